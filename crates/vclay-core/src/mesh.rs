@@ -1,0 +1,212 @@
+//! Triangle meshes and the sink trait that every tessellator writes through.
+//!
+//! Tessellators (spline surfaces, volume boundaries, subdivision lattices, PDE surfaces) never build
+//! a concrete mesh type: they call a [`MeshSink`], so an exporter, a renderer or the studio can take
+//! the triangles in the layout it wants. [`TriMesh`] is the plain indexed mesh that most callers use.
+
+use crate::math::Vec3;
+use thiserror::Error;
+
+/// Receiver of tessellated geometry: vertices (with optional normals) and triangles by index.
+///
+/// Indices passed to [`MeshSink::add_triangle`] are those returned by [`MeshSink::add_vertex`] on
+/// the same sink. Triangles are counter-clockwise seen from the side the normal points to.
+pub trait MeshSink {
+    /// Hint of how many vertices and triangles will follow (may be ignored).
+    fn reserve(&mut self, _vertices: usize, _triangles: usize) {}
+    /// Adds a vertex and returns its index.
+    fn add_vertex(&mut self, position: Vec3, normal: Option<Vec3>) -> u32;
+    /// Adds a triangle by vertex indices.
+    fn add_triangle(&mut self, indices: [u32; 3]);
+    /// Adds a quad `a b c d` (counter-clockwise) as two triangles split along `a-c`.
+    fn add_quad(&mut self, [a, b, c, d]: [u32; 4]) {
+        self.add_triangle([a, b, c]);
+        self.add_triangle([a, c, d]);
+    }
+}
+
+/// Problems found by [`TriMesh::validate`].
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum MeshError {
+    /// A vertex coordinate is NaN or infinite.
+    #[error("vertex {vertex} has a non-finite coordinate")]
+    NonFiniteVertex {
+        /// Index of the vertex.
+        vertex: usize,
+    },
+    /// A triangle references a vertex that does not exist.
+    #[error("triangle {triangle} references vertex {index}, but the mesh has {vertex_count} vertices")]
+    IndexOutOfRange {
+        /// Index of the triangle.
+        triangle: usize,
+        /// The offending vertex index.
+        index: u32,
+        /// Number of vertices in the mesh.
+        vertex_count: usize,
+    },
+    /// The normal array is neither empty nor one per vertex.
+    #[error("mesh has {normals} normals for {vertices} vertices")]
+    NormalCount {
+        /// Number of normals.
+        normals: usize,
+        /// Number of vertices.
+        vertices: usize,
+    },
+}
+
+/// An indexed triangle mesh with optional per-vertex normals.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TriMesh {
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Per-vertex unit normals: empty, or one per vertex.
+    pub normals: Vec<Vec3>,
+    /// Triangles, counter-clockwise.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl TriMesh {
+    /// An empty mesh.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Checks finiteness, index ranges and normal count.
+    pub fn validate(&self) -> Result<(), MeshError> {
+        if let Some(v) = self
+            .positions
+            .iter()
+            .position(|p| !p.iter().all(|c| c.is_finite()))
+        {
+            return Err(MeshError::NonFiniteVertex { vertex: v });
+        }
+        if !self.normals.is_empty() && self.normals.len() != self.positions.len() {
+            return Err(MeshError::NormalCount {
+                normals: self.normals.len(),
+                vertices: self.positions.len(),
+            });
+        }
+        let n = self.positions.len();
+        for (t, tri) in self.triangles.iter().enumerate() {
+            if let Some(&i) = tri.iter().find(|&&i| i as usize >= n) {
+                return Err(MeshError::IndexOutOfRange {
+                    triangle: t,
+                    index: i,
+                    vertex_count: n,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Replaces the normals by area-weighted averages of the adjacent face normals.
+    ///
+    /// Vertices with no non-degenerate adjacent face get the zero vector.
+    pub fn compute_normals(&mut self) {
+        let mut acc = vec![Vec3::zeros(); self.positions.len()];
+        for tri in &self.triangles {
+            let [a, b, c] = tri.map(|i| self.positions[i as usize]);
+            // Cross product length is twice the area: area weighting comes for free.
+            let n = (b - a).cross(&(c - a));
+            for &i in tri {
+                acc[i as usize] += n;
+            }
+        }
+        for n in &mut acc {
+            let len = n.norm();
+            if len > 0.0 {
+                *n /= len;
+            }
+        }
+        self.normals = acc;
+    }
+
+    /// Axis-aligned bounding box `(min, max)`, or `None` for an empty mesh.
+    pub fn bounding_box(&self) -> Option<(Vec3, Vec3)> {
+        let first = *self.positions.first()?;
+        Some(self.positions.iter().fold((first, first), |(lo, hi), p| {
+            (lo.inf(p), hi.sup(p))
+        }))
+    }
+
+    /// Appends another mesh (indices are shifted).
+    pub fn append(&mut self, other: &TriMesh) {
+        let off = self.positions.len() as u32;
+        let had_normals = !self.normals.is_empty() || self.positions.is_empty();
+        self.positions.extend_from_slice(&other.positions);
+        if had_normals && other.normals.len() == other.positions.len() {
+            self.normals.extend_from_slice(&other.normals);
+        } else {
+            self.normals.clear();
+        }
+        self.triangles
+            .extend(other.triangles.iter().map(|t| t.map(|i| i + off)));
+    }
+}
+
+impl MeshSink for TriMesh {
+    fn reserve(&mut self, vertices: usize, triangles: usize) {
+        self.positions.reserve(vertices);
+        self.normals.reserve(vertices);
+        self.triangles.reserve(triangles);
+    }
+
+    fn add_vertex(&mut self, position: Vec3, normal: Option<Vec3>) -> u32 {
+        let idx = self.positions.len() as u32;
+        self.positions.push(position);
+        match normal {
+            Some(n) if self.normals.len() == idx as usize => self.normals.push(n),
+            // A vertex without a normal (or a gap earlier) drops normals for the whole mesh:
+            // a partial normal array would be silent garbage.
+            _ => self.normals.clear(),
+        }
+        idx
+    }
+
+    fn add_triangle(&mut self, indices: [u32; 3]) {
+        self.triangles.push(indices);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square() -> TriMesh {
+        let mut m = TriMesh::new();
+        let a = m.add_vertex(Vec3::new(0.0, 0.0, 0.0), None);
+        let b = m.add_vertex(Vec3::new(1.0, 0.0, 0.0), None);
+        let c = m.add_vertex(Vec3::new(1.0, 1.0, 0.0), None);
+        let d = m.add_vertex(Vec3::new(0.0, 1.0, 0.0), None);
+        m.add_quad([a, b, c, d]);
+        m
+    }
+
+    #[test]
+    fn normals_of_ccw_square_point_up() {
+        let mut m = square();
+        m.compute_normals();
+        for n in &m.normals {
+            assert!((n - Vec3::z()).norm() < 1e-15);
+        }
+        assert_eq!(m.triangles.len(), 2);
+        m.validate().unwrap();
+    }
+
+    #[test]
+    fn validate_catches_bad_index_and_nan() {
+        let mut m = square();
+        m.triangles.push([0, 1, 9]);
+        assert_eq!(
+            m.validate(),
+            Err(MeshError::IndexOutOfRange {
+                triangle: 2,
+                index: 9,
+                vertex_count: 4
+            })
+        );
+        let mut m = square();
+        m.positions[3].y = f64::NAN;
+        assert_eq!(m.validate(), Err(MeshError::NonFiniteVertex { vertex: 3 }));
+    }
+}

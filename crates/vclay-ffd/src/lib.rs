@@ -1,0 +1,1 @@
+//! vclay-ffd (in progress)

@@ -1,0 +1,1 @@
+//! vclay-lattice (in progress)

@@ -1,0 +1,21 @@
+//! # vclay
+//!
+//! Physics-based free-form modeling ("virtual clay") in Rust. This facade re-exports the layers:
+//!
+//! - [`core`]: math types, tolerances, parallelism policy, the mesh sink.
+//! - [`spline`]: knots, basis functions, NURBS curves, surfaces and volumes, D-NURBS Jacobians,
+//!   refinement, primitives, tessellation.
+//! - [`io`]: the JSON model format and mesh files.
+//!
+//! See `docs/architecture.md` in the repository for the map of the layers.
+#![warn(missing_docs)]
+
+pub use vclay_core as core;
+pub use vclay_io as io;
+pub use vclay_spline as spline;
+
+pub use vclay_core::{Interval, Parallelism, TriMesh, Vec3, Vec4};
+pub use vclay_spline::{
+    KnotVector, NurbsCurve, NurbsSurface, NurbsVolume, ParametricCurve, ParametricSurface,
+    ParametricVolume, SplineError,
+};
