@@ -92,10 +92,7 @@ pub fn binomial(n: usize, k: usize) -> f64 {
 
 /// Largest absolute coordinate over a set of points: the model scale used by relative tolerances.
 pub fn max_abs_coordinate<'a>(points: impl IntoIterator<Item = &'a Vec3>) -> f64 {
-    points
-        .into_iter()
-        .map(|p| p.amax())
-        .fold(0.0_f64, f64::max)
+    points.into_iter().map(|p| p.amax()).fold(0.0_f64, f64::max)
 }
 
 #[cfg(test)]

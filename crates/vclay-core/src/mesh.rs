@@ -35,7 +35,9 @@ pub enum MeshError {
         vertex: usize,
     },
     /// A triangle references a vertex that does not exist.
-    #[error("triangle {triangle} references vertex {index}, but the mesh has {vertex_count} vertices")]
+    #[error(
+        "triangle {triangle} references vertex {index}, but the mesh has {vertex_count} vertices"
+    )]
     IndexOutOfRange {
         /// Index of the triangle.
         triangle: usize,
@@ -124,9 +126,11 @@ impl TriMesh {
     /// Axis-aligned bounding box `(min, max)`, or `None` for an empty mesh.
     pub fn bounding_box(&self) -> Option<(Vec3, Vec3)> {
         let first = *self.positions.first()?;
-        Some(self.positions.iter().fold((first, first), |(lo, hi), p| {
-            (lo.inf(p), hi.sup(p))
-        }))
+        Some(
+            self.positions
+                .iter()
+                .fold((first, first), |(lo, hi), p| (lo.inf(p), hi.sup(p))),
+        )
     }
 
     /// Appends another mesh (indices are shifted).

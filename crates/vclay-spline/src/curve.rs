@@ -8,12 +8,12 @@
 //! by the quotient rule on the homogeneous curve `C^w = (w c, w)` (Piegl & Tiller A4.2):
 //! `c^(k) = (A^(k) - sum_{i=1}^{k} C(k,i) w^(i) c^(k-i)) / w`.
 
+use crate::KnotError;
 use crate::error::SplineError;
 use crate::jacobian::SparseJacobian;
 use crate::knots::{BasisWorkspace, KnotVector};
 use crate::traits::ParametricCurve;
 use crate::util::{BasisBuf, check_net, check_param, homogeneous};
-use crate::KnotError;
 use vclay_core::math::binomial;
 use vclay_core::{Interval, Vec3, Vec4};
 

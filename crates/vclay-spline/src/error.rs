@@ -72,7 +72,9 @@ pub enum KnotError {
         max: usize,
     },
     /// The domain `[t_p, t_n]` has zero length: no non-empty knot span.
-    #[error("the parameter domain [{start}, {end}] is empty: the knot vector has no non-empty span")]
+    #[error(
+        "the parameter domain [{start}, {end}] is empty: the knot vector has no non-empty span"
+    )]
     EmptyDomain {
         /// Start of the domain (knot `p`).
         start: f64,
@@ -80,7 +82,9 @@ pub enum KnotError {
         end: f64,
     },
     /// A knot repeats more than `degree + 1` times, so a basis function vanishes identically.
-    #[error("knot {value} (first at index {index}) has multiplicity {multiplicity}, more than degree + 1 = {max}")]
+    #[error(
+        "knot {value} (first at index {index}) has multiplicity {multiplicity}, more than degree + 1 = {max}"
+    )]
     Multiplicity {
         /// Position of the first copy.
         index: usize,

@@ -93,7 +93,12 @@ pub struct SurfaceGrid {
 impl NurbsSurface {
     /// Points on the grid `us x vs`, index `i * vs.len() + j` (allocating form of
     /// [`NurbsSurface::eval_grid_into`]).
-    pub fn eval_grid(&self, us: &[f64], vs: &[f64], par: Parallelism) -> Result<Vec<Vec3>, SplineError> {
+    pub fn eval_grid(
+        &self,
+        us: &[f64],
+        vs: &[f64],
+        par: Parallelism,
+    ) -> Result<Vec<Vec3>, SplineError> {
         let mut out = vec![Vec3::zeros(); us.len() * vs.len()];
         self.eval_grid_into(us, vs, &mut out, par)?;
         Ok(out)
@@ -111,7 +116,11 @@ impl NurbsSurface {
         out: &mut [Vec3],
         par: Parallelism,
     ) -> Result<(), SplineError> {
-        assert_eq!(out.len(), us.len() * vs.len(), "output length must be us.len() * vs.len()");
+        assert_eq!(
+            out.len(),
+            us.len() * vs.len(),
+            "output length must be us.len() * vs.len()"
+        );
         if out.is_empty() {
             return Ok(());
         }

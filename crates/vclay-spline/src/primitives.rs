@@ -34,7 +34,12 @@ fn unit_circle() -> (Vec<(f64, f64)>, Vec<f64>) {
 impl NurbsCurve {
     /// The exact circle of `radius` around `center` in the plane spanned by the orthonormal
     /// directions `x_axis`, `y_axis`, starting at `center + radius x_axis`, counter-clockwise.
-    pub fn circle(center: Vec3, x_axis: Vec3, y_axis: Vec3, radius: f64) -> Result<Self, SplineError> {
+    pub fn circle(
+        center: Vec3,
+        x_axis: Vec3,
+        y_axis: Vec3,
+        radius: f64,
+    ) -> Result<Self, SplineError> {
         if !(radius.is_finite() && radius > 0.0) {
             return Err(SplineError::Shape {
                 what: "circle radius must be positive; radius given (as integer part)".into(),

@@ -50,9 +50,7 @@ fn insert_line(kv: &KnotVector, pw: &[Vec4], u: f64, r: usize, axis: usize) -> L
     let new_kv = kv.with_inserted(u, r).map_err(kerr(axis))?;
     let mut qw = vec![Vec4::zeros(); pw.len() + r];
     qw[..=(k - p)].copy_from_slice(&pw[..=(k - p)]);
-    for i in (k - s)..=np {
-        qw[i + r] = pw[i];
-    }
+    qw[(k - s + r)..=(np + r)].copy_from_slice(&pw[(k - s)..=np]);
     let mut rw: Vec<Vec4> = (0..=p - s).map(|i| pw[k - p + i]).collect();
     let mut l = 0;
     for j in 1..=r {
@@ -64,8 +62,8 @@ fn insert_line(kv: &KnotVector, pw: &[Vec4], u: f64, r: usize, axis: usize) -> L
         qw[l] = rw[0];
         qw[k + r - j - s] = rw[p - j - s];
     }
-    for i in (l + 1)..(k - s) {
-        qw[i] = rw[i - l];
+    if l + 1 < k - s {
+        qw[(l + 1)..(k - s)].copy_from_slice(&rw[1..(k - s - l)]);
     }
     Ok((new_kv, qw))
 }
@@ -106,7 +104,9 @@ fn clamp_line(kv: &KnotVector, pw: &[Vec4], axis: usize) -> LineResult {
     Ok((kv, pw))
 }
 
-/// Degree elevation by `t` (Piegl & Tiller A5.9) of a clamped line.
+/// Degree elevation by `t` (Piegl & Tiller A5.9) of a clamped line. The loop structure follows
+/// the book's listing line by line, so that it can be checked against it.
+#[allow(clippy::explicit_counter_loop)]
 fn elevate_line(kv: &KnotVector, pw: &[Vec4], t: usize, axis: usize) -> LineResult {
     if t == 0 {
         return Ok((kv.clone(), pw.to_vec()));
@@ -175,8 +175,16 @@ fn elevate_line(kv: &KnotVector, pw: &[Vec4], t: usize, axis: usize) -> LineResu
         let ub = u[b];
         let oldr = r;
         r = p as isize - mul as isize;
-        let lbz = if oldr > 0 { ((oldr + 2) / 2) as usize } else { 1 };
-        let rbz = if r > 0 { ph - ((r + 1) / 2) as usize } else { ph };
+        let lbz = if oldr > 0 {
+            ((oldr + 2) / 2) as usize
+        } else {
+            1
+        };
+        let rbz = if r > 0 {
+            ph - ((r + 1) / 2) as usize
+        } else {
+            ph
+        };
         if r > 0 {
             let numer = ub - ua;
             for k in ((mul + 1)..=p).rev() {
@@ -239,9 +247,8 @@ fn elevate_line(kv: &KnotVector, pw: &[Vec4], t: usize, axis: usize) -> LineResu
             cind += 1;
         }
         if b < m {
-            for j in 0..r.max(0) as usize {
-                bpts[j] = next_bpts[j];
-            }
+            let rr = r.max(0) as usize;
+            bpts[..rr].copy_from_slice(&next_bpts[..rr]);
             for j in r.max(0) as usize..=p {
                 bpts[j] = pw[b - p + j];
             }
@@ -327,7 +334,9 @@ impl NurbsCurve {
 
     /// Inserts every knot of `values` once (knot refinement).
     pub fn refine(&self, values: &[f64]) -> Result<Self, SplineError> {
-        values.iter().try_fold(self.clone(), |c, &u| c.insert_knot(u, 1))
+        values
+            .iter()
+            .try_fold(self.clone(), |c, &u| c.insert_knot(u, 1))
     }
 
     /// The same curve on its domain with end knots of multiplicity `p + 1`.

@@ -30,7 +30,10 @@ pub struct NurbsSurface {
 }
 
 /// Flattens a nested `[i][j]` net, reporting the first ragged row.
-pub(crate) fn flatten2<T: Clone>(net: &[Vec<T>], what: &str) -> Result<(Vec<T>, [usize; 2]), SplineError> {
+pub(crate) fn flatten2<T: Clone>(
+    net: &[Vec<T>],
+    what: &str,
+) -> Result<(Vec<T>, [usize; 2]), SplineError> {
     let nu = net.len();
     let nv = net.first().map_or(0, Vec::len);
     let mut flat = Vec::with_capacity(nu * nv);
@@ -116,7 +119,10 @@ impl NurbsSurface {
         Self::from_flat([ku, kv], points, w)
     }
 
-    pub(crate) fn from_homogeneous(knots: [KnotVector; 2], pw: &[Vec4]) -> Result<Self, SplineError> {
+    pub(crate) fn from_homogeneous(
+        knots: [KnotVector; 2],
+        pw: &[Vec4],
+    ) -> Result<Self, SplineError> {
         let (p, w) = crate::util::dehomogenize(pw);
         Self::from_flat(knots, p, w)
     }
@@ -131,7 +137,10 @@ impl NurbsSurface {
     }
     /// Control net size `(n_u, n_v)`.
     pub fn dims(&self) -> [usize; 2] {
-        [self.knots[0].control_points(), self.knots[1].control_points()]
+        [
+            self.knots[0].control_points(),
+            self.knots[1].control_points(),
+        ]
     }
     /// Flat control points, index `i * n_v + j`.
     pub fn control_points(&self) -> &[Vec3] {
@@ -191,7 +200,12 @@ impl NurbsSurface {
                 basis.push(bu[a] * bv[b]);
             }
         }
-        Ok(SparseJacobian::from_basis(idx, &basis, &self.points, &self.weights))
+        Ok(SparseJacobian::from_basis(
+            idx,
+            &basis,
+            &self.points,
+            &self.weights,
+        ))
     }
 
     /// Homogeneous partial derivatives `A[k][l]` for `k + l <= order` (Piegl & Tiller A3.6),
@@ -238,7 +252,9 @@ impl NurbsSurface {
 pub(crate) fn rational_surface_derivatives(a: &[Vec<Vec4>]) -> Vec<Vec<Vec3>> {
     let order = a.len() - 1;
     let w0 = a[0][0].w;
-    let mut s: Vec<Vec<Vec3>> = (0..=order).map(|k| vec![Vec3::zeros(); order - k + 1]).collect();
+    let mut s: Vec<Vec<Vec3>> = (0..=order)
+        .map(|k| vec![Vec3::zeros(); order - k + 1])
+        .collect();
     for k in 0..=order {
         for l in 0..=order - k {
             let mut v = a[k][l].xyz();

@@ -12,6 +12,14 @@ use crate::traits::ParametricVolume;
 use crate::volume::NurbsVolume;
 use vclay_core::{MeshSink, Parallelism, TriMesh, Vec3};
 
+/// Relative size of `|s_u x s_v|` (against the largest on the grid) below which a surface
+/// point counts as degenerate and takes the mesh normal instead of the analytic one.
+pub const DEGENERATE_NORMAL_RELATIVE: f64 = 1e-8;
+
+/// Relative parameter offset (of the domain width) at which the normal of a degenerate point is
+/// evaluated instead, giving the limit of the analytic normal.
+pub const NORMAL_NUDGE_RELATIVE: f64 = 1e-6;
+
 fn grid_triangles(nu: usize, nv: usize, flip: bool, base: u32, sink: &mut dyn MeshSink) {
     for i in 0..nu - 1 {
         for j in 0..nv - 1 {
@@ -45,16 +53,36 @@ pub fn tessellate_surface(
     mesh.positions = g.points.clone();
     grid_triangles(nu, nv, false, 0, &mut mesh);
     mesh.compute_normals();
-    let scale = vclay_core::math::max_abs_coordinate(&g.points).max(1.0);
-    let tiny = 1e-12 * scale * scale;
+    // A point is degenerate when its |s_u x s_v| is negligible next to the largest on the grid
+    // (relative tolerance DEGENERATE_NORMAL_RELATIVE).
+    let crosses: Vec<Vec3> = g.du.iter().zip(&g.dv).map(|(a, b)| a.cross(b)).collect();
+    let largest = crosses.iter().map(|c| c.norm()).fold(0.0, f64::max);
+    let tiny = DEGENERATE_NORMAL_RELATIVE * largest;
     sink.reserve(nu * nv, 2 * (nu - 1) * (nv - 1));
     let mut base = None;
     for k in 0..nu * nv {
-        let n = g.du[k].cross(&g.dv[k]);
+        let n = crosses[k];
         let normal = if n.norm() > tiny {
             n.normalize()
         } else {
-            mesh.normals[k]
+            // Limit of the analytic normal: evaluate slightly inside the domain.
+            let (u, v) = (us[k / nv], vs[k % nv]);
+            let nudge = |t: f64, d: vclay_core::Interval| {
+                let h = NORMAL_NUDGE_RELATIVE * d.length();
+                if t + h <= d.max { t + h } else { t - h }
+            };
+            let d = crate::traits::ParametricSurface::derivatives(
+                surface,
+                nudge(u, du),
+                nudge(v, dv),
+                1,
+            )?;
+            let m = d[1][0].cross(&d[0][1]);
+            if m.norm() > 0.0 && m.norm().is_finite() {
+                m.normalize()
+            } else {
+                mesh.normals[k]
+            }
         };
         let idx = sink.add_vertex(g.points[k], Some(normal));
         base.get_or_insert(idx);
@@ -76,7 +104,11 @@ pub fn tessellate_volume_boundary(
     for axis in 0..3 {
         let (a1, a2) = ((axis + 1) % 3, (axis + 2) % 3);
         for side in [0usize, 1] {
-            let fixed = if side == 0 { dom[axis].min } else { dom[axis].max };
+            let fixed = if side == 0 {
+                dom[axis].min
+            } else {
+                dom[axis].max
+            };
             let mut face = TriMesh::new();
             let (n1, n2) = (samples[a1], samples[a2]);
             let mut grid_params = [params[0].clone(), params[1].clone(), params[2].clone()];
@@ -88,7 +120,11 @@ pub fn tessellate_volume_boundary(
                 Parallelism::Auto,
             )?;
             // Reorder to an (a1, a2) grid.
-            let strides = [grid_params[1].len() * grid_params[2].len(), grid_params[2].len(), 1];
+            let strides = [
+                grid_params[1].len() * grid_params[2].len(),
+                grid_params[2].len(),
+                1,
+            ];
             for i in 0..n1 {
                 for j in 0..n2 {
                     let mut idx = [0usize; 3];

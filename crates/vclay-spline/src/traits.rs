@@ -55,8 +55,15 @@ pub trait ParametricVolume {
     ) -> Result<Vec<Vec<Vec<Vec3>>>, SplineError>;
     /// The 3x3 Jacobian matrix of the map, columns `V_u, V_v, V_w`. Its Gram matrix `J^T J` is the
     /// metric tensor `g_ij` of `subdivision-solids-journal.txt` section 4.3.
-    fn jacobian_matrix(&self, u: f64, v: f64, w: f64) -> Result<nalgebra::Matrix3<f64>, SplineError> {
+    fn jacobian_matrix(
+        &self,
+        u: f64,
+        v: f64,
+        w: f64,
+    ) -> Result<nalgebra::Matrix3<f64>, SplineError> {
         let d = self.derivatives(u, v, w, 1)?;
-        Ok(nalgebra::Matrix3::from_columns(&[d[1][0][0], d[0][1][0], d[0][0][1]]))
+        Ok(nalgebra::Matrix3::from_columns(&[
+            d[1][0][0], d[0][1][0], d[0][0][1],
+        ]))
     }
 }

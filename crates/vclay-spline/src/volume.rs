@@ -31,7 +31,10 @@ pub struct NurbsVolume {
     weights: Vec<f64>,
 }
 
-fn flatten3<T: Clone>(net: &[Vec<Vec<T>>], what: &str) -> Result<(Vec<T>, [usize; 3]), SplineError> {
+fn flatten3<T: Clone>(
+    net: &[Vec<Vec<T>>],
+    what: &str,
+) -> Result<(Vec<T>, [usize; 3]), SplineError> {
     let n0 = net.len();
     let (n1, n2) = net
         .first()
@@ -112,7 +115,12 @@ impl NurbsVolume {
     /// The identity-like lattice of `ffd-direct-manipulation.txt` section 2: clamped uniform knots
     /// on `[0, 1]^3`, unit weights and control points at the Greville abscissae mapped affinely
     /// onto the box `[lo, hi]`, so that `V(u, v, w) = lo + (hi - lo) * (u, v, w)` exactly.
-    pub fn box_lattice(degree: [usize; 3], dims: [usize; 3], lo: Vec3, hi: Vec3) -> Result<Self, SplineError> {
+    pub fn box_lattice(
+        degree: [usize; 3],
+        dims: [usize; 3],
+        lo: Vec3,
+        hi: Vec3,
+    ) -> Result<Self, SplineError> {
         let mut kvs = Vec::with_capacity(3);
         for axis in 0..3 {
             kvs.push(
@@ -135,7 +143,10 @@ impl NurbsVolume {
         Self::from_flat([a, b, c], pts, w)
     }
 
-    pub(crate) fn from_homogeneous(knots: [KnotVector; 3], pw: &[Vec4]) -> Result<Self, SplineError> {
+    pub(crate) fn from_homogeneous(
+        knots: [KnotVector; 3],
+        pw: &[Vec4],
+    ) -> Result<Self, SplineError> {
         let (p, w) = crate::util::dehomogenize(pw);
         Self::from_flat(knots, p, w)
     }
@@ -220,7 +231,12 @@ impl NurbsVolume {
                 }
             }
         }
-        Ok(SparseJacobian::from_basis(idx, &basis, &self.points, &self.weights))
+        Ok(SparseJacobian::from_basis(
+            idx,
+            &basis,
+            &self.points,
+            &self.weights,
+        ))
     }
 
     fn homogeneous_derivatives(&self, t: [f64; 3], order: usize) -> Vec<Vec<Vec<Vec4>>> {
