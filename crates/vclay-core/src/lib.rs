@@ -10,9 +10,11 @@
 pub mod math;
 pub mod mesh;
 pub mod par;
+pub mod quadrature;
 pub mod tolerance;
 
 pub use math::{Interval, Vec3, Vec4};
 pub use mesh::{MeshError, MeshSink, TriMesh};
 pub use par::Parallelism;
+pub use quadrature::GaussLegendre;
 pub use tolerance::Tolerance;

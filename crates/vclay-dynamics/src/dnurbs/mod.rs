@@ -1,0 +1,686 @@
+//! D-NURBS: dynamic NURBS curves and tensor-product surfaces (`d-nurbs.txt`).
+//!
+//! ## Model
+//! The control points `p` are generalized coordinates of the Lagrangian equations of motion
+//! (`d-nurbs.txt` eq 15) `M p'' + D p' + K p = f_p + g_p` with
+//!
+//! ```text
+//! M = integral mu J^T J,   D = integral gamma J^T J                                   (eq 16)
+//! K = integral (a11 J_u^T J_u + a22 J_v^T J_v + b11 J_uu^T J_uu + b12 J_uv^T J_uv + b22 J_vv^T J_vv)  (eq 17)
+//! f_p = integral J^T f                                                       (virtual work)
+//! ```
+//! (for curves `K = integral (alpha J_u^T J_u + beta J_uu^T J_uu)`, footnote 3). Each non-empty
+//! knot span (curve) or span rectangle (surface) is a finite element (section 5.1) whose matrices
+//! are integrated by Gauss-Legendre quadrature with `max(4, p + 1)` points per direction
+//! (section 5.2: 4 to 7 points; `p + 1` points integrate the polynomial mass integrand exactly).
+//!
+//! The delta spring of eq (19) is linear in `p` when weights are frozen, so vclay splits it:
+//! `k J^T d0` is an explicit force and `k J^T J` joins the stiffness in the implicit solve, which
+//! keeps stiff springs stable at any time step (the paper evaluates all forces at time t).
+//!
+//! ## Time integration
+//! Eq (18): `(2M + dt D + 2 dt^2 K) p(t+dt) = 2 dt^2 f_p + 4 M p(t) - (2M - dt D) p(t-dt)`, a
+//! central difference in M and D that is implicit in K, solved each step by Jacobi-preconditioned
+//! conjugate gradients working element by element without assembling the global matrices. The
+//! paper caps CG at 10 iterations ([`PAPER_CG_ITERATIONS`]); vclay iterates to a relative residual
+//! ([`DEFAULT_CG_TOLERANCE`]) with a higher cap by default. The static variant (`mu = gamma = 0`,
+//! section 5.3 and footnote 6) solves `K p = f_p` ([`Integrator::Static`]).
+//!
+//! ## Limitations
+//! Frozen weights only (footnote 2): the generalized inertial force `g_p` vanishes and the weight
+//! columns of J are not simulated. Linear constraints are limited to fixed control points
+//! (reduction to the free coordinates); point, normal and nonlinear constraints, swung and
+//! triangular surfaces are future work.
+
+mod geometry;
+mod system;
+
+pub use geometry::{DnurbsGeometry, ElementSamples};
+pub use system::{Element, ElementSystem, SolverStats};
+
+use crate::error::DynamicsError;
+use std::fmt;
+use std::sync::Arc;
+use vclay_core::{GaussLegendre, Vec3};
+use vclay_spline::{NurbsCurve, NurbsSurface};
+
+/// CG iteration cap used by the paper (section 5.3).
+pub const PAPER_CG_ITERATIONS: usize = 10;
+/// Default CG iteration cap.
+pub const DEFAULT_CG_ITERATIONS: usize = 500;
+/// Default relative residual at which CG stops.
+pub const DEFAULT_CG_TOLERANCE: f64 = 1e-10;
+/// A run is declared divergent when a control point moves farther than this many model sizes.
+pub const DIVERGENCE_DISPLACEMENT_FACTOR: f64 = 1e6;
+
+/// A density or elasticity function over the parametric domain.
+#[derive(Clone)]
+pub enum Density {
+    /// The same value everywhere.
+    Constant(f64),
+    /// One value per element (elements ordered span by span, v fastest for surfaces).
+    PerElement(Vec<f64>),
+    /// A function of the parameter `[u, v]` (`v = 0` for curves).
+    Function(Arc<dyn Fn([f64; 2]) -> f64 + Send + Sync>),
+}
+
+impl fmt::Debug for Density {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Density::Constant(v) => write!(f, "Constant({v})"),
+            Density::PerElement(v) => write!(f, "PerElement({} values)", v.len()),
+            Density::Function(_) => write!(f, "Function(..)"),
+        }
+    }
+}
+
+impl Density {
+    fn eval(&self, element: usize, param: [f64; 2]) -> f64 {
+        match self {
+            Density::Constant(v) => *v,
+            Density::PerElement(v) => v[element],
+            Density::Function(f) => f(param),
+        }
+    }
+
+    fn validate(&self, name: &'static str, elements: usize) -> Result<(), DynamicsError> {
+        let bad = |value: f64| DynamicsError::Parameter {
+            name,
+            value,
+            why: "must be finite and non-negative",
+        };
+        match self {
+            Density::Constant(v) if !(v.is_finite() && *v >= 0.0) => Err(bad(*v)),
+            Density::PerElement(v) if v.len() != elements => Err(DynamicsError::ElementCount {
+                name,
+                found: v.len(),
+                expected: elements,
+            }),
+            Density::PerElement(v) => match v.iter().find(|x| !(x.is_finite() && **x >= 0.0)) {
+                Some(x) => Err(bad(*x)),
+                None => Ok(()),
+            },
+            _ => Ok(()),
+        }
+    }
+}
+
+/// Default mass density `mu`.
+pub const DEFAULT_MU: f64 = 1.0;
+/// Default damping density `gamma`.
+pub const DEFAULT_GAMMA: f64 = 1.0;
+/// Default tension `alpha` (per direction).
+pub const DEFAULT_ALPHA: f64 = 1.0;
+/// Default rigidity `beta` (per second-derivative pair).
+pub const DEFAULT_BETA: f64 = 0.1;
+
+/// Physical parameters of a D-NURBS (`d-nurbs.txt` eqs 16-17).
+#[derive(Clone, Debug)]
+pub struct Material {
+    /// Mass density `mu` (default [`DEFAULT_MU`]).
+    pub mu: Density,
+    /// Damping density `gamma` (default [`DEFAULT_GAMMA`]).
+    pub gamma: Density,
+    /// Tension `alpha` per parametric direction (`[alpha]` for curves, `[a11, a22]` for
+    /// surfaces; default [`DEFAULT_ALPHA`]).
+    pub alpha: Vec<Density>,
+    /// Rigidity `beta` per second-derivative pair (`[beta]` for curves, `[b11, b12, b22]` for
+    /// surfaces; default [`DEFAULT_BETA`]).
+    pub beta: Vec<Density>,
+}
+
+impl Material {
+    /// Constant densities for a curve.
+    pub fn curve(mu: f64, gamma: f64, alpha: f64, beta: f64) -> Self {
+        Self {
+            mu: Density::Constant(mu),
+            gamma: Density::Constant(gamma),
+            alpha: vec![Density::Constant(alpha)],
+            beta: vec![Density::Constant(beta)],
+        }
+    }
+
+    /// Constant densities for a surface (same tension in u and v, same rigidity for all pairs).
+    pub fn surface(mu: f64, gamma: f64, alpha: f64, beta: f64) -> Self {
+        Self {
+            mu: Density::Constant(mu),
+            gamma: Density::Constant(gamma),
+            alpha: vec![Density::Constant(alpha); 2],
+            beta: vec![Density::Constant(beta); 3],
+        }
+    }
+}
+
+/// Where a spring pulls to.
+#[derive(Clone)]
+pub enum Target {
+    /// A fixed point in space.
+    Fixed(Vec3),
+    /// A point moving with time.
+    Moving(Arc<dyn Fn(f64) -> Vec3 + Send + Sync>),
+}
+
+impl fmt::Debug for Target {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Target::Fixed(p) => write!(f, "Fixed({p:?})"),
+            Target::Moving(_) => write!(f, "Moving(..)"),
+        }
+    }
+}
+
+impl Target {
+    fn at(&self, t: f64) -> Vec3 {
+        match self {
+            Target::Fixed(p) => *p,
+            Target::Moving(f) => f(t),
+        }
+    }
+}
+
+/// Applied forces (`d-nurbs.txt` section 6.1).
+#[derive(Clone, Debug)]
+pub enum Force {
+    /// The spring of eq (19): `f = k (d0 - s(u0))` at the material point `u0`; with
+    /// `kernel = Some(sigma)` the delta is replaced by a unit Gaussian of width `sigma` (in
+    /// parameter units) and the force is integrated over the elements.
+    Spring {
+        /// Material point `[u, v]` (`v` ignored for curves).
+        param: [f64; 2],
+        /// Point in space `d0`.
+        target: Target,
+        /// Spring stiffness `k`.
+        stiffness: f64,
+        /// Gaussian kernel width, or `None` for the delta of eq (19).
+        kernel: Option<f64>,
+    },
+    /// A constant force at a material point.
+    Point {
+        /// Material point.
+        param: [f64; 2],
+        /// The force.
+        force: Vec3,
+    },
+    /// Gravity: force density `mu g`.
+    Gravity(Vec3),
+    /// Inflation: pressure along the surface normal, `f = P s_u x s_v` (surfaces only).
+    Inflation(f64),
+}
+
+/// Time integration scheme.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Integrator {
+    /// `d-nurbs.txt` eq (18) with time step `dt`.
+    Implicit {
+        /// Time step.
+        dt: f64,
+    },
+    /// Static equilibrium `K p = f_p` (mu = gamma = 0, footnote 6: a shape optimizer).
+    Static,
+}
+
+/// What one step did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepReport {
+    /// Simulated time after the step.
+    pub time: f64,
+    /// Linear solve statistics.
+    pub solver: SolverStats,
+    /// Kinetic energy `1/2 v^T M v` after the step.
+    pub kinetic_energy: f64,
+    /// Elastic energy `1/2 p^T K p` after the step.
+    pub elastic_energy: f64,
+}
+
+/// A D-NURBS with frozen weights over a geometry `G` (curve or tensor-product surface).
+#[derive(Clone, Debug)]
+pub struct Dnurbs<G: DnurbsGeometry> {
+    geometry: G,
+    material: Material,
+    samples: Vec<ElementSamples>,
+    system: ElementSystem,
+    previous: Vec<Vec3>,
+    rest_scale: f64,
+    fixed: Vec<bool>,
+    forces: Vec<Force>,
+    time: f64,
+    steps: usize,
+    /// CG iteration cap (default [`DEFAULT_CG_ITERATIONS`]; the paper used
+    /// [`PAPER_CG_ITERATIONS`]).
+    pub max_iterations: usize,
+    /// CG relative residual tolerance (default [`DEFAULT_CG_TOLERANCE`]).
+    pub tolerance: f64,
+}
+
+/// A dynamic NURBS curve.
+pub type DnurbsCurve = Dnurbs<NurbsCurve>;
+/// A dynamic tensor-product NURBS surface.
+pub type DnurbsSurface = Dnurbs<NurbsSurface>;
+
+impl<G: DnurbsGeometry> Dnurbs<G> {
+    /// Builds the model: element samples and matrices are computed once (frozen weights).
+    pub fn new(geometry: G, material: Material) -> Result<Self, DynamicsError> {
+        let ng = geometry.max_degree().max(3) + 1;
+        let gauss = GaussLegendre::new(ng).map_err(|_| DynamicsError::Parameter {
+            name: "degree",
+            value: geometry.max_degree() as f64,
+            why: "too high for the quadrature table",
+        })?;
+        let samples = geometry.element_samples(&gauss);
+        let ne = samples.len();
+        if material.alpha.len() != G::DIM || material.beta.len() != G::PAIRS {
+            return Err(DynamicsError::Parameter {
+                name: "alpha/beta count",
+                value: material.alpha.len() as f64,
+                why: "curves take 1 alpha and 1 beta, surfaces 2 alphas and 3 betas",
+            });
+        }
+        material.mu.validate("mu", ne)?;
+        material.gamma.validate("gamma", ne)?;
+        for a in &material.alpha {
+            a.validate("alpha", ne)?;
+        }
+        for b in &material.beta {
+            b.validate("beta", ne)?;
+        }
+        let system = build_system::<G>(&geometry, &material, &samples)?;
+        let points = geometry.points().to_vec();
+        let rest_scale = vclay_core::math::max_abs_coordinate(&points).max(1.0);
+        let n = points.len();
+        Ok(Self {
+            geometry,
+            material,
+            samples,
+            system,
+            previous: points,
+            rest_scale,
+            fixed: vec![false; n],
+            forces: Vec::new(),
+            time: 0.0,
+            steps: 0,
+            max_iterations: DEFAULT_CG_ITERATIONS,
+            tolerance: DEFAULT_CG_TOLERANCE,
+        })
+    }
+
+    /// The current geometry.
+    pub fn geometry(&self) -> &G {
+        &self.geometry
+    }
+    /// The material.
+    pub fn material(&self) -> &Material {
+        &self.material
+    }
+    /// The element matrices.
+    pub fn system(&self) -> &ElementSystem {
+        &self.system
+    }
+    /// Simulated time.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+    /// Applied forces (edit freely between steps).
+    pub fn forces_mut(&mut self) -> &mut Vec<Force> {
+        &mut self.forces
+    }
+
+    /// Fixes control point `i` at its current position (or frees it).
+    pub fn set_fixed(&mut self, i: usize, fixed: bool) -> Result<(), DynamicsError> {
+        let count = self.fixed.len();
+        *self
+            .fixed
+            .get_mut(i)
+            .ok_or(DynamicsError::NoSuchControlPoint { index: i, count })? = fixed;
+        Ok(())
+    }
+
+    /// Whether control point `i` is fixed.
+    pub fn is_fixed(&self, i: usize) -> bool {
+        self.fixed.get(i).copied().unwrap_or(false)
+    }
+
+    /// Generalized force `f_p = integral J^T f` at the current time and shape.
+    pub fn generalized_force(&self) -> Result<Vec<Vec3>, DynamicsError> {
+        let (mut fp, springs) = self.split_forces()?;
+        // Add back the implicit part -k J^T J p of the delta springs.
+        let p = self.geometry.points();
+        for s in &springs {
+            let mut x = Vec3::zeros();
+            for (&i, &r) in s.indices.iter().zip(&s.values) {
+                x += p[i] * r;
+            }
+            for (&i, &r) in s.indices.iter().zip(&s.values) {
+                fp[i] -= x * (s.k * r);
+            }
+        }
+        Ok(fp)
+    }
+
+    /// The explicit part of the generalized force, and the delta springs as rank-one stiffness
+    /// terms (their `k J^T d0` part is in the explicit force).
+    fn split_forces(&self) -> Result<(Vec<Vec3>, Vec<system::RankOne>), DynamicsError> {
+        let mut springs = Vec::new();
+        let n = self.system.n;
+        let mut fp = vec![Vec3::zeros(); n];
+        let pts = self.geometry.points();
+        for force in &self.forces {
+            match force {
+                Force::Spring {
+                    param,
+                    target,
+                    stiffness,
+                    kernel: None,
+                } => {
+                    if !(stiffness.is_finite() && *stiffness >= 0.0) {
+                        return Err(DynamicsError::Parameter {
+                            name: "spring stiffness",
+                            value: *stiffness,
+                            why: "must be finite and non-negative",
+                        });
+                    }
+                    let (idx, r, _) = self.geometry.basis_at(&param[..G::DIM])?;
+                    let f = target.at(self.time) * *stiffness;
+                    for (&i, &ri) in idx.iter().zip(&r) {
+                        fp[i] += f * ri;
+                    }
+                    springs.push(system::RankOne {
+                        indices: idx,
+                        values: r,
+                        k: *stiffness,
+                    });
+                }
+                Force::Spring {
+                    param,
+                    target,
+                    stiffness,
+                    kernel: Some(sigma),
+                } => {
+                    if !(sigma.is_finite() && *sigma > 0.0) {
+                        return Err(DynamicsError::Parameter {
+                            name: "kernel width",
+                            value: *sigma,
+                            why: "must be positive",
+                        });
+                    }
+                    let d0 = target.at(self.time);
+                    let norm =
+                        (2.0 * std::f64::consts::PI * sigma * sigma).powf(G::DIM as f64 / 2.0);
+                    self.integrate_force(&mut fp, |q, s, _| {
+                        let d2: f64 = (0..G::DIM).map(|a| (q[a] - param[a]).powi(2)).sum();
+                        let g = (-d2 / (2.0 * sigma * sigma)).exp() / norm;
+                        (d0 - s) * (stiffness * g)
+                    });
+                }
+                Force::Point { param, force } => {
+                    let (idx, r, _) = self.geometry.basis_at(&param[..G::DIM])?;
+                    for (&i, &ri) in idx.iter().zip(&r) {
+                        fp[i] += force * ri;
+                    }
+                }
+                Force::Gravity(g) => {
+                    let mu = &self.material.mu;
+                    let mut e = 0;
+                    // Row sums of M times g (partition of unity): sum_j M_ij = integral mu R_i.
+                    for (el, s) in self.samples.iter().enumerate() {
+                        let nd = s.dofs.len();
+                        for (q, (&prm, &w)) in s.params.iter().zip(&s.weights).enumerate() {
+                            let m = mu.eval(el, prm) * w;
+                            for a in 0..nd {
+                                fp[s.dofs[a]] += g * (m * s.values[q * nd + a]);
+                            }
+                        }
+                        e += 1;
+                    }
+                    debug_assert_eq!(e, self.samples.len());
+                }
+                Force::Inflation(pressure) => {
+                    if G::DIM == 2 {
+                        self.integrate_force(&mut fp, |_, _, n| n * *pressure);
+                    }
+                }
+            }
+        }
+        let _ = pts;
+        Ok((fp, springs))
+    }
+
+    /// Adds `integral J^T f(q, s(q), s_u x s_v)` over all elements.
+    fn integrate_force(&self, fp: &mut [Vec3], f: impl Fn([f64; 2], Vec3, Vec3) -> Vec3) {
+        let pts = self.geometry.points();
+        for s in &self.samples {
+            let nd = s.dofs.len();
+            for (q, (&prm, &w)) in s.params.iter().zip(&s.weights).enumerate() {
+                let r = &s.values[q * nd..(q + 1) * nd];
+                let mut x = Vec3::zeros();
+                for a in 0..nd {
+                    x += pts[s.dofs[a]] * r[a];
+                }
+                let normal = if G::DIM == 2 {
+                    let (mut su, mut sv) = (Vec3::zeros(), Vec3::zeros());
+                    for a in 0..nd {
+                        su += pts[s.dofs[a]] * s.first[(q * 2) * nd + a];
+                        sv += pts[s.dofs[a]] * s.first[(q * 2 + 1) * nd + a];
+                    }
+                    su.cross(&sv)
+                } else {
+                    Vec3::zeros()
+                };
+                let fv = f(prm, x, normal) * w;
+                for a in 0..nd {
+                    fp[s.dofs[a]] += fv * r[a];
+                }
+            }
+        }
+    }
+
+    /// Elastic energy `1/2 p^T K p`.
+    pub fn elastic_energy(&self) -> f64 {
+        let p = self.geometry.points();
+        0.5 * self.system.quadratic_form([0.0, 0.0, 1.0], p, p)
+    }
+
+    /// Kinetic energy `1/2 v^T M v` with the backward-difference velocity of the last step `dt`.
+    pub fn kinetic_energy(&self, dt: f64) -> f64 {
+        let p = self.geometry.points();
+        let v: Vec<Vec3> = p
+            .iter()
+            .zip(&self.previous)
+            .map(|(a, b)| (a - b) / dt)
+            .collect();
+        0.5 * self.system.quadratic_form([1.0, 0.0, 0.0], &v, &v)
+    }
+
+    /// Advances one step with `integrator`.
+    pub fn step(&mut self, integrator: Integrator) -> Result<StepReport, DynamicsError> {
+        let n = self.system.n;
+        let (fp, springs) = self.split_forces()?;
+        let p = self.geometry.points().to_vec();
+        let (coeffs, rhs, mut x, dt) = match integrator {
+            Integrator::Implicit { dt } => {
+                if !(dt.is_finite() && dt > 0.0) {
+                    return Err(DynamicsError::Parameter {
+                        name: "dt",
+                        value: dt,
+                        why: "time step must be positive and finite",
+                    });
+                }
+                let coeffs = [2.0, dt, 2.0 * dt * dt];
+                let mix: Vec<Vec3> = p
+                    .iter()
+                    .zip(&self.previous)
+                    .map(|(a, b)| a * 4.0 - b * 2.0)
+                    .collect();
+                let mut m_mix = vec![Vec3::zeros(); n];
+                self.system.apply([1.0, 0.0, 0.0], &mix, &mut m_mix);
+                let mut d_prev = vec![Vec3::zeros(); n];
+                self.system
+                    .apply([0.0, 1.0, 0.0], &self.previous, &mut d_prev);
+                let rhs: Vec<Vec3> = (0..n)
+                    .map(|i| fp[i] * (2.0 * dt * dt) + m_mix[i] + d_prev[i] * dt)
+                    .collect();
+                // Initial guess: constant-velocity extrapolation (fixed points stay).
+                let x: Vec<Vec3> = (0..n)
+                    .map(|i| {
+                        if self.fixed[i] {
+                            p[i]
+                        } else {
+                            p[i] * 2.0 - self.previous[i]
+                        }
+                    })
+                    .collect();
+                (coeffs, rhs, x, dt)
+            }
+            Integrator::Static => ([0.0, 0.0, 1.0], fp.clone(), p.clone(), 1.0),
+        };
+        let op = system::Operator {
+            sys: &self.system,
+            coeffs,
+            springs: &springs,
+        };
+        let solver = system::conjugate_gradient(
+            &op,
+            &rhs,
+            &mut x,
+            &self.fixed,
+            self.max_iterations,
+            self.tolerance,
+        );
+        // Divergence: non-finite state or runaway displacement.
+        let limit = DIVERGENCE_DISPLACEMENT_FACTOR * self.rest_scale;
+        let bad = x
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !v.iter().all(|c| c.is_finite()) || v.amax() > limit);
+        if let Some((i, v)) = bad {
+            let what = if v.iter().all(|c| c.is_finite()) {
+                format!("control point {i} moved to {v:?}, beyond {limit:.1e}")
+            } else {
+                format!("control point {i} became non-finite")
+            };
+            return Err(DynamicsError::Diverged {
+                step: self.steps,
+                time: self.time,
+                what,
+                suggested_dt: self.suggest_dt(dt),
+            });
+        }
+        self.previous = p;
+        self.geometry.set_points(x)?;
+        if matches!(integrator, Integrator::Static) {
+            self.previous = self.geometry.points().to_vec();
+        }
+        self.time += if let Integrator::Implicit { dt } = integrator {
+            dt
+        } else {
+            0.0
+        };
+        self.steps += 1;
+        Ok(StepReport {
+            time: self.time,
+            solver,
+            kinetic_energy: self.kinetic_energy(dt),
+            elastic_energy: self.elastic_energy(),
+        })
+    }
+
+    /// Runs `steps` implicit steps of `dt`, returning the last report.
+    pub fn run(&mut self, dt: f64, steps: usize) -> Result<Option<StepReport>, DynamicsError> {
+        let mut last = None;
+        for _ in 0..steps {
+            last = Some(self.step(Integrator::Implicit { dt })?);
+        }
+        Ok(last)
+    }
+
+    /// A time step expected to be stable for the explicit (kernel) spring forces: half of the
+    /// central-difference limit `2 sqrt(m / k)` with `m` the smallest lumped mass. Delta springs
+    /// are implicit and do not limit the step.
+    fn suggest_dt(&self, dt: f64) -> f64 {
+        let k: f64 = self
+            .forces
+            .iter()
+            .map(|f| match f {
+                Force::Spring {
+                    stiffness,
+                    kernel: Some(_),
+                    ..
+                } => *stiffness,
+                _ => 0.0,
+            })
+            .sum();
+        let lumped = self.system.dense_row_sums_mass();
+        let m = lumped
+            .iter()
+            .copied()
+            .filter(|&x| x > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        if k > 0.0 && m.is_finite() {
+            (m / k).sqrt().min(dt / 4.0)
+        } else {
+            dt / 4.0
+        }
+    }
+}
+
+impl ElementSystem {
+    /// Row sums of the mass matrix (lumped masses).
+    pub fn dense_row_sums_mass(&self) -> Vec<f64> {
+        let mut out = vec![0.0; self.n];
+        for e in &self.elements {
+            let nd = e.dofs.len();
+            for a in 0..nd {
+                out[e.dofs[a]] += e.mass[a * nd..(a + 1) * nd].iter().sum::<f64>();
+            }
+        }
+        out
+    }
+}
+
+fn build_system<G: DnurbsGeometry>(
+    geometry: &G,
+    material: &Material,
+    samples: &[ElementSamples],
+) -> Result<ElementSystem, DynamicsError> {
+    use rayon::prelude::*;
+    let elements: Vec<Element> = samples
+        .par_iter()
+        .enumerate()
+        .map(|(el, s)| {
+            let mut alpha = vec![0.0; G::DIM];
+            let mut beta = vec![0.0; G::PAIRS];
+            Element::integrate(s, G::DIM, G::PAIRS, |_, prm, sink| {
+                for (a, d) in alpha.iter_mut().zip(&material.alpha) {
+                    *a = d.eval(el, prm);
+                }
+                for (b, d) in beta.iter_mut().zip(&material.beta) {
+                    *b = d.eval(el, prm);
+                }
+                sink(system::PointDensities {
+                    mu: material.mu.eval(el, prm),
+                    gamma: material.gamma.eval(el, prm),
+                    alpha: &alpha,
+                    beta: &beta,
+                });
+            })
+        })
+        .collect();
+    // Closures may return anything: check the integrated matrices.
+    for (i, e) in elements.iter().enumerate() {
+        if e.mass
+            .iter()
+            .chain(&e.damping)
+            .chain(&e.stiffness)
+            .any(|v| !v.is_finite())
+        {
+            return Err(DynamicsError::Parameter {
+                name: "density function",
+                value: i as f64,
+                why: "produced a non-finite element matrix (value is the element index)",
+            });
+        }
+    }
+    Ok(ElementSystem {
+        n: geometry.control_point_count(),
+        elements,
+    })
+}
