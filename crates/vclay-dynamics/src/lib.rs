@@ -14,7 +14,7 @@ pub mod dnurbs;
 pub mod error;
 
 pub use dnurbs::{
-    Density, DnurbsCurve, DnurbsSurface, ElementSystem, Force, Integrator, Material, SolverStats,
-    StepReport,
+    Density, DnurbsCurve, DnurbsSurface, ElasticReference, ElementSystem, Force, Integrator,
+    Material, SolverStats, StepReport,
 };
 pub use error::DynamicsError;

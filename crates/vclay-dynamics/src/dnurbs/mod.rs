@@ -219,6 +219,20 @@ pub enum Integrator {
     Static,
 }
 
+/// What the elastic energy measures deformation against.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ElasticReference {
+    /// `U = 1/2 (p - p_rest)^T K (p - p_rest)`: the shape at construction (or at the last
+    /// [`Dnurbs::set_rest_shape_to_current`], the plastic reset) is at rest, so a model left alone
+    /// keeps its shape. vclay's default.
+    #[default]
+    RestShape,
+    /// `U = 1/2 p^T K p`, the paper's form (eq 15): the energy is the thin-plate-under-tension
+    /// functional of the shape itself, so without forces or constraints the shape shrinks towards
+    /// minimal area and bending (fairing). Use it for fitting and fairness optimization.
+    Absolute,
+}
+
 /// What one step did.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StepReport {
@@ -240,6 +254,8 @@ pub struct Dnurbs<G: DnurbsGeometry> {
     samples: Vec<ElementSamples>,
     system: ElementSystem,
     previous: Vec<Vec3>,
+    rest: Vec<Vec3>,
+    reference: ElasticReference,
     rest_scale: f64,
     fixed: Vec<bool>,
     forces: Vec<Force>,
@@ -292,7 +308,9 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
             material,
             samples,
             system,
-            previous: points,
+            previous: points.clone(),
+            rest: points,
+            reference: ElasticReference::default(),
             rest_scale,
             fixed: vec![false; n],
             forces: Vec::new(),
@@ -319,6 +337,40 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
     pub fn time(&self) -> f64 {
         self.time
     }
+    /// What the elastic energy is measured against.
+    pub fn elastic_reference(&self) -> ElasticReference {
+        self.reference
+    }
+
+    /// Chooses what the elastic energy is measured against.
+    pub fn set_elastic_reference(&mut self, reference: ElasticReference) {
+        self.reference = reference;
+    }
+
+    /// Plastic reset: the current shape becomes the rest shape.
+    pub fn set_rest_shape_to_current(&mut self) {
+        self.rest = self.geometry.points().to_vec();
+    }
+
+    /// The rest shape's control points.
+    pub fn rest_shape(&self) -> &[Vec3] {
+        &self.rest
+    }
+
+    /// Moves control point `i` to `position` (it keeps its fixed/free state; a fixed point stays
+    /// at the new place). The velocity of the point is set to zero.
+    pub fn move_control_point(&mut self, i: usize, position: Vec3) -> Result<(), DynamicsError> {
+        let count = self.fixed.len();
+        if i >= count {
+            return Err(DynamicsError::NoSuchControlPoint { index: i, count });
+        }
+        let mut pts = self.geometry.points().to_vec();
+        pts[i] = position;
+        self.geometry.set_points(pts)?;
+        self.previous[i] = position;
+        Ok(())
+    }
+
     /// Applied forces (edit freely between steps).
     pub fn forces_mut(&mut self) -> &mut Vec<Force> {
         &mut self.forces
@@ -473,10 +525,15 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
         }
     }
 
-    /// Elastic energy `1/2 p^T K p`.
+    /// Elastic energy `1/2 (p - p_ref)^T K (p - p_ref)` with `p_ref` the rest shape or zero
+    /// (see [`ElasticReference`]).
     pub fn elastic_energy(&self) -> f64 {
         let p = self.geometry.points();
-        0.5 * self.system.quadratic_form([0.0, 0.0, 1.0], p, p)
+        let d: Vec<Vec3> = match self.reference {
+            ElasticReference::RestShape => p.iter().zip(&self.rest).map(|(a, b)| a - b).collect(),
+            ElasticReference::Absolute => p.to_vec(),
+        };
+        0.5 * self.system.quadratic_form([0.0, 0.0, 1.0], &d, &d)
     }
 
     /// Kinetic energy `1/2 v^T M v` with the backward-difference velocity of the last step `dt`.
@@ -532,6 +589,16 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
             }
             Integrator::Static => ([0.0, 0.0, 1.0], fp.clone(), p.clone(), 1.0),
         };
+        let mut rhs = rhs;
+        if self.reference == ElasticReference::RestShape {
+            // K (p - p_rest) on the left: K p_rest moves to the right-hand side.
+            let mut k_rest = vec![Vec3::zeros(); n];
+            self.system
+                .apply([0.0, 0.0, coeffs[2]], &self.rest, &mut k_rest);
+            for (r, k) in rhs.iter_mut().zip(&k_rest) {
+                *r += k;
+            }
+        }
         let op = system::Operator {
             sys: &self.system,
             coeffs,
