@@ -1,1 +1,56 @@
-//! vclay-lattice (in progress)
+//! # vclay-lattice
+//!
+//! Polyhedral cell complexes and MacCracken-Joy subdivision solids, the volumetric
+//! Catmull-Clark scheme of `subdivision-solids-conference.txt` (section 3.1, Table 1) and
+//! `subdivision-solids-journal.txt` (sections 3.3, 4.2, 5.2-5.3).
+//!
+//! * [`Lattice`]: points, edges, faces and cells of arbitrary polyhedral shape with adjacency in
+//!   both directions (radial-edge style, flat arrays with typed ids), built from cells given as
+//!   face loops and validated ([`LatticeError`] names the element at fault).
+//! * [`subdivide`]: one level of subdivision, the four rules of the conference paper plus a
+//!   [`BoundaryRule`] and user [`Features`] (creases, corners); returns the finer lattice and the
+//!   level operator `A^(j)` as a [`SparseMatrix`] (each row an affine combination).
+//! * [`SubdivisionSolid`] and [`SubdivisionMap`]: all levels, `d = A p = A^(n)...A^(1) p`
+//!   (journal eq 4) and `A^T f` applied level by level without forming the product.
+//! * [`primitives`]: boxes, cylinders, tori, L and T solids, the paper's torus, gear and cube
+//!   with holes; [`cells`]: face lists of hexahedra, prisms, tetrahedra, pyramids.
+//! * [`write_boundary`]: the outward boundary surface into a [`vclay_core::MeshSink`].
+//!
+//! ```
+//! use vclay_lattice::{primitives, Features, SubdivisionRules, BoundaryRule, SubdivisionSolid};
+//! use vclay_core::Vec3;
+//! let cube = primitives::box_lattice([4, 4, 4], Vec3::zeros(), Vec3::repeat(1.0));
+//! let features = Features::none(&cube);
+//! let solid = SubdivisionSolid::new(cube, features, SubdivisionRules::new(BoundaryRule::Smooth), 2).unwrap();
+//! // Conference paper, Table 1, "Cube (4^3)", level 2.
+//! assert_eq!(solid.finest().counts().to_array(), [2197, 6084, 5616, 1728]);
+//! let d = solid.map().apply(solid.control().points());
+//! assert!((d[100] - solid.finest().points()[100]).norm() < 1e-12);
+//! ```
+//!
+//! Limitations: editing operations (extrusion, cell deletion, run-time fixing) rebuild a lattice
+//! from cells; there are no file formats here (see `vclay-io`).
+#![warn(missing_docs)]
+
+pub mod boundary;
+pub mod cells;
+mod csr;
+pub mod error;
+pub mod hierarchy;
+pub mod ids;
+pub mod lattice;
+pub mod map;
+pub mod primitives;
+pub mod sparse;
+pub mod subdivide;
+
+pub use boundary::{boundary_mesh, write_boundary};
+pub use error::LatticeError;
+pub use hierarchy::SubdivisionSolid;
+pub use ids::{CellId, EdgeId, FaceId, VertexId};
+pub use lattice::{ElementCounts, Lattice};
+pub use map::{ChainWorkspace, SubdivisionMap};
+pub use sparse::{Coord, SparseMatrix};
+pub use subdivide::{
+    BoundaryRule, Features, Refinement, SubdivisionRules, subdivide, subdivision_operator,
+};

@@ -1,0 +1,231 @@
+//! The chain of level operators: `d = A p = A^(n) ... A^(1) p` without forming the product.
+//!
+//! `subdivision-solids-journal.txt` section 4.2 builds the data points `d` from the control
+//! points `p` level by level, `d^(j+1) = A^(j) d^(j)`, and collects the product
+//! `A = A^(n) A^(n-1) ... A^(1)` (eq 4). The equations of motion (journal eqs 7-10) need both `A`
+//! (control -> data) and `A^T` (forces on data points -> generalized forces on control points).
+//! [`SubdivisionMap`] applies both level by level: each `A^(j)` has about 10-30 entries per row,
+//! while the product's rows fill up with every control point of the support, so applying the
+//! chain is far cheaper than forming `A` except for small lattices ([`SubdivisionMap::product`]).
+//!
+//! Fixed control points (journal section 5.2, `d = A1 p1 + A2 p2`) are a column partition of the
+//! product; with the chain, apply `A` to `p` with the free entries zeroed and to `p` with the fixed
+//! entries zeroed.
+
+use std::sync::OnceLock;
+
+use rayon::prelude::*;
+use vclay_core::Parallelism;
+
+use crate::sparse::{Coord, SparseMatrix};
+
+/// The level operators `A^(1) .. A^(n)` of a subdivision hierarchy, with lazily built transposes.
+#[derive(Debug, Default)]
+pub struct SubdivisionMap {
+    ops: Vec<SparseMatrix>,
+    transposes: Vec<OnceLock<SparseMatrix>>,
+}
+
+impl Clone for SubdivisionMap {
+    fn clone(&self) -> Self {
+        Self {
+            ops: self.ops.clone(),
+            transposes: self.transposes.clone(),
+        }
+    }
+}
+
+/// Two reusable buffers for [`SubdivisionMap::apply_into`] and
+/// [`SubdivisionMap::apply_transpose_into`], so that repeated applications allocate nothing.
+#[derive(Clone, Debug, Default)]
+pub struct ChainWorkspace<T> {
+    a: Vec<T>,
+    b: Vec<T>,
+}
+
+impl<T: Coord> ChainWorkspace<T> {
+    /// Empty buffers (they grow on first use).
+    pub fn new() -> Self {
+        Self {
+            a: Vec::new(),
+            b: Vec::new(),
+        }
+    }
+}
+
+impl SubdivisionMap {
+    /// A chain from level operators in application order (`ops[0]` is `A^(1)`).
+    ///
+    /// # Panics
+    /// If consecutive operators do not chain (`ops[j].ncols() != ops[j-1].nrows()`).
+    #[track_caller]
+    pub fn new(ops: Vec<SparseMatrix>) -> Self {
+        for j in 1..ops.len() {
+            assert_eq!(
+                ops[j].ncols(),
+                ops[j - 1].nrows(),
+                "level operator {j} does not chain"
+            );
+        }
+        let transposes = ops.iter().map(|_| OnceLock::new()).collect();
+        Self { ops, transposes }
+    }
+
+    /// Appends the operator of one more level.
+    ///
+    /// # Panics
+    /// If it does not chain with the last one.
+    #[track_caller]
+    pub fn push(&mut self, op: SparseMatrix) {
+        if let Some(last) = self.ops.last() {
+            assert_eq!(op.ncols(), last.nrows(), "level operator does not chain");
+        }
+        self.ops.push(op);
+        self.transposes.push(OnceLock::new());
+    }
+
+    /// Number of levels `n`.
+    pub fn levels(&self) -> usize {
+        self.ops.len()
+    }
+
+    /// The operator `A^(j+1)` mapping level `j` to level `j + 1` (`j` from 0).
+    pub fn operator(&self, j: usize) -> &SparseMatrix {
+        &self.ops[j]
+    }
+
+    /// All level operators in application order.
+    pub fn operators(&self) -> &[SparseMatrix] {
+        &self.ops
+    }
+
+    /// The transpose of [`SubdivisionMap::operator`]`(j)`, built on first use and kept.
+    pub fn transpose(&self, j: usize) -> &SparseMatrix {
+        self.transposes[j].get_or_init(|| self.ops[j].transpose())
+    }
+
+    /// Builds all transposes now (in parallel), so later transpose applications do no setup.
+    pub fn prepare_transposes(&self) {
+        (0..self.ops.len()).into_par_iter().for_each(|j| {
+            self.transpose(j);
+        });
+    }
+
+    /// Number of control points (columns of `A`), or `None` for an empty chain.
+    pub fn control_count(&self) -> Option<usize> {
+        self.ops.first().map(|a| a.ncols())
+    }
+
+    /// Number of data points (rows of `A`), or `None` for an empty chain.
+    pub fn data_count(&self) -> Option<usize> {
+        self.ops.last().map(|a| a.nrows())
+    }
+
+    /// `d = A p`, allocating. An empty chain is the identity.
+    ///
+    /// # Panics
+    /// If `p` has the wrong length.
+    #[track_caller]
+    pub fn apply<T: Coord>(&self, p: &[T]) -> Vec<T> {
+        let mut out = vec![T::zero(); self.data_count().unwrap_or(p.len())];
+        self.apply_into(p, &mut out, &mut ChainWorkspace::new(), Parallelism::Auto);
+        out
+    }
+
+    /// `out = A p` level by level, using `ws` for the intermediate levels.
+    ///
+    /// # Panics
+    /// If `p` or `out` have the wrong length.
+    #[track_caller]
+    pub fn apply_into<T: Coord>(
+        &self,
+        p: &[T],
+        out: &mut [T],
+        ws: &mut ChainWorkspace<T>,
+        par: Parallelism,
+    ) {
+        let n = self.ops.len();
+        if n == 0 {
+            out.copy_from_slice(p);
+            return;
+        }
+        chain(p, out, ws, n, |j| (self.ops[j].nrows(), &self.ops[j]), par);
+    }
+
+    /// `g = A^T f` (forces on data points pulled back to control points), allocating.
+    ///
+    /// # Panics
+    /// If `f` has the wrong length.
+    #[track_caller]
+    pub fn apply_transpose<T: Coord>(&self, f: &[T]) -> Vec<T> {
+        let mut out = vec![T::zero(); self.control_count().unwrap_or(f.len())];
+        self.apply_transpose_into(f, &mut out, &mut ChainWorkspace::new(), Parallelism::Auto);
+        out
+    }
+
+    /// `out = A^T f = A^(1)T ... A^(n)T f` level by level with the precomputed transposes.
+    ///
+    /// # Panics
+    /// If `f` or `out` have the wrong length.
+    #[track_caller]
+    pub fn apply_transpose_into<T: Coord>(
+        &self,
+        f: &[T],
+        out: &mut [T],
+        ws: &mut ChainWorkspace<T>,
+        par: Parallelism,
+    ) {
+        let n = self.ops.len();
+        if n == 0 {
+            out.copy_from_slice(f);
+            return;
+        }
+        chain(
+            f,
+            out,
+            ws,
+            n,
+            |j| {
+                let t = self.transpose(n - 1 - j);
+                (t.nrows(), t)
+            },
+            par,
+        );
+    }
+
+    /// The product `A = A^(n) ... A^(1)` as one matrix (identity-free: `None` for an empty chain).
+    ///
+    /// Its rows fill with every control point in a data point's support, so this is meant for
+    /// small lattices (tests, fixed-region partitions of small models).
+    pub fn product(&self) -> Option<SparseMatrix> {
+        let mut it = self.ops.iter();
+        let first = it.next()?.clone();
+        Some(it.fold(first, |acc, a| a.mul(&acc)))
+    }
+}
+
+/// Applies `n` matrices in sequence, `step(j)` giving the j-th matrix and its row count.
+fn chain<'a, T: Coord>(
+    input: &[T],
+    out: &mut [T],
+    ws: &mut ChainWorkspace<T>,
+    n: usize,
+    step: impl Fn(usize) -> (usize, &'a SparseMatrix),
+    par: Parallelism,
+) {
+    let ChainWorkspace { a, b } = ws;
+    let mut cur: &mut Vec<T> = a;
+    let mut other: &mut Vec<T> = b;
+    for j in 0..n {
+        let (rows, m) = step(j);
+        let src: &[T] = if j == 0 { input } else { other.as_slice() };
+        if j + 1 == n {
+            m.apply_into(src, out, par);
+        } else {
+            cur.clear();
+            cur.resize(rows, T::zero());
+            m.apply_into(src, cur, par);
+            std::mem::swap(&mut cur, &mut other);
+        }
+    }
+}

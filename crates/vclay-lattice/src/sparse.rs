@@ -1,0 +1,311 @@
+//! Sparse matrices in compressed sparse row (CSR) form, applied to points or scalars.
+//!
+//! A subdivision level is the linear map `d^(j+1) = A^(j) d^(j)` of
+//! `subdivision-solids-journal.txt` section 4.2 (eq 4 and the step list after it): row `i` of
+//! `A^(j)` holds the weights of the affine combination that the subdivision rules use for new
+//! point `i`, so every row sums to 1. [`SparseMatrix`] stores such a matrix; it multiplies
+//! `f64` slices and `Vec3` slices alike through the [`Coord`] trait, in parallel over rows with
+//! rayon when the caller's [`Parallelism`] allows, and gives the transpose (for pulling forces on
+//! data points back to control points, journal eq 8: `A^T f_d`) and the product of two matrices.
+
+use rayon::prelude::*;
+use vclay_core::{Parallelism, Vec3};
+
+/// A value that sparse matrices can combine linearly: `f64`, `Vec3`.
+pub trait Coord: Copy + Send + Sync {
+    /// The additive identity.
+    fn zero() -> Self;
+    /// `self += w * x`.
+    fn add_scaled(&mut self, w: f64, x: &Self);
+}
+
+impl Coord for f64 {
+    #[inline]
+    fn zero() -> Self {
+        0.0
+    }
+    #[inline]
+    fn add_scaled(&mut self, w: f64, x: &Self) {
+        *self += w * x;
+    }
+}
+
+impl Coord for Vec3 {
+    #[inline]
+    fn zero() -> Self {
+        Vec3::zeros()
+    }
+    #[inline]
+    fn add_scaled(&mut self, w: f64, x: &Self) {
+        self.x += w * x.x;
+        self.y += w * x.y;
+        self.z += w * x.z;
+    }
+}
+
+/// A real sparse matrix in CSR form with sorted, unique column indices in each row: a level
+/// operator `A^(j)` or the product `A` of `d = A p` (`subdivision-solids-journal.txt` eq 4).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SparseMatrix {
+    nrows: usize,
+    ncols: usize,
+    row_ptr: Vec<usize>,
+    cols: Vec<u32>,
+    vals: Vec<f64>,
+}
+
+/// Rows per rayon task when applying a matrix in parallel.
+const MIN_ROWS_PER_TASK: usize = 2048;
+
+impl SparseMatrix {
+    /// A matrix from CSR arrays.
+    ///
+    /// # Panics
+    /// If the arrays are inconsistent: `row_ptr` not of length `nrows + 1`, not non-decreasing,
+    /// not ending at `cols.len() == vals.len()`, a column out of range, or columns of a row not
+    /// strictly increasing (programmer errors: matrices are produced by this crate).
+    #[track_caller]
+    pub fn from_csr(
+        nrows: usize,
+        ncols: usize,
+        row_ptr: Vec<usize>,
+        cols: Vec<u32>,
+        vals: Vec<f64>,
+    ) -> Self {
+        assert_eq!(row_ptr.len(), nrows + 1, "row_ptr length");
+        assert_eq!(row_ptr[0], 0, "row_ptr[0]");
+        assert_eq!(*row_ptr.last().unwrap(), cols.len(), "row_ptr end");
+        assert_eq!(cols.len(), vals.len(), "cols/vals length");
+        for i in 0..nrows {
+            let (a, b) = (row_ptr[i], row_ptr[i + 1]);
+            assert!(a <= b, "row_ptr decreases at row {i}");
+            assert!(
+                cols[a..b].windows(2).all(|w| w[0] < w[1]),
+                "columns of row {i} not strictly increasing"
+            );
+            assert!(
+                cols[a..b].iter().all(|&c| (c as usize) < ncols),
+                "column out of range in row {i}"
+            );
+        }
+        Self {
+            nrows,
+            ncols,
+            row_ptr,
+            cols,
+            vals,
+        }
+    }
+
+    /// Builds without the checks of [`SparseMatrix::from_csr`] (crate-internal producers that
+    /// guarantee them).
+    pub(crate) fn from_csr_unchecked(
+        nrows: usize,
+        ncols: usize,
+        row_ptr: Vec<usize>,
+        cols: Vec<u32>,
+        vals: Vec<f64>,
+    ) -> Self {
+        debug_assert_eq!(row_ptr.len(), nrows + 1);
+        debug_assert_eq!(*row_ptr.last().unwrap(), cols.len());
+        Self {
+            nrows,
+            ncols,
+            row_ptr,
+            cols,
+            vals,
+        }
+    }
+
+    /// The identity matrix of size `n`.
+    pub fn identity(n: usize) -> Self {
+        Self {
+            nrows: n,
+            ncols: n,
+            row_ptr: (0..=n).collect(),
+            cols: (0..n as u32).collect(),
+            vals: vec![1.0; n],
+        }
+    }
+
+    /// Number of rows.
+    pub fn nrows(&self) -> usize {
+        self.nrows
+    }
+
+    /// Number of columns.
+    pub fn ncols(&self) -> usize {
+        self.ncols
+    }
+
+    /// Number of stored entries.
+    pub fn nnz(&self) -> usize {
+        self.cols.len()
+    }
+
+    /// Row pointer array (`nrows + 1` entries).
+    pub fn row_ptr(&self) -> &[usize] {
+        &self.row_ptr
+    }
+
+    /// Column indices of all entries.
+    pub fn col_indices(&self) -> &[u32] {
+        &self.cols
+    }
+
+    /// Values of all entries.
+    pub fn values(&self) -> &[f64] {
+        &self.vals
+    }
+
+    /// Column indices and values of row `i`.
+    pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
+        let r = self.row_ptr[i]..self.row_ptr[i + 1];
+        (&self.cols[r.clone()], &self.vals[r])
+    }
+
+    /// Entry `(i, j)` (zero when not stored).
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        let (c, v) = self.row(i);
+        c.binary_search(&(j as u32)).map_or(0.0, |k| v[k])
+    }
+
+    /// The sum of each row (1 for every row of a subdivision operator).
+    pub fn row_sums(&self) -> Vec<f64> {
+        (0..self.nrows)
+            .map(|i| self.row(i).1.iter().sum())
+            .collect()
+    }
+
+    /// `y = A x`, allocating the result.
+    ///
+    /// # Panics
+    /// If `x.len() != ncols`.
+    #[track_caller]
+    pub fn apply<T: Coord>(&self, x: &[T]) -> Vec<T> {
+        let mut y = vec![T::zero(); self.nrows];
+        self.apply_into(x, &mut y, Parallelism::Auto);
+        y
+    }
+
+    /// `y = A x` into a caller-provided slice; rows run on rayon's pool as `par` decides.
+    ///
+    /// # Panics
+    /// If `x.len() != ncols` or `y.len() != nrows`.
+    #[track_caller]
+    pub fn apply_into<T: Coord>(&self, x: &[T], y: &mut [T], par: Parallelism) {
+        assert_eq!(x.len(), self.ncols, "apply: input length");
+        assert_eq!(y.len(), self.nrows, "apply: output length");
+        let row = |(i, yi): (usize, &mut T)| {
+            let mut acc = T::zero();
+            for k in self.row_ptr[i]..self.row_ptr[i + 1] {
+                acc.add_scaled(self.vals[k], &x[self.cols[k] as usize]);
+            }
+            *yi = acc;
+        };
+        if par.is_parallel(self.nrows) {
+            y.par_iter_mut()
+                .enumerate()
+                .with_min_len(MIN_ROWS_PER_TASK)
+                .for_each(row);
+        } else {
+            y.iter_mut().enumerate().for_each(row);
+        }
+    }
+
+    /// The transpose, as a new CSR matrix (a counting sort over columns; rows of the result
+    /// stay sorted).
+    pub fn transpose(&self) -> SparseMatrix {
+        let mut counts = vec![0usize; self.ncols + 1];
+        for &c in &self.cols {
+            counts[c as usize + 1] += 1;
+        }
+        for j in 0..self.ncols {
+            counts[j + 1] += counts[j];
+        }
+        let row_ptr = counts.clone();
+        let mut cursor = counts;
+        let mut cols = vec![0u32; self.nnz()];
+        let mut vals = vec![0.0; self.nnz()];
+        for i in 0..self.nrows {
+            for k in self.row_ptr[i]..self.row_ptr[i + 1] {
+                let c = self.cols[k] as usize;
+                let dst = cursor[c];
+                cols[dst] = i as u32;
+                vals[dst] = self.vals[k];
+                cursor[c] += 1;
+            }
+        }
+        SparseMatrix::from_csr_unchecked(self.ncols, self.nrows, row_ptr, cols, vals)
+    }
+
+    /// The product `self * rhs` (Gustavson's row-by-row algorithm with a dense accumulator).
+    ///
+    /// # Panics
+    /// If `self.ncols() != rhs.nrows()`.
+    #[track_caller]
+    pub fn mul(&self, rhs: &SparseMatrix) -> SparseMatrix {
+        assert_eq!(self.ncols, rhs.nrows, "mul: inner dimensions");
+        let n = rhs.ncols;
+        let rows: Vec<(Vec<u32>, Vec<f64>)> = (0..self.nrows)
+            .into_par_iter()
+            .with_min_len(256)
+            .map_init(
+                || (vec![0.0f64; n], vec![false; n], Vec::<u32>::new()),
+                |(acc, seen, touched), i| {
+                    let (c, v) = self.row(i);
+                    for (&k, &w) in c.iter().zip(v) {
+                        let (c2, v2) = rhs.row(k as usize);
+                        for (&j, &w2) in c2.iter().zip(v2) {
+                            let j = j as usize;
+                            if !seen[j] {
+                                seen[j] = true;
+                                touched.push(j as u32);
+                            }
+                            acc[j] += w * w2;
+                        }
+                    }
+                    touched.sort_unstable();
+                    let mut oc = Vec::with_capacity(touched.len());
+                    let mut ov = Vec::with_capacity(touched.len());
+                    for &j in touched.iter() {
+                        let j = j as usize;
+                        if acc[j] != 0.0 {
+                            oc.push(j as u32);
+                            ov.push(acc[j]);
+                        }
+                        acc[j] = 0.0;
+                        seen[j] = false;
+                    }
+                    touched.clear();
+                    (oc, ov)
+                },
+            )
+            .collect();
+        let mut row_ptr = Vec::with_capacity(self.nrows + 1);
+        row_ptr.push(0);
+        let nnz: usize = rows.iter().map(|r| r.0.len()).sum();
+        let mut cols = Vec::with_capacity(nnz);
+        let mut vals = Vec::with_capacity(nnz);
+        for (c, v) in rows {
+            cols.extend_from_slice(&c);
+            vals.extend_from_slice(&v);
+            row_ptr.push(cols.len());
+        }
+        SparseMatrix::from_csr_unchecked(self.nrows, n, row_ptr, cols, vals)
+    }
+
+    /// The matrix as dense rows (for tests and small examples).
+    pub fn to_dense(&self) -> Vec<Vec<f64>> {
+        (0..self.nrows)
+            .map(|i| {
+                let mut r = vec![0.0; self.ncols];
+                let (c, v) = self.row(i);
+                for (&j, &w) in c.iter().zip(v) {
+                    r[j as usize] = w;
+                }
+                r
+            })
+            .collect()
+    }
+}

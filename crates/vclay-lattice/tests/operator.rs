@@ -1,0 +1,158 @@
+//! Level operators `A^(j)` and their chain `A = A^(n) ... A^(1)`
+//! (`subdivision-solids-journal.txt` section 4.2, eq 4).
+
+mod common;
+
+use common::{Rng, perturb, solid};
+use vclay_core::{Parallelism, Vec3};
+use vclay_lattice::{BoundaryRule, ChainWorkspace, SparseMatrix, primitives};
+
+#[test]
+fn every_row_is_an_affine_combination() {
+    for rule in [
+        BoundaryRule::Interior,
+        BoundaryRule::Smooth,
+        BoundaryRule::Sharp,
+    ] {
+        for l in [
+            primitives::box_lattice([3, 4, 3], Vec3::zeros(), Vec3::new(2.0, 3.0, 2.0)),
+            primitives::cylinder(1.0, 1.0, 5, 1, 1),
+            primitives::gear(1.0, 2.0, 2.5, 0.4),
+        ] {
+            let s = solid(l, rule, 2);
+            for a in s.map().operators() {
+                for (i, sum) in a.row_sums().iter().enumerate() {
+                    assert!((sum - 1.0).abs() < 1e-13, "{rule:?}: row {i} sums to {sum}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn chain_reproduces_the_subdivided_points_and_the_product() {
+    let mut l = primitives::torus(3.0, 1.0, 6, 2);
+    perturb(&mut l, 3, 0.1);
+    let s = solid(l, BoundaryRule::Smooth, 2);
+    let p = s.control().points().to_vec();
+    let d = s.map().apply(&p);
+    for (a, b) in d.iter().zip(s.finest().points()) {
+        assert!((a - b).norm() < 1e-12);
+    }
+    let a = s.map().product().unwrap();
+    assert_eq!((a.nrows(), a.ncols()), (s.finest().num_points(), p.len()));
+    let d2 = a.apply(&p);
+    for (x, y) in d.iter().zip(&d2) {
+        assert!((x - y).norm() < 1e-12);
+    }
+    for (i, sum) in a.row_sums().iter().enumerate() {
+        assert!((sum - 1.0).abs() < 1e-12, "product row {i}");
+    }
+    // Affine invariance: moving all control points rigidly moves all data points.
+    let shift = Vec3::new(0.3, -2.0, 1.5);
+    let moved: Vec<Vec3> = p.iter().map(|q| q + shift).collect();
+    for (x, y) in s.map().apply(&moved).iter().zip(&d) {
+        assert!((x - (y + shift)).norm() < 1e-12);
+    }
+}
+
+#[test]
+fn transpose_chain_is_the_adjoint() {
+    let s = solid(primitives::l_solid(2, 1, 1.0), BoundaryRule::Sharp, 2);
+    let mut rng = Rng(11);
+    let x: Vec<f64> = (0..s.control().num_points()).map(|_| rng.sym()).collect();
+    let y: Vec<f64> = (0..s.finest().num_points()).map(|_| rng.sym()).collect();
+    let ax = s.map().apply(&x);
+    let aty = s.map().apply_transpose(&y);
+    let lhs: f64 = ax.iter().zip(&y).map(|(a, b)| a * b).sum();
+    let rhs: f64 = x.iter().zip(&aty).map(|(a, b)| a * b).sum();
+    assert!(
+        (lhs - rhs).abs() < 1e-10 * lhs.abs().max(1.0),
+        "{lhs} vs {rhs}"
+    );
+    // And it equals the transpose of the product.
+    let at = s.map().product().unwrap().transpose();
+    let aty2 = at.apply(&y);
+    for (a, b) in aty.iter().zip(&aty2) {
+        assert!((a - b).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn workspace_application_matches_and_parallel_equals_sequential() {
+    let s = solid(
+        primitives::box_lattice([4, 4, 4], Vec3::zeros(), Vec3::repeat(3.0)),
+        BoundaryRule::Smooth,
+        3,
+    );
+    let p = s.control().points().to_vec();
+    let mut ws = ChainWorkspace::new();
+    let mut d1 = vec![Vec3::zeros(); s.finest().num_points()];
+    let mut d2 = d1.clone();
+    s.map()
+        .apply_into(&p, &mut d1, &mut ws, Parallelism::Sequential);
+    s.map().apply_into(&p, &mut d2, &mut ws, Parallelism::Rayon);
+    assert_eq!(d1, d2);
+    let mut g1 = vec![Vec3::zeros(); p.len()];
+    let mut g2 = g1.clone();
+    s.map()
+        .apply_transpose_into(&d1, &mut g1, &mut ws, Parallelism::Sequential);
+    s.map()
+        .apply_transpose_into(&d1, &mut g2, &mut ws, Parallelism::Rayon);
+    for (a, b) in g1.iter().zip(&g2) {
+        assert!((a - b).norm() < 1e-9 * a.norm().max(1.0));
+    }
+    // Transpose of a chain of affine maps: A^T 1 = column sums, total = number of data points.
+    let ones = vec![1.0; s.finest().num_points()];
+    let cs: f64 = s.map().apply_transpose(&ones).iter().sum();
+    assert!((cs - s.finest().num_points() as f64).abs() < 1e-8);
+}
+
+#[test]
+fn fixed_control_points_partition_the_columns() {
+    // Journal section 5.2: d = A1 p1 + A2 p2 with the free and fixed columns.
+    let s = solid(primitives::cube_with_holes(1.0), BoundaryRule::Smooth, 1);
+    let p = s.control().points().to_vec();
+    let fixed: Vec<bool> = p.iter().map(|q| q.z < 0.5).collect();
+    let p1: Vec<Vec3> = p
+        .iter()
+        .zip(&fixed)
+        .map(|(q, &f)| if f { Vec3::zeros() } else { *q })
+        .collect();
+    let p2: Vec<Vec3> = p
+        .iter()
+        .zip(&fixed)
+        .map(|(q, &f)| if f { *q } else { Vec3::zeros() })
+        .collect();
+    let d = s.map().apply(&p);
+    let d1 = s.map().apply(&p1);
+    let d2 = s.map().apply(&p2);
+    for i in 0..d.len() {
+        assert!((d[i] - d1[i] - d2[i]).norm() < 1e-12);
+    }
+}
+
+#[test]
+fn sparse_matrix_basics() {
+    let a = SparseMatrix::from_csr(2, 3, vec![0, 2, 3], vec![0, 2, 1], vec![1.0, 2.0, 3.0]);
+    assert_eq!(a.to_dense(), vec![vec![1.0, 0.0, 2.0], vec![0.0, 3.0, 0.0]]);
+    assert_eq!(
+        a.transpose().to_dense(),
+        vec![vec![1.0, 0.0], vec![0.0, 3.0], vec![2.0, 0.0]]
+    );
+    let i = SparseMatrix::identity(3);
+    assert_eq!(a.mul(&i), a);
+    assert_eq!(
+        a.mul(&a.transpose()).to_dense(),
+        vec![vec![5.0, 0.0], vec![0.0, 9.0]]
+    );
+    assert_eq!(a.apply(&[1.0, 1.0, 1.0]), vec![3.0, 3.0]);
+    assert_eq!(a.get(0, 2), 2.0);
+    assert_eq!(a.get(1, 2), 0.0);
+}
+
+#[test]
+#[should_panic(expected = "not strictly increasing")]
+fn sparse_matrix_rejects_unsorted_rows() {
+    SparseMatrix::from_csr(1, 3, vec![0, 2], vec![2, 0], vec![1.0, 1.0]);
+}
