@@ -37,6 +37,12 @@ pub enum DynamicsError {
         /// Number of control points.
         count: usize,
     },
+    /// A linear system cannot be solved.
+    #[error("singular system: {what}")]
+    Singular {
+        /// Explanation and remedy.
+        what: String,
+    },
     /// The simulation diverged.
     #[error(
         "simulation diverged at step {step} (t = {time}): {what}; try a time step of at most {suggested_dt:.3e}"

@@ -73,7 +73,11 @@ fn static_string_under_gravity_is_the_exact_parabola() {
     for degree in [2, 3, 4] {
         let mut d = string_under_gravity(degree);
         let r = d.step(Integrator::Static).unwrap();
-        assert!(r.solver.relative_residual < 1e-10);
+        assert!(
+            r.solver.relative_residual < 1e-10,
+            "residual {}",
+            r.solver.relative_residual
+        );
         for i in 0..=20 {
             let u = i as f64 / 20.0;
             let p = d.geometry().point(u).unwrap();

@@ -26,6 +26,10 @@
 //! ([`DEFAULT_CG_TOLERANCE`]) with a higher cap by default. The static variant (`mu = gamma = 0`,
 //! section 5.3 and footnote 6) solves `K p = f_p` ([`Integrator::Static`]).
 //!
+//! Each step's linear system is solved by default with a cached sparse Cholesky factorization
+//! ([`LinearSolver::Direct`]; the matrix is constant with frozen weights), or by the paper's
+//! element-by-element CG ([`LinearSolver::ConjugateGradient`]).
+//!
 //! ## Limitations
 //! Frozen weights only (footnote 2): the generalized inertial force `g_p` vanishes and the weight
 //! columns of J are not simulated. Linear constraints are limited to fixed control points
@@ -233,6 +237,18 @@ pub enum ElasticReference {
     Absolute,
 }
 
+/// How each step's linear system is solved.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LinearSolver {
+    /// Sparse Cholesky of the reduced system, factored once and reused while the time step,
+    /// springs and fixed set are unchanged (frozen weights make the matrix constant). Default.
+    #[default]
+    Direct,
+    /// Jacobi-preconditioned conjugate gradients, element by element without assembly
+    /// (`d-nurbs.txt` section 5.3), with [`Dnurbs::max_iterations`] and [`Dnurbs::tolerance`].
+    ConjugateGradient,
+}
+
 /// What one step did.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StepReport {
@@ -266,6 +282,10 @@ pub struct Dnurbs<G: DnurbsGeometry> {
     pub max_iterations: usize,
     /// CG relative residual tolerance (default [`DEFAULT_CG_TOLERANCE`]).
     pub tolerance: f64,
+    /// Linear solver (default [`LinearSolver::Direct`]).
+    pub solver: LinearSolver,
+    direct: Option<system::DirectSolver>,
+    k_rest: Option<(f64, Vec<Vec3>)>,
 }
 
 /// A dynamic NURBS curve.
@@ -318,6 +338,9 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
             steps: 0,
             max_iterations: DEFAULT_CG_ITERATIONS,
             tolerance: DEFAULT_CG_TOLERANCE,
+            solver: LinearSolver::default(),
+            direct: None,
+            k_rest: None,
         })
     }
 
@@ -350,6 +373,7 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
     /// Plastic reset: the current shape becomes the rest shape.
     pub fn set_rest_shape_to_current(&mut self) {
         self.rest = self.geometry.points().to_vec();
+        self.k_rest = None;
     }
 
     /// The rest shape's control points.
@@ -536,6 +560,22 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
         0.5 * self.system.quadratic_form([0.0, 0.0, 1.0], &d, &d)
     }
 
+    /// Kinetic and elastic energy in one pass over the matrices.
+    fn energies(&self, dt: f64) -> (f64, f64) {
+        let p = self.geometry.points();
+        let v: Vec<Vec3> = p
+            .iter()
+            .zip(&self.previous)
+            .map(|(a, b)| (a - b) / dt)
+            .collect();
+        let d: Vec<Vec3> = match self.reference {
+            ElasticReference::RestShape => p.iter().zip(&self.rest).map(|(a, b)| a - b).collect(),
+            ElasticReference::Absolute => p.to_vec(),
+        };
+        let (m, k) = self.system.mass_and_stiffness_forms(&v, &d);
+        (0.5 * m, 0.5 * k)
+    }
+
     /// Kinetic energy `1/2 v^T M v` with the backward-difference velocity of the last step `dt`.
     pub fn kinetic_energy(&self, dt: f64) -> f64 {
         let p = self.geometry.points();
@@ -567,14 +607,15 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
                     .zip(&self.previous)
                     .map(|(a, b)| a * 4.0 - b * 2.0)
                     .collect();
-                let mut m_mix = vec![Vec3::zeros(); n];
-                self.system.apply([1.0, 0.0, 0.0], &mix, &mut m_mix);
-                let mut d_prev = vec![Vec3::zeros(); n];
-                self.system
-                    .apply([0.0, 1.0, 0.0], &self.previous, &mut d_prev);
-                let rhs: Vec<Vec3> = (0..n)
-                    .map(|i| fp[i] * (2.0 * dt * dt) + m_mix[i] + d_prev[i] * dt)
-                    .collect();
+                // One fused pass: M (4p - 2p_prev) + dt D p_prev.
+                let mut rhs = vec![Vec3::zeros(); n];
+                self.system.apply_terms(
+                    &[([1.0, 0.0, 0.0], &mix), ([0.0, dt, 0.0], &self.previous)],
+                    &mut rhs,
+                );
+                for (r, f) in rhs.iter_mut().zip(&fp) {
+                    *r += f * (2.0 * dt * dt);
+                }
                 // Initial guess: constant-velocity extrapolation (fixed points stay).
                 let x: Vec<Vec3> = (0..n)
                     .map(|i| {
@@ -604,14 +645,25 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
             coeffs,
             springs: &springs,
         };
-        let solver = system::conjugate_gradient(
-            &op,
-            &rhs,
-            &mut x,
-            &self.fixed,
-            self.max_iterations,
-            self.tolerance,
-        );
+        let solver = match self.solver {
+            LinearSolver::ConjugateGradient => system::conjugate_gradient(
+                &op,
+                &rhs,
+                &mut x,
+                &self.fixed,
+                self.max_iterations,
+                self.tolerance,
+            ),
+            LinearSolver::Direct => {
+                system::direct_solve(&mut self.direct, &op, &rhs, &mut x, &self.fixed).map_err(
+                    |_| DynamicsError::Singular {
+                        what: "the system matrix is not positive definite: with no mass (static \
+                               solve), fix control points so that rigid motions are excluded"
+                            .into(),
+                    },
+                )?
+            }
+        };
         // Divergence: non-finite state or runaway displacement.
         let limit = DIVERGENCE_DISPLACEMENT_FACTOR * self.rest_scale;
         let bad = x
@@ -642,11 +694,12 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
             0.0
         };
         self.steps += 1;
+        let (kinetic_energy, elastic_energy) = self.energies(dt);
         Ok(StepReport {
             time: self.time,
             solver,
-            kinetic_energy: self.kinetic_energy(dt),
-            elastic_energy: self.elastic_energy(),
+            kinetic_energy,
+            elastic_energy,
         })
     }
 
@@ -746,8 +799,5 @@ fn build_system<G: DnurbsGeometry>(
             });
         }
     }
-    Ok(ElementSystem {
-        n: geometry.control_point_count(),
-        elements,
-    })
+    Ok(ElementSystem::new(geometry.control_point_count(), elements))
 }

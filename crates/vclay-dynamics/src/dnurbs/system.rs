@@ -33,6 +33,127 @@ pub struct ElementSystem {
     pub n: usize,
     /// The elements.
     pub elements: Vec<Element>,
+    /// The global matrices in compressed-row form, assembled once on first use (frozen weights
+    /// make them constant); products use them instead of the element loop.
+    csr: std::sync::OnceLock<Csr3>,
+}
+
+/// `M`, `D` and `K` sharing one compressed-row pattern.
+#[derive(Clone, Debug)]
+struct Csr3 {
+    row_ptr: Vec<usize>,
+    cols: Vec<usize>,
+    /// Interleaved `[m, d, k]` per entry.
+    vals: Vec<[f64; 3]>,
+}
+
+impl Csr3 {
+    /// `out_i = sum_t sum_j (c_t . vals_ij) x_t[j]` over several terms in one pass.
+    fn apply_terms(&self, terms: &[([f64; 3], &[Vec3])], out: &mut [Vec3]) {
+        let row = |i: usize| {
+            let mut s = Vec3::zeros();
+            for k in self.row_ptr[i]..self.row_ptr[i + 1] {
+                let v = self.vals[k];
+                let j = self.cols[k];
+                for (c, x) in terms {
+                    s += x[j] * (c[0] * v[0] + c[1] * v[1] + c[2] * v[2]);
+                }
+            }
+            s
+        };
+        if out.len() >= 4 * PARALLEL_ELEMENTS {
+            out.par_iter_mut()
+                .enumerate()
+                .for_each(|(i, o)| *o = row(i));
+        } else {
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = row(i);
+            }
+        }
+    }
+
+    /// `(x^T M x, y^T K y)` in one pass.
+    fn two_forms(&self, x: &[Vec3], y: &[Vec3]) -> (f64, f64) {
+        let row = |i: usize| {
+            let (mut mx, mut ky) = (Vec3::zeros(), Vec3::zeros());
+            for k in self.row_ptr[i]..self.row_ptr[i + 1] {
+                let v = self.vals[k];
+                let j = self.cols[k];
+                mx += x[j] * v[0];
+                ky += y[j] * v[2];
+            }
+            (x[i].dot(&mx), y[i].dot(&ky))
+        };
+        let n = self.row_ptr.len() - 1;
+        if n >= 4 * PARALLEL_ELEMENTS {
+            (0..n)
+                .into_par_iter()
+                .map(row)
+                .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
+        } else {
+            (0..n)
+                .map(row)
+                .fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
+        }
+    }
+
+    fn assemble(n: usize, elements: &[Element]) -> Self {
+        let mut rows: Vec<Vec<(usize, [f64; 3])>> = vec![Vec::new(); n];
+        for e in elements {
+            let nd = e.dofs.len();
+            for a in 0..nd {
+                for b in 0..nd {
+                    let k = a * nd + b;
+                    rows[e.dofs[a]].push((e.dofs[b], [e.mass[k], e.damping[k], e.stiffness[k]]));
+                }
+            }
+        }
+        let mut row_ptr = Vec::with_capacity(n + 1);
+        let mut cols = Vec::new();
+        let mut vals: Vec<[f64; 3]> = Vec::new();
+        row_ptr.push(0);
+        for mut r in rows {
+            r.sort_by_key(|x| x.0);
+            let start = cols.len();
+            for (c, v) in r {
+                if cols.len() > start && *cols.last().expect("non-empty") == c {
+                    let last = vals.last_mut().expect("non-empty");
+                    for t in 0..3 {
+                        last[t] += v[t];
+                    }
+                } else {
+                    cols.push(c);
+                    vals.push(v);
+                }
+            }
+            row_ptr.push(cols.len());
+        }
+        Self {
+            row_ptr,
+            cols,
+            vals,
+        }
+    }
+
+    fn apply(&self, coeffs: [f64; 3], x: &[Vec3], out: &mut [Vec3]) {
+        let row = |i: usize| {
+            let mut s = Vec3::zeros();
+            for k in self.row_ptr[i]..self.row_ptr[i + 1] {
+                let v = self.vals[k];
+                s += x[self.cols[k]] * (coeffs[0] * v[0] + coeffs[1] * v[1] + coeffs[2] * v[2]);
+            }
+            s
+        };
+        if out.len() >= 4 * PARALLEL_ELEMENTS {
+            out.par_iter_mut()
+                .enumerate()
+                .for_each(|(i, o)| *o = row(i));
+        } else {
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = row(i);
+            }
+        }
+    }
 }
 
 /// Densities evaluated at one quadrature point: `mu, gamma`, tension per direction, rigidity per
@@ -101,8 +222,40 @@ impl Element {
 }
 
 impl ElementSystem {
-    /// `out = (a_m M + a_d D + a_k K) x`.
+    /// A system from its elements.
+    pub fn new(n: usize, elements: Vec<Element>) -> Self {
+        Self {
+            n,
+            elements,
+            csr: std::sync::OnceLock::new(),
+        }
+    }
+
+    /// `out = (a_m M + a_d D + a_k K) x` with the assembled matrices.
     pub fn apply(&self, coeffs: [f64; 3], x: &[Vec3], out: &mut [Vec3]) {
+        self.csr
+            .get_or_init(|| Csr3::assemble(self.n, &self.elements))
+            .apply(coeffs, x, out);
+    }
+
+    fn csr(&self) -> &Csr3 {
+        self.csr
+            .get_or_init(|| Csr3::assemble(self.n, &self.elements))
+    }
+
+    /// `out = sum_t (c_t . [M, D, K]) x_t`: several products fused into one pass.
+    pub fn apply_terms(&self, terms: &[([f64; 3], &[Vec3])], out: &mut [Vec3]) {
+        self.csr().apply_terms(terms, out);
+    }
+
+    /// `(x^T M x, y^T K y)` summed over coordinates, in one pass.
+    pub fn mass_and_stiffness_forms(&self, x: &[Vec3], y: &[Vec3]) -> (f64, f64) {
+        self.csr().two_forms(x, y)
+    }
+
+    /// `out = (a_m M + a_d D + a_k K) x` element by element, without assembly (`d-nurbs.txt`
+    /// section 5); gives the same result as [`ElementSystem::apply`].
+    pub fn apply_elementwise(&self, coeffs: [f64; 3], x: &[Vec3], out: &mut [Vec3]) {
         let local = |acc: &mut Vec<Vec3>, e: &Element| {
             let nd = e.dofs.len();
             for a in 0..nd {
@@ -273,14 +426,16 @@ pub(crate) fn conjugate_gradient(
             }
         })
         .collect();
+    // Relative residuals use the norm of the whole right-hand side (all three coordinates), so a
+    // coordinate whose right-hand side is ~0 does not make the ratio meaningless.
     let bnorm = {
-        let mut s = Vec3::zeros();
+        let mut s = 0.0;
         for (i, v) in b.iter().enumerate() {
             if !fixed[i] {
-                s += v.component_mul(v);
+                s += v.norm_squared();
             }
         }
-        s.map(f64::sqrt)
+        Vec3::repeat(s.sqrt())
     };
     let norms = |r: &[Vec3]| {
         let mut s = Vec3::zeros();
@@ -341,4 +496,177 @@ pub(crate) fn conjugate_gradient(
         stats.relative_residual = rel(norms(&r));
     }
     stats
+}
+
+/// A cached sparse Cholesky factorization of the reduced system matrix (free control points
+/// only). With frozen weights the matrix changes only when the time step, the delta springs or
+/// the set of fixed points change, so one factorization serves many steps (faer's supernodal
+/// Cholesky with a fill-reducing ordering).
+pub(crate) struct DirectSolver {
+    key: u64,
+    free: Vec<usize>,
+    /// `A_free,fixed x_fixed` for the fixed positions it was computed with.
+    coupling: Option<(Vec<Vec3>, Vec<Vec3>)>,
+    llt: faer::sparse::linalg::solvers::Llt<usize, f64>,
+}
+
+impl std::fmt::Debug for DirectSolver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "DirectSolver {{ free: {} }}", self.free.len())
+    }
+}
+
+impl Clone for DirectSolver {
+    fn clone(&self) -> Self {
+        Self {
+            key: self.key,
+            free: self.free.clone(),
+            coupling: self.coupling.clone(),
+            llt: self.llt.clone(),
+        }
+    }
+}
+
+fn operator_key(op: &Operator<'_>, fixed: &[bool]) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    for c in op.coeffs {
+        c.to_bits().hash(&mut h);
+    }
+    fixed.hash(&mut h);
+    for s in op.springs {
+        s.indices.hash(&mut h);
+        for v in &s.values {
+            v.to_bits().hash(&mut h);
+        }
+        s.k.to_bits().hash(&mut h);
+    }
+    h.finish()
+}
+
+/// Error of a direct factorization: the reduced matrix is not positive definite (for example a
+/// static solve with nothing fixed, where rigid translations have zero stiffness).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct NotPositiveDefinite;
+
+impl DirectSolver {
+    fn factor(op: &Operator<'_>, fixed: &[bool]) -> Result<Self, NotPositiveDefinite> {
+        use faer::sparse::{SparseColMat, Triplet};
+        let n = op.sys.n;
+        let mut pos = vec![usize::MAX; n];
+        let free: Vec<usize> = (0..n).filter(|&i| !fixed[i]).collect();
+        for (k, &i) in free.iter().enumerate() {
+            pos[i] = k;
+        }
+        let mut trips = Vec::new();
+        let c = op.coeffs;
+        for e in &op.sys.elements {
+            let nd = e.dofs.len();
+            for a in 0..nd {
+                let ra = pos[e.dofs[a]];
+                if ra == usize::MAX {
+                    continue;
+                }
+                for b in 0..nd {
+                    let rb = pos[e.dofs[b]];
+                    if rb == usize::MAX || rb > ra {
+                        continue;
+                    }
+                    let k = a * nd + b;
+                    let v = c[0] * e.mass[k] + c[1] * e.damping[k] + c[2] * e.stiffness[k];
+                    trips.push(Triplet::new(ra, rb, v));
+                }
+            }
+        }
+        for s in op.springs {
+            for (&i, &ri) in s.indices.iter().zip(&s.values) {
+                for (&j, &rj) in s.indices.iter().zip(&s.values) {
+                    let (a, b) = (pos[i], pos[j]);
+                    if a != usize::MAX && b != usize::MAX && b <= a {
+                        trips.push(Triplet::new(a, b, c[2] * s.k * ri * rj));
+                    }
+                }
+            }
+        }
+        let m = free.len();
+        let mat = SparseColMat::<usize, f64>::try_new_from_triplets(m, m, &trips)
+            .map_err(|_| NotPositiveDefinite)?;
+        let llt = mat
+            .sp_cholesky(faer::Side::Lower)
+            .map_err(|_| NotPositiveDefinite)?;
+        Ok(Self {
+            key: operator_key(op, fixed),
+            free,
+            coupling: None,
+            llt,
+        })
+    }
+}
+
+/// Solves `A x = b` on the free control points with a (cached) sparse Cholesky factorization.
+pub(crate) fn direct_solve(
+    cache: &mut Option<DirectSolver>,
+    op: &Operator<'_>,
+    b: &[Vec3],
+    x: &mut [Vec3],
+    fixed: &[bool],
+) -> Result<SolverStats, NotPositiveDefinite> {
+    use faer::linalg::solvers::Solve;
+    let n = op.sys.n;
+    let key = operator_key(op, fixed);
+    if cache.as_ref().is_none_or(|c| c.key != key) {
+        *cache = Some(DirectSolver::factor(op, fixed)?);
+    }
+    let solver = cache.as_mut().expect("just factored");
+    // Move the fixed values to the right-hand side: b_free - A_free,fixed x_fixed (cached while
+    // the fixed points stay where they are).
+    let fixed_values: Vec<Vec3> = (0..n).filter(|&i| fixed[i]).map(|i| x[i]).collect();
+    let fresh = solver
+        .coupling
+        .as_ref()
+        .is_none_or(|(v, _)| *v != fixed_values);
+    if fresh {
+        let mut axf = vec![Vec3::zeros(); n];
+        if !fixed_values.is_empty() {
+            let xf: Vec<Vec3> = (0..n)
+                .map(|i| if fixed[i] { x[i] } else { Vec3::zeros() })
+                .collect();
+            op.apply(&xf, &mut axf);
+        }
+        solver.coupling = Some((fixed_values, axf));
+    }
+    let solver = cache.as_ref().expect("just factored");
+    let axf = &solver.coupling.as_ref().expect("just computed").1;
+    let m = solver.free.len();
+    let mut rhs = faer::Mat::<f64>::zeros(m, 3);
+    for (k, &i) in solver.free.iter().enumerate() {
+        for c in 0..3 {
+            rhs[(k, c)] = b[i][c] - axf[i][c];
+        }
+    }
+    solver.llt.solve_in_place(rhs.as_mut());
+    for (k, &i) in solver.free.iter().enumerate() {
+        x[i] = Vec3::new(rhs[(k, 0)], rhs[(k, 1)], rhs[(k, 2)]);
+    }
+    // Report the true residual.
+    let mut ax = vec![Vec3::zeros(); n];
+    op.apply(x, &mut ax);
+    let (mut rn, mut bn) = (Vec3::zeros(), Vec3::zeros());
+    for i in 0..n {
+        if !fixed[i] {
+            let r = b[i] - ax[i];
+            rn += r.component_mul(&r);
+            bn += b[i].component_mul(&b[i]);
+        }
+    }
+    let (rn, bn) = (rn.sum(), bn.sum());
+    let rel = if bn > 0.0 {
+        (rn / bn).sqrt()
+    } else {
+        rn.sqrt()
+    };
+    Ok(SolverStats {
+        iterations: 0,
+        relative_residual: rel,
+    })
 }
