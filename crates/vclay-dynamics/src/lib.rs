@@ -14,7 +14,7 @@ pub mod dnurbs;
 pub mod error;
 
 pub use dnurbs::{
-    Density, DnurbsCurve, DnurbsSurface, ElasticReference, ElementSystem, Force, Integrator,
-    Material, SolverStats, StepReport,
+    Density, DnurbsClosedCurve, DnurbsCurve, DnurbsSurface, ElasticReference, ElementSystem, Force,
+    Integrator, LinearSolver, Material, SolverStats, StepReport,
 };
 pub use error::DynamicsError;

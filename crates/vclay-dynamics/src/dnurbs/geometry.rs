@@ -53,6 +53,8 @@ pub trait DnurbsGeometry: Clone + Send + Sync {
     fn area_normal(&self, param: &[f64]) -> Result<Vec3, DynamicsError>;
     /// Largest degree (for choosing the quadrature order).
     fn max_degree(&self) -> usize;
+    /// Parameter of the point of the geometry closest to `x` (`[u, 0]` for curves).
+    fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError>;
 }
 
 /// Non-empty spans of a knot vector as `(span index, start, end)`.
@@ -140,6 +142,10 @@ impl DnurbsGeometry for NurbsCurve {
         // Curves have no normal; validate the parameter anyway.
         self.point(param[0])?;
         Ok(Vec3::zeros())
+    }
+
+    fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
+        Ok([nearest_on_curve(self, x)?, 0.0])
     }
 }
 
@@ -259,4 +265,160 @@ impl DnurbsGeometry for NurbsSurface {
         let d = self.derivatives(param[0], param[1], 1)?;
         Ok(d[1][0].cross(&d[0][1]))
     }
+
+    fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
+        nearest_on_surface(self, x)
+    }
+}
+
+/// A closed (periodic) NURBS curve: `n` distinct control points, the first `p` repeated at the end
+/// over uniform knots, so the curve closes with `C^(p-1)` continuity. Its D-NURBS degrees of
+/// freedom are the `n` distinct points (a repeated point is one coordinate, not two).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClosedCurve {
+    curve: NurbsCurve,
+    unique: Vec<Vec3>,
+}
+
+impl ClosedCurve {
+    /// A closed B-spline curve of `degree` through the control polygon `points` (at least
+    /// `degree + 1` points), with the classic integer knots `t_i = i - p`, so the domain is
+    /// `[0, n]` and each span has unit length. The D-NURBS energies depend on the
+    /// parametrization (tension scales with `1/h`, bending with `1/h^3` for span length `h`);
+    /// the parameters of `d-nurbs.txt` Table 1 assume unit spans.
+    pub fn new(degree: usize, points: Vec<Vec3>) -> Result<Self, DynamicsError> {
+        let n = points.len();
+        if n < degree + 1 || degree == 0 {
+            return Err(DynamicsError::Parameter {
+                name: "closed curve control points",
+                value: n as f64,
+                why: "need degree >= 1 and at least degree + 1 distinct control points",
+            });
+        }
+        let knots: Vec<f64> = (0..n + 2 * degree + 1)
+            .map(|i| i as f64 - degree as f64)
+            .collect();
+        let kv = vclay_spline::KnotVector::new(knots, degree, n + degree)
+            .map_err(|source| vclay_spline::SplineError::Knots { axis: 0, source })?;
+        let wrapped: Vec<Vec3> = (0..n + degree).map(|i| points[i % n]).collect();
+        let curve = NurbsCurve::from_knot_vector(kv, wrapped, vec![1.0; n + degree])?;
+        Ok(Self {
+            curve,
+            unique: points,
+        })
+    }
+
+    /// The underlying (wrapped) NURBS curve, for evaluation and export.
+    pub fn curve(&self) -> &NurbsCurve {
+        &self.curve
+    }
+}
+
+impl DnurbsGeometry for ClosedCurve {
+    const DIM: usize = 1;
+    const PAIRS: usize = 1;
+
+    fn control_point_count(&self) -> usize {
+        self.unique.len()
+    }
+    fn points(&self) -> &[Vec3] {
+        &self.unique
+    }
+    fn set_points(&mut self, p: Vec<Vec3>) -> Result<(), DynamicsError> {
+        let n = p.len();
+        let deg = self.curve.degree();
+        let wrapped: Vec<Vec3> = (0..n + deg).map(|i| p[i % n]).collect();
+        self.curve.set_control_points(wrapped)?;
+        self.unique = p;
+        Ok(())
+    }
+    fn max_degree(&self) -> usize {
+        self.curve.degree()
+    }
+    fn element_samples(&self, gauss: &GaussLegendre) -> Vec<ElementSamples> {
+        let n = self.unique.len();
+        let mut s = self.curve.element_samples(gauss);
+        for e in &mut s {
+            for d in &mut e.dofs {
+                *d %= n;
+            }
+        }
+        s
+    }
+    fn basis_at(&self, param: &[f64]) -> Result<(Vec<usize>, Vec<f64>, Vec3), DynamicsError> {
+        let (idx, r, x) = self.curve.basis_at(param)?;
+        let n = self.unique.len();
+        Ok((idx.into_iter().map(|i| i % n).collect(), r, x))
+    }
+    fn area_normal(&self, param: &[f64]) -> Result<Vec3, DynamicsError> {
+        self.curve.area_normal(param)
+    }
+    fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
+        self.curve.nearest_param(x)
+    }
+}
+
+/// Number of samples per knot span used to seed closest-point searches.
+pub const NEAREST_SAMPLES_PER_SPAN: usize = 16;
+/// Newton iterations of closest-point searches.
+pub const NEAREST_NEWTON_STEPS: usize = 8;
+
+/// Closest point on a curve: dense sampling, then Newton on `(c(u) - x) . c'(u) = 0`, clamped to
+/// the domain.
+pub(crate) fn nearest_on_curve(c: &NurbsCurve, x: &Vec3) -> Result<f64, DynamicsError> {
+    let dom = c.domain();
+    let spans = c.knots().distinct().len().max(2) - 1;
+    let m = NEAREST_SAMPLES_PER_SPAN * spans;
+    let mut best = (f64::INFINITY, dom.min);
+    for i in 0..=m {
+        let u = dom.min + dom.length() * i as f64 / m as f64;
+        let d = (c.point(u)? - x).norm_squared();
+        if d < best.0 {
+            best = (d, u);
+        }
+    }
+    let mut u = best.1;
+    for _ in 0..NEAREST_NEWTON_STEPS {
+        let d = c.derivatives(u, 2)?;
+        let r = d[0] - x;
+        let g = r.dot(&d[1]);
+        let h = d[1].norm_squared() + r.dot(&d[2]);
+        if h <= 0.0 {
+            break;
+        }
+        u = dom.clamp(u - g / h);
+    }
+    Ok(u)
+}
+
+/// Closest point on a surface: dense sampling, then Newton on the 2x2 normal equations.
+pub(crate) fn nearest_on_surface(s: &NurbsSurface, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
+    let [du, dv] = s.domain();
+    let nu = NEAREST_SAMPLES_PER_SPAN * (s.knots()[0].distinct().len().max(2) - 1);
+    let nv = NEAREST_SAMPLES_PER_SPAN * (s.knots()[1].distinct().len().max(2) - 1);
+    let us = du.linspace(nu + 1);
+    let vs = dv.linspace(nv + 1);
+    let grid = s.eval_grid(&us, &vs, vclay_core::Parallelism::Auto)?;
+    let k = grid
+        .iter()
+        .enumerate()
+        .map(|(k, p)| (k, (p - x).norm_squared()))
+        .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
+        .0;
+    let (mut u, mut v) = (us[k / vs.len()], vs[k % vs.len()]);
+    for _ in 0..NEAREST_NEWTON_STEPS {
+        let d = s.derivatives(u, v, 2)?;
+        let r = d[0][0] - x;
+        let g = nalgebra::Vector2::new(r.dot(&d[1][0]), r.dot(&d[0][1]));
+        let h = nalgebra::Matrix2::new(
+            d[1][0].norm_squared() + r.dot(&d[2][0]),
+            d[1][0].dot(&d[0][1]) + r.dot(&d[1][1]),
+            d[1][0].dot(&d[0][1]) + r.dot(&d[1][1]),
+            d[0][1].norm_squared() + r.dot(&d[0][2]),
+        );
+        let Some(step) = h.lu().solve(&g) else { break };
+        u = du.clamp(u - step.x);
+        v = dv.clamp(v - step.y);
+    }
+    Ok([u, v])
 }

@@ -37,9 +37,11 @@
 //! triangular surfaces are future work.
 
 mod geometry;
+pub mod presets;
 mod system;
 
-pub use geometry::{DnurbsGeometry, ElementSamples};
+pub use geometry::{ClosedCurve, DnurbsGeometry, ElementSamples};
+pub use presets::{Preset, TABLE_1};
 pub use system::{Element, ElementSystem, SolverStats};
 
 use crate::error::DynamicsError;
@@ -209,6 +211,15 @@ pub enum Force {
     Gravity(Vec3),
     /// Inflation: pressure along the surface normal, `f = P s_u x s_v` (surfaces only).
     Inflation(f64),
+    /// A data point pulling the nearest point of the geometry with a spring of `stiffness`
+    /// (`d-nurbs.txt` section 7.3: "spring forces ... are always applied to the nearest points";
+    /// the attachment is searched again at every step).
+    DataPoint {
+        /// The data point.
+        point: Vec3,
+        /// Spring stiffness.
+        stiffness: f64,
+    },
 }
 
 /// Time integration scheme.
@@ -292,6 +303,23 @@ pub struct Dnurbs<G: DnurbsGeometry> {
 pub type DnurbsCurve = Dnurbs<NurbsCurve>;
 /// A dynamic tensor-product NURBS surface.
 pub type DnurbsSurface = Dnurbs<NurbsSurface>;
+/// A dynamic closed (periodic) curve.
+pub type DnurbsClosedCurve = Dnurbs<ClosedCurve>;
+
+impl<G: DnurbsGeometry> Dnurbs<G> {
+    /// Distances from each data point of the [`Force::DataPoint`] forces to the geometry.
+    pub fn data_distances(&self) -> Result<Vec<f64>, DynamicsError> {
+        let mut out = Vec::new();
+        for f in &self.forces {
+            if let Force::DataPoint { point, .. } = f {
+                let prm = self.geometry.nearest_param(point)?;
+                let (_, _, x) = self.geometry.basis_at(&prm[..G::DIM])?;
+                out.push((x - point).norm());
+            }
+        }
+        Ok(out)
+    }
+}
 
 impl<G: DnurbsGeometry> Dnurbs<G> {
     /// Builds the model: element samples and matrices are computed once (frozen weights).
@@ -485,6 +513,25 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
                         let d2: f64 = (0..G::DIM).map(|a| (q[a] - param[a]).powi(2)).sum();
                         let g = (-d2 / (2.0 * sigma * sigma)).exp() / norm;
                         (d0 - s) * (stiffness * g)
+                    });
+                }
+                Force::DataPoint { point, stiffness } => {
+                    if !(stiffness.is_finite() && *stiffness >= 0.0) {
+                        return Err(DynamicsError::Parameter {
+                            name: "data spring stiffness",
+                            value: *stiffness,
+                            why: "must be finite and non-negative",
+                        });
+                    }
+                    let prm = self.geometry.nearest_param(point)?;
+                    let (idx, r, _) = self.geometry.basis_at(&prm[..G::DIM])?;
+                    for (&i, &ri) in idx.iter().zip(&r) {
+                        fp[i] += point * (stiffness * ri);
+                    }
+                    springs.push(system::RankOne {
+                        indices: idx,
+                        values: r,
+                        k: *stiffness,
                     });
                 }
                 Force::Point { param, force } => {
