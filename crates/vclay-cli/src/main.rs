@@ -1,1 +1,72 @@
-fn main() {}
+//! The `vclay` command line.
+//!
+//! Subcommands: `eval` (evaluate a model file at parameters), `demo` (the main job: build
+//! built-in models and write results to `./vclay-demo/`), `bench` (timings as JSON, used by
+//! `bench/compare.py`). Errors go to stderr with exit code 2 and nothing on stdout.
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+mod bench;
+mod demo;
+mod eval;
+
+/// vclay: physics-based free-form modeling (virtual clay).
+#[derive(Debug, Parser)]
+#[command(name = "vclay", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Evaluate a NURBS model file at parameters; prints {"points": [...], "derivatives": [...]}.
+    Eval {
+        /// Model file (JSON, see docs/formats.md).
+        model: PathBuf,
+        /// JSON file with an array of parameter tuples ([u], [u,v] or [u,v,w]).
+        #[arg(long)]
+        params: PathBuf,
+        /// Also print partial derivatives up to this total order.
+        #[arg(long)]
+        derivatives: Option<usize>,
+        /// Which entity of the file to evaluate (0-based).
+        #[arg(long, default_value_t = 0)]
+        entity: usize,
+    },
+    /// Build the built-in models and write results to a folder (default ./vclay-demo).
+    Demo {
+        /// Output folder.
+        #[arg(long, default_value = "vclay-demo")]
+        out: PathBuf,
+    },
+    /// Time spline evaluation and print the figures as JSON.
+    Bench {
+        /// Approximate seconds per measurement.
+        #[arg(long, default_value_t = 1.0)]
+        seconds: f64,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Eval {
+            model,
+            params,
+            derivatives,
+            entity,
+        } => eval::run(&model, &params, derivatives, entity),
+        Command::Demo { out } => demo::run(&out),
+        Command::Bench { seconds } => bench::run(seconds),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}

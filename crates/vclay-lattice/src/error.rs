@@ -1,6 +1,6 @@
 //! The error type of the lattice layer.
 
-use crate::ids::{CellId, FaceId, VertexId};
+use crate::ids::{CellId, EdgeId, FaceId, VertexId};
 use thiserror::Error;
 
 /// Problems found while building or validating a [`crate::Lattice`].
@@ -180,5 +180,60 @@ pub enum LatticeError {
     NoSuchCell {
         /// The cell.
         cell: CellId,
+    },
+    /// An edit would remove the last cell of the lattice.
+    #[error("cannot delete {cell}: it is the only cell of the lattice")]
+    LastCell {
+        /// The cell.
+        cell: CellId,
+    },
+    /// Deleting a cell would split the lattice into more face-connected pieces.
+    #[error(
+        "cannot delete {cell}: the lattice would fall apart into {after} pieces (now {before})"
+    )]
+    WouldDisconnect {
+        /// The cell.
+        cell: CellId,
+        /// Face-connected components before the edit.
+        before: usize,
+        /// Face-connected components after the edit.
+        after: usize,
+    },
+    /// Deleting a cell would leave a boundary edge in other than two boundary faces.
+    #[error(
+        "cannot delete {cell}: {edge} (points {a}, {b}) would lie in {boundary_faces} boundary faces (a non-manifold edge)"
+    )]
+    WouldCreateNonManifoldEdge {
+        /// The cell.
+        cell: CellId,
+        /// The edge, with its id before the edit.
+        edge: EdgeId,
+        /// First end point (id before the edit).
+        a: VertexId,
+        /// Second end point (id before the edit).
+        b: VertexId,
+        /// Number of boundary faces the edge would lie in.
+        boundary_faces: usize,
+    },
+    /// Deleting a cell would pinch the boundary surface at a vertex (its boundary faces there
+    /// would form more than one fan).
+    #[error(
+        "cannot delete {cell}: the boundary would be pinched at {vertex} ({fans} separate fans of boundary faces)"
+    )]
+    WouldCreateNonManifoldVertex {
+        /// The cell.
+        cell: CellId,
+        /// The vertex, with its id before the edit.
+        vertex: VertexId,
+        /// Number of fans.
+        fans: usize,
+    },
+    /// A face cannot be extruded.
+    #[error("cannot extrude {face}: {reason}")]
+    CannotExtrude {
+        /// The face.
+        face: FaceId,
+        /// Why.
+        reason: String,
     },
 }

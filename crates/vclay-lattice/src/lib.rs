@@ -7,7 +7,7 @@
 //! * [`Lattice`]: points, edges, faces and cells of arbitrary polyhedral shape with adjacency in
 //!   both directions (radial-edge style, flat arrays with typed ids), built from cells given as
 //!   face loops and validated ([`LatticeError`] names the element at fault).
-//! * [`subdivide`]: one level of subdivision, the four rules of the conference paper plus a
+//! * [`subdivide()`]: one level of subdivision, the four rules of the conference paper plus a
 //!   [`BoundaryRule`] and user [`Features`] (creases, corners); returns the finer lattice and the
 //!   level operator `A^(j)` as a [`SparseMatrix`] (each row an affine combination).
 //! * [`SubdivisionSolid`] and [`SubdivisionMap`]: all levels, `d = A p = A^(n)...A^(1) p`
@@ -15,6 +15,12 @@
 //! * [`primitives`]: boxes, cylinders, tori, L and T solids, the paper's torus, gear and cube
 //!   with holes; [`cells`]: face lists of hexahedra, prisms, tetrahedra, pyramids.
 //! * [`write_boundary`]: the outward boundary surface into a [`vclay_core::MeshSink`].
+//! * [`edit`]: [`extrude_face`] and [`delete_cell`] return a new validated lattice with stable
+//!   ids (documented there) or an error saying why the edit is refused; [`Features`] tags are
+//!   edited in place and carried across edits.
+//! * [`formats`]: OpenVolumeMesh `.ovm` (read/write), VTK `.vtu` (write), boundary surface as
+//!   OBJ/STL/PLY (write); atomic writes, errors with file, line and element.
+//! * [`command`]: the logic of the `vclay subdivide` command line.
 //!
 //! ```
 //! use vclay_lattice::{primitives, Features, SubdivisionRules, BoundaryRule, SubdivisionSolid};
@@ -28,14 +34,18 @@
 //! assert!((d[100] - solid.finest().points()[100]).norm() < 1e-12);
 //! ```
 //!
-//! Limitations: editing operations (extrusion, cell deletion, run-time fixing) rebuild a lattice
-//! from cells; there are no file formats here (see `vclay-io`).
+//! Limitations: editing operations (extrusion, cell deletion) rebuild the lattice from cells;
+//! the surface writers in [`formats::surface`] are local stand-ins until `vclay-io` unifies mesh
+//! export.
 #![warn(missing_docs)]
 
 pub mod boundary;
 pub mod cells;
+pub mod command;
 mod csr;
+pub mod edit;
 pub mod error;
+pub mod formats;
 pub mod hierarchy;
 pub mod ids;
 pub mod lattice;
@@ -45,7 +55,9 @@ pub mod sparse;
 pub mod subdivide;
 
 pub use boundary::{boundary_mesh, write_boundary};
+pub use edit::{Edit, ExtrudeParams, delete_cell, extrude_face};
 pub use error::LatticeError;
+pub use formats::FormatError;
 pub use hierarchy::SubdivisionSolid;
 pub use ids::{CellId, EdgeId, FaceId, VertexId};
 pub use lattice::{ElementCounts, Lattice};

@@ -166,6 +166,38 @@ impl Features {
         Ok(())
     }
 
+    /// Removes the crease tag of edge `e` (no effect if it was not tagged).
+    pub fn untag_crease(&mut self, e: EdgeId) -> Result<(), LatticeError> {
+        let slot = self.crease.get_mut(e.index()).ok_or(LatticeError::BadTag {
+            element: e.to_string(),
+        })?;
+        *slot = false;
+        Ok(())
+    }
+
+    /// Removes the corner tag of vertex `v` (no effect if it was not tagged).
+    pub fn untag_corner(&mut self, v: VertexId) -> Result<(), LatticeError> {
+        let slot = self.corner.get_mut(v.index()).ok_or(LatticeError::BadTag {
+            element: v.to_string(),
+        })?;
+        *slot = false;
+        Ok(())
+    }
+
+    /// The tagged crease edges, in id order.
+    pub fn creases(&self) -> impl Iterator<Item = EdgeId> + '_ {
+        (0..self.crease.len())
+            .filter(|&e| self.crease[e])
+            .map(EdgeId::new)
+    }
+
+    /// The tagged corner vertices, in id order.
+    pub fn corners(&self) -> impl Iterator<Item = VertexId> + '_ {
+        (0..self.corner.len())
+            .filter(|&v| self.corner[v])
+            .map(VertexId::new)
+    }
+
     /// Whether edge `e` is tagged as a crease.
     pub fn is_crease(&self, e: EdgeId) -> bool {
         self.crease.get(e.index()).copied().unwrap_or(false)

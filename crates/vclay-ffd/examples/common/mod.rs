@@ -1,0 +1,112 @@
+//! Helpers shared by the examples: procedural meshes and a tiny OBJ writer (the io crate is not a
+//! dependency of this layer).
+#![allow(dead_code)]
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use vclay_core::{TriMesh, Vec3};
+use vclay_ffd::FfdLattice;
+
+/// Output directory: the first command-line argument, or `target/ffd-examples`.
+pub fn out_dir() -> PathBuf {
+    let dir = std::env::args()
+        .nth(1)
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("target/ffd-examples"));
+    std::fs::create_dir_all(&dir).expect("create output directory");
+    dir
+}
+
+/// Writes positions, normals (when present) and triangles as Wavefront OBJ.
+pub fn write_obj(path: &Path, mesh: &TriMesh) -> std::io::Result<()> {
+    let mut f = BufWriter::new(File::create(path)?);
+    writeln!(f, "# vclay-ffd example output")?;
+    for p in &mesh.positions {
+        writeln!(f, "v {} {} {}", p.x, p.y, p.z)?;
+    }
+    let normals = mesh.normals.len() == mesh.positions.len();
+    if normals {
+        for n in &mesh.normals {
+            writeln!(f, "vn {} {} {}", n.x, n.y, n.z)?;
+        }
+    }
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| i + 1);
+        if normals {
+            writeln!(f, "f {a}//{a} {b}//{b} {c}//{c}")?;
+        } else {
+            writeln!(f, "f {a} {b} {c}")?;
+        }
+    }
+    f.flush()?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
+/// Writes the control net of a lattice as OBJ polylines (the paper's "computed lattice").
+pub fn write_lattice_obj(path: &Path, lattice: &FfdLattice) -> std::io::Result<()> {
+    let mut f = BufWriter::new(File::create(path)?);
+    writeln!(f, "# vclay-ffd lattice control net")?;
+    for p in lattice.control_points() {
+        writeln!(f, "v {} {} {}", p.x, p.y, p.z)?;
+    }
+    let [nu, nv, nw] = lattice.dims();
+    let id = |i, j, k| lattice.flat_index(i, j, k) + 1;
+    for i in 0..nu {
+        for j in 0..nv {
+            for k in 0..nw {
+                if i + 1 < nu {
+                    writeln!(f, "l {} {}", id(i, j, k), id(i + 1, j, k))?;
+                }
+                if j + 1 < nv {
+                    writeln!(f, "l {} {}", id(i, j, k), id(i, j + 1, k))?;
+                }
+                if k + 1 < nw {
+                    writeln!(f, "l {} {}", id(i, j, k), id(i, j, k + 1))?;
+                }
+            }
+        }
+    }
+    f.flush()?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
+/// A surface of revolution about the z axis: `profile` is `(r, z)` from bottom to top, `segments`
+/// around. Rings with `r == 0` become a single pole vertex. Quads between rings, triangle fans at
+/// poles, counter-clockwise seen from outside when the profile runs upwards on the outside.
+pub fn lathe(profile: &[(f64, f64)], segments: usize) -> TriMesh {
+    let mut mesh = TriMesh::new();
+    let mut rings: Vec<Vec<u32>> = Vec::new();
+    for &(r, z) in profile {
+        if r == 0.0 {
+            mesh.positions.push(Vec3::new(0.0, 0.0, z));
+            rings.push(vec![mesh.positions.len() as u32 - 1; segments]);
+        } else {
+            let ring = (0..segments)
+                .map(|s| {
+                    let a = std::f64::consts::TAU * s as f64 / segments as f64;
+                    mesh.positions.push(Vec3::new(r * a.cos(), r * a.sin(), z));
+                    mesh.positions.len() as u32 - 1
+                })
+                .collect();
+            rings.push(ring);
+        }
+    }
+    for w in rings.windows(2) {
+        let (lo, hi) = (&w[0], &w[1]);
+        for s in 0..segments {
+            let t = (s + 1) % segments;
+            let (a, b, c, d) = (lo[s], lo[t], hi[t], hi[s]);
+            if a != b {
+                mesh.triangles.push([a, b, c]);
+            }
+            if c != d {
+                mesh.triangles.push([a, c, d]);
+            }
+        }
+    }
+    mesh.compute_normals();
+    mesh
+}

@@ -1,0 +1,336 @@
+//! The logic of the `vclay subdivide` command, as a library function so that it is tested here
+//! and the command line only parses arguments.
+//!
+//! `vclay subdivide (INPUT.ovm | --primitive NAME[:ARGS]) --levels N
+//! [--boundary interior|smooth|sharp] [--stats] [--out FILE.(ovm|vtu|obj|ply|stl)]` maps to
+//! [`SubdivideOptions`] and [`subdivide_command`]; `--stats` prints
+//! [`SubdivideOutcome::stats_json`]. Primitive names and arguments are listed in
+//! [`PRIMITIVE_HELP`] and parsed by [`primitive`].
+
+use std::path::{Path, PathBuf};
+
+use thiserror::Error;
+use vclay_core::Vec3;
+
+use crate::boundary::boundary_mesh;
+use crate::error::LatticeError;
+use crate::formats::{FormatError, ovm, surface, vtu};
+use crate::hierarchy::SubdivisionSolid;
+use crate::lattice::{ElementCounts, Lattice};
+use crate::primitives;
+use crate::subdivide::{BoundaryRule, Features, SubdivisionRules};
+
+/// Help text of the primitive names accepted by [`primitive`].
+pub const PRIMITIVE_HELP: &str = "box[:AxBxC] (points per axis, default 4x4x4, unit cells), \
+cylinder[:SECTORS[xLAYERS[xRINGS]]] (default 4x2x0, the paper's cylinder; radius 1, height 2), \
+torus (the paper's torus) or torus:SEGMENTSxCROSS (square cross-section of CROSSxCROSS hexahedra), \
+gear (the paper's gear), cube-with-holes (the paper's cube with holes), \
+l[:ARMxWIDTH] (L solid, default 2x1), t[:ARMxWIDTH] (T solid, default 1x1)";
+
+/// Largest predicted cell count (`cells * 8^levels`) [`subdivide_command`] accepts: 50 million.
+pub const MAX_PREDICTED_CELLS: u128 = 50_000_000;
+
+/// Errors of [`subdivide_command`] and [`primitive`].
+#[derive(Debug, Error)]
+pub enum CommandError {
+    /// Reading or writing a file failed.
+    #[error(transparent)]
+    Format(#[from] FormatError),
+    /// A primitive specification could not be understood.
+    #[error("primitive '{spec}': {message} (known: {PRIMITIVE_HELP})")]
+    BadPrimitive {
+        /// The specification as given.
+        spec: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The output file's extension names no supported format.
+    #[error("{}: unknown output format (use .ovm, .vtu, .obj, .ply or .stl)", path.display())]
+    UnknownOutputFormat {
+        /// The output path.
+        path: PathBuf,
+    },
+    /// The input file's extension is not `.ovm`.
+    #[error("{}: unknown input format (only .ovm lattices can be read)", path.display())]
+    UnknownInputFormat {
+        /// The input path.
+        path: PathBuf,
+    },
+    /// Subdivision would produce too many cells.
+    #[error(
+        "{levels} levels would give about {predicted} cells (more than {MAX_PREDICTED_CELLS}); use fewer levels"
+    )]
+    TooManyLevels {
+        /// Levels asked for.
+        levels: usize,
+        /// Predicted cell count.
+        predicted: u128,
+    },
+    /// Subdivision failed.
+    #[error("subdividing {source_name}: {source}")]
+    Subdivision {
+        /// The input file or primitive.
+        source_name: String,
+        /// What failed.
+        source: LatticeError,
+    },
+}
+
+/// Where the control lattice comes from.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum LatticeSource {
+    /// An `.ovm` file.
+    File(PathBuf),
+    /// A primitive specification `NAME[:ARGS]` (see [`PRIMITIVE_HELP`]).
+    Primitive(String),
+}
+
+impl LatticeSource {
+    /// The name used in messages.
+    pub fn name(&self) -> String {
+        match self {
+            LatticeSource::File(p) => p.display().to_string(),
+            LatticeSource::Primitive(s) => format!("primitive '{s}'"),
+        }
+    }
+
+    /// Loads (reads or builds) the control lattice.
+    pub fn load(&self) -> Result<Lattice, CommandError> {
+        match self {
+            LatticeSource::File(p) => {
+                let ext = extension(p);
+                if ext != "ovm" {
+                    return Err(CommandError::UnknownInputFormat { path: p.clone() });
+                }
+                Ok(ovm::read(p)?)
+            }
+            LatticeSource::Primitive(s) => primitive(s),
+        }
+    }
+}
+
+/// Output file formats, chosen by extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputFormat {
+    /// OpenVolumeMesh text (`.ovm`): the subdivided lattice.
+    Ovm,
+    /// VTK XML unstructured grid (`.vtu`): the subdivided lattice.
+    Vtu,
+    /// Wavefront OBJ (`.obj`): the boundary surface.
+    Obj,
+    /// ASCII PLY (`.ply`): the boundary surface.
+    Ply,
+    /// ASCII STL (`.stl`): the boundary surface.
+    Stl,
+}
+
+impl OutputFormat {
+    /// The format named by `path`'s extension (case-insensitive).
+    pub fn from_path(path: &Path) -> Result<Self, CommandError> {
+        Ok(match extension(path).as_str() {
+            "ovm" => Self::Ovm,
+            "vtu" => Self::Vtu,
+            "obj" => Self::Obj,
+            "ply" => Self::Ply,
+            "stl" => Self::Stl,
+            _ => {
+                return Err(CommandError::UnknownOutputFormat {
+                    path: path.to_path_buf(),
+                });
+            }
+        })
+    }
+
+    /// Writes `lattice` (or its boundary surface) to `path` in this format.
+    pub fn write(self, lattice: &Lattice, path: &Path) -> Result<(), FormatError> {
+        match self {
+            Self::Ovm => ovm::write(lattice, path),
+            Self::Vtu => vtu::write(lattice, path),
+            Self::Obj => surface::write_obj(&boundary_mesh(lattice), path),
+            Self::Ply => surface::write_ply(&boundary_mesh(lattice), path),
+            Self::Stl => surface::write_stl(&boundary_mesh(lattice), path),
+        }
+    }
+}
+
+fn extension(path: &Path) -> String {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
+/// Options of the `subdivide` command.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SubdivideOptions {
+    /// The control lattice.
+    pub source: LatticeSource,
+    /// Number of subdivision levels (0 writes the control lattice itself).
+    pub levels: usize,
+    /// Boundary rule.
+    pub boundary: BoundaryRule,
+    /// Output file; its extension picks the [`OutputFormat`].
+    pub out: Option<PathBuf>,
+}
+
+/// What [`subdivide_command`] did.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SubdivideOutcome {
+    /// Element counts of the control lattice.
+    pub control: ElementCounts,
+    /// Element counts of the subdivided lattice.
+    pub counts: ElementCounts,
+    /// The file written and its format, if any.
+    pub written: Option<(PathBuf, OutputFormat)>,
+}
+
+impl SubdivideOutcome {
+    /// `{"points": P, "edges": E, "faces": F, "cells": C}` of the subdivided lattice.
+    pub fn stats_json(&self) -> String {
+        let c = self.counts;
+        format!(
+            "{{\"points\": {}, \"edges\": {}, \"faces\": {}, \"cells\": {}}}",
+            c.points, c.edges, c.faces, c.cells
+        )
+    }
+}
+
+/// Loads the control lattice, subdivides it `levels` times and writes the result if asked.
+/// The output format is checked before any work is done.
+pub fn subdivide_command(options: &SubdivideOptions) -> Result<SubdivideOutcome, CommandError> {
+    let format = options
+        .out
+        .as_deref()
+        .map(OutputFormat::from_path)
+        .transpose()?;
+    let control = options.source.load()?;
+    let predicted = (control.num_cells() as u128)
+        .saturating_mul(8u128.saturating_pow(options.levels.min(64) as u32));
+    if predicted > MAX_PREDICTED_CELLS {
+        return Err(CommandError::TooManyLevels {
+            levels: options.levels,
+            predicted,
+        });
+    }
+    let control_counts = control.counts();
+    let features = Features::none(&control);
+    let solid = SubdivisionSolid::new(
+        control,
+        features,
+        SubdivisionRules::new(options.boundary),
+        options.levels,
+    )
+    .map_err(|source| CommandError::Subdivision {
+        source_name: options.source.name(),
+        source,
+    })?;
+    let finest = solid.finest();
+    let written = match (&options.out, format) {
+        (Some(path), Some(format)) => {
+            format.write(finest, path)?;
+            Some((path.clone(), format))
+        }
+        _ => None,
+    };
+    Ok(SubdivideOutcome {
+        control: control_counts,
+        counts: finest.counts(),
+        written,
+    })
+}
+
+/// Builds a primitive from `NAME[:ARGS]` (see [`PRIMITIVE_HELP`]).
+pub fn primitive(spec: &str) -> Result<Lattice, CommandError> {
+    let bad = |message: String| CommandError::BadPrimitive {
+        spec: spec.to_string(),
+        message,
+    };
+    let (name, args) = match spec.split_once(':') {
+        Some((n, a)) => (n.trim(), Some(a.trim())),
+        None => (spec.trim(), None),
+    };
+    // Parses `AxBx..` into at most `max` integers, each at least `min`.
+    let nums = |max: usize, min: usize| -> Result<Vec<usize>, CommandError> {
+        let Some(a) = args else { return Ok(Vec::new()) };
+        let v: Vec<usize> = a
+            .split(['x', 'X'])
+            .map(|t| t.trim().parse::<usize>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| bad(format!("arguments '{a}' are not integers separated by 'x'")))?;
+        if v.is_empty() || v.len() > max {
+            return Err(bad(format!("expected 1 to {max} numbers, got '{a}'")));
+        }
+        if let Some(x) = v.iter().find(|&&x| x < min) {
+            return Err(bad(format!("{x} is too small (at least {min})")));
+        }
+        if let Some(x) = v.iter().find(|&&x| x > 1000) {
+            return Err(bad(format!("{x} is too large (at most 1000)")));
+        }
+        Ok(v)
+    };
+    let no_args = |what: &str| -> Result<(), CommandError> {
+        match args {
+            Some(a) => Err(bad(format!("{what} takes no arguments, got '{a}'"))),
+            None => Ok(()),
+        }
+    };
+    match name.to_ascii_lowercase().as_str() {
+        "box" | "cube" => {
+            let v = nums(3, 2)?;
+            let n = match v.len() {
+                0 => [4, 4, 4],
+                1 => [v[0]; 3],
+                3 => [v[0], v[1], v[2]],
+                _ => return Err(bad("expected N or AxBxC points per axis".into())),
+            };
+            let max = Vec3::new(n[0] as f64 - 1.0, n[1] as f64 - 1.0, n[2] as f64 - 1.0);
+            Ok(primitives::box_lattice(n, Vec3::zeros(), max))
+        }
+        "cylinder" => {
+            let v = nums(3, 0)?;
+            let sectors = v.first().copied().unwrap_or(4);
+            let layers = v.get(1).copied().unwrap_or(2);
+            let rings = v.get(2).copied().unwrap_or(0);
+            if sectors < 3 || layers < 1 {
+                return Err(bad("needs at least 3 sectors and 1 layer".into()));
+            }
+            Ok(primitives::cylinder(1.0, 2.0, sectors, layers, rings))
+        }
+        "torus" => {
+            let v = nums(2, 1)?;
+            match v.len() {
+                0 => Ok(primitives::paper_torus(1.0, 2.0, 1.0)),
+                2 if v[0] >= 3 => Ok(primitives::torus(2.0, 0.75, v[0], v[1])),
+                _ => Err(bad(
+                    "expected SEGMENTSxCROSS with at least 3 segments".into()
+                )),
+            }
+        }
+        "gear" => {
+            no_args("gear")?;
+            Ok(primitives::gear(1.0, 2.0, 2.6, 1.0))
+        }
+        "cube-with-holes" => {
+            no_args("cube-with-holes")?;
+            Ok(primitives::cube_with_holes(1.0))
+        }
+        "l" | "t" => {
+            let v = nums(2, 1)?;
+            let default = if name.eq_ignore_ascii_case("l") {
+                [2, 1]
+            } else {
+                [1, 1]
+            };
+            let (arm, width) = match v.len() {
+                0 => (default[0], default[1]),
+                1 => (v[0], default[1]),
+                _ => (v[0], v[1]),
+            };
+            Ok(if name.eq_ignore_ascii_case("l") {
+                primitives::l_solid(arm, width, 1.0)
+            } else {
+                primitives::t_solid(arm, width, 1.0)
+            })
+        }
+        _ => Err(bad(format!("unknown name '{name}'"))),
+    }
+}
