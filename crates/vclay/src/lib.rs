@@ -5,13 +5,19 @@
 //! - [`core`]: math types, tolerances, parallelism policy, the mesh sink.
 //! - [`spline`]: knots, basis functions, NURBS curves, surfaces and volumes, D-NURBS Jacobians,
 //!   refinement, primitives, tessellation.
+//! - [`lattice`]: polyhedral cell complexes and MacCracken-Joy subdivision solids.
+//! - [`ffd`]: direct manipulation of free-form deformation.
+//! - [`dynamics`]: D-NURBS (dynamic NURBS curves and surfaces).
 //! - [`io`]: the JSON model format and mesh files.
 //!
 //! See `docs/architecture.md` in the repository for the map of the layers.
 #![warn(missing_docs)]
 
 pub use vclay_core as core;
+pub use vclay_dynamics as dynamics;
+pub use vclay_ffd as ffd;
 pub use vclay_io as io;
+pub use vclay_lattice as lattice;
 pub use vclay_spline as spline;
 
 pub use vclay_core::{Interval, Parallelism, TriMesh, Vec3, Vec4};
