@@ -43,6 +43,22 @@ pub enum DynamicsError {
         /// Explanation and remedy.
         what: String,
     },
+    /// A constraint cannot be met (contradicts another, acts on nothing free, or is malformed).
+    #[error("constraint {index}: {what}")]
+    Constraint {
+        /// Index of the constraint in the model's list.
+        index: usize,
+        /// Explanation.
+        what: String,
+    },
+    /// A generalized coordinate index is out of range.
+    #[error("generalized coordinate {index} does not exist (the model has {count})")]
+    NoSuchCoordinate {
+        /// Requested index.
+        index: usize,
+        /// Number of coordinates.
+        count: usize,
+    },
     /// The simulation diverged.
     #[error(
         "simulation diverged at step {step} (t = {time}): {what}; try a time step of at most {suggested_dt:.3e}"

@@ -36,12 +36,16 @@
 //! (reduction to the free coordinates); point, normal and nonlinear constraints, swung and
 //! triangular surfaces are future work.
 
+pub mod generalized;
 mod geometry;
 pub mod presets;
+pub mod rational;
 mod system;
 
+pub use generalized::{Constraint, GeneralizedDnurbs, GeneralizedGeometry, LocalJacobian};
 pub use geometry::{ClosedCurve, DnurbsGeometry, ElementSamples};
 pub use presets::{Preset, TABLE_1};
+pub use rational::{RationalGeometry, SwungGeometry};
 pub use system::{Element, ElementSystem, SolverStats};
 
 use crate::error::DynamicsError;

@@ -1,0 +1,1318 @@
+//! D-NURBS with the full set of generalized coordinates: control points **and weights**
+//! (`d-nurbs.txt` sections 4.1-4.3), for NURBS curves, tensor-product and swung surfaces.
+//!
+//! ## Equations
+//! The Lagrangian of `d-nurbs.txt` eq (15) with the p-dependent matrices of eqs (16)-(17):
+//!
+//! ```text
+//! M(p) p'' + D(p) p' + grad U(p) = f_p + g_p,      g_p = -integral mu J^T (dJ/dt) p'
+//! ```
+//! Derivation of `g_p` (the paper cites it): with `T = 1/2 integral mu |J p'|^2`,
+//! `d/dt dT/dp' = M p'' + integral mu (J'^T J + J^T J') p'` and `dT/dp = integral mu J'^T J p'`
+//! (because `d(J p')/dp = J'` for `J = ds/dp`), so the `J'^T` terms cancel and
+//! `g_p = -integral mu J^T J' p'`. `J' p'` is the second directional derivative of `s` along the
+//! velocity ([`GeneralizedGeometry::velocity_terms`]); it vanishes for frozen weights.
+//!
+//! The elastic energy is the thin-plate-under-tension functional of eq (17) evaluated on the
+//! shape, `U = 1/2 integral sum_a c_a |s^a - s^a_ref|^2` over `a` in `u, v, uu, uv, vv` with
+//! `c = (a11, a22, b11, b12, b22)` (curves: `alpha`, `beta`); `s_ref = 0` reproduces the paper's
+//! `1/2 p^T K p` where `s = J p`, the rest shape ([`ElasticReference::RestShape`]) keeps a model
+//! that is left alone still. Its gradient is `integral sum_a c_a J_a^T (s^a - s^a_ref)` and its
+//! Gauss-Newton Hessian is the stiffness matrix `K` of eq (17).
+//!
+//! ## Time integration
+//! Eq (18) with all matrices and forces evaluated at time t, written for the increment
+//! `dp = p(t+dt) - p(t)` with `v = p(t) - p(t-dt)` and `K dp + grad U` in place of `K p(t+dt)`
+//! (identical when `s = J p`, a linearized implicit step otherwise):
+//!
+//! ```text
+//! (2M + dt D + 2 dt^2 K) dp = 2 dt^2 (f_p + g_p - grad U) + (2M - dt D) v
+//! ```
+//! solved by Jacobi-preconditioned conjugate gradients element by element (the global matrices
+//! are never assembled; element products run in parallel), warm-started from `v`, with an
+//! iteration cap and a relative residual tolerance (the paper capped CG at 10 iterations). Delta
+//! springs (eq 19) and data springs add `k J^T J` to the implicit matrix.
+//!
+//! ## Constraints (section 6.2)
+//! Fixed coordinates (control points, single weights, `alpha`) are removed from the unknowns
+//! (reduction to the free coordinates). Point constraints `s(u0) = d` and normal constraints
+//! `s_u . n = s_v . n = 0` at `u0` are nonlinear in `p` once weights move; they are enforced by
+//! Lagrange multipliers on the linearized step with Baumgarte-style feedback: each step asks
+//! `C(p) + C_p dp = (1 - kappa) C(p)` for the constraint values `C`, with `kappa`
+//! ([`GeneralizedDnurbs::baumgarte`], default 1: the violation is removed in one step). The
+//! multipliers come from the Schur complement `C_p A^-1 C_p^T` (one CG solve per constraint row).
+//! Repeated, contradictory or unsatisfiable constraints (rows that are linearly dependent on the
+//! free coordinates) are reported by index.
+//!
+//! ## Weights
+//! After every step, weights below [`GeneralizedDnurbs::weight_floor`] are projected back to it
+//! (section 6.2); optionally a penalty `c/2 sum (w - w0)^2` holds them near their initial values
+//! ([`GeneralizedDnurbs::set_weight_penalty`]). Because `s` does not change when every weight of
+//! a NURBS is scaled by the same factor, one weight per rational curve or surface is held fixed
+//! by default (a gauge choice that changes no shape).
+
+use super::{Density, ElasticReference, Force, Integrator, Material, StepReport};
+use crate::SolverStats;
+use crate::error::DynamicsError;
+use rayon::prelude::*;
+use vclay_core::{GaussLegendre, Vec3};
+
+/// Values and Jacobian columns of a geometry at one parameter, for the six parametric
+/// derivatives `s, s_u, s_v, s_uu, s_uv, s_vv` (see [`super::rational::MULTI_INDICES`]).
+#[derive(Clone, Debug, Default)]
+pub struct LocalJacobian {
+    /// `s^a`.
+    pub s: [Vec3; 6],
+    /// Columns of the form `R^a e_k` for the three coordinates `base, base+1, base+2` (a control
+    /// point's x, y, z): `(base, R^a)`.
+    pub blocks: Vec<(usize, [f64; 6])>,
+    /// General columns `(coordinate, d s^a / d q)`.
+    pub vectors: Vec<(usize, [Vec3; 6])>,
+}
+
+impl LocalJacobian {
+    /// Local coordinate list: three per block, then one per vector column.
+    fn dofs(&self) -> Vec<usize> {
+        let mut d = Vec::with_capacity(3 * self.blocks.len() + self.vectors.len());
+        for &(b, _) in &self.blocks {
+            d.extend_from_slice(&[b, b + 1, b + 2]);
+        }
+        d.extend(self.vectors.iter().map(|v| v.0));
+        d
+    }
+
+    /// `J^a x` for local coordinate values `x` (ordered as [`Self::dofs`]).
+    fn apply(&self, m: usize, x: &[f64]) -> Vec3 {
+        let mut s = Vec3::zeros();
+        for (k, (_, r)) in self.blocks.iter().enumerate() {
+            s += Vec3::new(x[3 * k], x[3 * k + 1], x[3 * k + 2]) * r[m];
+        }
+        let nb = 3 * self.blocks.len();
+        for (k, (_, g)) in self.vectors.iter().enumerate() {
+            s += g[m] * x[nb + k];
+        }
+        s
+    }
+
+    /// `out += c J^a^T y` in local coordinates.
+    fn apply_transpose(&self, m: usize, c: f64, y: &Vec3, out: &mut [f64]) {
+        for (k, (_, r)) in self.blocks.iter().enumerate() {
+            let f = c * r[m];
+            out[3 * k] += f * y.x;
+            out[3 * k + 1] += f * y.y;
+            out[3 * k + 2] += f * y.z;
+        }
+        let nb = 3 * self.blocks.len();
+        for (k, (_, g)) in self.vectors.iter().enumerate() {
+            out[nb + k] += c * g[m].dot(y);
+        }
+    }
+
+    /// `out += sum_a coef[a] J^a^T J^a` into a dense local matrix (row-major, `nd x nd`).
+    fn accumulate_gram(&self, coef: &[f64; 6], out: &mut [f64]) {
+        let nb = self.blocks.len();
+        let nv = self.vectors.len();
+        let nd = 3 * nb + nv;
+        let active: Vec<usize> = (0..6).filter(|&m| coef[m] != 0.0).collect();
+        for a in 0..nb {
+            let ra = &self.blocks[a].1;
+            for b in a..nb {
+                let rb = &self.blocks[b].1;
+                let mut v = 0.0;
+                for &m in &active {
+                    v += coef[m] * ra[m] * rb[m];
+                }
+                for k in 0..3 {
+                    out[(3 * a + k) * nd + 3 * b + k] += v;
+                    if a != b {
+                        out[(3 * b + k) * nd + 3 * a + k] += v;
+                    }
+                }
+            }
+            for j in 0..nv {
+                let g = &self.vectors[j].1;
+                let mut v = Vec3::zeros();
+                for &m in &active {
+                    v += g[m] * (coef[m] * ra[m]);
+                }
+                let col = 3 * nb + j;
+                for k in 0..3 {
+                    out[(3 * a + k) * nd + col] += v[k];
+                    out[col * nd + 3 * a + k] += v[k];
+                }
+            }
+        }
+        for i in 0..nv {
+            let gi = &self.vectors[i].1;
+            for j in i..nv {
+                let gj = &self.vectors[j].1;
+                let mut v = 0.0;
+                for &m in &active {
+                    v += coef[m] * gi[m].dot(&gj[m]);
+                }
+                let (ri, rj) = (3 * nb + i, 3 * nb + j);
+                out[ri * nd + rj] += v;
+                if i != j {
+                    out[rj * nd + ri] += v;
+                }
+            }
+        }
+    }
+}
+
+/// A geometry whose generalized coordinates (control points, weights and any other shape
+/// parameters) are simulated by [`GeneralizedDnurbs`].
+pub trait GeneralizedGeometry: Clone + Send + Sync + std::fmt::Debug {
+    /// 1 for curves, 2 for surfaces.
+    fn parametric_dimension(&self) -> usize;
+    /// The generalized coordinates `p`.
+    fn coordinates(&self) -> &[f64];
+    /// Replaces the generalized coordinates (validated: finite, positive weights).
+    fn set_coordinates(&mut self, q: &[f64]) -> Result<(), DynamicsError>;
+    /// Indices of the weights in `p`.
+    fn weight_coordinates(&self) -> Vec<usize>;
+    /// Coordinates held fixed by default (gauge freedoms and components without influence).
+    fn default_fixed_coordinates(&self) -> Vec<usize>;
+    /// Groups of coordinates that belong together (a control point's x, y, z, w), used for the
+    /// block-Jacobi preconditioner. Default: each coordinate alone.
+    fn coordinate_groups(&self) -> Vec<std::ops::Range<usize>> {
+        (0..self.coordinates().len()).map(|i| i..i + 1).collect()
+    }
+    /// Finite elements as parameter rectangles (`[(u0, u1), (v0, v1)]`; curves have a
+    /// degenerate v interval).
+    fn elements(&self) -> Vec<[(f64, f64); 2]>;
+    /// Largest polynomial degree (chooses the quadrature order).
+    fn max_degree(&self) -> usize;
+    /// Size of the model (for tolerances and divergence detection).
+    fn scale(&self) -> f64;
+    /// Values and Jacobian columns at a parameter.
+    fn jacobian_at(&self, param: [f64; 2], out: &mut LocalJacobian) -> Result<(), DynamicsError>;
+    /// `(J p', J' p')`: the first and second directional derivatives of `s` along the
+    /// coordinate velocity `qdot` (global coordinates).
+    fn velocity_terms(&self, param: [f64; 2], qdot: &[f64]) -> Result<(Vec3, Vec3), DynamicsError>;
+    /// Parameter of the point of the geometry nearest to `x`.
+    fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError>;
+}
+
+/// A geometric constraint (`d-nurbs.txt` section 6.2).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Constraint {
+    /// The material point `param` stays at `target`: `s(param) = target` (3 rows).
+    Point {
+        /// Material point.
+        param: [f64; 2],
+        /// Required position.
+        target: Vec3,
+    },
+    /// The surface normal at `param` is parallel to `normal`: `s_u . n = 0`, `s_v . n = 0`
+    /// (surfaces only; 2 rows).
+    Normal {
+        /// Material point.
+        param: [f64; 2],
+        /// Required normal direction (any length but zero).
+        normal: Vec3,
+    },
+}
+
+/// Default floor for weights (section 6.2: weights that drift below it are projected back).
+pub const DEFAULT_WEIGHT_FLOOR: f64 = 1e-3;
+/// Default CG iteration cap of the generalized model.
+pub const GENERALIZED_CG_ITERATIONS: usize = 1000;
+/// Default CG relative tolerance of the generalized model.
+pub const GENERALIZED_CG_TOLERANCE: f64 = 1e-10;
+/// Default relative weight inertia (see [`GeneralizedDnurbs::weight_inertia`]).
+pub const DEFAULT_WEIGHT_INERTIA: f64 = 1.0;
+/// Largest relative weight change of one linearized step before it is split in two.
+pub const MAX_RELATIVE_WEIGHT_CHANGE: f64 = 0.25;
+/// Most halvings of one step.
+pub const MAX_SUBSTEP_LEVELS: usize = 12;
+
+fn unreachable_short() -> DynamicsError {
+    DynamicsError::Singular {
+        what: "static step was not taken".into(),
+    }
+}
+
+/// Constraint tolerance relative to the model size, met after each step by Newton projection.
+pub const CONSTRAINT_TOLERANCE: f64 = 1e-10;
+/// Constraint rows that depend on earlier ones are redundant (dropped) when their implied
+/// violation is below this, relative to the model size; contradictory otherwise.
+pub const CONSTRAINT_CONSISTENCY: f64 = 1e-8;
+/// Most projection iterations per step.
+pub const MAX_CONSTRAINT_PROJECTIONS: usize = 8;
+/// Relative threshold under which a constraint row counts as dependent on earlier ones.
+pub const CONSTRAINT_DEPENDENCE_TOLERANCE: f64 = 1e-9;
+
+#[derive(Clone, Debug)]
+struct Quadrature {
+    params: Vec<[f64; 2]>,
+    weights: Vec<f64>,
+}
+
+/// One element's contribution to a step.
+#[derive(Debug, Default)]
+struct ElementWork {
+    dofs: Vec<usize>,
+    a: Vec<f64>,
+    mass: Vec<f64>,
+    rhs: Vec<f64>,
+    elastic: f64,
+    kinetic: f64,
+}
+
+/// A D-NURBS whose control points and weights are all dynamic (see the module docs).
+#[derive(Clone, Debug)]
+pub struct GeneralizedDnurbs<G: GeneralizedGeometry> {
+    geometry: G,
+    material: Material,
+    quad: Vec<Quadrature>,
+    rest: Vec<Vec<[Vec3; 6]>>,
+    velocity: Vec<f64>,
+    fixed: Vec<bool>,
+    forces: Vec<Force>,
+    constraints: Vec<Constraint>,
+    reference: ElasticReference,
+    weight_targets: Vec<f64>,
+    weight_penalty: f64,
+    time: f64,
+    steps: usize,
+    /// CG iteration cap (default [`GENERALIZED_CG_ITERATIONS`]).
+    pub max_iterations: usize,
+    /// CG relative residual tolerance (default [`GENERALIZED_CG_TOLERANCE`]).
+    pub tolerance: f64,
+    /// Lower bound for weights (default [`DEFAULT_WEIGHT_FLOOR`]).
+    pub weight_floor: f64,
+    /// Constraint feedback gain `kappa` in `(0, 1]` (default 1).
+    pub baumgarte: f64,
+    /// Weight projections made so far (section 6.2).
+    pub weight_projections: usize,
+    substeps: usize,
+    /// Intrinsic inertia of the weights, relative (default [`DEFAULT_WEIGHT_INERTIA`]): each
+    /// weight gets the extra kinetic energy `1/2 m_w w'^2` with
+    /// `m_w = weight_inertia * (mean mass-matrix diagonal of the control-point coordinates) *
+    /// size^2`. The paper's mass matrix gives a weight whose control point lies near the surface
+    /// almost no mass (its column `N (p - s) / W` nearly vanishes), so tiny forces accelerate it
+    /// without bound; this floor keeps the dynamics well posed. Set 0 for the paper's exact form.
+    pub weight_inertia: f64,
+    /// Whether the generalized inertial force `g_p` is applied (default true; turning it off
+    /// shows its effect).
+    pub inertial_force: bool,
+}
+
+impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
+    /// A model at rest in its current shape.
+    pub fn new(geometry: G, material: Material) -> Result<Self, DynamicsError> {
+        let dim = geometry.parametric_dimension();
+        let elements = geometry.elements();
+        let ne = elements.len();
+        material.mu.validate("mu", ne)?;
+        material.gamma.validate("gamma", ne)?;
+        if material.alpha.len() != dim || material.beta.len() != if dim == 1 { 1 } else { 3 } {
+            return Err(DynamicsError::Parameter {
+                name: "material",
+                value: material.alpha.len() as f64,
+                why: "needs one alpha per parametric direction and one beta per second-derivative pair (1 and 1 for curves, 2 and 3 for surfaces)",
+            });
+        }
+        for a in &material.alpha {
+            a.validate("alpha", ne)?;
+        }
+        for b in &material.beta {
+            b.validate("beta", ne)?;
+        }
+        let n = geometry.coordinates().len();
+        let g = GaussLegendre::new((geometry.max_degree() + 1).clamp(4, 7)).map_err(|_| {
+            DynamicsError::Parameter {
+                name: "quadrature order",
+                value: geometry.max_degree() as f64,
+                why: "no Gauss rule",
+            }
+        })?;
+        let quad: Vec<Quadrature> = elements
+            .iter()
+            .map(|e| {
+                let us: Vec<(f64, f64)> = g.on_interval(e[0].0, e[0].1).collect();
+                let vs: Vec<(f64, f64)> = if dim == 2 {
+                    g.on_interval(e[1].0, e[1].1).collect()
+                } else {
+                    vec![(e[1].0, 1.0)]
+                };
+                let mut q = Quadrature {
+                    params: vec![],
+                    weights: vec![],
+                };
+                for &(u, wu) in &us {
+                    for &(v, wv) in &vs {
+                        q.params.push([u, v]);
+                        q.weights.push(wu * wv);
+                    }
+                }
+                q
+            })
+            .collect();
+        let mut fixed = vec![false; n];
+        for i in geometry.default_fixed_coordinates() {
+            fixed[i] = true;
+        }
+        let weights: Vec<f64> = geometry
+            .weight_coordinates()
+            .iter()
+            .map(|&i| geometry.coordinates()[i])
+            .collect();
+        let mut m = Self {
+            velocity: vec![0.0; geometry.coordinates().len()],
+            geometry,
+            material,
+            quad,
+            rest: vec![],
+            fixed,
+            forces: vec![],
+            constraints: vec![],
+            reference: ElasticReference::RestShape,
+            weight_targets: weights,
+            weight_penalty: 0.0,
+            time: 0.0,
+            steps: 0,
+            max_iterations: GENERALIZED_CG_ITERATIONS,
+            tolerance: GENERALIZED_CG_TOLERANCE,
+            weight_floor: DEFAULT_WEIGHT_FLOOR,
+            baumgarte: 1.0,
+            weight_projections: 0,
+            inertial_force: true,
+            substeps: 0,
+            weight_inertia: DEFAULT_WEIGHT_INERTIA,
+        };
+        m.set_rest_shape_to_current()?;
+        Ok(m)
+    }
+
+    /// The geometry.
+    pub fn geometry(&self) -> &G {
+        &self.geometry
+    }
+
+    /// Simulated time.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// The applied forces (edit freely between steps).
+    pub fn forces_mut(&mut self) -> &mut Vec<Force> {
+        &mut self.forces
+    }
+
+    /// The constraints.
+    pub fn constraints(&self) -> &[Constraint] {
+        &self.constraints
+    }
+
+    /// Adds a constraint after validating it; returns its index.
+    pub fn add_constraint(&mut self, c: Constraint) -> Result<usize, DynamicsError> {
+        let index = self.constraints.len();
+        let bad = |what: String| DynamicsError::Constraint { index, what };
+        let param = match &c {
+            Constraint::Point { param, target } => {
+                if !(target.iter().all(|x| x.is_finite())) {
+                    return Err(bad("target is not finite".into()));
+                }
+                *param
+            }
+            Constraint::Normal { param, normal } => {
+                if self.geometry.parametric_dimension() != 2 {
+                    return Err(bad("normal constraints need a surface".into()));
+                }
+                if !(normal.iter().all(|x| x.is_finite()) && normal.norm() > 0.0) {
+                    return Err(bad("normal must be finite and non-zero".into()));
+                }
+                *param
+            }
+        };
+        let mut lj = LocalJacobian::default();
+        self.geometry
+            .jacobian_at(param, &mut lj)
+            .map_err(|e| bad(format!("bad parameter {param:?}: {e}")))?;
+        self.constraints.push(c);
+        Ok(index)
+    }
+
+    /// Removes every constraint.
+    pub fn clear_constraints(&mut self) {
+        self.constraints.clear();
+    }
+
+    /// Constraint violations `|C(p)|` per constraint (largest row magnitude).
+    pub fn constraint_violations(&self) -> Result<Vec<f64>, DynamicsError> {
+        let mut out = Vec::with_capacity(self.constraints.len());
+        for c in &self.constraints {
+            let rows = self.constraint_rows(c)?;
+            out.push(rows.iter().map(|r| r.0.abs()).fold(0.0, f64::max));
+        }
+        Ok(out)
+    }
+
+    /// Holds (or frees) one generalized coordinate.
+    pub fn set_fixed_coordinate(&mut self, i: usize, fixed: bool) -> Result<(), DynamicsError> {
+        let n = self.fixed.len();
+        *self
+            .fixed
+            .get_mut(i)
+            .ok_or(DynamicsError::NoSuchCoordinate { index: i, count: n })? = fixed;
+        Ok(())
+    }
+
+    /// Whether coordinate `i` is held.
+    pub fn is_fixed_coordinate(&self, i: usize) -> bool {
+        self.fixed.get(i).copied().unwrap_or(false)
+    }
+
+    /// Penalty `c/2 sum (w - w0)^2` holding weights near their initial values (0 disables).
+    pub fn set_weight_penalty(&mut self, c: f64) -> Result<(), DynamicsError> {
+        if !(c.is_finite() && c >= 0.0) {
+            return Err(DynamicsError::Parameter {
+                name: "weight penalty",
+                value: c,
+                why: "must be finite and non-negative",
+            });
+        }
+        self.weight_penalty = c;
+        Ok(())
+    }
+
+    /// Chooses the elastic reference (see [`ElasticReference`]).
+    pub fn set_elastic_reference(&mut self, r: ElasticReference) {
+        self.reference = r;
+    }
+
+    /// Plastic reset: the current shape becomes the rest shape, and the motion stops.
+    pub fn set_rest_shape_to_current(&mut self) -> Result<(), DynamicsError> {
+        let g = &self.geometry;
+        self.rest = self
+            .quad
+            .par_iter()
+            .map(|q| {
+                let mut lj = LocalJacobian::default();
+                q.params
+                    .iter()
+                    .map(|&p| g.jacobian_at(p, &mut lj).map(|_| lj.s))
+                    .collect::<Result<Vec<_>, _>>()
+            })
+            .collect::<Result<_, _>>()?;
+        self.velocity = vec![0.0; self.velocity.len()];
+        Ok(())
+    }
+
+    /// The elastic energy `U` of the current shape.
+    pub fn elastic_energy(&self) -> Result<f64, DynamicsError> {
+        let coef = self.stiffness_coefficients_fn();
+        let g = &self.geometry;
+        let parts: Vec<f64> = self
+            .quad
+            .par_iter()
+            .enumerate()
+            .map(|(e, q)| {
+                let mut lj = LocalJacobian::default();
+                let mut u = 0.0;
+                for (k, (&p, &w)) in q.params.iter().zip(&q.weights).enumerate() {
+                    g.jacobian_at(p, &mut lj)?;
+                    let c = coef(e, p);
+                    for m in 1..6 {
+                        if c[m] != 0.0 {
+                            u += 0.5
+                                * w
+                                * c[m]
+                                * (lj.s[m] - self.reference_value(e, k, m)).norm_squared();
+                        }
+                    }
+                }
+                Ok(u)
+            })
+            .collect::<Result<_, DynamicsError>>()?;
+        Ok(parts.iter().sum())
+    }
+
+    fn reference_value(&self, e: usize, k: usize, m: usize) -> Vec3 {
+        match self.reference {
+            ElasticReference::RestShape => self.rest[e][k][m],
+            ElasticReference::Absolute => Vec3::zeros(),
+        }
+    }
+
+    /// `[0, a11, a22, b11, b12, b22]` at an element and parameter (curves: `[0, alpha, 0,
+    /// beta, 0, 0]`).
+    fn stiffness_coefficients_fn(&self) -> impl Fn(usize, [f64; 2]) -> [f64; 6] + Sync + '_ {
+        let mat = &self.material;
+        let surface = self.geometry.parametric_dimension() == 2;
+        move |e, p| {
+            let ev = |d: &Density| d.eval(e, p);
+            if surface {
+                [
+                    0.0,
+                    ev(&mat.alpha[0]),
+                    ev(&mat.alpha[1]),
+                    ev(&mat.beta[0]),
+                    ev(&mat.beta[1]),
+                    ev(&mat.beta[2]),
+                ]
+            } else {
+                [0.0, ev(&mat.alpha[0]), 0.0, ev(&mat.beta[0]), 0.0, 0.0]
+            }
+        }
+    }
+
+    /// Rows `(value, [(coordinate, derivative)])` of a constraint at the current shape.
+    fn constraint_rows(
+        &self,
+        c: &Constraint,
+    ) -> Result<Vec<(f64, Vec<(usize, f64)>)>, DynamicsError> {
+        let mut lj = LocalJacobian::default();
+        let (param, dirs): ([f64; 2], Vec<(usize, Vec3, Vec3)>) = match c {
+            Constraint::Point { param, target } => (
+                *param,
+                (0..3)
+                    .map(|k| {
+                        let mut e = Vec3::zeros();
+                        e[k] = 1.0;
+                        (0, e, *target)
+                    })
+                    .collect(),
+            ),
+            Constraint::Normal { param, normal } => {
+                let n = normal.normalize();
+                (*param, vec![(1, n, Vec3::zeros()), (2, n, Vec3::zeros())])
+            }
+        };
+        self.geometry.jacobian_at(param, &mut lj)?;
+        let dofs = lj.dofs();
+        Ok(dirs
+            .into_iter()
+            .map(|(m, n, target)| {
+                let value = n.dot(&(lj.s[m] - target));
+                let mut local = vec![0.0; dofs.len()];
+                lj.apply_transpose(m, 1.0, &n, &mut local);
+                (value, dofs.iter().copied().zip(local).collect())
+            })
+            .collect())
+    }
+
+    /// One step of the integrator. Returns what the step did; detects divergence.
+    ///
+    /// The step is linearized at time t; when it would change a weight by more than
+    /// [`MAX_RELATIVE_WEIGHT_CHANGE`] of its value, it is replaced by two half steps
+    /// (recursively, at most [`MAX_SUBSTEP_LEVELS`] times), so the nonlinearity of the rational
+    /// weights never makes a linearized step overshoot. Static (Gauss-Newton) steps are shortened
+    /// instead.
+    pub fn step(&mut self, integrator: Integrator) -> Result<StepReport, DynamicsError> {
+        match integrator {
+            Integrator::Implicit { dt } => {
+                if !(dt.is_finite() && dt > 0.0) {
+                    return Err(DynamicsError::Parameter {
+                        name: "dt",
+                        value: dt,
+                        why: "must be finite and positive",
+                    });
+                }
+                self.substep(dt, 0)
+            }
+            Integrator::Static => self
+                .step_once(1.0, false)?
+                .ok_or_else(|| unreachable_short()),
+        }
+    }
+
+    /// Number of sub-steps taken so far because linearized steps were too large.
+    pub fn substeps(&self) -> usize {
+        self.substeps
+    }
+
+    fn substep(&mut self, dt: f64, level: usize) -> Result<StepReport, DynamicsError> {
+        if let Some(r) = self.step_once(dt, true)? {
+            return Ok(r);
+        }
+        if level >= MAX_SUBSTEP_LEVELS {
+            return Err(DynamicsError::Diverged {
+                step: self.steps,
+                time: self.time,
+                what: format!(
+                    "a step of {dt:.3e} still changes the shape too much after {level} halvings"
+                ),
+                suggested_dt: dt / 2.0,
+            });
+        }
+        self.substeps += 1;
+        let first = self.substep(dt / 2.0, level + 1)?;
+        let second = self.substep(dt / 2.0, level + 1)?;
+        Ok(StepReport {
+            solver: SolverStats {
+                iterations: first.solver.iterations + second.solver.iterations,
+                relative_residual: first
+                    .solver
+                    .relative_residual
+                    .max(second.solver.relative_residual),
+            },
+            elastic_energy: first.elastic_energy,
+            ..second
+        })
+    }
+
+    /// One linearized step; `None` when the step is too large to trust (dynamic mode only).
+    fn step_once(&mut self, dt: f64, dynamic: bool) -> Result<Option<StepReport>, DynamicsError> {
+        let q = self.geometry.coordinates().to_vec();
+        let n = q.len();
+        let v: Vec<f64> = if dynamic {
+            self.velocity.iter().map(|x| x * dt).collect()
+        } else {
+            vec![0.0; n]
+        };
+        // System: A dq = b with A = cm M + cd D + ck K (+ springs), per the module docs.
+        let (ck, force_scale) = if dynamic {
+            (2.0 * dt * dt, 2.0 * dt * dt)
+        } else {
+            (1.0, 1.0)
+        };
+        let mut works = self.assemble(dt, dynamic, ck, force_scale, &v)?;
+        let elastic_before: f64 = works.iter().map(|w| w.elastic).sum();
+        self.add_point_forces(&mut works, ck, force_scale)?;
+        let mut b = vec![0.0; n];
+        for w in &works {
+            for (a, &i) in w.dofs.iter().enumerate() {
+                b[i] += w.rhs[a];
+            }
+        }
+        // Weight penalty: c/2 (w - w0)^2.
+        let mut extra_diag = vec![0.0; n];
+        if self.weight_penalty > 0.0 {
+            for (k, &i) in self.geometry.weight_coordinates().iter().enumerate() {
+                extra_diag[i] += ck * self.weight_penalty;
+                b[i] -= force_scale * self.weight_penalty * (q[i] - self.weight_targets[k]);
+            }
+        }
+        // Intrinsic weight inertia (see `weight_inertia`): m_w = kappa * mean position mass *
+        // scale^2, entering eq 18 as 2 m_w on the diagonal and 2 m_w v on the right.
+        let weight_mass = if dynamic && self.weight_inertia > 0.0 {
+            let weights = self.geometry.weight_coordinates();
+            let mut is_w = vec![false; n];
+            for &i in &weights {
+                is_w[i] = true;
+            }
+            let (mut sum, mut count) = (0.0, 0usize);
+            let mut md = vec![0.0; n];
+            for w in &works {
+                let nd = w.dofs.len();
+                if w.mass.is_empty() {
+                    continue;
+                }
+                for (a, &i) in w.dofs.iter().enumerate() {
+                    md[i] += w.mass[a * nd + a];
+                }
+            }
+            for i in 0..n {
+                if !is_w[i] && md[i] > 0.0 {
+                    sum += md[i];
+                    count += 1;
+                }
+            }
+            let scale = self.geometry.scale();
+            let mw = if count > 0 {
+                self.weight_inertia * sum / count as f64 * scale * scale
+            } else {
+                0.0
+            };
+            for &i in &weights {
+                extra_diag[i] += 2.0 * mw;
+                b[i] += 2.0 * mw * v[i];
+            }
+            mw
+        } else {
+            0.0
+        };
+        let op = Op {
+            works: &works,
+            extra_diag: &extra_diag,
+            fixed: &self.fixed,
+            n,
+        };
+        let mut x: Vec<f64> = (0..n)
+            .map(|i| if self.fixed[i] { 0.0 } else { v[i] })
+            .collect();
+        let pre = Precond::new(&op, &self.geometry.coordinate_groups());
+        let mut stats = pcg(&op, &pre, &b, &mut x, self.max_iterations, self.tolerance);
+        if !self.constraints.is_empty() {
+            stats = self.apply_constraints(&op, &pre, &b, &mut x, self.baumgarte, stats)?;
+        }
+        let scale = self.geometry.scale();
+        if x.iter().any(|d| !d.is_finite()) {
+            return Err(DynamicsError::Diverged {
+                step: self.steps,
+                time: self.time,
+                what: "the linear solve produced non-finite values".into(),
+                suggested_dt: dt / 10.0,
+            });
+        }
+        // Trust check of the linearization (see `step`).
+        let weights = self.geometry.weight_coordinates();
+        let mut ratio: f64 = 0.0;
+        for &i in &weights {
+            ratio = ratio.max(x[i].abs() / (MAX_RELATIVE_WEIGHT_CHANGE * q[i].abs()));
+        }
+        if ratio > 1.0 {
+            if dynamic {
+                return Ok(None);
+            }
+            for d in x.iter_mut() {
+                *d /= ratio;
+            }
+        }
+        // New coordinates with weight projection (a projected weight stops).
+        let mut qn: Vec<f64> = q.iter().zip(&x).map(|(a, d)| a + d).collect();
+        let mut stopped = vec![];
+        for &i in &weights {
+            if qn[i] < self.weight_floor {
+                qn[i] = self.weight_floor;
+                self.weight_projections += 1;
+                stopped.push(i);
+            }
+        }
+        let moved = qn
+            .iter()
+            .zip(&q)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        if qn.iter().any(|x| !x.is_finite())
+            || moved > super::DIVERGENCE_DISPLACEMENT_FACTOR * scale
+        {
+            return Err(DynamicsError::Diverged {
+                step: self.steps,
+                time: self.time,
+                what: format!("coordinates moved by {moved:.3e} (model size {scale:.3e})"),
+                suggested_dt: dt / 10.0,
+            });
+        }
+        self.geometry.set_coordinates(&qn)?;
+        // Newton projection onto the constraints in the metric of A (removes the second-order
+        // residual of the linearized constraint rows).
+        if !self.constraints.is_empty() && self.baumgarte >= 1.0 {
+            let tol = CONSTRAINT_TOLERANCE * scale;
+            for _ in 0..MAX_CONSTRAINT_PROJECTIONS {
+                let worst = self
+                    .constraint_violations()?
+                    .into_iter()
+                    .fold(0.0, f64::max);
+                if worst <= tol {
+                    break;
+                }
+                let zero = vec![0.0; n];
+                let mut dx = vec![0.0; n];
+                stats = self.apply_constraints(&op, &pre, &zero, &mut dx, 1.0, stats)?;
+                let q2: Vec<f64> = self
+                    .geometry
+                    .coordinates()
+                    .iter()
+                    .zip(&dx)
+                    .map(|(a, d)| a + d)
+                    .collect();
+                self.geometry.set_coordinates(&q2)?;
+                for i in 0..n {
+                    x[i] += dx[i];
+                    qn[i] = q2[i];
+                }
+            }
+        }
+        // Kinetic energy of the step's motion, 1/2 dq^T M dq / dt^2.
+        let kinetic = if dynamic {
+            let mut k = 0.0;
+            for w in &works {
+                let nd = w.dofs.len();
+                if w.mass.is_empty() {
+                    continue;
+                }
+                for a in 0..nd {
+                    let xa = x[w.dofs[a]];
+                    for bb in 0..nd {
+                        k += xa * w.mass[a * nd + bb] * x[w.dofs[bb]];
+                    }
+                }
+            }
+            for i in self.geometry.weight_coordinates() {
+                k += weight_mass * x[i] * x[i];
+            }
+            0.5 * k / (dt * dt)
+        } else {
+            0.0
+        };
+        if dynamic {
+            self.velocity = qn.iter().zip(&q).map(|(a, b)| (a - b) / dt).collect();
+            for i in stopped {
+                self.velocity[i] = 0.0;
+            }
+            self.time += dt;
+        }
+        self.steps += 1;
+        Ok(Some(StepReport {
+            time: self.time,
+            solver: stats,
+            kinetic_energy: kinetic,
+            elastic_energy: elastic_before,
+        }))
+    }
+
+    /// Runs `steps` implicit steps of size `dt`; returns the last report.
+    pub fn run(&mut self, dt: f64, steps: usize) -> Result<Option<StepReport>, DynamicsError> {
+        let mut last = None;
+        for _ in 0..steps {
+            last = Some(self.step(Integrator::Implicit { dt })?);
+        }
+        Ok(last)
+    }
+
+    fn assemble(
+        &self,
+        dt: f64,
+        dynamic: bool,
+        ck: f64,
+        fs: f64,
+        v: &[f64],
+    ) -> Result<Vec<ElementWork>, DynamicsError> {
+        let coef_fn = self.stiffness_coefficients_fn();
+        let g = &self.geometry;
+        let mat = &self.material;
+        let forces = &self.forces;
+        let surface = g.parametric_dimension() == 2;
+        self.quad
+            .par_iter()
+            .enumerate()
+            .map(|(e, q)| {
+                let mut lj = LocalJacobian::default();
+                g.jacobian_at(q.params[0], &mut lj)?;
+                let dofs = lj.dofs();
+                let nd = dofs.len();
+                let mut w = ElementWork {
+                    a: vec![0.0; nd * nd],
+                    mass: if dynamic { vec![0.0; nd * nd] } else { vec![] },
+                    rhs: vec![0.0; nd],
+                    dofs,
+                    ..Default::default()
+                };
+                let vl: Vec<f64> = w.dofs.iter().map(|&i| v[i]).collect();
+                for (k, (&p, &qw)) in q.params.iter().zip(&q.weights).enumerate() {
+                    if k > 0 {
+                        g.jacobian_at(p, &mut lj)?;
+                    }
+                    let c = coef_fn(e, p);
+                    let mu = mat.mu.eval(e, p);
+                    let gamma = mat.gamma.eval(e, p);
+                    // Stiffness (Gauss-Newton) and elastic gradient.
+                    let mut coef = [0.0; 6];
+                    for m in 1..6 {
+                        coef[m] = ck * qw * c[m];
+                    }
+                    if dynamic {
+                        coef[0] = qw * (2.0 * mu + dt * gamma);
+                    }
+                    lj.accumulate_gram(&coef, &mut w.a);
+                    for m in 1..6 {
+                        if c[m] != 0.0 {
+                            let d = lj.s[m] - self.reference_value(e, k, m);
+                            w.elastic += 0.5 * qw * c[m] * d.norm_squared();
+                            lj.apply_transpose(m, -fs * qw * c[m], &d, &mut w.rhs);
+                        }
+                    }
+                    if dynamic {
+                        let mut mc = [0.0; 6];
+                        mc[0] = qw * mu;
+                        lj.accumulate_gram(&mc, &mut w.mass);
+                        // (2M - dt D) v and the inertial force g_p.
+                        let jv = lj.apply(0, &vl);
+                        lj.apply_transpose(0, qw * (2.0 * mu - dt * gamma), &jv, &mut w.rhs);
+                        w.kinetic += 0.5 * qw * mu * jv.norm_squared() / (dt * dt);
+                        if self.inertial_force && mu != 0.0 && vl.iter().any(|x| *x != 0.0) {
+                            // 2 dt^2 g_p with p' = v / dt: -2 mu J^T (J' v).
+                            let (_, acc) = g.velocity_terms(p, v)?;
+                            lj.apply_transpose(0, -2.0 * qw * mu, &acc, &mut w.rhs);
+                        }
+                    }
+                    // Distributed forces.
+                    let mut f = Vec3::zeros();
+                    for force in forces {
+                        match force {
+                            Force::Gravity(gv) => f += gv * mu,
+                            Force::Inflation(pr) if surface => f += lj.s[1].cross(&lj.s[2]) * *pr,
+                            Force::Spring {
+                                param,
+                                target,
+                                stiffness,
+                                kernel: Some(sigma),
+                            } => {
+                                let d2 = (p[0] - param[0]).powi(2)
+                                    + if surface {
+                                        (p[1] - param[1]).powi(2)
+                                    } else {
+                                        0.0
+                                    };
+                                let dimf = if surface { 2.0 } else { 1.0 };
+                                let kern = (-(d2) / (2.0 * sigma * sigma)).exp()
+                                    / (2.0 * std::f64::consts::PI * sigma * sigma).powf(dimf / 2.0);
+                                let kk = stiffness * kern;
+                                f += (target.at(self.time) - lj.s[0]) * kk;
+                                let mut cc = [0.0; 6];
+                                cc[0] = ck * qw * kk;
+                                lj.accumulate_gram(&cc, &mut w.a);
+                            }
+                            _ => {}
+                        }
+                    }
+                    if f != Vec3::zeros() {
+                        lj.apply_transpose(0, fs * qw, &f, &mut w.rhs);
+                    }
+                }
+                Ok(w)
+            })
+            .collect()
+    }
+
+    /// Delta springs, point forces and data springs as extra small "elements".
+    fn add_point_forces(
+        &self,
+        works: &mut Vec<ElementWork>,
+        ck: f64,
+        fs: f64,
+    ) -> Result<(), DynamicsError> {
+        let mut lj = LocalJacobian::default();
+        for force in &self.forces {
+            let (param, spring, pull) = match force {
+                Force::Spring {
+                    param,
+                    target,
+                    stiffness,
+                    kernel: None,
+                } => (*param, *stiffness, Some(target.at(self.time))),
+                Force::Point { param, force } => (*param, 0.0, Some(*force)),
+                Force::DataPoint { point, stiffness } => (
+                    self.geometry.nearest_param(point)?,
+                    *stiffness,
+                    Some(*point),
+                ),
+                _ => continue,
+            };
+            self.geometry.jacobian_at(param, &mut lj)?;
+            let dofs = lj.dofs();
+            let nd = dofs.len();
+            let mut w = ElementWork {
+                a: vec![0.0; nd * nd],
+                rhs: vec![0.0; nd],
+                dofs,
+                ..Default::default()
+            };
+            let f = match force {
+                Force::Point { .. } => pull.unwrap_or_default(),
+                _ => (pull.unwrap_or_default() - lj.s[0]) * spring,
+            };
+            if spring > 0.0 {
+                let mut c = [0.0; 6];
+                c[0] = ck * spring;
+                lj.accumulate_gram(&c, &mut w.a);
+            }
+            lj.apply_transpose(0, fs, &f, &mut w.rhs);
+            works.push(w);
+        }
+        Ok(())
+    }
+
+    /// Lagrange multipliers for the constraints on the linearized step (module docs).
+    fn apply_constraints(
+        &self,
+        op: &Op<'_>,
+        pre: &Precond,
+        b: &[f64],
+        x: &mut [f64],
+        gain: f64,
+        mut stats: SolverStats,
+    ) -> Result<SolverStats, DynamicsError> {
+        let n = b.len();
+        // Rows restricted to the free coordinates, with their owning constraint.
+        let mut rows: Vec<(usize, f64, Vec<f64>)> = Vec::new();
+        for (ci, c) in self.constraints.iter().enumerate() {
+            for (value, entries) in self.constraint_rows(c)? {
+                let mut r = vec![0.0; n];
+                for (i, d) in entries {
+                    if !self.fixed[i] {
+                        r[i] += d;
+                    }
+                }
+                rows.push((ci, value, r));
+            }
+        }
+        // Dependence check (modified Gram-Schmidt in order, carrying the constraint values
+        // along). A row that depends on earlier rows is redundant when its value is what those
+        // rows already imply (dropped; e.g. the x and y rows of a point constraint at the pole of
+        // a swung surface, which both act only through the pole's x coordinate), and
+        // contradictory otherwise (an error naming the constraint).
+        let consistent = CONSTRAINT_CONSISTENCY * self.geometry.scale();
+        let norm = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let biggest = rows.iter().map(|r| norm(&r.2)).fold(0.0, f64::max);
+        let mut basis: Vec<(Vec<f64>, f64)> = Vec::new();
+        let mut kept = Vec::with_capacity(rows.len());
+        for (ci, value, r) in rows {
+            let norm0 = norm(&r);
+            let mut u = r.clone();
+            let mut uv = value;
+            for (q, qv) in &basis {
+                let d: f64 = u.iter().zip(q).map(|(a, b)| a * b).sum();
+                for (ui, qi) in u.iter_mut().zip(q) {
+                    *ui -= d * qi;
+                }
+                uv -= d * qv;
+            }
+            let nu = norm(&u);
+            let dependent = norm0 <= CONSTRAINT_DEPENDENCE_TOLERANCE * biggest
+                || nu <= CONSTRAINT_DEPENDENCE_TOLERANCE * norm0;
+            if dependent {
+                if uv.abs() <= consistent {
+                    continue;
+                }
+                return Err(DynamicsError::Constraint {
+                    index: ci,
+                    what: if norm0 <= CONSTRAINT_DEPENDENCE_TOLERANCE * biggest {
+                        format!(
+                            "acts only on fixed coordinates (violation {value:.3e}); free some coordinates near it"
+                        )
+                    } else {
+                        format!(
+                            "contradicts earlier constraints (its rows depend on theirs and would need a change of {uv:.3e} they forbid)"
+                        )
+                    },
+                });
+            }
+            basis.push((u.iter().map(|x| x / nu).collect(), uv / nu));
+            kept.push((ci, value, r));
+        }
+        let rows = kept;
+        if rows.is_empty() {
+            return Ok(stats);
+        }
+        let k = rows.len();
+        // Y = A^-1 C^T column by column.
+        let mut ys = Vec::with_capacity(k);
+        for (_, _, r) in &rows {
+            let mut y = vec![0.0; n];
+            let s = pcg(op, pre, r, &mut y, self.max_iterations, self.tolerance);
+            stats.iterations += s.iterations;
+            stats.relative_residual = stats.relative_residual.max(s.relative_residual);
+            ys.push(y);
+        }
+        let mut s = nalgebra::DMatrix::<f64>::zeros(k, k);
+        let mut rhs = nalgebra::DVector::<f64>::zeros(k);
+        for i in 0..k {
+            for j in 0..k {
+                s[(i, j)] = rows[i].2.iter().zip(&ys[j]).map(|(a, b)| a * b).sum();
+            }
+            let cx: f64 = rows[i].2.iter().zip(x.iter()).map(|(a, b)| a * b).sum();
+            // Want C dq = -kappa C(p).
+            rhs[i] = cx + gain * rows[i].1;
+        }
+        let lambda = s
+            .clone()
+            .cholesky()
+            .map(|c| c.solve(&rhs))
+            .or_else(|| s.lu().solve(&rhs))
+            .ok_or_else(|| DynamicsError::Constraint {
+                index: rows[0].0,
+                what: "the constraint system is singular".into(),
+            })?;
+        for j in 0..k {
+            for i in 0..n {
+                x[i] -= lambda[j] * ys[j][i];
+            }
+        }
+        Ok(stats)
+    }
+}
+
+/// The step operator `A = sum_e A_e + diag(extra)` on the free coordinates.
+struct Op<'a> {
+    works: &'a [ElementWork],
+    extra_diag: &'a [f64],
+    fixed: &'a [bool],
+    n: usize,
+}
+
+impl Op<'_> {
+    fn apply(&self, x: &[f64], out: &mut [f64]) {
+        let n = self.n;
+        let sum = self
+            .works
+            .par_iter()
+            .fold(
+                || vec![0.0; n],
+                |mut acc, w| {
+                    let nd = w.dofs.len();
+                    for a in 0..nd {
+                        let row = &w.a[a * nd..(a + 1) * nd];
+                        let mut s = 0.0;
+                        for (bb, &j) in w.dofs.iter().enumerate() {
+                            s += row[bb] * x[j];
+                        }
+                        acc[w.dofs[a]] += s;
+                    }
+                    acc
+                },
+            )
+            .reduce(
+                || vec![0.0; n],
+                |mut a, b| {
+                    for (x, y) in a.iter_mut().zip(b) {
+                        *x += y;
+                    }
+                    a
+                },
+            );
+        for i in 0..n {
+            out[i] = if self.fixed[i] {
+                0.0
+            } else {
+                sum[i] + self.extra_diag[i] * x[i]
+            };
+        }
+    }
+}
+
+/// Block-Jacobi preconditioner: the inverse of the diagonal blocks of `A` over the coordinate
+/// groups (free coordinates only).
+struct Precond {
+    groups: Vec<(Vec<usize>, nalgebra::DMatrix<f64>)>,
+}
+
+impl Precond {
+    fn new(op: &Op<'_>, groups: &[std::ops::Range<usize>]) -> Self {
+        let n = op.n;
+        let mut gid = vec![(usize::MAX, 0usize); n];
+        let mut blocks: Vec<(Vec<usize>, nalgebra::DMatrix<f64>)> = Vec::new();
+        for g in groups {
+            let free: Vec<usize> = g.clone().filter(|&i| !op.fixed[i]).collect();
+            if free.is_empty() {
+                continue;
+            }
+            for (k, &i) in free.iter().enumerate() {
+                gid[i] = (blocks.len(), k);
+            }
+            let m = free.len();
+            blocks.push((free, nalgebra::DMatrix::zeros(m, m)));
+        }
+        for i in 0..n {
+            if gid[i].0 == usize::MAX && !op.fixed[i] {
+                gid[i] = (blocks.len(), 0);
+                blocks.push((vec![i], nalgebra::DMatrix::zeros(1, 1)));
+            }
+        }
+        for w in op.works {
+            let nd = w.dofs.len();
+            for (a, &i) in w.dofs.iter().enumerate() {
+                let (gi, ki) = gid[i];
+                if gi == usize::MAX {
+                    continue;
+                }
+                for (bb, &j) in w.dofs.iter().enumerate() {
+                    let (gj, kj) = gid[j];
+                    if gj == gi {
+                        blocks[gi].1[(ki, kj)] += w.a[a * nd + bb];
+                    }
+                }
+            }
+        }
+        for i in 0..n {
+            let (g, k) = gid[i];
+            if g != usize::MAX {
+                blocks[g].1[(k, k)] += op.extra_diag[i];
+            }
+        }
+        let groups = blocks
+            .into_iter()
+            .map(|(idx, m)| {
+                let inv = m
+                    .clone()
+                    .cholesky()
+                    .map(|c| c.inverse())
+                    .unwrap_or_else(|| {
+                        nalgebra::DMatrix::from_diagonal(
+                            &m.diagonal().map(|d| if d > 0.0 { 1.0 / d } else { 0.0 }),
+                        )
+                    });
+                (idx, inv)
+            })
+            .collect();
+        Self { groups }
+    }
+
+    fn apply(&self, r: &[f64], z: &mut [f64]) {
+        for (idx, inv) in &self.groups {
+            for (a, &i) in idx.iter().enumerate() {
+                let mut s = 0.0;
+                for (bb, &j) in idx.iter().enumerate() {
+                    s += inv[(a, bb)] * r[j];
+                }
+                z[i] = s;
+            }
+        }
+    }
+}
+
+/// Block-Jacobi-preconditioned CG on the free coordinates (fixed entries of `x` stay 0).
+fn pcg(
+    op: &Op<'_>,
+    pre: &Precond,
+    b: &[f64],
+    x: &mut [f64],
+    max_it: usize,
+    tol: f64,
+) -> SolverStats {
+    let n = b.len();
+    for i in 0..n {
+        if op.fixed[i] {
+            x[i] = 0.0;
+        }
+    }
+    let mut ax = vec![0.0; n];
+    op.apply(x, &mut ax);
+    let mut r: Vec<f64> = (0..n)
+        .map(|i| if op.fixed[i] { 0.0 } else { b[i] - ax[i] })
+        .collect();
+    let bnorm = (0..n)
+        .filter(|&i| !op.fixed[i])
+        .map(|i| b[i] * b[i])
+        .sum::<f64>()
+        .sqrt();
+    let rel = |r: &[f64]| {
+        let rn = r.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if bnorm > 0.0 { rn / bnorm } else { rn }
+    };
+    let mut z = vec![0.0; n];
+    pre.apply(&r, &mut z);
+    let mut p = z.clone();
+    let mut rz: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();
+    let mut ap = vec![0.0; n];
+    let mut stats = SolverStats {
+        iterations: 0,
+        relative_residual: rel(&r),
+    };
+    while stats.iterations < max_it && stats.relative_residual > tol {
+        op.apply(&p, &mut ap);
+        let pap: f64 = p.iter().zip(&ap).map(|(a, b)| a * b).sum();
+        if pap <= 0.0 {
+            break;
+        }
+        let alpha = rz / pap;
+        for i in 0..n {
+            x[i] += alpha * p[i];
+            r[i] -= alpha * ap[i];
+        }
+        pre.apply(&r, &mut z);
+        let rz_new: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();
+        let beta = rz_new / rz;
+        rz = rz_new;
+        for i in 0..n {
+            p[i] = z[i] + beta * p[i];
+        }
+        stats.iterations += 1;
+        stats.relative_residual = rel(&r);
+    }
+    stats
+}

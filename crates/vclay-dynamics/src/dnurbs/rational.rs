@@ -1,0 +1,839 @@
+//! Geometries whose generalized coordinates include the weights (`d-nurbs.txt` sections 4.1-4.3):
+//! NURBS curves and tensor-product surfaces with dynamic weights, and swung surfaces (eq 7).
+//!
+//! ## Rational derivatives and their Jacobian columns
+//! With homogeneous sums over the local control points `W^a = sum N^a w`, `A^a = sum N^a w p`
+//! (`a` a multi-index of parametric derivatives, `N^a` the tensor-product basis derivative), the
+//! Leibniz rule on `A = W s` gives (Piegl-Tiller eq 4.8 / 4.20)
+//!
+//! ```text
+//! s^a = ( A^a - sum_{b < a} C(a,b) W^(a-b) s^b ) / W
+//! ```
+//!
+//! Differentiating this identity with respect to the coordinates gives the columns of the
+//! Jacobians `J^a = d s^a / d p` used by the finite elements (eqs 3, 6 and their parametric
+//! derivatives `J_u, J_v, J_uu, J_uv, J_vv` of eq 17):
+//!
+//! ```text
+//! d s^a / d p_k = R_k^a I,    R_k^a = ( N_k^a w_k - sum_{b<a} C(a,b) W^(a-b) R_k^b ) / W
+//! d s^a / d w_k = g_k^a,      g_k^a = ( N_k^a p_k - sum_{b<=a} C(a,b) N_k^(a-b) s^b
+//!                                        - sum_{b<a} C(a,b) W^(a-b) g_k^b ) / W
+//! ```
+//! (for `a = 0`: `g_k = N_k (p_k - s) / W`, the weight column of eq 3).
+//!
+//! ## The velocity term of the generalized inertial force
+//! `g_p = -integral mu J^T (dJ/dt) p'` needs `(dJ/dt) p' = d^2 s[p', p']`, the second directional
+//! derivative of `s` along the velocity. From `s W = A` with `A(e) = A + e A1 + e^2 A2` and
+//! `W(e) = W + e W1` along `p + e p'`, `w + e w'`:
+//!
+//! ```text
+//! A1 = sum N (w' p + w p'),  A2 = sum N w' p',  W1 = sum N w'
+//! s' = (A1 - s W1) / W,      d^2 s[p', p'] = 2 (A2 - s' W1) / W
+//! ```
+//! which vanishes when the weights are frozen (`w' = 0`), as footnote 2 of the paper says.
+//!
+//! ## Swung surfaces (eq 7)
+//! `s(u, v) = (alpha c1x(u) c2x(v), alpha c1x(u) c2y(v), c1z(u))` with the profile `c1` in the x-z
+//! plane and the trajectory `c2` in the x-y plane, and `p = [alpha, a, b]` where `a` and `b` hold
+//! the control points and weights of the two curves (4 numbers per control point). Derivation of
+//! the Jacobian `L = ds/dp` (eq 8), entry by entry, for the parametric derivative `(i, j)`:
+//!
+//! ```text
+//! d s^(i,j) / d alpha = ( c1x^(i) c2x^(j),        c1x^(i) c2y^(j),        0 )
+//! d s^(i,j) / d a_k   = ( alpha dc1x^(i) c2x^(j),  alpha dc1x^(i) c2y^(j),  [j = 0] dc1z^(i) )
+//! d s^(i,j) / d b_k   = ( alpha c1x^(i) dc2x^(j),  alpha c1x^(i) dc2y^(j),  0 )
+//! ```
+//! where `dc^(i)` are the curve Jacobian columns above (`R_k^(i) e` for a control-point component,
+//! `g_k^(i)` for a weight). `L p != s` because `s` is trilinear in `alpha`, `c1` and `c2`; the
+//! basis matrix `H` of eq (9) with `s = H p` is `H = [0 | H_a | 0]`, where the block acting on the
+//! profile coordinates is `H_a = diag(alpha c2x, alpha c2y, 1) J1` (rows x, y, z of the profile
+//! Jacobian `J1`, `c1 = J1 a` by eq 4). vclay uses `L` for the matrices of eqs 16-17 and the exact
+//! nonlinear energy gradient (see `generalized.rs`).
+//!
+//! The profile's y components and the trajectory's z components do not influence the surface;
+//! they are inactive coordinates (held fixed). So is `alpha` by default: `alpha` and a common
+//! scale of `c1x` against `c2` are redundant (`alpha c1x c2 = (k alpha) c1x (c2 / k)`).
+
+use super::generalized::{GeneralizedGeometry, LocalJacobian};
+use crate::error::DynamicsError;
+use vclay_core::Vec3;
+use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
+
+/// The parametric derivatives used, as multi-indices `(i, j)`: `s, s_u, s_v, s_uu, s_uv, s_vv`.
+pub const MULTI_INDICES: [(usize, usize); 6] = [(0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2)];
+
+/// For each multi-index `a`, the terms `(b, a - b, C(a, b))` with `b < a` (componentwise `<=`,
+/// `b != a`) of the Leibniz rule.
+const LOWER: [&[(usize, usize, f64)]; 6] = [
+    &[],
+    &[(0, 1, 1.0)],
+    &[(0, 2, 1.0)],
+    &[(0, 3, 1.0), (1, 1, 2.0)],
+    &[(0, 4, 1.0), (1, 2, 1.0), (2, 1, 1.0)],
+    &[(0, 5, 1.0), (2, 2, 2.0)],
+];
+
+/// Values and Jacobian columns of a rational tensor-product patch at one parameter.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct RationalPoint {
+    /// `s^a` for the six multi-indices.
+    pub s: [Vec3; 6],
+    /// Position columns `R_k^a` per local control point.
+    pub r: Vec<[f64; 6]>,
+    /// Weight columns `g_k^a` per local control point.
+    pub g: Vec<[Vec3; 6]>,
+}
+
+/// Evaluates a rational patch from basis derivative tables `bu` (`3 x ku`, rows value, first,
+/// second derivative) and `bv` (`3 x kv`), local weights and points (`ku x kv`, v fastest).
+pub(crate) fn rational_point(
+    bu: &[f64],
+    ku: usize,
+    bv: &[f64],
+    kv: usize,
+    w: &[f64],
+    p: &[Vec3],
+    out: &mut RationalPoint,
+) {
+    let n = ku * kv;
+    out.r.resize(n, [0.0; 6]);
+    out.g.resize(n, [Vec3::zeros(); 6]);
+    let mut nal = [[0.0; 6]; 64];
+    let mut nal_heap;
+    let nal: &mut [[f64; 6]] = if n <= 64 {
+        &mut nal[..n]
+    } else {
+        nal_heap = vec![[0.0; 6]; n];
+        &mut nal_heap
+    };
+    let mut wa = [0.0; 6];
+    let mut aa = [Vec3::zeros(); 6];
+    for a in 0..ku {
+        for b in 0..kv {
+            let c = a * kv + b;
+            for (m, &(i, j)) in MULTI_INDICES.iter().enumerate() {
+                let v = bu[i * ku + a] * bv[j * kv + b];
+                nal[c][m] = v;
+                wa[m] += v * w[c];
+                aa[m] += p[c] * (v * w[c]);
+            }
+        }
+    }
+    let w0 = wa[0];
+    for m in 0..6 {
+        let mut acc = aa[m];
+        for &(b, d, coef) in LOWER[m] {
+            acc -= out.s[b] * (coef * wa[d]);
+        }
+        out.s[m] = acc / w0;
+    }
+    for c in 0..n {
+        let (r, g) = (&mut out.r[c], &mut out.g[c]);
+        for m in 0..6 {
+            let mut racc = nal[c][m] * w[c];
+            let mut gacc = p[c] * nal[c][m] - out.s[m] * nal[c][0];
+            for &(b, d, coef) in LOWER[m] {
+                racc -= coef * wa[d] * r[b];
+                gacc -= out.s[b] * (coef * nal[c][d]) + g[b] * (coef * wa[d]);
+            }
+            r[m] = racc / w0;
+            g[m] = gacc / w0;
+        }
+    }
+}
+
+/// First and second directional derivatives `(s', d^2 s[p', p'])` of a rational point along
+/// control-point velocities `pd` and weight velocities `wd` (see the module docs).
+pub(crate) fn rational_velocity(
+    basis: &[f64],
+    w: &[f64],
+    p: &[Vec3],
+    pd: &[Vec3],
+    wd: &[f64],
+) -> (Vec3, Vec3) {
+    let (mut w0, mut w1) = (0.0, 0.0);
+    let (mut a0, mut a1, mut a2) = (Vec3::zeros(), Vec3::zeros(), Vec3::zeros());
+    for c in 0..basis.len() {
+        let n = basis[c];
+        w0 += n * w[c];
+        w1 += n * wd[c];
+        a0 += p[c] * (n * w[c]);
+        a1 += (p[c] * wd[c] + pd[c] * w[c]) * n;
+        a2 += pd[c] * (n * wd[c]);
+    }
+    let s = a0 / w0;
+    let s1 = (a1 - s * w1) / w0;
+    (s1, (a2 - s1 * w1) * (2.0 / w0))
+}
+
+/// The knot vector of a "curve in v" that is constant: degree 0, one control point.
+fn unit_knots() -> KnotVector {
+    KnotVector::new(vec![0.0, 1.0], 0, 1).expect("valid constant knot vector")
+}
+
+fn check_param(kv: &KnotVector, u: f64, axis: usize) -> Result<(), DynamicsError> {
+    let d = kv.domain();
+    let tol = kv.parameter_tolerance();
+    if !u.is_finite() || u < d.min - tol || u > d.max + tol {
+        return Err(DynamicsError::Parameter {
+            name: if axis == 0 { "u" } else { "v" },
+            value: u,
+            why: "outside the parameter domain",
+        });
+    }
+    Ok(())
+}
+
+/// A NURBS curve or tensor-product surface whose control points **and weights** are the
+/// generalized coordinates (`d-nurbs.txt` eqs 1-6): `p = [p_0, w_0, p_1, w_1, ...]`, four numbers
+/// per control point (x, y, z, w), control points ordered as in [`NurbsSurface`] (last index
+/// fastest). A curve is stored as a surface whose v direction is a single constant basis
+/// function.
+#[derive(Clone, Debug)]
+pub struct RationalGeometry {
+    knots: [KnotVector; 2],
+    dims: [usize; 2],
+    coords: Vec<f64>,
+    surface: bool,
+    scale: f64,
+}
+
+impl RationalGeometry {
+    /// A curve with dynamic weights.
+    pub fn from_curve(c: &NurbsCurve) -> Self {
+        Self::build(
+            [c.knots().clone(), unit_knots()],
+            [c.control_points().len(), 1],
+            c.control_points(),
+            c.weights(),
+            false,
+        )
+    }
+
+    /// A tensor-product surface with dynamic weights.
+    pub fn from_surface(s: &NurbsSurface) -> Self {
+        Self::build(
+            s.knots().clone(),
+            s.dims(),
+            s.control_points(),
+            s.weights(),
+            true,
+        )
+    }
+
+    fn build(
+        knots: [KnotVector; 2],
+        dims: [usize; 2],
+        pts: &[Vec3],
+        w: &[f64],
+        surface: bool,
+    ) -> Self {
+        let mut coords = Vec::with_capacity(4 * pts.len());
+        for (p, &wi) in pts.iter().zip(w) {
+            coords.extend_from_slice(&[p.x, p.y, p.z, wi]);
+        }
+        let scale = vclay_core::math::max_abs_coordinate(pts).max(f64::MIN_POSITIVE);
+        Self {
+            knots,
+            dims,
+            coords,
+            surface,
+            scale,
+        }
+    }
+
+    /// Control points (current).
+    pub fn control_points(&self) -> Vec<Vec3> {
+        self.coords
+            .chunks_exact(4)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect()
+    }
+
+    /// Weights (current).
+    pub fn weights(&self) -> Vec<f64> {
+        self.coords.chunks_exact(4).map(|c| c[3]).collect()
+    }
+
+    /// The current shape as a NURBS curve (an error for a surface).
+    pub fn to_curve(&self) -> Result<NurbsCurve, DynamicsError> {
+        if self.surface {
+            return Err(DynamicsError::Parameter {
+                name: "geometry",
+                value: 2.0,
+                why: "is a surface, not a curve",
+            });
+        }
+        Ok(NurbsCurve::from_knot_vector(
+            self.knots[0].clone(),
+            self.control_points(),
+            self.weights(),
+        )?)
+    }
+
+    /// The current shape as a NURBS surface (a curve becomes an error).
+    pub fn to_surface(&self) -> Result<NurbsSurface, DynamicsError> {
+        if !self.surface {
+            return Err(DynamicsError::Parameter {
+                name: "geometry",
+                value: 1.0,
+                why: "is a curve, not a surface",
+            });
+        }
+        Ok(NurbsSurface::from_flat(
+            self.knots.clone(),
+            self.control_points(),
+            self.weights(),
+        )?)
+    }
+
+    /// Local evaluation: spans, basis tables and local control indices.
+    fn local(&self, param: [f64; 2]) -> Result<Local, DynamicsError> {
+        let v = if self.surface { param[1] } else { 0.5 };
+        check_param(&self.knots[0], param[0], 0)?;
+        check_param(&self.knots[1], v, 1)?;
+        let su = self.knots[0].find_span(param[0]);
+        let sv = self.knots[1].find_span(v);
+        let (p, q) = (self.knots[0].degree(), self.knots[1].degree());
+        let bu = basis3(&self.knots[0], su, param[0]);
+        let bv = basis3(&self.knots[1], sv, v);
+        let (ku, kv) = (p + 1, q + 1);
+        let mut idx = Vec::with_capacity(ku * kv);
+        for a in 0..ku {
+            for b in 0..kv {
+                idx.push((su - p + a) * self.dims[1] + (sv - q + b));
+            }
+        }
+        Ok(Local {
+            bu,
+            bv,
+            ku,
+            kv,
+            idx,
+        })
+    }
+
+    fn local_net(&self, idx: &[usize]) -> (Vec<f64>, Vec<Vec3>) {
+        let w = idx.iter().map(|&c| self.coords[4 * c + 3]).collect();
+        let p = idx
+            .iter()
+            .map(|&c| {
+                Vec3::new(
+                    self.coords[4 * c],
+                    self.coords[4 * c + 1],
+                    self.coords[4 * c + 2],
+                )
+            })
+            .collect();
+        (w, p)
+    }
+}
+
+struct Local {
+    bu: Vec<f64>,
+    bv: Vec<f64>,
+    ku: usize,
+    kv: usize,
+    idx: Vec<usize>,
+}
+
+/// Basis values, first and second derivatives (`3 x (p+1)`; orders above the degree are zero).
+fn basis3(kv: &KnotVector, span: usize, u: f64) -> Vec<f64> {
+    kv.basis_derivatives_vec(span, u, 2)
+}
+
+fn non_empty_spans(kv: &KnotVector) -> Vec<(f64, f64)> {
+    let k = kv.as_slice();
+    (kv.degree()..kv.control_points())
+        .filter(|&i| k[i] < k[i + 1])
+        .map(|i| (k[i], k[i + 1]))
+        .collect()
+}
+
+impl GeneralizedGeometry for RationalGeometry {
+    fn parametric_dimension(&self) -> usize {
+        if self.surface { 2 } else { 1 }
+    }
+    fn coordinates(&self) -> &[f64] {
+        &self.coords
+    }
+    fn set_coordinates(&mut self, q: &[f64]) -> Result<(), DynamicsError> {
+        if q.len() != self.coords.len() {
+            return Err(DynamicsError::NoSuchCoordinate {
+                index: q.len(),
+                count: self.coords.len(),
+            });
+        }
+        if let Some((i, &x)) = q.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+            return Err(DynamicsError::Parameter {
+                name: "coordinate",
+                value: x,
+                why: if i % 4 == 3 {
+                    "weights must be finite"
+                } else {
+                    "control points must be finite"
+                },
+            });
+        }
+        if let Some(&w) = q.iter().skip(3).step_by(4).find(|&&w| w <= 0.0) {
+            return Err(DynamicsError::Parameter {
+                name: "weight",
+                value: w,
+                why: "weights must be positive",
+            });
+        }
+        self.coords.copy_from_slice(q);
+        Ok(())
+    }
+    fn weight_coordinates(&self) -> Vec<usize> {
+        (0..self.coords.len() / 4).map(|c| 4 * c + 3).collect()
+    }
+    fn coordinate_groups(&self) -> Vec<std::ops::Range<usize>> {
+        (0..self.coords.len() / 4)
+            .map(|c| 4 * c..4 * c + 4)
+            .collect()
+    }
+    fn default_fixed_coordinates(&self) -> Vec<usize> {
+        // Gauge: s is unchanged when all weights are scaled together, so one weight is held.
+        vec![3]
+    }
+    fn elements(&self) -> Vec<[(f64, f64); 2]> {
+        let us = non_empty_spans(&self.knots[0]);
+        let vs = if self.surface {
+            non_empty_spans(&self.knots[1])
+        } else {
+            vec![(0.5, 0.5)]
+        };
+        let mut out = Vec::with_capacity(us.len() * vs.len());
+        for &u in &us {
+            for &v in &vs {
+                out.push([u, v]);
+            }
+        }
+        out
+    }
+    fn max_degree(&self) -> usize {
+        if self.surface {
+            self.knots[0].degree().max(self.knots[1].degree())
+        } else {
+            self.knots[0].degree()
+        }
+    }
+    fn scale(&self) -> f64 {
+        self.scale
+    }
+    fn jacobian_at(&self, param: [f64; 2], out: &mut LocalJacobian) -> Result<(), DynamicsError> {
+        let l = self.local(param)?;
+        let (w, p) = self.local_net(&l.idx);
+        let mut rp = RationalPoint::default();
+        rational_point(&l.bu, l.ku, &l.bv, l.kv, &w, &p, &mut rp);
+        out.s = rp.s;
+        out.blocks.clear();
+        out.vectors.clear();
+        for (k, &c) in l.idx.iter().enumerate() {
+            out.blocks.push((4 * c, rp.r[k]));
+            out.vectors.push((4 * c + 3, rp.g[k]));
+        }
+        Ok(())
+    }
+    fn velocity_terms(&self, param: [f64; 2], qdot: &[f64]) -> Result<(Vec3, Vec3), DynamicsError> {
+        let l = self.local(param)?;
+        let (w, p) = self.local_net(&l.idx);
+        let basis: Vec<f64> = (0..l.ku)
+            .flat_map(|a| (0..l.kv).map(move |b| (a, b)))
+            .map(|(a, b)| l.bu[a] * l.bv[b])
+            .collect();
+        let pd: Vec<Vec3> = l
+            .idx
+            .iter()
+            .map(|&c| Vec3::new(qdot[4 * c], qdot[4 * c + 1], qdot[4 * c + 2]))
+            .collect();
+        let wd: Vec<f64> = l.idx.iter().map(|&c| qdot[4 * c + 3]).collect();
+        Ok(rational_velocity(&basis, &w, &p, &pd, &wd))
+    }
+    fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
+        if self.surface {
+            super::geometry::nearest_on_surface(&self.to_surface()?, x)
+        } else {
+            Ok([
+                super::geometry::nearest_on_curve(&self.to_curve()?, x)?,
+                0.0,
+            ])
+        }
+    }
+}
+
+/// A swung NURBS surface (`d-nurbs.txt` eq 7) with generalized coordinates
+/// `p = [alpha, a, b]`: the scale `alpha`, then the profile curve `c1(u)` (x-z plane) and the
+/// trajectory curve `c2(v)` (x-y plane), four numbers (x, y, z, w) per control point. The
+/// Jacobian `L` and basis matrix `H` are derived in the module docs.
+#[derive(Clone, Debug)]
+pub struct SwungGeometry {
+    profile: RationalGeometry,
+    trajectory: RationalGeometry,
+    coords: Vec<f64>,
+    scale: f64,
+}
+
+impl SwungGeometry {
+    /// A swung surface from a profile curve in the x-z plane, a trajectory curve in the x-y plane
+    /// and the scale `alpha`. Components outside those planes are ignored (and held fixed).
+    pub fn new(
+        profile: &NurbsCurve,
+        trajectory: &NurbsCurve,
+        alpha: f64,
+    ) -> Result<Self, DynamicsError> {
+        if !(alpha.is_finite() && alpha != 0.0) {
+            return Err(DynamicsError::Parameter {
+                name: "alpha",
+                value: alpha,
+                why: "must be finite and non-zero",
+            });
+        }
+        let profile = RationalGeometry::from_curve(profile);
+        let trajectory = RationalGeometry::from_curve(trajectory);
+        let mut coords = vec![alpha];
+        coords.extend_from_slice(&profile.coords);
+        coords.extend_from_slice(&trajectory.coords);
+        let mut g = Self {
+            profile,
+            trajectory,
+            coords,
+            scale: 1.0,
+        };
+        let (du, dv) = (
+            g.profile.knots[0].domain().linspace(9),
+            g.trajectory.knots[0].domain().linspace(9),
+        );
+        let mut pts = Vec::new();
+        for &u in &du {
+            for &v in &dv {
+                pts.push(g.point([u, v])?);
+            }
+        }
+        g.scale = vclay_core::math::max_abs_coordinate(&pts).max(f64::MIN_POSITIVE);
+        Ok(g)
+    }
+
+    fn offsets(&self) -> (usize, usize) {
+        (1, 1 + self.profile.coords.len())
+    }
+
+    /// The scale `alpha`.
+    pub fn alpha(&self) -> f64 {
+        self.coords[0]
+    }
+
+    /// The current profile curve.
+    pub fn profile(&self) -> Result<NurbsCurve, DynamicsError> {
+        self.profile.to_curve()
+    }
+
+    /// The current trajectory curve.
+    pub fn trajectory(&self) -> Result<NurbsCurve, DynamicsError> {
+        self.trajectory.to_curve()
+    }
+
+    /// The surface point at `[u, v]` (`u` in the profile's domain, `v` in the trajectory's).
+    pub fn point(&self, param: [f64; 2]) -> Result<Vec3, DynamicsError> {
+        let (r1, _, _) = curve_local(&self.profile, param[0])?;
+        let (r2, _, _) = curve_local(&self.trajectory, param[1])?;
+        let (a, b, al) = (r1.s[0], r2.s[0], self.alpha());
+        Ok(Vec3::new(al * a.x * b.x, al * a.x * b.y, a.z))
+    }
+
+    /// The exact NURBS surface of the swung surface: the tensor product with control points
+    /// `(alpha a_i,x b_j,x, alpha a_i,x b_j,y, a_i,z)` and weights `w^a_i w^b_j` (Piegl's
+    /// construction), for export and tessellation.
+    pub fn to_surface(&self) -> Result<NurbsSurface, DynamicsError> {
+        let al = self.alpha();
+        let (pa, wa) = (self.profile.control_points(), self.profile.weights());
+        let (pb, wb) = (self.trajectory.control_points(), self.trajectory.weights());
+        let mut pts = Vec::with_capacity(pa.len() * pb.len());
+        let mut ws = Vec::with_capacity(pa.len() * pb.len());
+        for (a, &wai) in pa.iter().zip(&wa) {
+            for (b, &wbj) in pb.iter().zip(&wb) {
+                pts.push(Vec3::new(al * a.x * b.x, al * a.x * b.y, a.z));
+                ws.push(wai * wbj);
+            }
+        }
+        Ok(NurbsSurface::from_flat(
+            [
+                self.profile.knots[0].clone(),
+                self.trajectory.knots[0].clone(),
+            ],
+            pts,
+            ws,
+        )?)
+    }
+
+    fn sync(&mut self) {
+        let (oa, ob) = self.offsets();
+        let na = self.profile.coords.len();
+        let nb = self.trajectory.coords.len();
+        self.profile
+            .coords
+            .copy_from_slice(&self.coords[oa..oa + na]);
+        self.trajectory
+            .coords
+            .copy_from_slice(&self.coords[ob..ob + nb]);
+    }
+}
+
+/// Curve values `c^(i)` (i = 0, 1, 2) and columns at a parameter.
+fn curve_local(
+    g: &RationalGeometry,
+    u: f64,
+) -> Result<(RationalPoint, Vec<usize>, Vec<f64>), DynamicsError> {
+    let l = g.local([u, 0.0])?;
+    let (w, p) = g.local_net(&l.idx);
+    let mut rp = RationalPoint::default();
+    rational_point(&l.bu, l.ku, &l.bv, l.kv, &w, &p, &mut rp);
+    let basis = l.bu[..l.ku].to_vec();
+    Ok((rp, l.idx, basis))
+}
+
+/// Slot of the curve derivative of order `i` in [`MULTI_INDICES`].
+const CURVE_SLOT: [usize; 3] = [0, 1, 3];
+
+impl GeneralizedGeometry for SwungGeometry {
+    fn parametric_dimension(&self) -> usize {
+        2
+    }
+    fn coordinates(&self) -> &[f64] {
+        &self.coords
+    }
+    fn set_coordinates(&mut self, q: &[f64]) -> Result<(), DynamicsError> {
+        if q.len() != self.coords.len() {
+            return Err(DynamicsError::NoSuchCoordinate {
+                index: q.len(),
+                count: self.coords.len(),
+            });
+        }
+        let (oa, ob) = self.offsets();
+        self.profile.set_coordinates(&q[oa..ob])?;
+        self.trajectory.set_coordinates(&q[ob..])?;
+        if !q[0].is_finite() {
+            return Err(DynamicsError::Parameter {
+                name: "alpha",
+                value: q[0],
+                why: "must be finite",
+            });
+        }
+        self.coords.copy_from_slice(q);
+        self.sync();
+        Ok(())
+    }
+    fn weight_coordinates(&self) -> Vec<usize> {
+        let (oa, ob) = self.offsets();
+        let mut w: Vec<usize> = self
+            .profile
+            .weight_coordinates()
+            .into_iter()
+            .map(|i| i + oa)
+            .collect();
+        w.extend(
+            self.trajectory
+                .weight_coordinates()
+                .into_iter()
+                .map(|i| i + ob),
+        );
+        w
+    }
+    fn coordinate_groups(&self) -> Vec<std::ops::Range<usize>> {
+        let mut g = vec![0..1];
+        g.extend((1..self.coords.len()).step_by(4).map(|c| c..c + 4));
+        g
+    }
+    fn default_fixed_coordinates(&self) -> Vec<usize> {
+        let (oa, ob) = self.offsets();
+        // alpha (redundant with the trajectory's scale), one weight per curve (gauge), and the
+        // inactive components: profile y, trajectory z.
+        let mut f = vec![0, oa + 3, ob + 3];
+        f.extend((0..self.profile.coords.len() / 4).map(|c| oa + 4 * c + 1));
+        f.extend((0..self.trajectory.coords.len() / 4).map(|c| ob + 4 * c + 2));
+        f
+    }
+    fn elements(&self) -> Vec<[(f64, f64); 2]> {
+        let us = non_empty_spans(&self.profile.knots[0]);
+        let vs = non_empty_spans(&self.trajectory.knots[0]);
+        let mut out = Vec::with_capacity(us.len() * vs.len());
+        for &u in &us {
+            for &v in &vs {
+                out.push([u, v]);
+            }
+        }
+        out
+    }
+    fn max_degree(&self) -> usize {
+        self.profile.max_degree().max(self.trajectory.max_degree())
+    }
+    fn scale(&self) -> f64 {
+        self.scale
+    }
+    fn jacobian_at(&self, param: [f64; 2], out: &mut LocalJacobian) -> Result<(), DynamicsError> {
+        let (r1, i1, _) = curve_local(&self.profile, param[0])?;
+        let (r2, i2, _) = curve_local(&self.trajectory, param[1])?;
+        let al = self.alpha();
+        let (oa, ob) = self.offsets();
+        let x = |i: usize| r1.s[CURVE_SLOT[i]];
+        let y = |j: usize| r2.s[CURVE_SLOT[j]];
+        out.blocks.clear();
+        out.vectors.clear();
+        let mut col_alpha = [Vec3::zeros(); 6];
+        for (m, &(i, j)) in MULTI_INDICES.iter().enumerate() {
+            let (c1, c2) = (x(i), y(j));
+            out.s[m] = Vec3::new(
+                al * c1.x * c2.x,
+                al * c1.x * c2.y,
+                if j == 0 { c1.z } else { 0.0 },
+            );
+            col_alpha[m] = Vec3::new(c1.x * c2.x, c1.x * c2.y, 0.0);
+        }
+        out.vectors.push((0, col_alpha));
+        // Profile columns: components x, y, z by R, weight by g.
+        for (k, &c) in i1.iter().enumerate() {
+            for comp in 0..4 {
+                let mut col = [Vec3::zeros(); 6];
+                for (m, &(i, j)) in MULTI_INDICES.iter().enumerate() {
+                    let slot = CURVE_SLOT[i];
+                    let d = if comp < 3 {
+                        let mut e = Vec3::zeros();
+                        e[comp] = r1.r[k][slot];
+                        e
+                    } else {
+                        r1.g[k][slot]
+                    };
+                    let c2 = y(j);
+                    col[m] = Vec3::new(
+                        al * d.x * c2.x,
+                        al * d.x * c2.y,
+                        if j == 0 { d.z } else { 0.0 },
+                    );
+                }
+                out.vectors.push((oa + 4 * c + comp, col));
+            }
+        }
+        for (k, &c) in i2.iter().enumerate() {
+            for comp in 0..4 {
+                let mut col = [Vec3::zeros(); 6];
+                for (m, &(i, j)) in MULTI_INDICES.iter().enumerate() {
+                    let slot = CURVE_SLOT[j];
+                    let d = if comp < 3 {
+                        let mut e = Vec3::zeros();
+                        e[comp] = r2.r[k][slot];
+                        e
+                    } else {
+                        r2.g[k][slot]
+                    };
+                    let c1 = x(i);
+                    col[m] = Vec3::new(al * c1.x * d.x, al * c1.x * d.y, 0.0);
+                }
+                out.vectors.push((ob + 4 * c + comp, col));
+            }
+        }
+        Ok(())
+    }
+    fn velocity_terms(&self, param: [f64; 2], qdot: &[f64]) -> Result<(Vec3, Vec3), DynamicsError> {
+        let (oa, ob) = self.offsets();
+        let (r1, _, _) = curve_local(&self.profile, param[0])?;
+        let (r2, _, _) = curve_local(&self.trajectory, param[1])?;
+        let (d1, dd1) = self
+            .profile
+            .velocity_terms([param[0], 0.0], &qdot[oa..ob])?;
+        let (d2, dd2) = self
+            .trajectory
+            .velocity_terms([param[1], 0.0], &qdot[ob..])?;
+        let (al, ald) = (self.alpha(), qdot[0]);
+        let (c1, c2) = (r1.s[0], r2.s[0]);
+        // s_x = alpha X Y with X = c1x, Y = c2x (s_y: Y = c2y); product rule for D and D^2.
+        let prod = |y: f64, yd: f64, ydd: f64| -> (f64, f64) {
+            let first = ald * c1.x * y + al * d1.x * y + al * c1.x * yd;
+            let second = 2.0 * (ald * d1.x * y + ald * c1.x * yd + al * d1.x * yd)
+                + al * (dd1.x * y + c1.x * ydd);
+            (first, second)
+        };
+        let (fx, sx) = prod(c2.x, d2.x, dd2.x);
+        let (fy, sy) = prod(c2.y, d2.y, dd2.y);
+        Ok((Vec3::new(fx, fy, d1.z), Vec3::new(sx, sy, dd1.z)))
+    }
+    fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
+        super::geometry::nearest_on_surface(&self.to_surface()?, x)
+    }
+}
+
+/// Profile and trajectory curves of exact swung primitives (quadratic rational curves).
+pub mod profiles {
+    use vclay_core::Vec3;
+    use vclay_spline::{NurbsCurve, SplineError};
+
+    /// A full circle of radius `r` in the x-y plane from three 120-degree arcs: quadratic,
+    /// 7 control points (the trajectory count of `d-nurbs.txt` Fig 9a).
+    pub fn circle7(r: f64) -> Result<NurbsCurve, SplineError> {
+        let mut pts = Vec::with_capacity(7);
+        let mut w = Vec::with_capacity(7);
+        for k in 0..7 {
+            let ang = std::f64::consts::PI / 3.0 * k as f64;
+            let (rad, wk) = if k % 2 == 1 { (2.0 * r, 0.5) } else { (r, 1.0) };
+            pts.push(Vec3::new(rad * ang.cos(), rad * ang.sin(), 0.0));
+            w.push(wk);
+        }
+        let t = 1.0 / 3.0;
+        NurbsCurve::new(
+            2,
+            vec![0.0, 0.0, 0.0, t, t, 2.0 * t, 2.0 * t, 1.0, 1.0, 1.0],
+            pts,
+            Some(w),
+        )
+    }
+
+    /// A half circle of radius `r` in the x-z plane (x >= 0) from the south pole to the north
+    /// pole: quadratic, 4 control points with weights `1, 1/2, 1/2, 1` and one simple interior
+    /// knot (the profile count of `d-nurbs.txt` Fig 9a).
+    pub fn semicircle4(r: f64) -> Result<NurbsCurve, SplineError> {
+        NurbsCurve::new(
+            2,
+            vec![0.0, 0.0, 0.0, 0.5, 1.0, 1.0, 1.0],
+            vec![
+                Vec3::new(0.0, 0.0, -r),
+                Vec3::new(r, 0.0, -r),
+                Vec3::new(r, 0.0, r),
+                Vec3::new(0.0, 0.0, r),
+            ],
+            Some(vec![1.0, 0.5, 0.5, 1.0]),
+        )
+    }
+
+    /// A circle of radius `r` in the x-z plane centred at `(big_r, 0, 0)` (torus profile).
+    pub fn offset_circle7(big_r: f64, r: f64) -> Result<NurbsCurve, SplineError> {
+        let c = circle7(r)?;
+        let pts = c
+            .control_points()
+            .iter()
+            .map(|p| Vec3::new(big_r + p.x, 0.0, p.y))
+            .collect();
+        NurbsCurve::from_knot_vector(c.knots().clone(), pts, c.weights().to_vec())
+    }
+
+    /// A non-rational quadratic profile in the x-z plane through the given `(x, z)` control
+    /// points on clamped uniform knots (hats, glasses, vases).
+    pub fn polyline_profile(xz: &[(f64, f64)]) -> Result<NurbsCurve, SplineError> {
+        NurbsCurve::clamped_uniform(2, xz.iter().map(|&(x, z)| Vec3::new(x, 0.0, z)).collect())
+    }
+}
+
+impl SwungGeometry {
+    /// The sphere of `d-nurbs.txt` Fig 9a: quadratic profiles with 4 and 7 control points.
+    pub fn sphere(r: f64) -> Result<Self, DynamicsError> {
+        Self::new(&profiles::semicircle4(r)?, &profiles::circle7(1.0)?, 1.0)
+    }
+
+    /// The torus of Fig 9b: quadratic profile and trajectory with 7 control points each.
+    pub fn torus(big_r: f64, r: f64) -> Result<Self, DynamicsError> {
+        Self::new(
+            &profiles::offset_circle7(big_r, r)?,
+            &profiles::circle7(1.0)?,
+            1.0,
+        )
+    }
+}
