@@ -111,3 +111,59 @@ fn fig7c_sinusoid_with_fixed_attachments_approaches_the_data() {
     // amplitude of 0.6. Allow 10 % of the amplitude.
     assert!(err < 0.1 * 0.6, "largest height error {err}");
 }
+
+#[test]
+fn fig7a_hemisphere_fit_with_dynamic_weights() {
+    // 19 hemisphere points, quadratic 7x7 surface (49 control points, weights dynamic), Table 1
+    // "Hemisphere fitting" parameters, springs on the nearest points.
+    use vclay_dynamics::dnurbs::{GeneralizedDnurbs, RationalGeometry};
+    let p = Preset::by_name("Hemisphere fitting").unwrap();
+    let n = 7;
+    let mut pts = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            pts.push(Vec3::new(
+                -1.2 + 2.4 * i as f64 / 6.0,
+                -1.2 + 2.4 * j as f64 / 6.0,
+                0.0,
+            ));
+        }
+    }
+    let sheet = NurbsSurface::clamped_uniform([2, 2], [n, n], pts).unwrap();
+    let mut d =
+        GeneralizedDnurbs::new(RationalGeometry::from_surface(&sheet), p.surface_material())
+            .unwrap();
+    d.set_elastic_reference(ElasticReference::Absolute);
+    let mut data = vec![Vec3::new(0.0, 0.0, 1.0)];
+    for (count, polar) in [(6, 0.45f64), (12, 1.0f64)] {
+        for k in 0..count {
+            let t = std::f64::consts::TAU * k as f64 / count as f64;
+            data.push(Vec3::new(
+                polar.sin() * t.cos(),
+                polar.sin() * t.sin(),
+                polar.cos(),
+            ));
+        }
+    }
+    for x in data {
+        d.forces_mut().push(Force::DataPoint {
+            point: x,
+            stiffness: p.k,
+        });
+    }
+    let rms = |v: Vec<f64>| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
+    let before = rms(d.data_distances().unwrap());
+    for _ in 0..120 {
+        d.step(Integrator::Implicit { dt: p.dt }).unwrap();
+    }
+    let after = rms(d.data_distances().unwrap());
+    // Measured (300 steps, example fig7_surface_fit): 0.70 -> 0.0078.
+    assert!(before > 0.6, "{before}");
+    assert!(after < 0.03, "RMS distance after fitting {after}");
+    assert!(d.geometry().weights().iter().all(|&w| w > 0.0));
+    let w = d.geometry().weights();
+    assert!(
+        w.iter().any(|&x| (x - 1.0).abs() > 1e-3),
+        "weights should take part in the fit"
+    );
+}

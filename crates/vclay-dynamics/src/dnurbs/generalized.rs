@@ -450,6 +450,20 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         Ok(out)
     }
 
+    /// Distances from each data point of the [`Force::DataPoint`] forces to the geometry.
+    pub fn data_distances(&self) -> Result<Vec<f64>, DynamicsError> {
+        let mut lj = LocalJacobian::default();
+        let mut out = vec![];
+        for f in &self.forces {
+            if let Force::DataPoint { point, .. } = f {
+                let p = self.geometry.nearest_param(point)?;
+                self.geometry.jacobian_at(p, &mut lj)?;
+                out.push((lj.s[0] - point).norm());
+            }
+        }
+        Ok(out)
+    }
+
     /// Holds (or frees) one generalized coordinate.
     pub fn set_fixed_coordinate(&mut self, i: usize, fixed: bool) -> Result<(), DynamicsError> {
         let n = self.fixed.len();

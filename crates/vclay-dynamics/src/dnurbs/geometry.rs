@@ -358,8 +358,11 @@ impl DnurbsGeometry for ClosedCurve {
     }
 }
 
-/// Number of samples per knot span used to seed closest-point searches.
+/// Number of samples per knot span used to seed closest-point searches on curves.
 pub const NEAREST_SAMPLES_PER_SPAN: usize = 16;
+/// Number of samples per knot span and direction used to seed closest-point searches on
+/// surfaces (Newton refines from the best sample).
+pub const NEAREST_SURFACE_SAMPLES_PER_SPAN: usize = 6;
 /// Newton iterations of closest-point searches.
 pub const NEAREST_NEWTON_STEPS: usize = 8;
 
@@ -394,8 +397,8 @@ pub(crate) fn nearest_on_curve(c: &NurbsCurve, x: &Vec3) -> Result<f64, Dynamics
 /// Closest point on a surface: dense sampling, then Newton on the 2x2 normal equations.
 pub(crate) fn nearest_on_surface(s: &NurbsSurface, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
     let [du, dv] = s.domain();
-    let nu = NEAREST_SAMPLES_PER_SPAN * (s.knots()[0].distinct().len().max(2) - 1);
-    let nv = NEAREST_SAMPLES_PER_SPAN * (s.knots()[1].distinct().len().max(2) - 1);
+    let nu = NEAREST_SURFACE_SAMPLES_PER_SPAN * (s.knots()[0].distinct().len().max(2) - 1);
+    let nv = NEAREST_SURFACE_SAMPLES_PER_SPAN * (s.knots()[1].distinct().len().max(2) - 1);
     let us = du.linspace(nu + 1);
     let vs = dv.linspace(nv + 1);
     let grid = s.eval_grid(&us, &vs, vclay_core::Parallelism::Auto)?;

@@ -815,6 +815,35 @@ pub mod profiles {
         NurbsCurve::from_knot_vector(c.knots().clone(), pts, c.weights().to_vec())
     }
 
+    /// The hat profile of `d-nurbs.txt` Fig 9c: 9 control points (brim, band, crown).
+    pub fn hat() -> Result<NurbsCurve, SplineError> {
+        polyline_profile(&[
+            (1.6, 0.0),
+            (1.3, 0.05),
+            (0.9, 0.05),
+            (0.85, 0.4),
+            (0.85, 0.8),
+            (0.8, 1.0),
+            (0.5, 1.1),
+            (0.2, 1.12),
+            (0.0, 1.12),
+        ])
+    }
+
+    /// The wine-glass profile of Fig 9d (a cylinder-like start): 7 control points from the foot
+    /// to the rim.
+    pub fn wine_glass() -> Result<NurbsCurve, SplineError> {
+        polyline_profile(&[
+            (0.6, 0.0),
+            (0.6, 0.3),
+            (0.6, 0.6),
+            (0.6, 0.9),
+            (0.6, 1.2),
+            (0.6, 1.5),
+            (0.6, 1.8),
+        ])
+    }
+
     /// A non-rational quadratic profile in the x-z plane through the given `(x, z)` control
     /// points on clamped uniform knots (hats, glasses, vases).
     pub fn polyline_profile(xz: &[(f64, f64)]) -> Result<NurbsCurve, SplineError> {
@@ -826,6 +855,18 @@ impl SwungGeometry {
     /// The sphere of `d-nurbs.txt` Fig 9a: quadratic profiles with 4 and 7 control points.
     pub fn sphere(r: f64) -> Result<Self, DynamicsError> {
         Self::new(&profiles::semicircle4(r)?, &profiles::circle7(1.0)?, 1.0)
+    }
+
+    /// The hat of Fig 9c (profile with 9 control points; the trajectory is the exact 7-point
+    /// circle, where the paper's 6-point trajectory cannot be an exact circle).
+    pub fn hat() -> Result<Self, DynamicsError> {
+        Self::new(&profiles::hat()?, &profiles::circle7(1.0)?, 1.0)
+    }
+
+    /// The wine glass of Fig 9d before sculpting: a cylinder (profile with 7 control points,
+    /// 7-point circular trajectory).
+    pub fn wine_glass() -> Result<Self, DynamicsError> {
+        Self::new(&profiles::wine_glass()?, &profiles::circle7(1.0)?, 1.0)
     }
 
     /// The torus of Fig 9b: quadratic profile and trajectory with 7 control points each.
