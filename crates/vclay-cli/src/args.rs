@@ -49,13 +49,20 @@ pub fn movement(text: &str) -> Result<(Vec3, Vec3)> {
 fn numbers(text: &str, what: &str, count: usize) -> Result<Vec<f64>> {
     let parts: Vec<&str> = text.split(',').collect();
     if parts.len() != count {
-        bail!("{what} '{text}': expected {count} comma-separated numbers, found {}", parts.len());
+        bail!(
+            "{what} '{text}': expected {count} comma-separated numbers, found {}",
+            parts.len()
+        );
     }
     let mut out = Vec::with_capacity(count);
     for (i, p) in parts.iter().enumerate() {
         match p.trim().parse::<f64>() {
             Ok(v) if v.is_finite() => out.push(v),
-            _ => bail!("{what} '{text}': item {} ('{}') is not a finite number", i + 1, p.trim()),
+            _ => bail!(
+                "{what} '{text}': item {} ('{}') is not a finite number",
+                i + 1,
+                p.trim()
+            ),
         }
     }
     Ok(out)

@@ -8,9 +8,16 @@ use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+mod args;
 mod bench;
+mod convert;
 mod demo;
 mod eval;
+mod ffd;
+mod pde;
+mod render;
+mod run;
+mod subdivide;
 
 /// vclay: physics-based free-form modeling (virtual clay).
 #[derive(Debug, Parser)]
@@ -22,6 +29,10 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Render a model or mesh headless to a PNG (or a turntable GIF).
+    Render(render::RenderArgs),
+    /// Convert between file formats, chosen by extension (model, geomdl, STEP, meshes, glTF).
+    Convert(convert::ConvertArgs),
     /// Evaluate a NURBS model file at parameters; prints {"points": [...], "derivatives": [...]}.
     Eval {
         /// Model file (JSON, see docs/formats.md).
@@ -48,6 +59,23 @@ enum Command {
         #[arg(long, default_value_t = 1.0)]
         seconds: f64,
     },
+    /// Subdivide a lattice (MacCracken-Joy); print element counts (--stats) and/or write --out.
+    Subdivide(subdivide::SubdivideArgs),
+    /// Move points of a mesh to targets by direct manipulation of an FFD lattice.
+    Ffd(ffd::FfdArgs),
+    /// Solve a dynamic PDE surface spec at --t or over --frames; write meshes, print residuals.
+    Pde(pde::PdeArgs),
+    /// Run a scenario file (TOML, see docs/formats.md): dynamic solids and their tool timeline.
+    Run {
+        /// Scenario file.
+        scenario: PathBuf,
+        /// Output folder (replaces the file's `[output] dir`).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -61,6 +89,16 @@ fn main() -> ExitCode {
         } => eval::run(&model, &params, derivatives, entity),
         Command::Demo { out } => demo::run(&out),
         Command::Bench { seconds } => bench::run(seconds),
+        Command::Render(args) => render::run(&args),
+        Command::Convert(args) => convert::run(&args),
+        Command::Subdivide(args) => subdivide::run(&args),
+        Command::Ffd(args) => ffd::run(&args),
+        Command::Pde(args) => pde::run(&args),
+        Command::Run {
+            scenario,
+            out,
+            quiet,
+        } => run::run(&scenario, out.as_deref(), quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -5,8 +5,8 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
-use vclay_lattice::BoundaryRule;
-use vclay_lattice::command::{LatticeSource, SubdivideOptions, subdivide_command};
+use vclay::lattice::BoundaryRule;
+use vclay::lattice::command::{LatticeSource, SubdivideOptions, subdivide_command};
 
 /// Subdivide a lattice N times (MacCracken-Joy); print counts (--stats) and/or write --out.
 #[derive(Debug, clap::Args)]
@@ -16,7 +16,8 @@ pub struct SubdivideArgs {
     pub input: Option<PathBuf>,
     /// Built-in control lattice instead of INPUT: box[:AxBxC] (points per axis, default 4x4x4),
     /// cylinder[:SECTORS[xLAYERS[xRINGS]]] (default 4x2x0), torus (the paper's) or
-    /// torus:SEGMENTSxCROSS, gear, cube-with-holes, l[:ARMxWIDTH] (default 2x1),
+    /// torus:SEGMENTSxCROSS, gear, cube-with-holes, tetrahedron-with-holes[:HOLE] (default 0.5),
+    /// l[:ARMxWIDTH] (default 2x1),
     /// t[:ARMxWIDTH] (default 1x1).
     #[arg(long, value_name = "NAME[:ARGS]")]
     pub primitive: Option<String>,

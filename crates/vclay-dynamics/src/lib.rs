@@ -12,6 +12,7 @@
 
 pub mod dnurbs;
 pub mod error;
+pub mod scenario;
 
 pub use dnurbs::{
     Density, DnurbsClosedCurve, DnurbsCurve, DnurbsSurface, ElasticReference, ElementSystem, Force,

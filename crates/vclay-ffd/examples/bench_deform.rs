@@ -1,6 +1,6 @@
 //! Quick timing of embedded-mesh deformation (not a benchmark harness; no assertions).
 //!
-//! Embeds a UV sphere of about one million vertices in cubic lattices of `4^3`, `7^3` and `10^3`
+//! Embeds a UV sphere of about one million vertices in cubic lattices of `4^3`, `7^3`, `10^3` and `20^3`
 //! control points and times: embedding (parameters and basis values), a full deformation (positions
 //! only, sequential and on rayon's pool), normal recomputation, and an incremental update after a
 //! single-point manipulation.
@@ -47,6 +47,29 @@ fn best_of<F: FnMut()>(runs: usize, mut f: F) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// CPU time of the calling thread in milliseconds (Linux `/proc/thread-self/schedstat`, first
+/// field: nanoseconds on a CPU), or `None` where unavailable. Unlike wall time it does not count
+/// time spent waiting for a CPU, so it stays meaningful on a busy machine.
+fn thread_cpu_ms() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: f64 = s.split_whitespace().next()?.parse().ok()?;
+    Some(ns * 1e-6)
+}
+
+/// The smallest thread CPU time of `runs` calls of `f` (milliseconds; NaN where unavailable).
+fn best_cpu_of<F: FnMut()>(runs: usize, mut f: F) -> f64 {
+    (0..runs)
+        .map(|_| {
+            let t0 = thread_cpu_ms();
+            f();
+            match (t0, thread_cpu_ms()) {
+                (Some(a), Some(b)) => b - a,
+                _ => f64::NAN,
+            }
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 fn main() {
     let n: usize = std::env::args()
         .nth(1)
@@ -59,7 +82,7 @@ fn main() {
         mesh.triangles.len(),
         rayon::current_num_threads()
     );
-    for cps in [4, 7, 10] {
+    for cps in [4, 7, 10, 20] {
         let mut lattice =
             FfdLattice::enclosing(&mesh.positions, LatticeSpec::uniform(3, cps), 0.05).unwrap();
         let t = Instant::now();
@@ -76,18 +99,46 @@ fn main() {
         let par = best_of(5, || {
             e.deform(&lattice, Parallelism::Rayon);
         });
+        let seq_cpu = best_cpu_of(5, || {
+            e.deform(&lattice, Parallelism::Sequential);
+        });
+        e.set_blocked_kernel(false);
+        let seq_scalar_cpu = best_cpu_of(5, || {
+            e.deform(&lattice, Parallelism::Sequential);
+        });
+        let seq_scalar = best_of(3, || {
+            e.deform(&lattice, Parallelism::Sequential);
+        });
+        let par_scalar = best_of(5, || {
+            e.deform(&lattice, Parallelism::Rayon);
+        });
+        e.set_blocked_kernel(true);
         let mut m2 = e.mesh().clone();
         let normals = best_of(3, || m2.compute_normals());
         let m =
             Manipulation::single_displacement(&lattice, [0.3, 0.5, 0.8], Vec3::new(0.0, 0.0, 0.05))
                 .unwrap();
-        lattice.apply(&m);
         let mut count = 0;
-        let inc = best_of(1, || {
+        // Each run applies the manipulation once more and updates the touched vertices.
+        let inc = best_of(5, || {
+            lattice.apply(&m);
             count = e.update(&lattice, m.indices(), Parallelism::Auto);
         });
+        let mut check = e.clone();
+        check.deform(&lattice, Parallelism::Auto);
+        let diff = check
+            .mesh()
+            .positions
+            .iter()
+            .zip(&e.mesh().positions)
+            .map(|(a, b)| (a - b).norm())
+            .fold(0.0, f64::max);
+        assert!(
+            diff < 1e-12,
+            "incremental and full deformation differ by {diff:e}"
+        );
         println!(
-            "cubic {cps}^3: embed {embed_ms:7.1} ms | full deform: 1 thread {seq:6.1} ms, rayon {par:6.1} ms | normals {normals:6.1} ms | incremental {inc:6.1} ms ({count} vertices)"
+            "cubic {cps}^3: embed {embed_ms:7.1} ms | full deform: 1 thread {seq:6.1} ms, rayon {par:6.1} ms (per-vertex kernel: {seq_scalar:6.1}, {par_scalar:6.1}) | 1-thread CPU time: blocked {seq_cpu:6.1} ms, per-vertex {seq_scalar_cpu:6.1} ms | normals {normals:6.1} ms | incremental {inc:6.1} ms ({count} vertices)"
         );
     }
 }

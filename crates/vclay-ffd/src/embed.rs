@@ -12,7 +12,10 @@
 //! the weights are applied at evaluation, so weight changes need no re-embedding). Vertices are
 //! bucketed by knot cell (CSR arrays). A full deformation evaluates every embedded vertex with
 //! the contracted tensor-product kernel (`(p+1)(q+1)(r+1) + (p+1)(q+1) + (p+1)` multiply-adds per
-//! coordinate), in parallel over vertex chunks. An incremental update after control points
+//! coordinate), in parallel over vertex chunks; runs of [`LANES`] consecutive vertices in the
+//! same knot cell (most of them in a mesh whose vertex order is spatially coherent) go through a
+//! blocked kernel that evaluates them together in lane arrays, which the compiler vectorizes
+//! (no `unsafe`, no target-specific code). An incremental update after control points
 //! `C` changed recomputes only the vertices of the cells whose support meets `C`: control point
 //! `i` influences knot cells `i - p ..= i` along each axis.
 //!
@@ -26,8 +29,13 @@ use vclay_core::{Parallelism, TriMesh, Vec3};
 
 /// Marker for vertices outside the lattice.
 const OUTSIDE: u32 = u32::MAX;
-/// Vertices per parallel task.
+/// Vertices per parallel task (a multiple of [`LANES`]).
 const CHUNK: usize = 4096;
+/// Vertices evaluated together by the blocked kernel of [`EmbeddedMesh::deform`].
+pub const LANES: usize = 4;
+/// The blocked kernel is used for degrees below this (a stack buffer of `3 * BLOCK_DEGREE`
+/// lane arrays); higher degrees use the per-vertex kernel.
+const BLOCK_DEGREE: usize = 8;
 
 /// A triangle mesh embedded in an [`FfdLattice`] (`ffd-direct-manipulation.txt` section 2): rest
 /// positions, precomputed `(t_x, B(t_x))` per embedded vertex, and the deformed mesh
@@ -52,6 +60,7 @@ pub struct EmbeddedMesh {
     dims: [usize; 3],
     bounds: (Vec3, Vec3),
     recompute_normals: bool,
+    blocked_kernel: bool,
 }
 
 impl EmbeddedMesh {
@@ -142,6 +151,7 @@ impl EmbeddedMesh {
             dims,
             bounds: lattice.bounds(),
             recompute_normals: true,
+            blocked_kernel: true,
         };
         out.deform(lattice, par);
         out
@@ -151,6 +161,13 @@ impl EmbeddedMesh {
     /// true). Turn it off to time or use positions only.
     pub fn set_recompute_normals(&mut self, on: bool) {
         self.recompute_normals = on;
+    }
+
+    /// Whether [`EmbeddedMesh::deform`] may use the blocked (SIMD-friendly) kernel (default
+    /// true). Both kernels give the same positions up to rounding; turning it off is for
+    /// comparisons in benchmarks.
+    pub fn set_blocked_kernel(&mut self, on: bool) {
+        self.blocked_kernel = on;
     }
 
     /// The deformed mesh.
@@ -201,6 +218,11 @@ impl EmbeddedMesh {
 
     /// Full deformation: every embedded vertex `x = sum P_ijk R_ijk(t_x)` (eq 1), then normals.
     ///
+    /// Runs of [`LANES`] consecutive mesh vertices that are all embedded in the same knot cell
+    /// (the common case: neighbouring vertices are near each other) are evaluated together, lane
+    /// by lane in fixed-size arrays the compiler turns into SIMD instructions; other vertices one
+    /// by one. Parallel over chunks of vertices when `par` allows.
+    ///
     /// # Panics
     /// If `lattice` has other dimensions, degrees or box than the one embedded in.
     #[track_caller]
@@ -208,10 +230,44 @@ impl EmbeddedMesh {
         self.check_lattice(lattice);
         let mut positions = std::mem::take(&mut self.mesh.positions);
         let this = &*self;
+        let blocked = self.blocked_kernel
+            && !lattice.is_rational()
+            && self.degree.iter().all(|&d| d < BLOCK_DEGREE);
         let kernel = |(xs, slots): (&mut [Vec3], &[u32])| {
-            for (x, &s) in xs.iter_mut().zip(slots) {
-                if s != OUTSIDE {
-                    *x = this.eval(lattice, s as usize);
+            if blocked {
+                let mut xb = xs.chunks_exact_mut(LANES);
+                let mut sb = slots.chunks_exact(LANES);
+                for (x, s) in (&mut xb).zip(&mut sb) {
+                    let s: &[u32; LANES] = s.try_into().expect("chunk of LANES");
+                    let b0 = if s[0] != OUTSIDE {
+                        this.base[s[0] as usize]
+                    } else {
+                        OUTSIDE
+                    };
+                    if b0 != OUTSIDE
+                        && s.iter()
+                            .all(|&e| e != OUTSIDE && this.base[e as usize] == b0)
+                    {
+                        let out = this.eval_block(lattice, s);
+                        x.copy_from_slice(&out);
+                    } else {
+                        for (xi, &e) in x.iter_mut().zip(s) {
+                            if e != OUTSIDE {
+                                *xi = this.eval(lattice, e as usize);
+                            }
+                        }
+                    }
+                }
+                for (xi, &e) in xb.into_remainder().iter_mut().zip(sb.remainder()) {
+                    if e != OUTSIDE {
+                        *xi = this.eval(lattice, e as usize);
+                    }
+                }
+            } else {
+                for (x, &s) in xs.iter_mut().zip(slots) {
+                    if s != OUTSIDE {
+                        *x = this.eval(lattice, s as usize);
+                    }
                 }
             }
         };
@@ -229,6 +285,56 @@ impl EmbeddedMesh {
         self.mesh.positions = positions;
         self.finish();
         &self.mesh
+    }
+
+    /// [`LANES`] embedded vertices of one knot cell (same support base) at once, non-rational
+    /// lattice: the same contraction as [`FfdLattice::eval_local`] with every scalar replaced by
+    /// a lane array (control points broadcast, basis values per lane).
+    #[inline]
+    fn eval_block(&self, lattice: &FfdLattice, e: &[u32; LANES]) -> [Vec3; LANES] {
+        let [p, q, r] = self.degree;
+        let stride = p + q + r + 3;
+        let mut bl = [[0.0f64; LANES]; 3 * BLOCK_DEGREE];
+        for (l, &ei) in e.iter().enumerate() {
+            let b = &self.basis[ei as usize * stride..(ei as usize + 1) * stride];
+            for (k, &v) in b.iter().enumerate() {
+                bl[k][l] = v;
+            }
+        }
+        let (bu, rest) = bl[..stride].split_at(p + 1);
+        let (bv, bw) = rest.split_at(q + 1);
+        let [_, nv, nw] = self.dims;
+        let su = nv * nw;
+        let base = self.base[e[0] as usize] as usize;
+        let pts = lattice.control_points();
+        let zero = [0.0f64; LANES];
+        let (mut x, mut y, mut z) = (zero, zero, zero);
+        for (a, ba) in bu.iter().enumerate() {
+            let (mut xv, mut yv, mut zv) = (zero, zero, zero);
+            for (c, bc) in bv.iter().enumerate() {
+                let start = base + a * su + c * nw;
+                let row = &pts[start..start + bw.len()];
+                let (mut xw, mut yw, mut zw) = (zero, zero, zero);
+                for (pt, be) in row.iter().zip(bw) {
+                    for l in 0..LANES {
+                        xw[l] += pt.x * be[l];
+                        yw[l] += pt.y * be[l];
+                        zw[l] += pt.z * be[l];
+                    }
+                }
+                for l in 0..LANES {
+                    xv[l] += xw[l] * bc[l];
+                    yv[l] += yw[l] * bc[l];
+                    zv[l] += zw[l] * bc[l];
+                }
+            }
+            for l in 0..LANES {
+                x[l] += xv[l] * ba[l];
+                y[l] += yv[l] * ba[l];
+                z[l] += zv[l] * ba[l];
+            }
+        }
+        std::array::from_fn(|l| Vec3::new(x[l], y[l], z[l]))
     }
 
     /// Incremental deformation after the control points (or weights) with flat indices `changed`
@@ -269,17 +375,47 @@ impl EmbeddedMesh {
             })
             .collect();
         let this = &*self;
-        let new: Vec<Vec3> = if par.is_parallel(affected.len()) {
+        let blocked = self.blocked_kernel
+            && !lattice.is_rational()
+            && self.degree.iter().all(|&d| d < BLOCK_DEGREE);
+        // Members of one cell are consecutive in `affected` and share their support base, so
+        // the blocked kernel applies to almost every group of LANES.
+        let kernel = |(es, xs): (&[u32], &mut [Vec3])| {
+            if blocked {
+                let mut eb = es.chunks_exact(LANES);
+                let mut xb = xs.chunks_exact_mut(LANES);
+                for (e, x) in (&mut eb).zip(&mut xb) {
+                    let e: &[u32; LANES] = e.try_into().expect("chunk of LANES");
+                    let b0 = this.base[e[0] as usize];
+                    if e.iter().all(|&ei| this.base[ei as usize] == b0) {
+                        x.copy_from_slice(&this.eval_block(lattice, e));
+                    } else {
+                        for (xi, &ei) in x.iter_mut().zip(e) {
+                            *xi = this.eval(lattice, ei as usize);
+                        }
+                    }
+                }
+                for (xi, &ei) in xb.into_remainder().iter_mut().zip(eb.remainder()) {
+                    *xi = this.eval(lattice, ei as usize);
+                }
+            } else {
+                for (xi, &ei) in xs.iter_mut().zip(es) {
+                    *xi = this.eval(lattice, ei as usize);
+                }
+            }
+        };
+        let mut new = vec![Vec3::zeros(); affected.len()];
+        if par.is_parallel(affected.len()) {
             affected
-                .par_iter()
-                .map(|&e| this.eval(lattice, e as usize))
-                .collect()
+                .par_chunks(CHUNK)
+                .zip(new.par_chunks_mut(CHUNK))
+                .for_each(kernel);
         } else {
             affected
-                .iter()
-                .map(|&e| this.eval(lattice, e as usize))
-                .collect()
-        };
+                .chunks(CHUNK)
+                .zip(new.chunks_mut(CHUNK))
+                .for_each(kernel);
+        }
         for (&e, x) in affected.iter().zip(new) {
             self.mesh.positions[self.vertex[e as usize] as usize] = x;
         }

@@ -207,3 +207,52 @@ fn using_another_lattice_panics() {
     );
     e.deform(&lattice(LatticeSpec::uniform(3, 5)), Parallelism::Auto);
 }
+
+/// The blocked kernel (groups of `LANES` vertices of one knot cell) agrees with the per-vertex
+/// kernel on a mesh whose consecutive vertices are neighbours (so most groups are blocked), with
+/// vertices outside the box interleaved (so some groups are not), for full and incremental
+/// deformation.
+#[test]
+fn blocked_kernel_equals_per_vertex_kernel() {
+    let mut rng = Lcg::new(35);
+    let (lo, hi) = test_box();
+    let mut mesh = TriMesh::new();
+    let n = 13;
+    for i in 0..n {
+        for j in 0..n {
+            for k in 0..n {
+                let t = Vec3::new(i as f64, j as f64, k as f64) / (n - 1) as f64;
+                // Every 7th point is pushed outside the box.
+                let out = if (i * n * n + j * n + k) % 7 == 3 {
+                    1.2
+                } else {
+                    1.0
+                };
+                mesh.positions
+                    .push(lo + (hi - lo).component_mul(&(t * out)));
+            }
+        }
+    }
+    let m = mesh.positions.len() as u32;
+    mesh.triangles = (0..m - 2).step_by(3).map(|i| [i, i + 1, i + 2]).collect();
+    for spec in specs() {
+        let mut l = lattice(spec);
+        jiggle(&mut l, &mut rng, 0.1);
+        for par in [Parallelism::Sequential, Parallelism::Rayon] {
+            let mut blocked = EmbeddedMesh::new(&l, mesh.clone(), par);
+            let mut single = blocked.clone();
+            single.set_blocked_kernel(false);
+            single.deform(&l, par);
+            let tol = 1e-13 * l.size();
+            assert!(max_diff(&blocked.mesh().positions, &single.mesh().positions) < tol);
+            let c = PointConstraint::new(rng.params(), rng.vec(1.0) + lo);
+            let manip = Manipulation::single(&l, &c).unwrap();
+            let mut l2 = l.clone();
+            l2.apply(&manip);
+            let nb = blocked.update(&l2, manip.indices(), par);
+            let ns = single.update(&l2, manip.indices(), par);
+            assert_eq!(nb, ns);
+            assert!(max_diff(&blocked.mesh().positions, &single.mesh().positions) < tol);
+        }
+    }
+}

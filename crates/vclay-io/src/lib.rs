@@ -1,8 +1,9 @@
 //! # vclay-io
 //!
 //! vclay's files: the JSON model format ([`model`]), parameter lists for `vclay eval`
-//! ([`params`]) and triangle meshes in OBJ, STL and PLY ([`mesh`]). The formats are specified in
-//! `docs/formats.md`.
+//! ([`params`]) and triangle meshes in OBJ, STL and PLY ([`mesh`]); exchange formats: glTF binary
+//! ([`gltf`]), STEP ([`step`]) and IGES ([`iges`]) export, NURBS-Python JSON ([`geomdl`]). The
+//! formats are specified in `docs/formats.md`.
 //!
 //! Every reader validates everything and names the place of an error: the file, then a line and
 //! column (`line 3, column 7: invalid JSON: ...`), a JSON path
@@ -25,10 +26,14 @@
 #![warn(missing_docs)]
 
 pub mod error;
+pub mod geomdl;
+pub mod gltf;
+pub mod iges;
 mod json;
 pub mod mesh;
 pub mod model;
 pub mod params;
+pub mod step;
 mod util;
 
 pub use error::{IoError, MeshLocation};
@@ -40,3 +45,4 @@ pub use model::{
     read_named_model, to_json, write_model, write_named_model,
 };
 pub use params::{parse_params, read_params};
+pub use util::write_atomic;

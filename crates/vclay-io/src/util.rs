@@ -7,7 +7,7 @@ use std::path::Path;
 /// Writes a file through `fill`, atomically: the bytes go to a temporary file in the target's
 /// directory, which is flushed, synced and renamed over `path` only when everything succeeded. A
 /// failed write leaves any existing file untouched and removes the temporary file.
-pub(crate) fn write_atomic(
+pub fn write_atomic(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), IoError> {

@@ -1,7 +1,8 @@
 //! Subdivides the "Cube (4^3)" control lattice of `subdivision-solids-conference.txt` Table 1
 //! (4 x 4 x 4 points, 27 hexahedra) to levels 1..5 and prints, per level, the element counts and
 //! the time for topology + level operator + points (`subdivide`), the cumulative time, and the
-//! time to apply `A` and `A^T` level by level to all control points. The time of a level includes
+//! time to apply `A` and `A^T` level by level to all control points (and, for comparison, `A^T`
+//! through stored transposes). The time of a level includes
 //! building the upward adjacency of the level before it (needed by the rules); the upward
 //! adjacency of the last level is built on first use and timed separately.
 //!
@@ -55,22 +56,12 @@ fn main() {
         "full upward adjacency of level {levels} (built lazily, on first use): {:.1} ms",
         t.elapsed().as_secs_f64() * 1e3
     );
-    let t = Instant::now();
-    map.prepare_transposes();
-    println!(
-        "transposes of all levels: {:.1} ms",
-        t.elapsed().as_secs_f64() * 1e3
-    );
     let p = control.points().to_vec();
     let mut d = vec![Vec3::zeros(); lattice.num_points()];
     let mut ws = ChainWorkspace::new();
     map.apply_into(&p, &mut d, &mut ws, Parallelism::Auto);
-    let t = Instant::now();
-    map.apply_into(&p, &mut d, &mut ws, Parallelism::Auto);
-    println!(
-        "d = A p (level by level): {:.1} ms",
-        t.elapsed().as_secs_f64() * 1e3
-    );
+    let a_ms = best_of(7, || map.apply_into(&p, &mut d, &mut ws, Parallelism::Auto));
+    println!("d = A p (level by level, best of 7): {a_ms:.1} ms");
     let err = d
         .iter()
         .zip(lattice.points())
@@ -79,10 +70,47 @@ fn main() {
     println!("max |A p - subdivided points| = {err:e}");
     let mut g = vec![Vec3::zeros(); p.len()];
     map.apply_transpose_into(&d, &mut g, &mut ws, Parallelism::Auto);
+    let at_ms = best_of(7, || {
+        map.apply_transpose_into(&d, &mut g, &mut ws, Parallelism::Auto)
+    });
+    println!("g = A^T d (level by level, scattered rows, best of 7): {at_ms:.1} ms");
+    // The previous method, for comparison: stored transposes applied row by row.
     let t = Instant::now();
-    map.apply_transpose_into(&d, &mut g, &mut ws, Parallelism::Auto);
+    map.prepare_transposes();
     println!(
-        "g = A^T d (level by level): {:.1} ms",
+        "(for comparison) stored transposes of all levels: {:.1} ms",
         t.elapsed().as_secs_f64() * 1e3
     );
+    let mut g2 = vec![Vec3::zeros(); p.len()];
+    let stored = |g2: &mut [Vec3]| {
+        let mut x = d.clone();
+        for j in (0..map.levels()).rev() {
+            let tj = map.transpose(j);
+            let mut y = vec![Vec3::zeros(); tj.nrows()];
+            tj.apply_into(&x, &mut y, Parallelism::Auto);
+            x = y;
+        }
+        g2.copy_from_slice(&x);
+    };
+    stored(&mut g2);
+    let stored_ms = best_of(3, || stored(&mut g2));
+    let diff = g
+        .iter()
+        .zip(&g2)
+        .map(|(a, b)| (a - b).norm())
+        .fold(0.0, f64::max);
+    println!(
+        "(for comparison) g = A^T d with stored transposes, best of 3: {stored_ms:.1} ms (max difference {diff:e})"
+    );
+}
+
+/// The shortest of `runs` timings of `f`, in milliseconds.
+fn best_of(runs: usize, mut f: impl FnMut()) -> f64 {
+    (0..runs)
+        .map(|_| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64() * 1e3
+        })
+        .fold(f64::INFINITY, f64::min)
 }

@@ -25,6 +25,7 @@ pub const PRIMITIVE_HELP: &str = "box[:AxBxC] (points per axis, default 4x4x4, u
 cylinder[:SECTORS[xLAYERS[xRINGS]]] (default 4x2x0, the paper's cylinder; radius 1, height 2), \
 torus (the paper's torus) or torus:SEGMENTSxCROSS (square cross-section of CROSSxCROSS hexahedra), \
 gear (the paper's gear), cube-with-holes (the paper's cube with holes), \
+tetrahedron-with-holes[:HOLE] (the paper's, one cell; HOLE the relative hole size, default 0.5), \
 l[:ARMxWIDTH] (L solid, default 2x1), t[:ARMxWIDTH] (T solid, default 1x1)";
 
 /// Largest predicted cell count (`cells * 8^levels`) [`subdivide_command`] accepts: 50 million.
@@ -312,6 +313,20 @@ pub fn primitive(spec: &str) -> Result<Lattice, CommandError> {
         "cube-with-holes" => {
             no_args("cube-with-holes")?;
             Ok(primitives::cube_with_holes(1.0))
+        }
+        "tetrahedron-with-holes" | "tet-with-holes" => {
+            let hole = match args {
+                None => 0.5,
+                Some(a) => match a.parse::<f64>() {
+                    Ok(h) if h > 0.0 && h < 1.0 => h,
+                    _ => {
+                        return Err(bad(format!(
+                            "hole size '{a}' must be a number strictly between 0 and 1"
+                        )));
+                    }
+                },
+            };
+            Ok(primitives::tetrahedron_with_holes(2.0, hole))
         }
         "l" | "t" => {
             let v = nums(2, 1)?;

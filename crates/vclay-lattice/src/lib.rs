@@ -11,9 +11,11 @@
 //!   [`BoundaryRule`] and user [`Features`] (creases, corners); returns the finer lattice and the
 //!   level operator `A^(j)` as a [`SparseMatrix`] (each row an affine combination).
 //! * [`SubdivisionSolid`] and [`SubdivisionMap`]: all levels, `d = A p = A^(n)...A^(1) p`
-//!   (journal eq 4) and `A^T f` applied level by level without forming the product.
-//! * [`primitives`]: boxes, cylinders, tori, L and T solids, the paper's torus, gear and cube
-//!   with holes; [`cells`]: face lists of hexahedra, prisms, tetrahedra, pyramids.
+//!   (journal eq 4) and `A^T f` applied level by level without forming the product (each level's
+//!   transpose product by scattering the rows of `A^(j)`, in parallel with per-task partial
+//!   sums, so no transpose is stored).
+//! * [`primitives`]: boxes, cylinders, tori, L and T solids, the paper's torus, gear, cube
+//!   with holes and tetrahedron with holes; [`cells`]: face lists of hexahedra, prisms, tetrahedra, pyramids.
 //! * [`write_boundary`]: the outward boundary surface into a [`vclay_core::MeshSink`].
 //! * [`edit`]: [`extrude_face`] and [`delete_cell`] return a new validated lattice with stable
 //!   ids (documented there) or an error saying why the edit is refused; [`Features`] tags are

@@ -19,7 +19,8 @@ use vclay_core::Parallelism;
 
 use crate::sparse::{Coord, SparseMatrix};
 
-/// The level operators `A^(1) .. A^(n)` of a subdivision hierarchy, with lazily built transposes.
+/// The level operators `A^(1) .. A^(n)` of a subdivision hierarchy. Transposes are built only on
+/// request ([`SubdivisionMap::transpose`]); applying `A^T` does not need them.
 #[derive(Debug, Default)]
 pub struct SubdivisionMap {
     ops: Vec<SparseMatrix>,
@@ -41,6 +42,8 @@ impl Clone for SubdivisionMap {
 pub struct ChainWorkspace<T> {
     a: Vec<T>,
     b: Vec<T>,
+    /// Per-task partial sums of the scattered transpose products.
+    partials: Vec<T>,
 }
 
 impl<T: Coord> ChainWorkspace<T> {
@@ -49,6 +52,7 @@ impl<T: Coord> ChainWorkspace<T> {
         Self {
             a: Vec::new(),
             b: Vec::new(),
+            partials: Vec::new(),
         }
     }
 }
@@ -104,7 +108,8 @@ impl SubdivisionMap {
         self.transposes[j].get_or_init(|| self.ops[j].transpose())
     }
 
-    /// Builds all transposes now (in parallel), so later transpose applications do no setup.
+    /// Builds all transposes now (in parallel), for callers that want `A^(j)T` as matrices
+    /// ([`SubdivisionMap::apply_transpose_into`] does not use them).
     pub fn prepare_transposes(&self) {
         (0..self.ops.len()).into_par_iter().for_each(|j| {
             self.transpose(j);
@@ -163,7 +168,10 @@ impl SubdivisionMap {
         out
     }
 
-    /// `out = A^T f = A^(1)T ... A^(n)T f` level by level with the precomputed transposes.
+    /// `out = A^T f = A^(1)T ... A^(n)T f` level by level. Each level scatters the rows of
+    /// `A^(j)` ([`SparseMatrix::apply_transpose_into`]): the fine-level input is read in order
+    /// and only the coarse-level output is accessed irregularly, which is faster than applying a
+    /// stored transpose (whose rows gather from all over the fine level) and needs no setup.
     ///
     /// # Panics
     /// If `f` or `out` have the wrong length.
@@ -180,17 +188,21 @@ impl SubdivisionMap {
             out.copy_from_slice(f);
             return;
         }
-        chain(
-            f,
-            out,
-            ws,
-            n,
-            |j| {
-                let t = self.transpose(n - 1 - j);
-                (t.nrows(), t)
-            },
-            par,
-        );
+        let ChainWorkspace { a, b, partials } = ws;
+        let mut cur: &mut Vec<T> = a;
+        let mut other: &mut Vec<T> = b;
+        for j in 0..n {
+            let m = &self.ops[n - 1 - j];
+            let src: &[T] = if j == 0 { f } else { other.as_slice() };
+            if j + 1 == n {
+                m.apply_transpose_into(src, out, partials, par);
+            } else {
+                cur.clear();
+                cur.resize(m.ncols(), T::zero());
+                m.apply_transpose_into(src, cur, partials, par);
+                std::mem::swap(&mut cur, &mut other);
+            }
+        }
     }
 
     /// The product `A = A^(n) ... A^(1)` as one matrix (identity-free: `None` for an empty chain).
@@ -213,7 +225,7 @@ fn chain<'a, T: Coord>(
     step: impl Fn(usize) -> (usize, &'a SparseMatrix),
     par: Parallelism,
 ) {
-    let ChainWorkspace { a, b } = ws;
+    let ChainWorkspace { a, b, .. } = ws;
     let mut cur: &mut Vec<T> = a;
     let mut other: &mut Vec<T> = b;
     for j in 0..n {

@@ -13,7 +13,12 @@
 //! * "Gear": [`gear`], the same annulus with a tooth on each of its 8 outer edges (56, 116, 76,
 //!   12 hexahedra + 4 prisms);
 //! * "Cube w/ holes": [`cube_with_holes`], the 3 x 3 x 3 block of cells less the centre cross (64,
-//!   144, 96, 20).
+//!   144, 96, 20);
+//! * "Tetrahedron w/ holes": [`tetrahedron_with_holes`], a single non-convex cell (a thickened
+//!   tetrahedral frame, genus 3; 16 points, 42 edges, 22 faces, 1 cell).
+//!
+//! Also: [`cylinder`] with any number of wedge sectors, hexahedral rings and layers, [`torus`]
+//! (a ring of hexahedra), [`l_solid`] and [`t_solid`] (branching solids).
 //!
 //! Builders: [`voxel_lattice`] (hexahedra on a grid, any subset), [`extrude`] (prisms over a
 //! planar polygon mesh, several layers), [`revolve`] (prisms swept around the z axis, closed).
@@ -350,4 +355,94 @@ pub fn t_solid(arm: usize, width: usize, cell: f64) -> Lattice {
         |i, j, _| j < width || (i >= arm && i < arm + width),
     )
     .expect("the T solid is valid")
+}
+
+/// The tetrahedron with holes of the conference paper's Table 1 and Fig. 1: a single non-convex
+/// cell, the regular tetrahedron of edge length `edge` (centred at the origin) with a triangular
+/// hole through each face, all four meeting in a hollow centre, so that what remains is a
+/// thickened tetrahedral frame (genus 3): 16 points, 42 edges, 22 faces, 1 cell, as in the
+/// table.
+///
+/// The 16 points are the 4 corners `X` and, on each face `f`, the inner triangle `X_f = c_f +
+/// hole (X - c_f)` (`c_f` the face centroid). The 22 faces: per tetrahedron face the 3 trapezoids
+/// `X Y Y_f X_f` around its hole (12), per tetrahedron edge `XY` between faces `f` and `g` the
+/// inner wall `X_f Y_f Y_g X_g` of the bar along it (6), and per corner the triangle `X_f X_g
+/// X_h` facing the hollow (4). `hole` in `(0, 1)` is the size of the holes relative to the faces.
+///
+/// # Panics
+/// If `edge <= 0` or `hole` is not in `(0, 1)`.
+#[track_caller]
+pub fn tetrahedron_with_holes(edge: f64, hole: f64) -> Lattice {
+    assert!(
+        edge > 0.0 && hole > 0.0 && hole < 1.0,
+        "tetrahedron_with_holes parameters"
+    );
+    // Regular tetrahedron with edge length 2 sqrt(2) * (edge / (2 sqrt(2))) = edge.
+    let s = edge / (2.0 * 2f64.sqrt());
+    let corners = [
+        Vec3::new(1.0, 1.0, 1.0) * s,
+        Vec3::new(1.0, -1.0, -1.0) * s,
+        Vec3::new(-1.0, 1.0, -1.0) * s,
+        Vec3::new(-1.0, -1.0, 1.0) * s,
+    ];
+    // Face f is opposite corner f; its loop counter-clockwise seen from outside.
+    let faces: Vec<[usize; 3]> = (0..4)
+        .map(|f| {
+            let mut loop_: Vec<usize> = (0..4).filter(|&v| v != f).collect();
+            let [a, b, c] = [0, 1, 2].map(|i| corners[loop_[i]]);
+            let centroid = (a + b + c) / 3.0;
+            if (b - a).cross(&(c - a)).dot(&(centroid - corners[f])) < 0.0 {
+                loop_.swap(1, 2);
+            }
+            [loop_[0], loop_[1], loop_[2]]
+        })
+        .collect();
+    let mut points = corners.to_vec();
+    // inner[f][v]: the point of face f's hole near corner v.
+    let mut inner = [[u32::MAX; 4]; 4];
+    for (f, loop_) in faces.iter().enumerate() {
+        let c = loop_.iter().map(|&v| corners[v]).sum::<Vec3>() / 3.0;
+        for &v in loop_ {
+            inner[f][v] = points.len() as u32;
+            points.push(c + (corners[v] - c) * hole);
+        }
+    }
+    let mut cell: Vec<Vec<u32>> = Vec::with_capacity(22);
+    for (f, loop_) in faces.iter().enumerate() {
+        for i in 0..3 {
+            let (x, y) = (loop_[i], loop_[(i + 1) % 3]);
+            cell.push(vec![x as u32, y as u32, inner[f][y], inner[f][x]]);
+        }
+    }
+    // Bars: the edge x -> y runs this way in face f and the other way in face g.
+    for x in 0..4 {
+        for y in 0..4 {
+            if x == y {
+                continue;
+            }
+            let Some(f) = (0..4).find(|&f| {
+                let l = faces[f];
+                (0..3).any(|i| l[i] == x && l[(i + 1) % 3] == y)
+            }) else {
+                continue;
+            };
+            if x < y {
+                let g = (0..4)
+                    .find(|&g| g != f && g != x && g != y)
+                    .expect("two faces");
+                cell.push(vec![inner[f][x], inner[f][y], inner[g][y], inner[g][x]]);
+            }
+        }
+    }
+    // Corners: the triangle of the three hole points near corner x, facing away from x.
+    let centre = Vec3::zeros();
+    for x in 0..4 {
+        let mut tri: Vec<u32> = (0..4).filter(|&f| f != x).map(|f| inner[f][x]).collect();
+        let [a, b, c] = [0, 1, 2].map(|i| points[tri[i] as usize]);
+        if (b - a).cross(&(c - a)).dot(&(centre - corners[x])) < 0.0 {
+            tri.swap(1, 2);
+        }
+        cell.push(tri);
+    }
+    Lattice::from_cells(points, &[cell]).expect("the tetrahedron with holes is valid")
 }

@@ -213,6 +213,81 @@ impl SparseMatrix {
         }
     }
 
+    /// `y = A^T x` without forming the transpose, allocating scratch space as needed.
+    ///
+    /// # Panics
+    /// If `x.len() != nrows` or `y.len() != ncols`.
+    #[track_caller]
+    pub fn apply_transpose<T: Coord>(&self, x: &[T]) -> Vec<T> {
+        let mut y = vec![T::zero(); self.ncols];
+        self.apply_transpose_into(x, &mut y, &mut Vec::new(), Parallelism::Auto);
+        y
+    }
+
+    /// `y = A^T x` by scattering the rows of `A` (no transpose is formed): row `i` adds
+    /// `a_ik x_i` to `y_k`. The rows are read in storage order and `x` sequentially, so the only
+    /// irregular accesses go to `y`, which is the smaller (coarser) side for a subdivision
+    /// operator. In parallel, each of `T` rayon tasks scatters a contiguous block of rows into
+    /// its own `ncols`-long partial sum in `scratch` (grown to `T * ncols` on first use, then
+    /// reused), and the partial sums are added column-parallel.
+    ///
+    /// # Panics
+    /// If `x.len() != nrows` or `y.len() != ncols`.
+    #[track_caller]
+    pub fn apply_transpose_into<T: Coord>(
+        &self,
+        x: &[T],
+        y: &mut [T],
+        scratch: &mut Vec<T>,
+        par: Parallelism,
+    ) {
+        assert_eq!(x.len(), self.nrows, "apply_transpose: input length");
+        assert_eq!(y.len(), self.ncols, "apply_transpose: output length");
+        let scatter = |rows: std::ops::Range<usize>, acc: &mut [T]| {
+            for i in rows {
+                let xi = &x[i];
+                for k in self.row_ptr[i]..self.row_ptr[i + 1] {
+                    acc[self.cols[k] as usize].add_scaled(self.vals[k], xi);
+                }
+            }
+        };
+        let tasks = rayon::current_num_threads().min(self.nrows / MIN_ROWS_PER_TASK);
+        if !par.is_parallel(self.nrows) || tasks < 2 {
+            y.iter_mut().for_each(|v| *v = T::zero());
+            scatter(0..self.nrows, y);
+            return;
+        }
+        let n = self.ncols;
+        scratch.clear();
+        scratch.resize(tasks * n, T::zero());
+        // Blocks of equal entry counts (rows differ in length).
+        let nnz = self.nnz();
+        let mut bounds: Vec<usize> = (0..=tasks)
+            .map(|t| {
+                let target = nnz * t / tasks;
+                self.row_ptr
+                    .partition_point(|&p| p < target)
+                    .min(self.nrows)
+            })
+            .collect();
+        bounds[tasks] = self.nrows;
+        scratch
+            .par_chunks_mut(n)
+            .enumerate()
+            .for_each(|(t, acc)| scatter(bounds[t]..bounds[t + 1], acc));
+        let partials: &[T] = scratch;
+        y.par_iter_mut()
+            .enumerate()
+            .with_min_len(MIN_ROWS_PER_TASK)
+            .for_each(|(c, v)| {
+                let mut s = partials[c];
+                for t in 1..tasks {
+                    s.add_scaled(1.0, &partials[t * n + c]);
+                }
+                *v = s;
+            });
+    }
+
     /// The transpose, as a new CSR matrix (a counting sort over columns; rows of the result
     /// stay sorted).
     pub fn transpose(&self) -> SparseMatrix {

@@ -64,6 +64,13 @@ fn table1_cube_with_holes() {
     assert_eq!(counts_after(l, 2), [1900, 5040, 4416, 1280]);
 }
 
+#[test]
+fn table1_tetrahedron_with_holes() {
+    let l = primitives::tetrahedron_with_holes(2.0, 0.5);
+    assert_eq!(l.counts().to_array(), [16, 42, 22, 1]);
+    assert_eq!(counts_after(l, 3), [2505, 6808, 6048, 1744]);
+}
+
 /// The recurrences derived in `subdivide.rs`:
 /// `P' = P + E + F + C`, `E' = 2E + sum_f k_f + sum_c faces(c)`,
 /// `F' = sum_f k_f + sum_c edges(c)`, `C' = sum_c vertices(c)`.

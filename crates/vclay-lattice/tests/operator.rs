@@ -156,3 +156,42 @@ fn sparse_matrix_basics() {
 fn sparse_matrix_rejects_unsorted_rows() {
     SparseMatrix::from_csr(1, 3, vec![0, 2], vec![2, 0], vec![1.0, 1.0]);
 }
+
+/// The scattered `A^T x` (no transpose formed) equals the stored transpose applied row by row,
+/// sequentially and with several tasks, also with empty rows at the start and the end (which
+/// the task blocks must not drop).
+#[test]
+fn scattered_transpose_equals_stored_transpose() {
+    let mut rng = Rng(7);
+    let (nrows, ncols) = (9000, 1100);
+    let mut row_ptr = vec![0];
+    let (mut cols, mut vals) = (Vec::new(), Vec::new());
+    for i in 0..nrows {
+        if i >= 5 && i < nrows - 7 {
+            let mut c: Vec<u32> = (0..1 + (rng.next_u64() % 12) as usize)
+                .map(|_| (rng.next_u64() % ncols as u64) as u32)
+                .collect();
+            c.sort_unstable();
+            c.dedup();
+            vals.extend(c.iter().map(|_| rng.sym()));
+            cols.extend(c);
+        }
+        row_ptr.push(cols.len());
+    }
+    let a = SparseMatrix::from_csr(nrows, ncols, row_ptr, cols, vals);
+    let x: Vec<Vec3> = (0..nrows).map(|_| rng.vec3(1.0)).collect();
+    let expected = a.transpose().apply(&x);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(3)
+        .build()
+        .unwrap();
+    for par in [Parallelism::Sequential, Parallelism::Rayon] {
+        let mut y = vec![Vec3::repeat(99.0); ncols];
+        let mut scratch = Vec::new();
+        pool.install(|| a.apply_transpose_into(&x, &mut y, &mut scratch, par));
+        for (u, v) in y.iter().zip(&expected) {
+            assert!((u - v).norm() < 1e-12 * v.norm().max(1.0), "{par:?}");
+        }
+    }
+    assert_eq!(a.apply_transpose(&x).len(), ncols);
+}

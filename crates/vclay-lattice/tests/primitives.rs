@@ -133,3 +133,43 @@ fn moving_control_points_updates_every_level() {
         assert!((a - (b * 2.0 + Vec3::new(1.0, 0.0, 0.0))).norm() < 1e-12);
     }
 }
+
+/// `subdivision-solids-conference.txt` Table 1, "Tetrahedron w/ holes": one non-convex cell of
+/// genus 3 whose boundary is closed and outward; its volume lies between the hollow's and the
+/// tetrahedron's and shrinks as the holes grow.
+#[test]
+fn tetrahedron_with_holes_is_one_closed_genus_three_cell() {
+    let edge = 2.0;
+    let full = edge * edge * edge / (6.0 * 2f64.sqrt());
+    let mut last = full;
+    for hole in [0.2, 0.5, 0.8] {
+        let l = primitives::tetrahedron_with_holes(edge, hole);
+        l.validate().unwrap();
+        assert_eq!(l.counts().to_array(), [16, 42, 22, 1]);
+        let v = l.cell_signed_volume(CellId(0));
+        assert!(
+            v > 0.0 && v < last,
+            "hole {hole}: volume {v}, previous {last}"
+        );
+        last = v;
+        let m = boundary_mesh(&l);
+        assert!((closed_mesh_volume(&m) - v).abs() < 1e-12 * full);
+        // A closed surface of genus 3 has Euler characteristic 2 - 2 * 3 = -4.
+        let (p, e, f) = (l.num_points(), l.num_edges(), l.num_faces());
+        assert_eq!(p as i64 - e as i64 + f as i64, -4);
+        // Every corner point has degree 6 (3 tetrahedron edges, 3 hole edges), every hole point 5.
+        let degrees: Vec<usize> = (0..p)
+            .map(|i| l.vertex_edges(vclay_lattice::VertexId(i as u32)).len())
+            .collect();
+        assert_eq!(degrees.iter().filter(|&&d| d == 6).count(), 4);
+        assert_eq!(degrees.iter().filter(|&&d| d == 5).count(), 12);
+    }
+    // Subdivided, it stays closed.
+    let s = common::solid(
+        primitives::tetrahedron_with_holes(edge, 0.5),
+        BoundaryRule::Smooth,
+        2,
+    );
+    let v = closed_mesh_volume(&boundary_mesh(s.finest()));
+    assert!(v > 0.0 && v < full, "{v}");
+}

@@ -10,6 +10,13 @@ use serde_json::json;
 use std::path::Path;
 use std::time::Instant;
 
+mod dnurbs;
+mod exchange;
+mod ffd;
+mod index;
+mod lattice;
+mod pde;
+mod solids;
 mod spline;
 
 /// What a demo step returns: a sentence describing the result, and the files it wrote.
@@ -47,6 +54,41 @@ fn steps() -> Vec<Step> {
             name: "batched evaluation",
             reproduces: "",
             run: spline::batched_evaluation,
+        },
+        Step {
+            name: "d-nurbs hemisphere fit",
+            reproduces: "d-nurbs.txt Fig 7a",
+            run: dnurbs::hemisphere_fit,
+        },
+        Step {
+            name: "d-nurbs swung egg",
+            reproduces: "d-nurbs.txt Fig 9a",
+            run: dnurbs::swung_egg,
+        },
+        Step {
+            name: "subdivision solids",
+            reproduces: "subdivision-solids-conference.txt Table 1, Fig 1",
+            run: lattice::subdivided_solids,
+        },
+        Step {
+            name: "ffd bottle",
+            reproduces: "ffd-direct-manipulation.txt Fig 3",
+            run: ffd::bottle,
+        },
+        Step {
+            name: "pde glass animation",
+            reproduces: "dynamic-pde-surfaces.txt Fig 2",
+            run: pde::glass,
+        },
+        Step {
+            name: "pictures and exchange",
+            reproduces: "",
+            run: exchange::pictures_and_exchange,
+        },
+        Step {
+            name: "rope on a dynamic cube",
+            reproduces: "subdivision-solids-journal.txt Fig 7, Fig 12",
+            run: solids::rope_cube,
         },
     ]
 }
@@ -92,6 +134,8 @@ pub fn run(out: &Path) -> Result<()> {
         serde_json::to_string_pretty(&summary)? + "\n",
     )
     .with_context(|| format!("cannot write {}", summary_path.display()))?;
+    let (pictures, index_ms) = index::write_index(out, &records).context("demo index page")?;
+    eprintln!("index.html: {pictures} pictures rendered ({index_ms:.1} ms)");
     println!("vclay demo: results in {}/", out.display());
     for r in &records {
         println!("  {:<24} {:>9.1} ms  {}", r.name, r.millis, r.what);

@@ -214,6 +214,10 @@ pub enum Constraint {
     },
 }
 
+/// One scalar constraint row: its value `C(p)` and its non-zero derivatives
+/// `(coordinate, dC/dq)`.
+type ConstraintRow = (f64, Vec<(usize, f64)>);
+
 /// Default floor for weights (section 6.2: weights that drift below it are projected back).
 pub const DEFAULT_WEIGHT_FLOOR: f64 = 1e-3;
 /// Default CG iteration cap of the generalized model.
@@ -574,10 +578,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
     }
 
     /// Rows `(value, [(coordinate, derivative)])` of a constraint at the current shape.
-    fn constraint_rows(
-        &self,
-        c: &Constraint,
-    ) -> Result<Vec<(f64, Vec<(usize, f64)>)>, DynamicsError> {
+    fn constraint_rows(&self, c: &Constraint) -> Result<Vec<ConstraintRow>, DynamicsError> {
         let mut lj = LocalJacobian::default();
         let (param, dirs): ([f64; 2], Vec<(usize, Vec3, Vec3)>) = match c {
             Constraint::Point { param, target } => (
@@ -627,9 +628,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                 }
                 self.substep(dt, 0)
             }
-            Integrator::Static => self
-                .step_once(1.0, false)?
-                .ok_or_else(|| unreachable_short()),
+            Integrator::Static => self.step_once(1.0, false)?.ok_or_else(unreachable_short),
         }
     }
 
@@ -827,8 +826,8 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                 self.geometry.set_coordinates(&q2)?;
                 for i in 0..n {
                     x[i] += dx[i];
-                    qn[i] = q2[i];
                 }
+                qn.copy_from_slice(&q2);
             }
         }
         // Kinetic energy of the step's motion, 1/2 dq^T M dq / dt^2.

@@ -641,9 +641,9 @@ impl GeneralizedGeometry for SwungGeometry {
         w
     }
     fn coordinate_groups(&self) -> Vec<std::ops::Range<usize>> {
-        let mut g = vec![0..1];
-        g.extend((1..self.coords.len()).step_by(4).map(|c| c..c + 4));
-        g
+        std::iter::once(0..1)
+            .chain((1..self.coords.len()).step_by(4).map(|c| c..c + 4))
+            .collect()
     }
     fn default_fixed_coordinates(&self) -> Vec<usize> {
         let (oa, ob) = self.offsets();

@@ -110,3 +110,46 @@ pub fn lathe(profile: &[(f64, f64)], segments: usize) -> TriMesh {
     mesh.compute_normals();
     mesh
 }
+
+/// Radius of the fish's body of revolution at `s` in `[0, 3]` (mouth at 0, tail fin at 3).
+fn fish_radius(s: f64) -> f64 {
+    if s <= 2.4 {
+        // Body: a blunt nose, widest at s = 1.1, narrowing to the tail stalk.
+        let x = s / 2.4;
+        0.12 + 0.85 * (std::f64::consts::PI * x.powf(0.8)).sin().max(0.0)
+    } else {
+        // Tail fin: flares from the stalk to the fin's edge.
+        let x = (s - 2.4) / 0.6;
+        0.12 + 0.55 * x * x
+    }
+}
+
+/// A fish-like closed surface (the model of `ffd-direct-manipulation.txt` Figs. 5 and 7, made
+/// procedurally): a body of revolution along `+y` from the mouth (`y = 0`) to the tail fin
+/// (`y = 3`), laterally compressed (x scaled by 0.45), `rings x segments` vertices plus poles.
+pub fn fish(rings: usize, segments: usize) -> TriMesh {
+    let mut profile = vec![(0.0, 0.0)];
+    profile.extend((1..rings).map(|i| {
+        let s = 3.0 * i as f64 / rings as f64;
+        (fish_radius(s), s)
+    }));
+    profile.push((0.0, 3.0));
+    let mut mesh = lathe(&profile, segments);
+    for p in &mut mesh.positions {
+        *p = Vec3::new(0.45 * p.x, p.z, p.y);
+    }
+    // The map (x, y, z) -> (0.45 x, z, y) is a reflection (negative determinant): flip triangles
+    // to keep them counter-clockwise seen from outside.
+    for t in &mut mesh.triangles {
+        t.swap(1, 2);
+    }
+    mesh.compute_normals();
+    mesh
+}
+
+/// The point of the fish's surface at length `s` in `(0, 3)` and angle `angle` around its axis
+/// (0: towards +x, pi/2: the top, +z).
+pub fn fish_point(s: f64, angle: f64) -> Vec3 {
+    let r = fish_radius(s);
+    Vec3::new(0.45 * r * angle.cos(), s, r * angle.sin())
+}

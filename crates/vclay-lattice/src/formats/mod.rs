@@ -10,7 +10,7 @@
 //! * [`surface`]: small writers for the outward boundary surface (triangles from
 //!   [`crate::boundary_mesh`]); the `vclay-io` crate will take these over.
 //!
-//! Layouts, cell-type detection and limitations are documented in `docs/formats-lattice.md`.
+//! Layouts, cell-type detection and limitations are documented in `docs/formats.md`, section 4.
 //!
 //! # How
 //! Readers report malformed input as a [`FormatError`] naming the file, the line and the element

@@ -1,0 +1,161 @@
+//! `vclay convert IN OUT [--samples N]`: between file formats, chosen by extension.
+//!
+//! Read: vclay model JSON and geomdl JSON (`.json`, told apart by content: geomdl has a
+//! top-level `"shape"`), meshes (`.obj`, `.stl`, `.ply`, `.glb`).
+//! Write: vclay model (`.json`), geomdl (`.geomdl.json`), STEP (`.step`, `.stp`: exact NURBS),
+//! IGES (`.igs`, `.iges`: entities 126/128),
+//! meshes (`.obj`, `.stl`, `.ply`, `.glb`: models are tessellated, curves are left out).
+//! A mesh cannot become exact geometry: mesh to model, geomdl, STEP or IGES is refused.
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use std::path::{Path, PathBuf};
+use vclay::TriMesh;
+use vclay::io::geomdl::{is_geomdl, parse_geomdl, write_geomdl};
+use vclay::io::gltf::{GlbMesh, read_glb, write_glb};
+use vclay::io::iges::write_iges;
+use vclay::io::mesh::{read_mesh, write_mesh};
+use vclay::io::model::{Entity, NamedEntity, parse_named_model, write_named_model};
+use vclay::io::step::write_step;
+use vclay::spline::{tessellate_surface, tessellate_volume_boundary};
+
+/// Arguments of `vclay convert`.
+#[derive(Debug, Args)]
+pub struct ConvertArgs {
+    /// Input file (.json model or geomdl, .obj, .stl, .ply, .glb).
+    pub input: PathBuf,
+    /// Output file (.json, .geomdl.json, .step/.stp, .igs/.iges, .obj, .stl, .ply, .glb).
+    pub output: PathBuf,
+    /// Tessellation samples per parametric axis when a model becomes a mesh.
+    #[arg(long, default_value_t = 48)]
+    pub samples: usize,
+}
+
+/// What a file held.
+pub enum Loaded {
+    /// Exact geometry (model or geomdl JSON).
+    Entities(Vec<NamedEntity>),
+    /// Triangle meshes.
+    Meshes(Vec<TriMesh>),
+}
+
+fn ext_of(path: &Path) -> String {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if name.ends_with(".geomdl.json") {
+        return "geomdl.json".into();
+    }
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
+/// Reads any supported input, choosing by extension (and, for .json, by content).
+pub fn read_any(path: &Path) -> Result<Loaded> {
+    match ext_of(path).as_str() {
+        "json" | "geomdl.json" => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read {}", path.display()))?;
+            let ents = if is_geomdl(&text) {
+                parse_geomdl(&text)
+            } else {
+                parse_named_model(&text)
+            }
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+            Ok(Loaded::Entities(ents))
+        }
+        "glb" => Ok(Loaded::Meshes(read_glb(path)?)),
+        "obj" | "stl" | "ply" => Ok(Loaded::Meshes(vec![read_mesh(path)?])),
+        other => bail!(
+            "{}: unknown input format {}; expected .json (vclay or geomdl model), .obj, .stl, .ply or .glb",
+            path.display(),
+            if other.is_empty() {
+                "(no extension)".to_string()
+            } else {
+                format!("\".{other}\"")
+            }
+        ),
+    }
+}
+
+/// Tessellates the surfaces and volume boundaries of a model into one mesh.
+pub fn tessellate_entities(ents: &[NamedEntity], samples: usize) -> Result<TriMesh> {
+    let mut mesh = TriMesh::new();
+    for (i, e) in ents.iter().enumerate() {
+        let mut m = TriMesh::new();
+        match &e.entity {
+            Entity::Curve(_) => continue,
+            Entity::Surface(s) => tessellate_surface(s, [samples; 2], &mut m),
+            Entity::Volume(v) => tessellate_volume_boundary(v, [samples; 3], &mut m),
+        }
+        .with_context(|| format!("tessellating entity {i}"))?;
+        mesh.append(&m);
+    }
+    if mesh.triangles.is_empty() {
+        bail!("the model holds only curves: nothing to tessellate into a mesh");
+    }
+    Ok(mesh)
+}
+
+/// Runs `vclay convert`.
+pub fn run(args: &ConvertArgs) -> Result<()> {
+    if args.samples < 2 {
+        bail!("--samples must be at least 2");
+    }
+    let input = read_any(&args.input)?;
+    let out = &args.output;
+    let ext = ext_of(out);
+    let mesh_of = |input: &Loaded| -> Result<TriMesh> {
+        match input {
+            Loaded::Entities(e) => tessellate_entities(e, args.samples),
+            Loaded::Meshes(ms) => {
+                let mut all = TriMesh::new();
+                for m in ms {
+                    all.append(m);
+                }
+                Ok(all)
+            }
+        }
+    };
+    let exact = |input: &Loaded| -> Result<Vec<NamedEntity>> {
+        match input {
+            Loaded::Entities(e) => Ok(e.clone()),
+            Loaded::Meshes(_) => bail!(
+                "{} is a mesh; it cannot be converted to exact NURBS geometry ({})",
+                args.input.display(),
+                out.display()
+            ),
+        }
+    };
+    match ext.as_str() {
+        "geomdl.json" => write_geomdl(out, &exact(&input)?)?,
+        "json" => write_named_model(out, &exact(&input)?)?,
+        "step" | "stp" => write_step(out, &exact(&input)?)?,
+        "igs" | "iges" => write_iges(out, &exact(&input)?)?,
+        "obj" | "stl" | "ply" => write_mesh(out, &mesh_of(&input)?)?,
+        "glb" => {
+            let name = args
+                .input
+                .file_stem()
+                .map_or("vclay".into(), |s| s.to_string_lossy().into_owned());
+            write_glb(out, &[GlbMesh::new(name, mesh_of(&input)?)])?
+        }
+        other => bail!(
+            "{}: unknown output format {}; expected .json, .geomdl.json, .step, .stp, .igs, .iges, .obj, .stl, .ply or .glb",
+            out.display(),
+            if other.is_empty() {
+                "(no extension)".to_string()
+            } else {
+                format!("\".{other}\"")
+            }
+        ),
+    }
+    eprintln!(
+        "vclay convert: {} -> {}",
+        args.input.display(),
+        out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,419 @@
+//! STEP (ISO 10303-21, AP214 "automotive design" schema) export of NURBS curves and surfaces as
+//! exact B-spline geometry.
+//!
+//! **What.** Each curve becomes a `B_SPLINE_CURVE_WITH_KNOTS` and each surface a
+//! `B_SPLINE_SURFACE_WITH_KNOTS`; rational ones become the complex entities
+//! `(BOUNDED_CURVE() B_SPLINE_CURVE(..) B_SPLINE_CURVE_WITH_KNOTS(..) CURVE()
+//! GEOMETRIC_REPRESENTATION_ITEM() RATIONAL_B_SPLINE_CURVE(..) REPRESENTATION_ITEM(''))` and
+//! `(BOUNDED_SURFACE() B_SPLINE_SURFACE(..) B_SPLINE_SURFACE_WITH_KNOTS(..)
+//! GEOMETRIC_REPRESENTATION_ITEM() RATIONAL_B_SPLINE_SURFACE(..) REPRESENTATION_ITEM('')
+//! SURFACE())` (ISO 10303-42 section 4.4, the form OpenCASCADE writes). Knots are written as
+//! distinct values with multiplicities, control points as `CARTESIAN_POINT`s (surface nets as a
+//! list of rows along u), weights as given. A volume is written as its six boundary surfaces,
+//! which are exact when its knot vectors are clamped (the usual case); an unclamped volume is
+//! refused. All geometry sits in a `GEOMETRIC_SET` of a
+//! `GEOMETRICALLY_BOUNDED_SURFACE_SHAPE_REPRESENTATION` (or a `GEOMETRIC_CURVE_SET` of a
+//! `GEOMETRICALLY_BOUNDED_WIREFRAME_SHAPE_REPRESENTATION` when there are only curves), attached
+//! to one product, in millimetres.
+//!
+//! **How.** Reals are printed in Rust's shortest round-trip form with a mandatory decimal point
+//! (`1.`, `0.25`, `1.5E-7`), so a reader recovers every `f64` bit for bit.
+//!
+//! **Limitations.** Export only (no STEP reader). No trimming, topology or B-rep: the geometry
+//! arrives in CAD tools as untrimmed curves and surfaces. Names are reduced to printable ASCII.
+
+use crate::error::IoError;
+use crate::model::{Entity, NamedEntity};
+use std::fmt::Write as _;
+use std::path::Path;
+use vclay_core::Vec3;
+use vclay_spline::{KnotVector, NurbsSurface, NurbsVolume};
+
+/// A real in STEP syntax: shortest round-trip digits, always with a decimal point.
+pub fn step_real(x: f64) -> String {
+    let s = format!("{x:?}");
+    let (mant, exp) = match s.split_once('e') {
+        Some((m, e)) => (m.to_string(), Some(e.to_string())),
+        None => (s, None),
+    };
+    let mant = if mant.contains('.') {
+        mant.trim_end_matches('0').to_string()
+    } else {
+        mant + "."
+    };
+    match exp {
+        Some(e) => format!("{mant}E{e}"),
+        None => mant,
+    }
+}
+
+fn step_string(s: &str) -> String {
+    let clean: String = s
+        .chars()
+        .map(|c| {
+            if c.is_ascii_graphic() || c == ' ' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    format!("'{}'", clean.replace('\'', "''").replace('\\', "\\\\"))
+}
+
+/// Writer state: entity numbering and the DATA section text.
+struct Data {
+    next: usize,
+    text: String,
+}
+
+impl Data {
+    fn add(&mut self, body: &str) -> usize {
+        let id = self.next;
+        self.next += 1;
+        let _ = writeln!(self.text, "#{id}={body};");
+        id
+    }
+
+    fn point(&mut self, p: &Vec3) -> usize {
+        self.add(&format!(
+            "CARTESIAN_POINT('',({},{},{}))",
+            step_real(p.x),
+            step_real(p.y),
+            step_real(p.z)
+        ))
+    }
+}
+
+fn refs(ids: &[usize]) -> String {
+    ids.iter()
+        .map(|i| format!("#{i}"))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+fn reals(xs: &[f64]) -> String {
+    xs.iter()
+        .map(|&x| step_real(x))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// `(multiplicities, distinct knots)` lists.
+fn knot_lists(k: &KnotVector) -> (String, String) {
+    let d = k.distinct();
+    let mults = d
+        .iter()
+        .map(|(_, m)| m.to_string())
+        .collect::<Vec<_>>()
+        .join(",");
+    let vals: Vec<f64> = d.iter().map(|(v, _)| *v).collect();
+    (format!("({mults})"), format!("({})", reals(&vals)))
+}
+
+fn write_curve(
+    d: &mut Data,
+    name: &str,
+    degree: usize,
+    knots: &KnotVector,
+    pts: &[Vec3],
+    w: &[f64],
+) -> usize {
+    let ids: Vec<usize> = pts.iter().map(|p| d.point(p)).collect();
+    let (m, k) = knot_lists(knots);
+    let cps = refs(&ids);
+    if w.iter().all(|&x| x == 1.0) {
+        d.add(&format!(
+            "B_SPLINE_CURVE_WITH_KNOTS({},{degree},({cps}),.UNSPECIFIED.,.F.,.F.,{m},{k},.UNSPECIFIED.)",
+            step_string(name)
+        ))
+    } else {
+        d.add(&format!(
+            "( BOUNDED_CURVE() B_SPLINE_CURVE({degree},({cps}),.UNSPECIFIED.,.F.,.F.) \
+             B_SPLINE_CURVE_WITH_KNOTS({m},{k},.UNSPECIFIED.) CURVE() GEOMETRIC_REPRESENTATION_ITEM() \
+             RATIONAL_B_SPLINE_CURVE(({})) REPRESENTATION_ITEM({}) )",
+            reals(w),
+            step_string(name)
+        ))
+    }
+}
+
+fn write_surface(d: &mut Data, name: &str, s: &NurbsSurface) -> usize {
+    let [nu, nv] = s.dims();
+    let [p, q] = s.degree();
+    let ids: Vec<usize> = s.control_points().iter().map(|x| d.point(x)).collect();
+    let net = ids
+        .chunks(nv)
+        .map(|row| format!("({})", refs(row)))
+        .collect::<Vec<_>>()
+        .join(",");
+    debug_assert_eq!(ids.len(), nu * nv);
+    let (mu, ku) = knot_lists(&s.knots()[0]);
+    let (mv, kv) = knot_lists(&s.knots()[1]);
+    let w = s.weights();
+    if w.iter().all(|&x| x == 1.0) {
+        d.add(&format!(
+            "B_SPLINE_SURFACE_WITH_KNOTS({},{p},{q},({net}),.UNSPECIFIED.,.F.,.F.,.F.,{mu},{mv},{ku},{kv},.UNSPECIFIED.)",
+            step_string(name)
+        ))
+    } else {
+        let wn = w
+            .chunks(nv)
+            .map(|row| format!("({})", reals(row)))
+            .collect::<Vec<_>>()
+            .join(",");
+        d.add(&format!(
+            "( BOUNDED_SURFACE() B_SPLINE_SURFACE({p},{q},({net}),.UNSPECIFIED.,.F.,.F.,.F.) \
+             B_SPLINE_SURFACE_WITH_KNOTS({mu},{mv},{ku},{kv},.UNSPECIFIED.) \
+             GEOMETRIC_REPRESENTATION_ITEM() RATIONAL_B_SPLINE_SURFACE(({wn})) \
+             REPRESENTATION_ITEM({}) SURFACE() )",
+            step_string(name)
+        ))
+    }
+}
+
+/// The six boundary surfaces of a volume with clamped knot vectors (exact), in the order
+/// u = min, u = max, v = min, v = max, w = min, w = max; `None` when a knot vector is not
+/// clamped.
+pub fn volume_boundary_surfaces(v: &NurbsVolume) -> Option<Vec<NurbsSurface>> {
+    if !v.knots().iter().all(KnotVector::is_clamped) {
+        return None;
+    }
+    let dims = v.dims();
+    let mut out = Vec::with_capacity(6);
+    for axis in 0..3 {
+        let (a1, a2) = match axis {
+            0 => (1, 2),
+            1 => (0, 2),
+            _ => (0, 1),
+        };
+        for side in [0, dims[axis] - 1] {
+            let mut pts = Vec::with_capacity(dims[a1] * dims[a2]);
+            let mut ws = Vec::with_capacity(dims[a1] * dims[a2]);
+            for i in 0..dims[a1] {
+                for j in 0..dims[a2] {
+                    let mut idx = [0; 3];
+                    idx[axis] = side;
+                    idx[a1] = i;
+                    idx[a2] = j;
+                    let flat = (idx[0] * dims[1] + idx[1]) * dims[2] + idx[2];
+                    pts.push(v.control_points()[flat]);
+                    ws.push(v.weights()[flat]);
+                }
+            }
+            let knots = [v.knots()[a1].clone(), v.knots()[a2].clone()];
+            out.push(NurbsSurface::from_flat(knots, pts, ws).ok()?);
+        }
+    }
+    Some(out)
+}
+
+/// Formats entities as a STEP AP214 file. `file_name` goes into the header.
+pub fn to_step_string(entities: &[NamedEntity], file_name: &str) -> Result<String, IoError> {
+    if entities.is_empty() {
+        return Err(IoError::EmptyModel);
+    }
+    let mut d = Data {
+        next: 1,
+        text: String::new(),
+    };
+    let ctx = d.add("APPLICATION_CONTEXT('core data for automotive mechanical design processes')");
+    d.add(&format!(
+        "APPLICATION_PROTOCOL_DEFINITION('international standard','automotive_design',2000,#{ctx})"
+    ));
+    let pctx = d.add(&format!("PRODUCT_CONTEXT('',#{ctx},'mechanical')"));
+    let prod = d.add(&format!(
+        "PRODUCT('vclay','vclay NURBS export','',(#{pctx}))"
+    ));
+    let pdf = d.add(&format!("PRODUCT_DEFINITION_FORMATION('','',#{prod})"));
+    let pdc = d.add(&format!(
+        "PRODUCT_DEFINITION_CONTEXT('part definition',#{ctx},'design')"
+    ));
+    let pd = d.add(&format!("PRODUCT_DEFINITION('design','',#{pdf},#{pdc})"));
+    let pds = d.add(&format!("PRODUCT_DEFINITION_SHAPE('','',#{pd})"));
+    let len = d.add("( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) )");
+    let ang = d.add("( NAMED_UNIT(*) PLANE_ANGLE_UNIT() SI_UNIT($,.RADIAN.) )");
+    let sol = d.add("( NAMED_UNIT(*) SI_UNIT($,.STERADIAN.) SOLID_ANGLE_UNIT() )");
+    let unc = d.add(&format!(
+        "UNCERTAINTY_MEASURE_WITH_UNIT(LENGTH_MEASURE(1.E-07),#{len},'distance_accuracy_value','confusion accuracy')"
+    ));
+    let rctx = d.add(&format!(
+        "( GEOMETRIC_REPRESENTATION_CONTEXT(3) GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT((#{unc})) \
+         GLOBAL_UNIT_ASSIGNED_CONTEXT((#{len},#{ang},#{sol})) \
+         REPRESENTATION_CONTEXT('Context #1','3D Context with UNIT and UNCERTAINTY') )"
+    ));
+    let mut items = Vec::new();
+    let mut only_curves = true;
+    for (i, e) in entities.iter().enumerate() {
+        let name = e.name.clone().unwrap_or_else(|| format!("entity {i}"));
+        match &e.entity {
+            Entity::Curve(c) => items.push(write_curve(
+                &mut d,
+                &name,
+                c.degree(),
+                c.knots(),
+                c.control_points(),
+                c.weights(),
+            )),
+            Entity::Surface(s) => {
+                only_curves = false;
+                items.push(write_surface(&mut d, &name, s));
+            }
+            Entity::Volume(v) => {
+                only_curves = false;
+                let faces = volume_boundary_surfaces(v).ok_or_else(|| IoError::Structure {
+                    path: format!("entities[{i}]"),
+                    message: "STEP export of a volume needs clamped knot vectors (its boundary \
+                              surfaces are written)"
+                        .into(),
+                })?;
+                for (f, s) in faces.iter().enumerate() {
+                    items.push(write_surface(&mut d, &format!("{name} face {f}"), s));
+                }
+            }
+        }
+    }
+    let (set, rep) = if only_curves {
+        (
+            "GEOMETRIC_CURVE_SET",
+            "GEOMETRICALLY_BOUNDED_WIREFRAME_SHAPE_REPRESENTATION",
+        )
+    } else {
+        (
+            "GEOMETRIC_SET",
+            "GEOMETRICALLY_BOUNDED_SURFACE_SHAPE_REPRESENTATION",
+        )
+    };
+    let gset = d.add(&format!("{set}('',({}))", refs(&items)));
+    let srep = d.add(&format!("{rep}('vclay',(#{gset}),#{rctx})"));
+    d.add(&format!("SHAPE_DEFINITION_REPRESENTATION(#{pds},#{srep})"));
+    let mut out = String::new();
+    out.push_str("ISO-10303-21;\nHEADER;\n");
+    out.push_str("FILE_DESCRIPTION(('vclay NURBS export'),'2;1');\n");
+    let _ = writeln!(
+        out,
+        "FILE_NAME({},{},(''),(''),'vclay','vclay','');",
+        step_string(file_name),
+        step_string(&timestamp())
+    );
+    out.push_str("FILE_SCHEMA(('AUTOMOTIVE_DESIGN { 1 0 10303 214 1 1 1 1 }'));\nENDSEC;\nDATA;\n");
+    out.push_str(&d.text);
+    out.push_str("ENDSEC;\nEND-ISO-10303-21;\n");
+    Ok(out)
+}
+
+/// Writes entities as a STEP AP214 file, atomically.
+pub fn write_step(path: impl AsRef<Path>, entities: &[NamedEntity]) -> Result<(), IoError> {
+    let path = path.as_ref();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let text = to_step_string(entities, &name).map_err(|e| e.in_file(path))?;
+    crate::util::write_atomic(path, |w| w.write_all(text.as_bytes()))
+}
+
+/// The current UTC time as `YYYY-MM-DDThh:mm:ss`.
+pub(crate) fn timestamp() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs()) as i64;
+    let (days, rem) = (secs.div_euclid(86400), secs.rem_euclid(86400));
+    // Civil date from days since 1970-01-01 (H. Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!(
+        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}",
+        rem / 3600,
+        rem / 60 % 60,
+        rem % 60
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vclay_spline::{NurbsCurve, ParametricSurface};
+
+    #[test]
+    fn reals_have_a_decimal_point_and_round_trip() {
+        assert_eq!(step_real(1.0), "1.");
+        assert_eq!(step_real(-0.25), "-0.25");
+        assert_eq!(step_real(1.5e-7), "1.5E-7");
+        assert_eq!(step_real(1e300), "1.E300");
+        for x in [0.1, 1.0 / 3.0, std::f64::consts::FRAC_1_SQRT_2, -2.5e-12] {
+            let s = step_real(x).replace("E", "e");
+            assert_eq!(s.parse::<f64>().unwrap(), x);
+        }
+    }
+
+    #[test]
+    fn rational_surface_and_curve_entities() {
+        let torus = NurbsSurface::torus(2.0, 0.5).unwrap();
+        let line = NurbsCurve::new(
+            1,
+            vec![0.0, 0.0, 1.0, 1.0],
+            vec![Vec3::zeros(), Vec3::x()],
+            None,
+        )
+        .unwrap();
+        let s = to_step_string(
+            &[
+                Entity::Surface(torus.clone()).into(),
+                NamedEntity {
+                    name: Some("it's a line".into()),
+                    entity: Entity::Curve(line),
+                },
+            ],
+            "t.step",
+        )
+        .unwrap();
+        assert!(s.starts_with("ISO-10303-21;"));
+        assert!(s.contains("RATIONAL_B_SPLINE_SURFACE(("));
+        // Torus: 9 x 9 net, knots 0,0,0,.25,.25,.5,.5,.75,.75,1,1,1 -> multiplicities 3,2,2,2,3.
+        assert!(s.contains("B_SPLINE_SURFACE_WITH_KNOTS((3,2,2,2,3),(3,2,2,2,3),(0.,0.25,0.5,0.75,1.),(0.,0.25,0.5,0.75,1.)"), "{s}");
+        assert_eq!(s.matches("CARTESIAN_POINT").count(), 81 + 2);
+        assert!(s.contains("B_SPLINE_CURVE_WITH_KNOTS('it''s a line',1,("));
+        assert!(s.contains("GEOMETRIC_SET('',("));
+        // Every #n referenced is defined.
+        let defined: std::collections::HashSet<&str> = s
+            .lines()
+            .filter_map(|l| l.strip_prefix('#').and_then(|r| r.split('=').next()))
+            .collect();
+        for tok in s.split(|c: char| !(c.is_ascii_digit() || c == '#')) {
+            if let Some(n) = tok.strip_prefix('#')
+                && !n.is_empty()
+            {
+                assert!(defined.contains(n), "#{n} undefined");
+            }
+        }
+        assert_eq!(ParametricSurface::domain(&torus)[0].max, 1.0);
+    }
+
+    #[test]
+    fn volume_boundaries_are_exact_faces() {
+        let v = NurbsVolume::box_lattice(
+            [1, 2, 2],
+            [2, 3, 4],
+            Vec3::zeros(),
+            Vec3::new(1.0, 2.0, 3.0),
+        )
+        .unwrap();
+        let f = volume_boundary_surfaces(&v).unwrap();
+        assert_eq!(f.len(), 6);
+        use vclay_spline::ParametricVolume;
+        let p = f[1].point(0.3, 0.6).unwrap();
+        let q = v.point(1.0, 0.3, 0.6).unwrap();
+        assert!((p - q).norm() < 1e-14);
+        let p = f[4].point(0.2, 0.7).unwrap();
+        let q = v.point(0.2, 0.7, 0.0).unwrap();
+        assert!((p - q).norm() < 1e-14);
+    }
+}

@@ -1,0 +1,149 @@
+//! Per-step time of dynamic solids beside `subdivision-solids-journal.txt` Tables 1-2.
+//!
+//! Run: `cargo run --release -p vclay-solids --example bench_levels -- [max_level] [seconds]
+//! [--seq] [--fix-half]` (`--seq`: one thread; `--fix-half`: lower half of the control points
+//! fixed, journal section 5.2).
+//! Prints one Markdown table row per model: data points, springs, build time, ms per step
+//! (symplectic Euler with a rope attached), bytes per data point of the per-step structures and
+//! the process's peak resident memory, and the paper's figure.
+
+use std::time::Instant;
+use vclay_core::Vec3;
+use vclay_lattice::{BoundaryRule, Features, SubdivisionRules, primitives};
+use vclay_solids::{DynamicSolid, Material, SolidParams, SolidSource};
+use vclay_spline::KnotVector;
+
+fn peak_rss_mb() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
+        .map_or(f64::NAN, |kb| kb / 1024.0)
+}
+
+/// CPU seconds (user + system) of this process so far, from `/proc/self/stat` (100 Hz ticks).
+fn cpu_seconds() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            let rest = s.rsplit_once(')')?.1;
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            Some((f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?) / 100.0)
+        })
+        .unwrap_or(f64::NAN)
+}
+
+/// Wall and CPU milliseconds per step.
+fn time_steps(s: &mut DynamicSolid, seconds: f64) -> (f64, f64) {
+    s.attach_rope(Vec3::new(1.3, 1.2, 1.1), 50.0, 0.0).unwrap();
+    s.run(3).unwrap();
+    let t0 = Instant::now();
+    let c0 = cpu_seconds();
+    let mut n = 0;
+    while t0.elapsed().as_secs_f64() < seconds || n < 5 {
+        s.step().unwrap();
+        n += 1;
+    }
+    (
+        t0.elapsed().as_secs_f64() * 1e3 / n as f64,
+        (cpu_seconds() - c0) * 1e3 / n as f64,
+    )
+}
+
+fn row(name: &str, s: &mut DynamicSolid, build: f64, seconds: f64, paper: &str) {
+    let st = s.stats();
+    let (ms, cpu) = time_steps(s, seconds);
+    println!(
+        "| {name} | {} | {} ({}) | {} ({}) | {:.2} | {:.4} | {:.4} | {:.1} | {:.0} | {:.0} | {paper} |",
+        st.control_points,
+        st.data_points,
+        st.active_data_points,
+        st.edge_springs + st.virtual_springs,
+        st.active_springs,
+        build,
+        ms,
+        cpu,
+        1e3 / ms,
+        s.bytes_per_data_point(),
+        peak_rss_mb() * 1048576.0 / st.data_points as f64,
+    );
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let max_level: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(4);
+    let seconds: f64 = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(1.0);
+    let fix_half = args.iter().any(|a| a == "--fix-half");
+    let params = SolidParams {
+        parallelism: if args.iter().any(|a| a == "--seq") {
+            vclay_core::Parallelism::Sequential
+        } else {
+            vclay_core::Parallelism::Auto
+        },
+        ..SolidParams::default()
+    };
+    println!(
+        "| model | control pts | data pts (active) | springs (active) | build s | wall ms/step | CPU ms/step | steps/s | B/data pt (per-step) | B/data pt (peak RSS) | paper ms (PIII 550) |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    let paper = ["10 (216 cells)", "72 (1,728 cells)", "-", "-", "-"];
+    for level in 1..=max_level {
+        let cube = primitives::box_lattice([4, 4, 4], Vec3::zeros(), Vec3::repeat(1.0));
+        let p = cube.points().to_vec();
+        let source = SolidSource::Subdivision {
+            features: Features::none(&cube),
+            control: cube,
+            rules: SubdivisionRules::new(BoundaryRule::Sharp),
+            levels: level,
+        };
+        let t0 = Instant::now();
+        let mut s = DynamicSolid::new(source, p, Material::default(), params).unwrap();
+        let build = t0.elapsed().as_secs_f64();
+        let mut name = format!("Cube (4^3) level {level}");
+        if fix_half {
+            // All but the top layer of control points (a local modification, section 5.2).
+            let low = s.control_points_where(|x| x.z < 0.9);
+            s.set_fixed(&low, true).unwrap();
+            name += ", all but top layer fixed";
+        }
+        row(&name, &mut s, build, seconds, paper[level - 1]);
+    }
+    if fix_half || max_level < 2 {
+        return;
+    }
+    // Journal Table 1: B-spline solids.
+    for (c, m, paper) in [
+        ([4, 4, 4], 10, "40"),
+        ([4, 4, 4], 12, "61"),
+        ([4, 5, 6], 10, "41"),
+        ([5, 5, 5], 10, "61"),
+        ([5, 5, 5], 12, "92"),
+        ([6, 6, 6], 10, "61"),
+        ([6, 6, 6], 12, "111"),
+    ] {
+        let knots: [KnotVector; 3] =
+            std::array::from_fn(|a| KnotVector::clamped_uniform(3, c[a]).unwrap());
+        let vol =
+            vclay_spline::NurbsVolume::box_lattice([3, 3, 3], c, Vec3::zeros(), Vec3::repeat(1.0))
+                .unwrap();
+        let source = SolidSource::BSpline {
+            knots,
+            weights: vec![1.0; vol.control_points().len()],
+            samples: [m; 3],
+        };
+        let t0 = Instant::now();
+        let mut s = DynamicSolid::new(
+            source,
+            vol.control_points().to_vec(),
+            Material::default(),
+            params,
+        )
+        .unwrap();
+        let build = t0.elapsed().as_secs_f64();
+        let name = format!("B-spline {}x{}x{}, {m}^3 samples", c[0], c[1], c[2]);
+        row(&name, &mut s, build, seconds, paper);
+    }
+}
