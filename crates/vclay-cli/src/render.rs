@@ -1,9 +1,11 @@
-//! `vclay render (MODEL.json | MESH.obj/.ply/.stl/.glb) --out FILE.png|.gif [--view V]
+//! `vclay render (MODEL.json | MESH.obj/.ply/.stl/.glb | SCENARIO.toml) --out FILE.png|.gif [--view V]
 //! [--size WxH] [--wireframe] [--frames N] [--ortho]`.
 //!
 //! A model's surfaces and volume boundaries are tessellated and shaded, its curves drawn as
 //! polylines; `--wireframe` adds control nets and lattices (for a mesh: its triangle edges). A
-//! `.gif` output is a turntable of `--frames` pictures. The scene builders here are shared with
+//! `.gif` output is a turntable of `--frames` pictures. A scenario (`vclay run` file) is run
+//! in a scratch folder and about `--frames` of its frames are animated with one camera: a
+//! `.gif`, or numbered PNGs beside a `.png` path. The scene builders here are shared with
 //! the demo's index page.
 
 use anyhow::{Context, Result, bail};
@@ -12,7 +14,7 @@ use std::path::{Path, PathBuf};
 use vclay::TriMesh;
 use vclay::io::model::Entity;
 use vclay::render::scene::{CLAY, NET};
-use vclay::render::{RenderOptions, Scene, View, render, turntable, write_gif};
+use vclay::render::{RenderOptions, Scene, View, render, turntable, write_animation, write_gif};
 use vclay::spline::{ParametricCurve, tessellate_surface, tessellate_volume_boundary};
 
 /// Arguments of `vclay render`.
@@ -165,12 +167,36 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    let scene = scene_from_file(&args.input, args.wireframe)?;
     let opts = RenderOptions {
         view,
         orthographic: args.ortho,
         ..RenderOptions::sized(width, height)
     };
+    if args
+        .input
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+    {
+        // A scenario: run it, then animate its frames with one camera.
+        let dir = tempfile::tempdir().context("cannot create a scratch folder")?;
+        let frames = crate::run::run_for_frames(&args.input, dir.path(), args.frames)?;
+        let scenes = frames
+            .iter()
+            .map(|f| scene_from_file(f, args.wireframe))
+            .collect::<Result<Vec<_>>>()?;
+        let written = write_animation(&args.out, &scenes, &opts, 80)?;
+        eprintln!(
+            "vclay render: {} frames of {} -> {} file(s), first {}",
+            scenes.len(),
+            args.input.display(),
+            written.len(),
+            written
+                .first()
+                .map_or(String::new(), |p| p.display().to_string())
+        );
+        return Ok(());
+    }
+    let scene = scene_from_file(&args.input, args.wireframe)?;
     match ext.as_deref() {
         Some("png") => render(&scene, &opts)?.write_png(&args.out)?,
         Some("gif") => {

@@ -148,3 +148,40 @@ fn run_dnurbs(path: &Path, text: &str, name: &str, out: Option<&Path>, quiet: bo
     }
     Ok(())
 }
+
+/// Runs a scenario quietly into `dir`, writing about `frames` OBJ frames, and returns the frame
+/// files in order (used by `vclay render SCENARIO.toml`).
+pub fn run_for_frames(path: &Path, dir: &Path, frames: usize) -> Result<Vec<std::path::PathBuf>> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read scenario {}", path.display()))?;
+    let name = path.display().to_string();
+    let kind = model_kind(&text, &name)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let files = if DNURBS_KINDS.contains(&kind.as_str()) {
+        let mut s = DnurbsScenario::parse(&text, &name, base)?;
+        s.out_dir = dir.to_path_buf();
+        s.every = (s.steps / frames.max(1)).max(1);
+        s.run(&mut |_, _, _| {})?.files
+    } else if SOLID_KINDS.contains(&kind.as_str()) {
+        let mut s = Scenario::parse(&text, &name, base)?;
+        s.output.dir = dir.to_path_buf();
+        s.output.obj = true;
+        s.output.every = (s.steps / frames.max(1)).max(1);
+        s.run(&mut |_| {})?.files
+    } else {
+        bail!("{name}: [model] kind \"{kind}\" is not known");
+    };
+    let mut frames: Vec<_> = files
+        .into_iter()
+        .filter(|f| {
+            f.extension().is_some_and(|e| e == "obj")
+                && f.file_name()
+                    .is_some_and(|n| n.to_string_lossy().starts_with("frame_"))
+        })
+        .collect();
+    frames.sort();
+    if frames.is_empty() {
+        bail!("{name}: the scenario wrote no frames to render");
+    }
+    Ok(frames)
+}

@@ -183,7 +183,8 @@ pub struct DnurbsScenario {
     pub steps: usize,
     /// Output folder.
     pub out_dir: PathBuf,
-    every: usize,
+    /// Write a frame (`frame_NNNNNN.obj`) every this many steps (0: never).
+    pub every: usize,
     grid: [usize; 2],
     /// Short description of the model.
     pub description: String,
