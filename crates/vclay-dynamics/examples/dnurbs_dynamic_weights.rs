@@ -1,6 +1,7 @@
 //! Steps per second of a D-NURBS surface with dynamic weights (`d-nurbs.txt` sections 4.2, 5.3):
 //! `cargo run --release -p vclay-dynamics --example dnurbs_dynamic_weights [N]` for an N x N
-//! cubic surface (default 16; issue goal: 60 steps/s on 2 cores), pulled by a moving spring,
+//! cubic surface (default 16; issue goal: 60 steps/s on 2 cores; optional second argument: CG
+//! relative tolerance), pulled by a moving spring,
 //! one edge fixed. Every step recomputes the element matrices (they depend on the weights).
 use std::time::Instant;
 use vclay_core::Vec3;
@@ -34,6 +35,9 @@ fn main() {
     )
     .expect("model");
     let setup = t0.elapsed().as_secs_f64();
+    if let Some(tol) = std::env::args().nth(2).and_then(|a| a.parse().ok()) {
+        d.tolerance = tol;
+    }
     for k in 0..n {
         for c in 0..3 {
             d.set_fixed_coordinate(4 * k + c, true).expect("index");

@@ -112,18 +112,12 @@ impl LocalJacobian {
         }
     }
 
-    /// `out += sum_a coef[a] J^a^T J^a` into a dense local matrix (row-major, `nd x nd`), and,
-    /// when `mass` is given as `(c, m)`, `m += c J^0^T J^0` in the same pass.
-    fn accumulate_gram(
-        &self,
-        coef: &[f64; 6],
-        out: &mut [f64],
-        mut mass: Option<(f64, &mut [f64])>,
-    ) {
+    /// `out += sum_a coef[a] J^a^T J^a` into the upper triangle of a dense local matrix
+    /// (row-major, `nd x nd`; see [`mirror_upper`]).
+    fn accumulate_gram(&self, coef: &[f64; 6], out: &mut [f64]) {
         let nb = self.blocks.len();
         let nv = self.vectors.len();
         let nd = 3 * nb + nv;
-        let mc = mass.as_ref().map_or(0.0, |m| m.0);
         for a in 0..nb {
             let ra = &self.blocks[a].1;
             for b in a..nb {
@@ -132,19 +126,8 @@ impl LocalJacobian {
                 for m in 0..6 {
                     v += coef[m] * ra[m] * rb[m];
                 }
-                let mv = mc * ra[0] * rb[0];
                 for k in 0..3 {
-                    let (i, j) = ((3 * a + k) * nd + 3 * b + k, (3 * b + k) * nd + 3 * a + k);
-                    out[i] += v;
-                    if a != b {
-                        out[j] += v;
-                    }
-                    if let Some((_, mm)) = mass.as_mut() {
-                        mm[i] += mv;
-                        if a != b {
-                            mm[j] += mv;
-                        }
-                    }
+                    out[(3 * a + k) * nd + 3 * b + k] += v;
                 }
             }
             for j in 0..nv {
@@ -153,15 +136,9 @@ impl LocalJacobian {
                 for m in 0..6 {
                     v += g[m] * (coef[m] * ra[m]);
                 }
-                let mv = g[0] * (mc * ra[0]);
                 let col = 3 * nb + j;
                 for k in 0..3 {
                     out[(3 * a + k) * nd + col] += v[k];
-                    out[col * nd + 3 * a + k] += v[k];
-                    if let Some((_, mm)) = mass.as_mut() {
-                        mm[(3 * a + k) * nd + col] += mv[k];
-                        mm[col * nd + 3 * a + k] += mv[k];
-                    }
                 }
             }
         }
@@ -173,19 +150,30 @@ impl LocalJacobian {
                 for m in 0..6 {
                     v += coef[m] * gi[m].dot(&gj[m]);
                 }
-                let mv = mc * gi[0].dot(&gj[0]);
-                let (ri, rj) = (3 * nb + i, 3 * nb + j);
-                out[ri * nd + rj] += v;
-                if i != j {
-                    out[rj * nd + ri] += v;
-                }
-                if let Some((_, mm)) = mass.as_mut() {
-                    mm[ri * nd + rj] += mv;
-                    if i != j {
-                        mm[rj * nd + ri] += mv;
-                    }
-                }
+                out[(3 * nb + i) * nd + 3 * nb + j] += v;
             }
+        }
+    }
+
+    /// `diag += c * diag(J^0^T J^0)` (the lumped view of the mass matrix's diagonal).
+    fn accumulate_value_diagonal(&self, c: f64, diag: &mut [f64]) {
+        let nb = self.blocks.len();
+        for (a, (_, r)) in self.blocks.iter().enumerate() {
+            for k in 0..3 {
+                diag[3 * a + k] += c * r[0] * r[0];
+            }
+        }
+        for (j, (_, g)) in self.vectors.iter().enumerate() {
+            diag[3 * nb + j] += c * g[0].norm_squared();
+        }
+    }
+}
+
+/// Copies the upper triangle of a dense `nd x nd` matrix to its lower triangle.
+fn mirror_upper(m: &mut [f64], nd: usize) {
+    for i in 0..nd {
+        for j in 0..i {
+            m[i * nd + j] = m[j * nd + i];
         }
     }
 }
@@ -288,7 +276,7 @@ struct Quadrature {
 struct ElementWork {
     dofs: Vec<usize>,
     a: Vec<f64>,
-    mass: Vec<f64>,
+    mass_diag: Vec<f64>,
     rhs: Vec<f64>,
     elastic: f64,
     kinetic: f64,
@@ -742,12 +730,10 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             let (mut sum, mut count) = (0.0, 0usize);
             let mut md = vec![0.0; n];
             for w in &works {
-                let nd = w.dofs.len();
-                if w.mass.is_empty() {
-                    continue;
-                }
                 for (a, &i) in w.dofs.iter().enumerate() {
-                    md[i] += w.mass[a * nd + a];
+                    if let Some(m) = w.mass_diag.get(a) {
+                        md[i] += m;
+                    }
                 }
             }
             for i in 0..n {
@@ -872,25 +858,14 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                 qn.copy_from_slice(&q2);
             }
         }
-        // Kinetic energy of the step's motion, 1/2 dq^T M dq / dt^2.
+        // Kinetic energy of the state the step started from, 1/2 p'^T M p' (the element part
+        // was integrated during assembly), plus the weights' intrinsic inertia.
         let kinetic = if dynamic {
-            let mut k = 0.0;
-            for w in &works {
-                let nd = w.dofs.len();
-                if w.mass.is_empty() {
-                    continue;
-                }
-                for a in 0..nd {
-                    let xa = x[w.dofs[a]];
-                    for bb in 0..nd {
-                        k += xa * w.mass[a * nd + bb] * x[w.dofs[bb]];
-                    }
-                }
-            }
+            let mut k: f64 = works.iter().map(|w| w.kinetic).sum();
             for i in self.geometry.weight_coordinates() {
-                k += weight_mass * x[i] * x[i];
+                k += 0.5 * weight_mass * self.velocity[i] * self.velocity[i];
             }
-            0.5 * k / (dt * dt)
+            k
         } else {
             0.0
         };
@@ -942,7 +917,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                 let nd = dofs.len();
                 let mut w = ElementWork {
                     a: vec![0.0; nd * nd],
-                    mass: if dynamic { vec![0.0; nd * nd] } else { vec![] },
+                    mass_diag: vec![0.0; nd],
                     rhs: vec![0.0; nd],
                     dofs,
                     ..Default::default()
@@ -963,12 +938,10 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                     if dynamic {
                         coef[0] = qw * (2.0 * mu + dt * gamma);
                     }
-                    let mass = if dynamic {
-                        Some((qw * mu, w.mass.as_mut_slice()))
-                    } else {
-                        None
-                    };
-                    lj.accumulate_gram(&coef, &mut w.a, mass);
+                    lj.accumulate_gram(&coef, &mut w.a);
+                    if dynamic {
+                        lj.accumulate_value_diagonal(qw * mu, &mut w.mass_diag);
+                    }
                     for m in 1..6 {
                         if c[m] != 0.0 {
                             let d = lj.s[m] - self.reference_value(e, k, m);
@@ -1012,7 +985,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                                 f += (target.at(self.time) - lj.s[0]) * kk;
                                 let mut cc = [0.0; 6];
                                 cc[0] = ck * qw * kk;
-                                lj.accumulate_gram(&cc, &mut w.a, None);
+                                lj.accumulate_gram(&cc, &mut w.a);
                             }
                             _ => {}
                         }
@@ -1021,6 +994,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                         lj.apply_transpose(0, fs * qw, &f, &mut w.rhs);
                     }
                 }
+                mirror_upper(&mut w.a, w.dofs.len());
                 Ok(w)
             })
             .collect()
@@ -1066,7 +1040,8 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             if spring > 0.0 {
                 let mut c = [0.0; 6];
                 c[0] = ck * spring;
-                lj.accumulate_gram(&c, &mut w.a, None);
+                lj.accumulate_gram(&c, &mut w.a);
+                mirror_upper(&mut w.a, nd);
             }
             lj.apply_transpose(0, fs, &f, &mut w.rhs);
             works.push(w);

@@ -271,7 +271,8 @@ pub struct StepReport {
     pub time: f64,
     /// Linear solve statistics.
     pub solver: SolverStats,
-    /// Kinetic energy `1/2 v^T M v` after the step.
+    /// Kinetic energy `1/2 v^T M v` after the step ([`GeneralizedDnurbs`]: of the state the
+    /// step started from, like its elastic energy, both integrated during assembly).
     pub kinetic_energy: f64,
     /// Elastic energy `1/2 p^T K p` after the step.
     pub elastic_energy: f64,
