@@ -1,4 +1,4 @@
-//! `d-nurbs.txt` Fig 7a/7b: a quadratic D-NURBS surface with 7 x 7 = 49 control points (weights
+//! `d-nurbs.txt` Fig 7a/7b/7c: a quadratic D-NURBS surface with 7 x 7 = 49 control points (weights
 //! dynamic) pulled to 19 points of a hemisphere, and to a convex/concave data set, by springs
 //! attached to the nearest surface points, with the parameters of Table 1.
 //!
@@ -90,6 +90,56 @@ fn fit(name: &str, preset: &str, data: &[Vec3], steps: usize) {
     let _ = report;
 }
 
+/// Fig 7c: 25 samples of a sinusoid, a quadratic 5x5 surface (25 control points, frozen
+/// weights), springs at fixed material points (Table 1 "Sinusoidal fitting").
+fn sinusoid() {
+    use vclay_dynamics::DnurbsSurface;
+    use vclay_dynamics::dnurbs::Target;
+    let p = Preset::by_name("Sinusoidal fitting").expect("Table 1 row");
+    let n = 5;
+    let kv = vclay_spline::KnotVector::new(vec![0., 0., 0., 1., 2., 3., 3., 3.], 2, n).unwrap();
+    let g = kv.greville();
+    let mut pts = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            pts.push(Vec3::new(g[i], g[j], 0.0));
+        }
+    }
+    let s = NurbsSurface::from_flat([kv.clone(), kv], pts, vec![1.0; n * n]).unwrap();
+    let mut d = DnurbsSurface::new(s, p.surface_material()).unwrap();
+    d.set_elastic_reference(ElasticReference::Absolute);
+    let f = |u: f64, v: f64| {
+        0.6 * (std::f64::consts::TAU * u / 3.0).sin() * (std::f64::consts::PI * v / 3.0).cos()
+    };
+    let samples: Vec<(f64, f64)> = (0..25)
+        .map(|k| (0.3 + 0.6 * (k / 5) as f64, 0.3 + 0.6 * (k % 5) as f64))
+        .collect();
+    for &(u, v) in &samples {
+        d.forces_mut().push(Force::Spring {
+            param: [u, v],
+            target: Target::Fixed(Vec3::new(u, v, f(u, v))),
+            stiffness: p.k,
+            kernel: None,
+        });
+    }
+    for _ in 0..400 {
+        d.step(Integrator::Implicit { dt: p.dt }).unwrap();
+    }
+    let err = samples
+        .iter()
+        .map(|&(u, v)| {
+            let z = vclay_spline::ParametricSurface::point(d.geometry(), u, v)
+                .unwrap()
+                .z;
+            (z - f(u, v)).abs()
+        })
+        .fold(0.0, f64::max);
+    println!(
+        "Fig 7c sinusoid: 25 data points, 25 control points, largest height error {err:.4} (amplitude 0.6), elastic energy {:.4}",
+        d.elastic_energy()
+    );
+}
+
 fn main() {
     fit(
         "Fig 7a hemisphere",
@@ -103,4 +153,5 @@ fn main() {
         &saddle_points(),
         300,
     );
+    sinusoid();
 }

@@ -5,9 +5,14 @@
 //! generalized coordinates with mass, damping and thin-plate-under-tension stiffness, integrated
 //! by the implicit scheme of eq (18) with an element-by-element conjugate-gradient solver.
 //!
-//! Limitations of this version (documented, not hidden): weights are frozen (footnote 2 of the
-//! paper: M, D, K constant and computed once); dynamic weights with the generalized inertial
-//! force g_p, swung and triangular surfaces, and nonlinear constraints are not implemented yet.
+//! Two engines: [`Dnurbs`](dnurbs::Dnurbs) with frozen weights (footnote 2: M, D, K constant,
+//! factored once) and [`GeneralizedDnurbs`](dnurbs::GeneralizedDnurbs), where control points
+//! **and weights** (and a swung surface's profile curves and scale, eq 7) are dynamic, with the
+//! generalized inertial force `g_p`, weight positivity and point/normal constraints by Lagrange
+//! multipliers. [`scenario`] reads the D-NURBS kinds of `vclay run` scenario files.
+//!
+//! Not yet: triangular D-NURBS (a later issue; they plug in as a
+//! [`GeneralizedGeometry`](dnurbs::GeneralizedGeometry)).
 #![warn(missing_docs)]
 
 pub mod dnurbs;

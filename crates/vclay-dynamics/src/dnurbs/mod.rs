@@ -30,11 +30,12 @@
 //! ([`LinearSolver::Direct`]; the matrix is constant with frozen weights), or by the paper's
 //! element-by-element CG ([`LinearSolver::ConjugateGradient`]).
 //!
-//! ## Limitations
-//! Frozen weights only (footnote 2): the generalized inertial force `g_p` vanishes and the weight
-//! columns of J are not simulated. Linear constraints are limited to fixed control points
-//! (reduction to the free coordinates); point, normal and nonlinear constraints, swung and
-//! triangular surfaces are future work.
+//! ## Two engines
+//! This module's [`Dnurbs`] keeps weights frozen (footnote 2): `g_p` vanishes, the weight columns
+//! of J drop out, and the matrices are constant. [`GeneralizedDnurbs`] (`generalized.rs`)
+//! simulates every generalized coordinate (weights included, and swung surfaces), with the
+//! generalized inertial force and constraints; with all weights held it reproduces this engine
+//! (tested to 1e-8).
 
 pub mod generalized;
 mod geometry;
