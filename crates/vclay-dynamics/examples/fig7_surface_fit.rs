@@ -4,56 +4,13 @@
 //!
 //! Run: `cargo run --release -p vclay-dynamics --example fig7_surface_fit`
 use vclay_core::Vec3;
-use vclay_dynamics::dnurbs::{GeneralizedDnurbs, Preset, RationalGeometry};
+use vclay_dynamics::dnurbs::{GeneralizedDnurbs, Preset, RationalGeometry, figures};
 use vclay_dynamics::{ElasticReference, Force, Integrator};
 use vclay_spline::NurbsSurface;
 
-fn flat_sheet() -> NurbsSurface {
-    let n = 7;
-    let mut pts = Vec::new();
-    for i in 0..n {
-        for j in 0..n {
-            let (x, y) = (
-                -1.2 + 2.4 * i as f64 / (n - 1) as f64,
-                -1.2 + 2.4 * j as f64 / (n - 1) as f64,
-            );
-            pts.push(Vec3::new(x, y, 0.0));
-        }
-    }
-    NurbsSurface::clamped_uniform([2, 2], [n, n], pts).expect("valid sheet")
-}
-
-/// 19 points of the unit hemisphere: the pole, a ring of 6 and a ring of 12.
-fn hemisphere_points() -> Vec<Vec3> {
-    let mut v = vec![Vec3::new(0.0, 0.0, 1.0)];
-    for (count, polar) in [(6, 0.45f64), (12, 1.0f64)] {
-        for k in 0..count {
-            let t = std::f64::consts::TAU * k as f64 / count as f64;
-            v.push(Vec3::new(
-                polar.sin() * t.cos(),
-                polar.sin() * t.sin(),
-                polar.cos(),
-            ));
-        }
-    }
-    v
-}
-
-/// A convex/concave set: z = 0.5 (x^2 - y^2) (a saddle) sampled at 25 points.
-fn saddle_points() -> Vec<Vec3> {
-    let mut v = vec![];
-    for i in 0..5 {
-        for j in 0..5 {
-            let (x, y) = (-0.9 + 0.45 * i as f64, -0.9 + 0.45 * j as f64);
-            v.push(Vec3::new(x, y, 0.5 * (x * x - y * y)));
-        }
-    }
-    v
-}
-
 fn fit(name: &str, preset: &str, data: &[Vec3], steps: usize) {
     let p = Preset::by_name(preset).expect("Table 1 row");
-    let geo = RationalGeometry::from_surface(&flat_sheet());
+    let geo = RationalGeometry::from_surface(&figures::flat_sheet(7, 2, 2.4).expect("sheet"));
     let mut d = GeneralizedDnurbs::new(geo, p.surface_material()).expect("valid model");
     d.set_elastic_reference(ElasticReference::Absolute);
     for &x in data {
@@ -144,13 +101,13 @@ fn main() {
     fit(
         "Fig 7a hemisphere",
         "Hemisphere fitting",
-        &hemisphere_points(),
+        &figures::hemisphere_points(),
         300,
     );
     fit(
         "Fig 7b convex/concave",
         "Convex/Concave fitting",
-        &saddle_points(),
+        &figures::saddle_points(),
         300,
     );
     sinusoid();

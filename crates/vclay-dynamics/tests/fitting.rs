@@ -116,35 +116,14 @@ fn fig7c_sinusoid_with_fixed_attachments_approaches_the_data() {
 fn fig7a_hemisphere_fit_with_dynamic_weights() {
     // 19 hemisphere points, quadratic 7x7 surface (49 control points, weights dynamic), Table 1
     // "Hemisphere fitting" parameters, springs on the nearest points.
-    use vclay_dynamics::dnurbs::{GeneralizedDnurbs, RationalGeometry};
+    use vclay_dynamics::dnurbs::{GeneralizedDnurbs, RationalGeometry, figures};
     let p = Preset::by_name("Hemisphere fitting").unwrap();
-    let n = 7;
-    let mut pts = Vec::new();
-    for i in 0..n {
-        for j in 0..n {
-            pts.push(Vec3::new(
-                -1.2 + 2.4 * i as f64 / 6.0,
-                -1.2 + 2.4 * j as f64 / 6.0,
-                0.0,
-            ));
-        }
-    }
-    let sheet = NurbsSurface::clamped_uniform([2, 2], [n, n], pts).unwrap();
+    let sheet = figures::flat_sheet(7, 2, 2.4).unwrap();
     let mut d =
         GeneralizedDnurbs::new(RationalGeometry::from_surface(&sheet), p.surface_material())
             .unwrap();
     d.set_elastic_reference(ElasticReference::Absolute);
-    let mut data = vec![Vec3::new(0.0, 0.0, 1.0)];
-    for (count, polar) in [(6, 0.45f64), (12, 1.0f64)] {
-        for k in 0..count {
-            let t = std::f64::consts::TAU * k as f64 / count as f64;
-            data.push(Vec3::new(
-                polar.sin() * t.cos(),
-                polar.sin() * t.sin(),
-                polar.cos(),
-            ));
-        }
-    }
+    let data = figures::hemisphere_points();
     for x in data {
         d.forces_mut().push(Force::DataPoint {
             point: x,

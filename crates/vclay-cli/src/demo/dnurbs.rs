@@ -6,44 +6,23 @@ use anyhow::{Result, ensure};
 use std::path::Path;
 use std::sync::Arc;
 use vclay::dynamics::dnurbs::{
-    Constraint, GeneralizedDnurbs, Preset, RationalGeometry, SwungGeometry, Target,
+    Constraint, GeneralizedDnurbs, Preset, RationalGeometry, SwungGeometry, Target, figures,
 };
 use vclay::dynamics::{ElasticReference, Force, Integrator};
 use vclay::io::mesh::write_mesh;
 use vclay::io::model::{Entity, write_model};
-use vclay::spline::{NurbsSurface, tessellate_surface};
+use vclay::spline::tessellate_surface;
 use vclay::{TriMesh, Vec3};
 
 /// Fig 7a: a quadratic 7 x 7 D-NURBS sheet (49 control points, weights dynamic) pulled to 19
 /// points of a hemisphere by springs on the nearest surface points (Table 1 parameters).
 pub fn hemisphere_fit(out: &Path) -> Result<(String, Vec<String>)> {
     let p = Preset::by_name("Hemisphere fitting").expect("Table 1 row");
-    let n = 7;
-    let mut pts = Vec::new();
-    for i in 0..n {
-        for j in 0..n {
-            let (x, y) = (
-                -1.2 + 2.4 * i as f64 / (n - 1) as f64,
-                -1.2 + 2.4 * j as f64 / (n - 1) as f64,
-            );
-            pts.push(Vec3::new(x, y, 0.0));
-        }
-    }
-    let sheet = NurbsSurface::clamped_uniform([2, 2], [n, n], pts)?;
+    let sheet = figures::flat_sheet(7, 2, 2.4)?;
     let mut d =
         GeneralizedDnurbs::new(RationalGeometry::from_surface(&sheet), p.surface_material())?;
     d.set_elastic_reference(ElasticReference::Absolute);
-    let mut data = vec![Vec3::new(0.0, 0.0, 1.0)];
-    for (count, polar) in [(6, 0.45f64), (12, 1.0f64)] {
-        for k in 0..count {
-            let t = std::f64::consts::TAU * k as f64 / count as f64;
-            data.push(Vec3::new(
-                polar.sin() * t.cos(),
-                polar.sin() * t.sin(),
-                polar.cos(),
-            ));
-        }
-    }
+    let data = figures::hemisphere_points();
     for &x in &data {
         d.forces_mut().push(Force::DataPoint {
             point: x,
