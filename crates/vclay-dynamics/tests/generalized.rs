@@ -440,3 +440,56 @@ fn swung_sphere_sculpted_by_a_spring_into_an_egg() {
         2.0 * hi
     );
 }
+
+#[test]
+fn static_variant_matches_the_frozen_engine_and_the_exact_parabola() {
+    // The static variant (footnote 6: a shape optimizer; mu only scales the gravity load here). A string under gravity with its ends held:
+    // the frozen engine's static solve and the generalized engine's Gauss-Newton step (weights
+    // held, so the problem is linear and one step solves it) must agree, and both give the exact
+    // parabola y = -mu g u (1 - u) / (2 alpha) (the parabola lies in the cubic spline space).
+    use vclay_dynamics::{DnurbsCurve, ElasticReference};
+    let n = 9;
+    let kv = vclay_spline::KnotVector::clamped_uniform(3, n).unwrap();
+    let pts: Vec<Vec3> = kv
+        .greville()
+        .into_iter()
+        .map(|g| Vec3::new(g, 0.0, 0.0))
+        .collect();
+    let line = NurbsCurve::from_knot_vector(kv, pts, vec![1.0; n]).unwrap();
+    let mat = Material::curve(1.0, 0.0, 4.0, 0.0);
+    let mut frozen = DnurbsCurve::new(line.clone(), mat.clone()).unwrap();
+    let mut general = GeneralizedDnurbs::new(RationalGeometry::from_curve(&line), mat).unwrap();
+    frozen.set_elastic_reference(ElasticReference::Absolute);
+    general.set_elastic_reference(ElasticReference::Absolute);
+    for i in [0, n - 1] {
+        frozen.set_fixed(i, true).unwrap();
+        for k in 0..3 {
+            general.set_fixed_coordinate(4 * i + k, true).unwrap();
+        }
+    }
+    for i in (3..4 * n).step_by(4) {
+        general.set_fixed_coordinate(i, true).unwrap();
+    }
+    // The control points sit at the Greville abscissae, so x(u) = u already balances the
+    // tension; only y moves.
+    let g = Vec3::new(0.0, -3.0, 0.0);
+    frozen.forces_mut().push(Force::Gravity(g));
+    general.forces_mut().push(Force::Gravity(g));
+    frozen.step(Integrator::Static).unwrap();
+    general.step(Integrator::Static).unwrap();
+    let a = frozen.geometry().control_points();
+    let b = general.geometry().control_points();
+    let diff = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| (x - y).norm())
+        .fold(0.0, f64::max);
+    assert!(diff < 1e-8, "static solutions differ by {diff:e}");
+    let c = general.geometry().to_curve().unwrap();
+    for k in 1..10 {
+        let u = k as f64 / 10.0;
+        let y = vclay_spline::ParametricCurve::point(&c, u).unwrap().y;
+        let exact = -3.0 * u * (1.0 - u) / (2.0 * 4.0);
+        assert!((y - exact).abs() < 1e-8, "y({u}) = {y}, exact {exact}");
+    }
+}
