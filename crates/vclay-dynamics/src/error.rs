@@ -59,6 +59,12 @@ pub enum DynamicsError {
         /// Number of coordinates.
         count: usize,
     },
+    /// A result could not be written (scenario outputs).
+    #[error("cannot write output: {what}")]
+    Output {
+        /// The file and the reason.
+        what: String,
+    },
     /// The simulation diverged.
     #[error(
         "simulation diverged at step {step} (t = {time}): {what}; try a time step of at most {suggested_dt:.3e}"

@@ -444,8 +444,6 @@ impl DnurbsScenario {
                 ));
             }
         };
-        let configure = |d: &mut dyn FnMut(&mut Vec<Force>)| d(&mut forces.clone());
-        let _ = configure;
         let out = f.output.unwrap_or_default();
         let out_dir = base.join(out.dir.unwrap_or_else(|| PathBuf::from("vclay-run")));
         let every = out.every.unwrap_or(0);
@@ -647,7 +645,7 @@ impl DnurbsScenario {
         &mut self,
         progress: &mut dyn FnMut(usize, usize, f64),
     ) -> Result<DnurbsRunSummary, DynamicsError> {
-        std::fs::create_dir_all(&self.out_dir).map_err(|e| DynamicsError::Singular {
+        std::fs::create_dir_all(&self.out_dir).map_err(|e| DynamicsError::Output {
             what: format!("cannot create {}: {e}", self.out_dir.display()),
         })?;
         let mut csv =
@@ -803,7 +801,7 @@ fn setup<G: GeneralizedGeometry>(
 }
 
 fn io_err(e: vclay_io::IoError) -> DynamicsError {
-    DynamicsError::Singular {
+    DynamicsError::Output {
         what: e.to_string(),
     }
 }

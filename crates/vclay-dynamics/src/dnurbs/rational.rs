@@ -593,6 +593,24 @@ fn curve_local(
     Ok((rp, l.idx, basis))
 }
 
+/// Column of a curve's derivative in `slot` for local control point `k`: component `comp` of the
+/// control point (`R e_comp`) or, for `comp = 3`, its weight (`g`).
+fn curve_column(r: &RationalPoint, k: usize, comp: usize, slot: usize) -> Vec3 {
+    if comp < 3 {
+        let mut e = Vec3::zeros();
+        e[comp] = r.r[k][slot];
+        e
+    } else {
+        r.g[k][slot]
+    }
+}
+
+/// A swung-surface column: for each multi-index `m`, the curve column `curve(m)` mapped through
+/// the product rule `map(d, m)`.
+fn swung_column(curve: impl Fn(usize) -> Vec3, map: impl Fn(Vec3, usize) -> Vec3) -> [Vec3; 6] {
+    std::array::from_fn(|m| map(curve(m), m))
+}
+
 /// Slot of the curve derivative of order `i` in [`MULTI_INDICES`].
 const CURVE_SLOT: [usize; 3] = [0, 1, 3];
 
@@ -691,44 +709,34 @@ impl GeneralizedGeometry for SwungGeometry {
             col_alpha[m] = Vec3::new(c1.x * c2.x, c1.x * c2.y, 0.0);
         }
         out.vectors.push((0, col_alpha));
-        // Profile columns: components x, y, z by R, weight by g.
+        // Profile columns (u derivatives come from c1) and trajectory columns (v derivatives
+        // from c2): components x, y, z by R, the weight by g (the module docs' table).
         for (k, &c) in i1.iter().enumerate() {
             for comp in 0..4 {
-                let mut col = [Vec3::zeros(); 6];
-                for (m, &(i, j)) in MULTI_INDICES.iter().enumerate() {
-                    let slot = CURVE_SLOT[i];
-                    let d = if comp < 3 {
-                        let mut e = Vec3::zeros();
-                        e[comp] = r1.r[k][slot];
-                        e
-                    } else {
-                        r1.g[k][slot]
-                    };
-                    let c2 = y(j);
-                    col[m] = Vec3::new(
-                        al * d.x * c2.x,
-                        al * d.x * c2.y,
-                        if j == 0 { d.z } else { 0.0 },
-                    );
-                }
+                let col = swung_column(
+                    |m| curve_column(&r1, k, comp, CURVE_SLOT[MULTI_INDICES[m].0]),
+                    |d, m| {
+                        let (_, j) = MULTI_INDICES[m];
+                        let c2 = y(j);
+                        Vec3::new(
+                            al * d.x * c2.x,
+                            al * d.x * c2.y,
+                            if j == 0 { d.z } else { 0.0 },
+                        )
+                    },
+                );
                 out.vectors.push((oa + 4 * c + comp, col));
             }
         }
         for (k, &c) in i2.iter().enumerate() {
             for comp in 0..4 {
-                let mut col = [Vec3::zeros(); 6];
-                for (m, &(i, j)) in MULTI_INDICES.iter().enumerate() {
-                    let slot = CURVE_SLOT[j];
-                    let d = if comp < 3 {
-                        let mut e = Vec3::zeros();
-                        e[comp] = r2.r[k][slot];
-                        e
-                    } else {
-                        r2.g[k][slot]
-                    };
-                    let c1 = x(i);
-                    col[m] = Vec3::new(al * c1.x * d.x, al * c1.x * d.y, 0.0);
-                }
+                let col = swung_column(
+                    |m| curve_column(&r2, k, comp, CURVE_SLOT[MULTI_INDICES[m].1]),
+                    |d, m| {
+                        let c1 = x(MULTI_INDICES[m].0);
+                        Vec3::new(al * c1.x * d.x, al * c1.x * d.y, 0.0)
+                    },
+                );
                 out.vectors.push((ob + 4 * c + comp, col));
             }
         }
