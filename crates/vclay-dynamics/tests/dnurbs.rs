@@ -335,3 +335,92 @@ fn implicit_step_matches_a_dense_reference_solve() {
         }
     }
 }
+
+#[test]
+fn multi_step_trajectory_matches_dense_reference_with_cached_products() {
+    // The frozen engine carries M p and D p from one step to the next; five steps (with the
+    // cache invalidated by a control-point move after the second) must follow the dense
+    // recurrence (2M + dt D + 2 dt^2 K) p_{k+1} = 2 dt^2 f + 4 M p_k - (2 M - dt D) p_{k-1}
+    // + 2 dt^2 K p_rest, and the reported energies and residual must agree with it.
+    let mut pts = Vec::new();
+    for i in 0..5 {
+        for j in 0..5 {
+            pts.push(Vec3::new(
+                i as f64,
+                j as f64,
+                ((i + 2 * j) as f64 * 0.4).cos(),
+            ));
+        }
+    }
+    let s = NurbsSurface::clamped_uniform([2, 3], [5, 5], pts).unwrap();
+    let mut d = DnurbsSurface::new(s, Material::surface(1.1, 0.6, 0.9, 0.3)).unwrap();
+    d.set_fixed(3, true).unwrap();
+    d.forces_mut()
+        .push(Force::Gravity(Vec3::new(0.2, 0.0, -1.0)));
+    let dt = 0.05;
+    let sys = d.system().clone();
+    let (m, dm, k) = (
+        sys.dense([1.0, 0.0, 0.0]),
+        sys.dense([0.0, 1.0, 0.0]),
+        sys.dense([0.0, 0.0, 1.0]),
+    );
+    let a = sys.dense([2.0, dt, 2.0 * dt * dt]);
+    let n = d.geometry().control_points().len();
+    let col = |v: &[Vec3], c: usize| nalgebra::DVector::from_iterator(n, v.iter().map(|x| x[c]));
+    let rest: Vec<Vec3> = d.rest_shape().to_vec();
+    let mut prev: Vec<Vec3> = d.geometry().control_points().to_vec();
+    let mut cur = prev.clone();
+    for step in 0..5 {
+        if step == 2 {
+            // Move the fixed point (velocity zeroed there): invalidates the carried products.
+            let mut q = cur[3];
+            q.z += 0.1;
+            d.move_control_point(3, q).unwrap();
+            cur[3] = q;
+            prev[3] = q;
+        }
+        let f = d.generalized_force().unwrap();
+        let report = d.step(Integrator::Implicit { dt }).unwrap();
+        let mut next = cur.clone();
+        for c in 0..3 {
+            let (p, pp, f, r) = (col(&cur, c), col(&prev, c), col(&f, c), col(&rest, c));
+            let mut rhs = f * (2.0 * dt * dt) + &m * &p * 4.0 - (&m * 2.0 - &dm * dt) * &pp
+                + &k * &r * (2.0 * dt * dt);
+            let mut ar = a.clone();
+            for j in 0..n {
+                ar[(3, j)] = if j == 3 { 1.0 } else { 0.0 };
+            }
+            rhs[3] = p[3];
+            let x = ar.lu().solve(&rhs).unwrap();
+            for i in 0..n {
+                next[i][c] = x[i];
+            }
+        }
+        for (i, (got, want)) in d.geometry().control_points().iter().zip(&next).enumerate() {
+            assert!(
+                (got - want).norm() < 1e-9,
+                "step {step} point {i}: {got:?} vs {want:?}"
+            );
+        }
+        // Energies: 1/2 v^T M v with v = (p_{k+1} - p_k) / dt and 1/2 e^T K e, e = p - p_rest.
+        let (mut kin, mut el) = (0.0, 0.0);
+        for c in 0..3 {
+            let v = (col(&next, c) - col(&cur, c)) / dt;
+            let e = col(&next, c) - col(&rest, c);
+            kin += 0.5 * v.dot(&(&m * &v));
+            el += 0.5 * e.dot(&(&k * &e));
+        }
+        assert!(
+            (report.kinetic_energy - kin).abs() < 1e-8 * kin.max(1e-12),
+            "step {step}"
+        );
+        assert!(
+            (report.elastic_energy - el).abs() < 1e-8 * el.max(1e-12),
+            "step {step}"
+        );
+        let rr = report.solver.relative_residual;
+        assert!(rr.is_finite() && rr < 1e-10, "step {step}: residual {rr}");
+        prev = cur;
+        cur = next;
+    }
+}

@@ -197,9 +197,10 @@ impl SparseMatrix {
         assert_eq!(x.len(), self.ncols, "apply: input length");
         assert_eq!(y.len(), self.nrows, "apply: output length");
         let row = |(i, yi): (usize, &mut T)| {
+            let r = self.row_ptr[i]..self.row_ptr[i + 1];
             let mut acc = T::zero();
-            for k in self.row_ptr[i]..self.row_ptr[i + 1] {
-                acc.add_scaled(self.vals[k], &x[self.cols[k] as usize]);
+            for (&c, &v) in self.cols[r.clone()].iter().zip(&self.vals[r]) {
+                acc.add_scaled(v, &x[c as usize]);
             }
             *yi = acc;
         };
@@ -244,10 +245,10 @@ impl SparseMatrix {
         assert_eq!(x.len(), self.nrows, "apply_transpose: input length");
         assert_eq!(y.len(), self.ncols, "apply_transpose: output length");
         let scatter = |rows: std::ops::Range<usize>, acc: &mut [T]| {
-            for i in rows {
-                let xi = &x[i];
-                for k in self.row_ptr[i]..self.row_ptr[i + 1] {
-                    acc[self.cols[k] as usize].add_scaled(self.vals[k], xi);
+            for (i, xi) in rows.clone().zip(&x[rows]) {
+                let r = self.row_ptr[i]..self.row_ptr[i + 1];
+                for (&c, &v) in self.cols[r.clone()].iter().zip(&self.vals[r]) {
+                    acc[c as usize].add_scaled(v, xi);
                 }
             }
         };
@@ -286,6 +287,32 @@ impl SparseMatrix {
                 }
                 *v = s;
             });
+    }
+
+    /// The matrix with its rows reordered: row `i` of the result is row `order[i]` of `self`
+    /// (`P A` for the permutation `P`; rows may also be repeated or dropped).
+    ///
+    /// # Panics
+    /// If an entry of `order` is not a row index (a programmer error).
+    #[track_caller]
+    pub fn select_rows(&self, order: &[u32]) -> SparseMatrix {
+        let mut row_ptr = Vec::with_capacity(order.len() + 1);
+        row_ptr.push(0);
+        let mut cols = Vec::with_capacity(self.nnz());
+        let mut vals = Vec::with_capacity(self.nnz());
+        for &r in order {
+            let (c, v) = self.row(r as usize);
+            cols.extend_from_slice(c);
+            vals.extend_from_slice(v);
+            row_ptr.push(cols.len());
+        }
+        SparseMatrix {
+            nrows: order.len(),
+            ncols: self.ncols,
+            row_ptr,
+            cols,
+            vals,
+        }
     }
 
     /// The transpose, as a new CSR matrix (a counting sort over columns; rows of the result

@@ -156,12 +156,33 @@ impl SolidSource {
                 } else {
                     solid.map().clone()
                 };
-                let data = solid.finest().clone();
-                debug_assert_eq!(parent.len(), data.num_cells());
+                debug_assert_eq!(parent.len(), solid.finest().num_cells());
+                if *levels == 0 {
+                    return Ok(Discretization {
+                        map,
+                        data: solid.finest().clone(),
+                        cell_parent: parent,
+                        order: (0..p.len() as u32).collect(),
+                    });
+                }
+                // Renumber the data points by a breadth-first sweep (Cuthill-McKee, from the
+                // topology alone, so the numbering does not depend on the placement; cells, edges and faces keep their
+                // ids): the subdivision numbering (vertex, edge, face, cell points, recursively)
+                // scatters neighbours across the whole array, and the per-step spring and
+                // operator passes are bound by memory access at large levels.
+                let order = solid.finest().locality_order();
+                let data = solid
+                    .finest()
+                    .renumber_points(&order)
+                    .map_err(SolidsError::Lattice)?;
+                let mut ops = map.operators().to_vec();
+                let last = ops.len() - 1;
+                ops[last] = ops[last].select_rows(&order);
                 Ok(Discretization {
-                    map,
+                    map: SubdivisionMap::new(ops),
                     data,
                     cell_parent: parent,
+                    order,
                 })
             }
             SolidSource::BSpline {
@@ -182,6 +203,12 @@ pub struct Discretization {
     pub data: Lattice,
     /// Control cell of each data cell.
     pub cell_parent: Vec<u32>,
+    /// Data point `i` is point `order[i]` of the lattice the source defines (for subdivision
+    /// solids the finest level of [`vclay_lattice::SubdivisionSolid`], whose numbering puts
+    /// vertex, edge, face and cell points in blocks; the data points are renumbered by
+    /// [`Lattice::locality_order`] for cache-friendly passes). The identity for B-spline solids and
+    /// level 0.
+    pub order: Vec<u32>,
 }
 
 /// Grid sample parameters: `samples` values spread uniformly over the knot vector's domain.
@@ -279,9 +306,11 @@ fn bspline_discretization(
         });
         cell_parent.push(((idx[0] * cells[1] + idx[1]) * cells[2] + idx[2]) as u32);
     }
+    let order = (0..data.num_points() as u32).collect();
     Ok(Discretization {
         map: SubdivisionMap::new(vec![b]),
         data,
         cell_parent,
+        order,
     })
 }

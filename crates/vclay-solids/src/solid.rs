@@ -416,6 +416,7 @@ impl DynamicSolid {
                 boundary.offsets.push(boundary.verts.len() as u32);
             }
         }
+        sp.organize(nd, force_blocks());
         if self.metric.is_none() {
             self.energy_scale = spring_energy_scale(&sp);
         }
@@ -457,7 +458,9 @@ impl DynamicSolid {
             let active = influenced(&self.disc.map, &free_mask);
             let rows: Vec<u32> = (0..nd as u32).filter(|&i| active[i as usize]).collect();
             self.active_count = rows.len();
-            self.active_springs = Some(self.springs.filter(&active));
+            let mut act = self.springs.filter(&active);
+            act.organize(nd, force_blocks());
+            self.active_springs = Some(act);
             self.restricted = Some(Restricted::new(&self.disc.map, rows));
         } else {
             self.active_count = nd;
@@ -530,9 +533,18 @@ impl DynamicSolid {
     pub fn rest_control_points(&self) -> &[Vec3] {
         &self.p_rest
     }
-    /// Data points `d = A p` (up to date after every step).
+    /// Data points `d = A p` (up to date after every step), numbered as the points of
+    /// [`DynamicSolid::data_lattice`] (see [`DynamicSolid::data_order`]).
     pub fn data_points(&self) -> &[Vec3] {
         &self.d
+    }
+    /// Data point `i` is point `data_order()[i]` of the lattice the source defines: for a
+    /// subdivision solid the finest level of [`vclay_lattice::SubdivisionSolid`] (the data
+    /// points are renumbered by [`vclay_lattice::Lattice::locality_order`] for cache-friendly passes,
+    /// [`Discretization::order`](crate::Discretization::order)); the identity for B-spline
+    /// solids.
+    pub fn data_order(&self) -> &[u32] {
+        &self.disc.order
     }
     /// Lumped data point masses.
     pub fn masses(&self) -> &[f64] {
@@ -1370,6 +1382,12 @@ impl DynamicSolid {
 }
 
 /// Energy of stretching every spring by its own rest length.
+/// Point blocks of the parallel spring passes ([`SpringSet::organize`]): two per rayon thread,
+/// so that work stealing can even out unequal blocks.
+fn force_blocks() -> usize {
+    2 * rayon::current_num_threads().max(1)
+}
+
 fn spring_energy_scale(sp: &SpringSet) -> f64 {
     0.5 * (sp.edge_k.iter().zip(&sp.edge_rest))
         .chain(sp.corner_k.iter().zip(&sp.corner_rest))

@@ -27,9 +27,6 @@
 use rayon::prelude::*;
 use vclay_core::{Parallelism, Vec3};
 
-/// Springs below this count run on one thread.
-const PARALLEL_SPRINGS: usize = 100_000;
-
 /// Edge springs and virtual springs of a data lattice (or of its active part).
 #[derive(Clone, Debug, Default)]
 pub struct SpringSet {
@@ -47,6 +44,17 @@ pub struct SpringSet {
     pub corner_rest: Vec<f64>,
     /// Virtual spring stiffness per corner (aligned with `face_verts`).
     pub corner_k: Vec<f64>,
+    /// Thread partition from [`SpringSet::organize`] (empty: not organized).
+    pub(crate) parts: Vec<Part>,
+}
+
+/// One block of an organized spring set: the springs whose points all lie in `points`, or (the
+/// last part) the springs that straddle blocks.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Part {
+    edges: std::ops::Range<usize>,
+    faces: std::ops::Range<usize>,
+    points: std::ops::Range<usize>,
 }
 
 /// Per-thread force buffers.
@@ -66,6 +74,10 @@ fn corner(verts: &[u32], j: usize) -> (usize, usize, usize) {
 }
 
 impl SpringSet {
+    /// Unorganized sets run on one thread below this many springs (the per-thread copies of
+    /// the force array cost more than they save on small sets).
+    pub const PARALLEL_UNORGANIZED: usize = 100_000;
+
     /// Number of faces.
     pub fn num_faces(&self) -> usize {
         self.face_offsets.len().saturating_sub(1)
@@ -129,6 +141,110 @@ impl SpringSet {
         out
     }
 
+    /// Reorders the springs for parallel, cache-friendly force passes on `n` points: the point
+    /// ids are cut into `blocks` contiguous ranges; springs whose points all lie in one range
+    /// form that range's part, the rest a final straddling part, and inside each part the
+    /// springs are sorted by their smallest point id. [`SpringSet::add_forces`] then runs the
+    /// parts in parallel, each writing only its own range of the force array (no per-thread
+    /// copies), and the straddling part after them. Pays off when the point ids are numbered for
+    /// locality (the data lattices of [`crate::model`] are, by
+    /// [`vclay_lattice::Lattice::locality_order`]). The forces do not
+    /// depend on the order.
+    pub fn organize(&mut self, n: usize, blocks: usize) {
+        let blocks = blocks.max(1);
+        let block = |v: u32| (v as usize * blocks / n.max(1)).min(blocks - 1);
+        let part_of = |vs: &mut dyn Iterator<Item = u32>| -> (usize, u32) {
+            let first = vs.next().unwrap_or(0);
+            let (b, mut lo) = (block(first), first);
+            let mut same = true;
+            for v in vs {
+                same &= block(v) == b;
+                lo = lo.min(v);
+            }
+            (if same { b } else { blocks }, lo)
+        };
+        // Edges.
+        let mut key: Vec<(usize, u32, u32)> = self
+            .edges
+            .iter()
+            .enumerate()
+            .map(|(i, e)| {
+                let (p, lo) = part_of(&mut e.iter().copied());
+                (p, lo, i as u32)
+            })
+            .collect();
+        key.sort_unstable();
+        let edge_counts = counts(key.iter().map(|k| k.0), blocks + 1);
+        let pick = |v: &[f64]| key.iter().map(|k| v[k.2 as usize]).collect::<Vec<f64>>();
+        let (rest, k) = (pick(&self.edge_rest), pick(&self.edge_k));
+        self.edges = key.iter().map(|k| self.edges[k.2 as usize]).collect();
+        self.edge_rest = rest;
+        self.edge_k = k;
+        // Faces.
+        let nf = self.num_faces();
+        let mut key: Vec<(usize, u32, u32)> = (0..nf)
+            .map(|f| {
+                let (lo, hi) = (
+                    self.face_offsets[f] as usize,
+                    self.face_offsets[f + 1] as usize,
+                );
+                let (p, m) = part_of(&mut self.face_verts[lo..hi].iter().copied());
+                (p, m, f as u32)
+            })
+            .collect();
+        key.sort_unstable();
+        let face_counts = counts(key.iter().map(|k| k.0), blocks + 1);
+        let (mut offsets, mut verts) = (vec![0u32], Vec::with_capacity(self.face_verts.len()));
+        let (mut rest, mut ks) = (
+            Vec::with_capacity(self.face_verts.len()),
+            Vec::with_capacity(self.face_verts.len()),
+        );
+        for &(_, _, f) in &key {
+            let (lo, hi) = (
+                self.face_offsets[f as usize] as usize,
+                self.face_offsets[f as usize + 1] as usize,
+            );
+            verts.extend_from_slice(&self.face_verts[lo..hi]);
+            rest.extend_from_slice(&self.corner_rest[lo..hi]);
+            ks.extend_from_slice(&self.corner_k[lo..hi]);
+            offsets.push(verts.len() as u32);
+        }
+        self.face_offsets = offsets;
+        self.face_verts = verts;
+        self.corner_rest = rest;
+        self.corner_k = ks;
+        let (mut e0, mut f0) = (0, 0);
+        self.parts = (0..=blocks)
+            .map(|b| {
+                let part = Part {
+                    edges: e0..e0 + edge_counts[b],
+                    faces: f0..f0 + face_counts[b],
+                    points: if b == blocks {
+                        0..n
+                    } else {
+                        // Exactly the ids `v` with `block(v) == b`.
+                        (n * b).div_ceil(blocks)..(n * (b + 1)).div_ceil(blocks)
+                    },
+                };
+                e0 += edge_counts[b];
+                f0 += face_counts[b];
+                part
+            })
+            .collect();
+    }
+
+    /// Number of springs in the straddling part of an organized set (all springs if the set is
+    /// not organized): the springs [`SpringSet::add_forces`] processes on one thread.
+    pub fn straddling(&self) -> usize {
+        match self.parts.last() {
+            Some(p) => {
+                p.edges.len()
+                    + (self.face_offsets[p.faces.end] - self.face_offsets[p.faces.start]) as usize
+            }
+            None => self.len(),
+        }
+    }
+
     /// Potential energy `sum k/2 (l - l0)^2` in configuration `d`.
     pub fn energy(&self, d: &[Vec3]) -> f64 {
         let mut e = 0.0;
@@ -152,6 +268,11 @@ impl SpringSet {
     }
 
     /// Adds the spring forces in configuration `d` to `f` and returns the potential energy.
+    ///
+    /// In parallel (`par` and the spring count allowing, and more than one rayon thread): an
+    /// [organized](SpringSet::organize) set runs its blocks side by side, each writing its own
+    /// range of `f`; an unorganized one (from [`SpringSet::PARALLEL_UNORGANIZED`] springs)
+    /// splits the springs evenly and sums per-thread copies of `f` kept in `ws`.
     pub fn add_forces(
         &self,
         d: &[Vec3],
@@ -159,13 +280,39 @@ impl SpringSet {
         ws: &mut ForceWorkspace,
         par: Parallelism,
     ) -> f64 {
-        let threads = if par.is_parallel(self.len()) && self.len() >= PARALLEL_SPRINGS {
+        let organized = self.parts.len() > 2
+            && self.parts[self.parts.len() - 2].points.end == f.len()
+            && d.len() == f.len();
+        let threads = if par.is_parallel(self.len())
+            && (organized || self.len() >= Self::PARALLEL_UNORGANIZED)
+        {
             rayon::current_num_threads().max(1)
         } else {
             1
         };
         if threads == 1 {
-            return self.forces_range(d, f, 0..self.edges.len(), 0..self.num_faces());
+            return self.forces_range(d, f, 0, 0..self.edges.len(), 0..self.num_faces());
+        }
+        if organized && let Some((straddle, blocks)) = self.parts.split_last() {
+            // Organized: each block writes its own range of `f`, then the straddling springs.
+            let mut chunks = Vec::with_capacity(blocks.len());
+            let mut rest = &mut *f;
+            let mut at = 0;
+            for b in blocks {
+                let (head, tail) = std::mem::take(&mut rest).split_at_mut(b.points.end - at);
+                chunks.push(head);
+                rest = tail;
+                at = b.points.end;
+            }
+            let energy: f64 = blocks
+                .par_iter()
+                .zip(chunks)
+                .map(|(b, chunk)| {
+                    self.forces_range(d, chunk, b.points.start, b.edges.clone(), b.faces.clone())
+                })
+                .sum();
+            return energy
+                + self.forces_range(d, f, 0, straddle.edges.clone(), straddle.faces.clone());
         }
         ws.bufs.resize_with(threads, Vec::new);
         let (ne, nf) = (self.edges.len(), self.num_faces());
@@ -178,7 +325,7 @@ impl SpringSet {
                 buf.resize(d.len(), Vec3::zeros());
                 let er = ne * t / threads..ne * (t + 1) / threads;
                 let fr = nf * t / threads..nf * (t + 1) / threads;
-                self.forces_range(d, buf, er, fr)
+                self.forces_range(d, buf, 0, er, fr)
             })
             .sum();
         let bufs = &ws.bufs;
@@ -193,79 +340,176 @@ impl SpringSet {
         energy
     }
 
+    /// Forces of the edges and faces in the given ranges, added to `f`, whose entry `i` is the
+    /// force on point `base + i`.
     fn forces_range(
         &self,
         d: &[Vec3],
         f: &mut [Vec3],
+        base: usize,
+        edges: std::ops::Range<usize>,
+        faces: std::ops::Range<usize>,
+    ) -> f64 {
+        // Compiled once per instruction set (AVX2 + FMA where the CPU has it, else the
+        // baseline); the batched arithmetic below vectorizes in either.
+        pulp::Arch::new().dispatch(ForcesOp {
+            set: self,
+            d,
+            f,
+            base,
+            edges,
+            faces,
+        })
+    }
+
+    /// The force kernel (see [`ForcesOp`]): springs in batches of [`BATCH`], each batch
+    /// gathered (spring vectors `x`), then `g = k (1 - l0/|x|) x` and the energy computed
+    /// lane-wise without branches, then scattered.
+    #[inline(always)]
+    fn forces_kernel(
+        &self,
+        d: &[Vec3],
+        f: &mut [Vec3],
+        base: usize,
         edges: std::ops::Range<usize>,
         faces: std::ops::Range<usize>,
     ) -> f64 {
         let mut energy = 0.0;
-        for i in edges {
+        let mut x = [[0.0; BATCH]; 3];
+        // Edge springs.
+        let mut e = edges.start;
+        while e + BATCH <= edges.end {
+            let idx = &self.edges[e..e + BATCH];
+            for (j, &[a, b]) in idx.iter().enumerate() {
+                let v = d[b as usize] - d[a as usize];
+                x[0][j] = v.x;
+                x[1][j] = v.y;
+                x[2][j] = v.z;
+            }
+            energy += spring_batch(
+                &mut x,
+                &self.edge_rest[e..e + BATCH],
+                &self.edge_k[e..e + BATCH],
+            );
+            for (j, &[a, b]) in idx.iter().enumerate() {
+                let g = Vec3::new(x[0][j], x[1][j], x[2][j]);
+                f[a as usize - base] += g;
+                f[b as usize - base] -= g;
+            }
+            e += BATCH;
+        }
+        for i in e..edges.end {
             let [a, b] = self.edges[i];
             let (a, b) = (a as usize, b as usize);
             let x = d[b] - d[a];
             let l = x.norm();
-            let s = l - self.edge_rest[i];
-            if s == 0.0 || l == 0.0 {
+            if l == 0.0 {
                 continue;
             }
             let k = self.edge_k[i];
+            let s = l - self.edge_rest[i];
             energy += 0.5 * k * s * s;
             let g = x * (k * s / l);
-            f[a] += g;
-            f[b] -= g;
+            f[a - base] += g;
+            f[b - base] -= g;
         }
+        // Virtual springs: quads (every face of a subdivided lattice) in batches of
+        // `BATCH / 4`; corners 0 and 2 share the virtual point (p1 + p3) / 2, corners 1 and 3
+        // share (p0 + p2) / 2. Other faces corner by corner.
+        const Q: usize = BATCH / 4;
+        let mut quads = [0usize; Q];
+        let mut starts = [0usize; Q];
+        let mut rest = [0.0; BATCH];
+        let mut ks = [0.0; BATCH];
+        let mut nq = 0;
         for fc in faces {
             let (lo, hi) = (
                 self.face_offsets[fc] as usize,
                 self.face_offsets[fc + 1] as usize,
             );
-            let verts = &self.face_verts[lo..hi];
-            if let [i0, i1, i2, i3] = *verts {
-                // Quads (every face of a subdivided lattice): corners 0 and 2 share the virtual
-                // point (p1 + p3) / 2, corners 1 and 3 share (p0 + p2) / 2; four scatters.
-                let idx = [i0 as usize, i1 as usize, i2 as usize, i3 as usize];
-                let p = idx.map(|i| d[i]);
-                let mid = [(p[1] + p[3]) * 0.5, (p[0] + p[2]) * 0.5];
-                let mut acc = [Vec3::zeros(); 4];
-                let rest = &self.corner_rest[lo..hi];
-                let ks = &self.corner_k[lo..hi];
-                for j in 0..4 {
-                    let x = p[j] - mid[j & 1];
-                    let l = x.norm();
-                    let s = l - rest[j];
-                    if l == 0.0 {
-                        continue;
-                    }
-                    energy += 0.5 * ks[j] * s * s;
-                    let g = x * (ks[j] * s / l);
-                    acc[j] -= g;
-                    let h = g * 0.5;
-                    acc[(j + 1) & 3] += h;
-                    acc[(j + 3) & 3] += h;
-                }
-                for j in 0..4 {
-                    f[idx[j]] += acc[j];
+            if hi - lo == 4 {
+                quads[nq] = fc;
+                starts[nq] = lo;
+                nq += 1;
+                if nq == Q {
+                    energy += self.quad_batch(d, f, base, &starts, &mut x, &mut rest, &mut ks);
+                    nq = 0;
                 }
                 continue;
             }
-            for j in 0..verts.len() {
-                let (m, a, b) = corner(verts, j);
-                let x = d[m] - (d[a] + d[b]) * 0.5;
-                let l = x.norm();
-                let s = l - self.corner_rest[lo + j];
-                if s == 0.0 || l == 0.0 {
-                    continue;
-                }
-                let k = self.corner_k[lo + j];
-                energy += 0.5 * k * s * s;
-                let g = x * (k * s / l);
-                f[m] -= g;
-                let h = g * 0.5;
-                f[a] += h;
-                f[b] += h;
+            energy += self.face_scalar(d, f, base, lo, hi);
+        }
+        for &lo in &starts[..nq] {
+            energy += self.face_scalar(d, f, base, lo, lo + 4);
+        }
+        energy
+    }
+
+    /// One batch of `BATCH / 4` quads starting at corner offsets `starts`.
+    #[inline(always)]
+    fn quad_batch(
+        &self,
+        d: &[Vec3],
+        f: &mut [Vec3],
+        base: usize,
+        starts: &[usize; BATCH / 4],
+        x: &mut [[f64; BATCH]; 3],
+        rest: &mut [f64; BATCH],
+        ks: &mut [f64; BATCH],
+    ) -> f64 {
+        for (q, &lo) in starts.iter().enumerate() {
+            let v = &self.face_verts[lo..lo + 4];
+            let p = [
+                d[v[0] as usize],
+                d[v[1] as usize],
+                d[v[2] as usize],
+                d[v[3] as usize],
+            ];
+            let mid = [(p[1] + p[3]) * 0.5, (p[0] + p[2]) * 0.5];
+            for j in 0..4 {
+                let y = p[j] - mid[j & 1];
+                x[0][4 * q + j] = y.x;
+                x[1][4 * q + j] = y.y;
+                x[2][4 * q + j] = y.z;
             }
+            rest[4 * q..4 * q + 4].copy_from_slice(&self.corner_rest[lo..lo + 4]);
+            ks[4 * q..4 * q + 4].copy_from_slice(&self.corner_k[lo..lo + 4]);
+        }
+        let energy = spring_batch(x, rest, ks);
+        for (q, &lo) in starts.iter().enumerate() {
+            let v = &self.face_verts[lo..lo + 4];
+            let g: [Vec3; 4] = std::array::from_fn(|j| {
+                Vec3::new(x[0][4 * q + j], x[1][4 * q + j], x[2][4 * q + j])
+            });
+            // Corner j: -g_j on its point, +g_j / 2 on each neighbour.
+            for j in 0..4 {
+                let acc = (g[(j + 1) & 3] + g[(j + 3) & 3]) * 0.5 - g[j];
+                f[v[j] as usize - base] += acc;
+            }
+        }
+        energy
+    }
+
+    /// The virtual springs of one face (corners `lo..hi` of `face_verts`), one by one.
+    #[inline(always)]
+    fn face_scalar(&self, d: &[Vec3], f: &mut [Vec3], base: usize, lo: usize, hi: usize) -> f64 {
+        let verts = &self.face_verts[lo..hi];
+        let mut energy = 0.0;
+        for j in 0..verts.len() {
+            let (m, a, b) = corner(verts, j);
+            let x = d[m] - (d[a] + d[b]) * 0.5;
+            let l = x.norm();
+            if l == 0.0 {
+                continue;
+            }
+            let k = self.corner_k[lo + j];
+            let s = l - self.corner_rest[lo + j];
+            energy += 0.5 * k * s * s;
+            let g = x * (k * s / l);
+            f[m - base] -= g;
+            let h = g * 0.5;
+            f[a - base] += h;
+            f[b - base] += h;
         }
         energy
     }
@@ -323,6 +567,62 @@ impl SpringSet {
         }
         g
     }
+}
+
+/// How many items of each value `0..n` the iterator yields.
+fn counts(it: impl Iterator<Item = usize>, n: usize) -> Vec<usize> {
+    let mut c = vec![0; n];
+    for i in it {
+        c[i] += 1;
+    }
+    c
+}
+
+/// Springs per batch of the force kernel.
+const BATCH: usize = 16;
+
+/// The force kernel as a [`pulp::WithSimd`] operation, so that [`pulp::Arch::dispatch`]
+/// compiles it with the best instruction set the CPU has (runtime detection, safe code).
+struct ForcesOp<'a> {
+    set: &'a SpringSet,
+    d: &'a [Vec3],
+    f: &'a mut [Vec3],
+    base: usize,
+    edges: std::ops::Range<usize>,
+    faces: std::ops::Range<usize>,
+}
+
+impl pulp::WithSimd for ForcesOp<'_> {
+    type Output = f64;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) -> f64 {
+        self.set
+            .forces_kernel(self.d, self.f, self.base, self.edges, self.faces)
+    }
+}
+
+/// For a batch of spring vectors `x` (rows x, y, z), rest lengths and stiffnesses: replaces
+/// `x` by the force `g = k (l - l0) x / l` (zero where `l = 0`) and returns the energy
+/// `sum k/2 (l - l0)^2`. Straight-line arithmetic over arrays, so it vectorizes.
+#[inline(always)]
+fn spring_batch(x: &mut [[f64; BATCH]; 3], rest: &[f64], k: &[f64]) -> f64 {
+    let (rest, k) = (&rest[..BATCH], &k[..BATCH]);
+    let mut e = [0.0; BATCH];
+    let mut c = [0.0; BATCH];
+    for j in 0..BATCH {
+        let l = (x[0][j] * x[0][j] + x[1][j] * x[1][j] + x[2][j] * x[2][j]).sqrt();
+        let s = l - rest[j];
+        let inv = if l > 0.0 { 1.0 / l } else { 0.0 };
+        c[j] = k[j] * s * inv;
+        e[j] = if l > 0.0 { 0.5 * k[j] * s * s } else { 0.0 };
+    }
+    for row in x.iter_mut() {
+        for j in 0..BATCH {
+            row[j] *= c[j];
+        }
+    }
+    e.iter().sum()
 }
 
 /// `H y` for one spring with vector `x`, stiffness `k`, rest length `l0` (clamped Hessian).

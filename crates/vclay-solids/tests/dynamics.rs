@@ -220,8 +220,10 @@ fn fixed_control_points_never_move_and_skip_work() {
         1,
     )
     .unwrap();
-    for (a, b) in d_full.finest().points().iter().zip(s.data_points()) {
-        assert!((a - b).norm() < 1e-12);
+    let finest = d_full.finest().points();
+    assert_eq!(s.data_order().len(), finest.len());
+    for (&o, b) in s.data_order().iter().zip(s.data_points()) {
+        assert!((finest[o as usize] - b).norm() < 1e-12);
     }
     // Freeing them lets them move again.
     s.set_fixed(&bottom, false).unwrap();
@@ -497,4 +499,133 @@ fn metric_tensor_energy_rest_rigid_gradient_and_motion() {
     let (source, p) = cube_source(2, 1);
     let mut t = DynamicSolid::new(source, p, undamped(), SolidParams::default()).unwrap();
     assert!(t.use_metric_energy(Some(1.0)).is_err());
+}
+
+/// Spring forces by the textbook formula, one spring at a time (journal section 5.1).
+fn reference_forces(sp: &vclay_solids::springs::SpringSet, d: &[Vec3]) -> Vec<Vec3> {
+    let mut f = vec![Vec3::zeros(); d.len()];
+    let force = |x: Vec3, k: f64, l0: f64| x * (k * (x.norm() - l0) / x.norm());
+    for (i, &[a, b]) in sp.edges.iter().enumerate() {
+        let (a, b) = (a as usize, b as usize);
+        let g = force(d[b] - d[a], sp.edge_k[i], sp.edge_rest[i]);
+        f[b] -= g;
+        f[a] += g;
+    }
+    for w in sp.face_offsets.windows(2) {
+        let vs = &sp.face_verts[w[0] as usize..w[1] as usize];
+        let n = vs.len();
+        for j in 0..n {
+            let (m, a, b) = (
+                vs[j] as usize,
+                vs[(j + n - 1) % n] as usize,
+                vs[(j + 1) % n] as usize,
+            );
+            let c = w[0] as usize + j;
+            let g = force(
+                d[m] - (d[a] + d[b]) * 0.5,
+                sp.corner_k[c],
+                sp.corner_rest[c],
+            );
+            f[m] -= g;
+            f[a] += g * 0.5;
+            f[b] += g * 0.5;
+        }
+    }
+    f
+}
+
+#[test]
+fn batched_and_parallel_spring_forces_match_the_reference() {
+    // Level 2 (28,548 springs): batches, remainders and the organized thread blocks; the
+    // solid's springs come organized, `filter` gives an unorganized copy.
+    let (source, p) = cube_source(4, 2);
+    let s = DynamicSolid::new(source, p, undamped(), SolidParams::default()).unwrap();
+    let mut d = s.data_points().to_vec();
+    for (i, x) in d.iter_mut().enumerate() {
+        let t = i as f64;
+        *x += Vec3::new((1.3 * t).sin(), (2.1 * t).cos(), (0.7 * t).sin()) * 0.01;
+    }
+    let organized = s.springs().clone();
+    assert!(organized.straddling() < organized.len() / 2);
+    let plain = organized.filter(&vec![true; d.len()]);
+    assert_eq!(plain.straddling(), plain.len());
+    // A set with a triangle and a pentagon besides quads (the corner-by-corner path).
+    let mut mixed = vclay_solids::springs::SpringSet::default();
+    mixed.face_offsets = vec![0, 3, 8];
+    mixed.face_verts = vec![0, 5, 9, 1, 2, 3, 4, 7];
+    mixed.corner_rest = vec![0.1; 8];
+    mixed.corner_k = vec![2.0; 8];
+    let want = reference_forces(&organized, &d);
+    let scale = want.iter().map(|x| x.norm()).fold(0.0, f64::max);
+    assert!(scale > 0.0);
+    for (set, name) in [
+        (&organized, "organized"),
+        (&plain, "unorganized"),
+        (&mixed, "mixed"),
+    ] {
+        let want = reference_forces(set, &d);
+        for par in [
+            vclay_core::Parallelism::Sequential,
+            vclay_core::Parallelism::Rayon,
+        ] {
+            let mut f = vec![Vec3::zeros(); d.len()];
+            let e = set.add_forces(&d, &mut f, &mut Default::default(), par);
+            assert!(
+                (e - set.energy(&d)).abs() <= 1e-12 * e.abs().max(1e-300),
+                "{name}"
+            );
+            for (i, (a, b)) in f.iter().zip(&want).enumerate() {
+                assert!(
+                    (a - b).norm() <= 1e-12 * scale,
+                    "{name} {par:?}: point {i}: {a:?} vs {b:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn data_points_are_renumbered_for_locality_consistently() {
+    // The data lattice, the data points and the map agree under the locality renumbering, and
+    // the renumbered lattice passes every invariant check.
+    let (source, p) = cube_source(3, 2);
+    let mut s = DynamicSolid::new(
+        source,
+        p.clone(),
+        Material::default(),
+        SolidParams::default(),
+    )
+    .unwrap();
+    let order = s.data_order().to_vec();
+    let mut seen = vec![false; order.len()];
+    for &o in &order {
+        assert!(!std::mem::replace(&mut seen[o as usize], true));
+    }
+    assert_ne!(order, (0..order.len() as u32).collect::<Vec<_>>());
+    let lattice = s.data_lattice().clone();
+    lattice.validate().unwrap();
+    let reference = vclay_lattice::SubdivisionSolid::new(
+        s.control_lattice().unwrap(),
+        Features::none(&s.control_lattice().unwrap()),
+        SubdivisionRules::new(BoundaryRule::Sharp),
+        2,
+    )
+    .unwrap();
+    let fine = reference.finest();
+    assert_eq!(lattice.counts(), fine.counts());
+    for (i, &o) in order.iter().enumerate() {
+        assert!((lattice.points()[i] - fine.points()[o as usize]).norm() < 1e-12);
+        assert!((s.data_points()[i] - fine.points()[o as usize]).norm() < 1e-12);
+    }
+    // Faces keep their ids and loops (in the new numbering).
+    for f in 0..fine.num_faces() {
+        let id = vclay_lattice::FaceId::new(f);
+        let a: Vec<u32> = lattice
+            .face_vertices(id)
+            .iter()
+            .map(|v| order[v.index()])
+            .collect();
+        let b: Vec<u32> = fine.face_vertices(id).iter().map(|v| v.0).collect();
+        assert_eq!(a, b, "face {f}");
+    }
 }

@@ -303,7 +303,20 @@ pub struct Dnurbs<G: DnurbsGeometry> {
     /// Linear solver (default [`LinearSolver::Direct`]).
     pub solver: LinearSolver,
     direct: Option<system::DirectSolver>,
-    k_rest: Option<(f64, Vec<Vec3>)>,
+    cache: StepCache,
+}
+
+/// Products carried from one step to the next, so that a frozen-weight step makes a single
+/// pass over the assembled matrices: the end-of-step pass at the new points gives `M x`,
+/// `D x` (and `K x` for the residual, and both energies), and the next step's right-hand side
+/// `M (4 p - 2 p_prev) + dt D p_prev` is a combination of those and the previous step's.
+#[derive(Clone, Debug, Default)]
+struct StepCache {
+    /// `K p_rest` (without the coefficient) while the rest shape is unchanged.
+    k_rest: Option<Vec<Vec3>>,
+    /// `[M p, D p, M p_prev, D p_prev]` for the current and previous points, while neither
+    /// has changed outside [`Dnurbs::step`].
+    products: Option<[Vec<Vec3>; 4]>,
 }
 
 /// A dynamic NURBS curve.
@@ -375,7 +388,7 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
             tolerance: DEFAULT_CG_TOLERANCE,
             solver: LinearSolver::default(),
             direct: None,
-            k_rest: None,
+            cache: StepCache::default(),
         })
     }
 
@@ -408,7 +421,7 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
     /// Plastic reset: the current shape becomes the rest shape.
     pub fn set_rest_shape_to_current(&mut self) {
         self.rest = self.geometry.points().to_vec();
-        self.k_rest = None;
+        self.cache.k_rest = None;
     }
 
     /// The rest shape's control points.
@@ -425,6 +438,7 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
         }
         let mut pts = self.geometry.points().to_vec();
         pts[i] = position;
+        self.cache.products = None;
         self.geometry.set_points(pts)?;
         self.previous[i] = position;
         Ok(())
@@ -614,22 +628,6 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
         0.5 * self.system.quadratic_form([0.0, 0.0, 1.0], &d, &d)
     }
 
-    /// Kinetic and elastic energy in one pass over the matrices.
-    fn energies(&self, dt: f64) -> (f64, f64) {
-        let p = self.geometry.points();
-        let v: Vec<Vec3> = p
-            .iter()
-            .zip(&self.previous)
-            .map(|(a, b)| (a - b) / dt)
-            .collect();
-        let d: Vec<Vec3> = match self.reference {
-            ElasticReference::RestShape => p.iter().zip(&self.rest).map(|(a, b)| a - b).collect(),
-            ElasticReference::Absolute => p.to_vec(),
-        };
-        let (m, k) = self.system.mass_and_stiffness_forms(&v, &d);
-        (0.5 * m, 0.5 * k)
-    }
-
     /// Kinetic energy `1/2 v^T M v` with the backward-difference velocity of the last step `dt`.
     pub fn kinetic_energy(&self, dt: f64) -> f64 {
         let p = self.geometry.points();
@@ -642,11 +640,26 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
     }
 
     /// Advances one step with `integrator`.
+    ///
+    /// One pass over the assembled `M`, `D`, `K` per step (plus the solve): the right-hand side
+    /// comes from products the previous step's end-of-step pass left (`StepCache`), and that
+    /// pass gives the residual check and both energies too.
     pub fn step(&mut self, integrator: Integrator) -> Result<StepReport, DynamicsError> {
         let n = self.system.n;
         let (fp, springs) = self.split_forces()?;
         let p = self.geometry.points().to_vec();
-        let (coeffs, rhs, mut x, dt) = match integrator {
+        // [M p, D p, M p_prev, D p_prev], from the last step or computed now.
+        let products = match self.cache.products.take() {
+            Some(c) => c,
+            None => {
+                let mut c: [Vec<Vec3>; 4] = std::array::from_fn(|_| vec![Vec3::zeros(); n]);
+                let [mp, dp, mpp, dpp] = &mut c;
+                self.system.mass_damping_products(&p, mp, dp);
+                self.system.mass_damping_products(&self.previous, mpp, dpp);
+                c
+            }
+        };
+        let (coeffs, mut rhs, mut x, dt) = match integrator {
             Integrator::Implicit { dt } => {
                 if !(dt.is_finite() && dt > 0.0) {
                     return Err(DynamicsError::Parameter {
@@ -656,20 +669,11 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
                     });
                 }
                 let coeffs = [2.0, dt, 2.0 * dt * dt];
-                let mix: Vec<Vec3> = p
-                    .iter()
-                    .zip(&self.previous)
-                    .map(|(a, b)| a * 4.0 - b * 2.0)
+                // M (4p - 2p_prev) + dt D p_prev + 2 dt^2 f_p.
+                let [mp, _, mpp, dpp] = &products;
+                let rhs: Vec<Vec3> = (0..n)
+                    .map(|i| mp[i] * 4.0 - mpp[i] * 2.0 + dpp[i] * dt + fp[i] * (2.0 * dt * dt))
                     .collect();
-                // One fused pass: M (4p - 2p_prev) + dt D p_prev.
-                let mut rhs = vec![Vec3::zeros(); n];
-                self.system.apply_terms(
-                    &[([1.0, 0.0, 0.0], &mix), ([0.0, dt, 0.0], &self.previous)],
-                    &mut rhs,
-                );
-                for (r, f) in rhs.iter_mut().zip(&fp) {
-                    *r += f * (2.0 * dt * dt);
-                }
                 // Initial guess: constant-velocity extrapolation (fixed points stay).
                 let x: Vec<Vec3> = (0..n)
                     .map(|i| {
@@ -684,14 +688,15 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
             }
             Integrator::Static => ([0.0, 0.0, 1.0], fp.clone(), p.clone(), 1.0),
         };
-        let mut rhs = rhs;
         if self.reference == ElasticReference::RestShape {
             // K (p - p_rest) on the left: K p_rest moves to the right-hand side.
-            let mut k_rest = vec![Vec3::zeros(); n];
-            self.system
-                .apply([0.0, 0.0, coeffs[2]], &self.rest, &mut k_rest);
-            for (r, k) in rhs.iter_mut().zip(&k_rest) {
-                *r += k;
+            let k_rest = self.cache.k_rest.get_or_insert_with(|| {
+                let mut k = vec![Vec3::zeros(); n];
+                self.system.apply([0.0, 0.0, 1.0], &self.rest, &mut k);
+                k
+            });
+            for (r, k) in rhs.iter_mut().zip(k_rest.iter()) {
+                *r += k * coeffs[2];
             }
         }
         let op = system::Operator {
@@ -699,7 +704,7 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
             coeffs,
             springs: &springs,
         };
-        let solver = match self.solver {
+        let mut solver = match self.solver {
             LinearSolver::ConjugateGradient => system::conjugate_gradient(
                 &op,
                 &rhs,
@@ -709,13 +714,12 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
                 self.tolerance,
             ),
             LinearSolver::Direct => {
-                system::direct_solve(&mut self.direct, &op, &rhs, &mut x, &self.fixed).map_err(
-                    |_| DynamicsError::Singular {
+                system::direct_solve(&mut self.direct, &op, &rhs, &mut x, &self.fixed, false)
+                    .map_err(|_| DynamicsError::Singular {
                         what: "the system matrix is not positive definite: with no mass (static \
-                               solve), fix control points so that rigid motions are excluded"
+                       solve), fix control points so that rigid motions are excluded"
                             .into(),
-                    },
-                )?
+                    })?
             }
         };
         // Divergence: non-finite state or runaway displacement.
@@ -737,23 +741,54 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
                 suggested_dt: self.suggest_dt(dt),
             });
         }
-        self.previous = p;
-        self.geometry.set_points(x)?;
-        if matches!(integrator, Integrator::Static) {
-            self.previous = self.geometry.points().to_vec();
+        // The end-of-step pass: M x, D x, K x and the energy forms.
+        let is_static = matches!(integrator, Integrator::Static);
+        let [mut mx, mut dx, mut kx] = std::array::from_fn(|_| vec![Vec3::zeros(); n]);
+        let rest = (self.reference == ElasticReference::RestShape).then_some(&self.rest[..]);
+        let (mass_form, stiffness_form) = self.system.step_products(
+            system::StepInputs {
+                x: &x,
+                p: if is_static { &x } else { &p },
+                inv_dt: if is_static { 0.0 } else { 1.0 / dt },
+                rest,
+            },
+            system::StepOutputs {
+                mx: &mut mx,
+                dx: &mut dx,
+                kx: &mut kx,
+            },
+        );
+        if matches!(self.solver, LinearSolver::Direct) {
+            // A x from the pass: a_m M x + a_d D x + a_k K x + springs.
+            let mut ax: Vec<Vec3> = (0..n)
+                .map(|i| mx[i] * coeffs[0] + dx[i] * coeffs[1] + kx[i] * coeffs[2])
+                .collect();
+            op.add_springs(&x, &mut ax);
+            solver.relative_residual = system::relative_residual(&rhs, &ax, &self.fixed);
         }
+        self.geometry.set_points(x)?;
+        let [mp, dp, _, _] = products;
+        self.cache.products = Some(if is_static {
+            [mx.clone(), dx.clone(), mx, dx]
+        } else {
+            [mx, dx, mp, dp]
+        });
+        self.previous = if is_static {
+            self.geometry.points().to_vec()
+        } else {
+            p
+        };
         self.time += if let Integrator::Implicit { dt } = integrator {
             dt
         } else {
             0.0
         };
         self.steps += 1;
-        let (kinetic_energy, elastic_energy) = self.energies(dt);
         Ok(StepReport {
             time: self.time,
             solver,
-            kinetic_energy,
-            elastic_energy,
+            kinetic_energy: 0.5 * mass_form,
+            elastic_energy: 0.5 * stiffness_form,
         })
     }
 

@@ -97,6 +97,69 @@ impl Csr3 {
         }
     }
 
+    /// `(M x, D x)` in one pass.
+    fn mass_damping(&self, x: &[Vec3], mx: &mut [Vec3], dx: &mut [Vec3]) {
+        let row = |(i, (m, d)): (usize, (&mut Vec3, &mut Vec3))| {
+            let (mut sm, mut sd) = (Vec3::zeros(), Vec3::zeros());
+            let r = self.row_ptr[i]..self.row_ptr[i + 1];
+            for (&j, v) in self.cols[r.clone()].iter().zip(&self.vals[r]) {
+                sm += x[j] * v[0];
+                sd += x[j] * v[1];
+            }
+            *m = sm;
+            *d = sd;
+        };
+        if mx.len() >= 4 * PARALLEL_ELEMENTS {
+            mx.par_iter_mut()
+                .zip(dx.par_iter_mut())
+                .enumerate()
+                .for_each(row);
+        } else {
+            mx.iter_mut().zip(dx.iter_mut()).enumerate().for_each(row);
+        }
+    }
+
+    /// The end-of-step pass (see [`ElementSystem::step_products`]).
+    fn step_products(&self, inp: StepInputs<'_>, out: StepOutputs<'_>) -> (f64, f64) {
+        let StepInputs { x, p, inv_dt, rest } = inp;
+        let row = |(i, ((m, d), k)): (usize, ((&mut Vec3, &mut Vec3), &mut Vec3))| {
+            let (mut sm, mut sd, mut sk) = (Vec3::zeros(), Vec3::zeros(), Vec3::zeros());
+            let (mut mv, mut kd) = (Vec3::zeros(), Vec3::zeros());
+            let r = self.row_ptr[i]..self.row_ptr[i + 1];
+            for (&j, v) in self.cols[r.clone()].iter().zip(&self.vals[r]) {
+                let xj = x[j];
+                sm += xj * v[0];
+                sd += xj * v[1];
+                sk += xj * v[2];
+                mv += (xj - p[j]) * v[0];
+                kd += rest.map_or(xj, |r| xj - r[j]) * v[2];
+            }
+            *m = sm;
+            *d = sd;
+            *k = sk;
+            let vi = (x[i] - p[i]) * inv_dt;
+            let di = rest.map_or(x[i], |r| x[i] - r[i]);
+            (vi.dot(&mv) * inv_dt, di.dot(&kd))
+        };
+        let StepOutputs { mx, dx, kx } = out;
+        let add = |a: (f64, f64), b: (f64, f64)| (a.0 + b.0, a.1 + b.1);
+        if mx.len() >= 4 * PARALLEL_ELEMENTS {
+            mx.par_iter_mut()
+                .zip(dx.par_iter_mut())
+                .zip(kx.par_iter_mut())
+                .enumerate()
+                .map(row)
+                .reduce(|| (0.0, 0.0), add)
+        } else {
+            mx.iter_mut()
+                .zip(dx.iter_mut())
+                .zip(kx.iter_mut())
+                .enumerate()
+                .map(row)
+                .fold((0.0, 0.0), add)
+        }
+    }
+
     fn assemble(n: usize, elements: &[Element]) -> Self {
         let mut rows: Vec<Vec<(usize, [f64; 3])>> = vec![Vec::new(); n];
         for e in elements {
@@ -154,6 +217,21 @@ impl Csr3 {
             }
         }
     }
+}
+
+/// Inputs of [`ElementSystem::step_products`].
+pub(crate) struct StepInputs<'a> {
+    pub x: &'a [Vec3],
+    pub p: &'a [Vec3],
+    pub inv_dt: f64,
+    pub rest: Option<&'a [Vec3]>,
+}
+
+/// Outputs of [`ElementSystem::step_products`]: `M x`, `D x`, `K x`.
+pub(crate) struct StepOutputs<'a> {
+    pub mx: &'a mut [Vec3],
+    pub dx: &'a mut [Vec3],
+    pub kx: &'a mut [Vec3],
 }
 
 /// Densities evaluated at one quadrature point: `mu, gamma`, tension per direction, rigidity per
@@ -251,6 +329,19 @@ impl ElementSystem {
     /// `(x^T M x, y^T K y)` summed over coordinates, in one pass.
     pub fn mass_and_stiffness_forms(&self, x: &[Vec3], y: &[Vec3]) -> (f64, f64) {
         self.csr().two_forms(x, y)
+    }
+
+    /// `(M x, D x)` in one pass over the assembled matrices.
+    pub fn mass_damping_products(&self, x: &[Vec3], mx: &mut [Vec3], dx: &mut [Vec3]) {
+        self.csr().mass_damping(x, mx, dx);
+    }
+
+    /// One pass at the end of an implicit step at the new points `x` (previous points `p`):
+    /// writes `M x`, `D x`, `K x` (the next step's right-hand side and this step's residual
+    /// need them) and returns the forms `v^T M v` and `e^T K e` with `v = (x - p) inv_dt` and
+    /// `e = x - rest` (`e = x` without a rest shape), summed over coordinates.
+    pub(crate) fn step_products(&self, inp: StepInputs<'_>, out: StepOutputs<'_>) -> (f64, f64) {
+        self.csr().step_products(inp, out)
     }
 
     /// `out = (a_m M + a_d D + a_k K) x` element by element, without assembly (`d-nurbs.txt`
@@ -375,6 +466,11 @@ pub(crate) struct Operator<'a> {
 impl Operator<'_> {
     fn apply(&self, x: &[Vec3], out: &mut [Vec3]) {
         self.sys.apply(self.coeffs, x, out);
+        self.add_springs(x, out);
+    }
+
+    /// `out += a_k sum k r r^T x` (the rank-one springs' part of the operator).
+    pub(crate) fn add_springs(&self, x: &[Vec3], out: &mut [Vec3]) {
         for s in self.springs {
             let mut dot = Vec3::zeros();
             for (&i, &r) in s.indices.iter().zip(&s.values) {
@@ -610,6 +706,7 @@ pub(crate) fn direct_solve(
     b: &[Vec3],
     x: &mut [Vec3],
     fixed: &[bool],
+    verify: bool,
 ) -> Result<SolverStats, NotPositiveDefinite> {
     use faer::linalg::solvers::Solve;
     let n = op.sys.n;
@@ -648,25 +745,32 @@ pub(crate) fn direct_solve(
     for (k, &i) in solver.free.iter().enumerate() {
         x[i] = Vec3::new(rhs[(k, 0)], rhs[(k, 1)], rhs[(k, 2)]);
     }
-    // Report the true residual.
-    let mut ax = vec![Vec3::zeros(); n];
-    op.apply(x, &mut ax);
-    let (mut rn, mut bn) = (Vec3::zeros(), Vec3::zeros());
-    for i in 0..n {
-        if !fixed[i] {
-            let r = b[i] - ax[i];
-            rn += r.component_mul(&r);
-            bn += b[i].component_mul(&b[i]);
-        }
-    }
-    let (rn, bn) = (rn.sum(), bn.sum());
-    let rel = if bn > 0.0 {
-        (rn / bn).sqrt()
+    // Report the true residual (unless the caller computes it from its own pass).
+    let rel = if verify {
+        let mut ax = vec![Vec3::zeros(); n];
+        op.apply(x, &mut ax);
+        relative_residual(b, &ax, fixed)
     } else {
-        rn.sqrt()
+        f64::NAN
     };
     Ok(SolverStats {
         iterations: 0,
         relative_residual: rel,
     })
+}
+
+/// `|b - A x| / |b|` over the free entries (all coordinates together), from `ax = A x`.
+pub(crate) fn relative_residual(b: &[Vec3], ax: &[Vec3], fixed: &[bool]) -> f64 {
+    let (mut rn, mut bn) = (0.0, 0.0);
+    for i in 0..b.len() {
+        if !fixed[i] {
+            rn += (b[i] - ax[i]).norm_squared();
+            bn += b[i].norm_squared();
+        }
+    }
+    if bn > 0.0 {
+        (rn / bn).sqrt()
+    } else {
+        rn.sqrt()
+    }
 }

@@ -1,0 +1,106 @@
+//! Times the per-step kernels of a dynamic subdivision solid (4^3 cube) one by one: spring
+//! forces (one thread and all threads), `d = A p` and `g = A^T f`.
+//!
+//! Run: `cargo run --release -p vclay-solids --example kernels -- [level] [reps]`.
+
+use std::time::Instant;
+use vclay_core::{Parallelism, Vec3};
+use vclay_lattice::{BoundaryRule, Features, SubdivisionRules, primitives};
+use vclay_solids::springs::ForceWorkspace;
+use vclay_solids::{DynamicSolid, Material, SolidParams, SolidSource};
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let level: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(4);
+    let reps: usize = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(20);
+    let cube = primitives::box_lattice([4, 4, 4], Vec3::zeros(), Vec3::repeat(1.0));
+    let p = cube.points().to_vec();
+    let source = SolidSource::Subdivision {
+        features: Features::none(&cube),
+        control: cube,
+        rules: SubdivisionRules::new(BoundaryRule::Sharp),
+        levels: level,
+    };
+    let mut s = DynamicSolid::new(
+        source.clone(),
+        p,
+        Material::default(),
+        SolidParams::default(),
+    )
+    .unwrap();
+    // A deformed state: pull one corner and take a few steps.
+    s.attach_rope(Vec3::new(1.3, 1.2, 1.1), 50.0, 0.0).unwrap();
+    s.run(3).unwrap();
+    let d = s.data_points().to_vec();
+    let springs = s.springs().clone();
+    println!(
+        "level {level}: {} data points, {} springs, {} straddling the thread blocks",
+        d.len(),
+        springs.len(),
+        springs.straddling()
+    );
+    let mut f = vec![Vec3::zeros(); d.len()];
+    let mut ws = ForceWorkspace::default();
+    for (name, par) in [
+        ("springs, 1 thread", Parallelism::Sequential),
+        ("springs, all threads", Parallelism::Rayon),
+    ] {
+        let t: Vec<f64> = (0..reps)
+            .map(|_| {
+                f.iter_mut().for_each(|x| *x = Vec3::zeros());
+                let t0 = Instant::now();
+                springs.add_forces(&d, &mut f, &mut ws, par);
+                t0.elapsed().as_secs_f64() * 1e3
+            })
+            .collect();
+        println!(
+            "level {level}: {name}: {:.3} ms ({:.2} ns/spring)",
+            median(t.clone()),
+            median(t) * 1e6 / springs.len() as f64
+        );
+    }
+    // The control map alone.
+    let disc = source.discretize(s.control_points()).unwrap();
+    let mut ws = vclay_lattice::ChainWorkspace::new();
+    let mut dd = vec![Vec3::zeros(); d.len()];
+    let mut g = vec![Vec3::zeros(); s.control_points().len()];
+    for (name, par) in [
+        ("1 thread", Parallelism::Sequential),
+        ("all threads", Parallelism::Auto),
+    ] {
+        let ta: Vec<f64> = (0..reps)
+            .map(|_| {
+                let t0 = Instant::now();
+                disc.map
+                    .apply_into(s.control_points(), &mut dd, &mut ws, par);
+                t0.elapsed().as_secs_f64() * 1e3
+            })
+            .collect();
+        let tt: Vec<f64> = (0..reps)
+            .map(|_| {
+                let t0 = Instant::now();
+                disc.map.apply_transpose_into(&f, &mut g, &mut ws, par);
+                t0.elapsed().as_secs_f64() * 1e3
+            })
+            .collect();
+        println!(
+            "level {level}: A p {:.3} ms, A^T f {:.3} ms ({name}, {} non-zeros)",
+            median(ta),
+            median(tt),
+            disc.map.operators().iter().map(|m| m.nnz()).sum::<usize>()
+        );
+    }
+    let t: Vec<f64> = (0..reps)
+        .map(|_| {
+            let t0 = Instant::now();
+            s.step().unwrap();
+            t0.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    println!("level {level}: whole step: {:.3} ms", median(t));
+}
