@@ -1,8 +1,9 @@
 //! Steps per second of a D-NURBS surface with dynamic weights (`d-nurbs.txt` sections 4.2, 5.3):
 //! `cargo run --release -p vclay-dynamics --example dnurbs_dynamic_weights [N]` for an N x N
 //! cubic surface (default 16; issue goal: 60 steps/s on 2 cores; optional second argument: CG
-//! relative tolerance), pulled by a moving spring,
-//! one edge fixed. Every step recomputes the element matrices (they depend on the weights).
+//! relative tolerance; `--direct`: the sparse Cholesky solver instead of CG), pulled by a moving
+//! spring, one edge fixed. Every step recomputes the element matrices (they depend on the
+//! weights).
 use std::time::Instant;
 use vclay_core::Vec3;
 use vclay_dynamics::dnurbs::{GeneralizedDnurbs, GeneralizedGeometry, RationalGeometry, Target};
@@ -10,10 +11,9 @@ use vclay_dynamics::{Force, Integrator, Material};
 use vclay_spline::NurbsSurface;
 
 fn main() {
-    let n: usize = std::env::args()
-        .nth(1)
-        .and_then(|a| a.parse().ok())
-        .unwrap_or(16);
+    let direct = std::env::args().any(|a| a == "--direct");
+    let args: Vec<String> = std::env::args().filter(|a| a != "--direct").collect();
+    let n: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(16);
     let mut pts = Vec::with_capacity(n * n);
     let mut w = Vec::with_capacity(n * n);
     for i in 0..n {
@@ -35,8 +35,11 @@ fn main() {
     )
     .expect("model");
     let setup = t0.elapsed().as_secs_f64();
-    if let Some(tol) = std::env::args().nth(2).and_then(|a| a.parse().ok()) {
+    if let Some(tol) = args.get(2).and_then(|a| a.parse().ok()) {
         d.tolerance = tol;
+    }
+    if direct {
+        d.solver = vclay_dynamics::LinearSolver::Direct;
     }
     for k in 0..n {
         for c in 0..3 {
@@ -67,8 +70,9 @@ fn main() {
         .iter()
         .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
     println!(
-        "{n}x{n} cubic, dynamic weights ({} coordinates): setup {:.1} ms, {:.1} steps/s, {:.1} CG iterations per step, {} sub-steps, weights now {lo:.3}..{hi:.3}",
+        "{n}x{n} cubic, dynamic weights ({} coordinates, {:?}): setup {:.1} ms, {:.1} steps/s, {:.1} CG iterations per step, {} sub-steps, weights now {lo:.3}..{hi:.3}",
         d.geometry().coordinates().len(),
+        d.solver,
         setup * 1e3,
         steps as f64 / secs,
         iters as f64 / steps as f64,

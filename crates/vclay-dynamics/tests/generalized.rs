@@ -493,3 +493,71 @@ fn static_variant_matches_the_frozen_engine_and_the_exact_parabola() {
         assert!((y - exact).abs() < 1e-8, "y({u}) = {y}, exact {exact}");
     }
 }
+
+#[test]
+fn direct_and_conjugate_gradient_solvers_agree_with_dynamic_weights() {
+    // The sparse Cholesky (default for tensor-product models, symbolic analysis reused) and
+    // the paper's CG solve the same step systems: trajectories agree to CG's tolerance, with a
+    // spring, a data-point force and a point constraint; swung geometries default to CG.
+    let run = |solver: LinearSolver| {
+        let geo = RationalGeometry::from_surface(&wavy_rational_surface(7));
+        let mut d = GeneralizedDnurbs::new(geo, Material::surface(1.0, 2.0, 1.0, 0.1)).unwrap();
+        assert_eq!(d.solver, LinearSolver::Direct);
+        d.solver = solver;
+        d.tolerance = 1e-12;
+        d.add_constraint(Constraint::Point {
+            param: [0.1, 0.9],
+            target: d.geometry().to_surface().unwrap().point(0.1, 0.9).unwrap(),
+        })
+        .unwrap();
+        d.forces_mut().push(Force::Spring {
+            param: [0.6, 0.4],
+            target: Target::Fixed(Vec3::new(0.6, 0.4, 0.6)),
+            stiffness: 30.0,
+            kernel: None,
+        });
+        d.forces_mut().push(Force::DataPoint {
+            point: Vec3::new(0.3, 0.3, -0.2),
+            stiffness: 5.0,
+        });
+        let mut iterations = 0;
+        for _ in 0..15 {
+            let r = d.step(Integrator::Implicit { dt: 0.02 }).unwrap();
+            assert!(
+                r.solver.relative_residual < 1e-9,
+                "{solver:?}: {:?}",
+                r.solver
+            );
+            iterations += r.solver.iterations;
+        }
+        (d.geometry().coordinates().to_vec(), iterations)
+    };
+    let (direct, it_direct) = run(LinearSolver::Direct);
+    let (cg, it_cg) = run(LinearSolver::ConjugateGradient);
+    assert_eq!(it_direct, 0);
+    assert!(it_cg > 0);
+    let same = direct
+        .iter()
+        .zip(&run(LinearSolver::Direct).0)
+        .all(|(a, b)| a == b);
+    assert!(same, "the direct solver is deterministic");
+    let start = RationalGeometry::from_surface(&wavy_rational_surface(7));
+    let travel = direct
+        .iter()
+        .zip(start.coordinates())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(travel > 1e-2, "the model moved ({travel:e})");
+    let diff = direct
+        .iter()
+        .zip(&cg)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(diff < 1e-8, "direct vs CG: {diff:e}");
+    let swung = GeneralizedDnurbs::new(
+        SwungGeometry::sphere(1.0).unwrap(),
+        Material::surface(1.0, 2.0, 1.0, 0.05),
+    )
+    .unwrap();
+    assert_eq!(swung.solver, LinearSolver::ConjugateGradient);
+}

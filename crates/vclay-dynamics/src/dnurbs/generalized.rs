@@ -54,7 +54,7 @@
 //! a NURBS is scaled by the same factor, one weight per rational curve or surface is held fixed
 //! by default (a gauge choice that changes no shape).
 
-use super::{Density, ElasticReference, Force, Integrator, Material, StepReport};
+use super::{Density, ElasticReference, Force, Integrator, LinearSolver, Material, StepReport};
 use crate::SolverStats;
 use crate::error::DynamicsError;
 use rayon::prelude::*;
@@ -112,49 +112,6 @@ impl LocalJacobian {
         }
     }
 
-    /// `out += sum_a coef[a] J^a^T J^a` into the upper triangle of a dense local matrix
-    /// (row-major, `nd x nd`; see [`mirror_upper`]).
-    fn accumulate_gram(&self, coef: &[f64; 6], out: &mut [f64]) {
-        let nb = self.blocks.len();
-        let nv = self.vectors.len();
-        let nd = 3 * nb + nv;
-        for a in 0..nb {
-            let ra = &self.blocks[a].1;
-            for b in a..nb {
-                let rb = &self.blocks[b].1;
-                let mut v = 0.0;
-                for m in 0..6 {
-                    v += coef[m] * ra[m] * rb[m];
-                }
-                for k in 0..3 {
-                    out[(3 * a + k) * nd + 3 * b + k] += v;
-                }
-            }
-            for j in 0..nv {
-                let g = &self.vectors[j].1;
-                let mut v = Vec3::zeros();
-                for m in 0..6 {
-                    v += g[m] * (coef[m] * ra[m]);
-                }
-                let col = 3 * nb + j;
-                for k in 0..3 {
-                    out[(3 * a + k) * nd + col] += v[k];
-                }
-            }
-        }
-        for i in 0..nv {
-            let gi = &self.vectors[i].1;
-            for j in i..nv {
-                let gj = &self.vectors[j].1;
-                let mut v = 0.0;
-                for m in 0..6 {
-                    v += coef[m] * gi[m].dot(&gj[m]);
-                }
-                out[(3 * nb + i) * nd + 3 * nb + j] += v;
-            }
-        }
-    }
-
     /// `diag += c * diag(J^0^T J^0)` (the lumped view of the mass matrix's diagonal).
     fn accumulate_value_diagonal(&self, c: f64, diag: &mut [f64]) {
         let nb = self.blocks.len();
@@ -169,11 +126,109 @@ impl LocalJacobian {
     }
 }
 
-/// Copies the upper triangle of a dense `nd x nd` matrix to its lower triangle.
-fn mirror_upper(m: &mut [f64], nd: usize) {
-    for i in 0..nd {
-        for j in 0..i {
-            m[i * nd + j] = m[j * nd + i];
+/// `sum_q sum_a coef_q[a] J_q^a^T J_q^a` over the quadrature points of one element, kept in the
+/// compact form the Jacobian's structure allows (eqs 16-17 with the columns of
+/// [`LocalJacobian`]): a block column `R^a e_k` pairs with another as the scalar
+/// `sum_a c_a R^a_i R^a_j` times the 3x3 identity, with a general column `g` as the vector
+/// `sum_a c_a R^a_i g^a`, and general columns pair by dot products. Accumulating these small
+/// arrays (instead of the dense `nd x nd` matrix) keeps the per-point work in registers and L1;
+/// [`Gram::expand`] writes the dense symmetric matrix once per element.
+#[derive(Clone, Debug, Default)]
+struct Gram {
+    nb: usize,
+    nv: usize,
+    /// Block-block scalars, `nb x nb` (upper triangle used).
+    bb: Vec<f64>,
+    /// Block-vector columns, `nb x nv`.
+    bv: Vec<Vec3>,
+    /// Vector-vector scalars, `nv x nv` (upper triangle used).
+    vv: Vec<f64>,
+    /// Scratch: `coef[a] R^a` per block.
+    scaled: Vec<[f64; 6]>,
+}
+
+impl Gram {
+    /// An empty accumulator for Jacobians shaped like `lj`.
+    fn new(lj: &LocalJacobian) -> Self {
+        let (nb, nv) = (lj.blocks.len(), lj.vectors.len());
+        Self {
+            nb,
+            nv,
+            bb: vec![0.0; nb * nb],
+            bv: vec![Vec3::zeros(); nb * nv],
+            vv: vec![0.0; nv * nv],
+            scaled: vec![[0.0; 6]; nb],
+        }
+    }
+
+    /// Adds `sum_a coef[a] J^a^T J^a` for one Jacobian (same columns as at construction).
+    fn add(&mut self, lj: &LocalJacobian, coef: &[f64; 6]) {
+        let (nb, nv) = (self.nb, self.nv);
+        debug_assert_eq!((lj.blocks.len(), lj.vectors.len()), (nb, nv));
+        for (sc, (_, r)) in self.scaled.iter_mut().zip(&lj.blocks) {
+            *sc = std::array::from_fn(|m| coef[m] * r[m]);
+        }
+        for a in 0..nb {
+            let ca = &self.scaled[a];
+            let row = &mut self.bb[a * nb..(a + 1) * nb];
+            for b in a..nb {
+                let rb = &lj.blocks[b].1;
+                row[b] += (0..6).map(|m| ca[m] * rb[m]).sum::<f64>();
+            }
+            let row = &mut self.bv[a * nv..(a + 1) * nv];
+            for (j, (_, g)) in lj.vectors.iter().enumerate() {
+                let mut v = Vec3::zeros();
+                for m in 0..6 {
+                    v += g[m] * ca[m];
+                }
+                row[j] += v;
+            }
+        }
+        for i in 0..nv {
+            let gi = &lj.vectors[i].1;
+            for j in i..nv {
+                let gj = &lj.vectors[j].1;
+                let mut v = 0.0;
+                for m in 0..6 {
+                    v += coef[m] * gi[m].dot(&gj[m]);
+                }
+                self.vv[i * nv + j] += v;
+            }
+        }
+    }
+
+    /// `out += ` the accumulated matrix, dense and symmetric (row-major, local order of
+    /// [`LocalJacobian::dofs`]).
+    fn expand(&self, out: &mut [f64]) {
+        let (nb, nv) = (self.nb, self.nv);
+        let nd = 3 * nb + nv;
+        for a in 0..nb {
+            for b in a..nb {
+                let v = self.bb[a * nb + b];
+                for k in 0..3 {
+                    out[(3 * a + k) * nd + 3 * b + k] += v;
+                    if b != a {
+                        out[(3 * b + k) * nd + 3 * a + k] += v;
+                    }
+                }
+            }
+            for j in 0..nv {
+                let v = self.bv[a * nv + j];
+                let col = 3 * nb + j;
+                for k in 0..3 {
+                    out[(3 * a + k) * nd + col] += v[k];
+                    out[col * nd + 3 * a + k] += v[k];
+                }
+            }
+        }
+        for i in 0..nv {
+            for j in i..nv {
+                let v = self.vv[i * nv + j];
+                out[(3 * nb + i) * nd + 3 * nb + j] += v;
+                if j != i {
+                    out[(3 * nb + j) * nd + 3 * nb + i] += v;
+                }
+            }
         }
     }
 }
@@ -210,6 +265,14 @@ pub trait GeneralizedGeometry: Clone + Send + Sync + std::fmt::Debug {
     fn velocity_terms(&self, param: [f64; 2], qdot: &[f64]) -> Result<(Vec3, Vec3), DynamicsError>;
     /// Parameter of the point of the geometry nearest to `x`.
     fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError>;
+    /// The solver [`GeneralizedDnurbs::new`] picks for this geometry. Default
+    /// [`LinearSolver::Direct`]; geometries whose coordinates are redundant (directions that
+    /// change the shape little or not at all, so the step matrix is nearly singular along them)
+    /// return [`LinearSolver::ConjugateGradient`]: an exact solve amplifies rounding along those
+    /// directions, while CG from a symmetric start never leaves the well-determined subspace.
+    fn default_solver(&self) -> LinearSolver {
+        LinearSolver::Direct
+    }
 }
 
 /// A geometric constraint (`d-nurbs.txt` section 6.2).
@@ -320,12 +383,20 @@ pub struct GeneralizedDnurbs<G: GeneralizedGeometry> {
     /// Whether the generalized inertial force `g_p` is applied (default true; turning it off
     /// shows its effect).
     pub inertial_force: bool,
+    /// How each step's linear system is solved (default [`LinearSolver::Direct`]: a sparse
+    /// Cholesky refactored every step on a symbolic analysis that is computed once per set of
+    /// fixed coordinates, since the pattern never changes; [`LinearSolver::ConjugateGradient`]:
+    /// block-Jacobi CG with [`GeneralizedDnurbs::max_iterations`] and
+    /// [`GeneralizedDnurbs::tolerance`], the paper's method).
+    pub solver: LinearSolver,
+    direct: Option<Arc<DirectPattern>>,
 }
 
 impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
     /// A model at rest in its current shape.
     pub fn new(geometry: G, material: Material) -> Result<Self, DynamicsError> {
         let dim = geometry.parametric_dimension();
+        let geometry_solver = geometry.default_solver();
         let elements = geometry.elements();
         let ne = elements.len();
         material.mu.validate("mu", ne)?;
@@ -403,6 +474,8 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             baumgarte: 1.0,
             weight_projections: 0,
             inertial_force: true,
+            solver: geometry_solver,
+            direct: None,
             substeps: 0,
             weight_inertia: DEFAULT_WEIGHT_INERTIA,
         };
@@ -764,6 +837,10 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         }
         let pattern = self.pattern.clone().expect("just built");
         let values = pattern.values(&works[..ne]);
+        let direct = match self.solver {
+            LinearSolver::Direct => self.factor(&pattern, &values, &works[ne..], &extra_diag),
+            LinearSolver::ConjugateGradient => None,
+        };
         let op = Op {
             works: &works,
             csr: Some((&pattern, &values)),
@@ -775,8 +852,11 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         let mut x: Vec<f64> = (0..n)
             .map(|i| if self.fixed[i] { 0.0 } else { v[i] })
             .collect();
-        let pre = Precond::new(&op, &self.geometry.coordinate_groups());
-        let mut stats = pcg(&op, &pre, &b, &mut x, self.max_iterations, self.tolerance);
+        let pre = match direct {
+            Some(f) => Solve::Direct(f),
+            None => Solve::Pcg(Precond::new(&op, &self.geometry.coordinate_groups())),
+        };
+        let mut stats = pre.solve(&op, &b, &mut x, self.max_iterations, self.tolerance);
         if !self.constraints.is_empty() {
             stats = self.apply_constraints(&op, &pre, &b, &mut x, self.baumgarte, stats)?;
         }
@@ -923,6 +1003,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                     ..Default::default()
                 };
                 let vl: Vec<f64> = w.dofs.iter().map(|&i| v[i]).collect();
+                let mut gram = Gram::new(&lj);
                 for (k, (&p, &qw)) in q.params.iter().zip(&q.weights).enumerate() {
                     if k > 0 {
                         g.jacobian_at(p, &mut lj)?;
@@ -938,7 +1019,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                     if dynamic {
                         coef[0] = qw * (2.0 * mu + dt * gamma);
                     }
-                    lj.accumulate_gram(&coef, &mut w.a);
+                    gram.add(&lj, &coef);
                     if dynamic {
                         lj.accumulate_value_diagonal(qw * mu, &mut w.mass_diag);
                     }
@@ -985,7 +1066,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                                 f += (target.at(self.time) - lj.s[0]) * kk;
                                 let mut cc = [0.0; 6];
                                 cc[0] = ck * qw * kk;
-                                lj.accumulate_gram(&cc, &mut w.a);
+                                gram.add(&lj, &cc);
                             }
                             _ => {}
                         }
@@ -994,7 +1075,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                         lj.apply_transpose(0, fs * qw, &f, &mut w.rhs);
                     }
                 }
-                mirror_upper(&mut w.a, w.dofs.len());
+                gram.expand(&mut w.a);
                 Ok(w)
             })
             .collect()
@@ -1040,8 +1121,9 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             if spring > 0.0 {
                 let mut c = [0.0; 6];
                 c[0] = ck * spring;
-                lj.accumulate_gram(&c, &mut w.a);
-                mirror_upper(&mut w.a, nd);
+                let mut gram = Gram::new(&lj);
+                gram.add(&lj, &c);
+                gram.expand(&mut w.a);
             }
             lj.apply_transpose(0, fs, &f, &mut w.rhs);
             works.push(w);
@@ -1049,11 +1131,59 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         Ok(())
     }
 
+    /// Sparse Cholesky of this step's matrix on the free coordinates, reusing the symbolic
+    /// analysis (cached per fixed set). `None` (the caller falls back to conjugate gradients)
+    /// if a point-force block falls outside the element pattern or the matrix is not positive
+    /// definite.
+    fn factor(
+        &mut self,
+        pattern: &CsrPattern,
+        values: &[f64],
+        extras: &[ElementWork],
+        extra_diag: &[f64],
+    ) -> Option<Factor> {
+        let mut full = values.to_vec();
+        for w in extras {
+            let nd = w.dofs.len();
+            for (a, &i) in w.dofs.iter().enumerate() {
+                let row = &pattern.cols[pattern.row_ptr[i]..pattern.row_ptr[i + 1]];
+                for (bb, &j) in w.dofs.iter().enumerate() {
+                    let k = row.binary_search(&j).ok()?;
+                    full[pattern.row_ptr[i] + k] += w.a[a * nd + bb];
+                }
+            }
+        }
+        if self.direct.as_ref().is_none_or(|d| d.fixed != self.fixed) {
+            self.direct = Some(Arc::new(DirectPattern::new(pattern, &self.fixed)?));
+        }
+        let dp = self.direct.clone()?;
+        let mut vals: Vec<f64> = dp.src.iter().map(|&k| full[k]).collect();
+        for (j, &i) in dp.free.iter().enumerate() {
+            vals[dp.col_ptr[j]] += extra_diag[i];
+        }
+        let m = dp.free.len();
+        let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(
+            m,
+            m,
+            &dp.col_ptr,
+            None,
+            &dp.row_idx,
+        );
+        let mat = faer::sparse::SparseColMatRef::new(sym, &vals);
+        let llt = faer::sparse::linalg::solvers::Llt::try_new_with_symbolic(
+            dp.symbolic.clone(),
+            mat,
+            faer::Side::Lower,
+        )
+        .ok()?;
+        Some(Factor { pattern: dp, llt })
+    }
+
     /// Lagrange multipliers for the constraints on the linearized step (module docs).
     fn apply_constraints(
         &self,
         op: &Op<'_>,
-        pre: &Precond,
+        pre: &Solve,
         b: &[f64],
         x: &mut [f64],
         gain: f64,
@@ -1126,7 +1256,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         let mut ys = Vec::with_capacity(k);
         for (_, _, r) in &rows {
             let mut y = vec![0.0; n];
-            let s = pcg(op, pre, r, &mut y, self.max_iterations, self.tolerance);
+            let s = pre.solve(op, r, &mut y, self.max_iterations, self.tolerance);
             stats.iterations += s.iterations;
             stats.relative_residual = stats.relative_residual.max(s.relative_residual);
             ys.push(y);
@@ -1337,6 +1467,115 @@ impl Precond {
                     s += inv[(a, bb)] * r[j];
                 }
                 z[i] = s;
+            }
+        }
+    }
+}
+
+/// The free-coordinate block of the element pattern as a lower-triangular CSC matrix, with
+/// its symbolic Cholesky analysis (fill-reducing ordering, elimination tree), computed once per
+/// set of fixed coordinates.
+#[derive(Debug)]
+struct DirectPattern {
+    /// The fixed mask it was built for.
+    fixed: Vec<bool>,
+    /// Free coordinates in order (column `j` is coordinate `free[j]`).
+    free: Vec<usize>,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    /// For each stored entry, its index in the CSR values of [`CsrPattern`].
+    src: Vec<usize>,
+    symbolic: faer::sparse::linalg::solvers::SymbolicLlt<usize>,
+}
+
+impl DirectPattern {
+    fn new(pattern: &CsrPattern, fixed: &[bool]) -> Option<Self> {
+        let n = fixed.len();
+        let free: Vec<usize> = (0..n).filter(|&i| !fixed[i]).collect();
+        let mut pos = vec![usize::MAX; n];
+        for (k, &i) in free.iter().enumerate() {
+            pos[i] = k;
+        }
+        // The pattern is symmetric: column j's lower part is row j's entries at columns >= j.
+        let (mut col_ptr, mut row_idx, mut src) = (vec![0], Vec::new(), Vec::new());
+        for &i in &free {
+            for p in pattern.row_ptr[i]..pattern.row_ptr[i + 1] {
+                let c = pattern.cols[p];
+                if pos[c] != usize::MAX && pos[c] >= pos[i] {
+                    row_idx.push(pos[c]);
+                    src.push(p);
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+        // Every free coordinate's diagonal is in the pattern (it lies in some element), and it
+        // comes first in its column (rows sorted, all >= the column).
+        if (0..free.len()).any(|j| col_ptr[j] == col_ptr[j + 1] || row_idx[col_ptr[j]] != j) {
+            return None;
+        }
+        let m = free.len();
+        let sym =
+            faer::sparse::SymbolicSparseColMatRef::new_checked(m, m, &col_ptr, None, &row_idx);
+        let symbolic =
+            faer::sparse::linalg::solvers::SymbolicLlt::try_new(sym, faer::Side::Lower).ok()?;
+        Some(Self {
+            fixed: fixed.to_vec(),
+            free,
+            col_ptr,
+            row_idx,
+            src,
+            symbolic,
+        })
+    }
+}
+
+/// A numeric Cholesky factorization of one step's matrix.
+struct Factor {
+    pattern: Arc<DirectPattern>,
+    llt: faer::sparse::linalg::solvers::Llt<usize, f64>,
+}
+
+/// How a step's systems `A x = b` are solved.
+enum Solve {
+    /// Block-Jacobi-preconditioned conjugate gradients.
+    Pcg(Precond),
+    /// The step's sparse Cholesky factorization.
+    Direct(Factor),
+}
+
+impl Solve {
+    /// Solves `A x = b` on the free coordinates (fixed entries of `x` become 0). For the
+    /// direct solver the reported residual is the true one (one product with `A`).
+    fn solve(&self, op: &Op<'_>, b: &[f64], x: &mut [f64], max_it: usize, tol: f64) -> SolverStats {
+        match self {
+            Solve::Pcg(pre) => pcg(op, pre, b, x, max_it, tol),
+            Solve::Direct(f) => {
+                use faer::linalg::solvers::Solve as _;
+                let free = &f.pattern.free;
+                let mut rhs = faer::Mat::<f64>::zeros(free.len(), 1);
+                for (k, &i) in free.iter().enumerate() {
+                    rhs[(k, 0)] = b[i];
+                }
+                f.llt.solve_in_place(rhs.as_mut());
+                x.iter_mut().for_each(|v| *v = 0.0);
+                for (k, &i) in free.iter().enumerate() {
+                    x[i] = rhs[(k, 0)];
+                }
+                let mut ax = vec![0.0; b.len()];
+                op.apply(x, &mut ax);
+                let (mut rn, mut bn) = (0.0, 0.0);
+                for &i in free {
+                    rn += (b[i] - ax[i]).powi(2);
+                    bn += b[i] * b[i];
+                }
+                SolverStats {
+                    iterations: 0,
+                    relative_residual: if bn > 0.0 {
+                        (rn / bn).sqrt()
+                    } else {
+                        rn.sqrt()
+                    },
+                }
             }
         }
     }
