@@ -1,8 +1,8 @@
 //! Steps per second of a D-NURBS surface with dynamic weights (`d-nurbs.txt` sections 4.2, 5.3):
 //! `cargo run --release -p vclay-dynamics --example dnurbs_dynamic_weights [N]` for an N x N
 //! cubic surface (default 16; issue goal: 60 steps/s on 2 cores; optional second argument: CG
-//! relative tolerance; `--direct`: the sparse Cholesky solver instead of CG), pulled by a moving
-//! spring, one edge fixed. Every step recomputes the element matrices (they depend on the
+//! relative tolerance; `--cg`: block-Jacobi CG instead of the default sparse Cholesky), pulled
+//! by a moving spring, one edge fixed. Every step recomputes the element matrices (they depend on the
 //! weights).
 use std::time::Instant;
 use vclay_core::Vec3;
@@ -11,8 +11,8 @@ use vclay_dynamics::{Force, Integrator, Material};
 use vclay_spline::NurbsSurface;
 
 fn main() {
-    let direct = std::env::args().any(|a| a == "--direct");
-    let args: Vec<String> = std::env::args().filter(|a| a != "--direct").collect();
+    let cg = std::env::args().any(|a| a == "--cg");
+    let args: Vec<String> = std::env::args().filter(|a| a != "--cg").collect();
     let n: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(16);
     let mut pts = Vec::with_capacity(n * n);
     let mut w = Vec::with_capacity(n * n);
@@ -38,8 +38,8 @@ fn main() {
     if let Some(tol) = args.get(2).and_then(|a| a.parse().ok()) {
         d.tolerance = tol;
     }
-    if direct {
-        d.solver = vclay_dynamics::LinearSolver::Direct;
+    if cg {
+        d.solver = vclay_dynamics::LinearSolver::ConjugateGradient;
     }
     for k in 0..n {
         for c in 0..3 {

@@ -1382,10 +1382,11 @@ impl DynamicSolid {
 }
 
 /// Energy of stretching every spring by its own rest length.
-/// Point blocks of the parallel spring passes ([`SpringSet::organize`]): two per rayon thread,
-/// so that work stealing can even out unequal blocks.
+/// Point blocks of the parallel spring passes ([`SpringSet::organize`]): one per rayon thread
+/// (blocks of equal point counts carry nearly equal spring counts, and fewer cuts leave fewer
+/// straddling springs for the sequential tail).
 fn force_blocks() -> usize {
-    2 * rayon::current_num_threads().max(1)
+    rayon::current_num_threads().max(1)
 }
 
 fn spring_energy_scale(sp: &SpringSet) -> f64 {

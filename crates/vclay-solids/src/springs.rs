@@ -74,9 +74,11 @@ fn corner(verts: &[u32], j: usize) -> (usize, usize, usize) {
 }
 
 impl SpringSet {
-    /// Unorganized sets run on one thread below this many springs (the per-thread copies of
-    /// the force array cost more than they save on small sets).
-    pub const PARALLEL_UNORGANIZED: usize = 100_000;
+    /// Under [`Parallelism::Auto`], sets run on one thread below this many springs: thread
+    /// start-up, the straddling springs (a larger share on small lattices) and, for unorganized
+    /// sets, the per-thread copies of the force array cost more than they save (measured with
+    /// `examples/kernels.rs`: no gain at 218k springs, 1.5x at 1.7M on 2 cores).
+    pub const PARALLEL_SPRINGS: usize = 500_000;
 
     /// Number of faces.
     pub fn num_faces(&self) -> usize {
@@ -269,10 +271,10 @@ impl SpringSet {
 
     /// Adds the spring forces in configuration `d` to `f` and returns the potential energy.
     ///
-    /// In parallel (`par` and the spring count allowing, and more than one rayon thread): an
-    /// [organized](SpringSet::organize) set runs its blocks side by side, each writing its own
-    /// range of `f`; an unorganized one (from [`SpringSet::PARALLEL_UNORGANIZED`] springs)
-    /// splits the springs evenly and sums per-thread copies of `f` kept in `ws`.
+    /// In parallel ([`Parallelism::Rayon`], or `Auto` from [`SpringSet::PARALLEL_SPRINGS`]
+    /// springs): an [organized](SpringSet::organize) set runs its blocks side by side, each
+    /// writing its own range of `f`, then its straddling springs; an unorganized one splits the
+    /// springs evenly and sums per-thread copies of `f` kept in `ws`.
     pub fn add_forces(
         &self,
         d: &[Vec3],
@@ -283,9 +285,8 @@ impl SpringSet {
         let organized = self.parts.len() > 2
             && self.parts[self.parts.len() - 2].points.end == f.len()
             && d.len() == f.len();
-        let threads = if par.is_parallel(self.len())
-            && (organized || self.len() >= Self::PARALLEL_UNORGANIZED)
-        {
+        let big = self.len() >= Self::PARALLEL_SPRINGS;
+        let threads = if par.is_parallel(self.len()) && (big || par == Parallelism::Rayon) {
             rayon::current_num_threads().max(1)
         } else {
             1

@@ -137,14 +137,16 @@ impl LocalJacobian {
 struct Gram {
     nb: usize,
     nv: usize,
-    /// Block-block scalars, `nb x nb` (upper triangle used).
+    /// Block-block scalars, `nb x nb`.
     bb: Vec<f64>,
-    /// Block-vector columns, `nb x nv`.
-    bv: Vec<Vec3>,
-    /// Vector-vector scalars, `nv x nv` (upper triangle used).
+    /// Block-vector columns, `nb x 3 x nv` (component-major per block).
+    bv: Vec<f64>,
+    /// Vector-vector scalars, `nv x nv`.
     vv: Vec<f64>,
-    /// Scratch: `coef[a] R^a` per block.
-    scaled: Vec<[f64; 6]>,
+    /// Scratch: the block values transposed, `6 x nb`.
+    rt: Vec<f64>,
+    /// Scratch: the general columns, `6 x 3 x nv` (kind, component, column).
+    gk: Vec<f64>,
 }
 
 impl Gram {
@@ -155,44 +157,72 @@ impl Gram {
             nb,
             nv,
             bb: vec![0.0; nb * nb],
-            bv: vec![Vec3::zeros(); nb * nv],
+            bv: vec![0.0; nb * 3 * nv],
             vv: vec![0.0; nv * nv],
-            scaled: vec![[0.0; 6]; nb],
+            rt: vec![0.0; 6 * nb],
+            gk: vec![0.0; 18 * nv],
         }
     }
 
     /// Adds `sum_a coef[a] J^a^T J^a` for one Jacobian (same columns as at construction).
+    /// The columns are first laid out kind-major, so every inner loop runs over contiguous
+    /// columns (and vectorizes); full squares are accumulated rather than triangles.
     fn add(&mut self, lj: &LocalJacobian, coef: &[f64; 6]) {
+        struct Add<'a>(&'a mut Gram, &'a LocalJacobian, &'a [f64; 6]);
+        impl pulp::WithSimd for Add<'_> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, _simd: S) {
+                self.0.add_kernel(self.1, self.2);
+            }
+        }
+        // Compiled for AVX2/FMA too and chosen at run time (the loops below vectorize).
+        pulp::Arch::new().dispatch(Add(self, lj, coef));
+    }
+
+    #[inline(always)]
+    fn add_kernel(&mut self, lj: &LocalJacobian, coef: &[f64; 6]) {
         let (nb, nv) = (self.nb, self.nv);
         debug_assert_eq!((lj.blocks.len(), lj.vectors.len()), (nb, nv));
-        for (sc, (_, r)) in self.scaled.iter_mut().zip(&lj.blocks) {
-            *sc = std::array::from_fn(|m| coef[m] * r[m]);
-        }
-        for a in 0..nb {
-            let ca = &self.scaled[a];
-            let row = &mut self.bb[a * nb..(a + 1) * nb];
-            for b in a..nb {
-                let rb = &lj.blocks[b].1;
-                row[b] += (0..6).map(|m| ca[m] * rb[m]).sum::<f64>();
-            }
-            let row = &mut self.bv[a * nv..(a + 1) * nv];
-            for (j, (_, g)) in lj.vectors.iter().enumerate() {
-                let mut v = Vec3::zeros();
-                for m in 0..6 {
-                    v += g[m] * ca[m];
-                }
-                row[j] += v;
+        for (a, (_, r)) in lj.blocks.iter().enumerate() {
+            for m in 0..6 {
+                self.rt[m * nb + a] = r[m];
             }
         }
-        for i in 0..nv {
-            let gi = &lj.vectors[i].1;
-            for j in i..nv {
-                let gj = &lj.vectors[j].1;
-                let mut v = 0.0;
-                for m in 0..6 {
-                    v += coef[m] * gi[m].dot(&gj[m]);
+        for (j, (_, g)) in lj.vectors.iter().enumerate() {
+            for m in 0..6 {
+                for k in 0..3 {
+                    self.gk[(3 * m + k) * nv + j] = g[m][k];
                 }
-                self.vv[i * nv + j] += v;
+            }
+        }
+        for m in 0..6 {
+            if coef[m] == 0.0 {
+                continue;
+            }
+            let rt = &self.rt[m * nb..(m + 1) * nb];
+            let gk = &self.gk[3 * m * nv..3 * (m + 1) * nv];
+            for a in 0..nb {
+                let c = coef[m] * rt[a];
+                if c == 0.0 {
+                    continue;
+                }
+                for (o, &rb) in self.bb[a * nb..(a + 1) * nb].iter_mut().zip(rt) {
+                    *o += c * rb;
+                }
+                for (o, &g) in self.bv[a * 3 * nv..(a + 1) * 3 * nv].iter_mut().zip(gk) {
+                    *o += c * g;
+                }
+            }
+            for i in 0..nv {
+                let row = &mut self.vv[i * nv..(i + 1) * nv];
+                for k in 0..3 {
+                    let gki = &gk[k * nv..(k + 1) * nv];
+                    let c = coef[m] * gki[i];
+                    for (o, &g) in row.iter_mut().zip(gki) {
+                        *o += c * g;
+                    }
+                }
             }
         }
     }
@@ -203,31 +233,24 @@ impl Gram {
         let (nb, nv) = (self.nb, self.nv);
         let nd = 3 * nb + nv;
         for a in 0..nb {
-            for b in a..nb {
+            for b in 0..nb {
                 let v = self.bb[a * nb + b];
                 for k in 0..3 {
                     out[(3 * a + k) * nd + 3 * b + k] += v;
-                    if b != a {
-                        out[(3 * b + k) * nd + 3 * a + k] += v;
-                    }
                 }
             }
             for j in 0..nv {
-                let v = self.bv[a * nv + j];
                 let col = 3 * nb + j;
                 for k in 0..3 {
-                    out[(3 * a + k) * nd + col] += v[k];
-                    out[col * nd + 3 * a + k] += v[k];
+                    let v = self.bv[(3 * a + k) * nv + j];
+                    out[(3 * a + k) * nd + col] += v;
+                    out[col * nd + 3 * a + k] += v;
                 }
             }
         }
         for i in 0..nv {
-            for j in i..nv {
-                let v = self.vv[i * nv + j];
-                out[(3 * nb + i) * nd + 3 * nb + j] += v;
-                if j != i {
-                    out[(3 * nb + j) * nd + 3 * nb + i] += v;
-                }
+            for j in 0..nv {
+                out[(3 * nb + i) * nd + 3 * nb + j] += self.vv[i * nv + j];
             }
         }
     }
@@ -836,15 +859,21 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             self.pattern = Some(Arc::new(CsrPattern::new(n, &works[..ne])));
         }
         let pattern = self.pattern.clone().expect("just built");
-        let values = pattern.values(&works[..ne]);
-        let direct = match self.solver {
-            LinearSolver::Direct => self.factor(&pattern, &values, &works[ne..], &extra_diag),
-            LinearSolver::ConjugateGradient => None,
+        let mut values = pattern.values(&works[..ne]);
+        // The direct solver folds the point-force blocks into the CSR values (they lie in the
+        // element pattern) and factors them; CG applies them element-wise.
+        let folded =
+            self.solver == LinearSolver::Direct && fold_extras(&pattern, &mut values, &works[ne..]);
+        let direct = if folded {
+            self.factor(&pattern, &values, &extra_diag)
+        } else {
+            None
         };
+        let first_extra = if folded { works.len() } else { ne };
         let op = Op {
             works: &works,
             csr: Some((&pattern, &values)),
-            first_extra: ne,
+            first_extra,
             extra_diag: &extra_diag,
             fixed: &self.fixed,
             n,
@@ -1131,28 +1160,11 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         Ok(())
     }
 
-    /// Sparse Cholesky of this step's matrix on the free coordinates, reusing the symbolic
-    /// analysis (cached per fixed set). `None` (the caller falls back to conjugate gradients)
-    /// if a point-force block falls outside the element pattern or the matrix is not positive
-    /// definite.
-    fn factor(
-        &mut self,
-        pattern: &CsrPattern,
-        values: &[f64],
-        extras: &[ElementWork],
-        extra_diag: &[f64],
-    ) -> Option<Factor> {
-        let mut full = values.to_vec();
-        for w in extras {
-            let nd = w.dofs.len();
-            for (a, &i) in w.dofs.iter().enumerate() {
-                let row = &pattern.cols[pattern.row_ptr[i]..pattern.row_ptr[i + 1]];
-                for (bb, &j) in w.dofs.iter().enumerate() {
-                    let k = row.binary_search(&j).ok()?;
-                    full[pattern.row_ptr[i] + k] += w.a[a * nd + bb];
-                }
-            }
-        }
+    /// Sparse Cholesky of this step's matrix (CSR values `full` with the point-force blocks
+    /// folded in, plus `extra_diag`) on the free coordinates, reusing the symbolic analysis
+    /// (cached per fixed set). `None` (the caller falls back to conjugate gradients) if the
+    /// matrix is not positive definite.
+    fn factor(&mut self, pattern: &CsrPattern, full: &[f64], extra_diag: &[f64]) -> Option<Factor> {
         if self.direct.as_ref().is_none_or(|d| d.fixed != self.fixed) {
             self.direct = Some(Arc::new(DirectPattern::new(pattern, &self.fixed)?));
         }
@@ -1470,6 +1482,31 @@ impl Precond {
             }
         }
     }
+}
+
+/// Adds the point-force blocks `extras` into the CSR values when every entry lies in the
+/// pattern (they do: a point's Jacobian columns are those of its element); returns whether it
+/// did (if not, nothing is changed).
+fn fold_extras(pattern: &CsrPattern, values: &mut [f64], extras: &[ElementWork]) -> bool {
+    let mut at = Vec::new();
+    for w in extras {
+        for &i in &w.dofs {
+            let row = &pattern.cols[pattern.row_ptr[i]..pattern.row_ptr[i + 1]];
+            for &j in &w.dofs {
+                match row.binary_search(&j) {
+                    Ok(k) => at.push(pattern.row_ptr[i] + k),
+                    Err(_) => return false,
+                }
+            }
+        }
+    }
+    let mut at = at.into_iter();
+    for w in extras {
+        for &a in &w.a {
+            values[at.next().expect("one position per entry")] += a;
+        }
+    }
+    true
 }
 
 /// The free-coordinate block of the element pattern as a lower-triangular CSC matrix, with

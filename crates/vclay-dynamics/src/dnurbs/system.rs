@@ -119,27 +119,31 @@ impl Csr3 {
         }
     }
 
-    /// The end-of-step pass (see [`ElementSystem::step_products`]).
+    /// The end-of-step pass (see [`ElementSystem::step_products`]). The three vectors each
+    /// entry reads (`x`, `x - p`, `x - rest`) are packed per point first, so the pass gathers
+    /// one record per matrix entry.
     fn step_products(&self, inp: StepInputs<'_>, out: StepOutputs<'_>) -> (f64, f64) {
         let StepInputs { x, p, inv_dt, rest } = inp;
+        let packed: Vec<[Vec3; 3]> = (0..x.len())
+            .map(|i| [x[i], x[i] - p[i], rest.map_or(x[i], |r| x[i] - r[i])])
+            .collect();
         let row = |(i, ((m, d), k)): (usize, ((&mut Vec3, &mut Vec3), &mut Vec3))| {
             let (mut sm, mut sd, mut sk) = (Vec3::zeros(), Vec3::zeros(), Vec3::zeros());
             let (mut mv, mut kd) = (Vec3::zeros(), Vec3::zeros());
             let r = self.row_ptr[i]..self.row_ptr[i + 1];
             for (&j, v) in self.cols[r.clone()].iter().zip(&self.vals[r]) {
-                let xj = x[j];
+                let [xj, vj, ej] = &packed[j];
                 sm += xj * v[0];
                 sd += xj * v[1];
                 sk += xj * v[2];
-                mv += (xj - p[j]) * v[0];
-                kd += rest.map_or(xj, |r| xj - r[j]) * v[2];
+                mv += vj * v[0];
+                kd += ej * v[2];
             }
             *m = sm;
             *d = sd;
             *k = sk;
-            let vi = (x[i] - p[i]) * inv_dt;
-            let di = rest.map_or(x[i], |r| x[i] - r[i]);
-            (vi.dot(&mv) * inv_dt, di.dot(&kd))
+            let [_, vi, ei] = &packed[i];
+            (vi.dot(&mv) * inv_dt * inv_dt, ei.dot(&kd))
         };
         let StepOutputs { mx, dx, kx } = out;
         let add = |a: (f64, f64), b: (f64, f64)| (a.0 + b.0, a.1 + b.1);
