@@ -745,7 +745,17 @@ pub(crate) fn direct_solve(
             rhs[(k, c)] = b[i][c] - axf[i][c];
         }
     }
-    solver.llt.solve_in_place(rhs.as_mut());
+    // The x column on one thread, y and z on another (faer runs sequentially here: its rayon
+    // feature is off), for models big enough to pay for the split.
+    if m >= 4 * PARALLEL_ELEMENTS {
+        let (first, rest) = rhs.as_mut().split_at_col_mut(1);
+        rayon::join(
+            || solver.llt.solve_in_place(first),
+            || solver.llt.solve_in_place(rest),
+        );
+    } else {
+        solver.llt.solve_in_place(rhs.as_mut());
+    }
     for (k, &i) in solver.free.iter().enumerate() {
         x[i] = Vec3::new(rhs[(k, 0)], rhs[(k, 1)], rhs[(k, 2)]);
     }
