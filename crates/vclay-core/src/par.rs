@@ -28,4 +28,31 @@ impl Parallelism {
             Parallelism::Auto => items >= DEFAULT_PARALLEL_THRESHOLD,
         }
     }
+
+    /// As [`Parallelism::is_parallel`], with `Auto` going parallel from `threshold` items
+    /// instead of [`DEFAULT_PARALLEL_THRESHOLD`] (for work whose per-item cost or setup makes
+    /// the break-even point differ, measured at the call site).
+    pub fn is_parallel_from(self, items: usize, threshold: usize) -> bool {
+        match self {
+            Parallelism::Auto => items >= threshold,
+            other => other.is_parallel(items),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thresholds_apply_to_auto_only() {
+        assert!(!Parallelism::Auto.is_parallel_from(999, 1000));
+        assert!(Parallelism::Auto.is_parallel_from(1000, 1000));
+        assert!(Parallelism::Rayon.is_parallel_from(1, 1000));
+        assert!(!Parallelism::Sequential.is_parallel_from(1 << 30, 1000));
+        assert_eq!(
+            Parallelism::Auto.is_parallel_from(5000, DEFAULT_PARALLEL_THRESHOLD),
+            Parallelism::Auto.is_parallel(5000)
+        );
+    }
 }

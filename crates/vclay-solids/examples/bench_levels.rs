@@ -9,7 +9,7 @@
 
 use std::time::Instant;
 use vclay_core::Vec3;
-use vclay_lattice::{BoundaryRule, Features, SubdivisionRules, primitives};
+use vclay_lattice::{BoundaryRule, primitives};
 use vclay_solids::{DynamicSolid, Material, SolidParams, SolidSource};
 use vclay_spline::KnotVector;
 
@@ -92,13 +92,7 @@ fn main() {
     let paper = ["10 (216 cells)", "72 (1,728 cells)", "-", "-", "-"];
     for level in 1..=max_level {
         let cube = primitives::box_lattice([4, 4, 4], Vec3::zeros(), Vec3::repeat(1.0));
-        let p = cube.points().to_vec();
-        let source = SolidSource::Subdivision {
-            features: Features::none(&cube),
-            control: cube,
-            rules: SubdivisionRules::new(BoundaryRule::Sharp),
-            levels: level,
-        };
+        let (source, p) = SolidSource::subdivision(cube, BoundaryRule::Sharp, level);
         let t0 = Instant::now();
         let mut s = DynamicSolid::new(source, p, Material::default(), params).unwrap();
         let build = t0.elapsed().as_secs_f64();

@@ -5,7 +5,7 @@
 
 use std::time::Instant;
 use vclay_core::{Parallelism, Vec3};
-use vclay_lattice::{BoundaryRule, Features, SubdivisionRules, primitives};
+use vclay_lattice::{BoundaryRule, primitives};
 use vclay_solids::springs::ForceWorkspace;
 use vclay_solids::{DynamicSolid, Material, SolidParams, SolidSource};
 
@@ -19,13 +19,7 @@ fn main() {
     let level: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(4);
     let reps: usize = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(20);
     let cube = primitives::box_lattice([4, 4, 4], Vec3::zeros(), Vec3::repeat(1.0));
-    let p = cube.points().to_vec();
-    let source = SolidSource::Subdivision {
-        features: Features::none(&cube),
-        control: cube,
-        rules: SubdivisionRules::new(BoundaryRule::Sharp),
-        levels: level,
-    };
+    let (source, p) = SolidSource::subdivision(cube, BoundaryRule::Sharp, level);
     let mut s = DynamicSolid::new(
         source.clone(),
         p,

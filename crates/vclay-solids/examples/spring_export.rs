@@ -36,7 +36,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use vclay_core::{Parallelism, Vec3};
-use vclay_lattice::{BoundaryRule, Features, SubdivisionRules, primitives};
+use vclay_lattice::{BoundaryRule, primitives};
 use vclay_solids::springs::{ForceWorkspace, SpringSet};
 use vclay_solids::{DynamicSolid, Material, SolidParams, SolidSource};
 
@@ -176,13 +176,7 @@ fn run(level: usize, out: &Path, seconds: f64) -> Res<String> {
     }
     std::fs::create_dir_all(out)?;
     let cube = primitives::box_lattice([4, 4, 4], Vec3::zeros(), Vec3::repeat(1.0));
-    let p = cube.points().to_vec();
-    let source = SolidSource::Subdivision {
-        features: Features::none(&cube),
-        control: cube,
-        rules: SubdivisionRules::new(BoundaryRule::Sharp),
-        levels: level,
-    };
+    let (source, p) = SolidSource::subdivision(cube, BoundaryRule::Sharp, level);
     let t0 = Instant::now();
     let solid = DynamicSolid::new(source, p, Material::default(), SolidParams::default())?;
     let build_s = t0.elapsed().as_secs_f64();

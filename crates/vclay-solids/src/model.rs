@@ -51,6 +51,24 @@ pub enum SolidSource {
 }
 
 impl SolidSource {
+    /// A subdivision solid over `control` with no tagged features and `boundary` as the
+    /// boundary rule, subdivided `levels` times, with the control lattice's points as the
+    /// control points (what [`crate::DynamicSolid::new`] takes).
+    pub fn subdivision(
+        control: Lattice,
+        boundary: vclay_lattice::BoundaryRule,
+        levels: usize,
+    ) -> (Self, Vec<Vec3>) {
+        let p = control.points().to_vec();
+        let source = SolidSource::Subdivision {
+            features: Features::none(&control),
+            control,
+            rules: SubdivisionRules::new(boundary),
+            levels,
+        };
+        (source, p)
+    }
+
     /// Number of control points.
     pub fn control_count(&self) -> usize {
         match self {

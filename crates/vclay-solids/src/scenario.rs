@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use toml::Spanned;
 use vclay_core::Vec3;
-use vclay_lattice::{BoundaryRule, Features, Lattice, SubdivisionRules, formats, primitives};
+use vclay_lattice::{BoundaryRule, Lattice, formats, primitives};
 use vclay_spline::{KnotVector, NurbsVolume};
 
 use crate::error::SolidsError;
@@ -691,16 +691,7 @@ fn build_model(
                     return Err(src.err(span, "boundary", format!("unknown rule \"{other}\"; expected \"sharp\", \"smooth\" or \"interior\"")));
                 }
             };
-            let p = lattice.points().to_vec();
-            Ok((
-                SolidSource::Subdivision {
-                    features: Features::none(&lattice),
-                    control: lattice,
-                    rules: SubdivisionRules::new(boundary),
-                    levels: level,
-                },
-                p,
-            ))
+            Ok(SolidSource::subdivision(lattice, boundary, level))
         }
         "bspline-solid" => {
             for (k, present) in [

@@ -95,6 +95,39 @@ impl SpringSet {
         self.len() == 0
     }
 
+    /// The corners of face `f` (its range in `face_verts`, `corner_rest` and `corner_k`).
+    #[inline]
+    fn face(&self, f: usize) -> std::ops::Range<usize> {
+        self.face_offsets[f] as usize..self.face_offsets[f + 1] as usize
+    }
+
+    /// A new (unorganized) set with the given edges and faces, in the given order.
+    fn select(
+        &self,
+        edges: impl IntoIterator<Item = usize>,
+        faces: impl IntoIterator<Item = usize>,
+    ) -> SpringSet {
+        let mut out = SpringSet {
+            face_offsets: vec![0],
+            ..Default::default()
+        };
+        for i in edges {
+            out.edges.push(self.edges[i]);
+            out.edge_rest.push(self.edge_rest[i]);
+            out.edge_k.push(self.edge_k[i]);
+        }
+        for f in faces {
+            let r = self.face(f);
+            out.face_verts
+                .extend_from_slice(&self.face_verts[r.clone()]);
+            out.corner_rest
+                .extend_from_slice(&self.corner_rest[r.clone()]);
+            out.corner_k.extend_from_slice(&self.corner_k[r]);
+            out.face_offsets.push(out.face_verts.len() as u32);
+        }
+        out
+    }
+
     /// Sets every rest length to the length in configuration `d` (plastic reset, journal
     /// section 5.4: both kinds of spring).
     pub fn reset_rest(&mut self, d: &[Vec3]) {
@@ -102,11 +135,8 @@ impl SpringSet {
             *r = (d[e[1] as usize] - d[e[0] as usize]).norm();
         }
         for f in 0..self.num_faces() {
-            let (lo, hi) = (
-                self.face_offsets[f] as usize,
-                self.face_offsets[f + 1] as usize,
-            );
-            let verts = &self.face_verts[lo..hi];
+            let lo = self.face(f).start;
+            let verts = &self.face_verts[self.face(f)];
             for j in 0..verts.len() {
                 let (m, a, b) = corner(verts, j);
                 self.corner_rest[lo + j] = (d[m] - (d[a] + d[b]) * 0.5).norm();
@@ -117,30 +147,11 @@ impl SpringSet {
     /// The subset of springs that touch a point with `keep[i]` (journal section 5.2: springs
     /// among data points that only fixed control points define need no processing).
     pub fn filter(&self, keep: &[bool]) -> SpringSet {
-        let mut out = SpringSet {
-            face_offsets: vec![0],
-            ..Default::default()
-        };
-        for (i, e) in self.edges.iter().enumerate() {
-            if keep[e[0] as usize] || keep[e[1] as usize] {
-                out.edges.push(*e);
-                out.edge_rest.push(self.edge_rest[i]);
-                out.edge_k.push(self.edge_k[i]);
-            }
-        }
-        for f in 0..self.num_faces() {
-            let (lo, hi) = (
-                self.face_offsets[f] as usize,
-                self.face_offsets[f + 1] as usize,
-            );
-            if self.face_verts[lo..hi].iter().any(|&v| keep[v as usize]) {
-                out.face_verts.extend_from_slice(&self.face_verts[lo..hi]);
-                out.corner_rest.extend_from_slice(&self.corner_rest[lo..hi]);
-                out.corner_k.extend_from_slice(&self.corner_k[lo..hi]);
-                out.face_offsets.push(out.face_verts.len() as u32);
-            }
-        }
-        out
+        let kept = |vs: &[u32]| vs.iter().any(|&v| keep[v as usize]);
+        self.select(
+            (0..self.edges.len()).filter(|&i| kept(&self.edges[i])),
+            (0..self.num_faces()).filter(|&f| kept(&self.face_verts[self.face(f)])),
+        )
     }
 
     /// Reorders the springs for parallel, cache-friendly force passes on `n` points: the point
@@ -150,71 +161,28 @@ impl SpringSet {
     /// parts in parallel, each writing only its own range of the force array (no per-thread
     /// copies), and the straddling part after them. Pays off when the point ids are numbered for
     /// locality (the data lattices of [`crate::model`] are, by
-    /// [`vclay_lattice::Lattice::locality_order`]). The forces do not
-    /// depend on the order.
+    /// [`vclay_lattice::Lattice::locality_order`]). The forces do not depend on the order.
     pub fn organize(&mut self, n: usize, blocks: usize) {
         let blocks = blocks.max(1);
         let block = |v: u32| (v as usize * blocks / n.max(1)).min(blocks - 1);
-        let part_of = |vs: &mut dyn Iterator<Item = u32>| -> (usize, u32) {
-            let first = vs.next().unwrap_or(0);
-            let (b, mut lo) = (block(first), first);
-            let mut same = true;
-            for v in vs {
-                same &= block(v) == b;
-                lo = lo.min(v);
-            }
-            (if same { b } else { blocks }, lo)
+        // (part, smallest point id, index) of a spring over points `vs`.
+        let key = |vs: &[u32], i: usize| -> (usize, u32, usize) {
+            let b = vs.first().map_or(0, |&v| block(v));
+            let same = vs.iter().all(|&v| block(v) == b);
+            let lo = vs.iter().copied().min().unwrap_or(0);
+            (if same { b } else { blocks }, lo, i)
         };
-        // Edges.
-        let mut key: Vec<(usize, u32, u32)> = self
-            .edges
-            .iter()
-            .enumerate()
-            .map(|(i, e)| {
-                let (p, lo) = part_of(&mut e.iter().copied());
-                (p, lo, i as u32)
-            })
+        let mut edge_keys: Vec<_> = (0..self.edges.len())
+            .map(|i| key(&self.edges[i], i))
             .collect();
-        key.sort_unstable();
-        let edge_counts = counts(key.iter().map(|k| k.0), blocks + 1);
-        let pick = |v: &[f64]| key.iter().map(|k| v[k.2 as usize]).collect::<Vec<f64>>();
-        let (rest, k) = (pick(&self.edge_rest), pick(&self.edge_k));
-        self.edges = key.iter().map(|k| self.edges[k.2 as usize]).collect();
-        self.edge_rest = rest;
-        self.edge_k = k;
-        // Faces.
-        let nf = self.num_faces();
-        let mut key: Vec<(usize, u32, u32)> = (0..nf)
-            .map(|f| {
-                let (lo, hi) = (
-                    self.face_offsets[f] as usize,
-                    self.face_offsets[f + 1] as usize,
-                );
-                let (p, m) = part_of(&mut self.face_verts[lo..hi].iter().copied());
-                (p, m, f as u32)
-            })
+        let mut face_keys: Vec<_> = (0..self.num_faces())
+            .map(|f| key(&self.face_verts[self.face(f)], f))
             .collect();
-        key.sort_unstable();
-        let face_counts = counts(key.iter().map(|k| k.0), blocks + 1);
-        let (mut offsets, mut verts) = (vec![0u32], Vec::with_capacity(self.face_verts.len()));
-        let (mut rest, mut ks) = (
-            Vec::with_capacity(self.face_verts.len()),
-            Vec::with_capacity(self.face_verts.len()),
-        );
-        for &(_, _, f) in &key {
-            let (lo, hi) = (
-                self.face_offsets[f as usize] as usize,
-                self.face_offsets[f as usize + 1] as usize,
-            );
-            verts.extend_from_slice(&self.face_verts[lo..hi]);
-            rest.extend_from_slice(&self.corner_rest[lo..hi]);
-            ks.extend_from_slice(&self.corner_k[lo..hi]);
-            offsets.push(verts.len() as u32);
-        }
-        self.face_offsets = offsets;
-        self.face_verts = verts;
-        self.corner_rest = rest;
-        self.corner_k = ks;
+        edge_keys.sort_unstable();
+        face_keys.sort_unstable();
+        let edge_counts = counts(edge_keys.iter().map(|k| k.0), blocks + 1);
+        let face_counts = counts(face_keys.iter().map(|k| k.0), blocks + 1);
+        *self = self.select(edge_keys.iter().map(|k| k.2), face_keys.iter().map(|k| k.2));
         let (mut e0, mut f0) = (0, 0);
         self.parts = (0..=blocks)
             .map(|b| {
@@ -255,11 +223,8 @@ impl SpringSet {
             e += 0.5 * self.edge_k[i] * (l - self.edge_rest[i]).powi(2);
         }
         for f in 0..self.num_faces() {
-            let (lo, hi) = (
-                self.face_offsets[f] as usize,
-                self.face_offsets[f + 1] as usize,
-            );
-            let verts = &self.face_verts[lo..hi];
+            let lo = self.face(f).start;
+            let verts = &self.face_verts[self.face(f)];
             for j in 0..verts.len() {
                 let (m, a, b) = corner(verts, j);
                 let l = (d[m] - (d[a] + d[b]) * 0.5).norm();
@@ -285,8 +250,7 @@ impl SpringSet {
         let organized = self.parts.len() > 2
             && self.parts[self.parts.len() - 2].points.end == f.len()
             && d.len() == f.len();
-        let big = self.len() >= Self::PARALLEL_SPRINGS;
-        let threads = if par.is_parallel(self.len()) && (big || par == Parallelism::Rayon) {
+        let threads = if par.is_parallel_from(self.len(), Self::PARALLEL_SPRINGS) {
             rayon::current_num_threads().max(1)
         } else {
             1
@@ -424,10 +388,7 @@ impl SpringSet {
         let mut ks = [0.0; BATCH];
         let mut nq = 0;
         for fc in faces {
-            let (lo, hi) = (
-                self.face_offsets[fc] as usize,
-                self.face_offsets[fc + 1] as usize,
-            );
+            let (lo, hi) = (self.face(fc).start, self.face(fc).end);
             if hi - lo == 4 {
                 quads[nq] = fc;
                 starts[nq] = lo;
@@ -526,10 +487,7 @@ impl SpringSet {
             out[a] -= h;
         }
         for fc in 0..self.num_faces() {
-            let (lo, hi) = (
-                self.face_offsets[fc] as usize,
-                self.face_offsets[fc + 1] as usize,
-            );
+            let (lo, hi) = (self.face(fc).start, self.face(fc).end);
             let verts = &self.face_verts[lo..hi];
             for j in 0..verts.len() {
                 let (m, a, b) = corner(verts, j);
@@ -553,10 +511,7 @@ impl SpringSet {
             g[e[1] as usize] += 2.0 * self.edge_k[i];
         }
         for fc in 0..self.num_faces() {
-            let (lo, hi) = (
-                self.face_offsets[fc] as usize,
-                self.face_offsets[fc + 1] as usize,
-            );
+            let (lo, hi) = (self.face(fc).start, self.face(fc).end);
             let verts = &self.face_verts[lo..hi];
             for j in 0..verts.len() {
                 let (m, a, b) = corner(verts, j);

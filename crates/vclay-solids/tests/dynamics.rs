@@ -9,16 +9,7 @@ use vclay_spline::KnotVector;
 
 fn cube_source(n: usize, levels: usize) -> (SolidSource, Vec<Vec3>) {
     let cube = primitives::box_lattice([n, n, n], Vec3::zeros(), Vec3::repeat(1.0));
-    let p = cube.points().to_vec();
-    (
-        SolidSource::Subdivision {
-            features: Features::none(&cube),
-            control: cube,
-            rules: SubdivisionRules::new(BoundaryRule::Sharp),
-            levels,
-        },
-        p,
-    )
+    SolidSource::subdivision(cube, BoundaryRule::Sharp, levels)
 }
 
 fn bspline_source(n: usize, m: usize) -> (SolidSource, Vec<Vec3>) {

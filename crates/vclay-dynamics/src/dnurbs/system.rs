@@ -48,55 +48,6 @@ struct Csr3 {
 }
 
 impl Csr3 {
-    /// `out_i = sum_t sum_j (c_t . vals_ij) x_t[j]` over several terms in one pass.
-    fn apply_terms(&self, terms: &[([f64; 3], &[Vec3])], out: &mut [Vec3]) {
-        let row = |i: usize| {
-            let mut s = Vec3::zeros();
-            for k in self.row_ptr[i]..self.row_ptr[i + 1] {
-                let v = self.vals[k];
-                let j = self.cols[k];
-                for (c, x) in terms {
-                    s += x[j] * (c[0] * v[0] + c[1] * v[1] + c[2] * v[2]);
-                }
-            }
-            s
-        };
-        if out.len() >= 4 * PARALLEL_ELEMENTS {
-            out.par_iter_mut()
-                .enumerate()
-                .for_each(|(i, o)| *o = row(i));
-        } else {
-            for (i, o) in out.iter_mut().enumerate() {
-                *o = row(i);
-            }
-        }
-    }
-
-    /// `(x^T M x, y^T K y)` in one pass.
-    fn two_forms(&self, x: &[Vec3], y: &[Vec3]) -> (f64, f64) {
-        let row = |i: usize| {
-            let (mut mx, mut ky) = (Vec3::zeros(), Vec3::zeros());
-            for k in self.row_ptr[i]..self.row_ptr[i + 1] {
-                let v = self.vals[k];
-                let j = self.cols[k];
-                mx += x[j] * v[0];
-                ky += y[j] * v[2];
-            }
-            (x[i].dot(&mx), y[i].dot(&ky))
-        };
-        let n = self.row_ptr.len() - 1;
-        if n >= 4 * PARALLEL_ELEMENTS {
-            (0..n)
-                .into_par_iter()
-                .map(row)
-                .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
-        } else {
-            (0..n)
-                .map(row)
-                .fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
-        }
-    }
-
     /// `(M x, D x)` in one pass.
     fn mass_damping(&self, x: &[Vec3], mx: &mut [Vec3], dx: &mut [Vec3]) {
         let row = |(i, (m, d)): (usize, (&mut Vec3, &mut Vec3))| {
@@ -323,16 +274,6 @@ impl ElementSystem {
     fn csr(&self) -> &Csr3 {
         self.csr
             .get_or_init(|| Csr3::assemble(self.n, &self.elements))
-    }
-
-    /// `out = sum_t (c_t . [M, D, K]) x_t`: several products fused into one pass.
-    pub fn apply_terms(&self, terms: &[([f64; 3], &[Vec3])], out: &mut [Vec3]) {
-        self.csr().apply_terms(terms, out);
-    }
-
-    /// `(x^T M x, y^T K y)` summed over coordinates, in one pass.
-    pub fn mass_and_stiffness_forms(&self, x: &[Vec3], y: &[Vec3]) -> (f64, f64) {
-        self.csr().two_forms(x, y)
     }
 
     /// `(M x, D x)` in one pass over the assembled matrices.
