@@ -11,6 +11,7 @@ pub mod math;
 pub mod mesh;
 pub mod par;
 pub mod quadrature;
+pub mod text;
 pub mod tolerance;
 
 pub use math::{Interval, Vec3, Vec4};

@@ -202,39 +202,10 @@ struct Src<'a> {
 }
 
 impl Src<'_> {
-    fn line(&self, span: &Range<usize>) -> usize {
-        self.text[..span.start.min(self.text.len())]
-            .bytes()
-            .filter(|&b| b == b'\n')
-            .count()
-            + 1
-    }
-    /// The line of `key = ...` inside the span when present, else the span's first line.
-    fn key_line(&self, span: &Range<usize>, key: &str) -> usize {
-        // The entry runs from its span to the next table header.
-        let start = span.start.min(self.text.len());
-        let end = self.text[start..]
-            .match_indices("\n[")
-            .map(|(i, _)| start + i)
-            .find(|&i| i >= span.end.min(self.text.len()).saturating_sub(1))
-            .unwrap_or(self.text.len());
-        let part = &self.text[start..end];
-        let mut offset = 0;
-        while let Some(i) = part[offset..].find(key) {
-            let at = offset + i;
-            let before_ok = at == 0 || part.as_bytes()[at - 1].is_ascii_whitespace();
-            let rest = part[at + key.len()..].trim_start_matches([' ', '\t']);
-            if before_ok && rest.starts_with('=') {
-                return self.line(&((start + at)..(start + at)));
-            }
-            offset = at + key.len();
-        }
-        self.line(span)
-    }
     fn err(&self, span: &Range<usize>, key: &str, what: impl Into<String>) -> ScenarioError {
         ScenarioError {
             file: self.file.into(),
-            line: self.key_line(span, key),
+            line: vclay_core::text::key_line(self.text, span, key),
             key: key.into(),
             what: what.into(),
         }

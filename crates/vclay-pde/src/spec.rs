@@ -266,7 +266,9 @@ impl PdeModel {
     /// in errors.
     pub fn from_toml(text: &str, source: &str) -> Result<Self, PdeError> {
         let spec: SpecFile = toml::from_str(text).map_err(|e| {
-            let (line, col) = e.span().map_or((1, 1), |s| line_column(text, s.start));
+            let (line, col) = e
+                .span()
+                .map_or((1, 1), |s| vclay_core::text::line_column(text, s.start));
             PdeError::Spec {
                 place: format!("{source}:{line}:{col}"),
                 message: e.message().trim().to_string(),
@@ -334,14 +336,6 @@ impl PdeModel {
             patches,
         })
     }
-}
-
-/// 1-based line and column (in characters) of byte offset `at` in `text`.
-fn line_column(text: &str, at: usize) -> (usize, usize) {
-    let before = &text[..at.min(text.len())];
-    let line = before.matches('\n').count() + 1;
-    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
-    (line, col)
 }
 
 struct Ctx<'a> {

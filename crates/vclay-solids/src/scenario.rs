@@ -307,42 +307,10 @@ struct Source<'a> {
 }
 
 impl Source<'_> {
-    fn line_at(&self, offset: usize) -> usize {
-        self.text[..offset.min(self.text.len())]
-            .bytes()
-            .filter(|&b| b == b'\n')
-            .count()
-            + 1
-    }
-
-    /// The line of `key = ...` in the table that starts at `span` (up to the next table
-    /// header; the line of the span when not found).
-    fn line_of_key(&self, span: &Range<usize>, key: &str) -> usize {
-        let start = span.start.min(self.text.len());
-        let mut offset = start;
-        for (k, line) in self.text[start..].split_inclusive('\n').enumerate() {
-            let t = line.trim_start();
-            if k > 0 && offset >= span.end && t.starts_with('[') {
-                break;
-            }
-            if let Some(rest) = t.strip_prefix(key)
-                && rest.trim_start().starts_with('=')
-            {
-                return self.line_at(offset);
-            }
-            // Inline tables: `{ key = ... }`.
-            if let Some(pos) = line.find(&format!(" {key} =")) {
-                return self.line_at(offset + pos);
-            }
-            offset += line.len();
-        }
-        self.line_at(start)
-    }
-
     fn err(&self, span: &Range<usize>, key: &str, message: impl std::fmt::Display) -> SolidsError {
         SolidsError::Scenario {
             file: self.name.to_string(),
-            line: self.line_of_key(span, key),
+            line: vclay_core::text::key_line(self.text, span, key),
             message: format!("`{key}`: {message}"),
         }
     }
