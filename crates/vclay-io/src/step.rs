@@ -304,13 +304,7 @@ pub fn to_step_string(entities: &[NamedEntity], file_name: &str) -> Result<Strin
 
 /// Writes entities as a STEP AP214 file, atomically.
 pub fn write_step(path: impl AsRef<Path>, entities: &[NamedEntity]) -> Result<(), IoError> {
-    let path = path.as_ref();
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let text = to_step_string(entities, &name).map_err(|e| e.in_file(path))?;
-    crate::util::write_atomic(path, |w| w.write_all(text.as_bytes()))
+    crate::util::write_named_text(path.as_ref(), |name| to_step_string(entities, name))
 }
 
 /// The current UTC time as `YYYY-MM-DDThh:mm:ss`.

@@ -4,6 +4,20 @@ use crate::error::IoError;
 use std::io::Write;
 use std::path::Path;
 
+/// Writes the text that `render` makes from the file's name (exchange formats record it in
+/// their headers) to `path`, atomically; a render error names the file.
+pub(crate) fn write_named_text(
+    path: &Path,
+    render: impl FnOnce(&str) -> Result<String, IoError>,
+) -> Result<(), IoError> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let text = render(&name).map_err(|e| e.in_file(path))?;
+    write_atomic(path, |w| w.write_all(text.as_bytes()))
+}
+
 /// Writes a file through `fill`, atomically: the bytes go to a temporary file in the target's
 /// directory, which is flushed, synced and renamed over `path` only when everything succeeded. A
 /// failed write leaves any existing file untouched and removes the temporary file.
