@@ -73,6 +73,46 @@ impl TriMesh {
         Self::default()
     }
 
+    /// A surface of revolution about the z axis, with normals: `profile` holds `(r, z)` from
+    /// bottom to top, `segments` points around each ring. A ring with `r == 0` becomes one pole
+    /// vertex (triangle fans there, quads split in two elsewhere); triangles run
+    /// counter-clockwise seen from outside when the profile's outside faces away from the axis.
+    /// Starting and ending the profile at `r == 0` closes the surface.
+    pub fn revolution(profile: &[(f64, f64)], segments: usize) -> TriMesh {
+        let mut mesh = TriMesh::new();
+        let mut rings: Vec<Vec<u32>> = Vec::new();
+        for &(r, z) in profile {
+            if r == 0.0 {
+                mesh.positions.push(Vec3::new(0.0, 0.0, z));
+                rings.push(vec![mesh.positions.len() as u32 - 1; segments]);
+            } else {
+                let ring = (0..segments)
+                    .map(|s| {
+                        let a = std::f64::consts::TAU * s as f64 / segments as f64;
+                        mesh.positions.push(Vec3::new(r * a.cos(), r * a.sin(), z));
+                        mesh.positions.len() as u32 - 1
+                    })
+                    .collect();
+                rings.push(ring);
+            }
+        }
+        for w in rings.windows(2) {
+            let (lo, hi) = (&w[0], &w[1]);
+            for s in 0..segments {
+                let t = (s + 1) % segments;
+                let (a, b, c, d) = (lo[s], lo[t], hi[t], hi[s]);
+                if a != b {
+                    mesh.triangles.push([a, b, c]);
+                }
+                if c != d {
+                    mesh.triangles.push([a, c, d]);
+                }
+            }
+        }
+        mesh.compute_normals();
+        mesh
+    }
+
     /// Checks finiteness, index ranges and normal count.
     pub fn validate(&self) -> Result<(), MeshError> {
         if let Some(v) = self
@@ -175,6 +215,32 @@ impl MeshSink for TriMesh {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn revolution_is_closed_and_outward() {
+        // A closed capsule-like profile: poles at both ends.
+        let profile = [(0.0, 0.0), (1.0, 0.5), (1.0, 1.5), (0.0, 2.0)];
+        let m = TriMesh::revolution(&profile, 12);
+        m.validate().unwrap();
+        assert_eq!(m.positions.len(), 2 + 2 * 12);
+        // Two fans and one band of quads: 12 + 12 + 24 triangles; V - E + F = 2 (a sphere).
+        assert_eq!(m.triangles.len(), 48);
+        let edges = 3 * m.triangles.len() / 2;
+        assert_eq!(
+            m.positions.len() as i64 - edges as i64 + m.triangles.len() as i64,
+            2
+        );
+        // Outward: the signed volume is positive.
+        let vol: f64 = m
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| m.positions[i as usize]);
+                a.dot(&b.cross(&c)) / 6.0
+            })
+            .sum();
+        assert!(vol > 0.0, "volume {vol}");
+    }
 
     fn square() -> TriMesh {
         let mut m = TriMesh::new();

@@ -35,7 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let z = 3.0 * i as f64 / 80.0;
         (radius(z), z)
     }));
-    let bottle = common::lathe(&profile, 64);
+    let bottle = vclay_core::TriMesh::revolution(&profile, 64);
     common::write_obj(&dir.join("fig3a_bottle.obj"), &bottle)?;
 
     let spec = LatticeSpec {

@@ -38,7 +38,7 @@ fn hollow_cylinder() -> TriMesh {
     profile.extend((1..4).map(|i| (INNER + (OUTER - INNER) * i as f64 / 4.0, 0.0)));
     // Close the loop back to the first ring.
     profile.push(profile[0]);
-    common::lathe(&profile, 64)
+    vclay_core::TriMesh::revolution(&profile, 64)
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -30,7 +30,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             (r, -1.3 * th.cos())
         })
         .collect();
-    let head = common::lathe(&profile, 2 * n);
+    let head = vclay_core::TriMesh::revolution(&profile, 2 * n);
     common::write_obj(&dir.join("fig6a_head.obj"), &head)?;
 
     // Only the middle part of the crown: |x| < 0.75, |y| < 0.5, z > 0.55.

@@ -11,43 +11,6 @@ use vclay::io::mesh::write_mesh;
 use vclay::io::model::{Entity, write_model};
 use vclay::{TriMesh, Vec3};
 
-/// A closed surface of revolution about z: `profile` `(r, z)` from bottom to top, poles where
-/// `r == 0`, `segments` around; counter-clockwise seen from outside.
-fn lathe(profile: &[(f64, f64)], segments: usize) -> TriMesh {
-    let mut mesh = TriMesh::new();
-    let mut rings: Vec<Vec<u32>> = Vec::new();
-    for &(r, z) in profile {
-        if r == 0.0 {
-            mesh.positions.push(Vec3::new(0.0, 0.0, z));
-            rings.push(vec![mesh.positions.len() as u32 - 1; segments]);
-        } else {
-            let ring = (0..segments)
-                .map(|s| {
-                    let a = std::f64::consts::TAU * s as f64 / segments as f64;
-                    mesh.positions.push(Vec3::new(r * a.cos(), r * a.sin(), z));
-                    mesh.positions.len() as u32 - 1
-                })
-                .collect();
-            rings.push(ring);
-        }
-    }
-    for w in rings.windows(2) {
-        let (lo, hi) = (&w[0], &w[1]);
-        for s in 0..segments {
-            let t = (s + 1) % segments;
-            let (a, b, c, d) = (lo[s], lo[t], hi[t], hi[s]);
-            if a != b {
-                mesh.triangles.push([a, b, c]);
-            }
-            if c != d {
-                mesh.triangles.push([a, c, d]);
-            }
-        }
-    }
-    mesh.compute_normals();
-    mesh
-}
-
 /// Bottle radius at height `z` in `[0, 3]`: body, shoulder, neck.
 fn bottle_radius(z: f64) -> f64 {
     let t = ((z - 1.7) / 0.7).clamp(0.0, 1.0);
@@ -67,7 +30,7 @@ pub fn bottle(out: &Path) -> Result<(String, Vec<String>)> {
         (bottle_radius(z), z)
     }));
     profile.push((0.0, 3.0));
-    let original = lathe(&profile, 96);
+    let original = TriMesh::revolution(&profile, 96);
     let spec = LatticeSpec {
         degree: [3; 3],
         control_points: [5, 5, 7],

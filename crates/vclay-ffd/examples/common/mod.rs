@@ -73,44 +73,6 @@ pub fn write_lattice_obj(path: &Path, lattice: &FfdLattice) -> std::io::Result<(
     Ok(())
 }
 
-/// A surface of revolution about the z axis: `profile` is `(r, z)` from bottom to top, `segments`
-/// around. Rings with `r == 0` become a single pole vertex. Quads between rings, triangle fans at
-/// poles, counter-clockwise seen from outside when the profile runs upwards on the outside.
-pub fn lathe(profile: &[(f64, f64)], segments: usize) -> TriMesh {
-    let mut mesh = TriMesh::new();
-    let mut rings: Vec<Vec<u32>> = Vec::new();
-    for &(r, z) in profile {
-        if r == 0.0 {
-            mesh.positions.push(Vec3::new(0.0, 0.0, z));
-            rings.push(vec![mesh.positions.len() as u32 - 1; segments]);
-        } else {
-            let ring = (0..segments)
-                .map(|s| {
-                    let a = std::f64::consts::TAU * s as f64 / segments as f64;
-                    mesh.positions.push(Vec3::new(r * a.cos(), r * a.sin(), z));
-                    mesh.positions.len() as u32 - 1
-                })
-                .collect();
-            rings.push(ring);
-        }
-    }
-    for w in rings.windows(2) {
-        let (lo, hi) = (&w[0], &w[1]);
-        for s in 0..segments {
-            let t = (s + 1) % segments;
-            let (a, b, c, d) = (lo[s], lo[t], hi[t], hi[s]);
-            if a != b {
-                mesh.triangles.push([a, b, c]);
-            }
-            if c != d {
-                mesh.triangles.push([a, c, d]);
-            }
-        }
-    }
-    mesh.compute_normals();
-    mesh
-}
-
 /// Radius of the fish's body of revolution at `s` in `[0, 3]` (mouth at 0, tail fin at 3).
 fn fish_radius(s: f64) -> f64 {
     if s <= 2.4 {
@@ -134,7 +96,7 @@ pub fn fish(rings: usize, segments: usize) -> TriMesh {
         (fish_radius(s), s)
     }));
     profile.push((0.0, 3.0));
-    let mut mesh = lathe(&profile, segments);
+    let mut mesh = TriMesh::revolution(&profile, segments);
     for p in &mut mesh.positions {
         *p = Vec3::new(0.45 * p.x, p.z, p.y);
     }
