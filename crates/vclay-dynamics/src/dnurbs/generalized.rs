@@ -72,17 +72,25 @@ pub struct LocalJacobian {
     pub blocks: Vec<(usize, [f64; 6])>,
     /// General columns `(coordinate, d s^a / d q)`.
     pub vectors: Vec<(usize, [Vec3; 6])>,
+    /// Evaluation buffers a geometry may reuse between calls (no allocation per point).
+    pub(crate) scratch: super::rational::Local,
 }
 
 impl LocalJacobian {
     /// Local coordinate list: three per block, then one per vector column.
     fn dofs(&self) -> Vec<usize> {
-        let mut d = Vec::with_capacity(3 * self.blocks.len() + self.vectors.len());
+        let mut d = Vec::new();
+        self.dofs_into(&mut d);
+        d
+    }
+
+    /// [`Self::dofs`] into a reused buffer.
+    fn dofs_into(&self, d: &mut Vec<usize>) {
+        d.clear();
         for &(b, _) in &self.blocks {
             d.extend_from_slice(&[b, b + 1, b + 2]);
         }
         d.extend(self.vectors.iter().map(|v| v.0));
-        d
     }
 
     /// `J^a x` for local coordinate values `x` (ordered as [`Self::dofs`]).
@@ -112,6 +120,27 @@ impl LocalJacobian {
         }
     }
 
+    /// `out += sum_a J^a^T y[a]` in local coordinates (all six kinds in one pass).
+    fn apply_transpose_all(&self, y: &[Vec3; 6], out: &mut [f64]) {
+        for (k, (_, r)) in self.blocks.iter().enumerate() {
+            let mut acc = Vec3::zeros();
+            for m in 0..6 {
+                acc += y[m] * r[m];
+            }
+            out[3 * k] += acc.x;
+            out[3 * k + 1] += acc.y;
+            out[3 * k + 2] += acc.z;
+        }
+        let nb = 3 * self.blocks.len();
+        for (k, (_, g)) in self.vectors.iter().enumerate() {
+            let mut acc = 0.0;
+            for m in 0..6 {
+                acc += g[m].dot(&y[m]);
+            }
+            out[nb + k] += acc;
+        }
+    }
+
     /// `diag += c * diag(J^0^T J^0)` (the lumped view of the mass matrix's diagonal).
     fn accumulate_value_diagonal(&self, c: f64, diag: &mut [f64]) {
         let nb = self.blocks.len();
@@ -126,132 +155,138 @@ impl LocalJacobian {
     }
 }
 
-/// `sum_q sum_a coef_q[a] J_q^a^T J_q^a` over the quadrature points of one element, kept in the
-/// compact form the Jacobian's structure allows (eqs 16-17 with the columns of
-/// [`LocalJacobian`]): a block column `R^a e_k` pairs with another as the scalar
-/// `sum_a c_a R^a_i R^a_j` times the 3x3 identity, with a general column `g` as the vector
-/// `sum_a c_a R^a_i g^a`, and general columns pair by dot products. Accumulating these small
-/// arrays (instead of the dense `nd x nd` matrix) keeps the per-point work in registers and L1;
-/// [`Gram::expand`] writes the dense symmetric matrix once per element.
+/// `sum_q sum_a coef_q[a] J_q^a^T J_q^a` over the quadrature points of one element (eqs 16-17
+/// with the columns of [`LocalJacobian`]), computed as matrix products.
+///
+/// Each `(point, kind a)` with a nonzero coefficient contributes one row of the stacked matrix
+/// `X = [P | G_x | G_y | G_z]`: `P` holds the block values `R^a_i` (a block column `R^a e_k`
+/// pairs with another as the scalar `R^a_i R^a_j` times the 3x3 identity), and `G_k` the
+/// component `k` of the general columns `g^a_j`. With `C` the diagonal of the coefficients:
+/// - block-block and block-vector parts: `[bb | bv] = P^T C X` (`nb x (nb + 3 nv)`),
+/// - vector-vector part: `vv = sum_k G_k^T C G_k`.
+///
+/// Collecting the rows of a whole element and multiplying once (register-blocked products from
+/// faer) replaces one rank-6 update of the element matrix per quadrature point, which was bound
+/// by loads and stores. [`Gram::write`] writes the dense symmetric `nd x nd` matrix.
 #[derive(Clone, Debug, Default)]
 struct Gram {
     nb: usize,
     nv: usize,
-    /// Block-block scalars, `nb x nb`.
-    bb: Vec<f64>,
-    /// Block-vector columns, `nb x 3 x nv` (component-major per block).
-    bv: Vec<f64>,
-    /// Vector-vector scalars, `nv x nv`.
+    /// The rows of `X`, row-major, `nc = nb + 3 nv` columns.
+    x: Vec<f64>,
+    /// The rows of `C X`.
+    cx: Vec<f64>,
+    /// `[bb | bv]`, row-major `nb x nc` (`bv` component-major per block: column
+    /// `nb + k nv + j`), valid after [`Gram::finish`].
+    bbv: Vec<f64>,
+    /// `vv`, row-major `nv x nv`, valid after [`Gram::finish`].
     vv: Vec<f64>,
-    /// Scratch: the block values transposed, `6 x nb`.
-    rt: Vec<f64>,
-    /// Scratch: the general columns, `6 x 3 x nv` (kind, component, column).
-    gk: Vec<f64>,
 }
 
 impl Gram {
     /// An empty accumulator for Jacobians shaped like `lj`.
     fn new(lj: &LocalJacobian) -> Self {
-        let (nb, nv) = (lj.blocks.len(), lj.vectors.len());
-        Self {
-            nb,
-            nv,
-            bb: vec![0.0; nb * nb],
-            bv: vec![0.0; nb * 3 * nv],
-            vv: vec![0.0; nv * nv],
-            rt: vec![0.0; 6 * nb],
-            gk: vec![0.0; 18 * nv],
-        }
+        let mut g = Self::default();
+        g.reset(lj);
+        g
     }
 
-    /// Adds `sum_a coef[a] J^a^T J^a` for one Jacobian (same columns as at construction).
-    /// The columns are first laid out kind-major, so every inner loop runs over contiguous
-    /// columns (and vectorizes); full squares are accumulated rather than triangles.
+    /// Empties the accumulator for Jacobians shaped like `lj`, keeping its buffers.
+    fn reset(&mut self, lj: &LocalJacobian) {
+        self.nb = lj.blocks.len();
+        self.nv = lj.vectors.len();
+        self.x.clear();
+        self.cx.clear();
+    }
+
+    /// Columns of `X`.
+    fn nc(&self) -> usize {
+        self.nb + 3 * self.nv
+    }
+
+    /// Adds `sum_a coef[a] J^a^T J^a` for one Jacobian (same columns as at construction):
+    /// appends the rows of the kinds with a nonzero coefficient.
     fn add(&mut self, lj: &LocalJacobian, coef: &[f64; 6]) {
-        struct Add<'a>(&'a mut Gram, &'a LocalJacobian, &'a [f64; 6]);
-        impl pulp::WithSimd for Add<'_> {
-            type Output = ();
-            #[inline(always)]
-            fn with_simd<S: pulp::Simd>(self, _simd: S) {
-                self.0.add_kernel(self.1, self.2);
-            }
-        }
-        // Compiled for AVX2/FMA too and chosen at run time (the loops below vectorize).
-        pulp::Arch::new().dispatch(Add(self, lj, coef));
-    }
-
-    #[inline(always)]
-    fn add_kernel(&mut self, lj: &LocalJacobian, coef: &[f64; 6]) {
         let (nb, nv) = (self.nb, self.nv);
         debug_assert_eq!((lj.blocks.len(), lj.vectors.len()), (nb, nv));
-        for (a, (_, r)) in lj.blocks.iter().enumerate() {
-            for m in 0..6 {
-                self.rt[m * nb + a] = r[m];
-            }
-        }
-        for (j, (_, g)) in lj.vectors.iter().enumerate() {
-            for m in 0..6 {
-                for k in 0..3 {
-                    self.gk[(3 * m + k) * nv + j] = g[m][k];
-                }
-            }
-        }
-        for m in 0..6 {
-            if coef[m] == 0.0 {
+        for (m, &c) in coef.iter().enumerate() {
+            if c == 0.0 {
                 continue;
             }
-            let rt = &self.rt[m * nb..(m + 1) * nb];
-            let gk = &self.gk[3 * m * nv..3 * (m + 1) * nv];
-            for a in 0..nb {
-                let c = coef[m] * rt[a];
-                if c == 0.0 {
-                    continue;
-                }
-                for (o, &rb) in self.bb[a * nb..(a + 1) * nb].iter_mut().zip(rt) {
-                    *o += c * rb;
-                }
-                for (o, &g) in self.bv[a * 3 * nv..(a + 1) * 3 * nv].iter_mut().zip(gk) {
-                    *o += c * g;
-                }
+            let at = self.x.len();
+            self.x.extend(lj.blocks.iter().map(|(_, r)| r[m]));
+            for k in 0..3 {
+                self.x.extend(lj.vectors.iter().map(|(_, g)| g[m][k]));
             }
-            for i in 0..nv {
-                let row = &mut self.vv[i * nv..(i + 1) * nv];
-                for k in 0..3 {
-                    let gki = &gk[k * nv..(k + 1) * nv];
-                    let c = coef[m] * gki[i];
-                    for (o, &g) in row.iter_mut().zip(gki) {
-                        *o += c * g;
-                    }
-                }
+            self.cx.extend(self.x[at..].iter().map(|v| c * v));
+        }
+    }
+
+    /// Forms `[bb | bv]` and `vv` from the collected rows.
+    fn finish(&mut self) {
+        use faer::{Accum, MatMut, MatRef, Par};
+        let (nb, nv, nc) = (self.nb, self.nv, self.nc());
+        let rows = self.x.len() / nc.max(1);
+        self.bbv.clear();
+        self.bbv.resize(nb * nc, 0.0);
+        self.vv.clear();
+        self.vv.resize(nv * nv, 0.0);
+        if rows == 0 || nc == 0 {
+            return;
+        }
+        let x = MatRef::from_row_major_slice(&self.x, rows, nc);
+        let cx = MatRef::from_row_major_slice(&self.cx, rows, nc);
+        faer::linalg::matmul::matmul(
+            MatMut::from_row_major_slice_mut(&mut self.bbv, nb, nc),
+            Accum::Replace,
+            x.get(.., ..nb).transpose(),
+            cx,
+            1.0,
+            Par::Seq,
+        );
+        if nv > 0 {
+            let mut vv = MatMut::from_row_major_slice_mut(&mut self.vv, nv, nv);
+            for k in 0..3 {
+                let cols = nb + k * nv..nb + (k + 1) * nv;
+                faer::linalg::matmul::matmul(
+                    vv.as_mut(),
+                    if k == 0 { Accum::Replace } else { Accum::Add },
+                    x.get(.., cols.clone()).transpose(),
+                    cx.get(.., cols),
+                    1.0,
+                    Par::Seq,
+                );
             }
         }
     }
 
-    /// `out += ` the accumulated matrix, dense and symmetric (row-major, local order of
-    /// [`LocalJacobian::dofs`]).
-    fn expand(&self, out: &mut [f64]) {
-        let (nb, nv) = (self.nb, self.nv);
+    /// Writes the accumulated matrix into `out`, dense and symmetric (row-major `nd x nd`, the
+    /// local order of [`LocalJacobian::dofs`]; every entry is set).
+    fn write(&mut self, out: &mut [f64]) {
+        self.finish();
+        let (nb, nv, nc) = (self.nb, self.nv, self.nc());
         let nd = 3 * nb + nv;
         for a in 0..nb {
-            for b in 0..nb {
-                let v = self.bb[a * nb + b];
-                for k in 0..3 {
-                    out[(3 * a + k) * nd + 3 * b + k] += v;
+            let row = &self.bbv[a * nc..(a + 1) * nc];
+            for k in 0..3 {
+                let o = &mut out[(3 * a + k) * nd..(3 * a + k + 1) * nd];
+                for b in 0..nb {
+                    let v = row[b];
+                    // The block pair is `v I`: only the matching component is nonzero.
+                    o[3 * b..3 * b + 3].copy_from_slice(&[0.0; 3]);
+                    o[3 * b + k] = v;
                 }
-            }
-            for j in 0..nv {
-                let col = 3 * nb + j;
-                for k in 0..3 {
-                    let v = self.bv[(3 * a + k) * nv + j];
-                    out[(3 * a + k) * nd + col] += v;
-                    out[col * nd + 3 * a + k] += v;
-                }
+                o[3 * nb..].copy_from_slice(&row[nb + k * nv..nb + (k + 1) * nv]);
             }
         }
         for i in 0..nv {
-            for j in 0..nv {
-                out[(3 * nb + i) * nd + 3 * nb + j] += self.vv[i * nv + j];
+            let o = &mut out[(3 * nb + i) * nd..(3 * nb + i + 1) * nd];
+            for a in 0..nb {
+                for k in 0..3 {
+                    o[3 * a + k] = self.bbv[a * nc + nb + k * nv + i];
+                }
             }
+            o[3 * nb..].copy_from_slice(&self.vv[i * nv..(i + 1) * nv]);
         }
     }
 }
@@ -358,7 +393,7 @@ struct Quadrature {
 }
 
 /// One element's contribution to a step.
-#[derive(Debug, Default)]
+#[derive(Clone, Debug, Default)]
 struct ElementWork {
     dofs: Vec<usize>,
     a: Vec<f64>,
@@ -375,6 +410,8 @@ pub struct GeneralizedDnurbs<G: GeneralizedGeometry> {
     material: Material,
     quad: Vec<Quadrature>,
     pattern: Option<Arc<CsrPattern>>,
+    /// Element work buffers kept between steps (scratch; no state).
+    work_pool: Vec<ElementWork>,
     rest: Vec<Vec<[Vec3; 6]>>,
     velocity: Vec<f64>,
     fixed: Vec<bool>,
@@ -482,6 +519,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             material,
             quad,
             pattern: None,
+            work_pool: Vec::new(),
             rest: vec![],
             fixed,
             forces: vec![],
@@ -798,7 +836,9 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         } else {
             (1.0, 1.0)
         };
-        let mut works = self.assemble(dt, dynamic, ck, force_scale, &v)?;
+        // Element buffers from the previous step (taken back at the end of a step).
+        let mut works = std::mem::take(&mut self.work_pool);
+        self.assemble(dt, dynamic, ck, force_scale, &v, &mut works)?;
         let elastic_before: f64 = works.iter().map(|w| w.elastic).sum();
         self.add_point_forces(&mut works, ck, force_scale)?;
         let mut b = vec![0.0; n];
@@ -986,6 +1026,8 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             self.time += dt;
         }
         self.steps += 1;
+        works.truncate(ne);
+        self.work_pool = works;
         Ok(Some(StepReport {
             time: self.time,
             solver: stats,
@@ -1003,6 +1045,9 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         Ok(last)
     }
 
+    /// The element work of this step into `works` (one per element; buffers reused between
+    /// steps), elements in parallel, each thread with its own Jacobian and Gram scratch.
+    #[allow(clippy::too_many_arguments)]
     fn assemble(
         &self,
         dt: f64,
@@ -1010,104 +1055,107 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         ck: f64,
         fs: f64,
         v: &[f64],
-    ) -> Result<Vec<ElementWork>, DynamicsError> {
+        works: &mut Vec<ElementWork>,
+    ) -> Result<(), DynamicsError> {
         let coef_fn = self.stiffness_coefficients_fn();
         let g = &self.geometry;
         let mat = &self.material;
         let forces = &self.forces;
         let surface = g.parametric_dimension() == 2;
+        works.truncate(self.quad.len());
+        works.resize_with(self.quad.len(), ElementWork::default);
         self.quad
             .par_iter()
+            .zip(works.par_iter_mut())
             .enumerate()
-            .map(|(e, q)| {
-                let mut lj = LocalJacobian::default();
-                g.jacobian_at(q.params[0], &mut lj)?;
-                let dofs = lj.dofs();
-                let nd = dofs.len();
-                let mut w = ElementWork {
-                    a: vec![0.0; nd * nd],
-                    mass_diag: vec![0.0; nd],
-                    rhs: vec![0.0; nd],
-                    dofs,
-                    ..Default::default()
-                };
-                let vl: Vec<f64> = w.dofs.iter().map(|&i| v[i]).collect();
-                let mut gram = Gram::new(&lj);
-                for (k, (&p, &qw)) in q.params.iter().zip(&q.weights).enumerate() {
-                    if k > 0 {
-                        g.jacobian_at(p, &mut lj)?;
+            .try_for_each_init(
+                || (LocalJacobian::default(), Gram::default(), Vec::new()),
+                |(lj, gram, vl), (e, (q, w))| {
+                    g.jacobian_at(q.params[0], lj)?;
+                    lj.dofs_into(&mut w.dofs);
+                    let nd = w.dofs.len();
+                    w.a.resize(nd * nd, 0.0);
+                    for buf in [&mut w.mass_diag, &mut w.rhs] {
+                        buf.clear();
+                        buf.resize(nd, 0.0);
                     }
-                    let c = coef_fn(e, p);
-                    let mu = mat.mu.eval(e, p);
-                    let gamma = mat.gamma.eval(e, p);
-                    // Stiffness (Gauss-Newton) and elastic gradient.
-                    let mut coef = [0.0; 6];
-                    for m in 1..6 {
-                        coef[m] = ck * qw * c[m];
-                    }
-                    if dynamic {
-                        coef[0] = qw * (2.0 * mu + dt * gamma);
-                    }
-                    gram.add(&lj, &coef);
-                    if dynamic {
-                        lj.accumulate_value_diagonal(qw * mu, &mut w.mass_diag);
-                    }
-                    for m in 1..6 {
-                        if c[m] != 0.0 {
-                            let d = lj.s[m] - self.reference_value(e, k, m);
-                            w.elastic += 0.5 * qw * c[m] * d.norm_squared();
-                            lj.apply_transpose(m, -fs * qw * c[m], &d, &mut w.rhs);
+                    (w.elastic, w.kinetic) = (0.0, 0.0);
+                    vl.clear();
+                    vl.extend(w.dofs.iter().map(|&i| v[i]));
+                    let moving = vl.iter().any(|x| *x != 0.0);
+                    gram.reset(lj);
+                    for (k, (&p, &qw)) in q.params.iter().zip(&q.weights).enumerate() {
+                        if k > 0 {
+                            g.jacobian_at(p, lj)?;
                         }
-                    }
-                    if dynamic {
-                        // (2M - dt D) v and the inertial force g_p.
-                        let jv = lj.apply(0, &vl);
-                        lj.apply_transpose(0, qw * (2.0 * mu - dt * gamma), &jv, &mut w.rhs);
-                        w.kinetic += 0.5 * qw * mu * jv.norm_squared() / (dt * dt);
-                        if self.inertial_force && mu != 0.0 && vl.iter().any(|x| *x != 0.0) {
-                            // 2 dt^2 g_p with p' = v / dt: -2 mu J^T (J' v).
-                            let (_, acc) = g.velocity_terms(p, v)?;
-                            lj.apply_transpose(0, -2.0 * qw * mu, &acc, &mut w.rhs);
-                        }
-                    }
-                    // Distributed forces.
-                    let mut f = Vec3::zeros();
-                    for force in forces {
-                        match force {
-                            Force::Gravity(gv) => f += gv * mu,
-                            Force::Inflation(pr) if surface => f += lj.s[1].cross(&lj.s[2]) * *pr,
-                            Force::Spring {
-                                param,
-                                target,
-                                stiffness,
-                                kernel: Some(sigma),
-                            } => {
-                                let d2 = (p[0] - param[0]).powi(2)
-                                    + if surface {
-                                        (p[1] - param[1]).powi(2)
-                                    } else {
-                                        0.0
-                                    };
-                                let dimf = if surface { 2.0 } else { 1.0 };
-                                let kern = (-(d2) / (2.0 * sigma * sigma)).exp()
-                                    / (2.0 * std::f64::consts::PI * sigma * sigma).powf(dimf / 2.0);
-                                let kk = stiffness * kern;
-                                f += (target.at(self.time) - lj.s[0]) * kk;
-                                let mut cc = [0.0; 6];
-                                cc[0] = ck * qw * kk;
-                                gram.add(&lj, &cc);
+                        let c = coef_fn(e, p);
+                        let mu = mat.mu.eval(e, p);
+                        let gamma = mat.gamma.eval(e, p);
+                        // Stiffness (Gauss-Newton) coefficients; `y[m]` collects the vectors
+                        // `J^m^T` is applied to for the right-hand side (one pass at the end).
+                        let mut coef = [0.0; 6];
+                        let mut y = [Vec3::zeros(); 6];
+                        for m in 1..6 {
+                            coef[m] = ck * qw * c[m];
+                            if c[m] != 0.0 {
+                                // Elastic gradient.
+                                let d = lj.s[m] - self.reference_value(e, k, m);
+                                w.elastic += 0.5 * qw * c[m] * d.norm_squared();
+                                y[m] -= d * (fs * qw * c[m]);
                             }
-                            _ => {}
                         }
+                        if dynamic {
+                            coef[0] = qw * (2.0 * mu + dt * gamma);
+                            lj.accumulate_value_diagonal(qw * mu, &mut w.mass_diag);
+                            // (2M - dt D) v and the inertial force g_p.
+                            let jv = lj.apply(0, vl);
+                            y[0] += jv * (qw * (2.0 * mu - dt * gamma));
+                            w.kinetic += 0.5 * qw * mu * jv.norm_squared() / (dt * dt);
+                            if self.inertial_force && mu != 0.0 && moving {
+                                // 2 dt^2 g_p with p' = v / dt: -2 mu J^T (J' v).
+                                let (_, acc) = g.velocity_terms(p, v)?;
+                                y[0] -= acc * (2.0 * qw * mu);
+                            }
+                        }
+                        // Distributed forces.
+                        let mut f = Vec3::zeros();
+                        for force in forces {
+                            match force {
+                                Force::Gravity(gv) => f += gv * mu,
+                                Force::Inflation(pr) if surface => {
+                                    f += lj.s[1].cross(&lj.s[2]) * *pr
+                                }
+                                Force::Spring {
+                                    param,
+                                    target,
+                                    stiffness,
+                                    kernel: Some(sigma),
+                                } => {
+                                    let d2 = (p[0] - param[0]).powi(2)
+                                        + if surface {
+                                            (p[1] - param[1]).powi(2)
+                                        } else {
+                                            0.0
+                                        };
+                                    let dimf = if surface { 2.0 } else { 1.0 };
+                                    let kern = (-(d2) / (2.0 * sigma * sigma)).exp()
+                                        / (2.0 * std::f64::consts::PI * sigma * sigma)
+                                            .powf(dimf / 2.0);
+                                    let kk = stiffness * kern;
+                                    f += (target.at(self.time) - lj.s[0]) * kk;
+                                    coef[0] += ck * qw * kk;
+                                }
+                                _ => {}
+                            }
+                        }
+                        y[0] += f * (fs * qw);
+                        gram.add(lj, &coef);
+                        lj.apply_transpose_all(&y, &mut w.rhs);
                     }
-                    if f != Vec3::zeros() {
-                        lj.apply_transpose(0, fs * qw, &f, &mut w.rhs);
-                    }
-                }
-                gram.expand(&mut w.a);
-                Ok(w)
-            })
-            .collect()
+                    gram.write(&mut w.a);
+                    Ok(())
+                },
+            )
     }
 
     /// Delta springs, point forces and data springs as extra small "elements".
@@ -1152,7 +1200,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                 c[0] = ck * spring;
                 let mut gram = Gram::new(&lj);
                 gram.add(&lj, &c);
-                gram.expand(&mut w.a);
+                gram.write(&mut w.a);
             }
             lj.apply_transpose(0, fs, &f, &mut w.rhs);
             works.push(w);
@@ -1358,13 +1406,37 @@ impl CsrPattern {
         }
     }
 
+    /// The summed element matrices as CSR values. The rows are cut into one band per thread;
+    /// each band adds the element rows that fall into it, so the bands run side by side.
     fn values(&self, works: &[ElementWork]) -> Vec<f64> {
+        let n = self.row_ptr.len() - 1;
         let mut v = vec![0.0; self.cols.len()];
-        for (w, pos) in works.iter().zip(&self.positions) {
-            for (k, &p) in pos.iter().enumerate() {
-                v[p] += w.a[k];
-            }
+        let bands = rayon::current_num_threads().clamp(1, 8);
+        let mut slices = Vec::with_capacity(bands);
+        let mut rest = v.as_mut_slice();
+        let mut at = 0;
+        for t in 0..bands {
+            let rows = n * t / bands..n * (t + 1) / bands;
+            let end = self.row_ptr[rows.end];
+            let (head, tail) = std::mem::take(&mut rest).split_at_mut(end - at);
+            slices.push((rows, at, head));
+            rest = tail;
+            at = end;
         }
+        slices.into_par_iter().for_each(|(rows, base, out)| {
+            for (w, pos) in works.iter().zip(&self.positions) {
+                let nd = w.dofs.len();
+                for (a, &i) in w.dofs.iter().enumerate() {
+                    if !rows.contains(&i) {
+                        continue;
+                    }
+                    let row = a * nd..(a + 1) * nd;
+                    for (&p, &x) in pos[row.clone()].iter().zip(&w.a[row]) {
+                        out[p - base] += x;
+                    }
+                }
+            }
+        });
         v
     }
 }
@@ -1678,4 +1750,87 @@ fn pcg(
         stats.relative_residual = rel(&r);
     }
     stats
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A Jacobian with `nb` block and `nv` general columns filled with varied values.
+    fn jacobian(nb: usize, nv: usize, seed: f64) -> LocalJacobian {
+        let val = |i: usize| ((i as f64 + seed) * 0.7548776662).sin();
+        LocalJacobian {
+            blocks: (0..nb)
+                .map(|a| (3 * a, std::array::from_fn(|m| val(6 * a + m))))
+                .collect(),
+            vectors: (0..nv)
+                .map(|j| {
+                    let g = std::array::from_fn(|m| {
+                        let i = 100 + 18 * j + 3 * m;
+                        Vec3::new(val(i), val(i + 1), val(i + 2))
+                    });
+                    (3 * nb + j, g)
+                })
+                .collect(),
+            ..Default::default()
+        }
+    }
+
+    /// `J^m` as a dense `3 x nd` matrix (row-major).
+    fn dense(lj: &LocalJacobian, m: usize) -> Vec<f64> {
+        let (nb, nv) = (lj.blocks.len(), lj.vectors.len());
+        let nd = 3 * nb + nv;
+        let mut j = vec![0.0; 3 * nd];
+        for (a, (_, r)) in lj.blocks.iter().enumerate() {
+            for k in 0..3 {
+                j[k * nd + 3 * a + k] = r[m];
+            }
+        }
+        for (c, (_, g)) in lj.vectors.iter().enumerate() {
+            for k in 0..3 {
+                j[k * nd + 3 * nb + c] = g[m][k];
+            }
+        }
+        j
+    }
+
+    #[test]
+    fn gram_products_match_the_sum_of_jacobian_outer_products() {
+        let (nb, nv) = (5, 4);
+        let nd = 3 * nb + nv;
+        let mut gram = Gram::default();
+        let mut expected = vec![0.0; nd * nd];
+        gram.reset(&jacobian(nb, nv, 0.0));
+        for point in 0..3 {
+            let lj = jacobian(nb, nv, point as f64 * 1.3);
+            // Zero coefficients are skipped; a negative one must still count.
+            let coef = [0.5, 0.0, 2.0, -0.25, 1.0, 0.0].map(|c| c * (1.0 + point as f64));
+            gram.add(&lj, &coef);
+            for (m, &c) in coef.iter().enumerate() {
+                let j = dense(&lj, m);
+                for r in 0..nd {
+                    for s in 0..nd {
+                        for k in 0..3 {
+                            expected[r * nd + s] += c * j[k * nd + r] * j[k * nd + s];
+                        }
+                    }
+                }
+            }
+        }
+        // `write` sets every entry, whatever was there.
+        let mut out = vec![f64::NAN; nd * nd];
+        gram.write(&mut out);
+        for (k, (a, b)) in out.iter().zip(&expected).enumerate() {
+            assert!(
+                (a - b).abs() < 1e-12,
+                "entry ({}, {}): {a} != {b}",
+                k / nd,
+                k % nd
+            );
+        }
+        // Reset forgets the previous rows.
+        gram.reset(&jacobian(nb, nv, 0.0));
+        gram.write(&mut out);
+        assert!(out.iter().all(|&x| x == 0.0));
+    }
 }

@@ -119,26 +119,39 @@ pub(crate) fn rational_point(
             }
         }
     }
-    let w0 = wa[0];
+    // One division; the columns below multiply by `1 / W` (their recurrences chain through
+    // `r[b]`, `g[b]`, so divisions there would serialize on the divider's latency).
+    let inv_w0 = 1.0 / wa[0];
     for m in 0..6 {
         let mut acc = aa[m];
         for &(b, d, coef) in LOWER[m] {
             acc -= out.s[b] * (coef * wa[d]);
         }
-        out.s[m] = acc / w0;
+        out.s[m] = acc * inv_w0;
     }
+    // The column recurrences of the module docs with the Leibniz terms of `LOWER` written out
+    // (multi-indices 0..6 = s, u, v, uu, uv, vv), so that they stay in registers.
+    let s = out.s;
+    let [w1, w2, w3, w4, w5] = [wa[1], wa[2], wa[3], wa[4], wa[5]];
     for c in 0..n {
-        let (r, g) = (&mut out.r[c], &mut out.g[c]);
-        for m in 0..6 {
-            let mut racc = nal[c][m] * w[c];
-            let mut gacc = p[c] * nal[c][m] - out.s[m] * nal[c][0];
-            for &(b, d, coef) in LOWER[m] {
-                racc -= coef * wa[d] * r[b];
-                gacc -= out.s[b] * (coef * nal[c][d]) + g[b] * (coef * wa[d]);
-            }
-            r[m] = racc / w0;
-            g[m] = gacc / w0;
-        }
+        let [n0, n1, n2, n3, n4, n5] = nal[c];
+        let (wc, pc) = (w[c], p[c]);
+        let r0 = n0 * wc * inv_w0;
+        let r1 = (n1 * wc - w1 * r0) * inv_w0;
+        let r2 = (n2 * wc - w2 * r0) * inv_w0;
+        let r3 = (n3 * wc - w3 * r0 - 2.0 * w1 * r1) * inv_w0;
+        let r4 = (n4 * wc - w4 * r0 - w2 * r1 - w1 * r2) * inv_w0;
+        let r5 = (n5 * wc - w5 * r0 - 2.0 * w2 * r2) * inv_w0;
+        out.r[c] = [r0, r1, r2, r3, r4, r5];
+        let g0 = (pc - s[0]) * (n0 * inv_w0);
+        let g1 = (pc * n1 - s[1] * n0 - s[0] * n1 - g0 * w1) * inv_w0;
+        let g2 = (pc * n2 - s[2] * n0 - s[0] * n2 - g0 * w2) * inv_w0;
+        let g3 = (pc * n3 - s[3] * n0 - s[0] * n3 - g0 * w3 - (s[1] * n1 + g1 * w1) * 2.0) * inv_w0;
+        let g4 =
+            (pc * n4 - s[4] * n0 - s[0] * n4 - g0 * w4 - s[1] * n2 - g1 * w2 - s[2] * n1 - g2 * w1)
+                * inv_w0;
+        let g5 = (pc * n5 - s[5] * n0 - s[0] * n5 - g0 * w5 - (s[2] * n2 + g2 * w2) * 2.0) * inv_w0;
+        out.g[c] = [g0, g1, g2, g3, g4, g5];
     }
 }
 
@@ -289,57 +302,57 @@ impl RationalGeometry {
 
     /// Local evaluation: spans, basis tables and local control indices.
     fn local(&self, param: [f64; 2]) -> Result<Local, DynamicsError> {
+        let mut l = Local::default();
+        self.local_into(param, &mut l)?;
+        Ok(l)
+    }
+
+    /// [`Self::local`] into reused buffers, with the local weights and control points.
+    fn local_into(&self, param: [f64; 2], l: &mut Local) -> Result<(), DynamicsError> {
         let v = if self.surface { param[1] } else { 0.5 };
         check_param(&self.knots[0], param[0], 0)?;
         check_param(&self.knots[1], v, 1)?;
         let su = self.knots[0].find_span(param[0]);
         let sv = self.knots[1].find_span(v);
         let (p, q) = (self.knots[0].degree(), self.knots[1].degree());
-        let bu = basis3(&self.knots[0], su, param[0]);
-        let bv = basis3(&self.knots[1], sv, v);
-        let (ku, kv) = (p + 1, q + 1);
-        let mut idx = Vec::with_capacity(ku * kv);
-        for a in 0..ku {
-            for b in 0..kv {
-                idx.push((su - p + a) * self.dims[1] + (sv - q + b));
+        (l.ku, l.kv) = (p + 1, q + 1);
+        l.bu.clear();
+        l.bu.resize(3 * l.ku, 0.0);
+        l.bv.clear();
+        l.bv.resize(3 * l.kv, 0.0);
+        self.knots[0].basis_derivatives(su, param[0], 2, &mut l.bu, &mut l.ws);
+        self.knots[1].basis_derivatives(sv, v, 2, &mut l.bv, &mut l.ws);
+        l.idx.clear();
+        for a in 0..l.ku {
+            for b in 0..l.kv {
+                l.idx.push((su - p + a) * self.dims[1] + (sv - q + b));
             }
         }
-        Ok(Local {
-            bu,
-            bv,
-            ku,
-            kv,
-            idx,
-        })
-    }
-
-    fn local_net(&self, idx: &[usize]) -> (Vec<f64>, Vec<Vec3>) {
-        let w = idx.iter().map(|&c| self.coords[4 * c + 3]).collect();
-        let p = idx
-            .iter()
-            .map(|&c| {
-                Vec3::new(
-                    self.coords[4 * c],
-                    self.coords[4 * c + 1],
-                    self.coords[4 * c + 2],
-                )
-            })
-            .collect();
-        (w, p)
+        l.w.clear();
+        l.p.clear();
+        for &c in &l.idx {
+            let x = &self.coords[4 * c..4 * c + 4];
+            l.w.push(x[3]);
+            l.p.push(Vec3::new(x[0], x[1], x[2]));
+        }
+        Ok(())
     }
 }
 
-struct Local {
+/// Local evaluation data at one parameter, reused between evaluations (see
+/// [`LocalJacobian`]'s scratch): basis tables (`3 x ku`, `3 x kv`; orders above the degree are
+/// zero), local control indices, weights and points, and the rational point.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Local {
     bu: Vec<f64>,
     bv: Vec<f64>,
     ku: usize,
     kv: usize,
     idx: Vec<usize>,
-}
-
-/// Basis values, first and second derivatives (`3 x (p+1)`; orders above the degree are zero).
-fn basis3(kv: &KnotVector, span: usize, u: f64) -> Vec<f64> {
-    kv.basis_derivatives_vec(span, u, 2)
+    w: Vec<f64>,
+    p: Vec<Vec3>,
+    ws: vclay_spline::BasisWorkspace,
+    rp: RationalPoint,
 }
 
 fn non_empty_spans(kv: &KnotVector) -> Vec<(f64, f64)> {
@@ -423,22 +436,21 @@ impl GeneralizedGeometry for RationalGeometry {
         self.scale
     }
     fn jacobian_at(&self, param: [f64; 2], out: &mut LocalJacobian) -> Result<(), DynamicsError> {
-        let l = self.local(param)?;
-        let (w, p) = self.local_net(&l.idx);
-        let mut rp = RationalPoint::default();
-        rational_point(&l.bu, l.ku, &l.bv, l.kv, &w, &p, &mut rp);
-        out.s = rp.s;
+        let l = &mut out.scratch;
+        self.local_into(param, l)?;
+        rational_point(&l.bu, l.ku, &l.bv, l.kv, &l.w, &l.p, &mut l.rp);
+        out.s = l.rp.s;
         out.blocks.clear();
         out.vectors.clear();
         for (k, &c) in l.idx.iter().enumerate() {
-            out.blocks.push((4 * c, rp.r[k]));
-            out.vectors.push((4 * c + 3, rp.g[k]));
+            out.blocks.push((4 * c, l.rp.r[k]));
+            out.vectors.push((4 * c + 3, l.rp.g[k]));
         }
         Ok(())
     }
     fn velocity_terms(&self, param: [f64; 2], qdot: &[f64]) -> Result<(Vec3, Vec3), DynamicsError> {
         let l = self.local(param)?;
-        let (w, p) = self.local_net(&l.idx);
+        let (w, p) = (&l.w, &l.p);
         let basis: Vec<f64> = (0..l.ku)
             .flat_map(|a| (0..l.kv).map(move |b| (a, b)))
             .map(|(a, b)| l.bu[a] * l.bv[b])
@@ -449,7 +461,7 @@ impl GeneralizedGeometry for RationalGeometry {
             .map(|&c| Vec3::new(qdot[4 * c], qdot[4 * c + 1], qdot[4 * c + 2]))
             .collect();
         let wd: Vec<f64> = l.idx.iter().map(|&c| qdot[4 * c + 3]).collect();
-        Ok(rational_velocity(&basis, &w, &p, &pd, &wd))
+        Ok(rational_velocity(&basis, w, p, &pd, &wd))
     }
     fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
         if self.surface {
@@ -586,9 +598,8 @@ fn curve_local(
     u: f64,
 ) -> Result<(RationalPoint, Vec<usize>, Vec<f64>), DynamicsError> {
     let l = g.local([u, 0.0])?;
-    let (w, p) = g.local_net(&l.idx);
     let mut rp = RationalPoint::default();
-    rational_point(&l.bu, l.ku, &l.bv, l.kv, &w, &p, &mut rp);
+    rational_point(&l.bu, l.ku, &l.bv, l.kv, &l.w, &l.p, &mut rp);
     let basis = l.bu[..l.ku].to_vec();
     Ok((rp, l.idx, basis))
 }
