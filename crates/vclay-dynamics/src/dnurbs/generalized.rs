@@ -224,7 +224,6 @@ impl Gram {
 
     /// Forms `[bb | bv]` and `vv` from the collected rows.
     fn finish(&mut self) {
-        use faer::{Accum, MatMut, MatRef, Par};
         let (nb, nv, nc) = (self.nb, self.nv, self.nc());
         let rows = self.x.len() / nc.max(1);
         self.bbv.clear();
@@ -234,30 +233,48 @@ impl Gram {
         if rows == 0 || nc == 0 {
             return;
         }
-        let x = MatRef::from_row_major_slice(&self.x, rows, nc);
-        let cx = MatRef::from_row_major_slice(&self.cx, rows, nc);
-        faer::linalg::matmul::matmul(
-            MatMut::from_row_major_slice_mut(&mut self.bbv, nb, nc),
-            Accum::Replace,
-            x.get(.., ..nb).transpose(),
-            cx,
-            1.0,
-            Par::Seq,
-        );
-        if nv > 0 {
-            let mut vv = MatMut::from_row_major_slice_mut(&mut self.vv, nv, nv);
-            for k in 0..3 {
-                let cols = nb + k * nv..nb + (k + 1) * nv;
-                faer::linalg::matmul::matmul(
-                    vv.as_mut(),
-                    if k == 0 { Accum::Replace } else { Accum::Add },
-                    x.get(.., cols.clone()).transpose(),
-                    cx.get(.., cols),
-                    1.0,
-                    Par::Seq,
-                );
+        let (x, cx) = (&self.x[..rows * nc], &self.cx[..rows * nc]);
+        struct Products<'a> {
+            x: &'a [f64],
+            cx: &'a [f64],
+            nc: usize,
+            nb: usize,
+            nv: usize,
+            bbv: &'a mut [f64],
+            vv: &'a mut [f64],
+        }
+        impl pulp::WithSimd for Products<'_> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, _simd: S) {
+                let Products {
+                    x,
+                    cx,
+                    nc,
+                    nb,
+                    nv,
+                    bbv,
+                    vv,
+                } = self;
+                // bb and each G_k^T C G_k are symmetric: upper tiles only.
+                gemm_tn(x, cx, nc, 0..nb, 0..nb, bbv, nc, true);
+                gemm_tn(x, cx, nc, 0..nb, nb..nc, &mut bbv[nb..], nc, false);
+                for k in 0..3 {
+                    let cols = nb + k * nv..nb + (k + 1) * nv;
+                    gemm_tn(x, cx, nc, cols.clone(), cols, vv, nv, true);
+                }
             }
         }
+        // Compiled for AVX2/FMA too and chosen at run time.
+        pulp::Arch::new().dispatch(Products {
+            x,
+            cx,
+            nc,
+            nb,
+            nv,
+            bbv: &mut self.bbv,
+            vv: &mut self.vv,
+        });
     }
 
     /// Writes the accumulated matrix into `out`, dense and symmetric (row-major `nd x nd`, the
@@ -288,6 +305,113 @@ impl Gram {
             }
             o[3 * nb..].copy_from_slice(&self.vv[i * nv..(i + 1) * nv]);
         }
+    }
+}
+
+/// `out += L^T R` for the column ranges `lc` of `L` and `rc` of `R`, both row-major with `ld`
+/// columns and the same rows; `out` is row-major with row stride `ldo` (entry `(a, j)` at
+/// `a ldo + j`). With `sym` (`L^T R` symmetric: `lc == rc` and `R = C L` for a diagonal `C`)
+/// only the tiles on or above the diagonal are computed and the rest mirrored. Small products
+/// (tens of rows and columns, once per element): tiles of 4 x 8 accumulated in registers over
+/// all rows, without the packing buffers a general GEMM allocates per call.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn gemm_tn(
+    l: &[f64],
+    r: &[f64],
+    ld: usize,
+    lc: std::ops::Range<usize>,
+    rc: std::ops::Range<usize>,
+    out: &mut [f64],
+    ldo: usize,
+    sym: bool,
+) {
+    const TA: usize = 4;
+    const TJ: usize = 8;
+    let rows = l.len() / ld;
+    let (m, n) = (lc.len(), rc.len());
+    // Tile (a0, j0) lies wholly below the diagonal.
+    let below = |a0: usize, j0: usize| sym && j0 + TJ <= a0;
+    let mut a0 = 0;
+    while a0 < m {
+        let ta = TA.min(m - a0);
+        let mut j0 = 0;
+        while j0 < n {
+            let tj = TJ.min(n - j0);
+            if below(a0, j0) {
+                j0 += TJ;
+                continue;
+            }
+            let mut acc = [[0.0; TJ]; TA];
+            if ta == TA && tj == TJ {
+                for row in 0..rows {
+                    let lr = &l[row * ld + lc.start + a0..][..TA];
+                    let rr: &[f64; TJ] = r[row * ld + rc.start + j0..][..TJ]
+                        .try_into()
+                        .expect("TJ columns");
+                    for (acc_a, &p) in acc.iter_mut().zip(lr) {
+                        for jj in 0..TJ {
+                            acc_a[jj] += p * rr[jj];
+                        }
+                    }
+                }
+            } else {
+                for row in 0..rows {
+                    let lr = &l[row * ld + lc.start + a0..][..ta];
+                    let rr = &r[row * ld + rc.start + j0..][..tj];
+                    for (acc_a, &p) in acc.iter_mut().zip(lr) {
+                        for (o, &v) in acc_a.iter_mut().zip(rr) {
+                            *o += p * v;
+                        }
+                    }
+                }
+            }
+            for (a, acc_a) in acc.iter().enumerate().take(ta) {
+                let o = &mut out[(a0 + a) * ldo + j0..][..tj];
+                for (o, v) in o.iter_mut().zip(acc_a) {
+                    *o += v;
+                }
+            }
+            j0 += TJ;
+        }
+        a0 += TA;
+    }
+    if sym {
+        for a in 0..m {
+            for j in 0..a.min(n) {
+                // Skipped entries only ever hold the mirror (so repeated calls accumulate).
+                if below(a - a % TA, j - j % TJ) {
+                    out[a * ldo + j] = out[j * ldo + a];
+                }
+            }
+        }
+    }
+}
+
+/// Scratch of one element's assembly (see [`GeneralizedDnurbs::step`]).
+#[derive(Default)]
+struct ElementScratch {
+    lj: LocalJacobian,
+    gram: Gram,
+    /// The element's coordinate velocities.
+    vl: Vec<f64>,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<ElementScratch> =
+        std::cell::RefCell::new(ElementScratch::default());
+}
+
+/// Runs `f` with this thread's element scratch (a fresh one if it is already in use).
+fn with_scratch<R>(f: impl FnOnce(&mut ElementScratch) -> R) -> R {
+    let mut f = Some(f);
+    let out = SCRATCH.with(|cell| match cell.try_borrow_mut() {
+        Ok(mut sc) => Some((f.take().expect("not yet run"))(&mut sc)),
+        Err(_) => None,
+    });
+    match out {
+        Some(r) => r,
+        None => (f.take().expect("not yet run"))(&mut ElementScratch::default()),
     }
 }
 
@@ -1068,9 +1192,10 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             .par_iter()
             .zip(works.par_iter_mut())
             .enumerate()
-            .try_for_each_init(
-                || (LocalJacobian::default(), Gram::default(), Vec::new()),
-                |(lj, gram, vl), (e, (q, w))| {
+            .try_for_each(|(e, (q, w))| {
+                // Per-thread scratch that outlives the step (rayon would re-create per-job
+                // state for every split, and freeing those buffers each step churns the heap).
+                with_scratch(|ElementScratch { lj, gram, vl }| {
                     g.jacobian_at(q.params[0], lj)?;
                     lj.dofs_into(&mut w.dofs);
                     let nd = w.dofs.len();
@@ -1154,8 +1279,8 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                     }
                     gram.write(&mut w.a);
                     Ok(())
-                },
-            )
+                })
+            })
     }
 
     /// Delta springs, point forces and data springs as extra small "elements".
@@ -1796,7 +1921,9 @@ mod tests {
 
     #[test]
     fn gram_products_match_the_sum_of_jacobian_outer_products() {
-        let (nb, nv) = (5, 4);
+        // Sizes past one 4 x 8 tile, with remainders, so that the symmetric skip and mirror
+        // and the partial tiles all run.
+        let (nb, nv) = (13, 21);
         let nd = 3 * nb + nv;
         let mut gram = Gram::default();
         let mut expected = vec![0.0; nd * nd];
