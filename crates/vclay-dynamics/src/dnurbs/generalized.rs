@@ -28,13 +28,16 @@
 //! ```text
 //! (2M + dt D + 2 dt^2 K) dp = 2 dt^2 (f_p + g_p - grad U) + (2M - dt D) v
 //! ```
-//! solved by block-Jacobi-preconditioned conjugate gradients (one 4x4 block per control point:
-//! x, y, z, w), warm-started from `v`, with an iteration cap and a relative residual tolerance
-//! (the paper capped CG at 10 iterations). The element matrices are computed in parallel per
-//! element (section 5.1) and, because the elements' coordinates never change, summed each step
-//! into a CSR matrix with a pattern built once, so each CG product is one sparse pass instead of
-//! one dense product per element. Delta springs (eq 19) and data springs add `k J^T J` to the
-//! implicit matrix.
+//! solved by a sparse Cholesky factorization refactored every step on a symbolic analysis
+//! cached per set of fixed coordinates ([`LinearSolver::Direct`], the default for tensor-product
+//! geometries), or by block-Jacobi-preconditioned conjugate gradients (one 4x4 block per control
+//! point: x, y, z, w), warm-started from `v`, with an iteration cap and a relative residual
+//! tolerance (the paper capped CG at 10 iterations; the default for swung surfaces). The element
+//! matrices are computed in parallel per element (section 5.1): the Jacobian rows of all the
+//! element's quadrature points are stacked and the structured `J^T J` blocks formed by one small
+//! tiled product (`Gram`). Because the elements' coordinates never change, they are summed
+//! each step into a CSR matrix with a pattern built once. Delta springs (eq 19) and data springs
+//! add `k J^T J` to the implicit matrix.
 //!
 //! ## Constraints (section 6.2)
 //! Fixed coordinates (control points, single weights, `alpha`) are removed from the unknowns
@@ -165,9 +168,9 @@ impl LocalJacobian {
 /// - block-block and block-vector parts: `[bb | bv] = P^T C X` (`nb x (nb + 3 nv)`),
 /// - vector-vector part: `vv = sum_k G_k^T C G_k`.
 ///
-/// Collecting the rows of a whole element and multiplying once (register-blocked products from
-/// faer) replaces one rank-6 update of the element matrix per quadrature point, which was bound
-/// by loads and stores. [`Gram::write`] writes the dense symmetric `nd x nd` matrix.
+/// Collecting the rows of a whole element and multiplying once (register-tiled products,
+/// [`gemm_tn`]) replaces one rank-6 update of the element matrix per quadrature point, which was
+/// bound by loads and stores. [`Gram::write`] writes the dense symmetric `nd x nd` matrix.
 #[derive(Clone, Debug, Default)]
 struct Gram {
     nb: usize,
@@ -1070,6 +1073,9 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         }
         if ratio > 1.0 {
             if dynamic {
+                // The caller halves the step: keep the element buffers for the retry.
+                works.truncate(ne);
+                self.work_pool = works;
                 return Ok(None);
             }
             for d in x.iter_mut() {
