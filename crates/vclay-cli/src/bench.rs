@@ -1,6 +1,12 @@
 //! `vclay bench`: evaluation throughput as JSON, so that `bench/compare.py` can put vclay and
 //! its peers (geomdl, OpenNURBS through rhino3dm) in one table from one run. The statistically
 //! careful figures come from `cargo bench -p vclay-bench`; this is the quick, scriptable form.
+//!
+//! With `--physics` it also times the simulation benchmark models (the definitions shared with
+//! the examples: `vclay::dynamics::dnurbs::benchmarks`, `vclay::solids::benchmarks`) and puts
+//! each figure beside the speed goal it is held to (`docs/performance.md`), with whether this
+//! run met it. The machine's speed can drift between runs; the documented figures are medians
+//! of alternating runs.
 
 use anyhow::Result;
 use serde_json::json;
@@ -41,7 +47,7 @@ fn time_best(budget: f64, mut f: impl FnMut()) -> f64 {
 }
 
 /// Runs the measurements and prints JSON.
-pub fn run(seconds: f64) -> Result<()> {
+pub fn run(seconds: f64, physics: bool, large: bool) -> Result<()> {
     let s = bench_surface()?;
     let side = 1000;
     let us: Vec<f64> = (0..side).map(|i| i as f64 / (side - 1) as f64).collect();
@@ -85,15 +91,71 @@ pub fn run(seconds: f64) -> Result<()> {
         }
     });
     let curve_ns = t / cu.len() as f64 * 1e9;
-    let doc = json!({
+    let mut doc = json!({
         "threads": rayon_threads(),
         "surface_grid_points_per_second_1_thread": grid_seq,
         "surface_grid_points_per_second_all_threads": grid_par,
         "surface_point_ns": point_ns,
         "curve_point_ns": curve_ns,
     });
+    if physics {
+        doc["physics"] = physics_figures(seconds, large)?;
+    }
     println!("{}", serde_json::to_string_pretty(&doc)?);
     Ok(())
+}
+
+/// Steps per second of `step` run for about `seconds` (at least 5 steps), after one untimed
+/// step (the D-NURBS first step assembles and factors).
+fn steps_per_second(seconds: f64, mut step: impl FnMut() -> Result<()>) -> Result<f64> {
+    step()?;
+    let t0 = Instant::now();
+    let mut n = 0;
+    while n < 5 || t0.elapsed().as_secs_f64() < seconds {
+        step()?;
+        n += 1;
+    }
+    Ok(n as f64 / t0.elapsed().as_secs_f64())
+}
+
+/// `{value, unit, goal, met}` for a rate with a lower bound as goal.
+fn at_least(value: f64, unit: &str, goal: f64) -> serde_json::Value {
+    json!({ "value": value, "unit": unit, "goal": format!(">= {goal}"), "met": value >= goal })
+}
+
+/// The simulation figures and their goals (issues 4 and 5).
+fn physics_figures(seconds: f64, large: bool) -> Result<serde_json::Value> {
+    use vclay::dynamics::Integrator;
+    use vclay::dynamics::dnurbs::benchmarks as dn;
+    use vclay::solids::{SolidParams, benchmarks as so};
+    let implicit = Integrator::Implicit { dt: dn::DT };
+    let mut frozen = dn::frozen_sheet(64)?;
+    let frozen_rate = steps_per_second(seconds, || Ok(frozen.step(implicit).map(drop)?))?;
+    let mut dynamic = dn::dynamic_sheet(16)?;
+    let dynamic_rate = steps_per_second(seconds, || Ok(dynamic.step(implicit).map(drop)?))?;
+    let mut cube = so::cube(2, SolidParams::default())?;
+    so::pull(&mut cube)?;
+    let cube_rate = steps_per_second(seconds, || Ok(cube.step().map(drop)?))?;
+    let cube_ms = 1e3 / cube_rate;
+    let mut out = json!({
+        "dnurbs_64x64_frozen_weights": at_least(frozen_rate, "steps/s", 500.0),
+        "dnurbs_16x16_dynamic_weights": at_least(dynamic_rate, "steps/s", 60.0),
+        "solid_cube_level2": {
+            "value": cube_ms,
+            "unit": "ms/step",
+            "goal": "< 0.1",
+            "met": cube_ms < 0.1,
+            "data_points": cube.data_points().len(),
+        },
+    });
+    if large {
+        let mut big = so::cube(5, SolidParams::default())?;
+        so::pull(&mut big)?;
+        let rate = steps_per_second(seconds, || Ok(big.step().map(drop)?))?;
+        out["solid_cube_level5"] = at_least(rate, "steps/s", 10.0);
+        out["solid_cube_level5"]["bytes_per_data_point"] = json!(big.bytes_per_data_point());
+    }
+    Ok(out)
 }
 
 fn rayon_threads() -> usize {

@@ -53,11 +53,18 @@ enum Command {
         #[arg(long, default_value = "vclay-demo")]
         out: PathBuf,
     },
-    /// Time spline evaluation and print the figures as JSON.
+    /// Time spline evaluation (and with --physics the simulations' speed goals) as JSON.
     Bench {
         /// Approximate seconds per measurement.
         #[arg(long, default_value_t = 1.0)]
         seconds: f64,
+        /// Also time the D-NURBS and dynamic-solid benchmark models against their goals.
+        #[arg(long)]
+        physics: bool,
+        /// With --physics, also the level-5 cube (912,673 data points: about 7 s to build and
+        /// 2 GB of memory).
+        #[arg(long)]
+        large: bool,
     },
     /// Subdivide a lattice (MacCracken-Joy); print element counts (--stats) and/or write --out.
     Subdivide(subdivide::SubdivideArgs),
@@ -88,7 +95,11 @@ fn main() -> ExitCode {
             entity,
         } => eval::run(&model, &params, derivatives, entity),
         Command::Demo { out } => demo::run(&out),
-        Command::Bench { seconds } => bench::run(seconds),
+        Command::Bench {
+            seconds,
+            physics,
+            large,
+        } => bench::run(seconds, physics, large),
         Command::Render(args) => render::run(&args),
         Command::Convert(args) => convert::run(&args),
         Command::Subdivide(args) => subdivide::run(&args),

@@ -2,38 +2,18 @@
 //! `cargo run --release -p vclay-dynamics --example dnurbs_dynamic_weights [N]` for an N x N
 //! cubic surface (default 16; issue goal: 60 steps/s on 2 cores; optional second argument: CG
 //! relative tolerance; `--cg`: block-Jacobi CG instead of the default sparse Cholesky), pulled
-//! by a moving spring, one edge fixed. Every step recomputes the element matrices (they depend on the
-//! weights).
+//! by a moving spring, one edge fixed (`vclay_dynamics::dnurbs::benchmarks::dynamic_sheet`).
+//! Every step recomputes the element matrices (they depend on the weights).
 use std::time::Instant;
-use vclay_core::Vec3;
-use vclay_dynamics::dnurbs::{GeneralizedDnurbs, GeneralizedGeometry, RationalGeometry, Target};
-use vclay_dynamics::{Force, Integrator, Material};
-use vclay_spline::NurbsSurface;
+use vclay_dynamics::Integrator;
+use vclay_dynamics::dnurbs::{GeneralizedGeometry, benchmarks};
 
 fn main() {
     let cg = std::env::args().any(|a| a == "--cg");
     let args: Vec<String> = std::env::args().filter(|a| a != "--cg").collect();
     let n: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(16);
-    let mut pts = Vec::with_capacity(n * n);
-    let mut w = Vec::with_capacity(n * n);
-    for i in 0..n {
-        for j in 0..n {
-            pts.push(Vec3::new(
-                i as f64 / (n - 1) as f64,
-                j as f64 / (n - 1) as f64,
-                0.0,
-            ));
-            w.push(1.0 + 0.2 * ((i + j) % 3) as f64);
-        }
-    }
-    let mut s = NurbsSurface::clamped_uniform([3, 3], [n, n], pts).expect("surface");
-    s.set_weights(w).expect("weights");
     let t0 = Instant::now();
-    let mut d = GeneralizedDnurbs::new(
-        RationalGeometry::from_surface(&s),
-        Material::surface(1.0, 2.0, 1.0, 0.1),
-    )
-    .expect("model");
+    let mut d = benchmarks::dynamic_sheet(n).expect("model");
     let setup = t0.elapsed().as_secs_f64();
     if let Some(tol) = args.get(2).and_then(|a| a.parse().ok()) {
         d.tolerance = tol;
@@ -41,19 +21,6 @@ fn main() {
     if cg {
         d.solver = vclay_dynamics::LinearSolver::ConjugateGradient;
     }
-    for k in 0..n {
-        for c in 0..3 {
-            d.set_fixed_coordinate(4 * k + c, true).expect("index");
-        }
-    }
-    d.forces_mut().push(Force::Spring {
-        param: [0.7, 0.5],
-        target: Target::Moving(std::sync::Arc::new(|t| {
-            Vec3::new(0.7, 0.5, 0.3 * (t * 3.0).sin())
-        })),
-        stiffness: 50.0,
-        kernel: None,
-    });
     let steps = 60;
     let t0 = Instant::now();
     let mut iters = 0;

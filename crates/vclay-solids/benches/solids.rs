@@ -4,15 +4,11 @@
 //! `cargo run --release -p vclay-solids --example bench_levels`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use vclay_core::Vec3;
-use vclay_lattice::{BoundaryRule, primitives};
-use vclay_solids::{DynamicSolid, Material, SolidParams, SolidSource};
+use vclay_solids::{DynamicSolid, SolidParams, benchmarks};
 
 fn cube(level: usize) -> DynamicSolid {
-    let c = primitives::box_lattice([4, 4, 4], Vec3::zeros(), Vec3::repeat(1.0));
-    let (source, p) = SolidSource::subdivision(c, BoundaryRule::Sharp, level);
-    let mut s = DynamicSolid::new(source, p, Material::default(), SolidParams::default()).unwrap();
-    s.attach_rope(Vec3::new(1.3, 1.2, 1.1), 50.0, 0.0).unwrap();
+    let mut s = benchmarks::cube(level, SolidParams::default()).unwrap();
+    benchmarks::pull(&mut s).unwrap();
     s
 }
 

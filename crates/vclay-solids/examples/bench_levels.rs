@@ -9,8 +9,7 @@
 
 use std::time::Instant;
 use vclay_core::Vec3;
-use vclay_lattice::{BoundaryRule, primitives};
-use vclay_solids::{DynamicSolid, Material, SolidParams, SolidSource};
+use vclay_solids::{DynamicSolid, Material, SolidParams, SolidSource, benchmarks};
 use vclay_spline::KnotVector;
 
 fn peak_rss_mb() -> f64 {
@@ -36,10 +35,9 @@ fn cpu_seconds() -> f64 {
         .unwrap_or(f64::NAN)
 }
 
-/// Wall and CPU milliseconds per step.
+/// Wall and CPU milliseconds per step (after `benchmarks::pull`).
 fn time_steps(s: &mut DynamicSolid, seconds: f64) -> (f64, f64) {
-    s.attach_rope(Vec3::new(1.3, 1.2, 1.1), 50.0, 0.0).unwrap();
-    s.run(3).unwrap();
+    benchmarks::pull(s).unwrap();
     let t0 = Instant::now();
     let c0 = cpu_seconds();
     let mut n = 0;
@@ -91,10 +89,8 @@ fn main() {
     println!("|---|---|---|---|---|---|---|---|---|---|---|");
     let paper = ["10 (216 cells)", "72 (1,728 cells)", "-", "-", "-"];
     for level in 1..=max_level {
-        let cube = primitives::box_lattice([4, 4, 4], Vec3::zeros(), Vec3::repeat(1.0));
-        let (source, p) = SolidSource::subdivision(cube, BoundaryRule::Sharp, level);
         let t0 = Instant::now();
-        let mut s = DynamicSolid::new(source, p, Material::default(), params).unwrap();
+        let mut s = benchmarks::cube(level, params).unwrap();
         let build = t0.elapsed().as_secs_f64();
         let mut name = format!("Cube (4^3) level {level}");
         if fix_half {

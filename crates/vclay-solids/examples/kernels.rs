@@ -5,9 +5,8 @@
 
 use std::time::Instant;
 use vclay_core::{Parallelism, Vec3};
-use vclay_lattice::{BoundaryRule, primitives};
 use vclay_solids::springs::ForceWorkspace;
-use vclay_solids::{DynamicSolid, Material, SolidParams, SolidSource};
+use vclay_solids::{SolidParams, benchmarks};
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -18,18 +17,9 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let level: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(4);
     let reps: usize = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(20);
-    let cube = primitives::box_lattice([4, 4, 4], Vec3::zeros(), Vec3::repeat(1.0));
-    let (source, p) = SolidSource::subdivision(cube, BoundaryRule::Sharp, level);
-    let mut s = DynamicSolid::new(
-        source.clone(),
-        p,
-        Material::default(),
-        SolidParams::default(),
-    )
-    .unwrap();
+    let mut s = benchmarks::cube(level, SolidParams::default()).unwrap();
     // A deformed state: pull one corner and take a few steps.
-    s.attach_rope(Vec3::new(1.3, 1.2, 1.1), 50.0, 0.0).unwrap();
-    s.run(3).unwrap();
+    benchmarks::pull(&mut s).unwrap();
     let d = s.data_points().to_vec();
     let springs = s.springs().clone();
     println!(
@@ -59,7 +49,7 @@ fn main() {
         );
     }
     // The control map alone.
-    let disc = source.discretize(s.control_points()).unwrap();
+    let disc = s.source().discretize(s.control_points()).unwrap();
     let mut ws = vclay_lattice::ChainWorkspace::new();
     let mut dd = vec![Vec3::zeros(); d.len()];
     let mut g = vec![Vec3::zeros(); s.control_points().len()];

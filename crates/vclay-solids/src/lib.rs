@@ -48,6 +48,7 @@
 //! topologically.
 #![warn(missing_docs)]
 
+pub mod benchmarks;
 pub mod error;
 pub mod map;
 pub mod material;

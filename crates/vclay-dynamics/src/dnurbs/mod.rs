@@ -37,6 +37,7 @@
 //! generalized inertial force and constraints; with all weights held it reproduces this engine
 //! (tested to 1e-8).
 
+pub mod benchmarks;
 pub mod figures;
 pub mod generalized;
 mod geometry;
