@@ -188,7 +188,72 @@ pub struct SolidStats {
 /// The factored reduced mass matrix of the free control points.
 struct MassSolver {
     llt: Option<faer::sparse::linalg::solvers::Llt<usize, f64>>,
+    /// Used instead of `llt` for small, nearly dense matrices (a coarse control net couples
+    /// almost every pair of control points), where the dense triangular solves are faster.
+    dense: Option<faer::linalg::solvers::Llt<f64>>,
     rhs: faer::Mat<f64>,
+}
+
+/// Free control points up to which a mass matrix at least a quarter full is factored densely.
+const DENSE_MASS: usize = 512;
+
+impl MassSolver {
+    /// Factors the block of `mp` (`n x n`) on the `free` control points: densely when it is
+    /// small and at least a quarter full (and `allow_dense`), else by sparse Cholesky.
+    fn new(
+        mp: &SparseMatrix,
+        free: &[u32],
+        n: usize,
+        allow_dense: bool,
+    ) -> Result<Self, SolidsError> {
+        let m = free.len();
+        let mut pos = vec![usize::MAX; n];
+        for (k, &i) in free.iter().enumerate() {
+            pos[i as usize] = k;
+        }
+        let mut trips = Vec::new();
+        for &i in free {
+            let (cols, vals) = mp.row(i as usize);
+            let ri = pos[i as usize];
+            for (&c, &v) in cols.iter().zip(vals) {
+                let rc = pos[c as usize];
+                if rc != usize::MAX && rc <= ri {
+                    trips.push(faer::sparse::Triplet::new(ri, rc, v));
+                }
+            }
+        }
+        Ok(if m == 0 {
+            MassSolver {
+                llt: None,
+                dense: None,
+                rhs: faer::Mat::zeros(0, 3),
+            }
+        } else if allow_dense && m <= DENSE_MASS && 8 * trips.len() >= m * m {
+            let mut a = faer::Mat::<f64>::zeros(m, m);
+            for t in &trips {
+                a[(t.row, t.col)] = t.val;
+            }
+            let llt = a
+                .llt(faer::Side::Lower)
+                .map_err(|e| SolidsError::MassMatrix(format!("{e:?}")))?;
+            MassSolver {
+                llt: None,
+                dense: Some(llt),
+                rhs: faer::Mat::zeros(m, 3),
+            }
+        } else {
+            let mat = faer::sparse::SparseColMat::<usize, f64>::try_new_from_triplets(m, m, &trips)
+                .map_err(|e| SolidsError::MassMatrix(format!("{e:?}")))?;
+            let llt = mat
+                .sp_cholesky(faer::Side::Lower)
+                .map_err(|e| SolidsError::MassMatrix(format!("{e:?}")))?;
+            MassSolver {
+                llt: Some(llt),
+                dense: None,
+                rhs: faer::Mat::zeros(m, 3),
+            }
+        })
+    }
 }
 
 impl std::fmt::Debug for MassSolver {
@@ -201,6 +266,7 @@ impl Clone for MassSolver {
     fn clone(&self) -> Self {
         Self {
             llt: self.llt.clone(),
+            dense: self.dense.clone(),
             rhs: self.rhs.clone(),
         }
     }
@@ -317,6 +383,7 @@ impl DynamicSolid {
             free: Vec::new(),
             solver: MassSolver {
                 llt: None,
+                dense: None,
                 rhs: faer::Mat::zeros(0, 3),
             },
             boundary: Boundary::default(),
@@ -473,38 +540,7 @@ impl DynamicSolid {
             self.restricted = None;
         }
         // Factor the free block of A^T M A.
-        let m = self.free.len();
-        let mut pos = vec![usize::MAX; n];
-        for (k, &i) in self.free.iter().enumerate() {
-            pos[i as usize] = k;
-        }
-        let mut trips = Vec::new();
-        for &i in &self.free {
-            let (cols, vals) = self.mp.row(i as usize);
-            let ri = pos[i as usize];
-            for (&c, &v) in cols.iter().zip(vals) {
-                let rc = pos[c as usize];
-                if rc != usize::MAX && rc <= ri {
-                    trips.push(faer::sparse::Triplet::new(ri, rc, v));
-                }
-            }
-        }
-        self.solver = if m == 0 {
-            MassSolver {
-                llt: None,
-                rhs: faer::Mat::zeros(0, 3),
-            }
-        } else {
-            let mat = faer::sparse::SparseColMat::<usize, f64>::try_new_from_triplets(m, m, &trips)
-                .map_err(|e| SolidsError::MassMatrix(format!("{e:?}")))?;
-            let llt = mat
-                .sp_cholesky(faer::Side::Lower)
-                .map_err(|e| SolidsError::MassMatrix(format!("{e:?}")))?;
-            MassSolver {
-                llt: Some(llt),
-                rhs: faer::Mat::zeros(m, 3),
-            }
-        };
+        self.solver = MassSolver::new(&self.mp, &self.free, n, true)?;
         let w = &mut self.work;
         w.f = vec![Vec3::zeros(); nd];
         w.dy = vec![Vec3::zeros(); nd];
@@ -737,15 +773,20 @@ impl DynamicSolid {
     fn solve_mass(solver: &mut MassSolver, free: &[u32], b: &[Vec3], x: &mut [Vec3]) {
         use faer::linalg::solvers::Solve;
         x.iter_mut().for_each(|v| *v = Vec3::zeros());
-        let Some(llt) = &solver.llt else { return };
+        let MassSolver { llt, dense, rhs } = solver;
+        let solve: &dyn Fn(faer::MatMut<'_, f64>) = match (dense, llt) {
+            (Some(d), _) => &|r| d.solve_in_place(r),
+            (None, Some(s)) => &|r| s.solve_in_place(r),
+            (None, None) => return,
+        };
         for (k, &i) in free.iter().enumerate() {
             for c in 0..3 {
-                solver.rhs[(k, c)] = b[i as usize][c];
+                rhs[(k, c)] = b[i as usize][c];
             }
         }
-        llt.solve_in_place(solver.rhs.as_mut());
+        solve(rhs.as_mut());
         for (k, &i) in free.iter().enumerate() {
-            x[i as usize] = Vec3::new(solver.rhs[(k, 0)], solver.rhs[(k, 1)], solver.rhs[(k, 2)]);
+            x[i as usize] = Vec3::new(rhs[(k, 0)], rhs[(k, 1)], rhs[(k, 2)]);
         }
     }
 
@@ -1412,6 +1453,41 @@ fn spring_energy_scale(sp: &SpringSet) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn dense_and_sparse_mass_factorizations_solve_alike() {
+        let s = crate::benchmarks::cube(1, SolidParams::default()).unwrap();
+        let n = s.p.len();
+        // Every third control point fixed, so the factored block is a proper subset.
+        let free: Vec<u32> = (0..n as u32).filter(|i| i % 3 != 0).collect();
+        let mut dense = MassSolver::new(&s.mp, &free, n, true).unwrap();
+        let mut sparse = MassSolver::new(&s.mp, &free, n, false).unwrap();
+        assert!(dense.dense.is_some() && sparse.llt.is_some());
+        let b: Vec<Vec3> = (0..n)
+            .map(|i| Vec3::new((i as f64).sin(), 1.0, (0.5 * i as f64).cos()))
+            .collect();
+        let (mut x1, mut x2) = (vec![Vec3::zeros(); n], vec![Vec3::zeros(); n]);
+        DynamicSolid::solve_mass(&mut dense, &free, &b, &mut x1);
+        DynamicSolid::solve_mass(&mut sparse, &free, &b, &mut x2);
+        let scale = x1.iter().map(|x| x.norm()).fold(0.0, f64::max);
+        assert!(scale > 0.0);
+        for i in 0..n {
+            assert!((x1[i] - x2[i]).norm() <= 1e-10 * scale, "point {i}");
+            if i % 3 == 0 {
+                assert_eq!(x1[i], Vec3::zeros());
+            }
+        }
+        // The solution solves the free block: (M x)_i = b_i on free points.
+        let mut mx = vec![Vec3::zeros(); n];
+        s.mp.apply_into(&x1, &mut mx, Parallelism::Sequential);
+        for &i in &free {
+            let i = i as usize;
+            assert!(
+                (mx[i] - b[i]).norm() <= 1e-9 * b[i].norm().max(1.0),
+                "row {i}"
+            );
+        }
+    }
 
     #[test]
     fn proportional_damping_shortcut_matches_the_damping_matrix() {
