@@ -561,3 +561,33 @@ fn direct_and_conjugate_gradient_solvers_agree_with_dynamic_weights() {
     .unwrap();
     assert_eq!(swung.solver, LinearSolver::ConjugateGradient);
 }
+
+#[test]
+fn kernel_spring_pulls_with_dynamic_weights_and_bad_widths_are_named() {
+    let target = Vec3::new(0.5, 0.5, 0.4);
+    let mut d = vclay_dynamics::dnurbs::benchmarks::dynamic_sheet(6).unwrap();
+    d.forces_mut().clear();
+    d.forces_mut().push(Force::Spring {
+        param: [0.5, 0.5],
+        target: Target::Fixed(target),
+        stiffness: 40.0,
+        kernel: Some(0.1),
+    });
+    let gap = |d: &GeneralizedDnurbs<RationalGeometry>| {
+        (d.geometry().to_surface().unwrap().point(0.5, 0.5).unwrap() - target).norm()
+    };
+    let before = gap(&d);
+    for _ in 0..40 {
+        d.step(Integrator::Implicit { dt: 0.01 }).unwrap();
+    }
+    assert!(gap(&d) < 0.7 * before, "{before} -> {}", gap(&d));
+    // A zero width is named, not turned into NaN.
+    d.forces_mut()[0] = Force::Spring {
+        param: [0.5, 0.5],
+        target: Target::Fixed(target),
+        stiffness: 40.0,
+        kernel: Some(0.0),
+    };
+    let err = d.step(Integrator::Implicit { dt: 0.01 }).unwrap_err();
+    assert!(err.to_string().contains("kernel width"), "{err}");
+}

@@ -1192,6 +1192,22 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         let mat = &self.material;
         let forces = &self.forces;
         let surface = g.parametric_dimension() == 2;
+        let dim = g.parametric_dimension();
+        // Kernel springs: the kernel and the target, once per step rather than per point.
+        let kernels = forces
+            .iter()
+            .map(|force| match force {
+                Force::Spring {
+                    target,
+                    kernel: Some(sigma),
+                    ..
+                } => Ok(Some((
+                    super::SpringKernel::new(*sigma, dim)?,
+                    target.at(self.time),
+                ))),
+                _ => Ok(None),
+            })
+            .collect::<Result<Vec<_>, DynamicsError>>()?;
         works.truncate(self.quad.len());
         works.resize_with(self.quad.len(), ElementWork::default);
         self.quad
@@ -1250,31 +1266,20 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                         }
                         // Distributed forces.
                         let mut f = Vec3::zeros();
-                        for force in forces {
+                        for (fi, force) in forces.iter().enumerate() {
                             match force {
                                 Force::Gravity(gv) => f += gv * mu,
                                 Force::Inflation(pr) if surface => {
                                     f += lj.s[1].cross(&lj.s[2]) * *pr
                                 }
                                 Force::Spring {
-                                    param,
-                                    target,
-                                    stiffness,
-                                    kernel: Some(sigma),
+                                    param, stiffness, ..
                                 } => {
-                                    let d2 = (p[0] - param[0]).powi(2)
-                                        + if surface {
-                                            (p[1] - param[1]).powi(2)
-                                        } else {
-                                            0.0
-                                        };
-                                    let dimf = if surface { 2.0 } else { 1.0 };
-                                    let kern = (-(d2) / (2.0 * sigma * sigma)).exp()
-                                        / (2.0 * std::f64::consts::PI * sigma * sigma)
-                                            .powf(dimf / 2.0);
-                                    let kk = stiffness * kern;
-                                    f += (target.at(self.time) - lj.s[0]) * kk;
-                                    coef[0] += ck * qw * kk;
+                                    if let Some((kernel, d0)) = &kernels[fi] {
+                                        let kk = stiffness * kernel.at(&p[..dim], param);
+                                        f += (d0 - lj.s[0]) * kk;
+                                        coef[0] += ck * qw * kk;
+                                    }
                                 }
                                 _ => {}
                             }

@@ -229,6 +229,36 @@ pub enum Force {
     },
 }
 
+/// The unit Gaussian that replaces the delta of eq (19) for a [`Force::Spring`] with
+/// `kernel = Some(sigma)`: `exp(-|q - c|^2 / (2 sigma^2)) / (2 pi sigma^2)^(dim/2)` over the
+/// parametric dimension `dim = q.len()`. Both engines weight the spring force density with it.
+pub(crate) struct SpringKernel {
+    sigma: f64,
+    norm: f64,
+}
+
+impl SpringKernel {
+    /// The kernel of width `sigma` in `dim` parameters; an error names a width that is not
+    /// positive and finite.
+    pub(crate) fn new(sigma: f64, dim: usize) -> Result<Self, DynamicsError> {
+        if !(sigma.is_finite() && sigma > 0.0) {
+            return Err(DynamicsError::Parameter {
+                name: "kernel width",
+                value: sigma,
+                why: "must be positive",
+            });
+        }
+        let norm = (2.0 * std::f64::consts::PI * sigma * sigma).powf(dim as f64 / 2.0);
+        Ok(Self { sigma, norm })
+    }
+
+    /// The kernel at parameter `q` around the centre `c` (the first `q.len()` entries).
+    pub(crate) fn at(&self, q: &[f64], c: &[f64]) -> f64 {
+        let d2: f64 = q.iter().zip(c).map(|(a, b)| (a - b).powi(2)).sum();
+        (-d2 / (2.0 * self.sigma * self.sigma)).exp() / self.norm
+    }
+}
+
 /// Time integration scheme.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Integrator {
@@ -521,20 +551,10 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
                     stiffness,
                     kernel: Some(sigma),
                 } => {
-                    if !(sigma.is_finite() && *sigma > 0.0) {
-                        return Err(DynamicsError::Parameter {
-                            name: "kernel width",
-                            value: *sigma,
-                            why: "must be positive",
-                        });
-                    }
+                    let kernel = SpringKernel::new(*sigma, G::DIM)?;
                     let d0 = target.at(self.time);
-                    let norm =
-                        (2.0 * std::f64::consts::PI * sigma * sigma).powf(G::DIM as f64 / 2.0);
                     self.integrate_force(&mut fp, |q, s, _| {
-                        let d2: f64 = (0..G::DIM).map(|a| (q[a] - param[a]).powi(2)).sum();
-                        let g = (-d2 / (2.0 * sigma * sigma)).exp() / norm;
-                        (d0 - s) * (stiffness * g)
+                        (d0 - s) * (stiffness * kernel.at(&q[..G::DIM], param))
                     });
                 }
                 Force::DataPoint { point, stiffness } => {
