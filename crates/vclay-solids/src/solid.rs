@@ -186,12 +186,22 @@ pub struct SolidStats {
 }
 
 /// The factored reduced mass matrix of the free control points.
+#[derive(Clone)]
 struct MassSolver {
-    llt: Option<faer::sparse::linalg::solvers::Llt<usize, f64>>,
-    /// Used instead of `llt` for small, nearly dense matrices (a coarse control net couples
-    /// almost every pair of control points), where the dense triangular solves are faster.
-    dense: Option<faer::linalg::solvers::Llt<f64>>,
+    factor: MassFactor,
     rhs: faer::Mat<f64>,
+}
+
+/// The factorization of the free block of `A^T M A`.
+#[derive(Clone)]
+enum MassFactor {
+    /// No free control points.
+    Empty,
+    /// Sparse Cholesky.
+    Sparse(faer::sparse::linalg::solvers::Llt<usize, f64>),
+    /// Dense Cholesky, for small, nearly dense matrices (a coarse control net couples almost
+    /// every pair of control points), whose dense triangular solves are faster.
+    Dense(faer::linalg::solvers::Llt<f64>),
 }
 
 /// Free control points up to which a mass matrix at least a quarter full is factored densely.
@@ -222,12 +232,8 @@ impl MassSolver {
                 }
             }
         }
-        Ok(if m == 0 {
-            MassSolver {
-                llt: None,
-                dense: None,
-                rhs: faer::Mat::zeros(0, 3),
-            }
+        let factor = if m == 0 {
+            MassFactor::Empty
         } else if allow_dense && m <= DENSE_MASS && 8 * trips.len() >= m * m {
             let mut a = faer::Mat::<f64>::zeros(m, m);
             for t in &trips {
@@ -236,22 +242,18 @@ impl MassSolver {
             let llt = a
                 .llt(faer::Side::Lower)
                 .map_err(|e| SolidsError::MassMatrix(format!("{e:?}")))?;
-            MassSolver {
-                llt: None,
-                dense: Some(llt),
-                rhs: faer::Mat::zeros(m, 3),
-            }
+            MassFactor::Dense(llt)
         } else {
             let mat = faer::sparse::SparseColMat::<usize, f64>::try_new_from_triplets(m, m, &trips)
                 .map_err(|e| SolidsError::MassMatrix(format!("{e:?}")))?;
             let llt = mat
                 .sp_cholesky(faer::Side::Lower)
                 .map_err(|e| SolidsError::MassMatrix(format!("{e:?}")))?;
-            MassSolver {
-                llt: Some(llt),
-                dense: None,
-                rhs: faer::Mat::zeros(m, 3),
-            }
+            MassFactor::Sparse(llt)
+        };
+        Ok(MassSolver {
+            factor,
+            rhs: faer::Mat::zeros(m, 3),
         })
     }
 }
@@ -259,16 +261,6 @@ impl MassSolver {
 impl std::fmt::Debug for MassSolver {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "MassSolver {{ n: {} }}", self.rhs.nrows())
-    }
-}
-
-impl Clone for MassSolver {
-    fn clone(&self) -> Self {
-        Self {
-            llt: self.llt.clone(),
-            dense: self.dense.clone(),
-            rhs: self.rhs.clone(),
-        }
     }
 }
 
@@ -382,8 +374,7 @@ impl DynamicSolid {
             damping_ratio: None,
             free: Vec::new(),
             solver: MassSolver {
-                llt: None,
-                dense: None,
+                factor: MassFactor::Empty,
                 rhs: faer::Mat::zeros(0, 3),
             },
             boundary: Boundary::default(),
@@ -773,18 +764,20 @@ impl DynamicSolid {
     fn solve_mass(solver: &mut MassSolver, free: &[u32], b: &[Vec3], x: &mut [Vec3]) {
         use faer::linalg::solvers::Solve;
         x.iter_mut().for_each(|v| *v = Vec3::zeros());
-        let MassSolver { llt, dense, rhs } = solver;
-        let solve: &dyn Fn(faer::MatMut<'_, f64>) = match (dense, llt) {
-            (Some(d), _) => &|r| d.solve_in_place(r),
-            (None, Some(s)) => &|r| s.solve_in_place(r),
-            (None, None) => return,
-        };
+        let MassSolver { factor, rhs } = solver;
+        if matches!(factor, MassFactor::Empty) {
+            return;
+        }
         for (k, &i) in free.iter().enumerate() {
             for c in 0..3 {
                 rhs[(k, c)] = b[i as usize][c];
             }
         }
-        solve(rhs.as_mut());
+        match factor {
+            MassFactor::Dense(d) => d.solve_in_place(rhs.as_mut()),
+            MassFactor::Sparse(s) => s.solve_in_place(rhs.as_mut()),
+            MassFactor::Empty => {}
+        }
         for (k, &i) in free.iter().enumerate() {
             x[i as usize] = Vec3::new(rhs[(k, 0)], rhs[(k, 1)], rhs[(k, 2)]);
         }
@@ -1462,7 +1455,8 @@ mod tests {
         let free: Vec<u32> = (0..n as u32).filter(|i| i % 3 != 0).collect();
         let mut dense = MassSolver::new(&s.mp, &free, n, true).unwrap();
         let mut sparse = MassSolver::new(&s.mp, &free, n, false).unwrap();
-        assert!(dense.dense.is_some() && sparse.llt.is_some());
+        assert!(matches!(dense.factor, MassFactor::Dense(_)));
+        assert!(matches!(sparse.factor, MassFactor::Sparse(_)));
         let b: Vec<Vec3> = (0..n)
             .map(|i| Vec3::new((i as f64).sin(), 1.0, (0.5 * i as f64).cos()))
             .collect();

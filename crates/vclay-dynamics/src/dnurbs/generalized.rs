@@ -1191,8 +1191,8 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         let g = &self.geometry;
         let mat = &self.material;
         let forces = &self.forces;
-        let surface = g.parametric_dimension() == 2;
         let dim = g.parametric_dimension();
+        let surface = dim == 2;
         // Kernel springs: the kernel and the target, once per step rather than per point.
         let kernels = forces
             .iter()
