@@ -11,6 +11,7 @@ pub mod math;
 pub mod mesh;
 pub mod par;
 pub mod quadrature;
+pub mod team;
 pub mod text;
 pub mod tolerance;
 

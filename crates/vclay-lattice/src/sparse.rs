@@ -214,6 +214,29 @@ impl SparseMatrix {
         }
     }
 
+    /// Rows `rows` of `y = A x`, the input read through `x(column)` and each row's value
+    /// handed to `out(row, value)`: the kernel of phased programs that split a product by rows
+    /// and read or write through index maps (restricted chains).
+    ///
+    /// # Panics
+    /// If `rows` is out of bounds.
+    #[inline]
+    pub fn apply_rows_with<T: Coord>(
+        &self,
+        rows: std::ops::Range<usize>,
+        x: impl Fn(usize) -> T,
+        mut out: impl FnMut(usize, T),
+    ) {
+        for i in rows {
+            let r = self.row_ptr[i]..self.row_ptr[i + 1];
+            let mut acc = T::zero();
+            for (&c, &v) in self.cols[r.clone()].iter().zip(&self.vals[r]) {
+                acc.add_scaled(v, &x(c as usize));
+            }
+            out(i, acc);
+        }
+    }
+
     /// `y = A^T x` without forming the transpose, allocating scratch space as needed.
     ///
     /// # Panics

@@ -50,6 +50,8 @@ pub struct SpringSet {
     pub corner_k: Vec<f64>,
     /// Thread partition from [`SpringSet::organize`] (empty: not organized).
     pub(crate) parts: Vec<Part>,
+    /// The points of the straddling springs of an organized set, sorted.
+    pub(crate) band: Vec<u32>,
 }
 
 /// One block of an organized spring set: the springs whose points all lie in `points`, or (the
@@ -205,6 +207,61 @@ impl SpringSet {
                 part
             })
             .collect();
+        let straddle = &self.parts[blocks];
+        let mut band: Vec<u32> = self.edges[straddle.edges.clone()]
+            .iter()
+            .flatten()
+            .copied()
+            .chain(
+                self.face_verts[self.face_offsets[straddle.faces.start] as usize
+                    ..self.face_offsets[straddle.faces.end] as usize]
+                    .iter()
+                    .copied(),
+            )
+            .collect();
+        band.sort_unstable();
+        band.dedup();
+        self.band = band;
+    }
+
+    /// The point blocks of a set [organized](SpringSet::organize) for `n` points (`None`
+    /// otherwise): block `b` owns the forces on the points of its range, for phased programs
+    /// ([`SpringSet::block_forces`], then [`SpringSet::straddle_forces`]).
+    pub(crate) fn blocks_for(&self, n: usize) -> Option<Vec<std::ops::Range<usize>>> {
+        let (_, blocks) = self.parts.split_last()?;
+        (blocks.len() > 1 && blocks.last()?.points.end == n)
+            .then(|| blocks.iter().map(|b| b.points.clone()).collect())
+    }
+
+    /// Overwrites `f_block` (the forces on the points of block `b`) with the forces of the
+    /// springs inside the block; returns their energy.
+    pub(crate) fn block_forces(&self, b: usize, d: &[Vec3], f_block: &mut [Vec3]) -> f64 {
+        let part = &self.parts[b];
+        f_block.fill(Vec3::zeros());
+        self.forces_range(
+            d,
+            f_block,
+            part.points.start,
+            part.edges.clone(),
+            part.faces.clone(),
+        )
+    }
+
+    /// Adds the forces of part `k` of `parts` (equal shares) of the springs that straddle
+    /// blocks to `f` (they act on the points of [`SpringSet::band`] only); returns their
+    /// energy.
+    pub(crate) fn straddle_forces(
+        &self,
+        d: &[Vec3],
+        f: &mut [Vec3],
+        k: usize,
+        parts: usize,
+    ) -> f64 {
+        let part = self.parts.last().expect("organized spring set");
+        let share = |r: &std::ops::Range<usize>| {
+            r.start + r.len() * k / parts..r.start + r.len() * (k + 1) / parts
+        };
+        self.forces_range(d, f, 0, share(&part.edges), share(&part.faces))
     }
 
     /// Number of springs in the straddling part of an organized set (all springs if the set is

@@ -1,0 +1,568 @@
+//! A persistent team of threads for short phased programs, such as one time step of a
+//! mid-sized simulation, where a scheduler's cost per parallel phase would exceed the work.
+//!
+//! # What
+//! A *phased program* is a list of phases; phase `k` has `counts[k]` tasks, run as
+//! `run(k, task)`. Every task of phase `k` starts after every task of the phases before it has
+//! finished. [`run_phases`] runs a program on the global [`Team`]: the calling thread and up to
+//! [`MAX_TEAM`] `- 1` helper threads.
+//!
+//! Two safe shared buffers let the tasks of a phase write disjoint parts of one slice:
+//! [`SharedSlice`] hands out checked borrows of index ranges (a conflicting borrow panics, so a
+//! wrongly phased program fails loudly instead of racing), and [`SharedSlice::read`] borrows the
+//! whole slice for reading in a later phase.
+//!
+//! # How
+//! Tasks are numbered through the whole program and claimed from one atomic ticket counter. A
+//! thread that claims a ticket of phase `k` waits (spinning) until the count of finished tasks
+//! reaches the first ticket of phase `k`. Every smaller ticket has been claimed by a thread that
+//! is running it, so the wait always ends: the program completes even if the helpers never
+//! arrive, with the caller running every task itself. Results therefore never depend on how many
+//! threads took part, provided that each task writes only its own part.
+//!
+//! Helpers spin for [`SPIN`] after their last program, so that a loop of steps finds them
+//! awake, then park. A caller that finds the team busy (another thread's program, or a program
+//! started from inside a task) runs its program alone, in order.
+//!
+//! The phase barrier is a release increment of the finished count and an acquire load of it.
+//! Helpers register before they read a posted program and the caller waits for all of them to
+//! leave before it returns, so no helper touches a program's borrowed data after
+//! [`Team::run`] returns (the registration and the close are sequentially consistent, the
+//! classic two-flag handshake).
+//!
+//! This module is the workspace's only `unsafe` code: raw pointers to the caller's program and
+//! to the slices of [`SharedSlice`], each use with its safety argument.
+#![allow(unsafe_code)]
+
+use std::any::Any;
+use std::marker::PhantomData;
+use std::ops::{Deref, DerefMut, Range};
+use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
+use std::thread::Thread;
+use std::time::{Duration, Instant};
+
+/// Largest team (caller included). Phased programs are meant for work of tens of
+/// microseconds per phase, where more threads mostly add barrier traffic.
+pub const MAX_TEAM: usize = 4;
+
+/// Most tasks of a program run by a team (larger programs run on the caller alone).
+pub const MAX_TASKS: usize = 1024;
+
+/// How long an idle helper spins for the next program before it parks.
+pub const SPIN: Duration = Duration::from_micros(100);
+
+/// The task function of a phased program: `run(phase, task)`.
+pub type TaskFn<'a> = dyn Fn(usize, usize) + Sync + 'a;
+
+/// A posted program, its lifetime erased (valid while the caller is inside [`Team::run`]).
+#[derive(Clone, Copy)]
+struct Job {
+    counts: *const [usize],
+    run: *const TaskFn<'static>,
+}
+
+// SAFETY: a `Job` only travels to helpers that dereference it while registered in
+// `Shared::active`; `Team::run` keeps the pointees alive until no helper is registered.
+unsafe impl Send for Job {}
+
+struct Shared {
+    /// Odd while a program is open; incremented to open and to close.
+    epoch: AtomicUsize,
+    job: Mutex<Option<Job>>,
+    /// Per task (numbered through the program), the epoch of its last claim.
+    claims: Box<[AtomicUsize]>,
+    done: AtomicUsize,
+    /// Helpers registered with the current epoch.
+    active: AtomicUsize,
+    panic: Mutex<Option<Box<dyn Any + Send>>>,
+    sleeping: Vec<AtomicBool>,
+}
+
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    // Nothing panics while holding these locks; recover anyway.
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// A team of threads that runs phased programs ([module docs](self)).
+pub struct Team {
+    shared: Arc<Shared>,
+    busy: AtomicBool,
+    helpers: Vec<Thread>,
+}
+
+impl std::fmt::Debug for Team {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Team {{ threads: {} }}", self.threads())
+    }
+}
+
+/// The team size from `RAYON_NUM_THREADS` (so one setting governs all of vclay's threads) or
+/// the available parallelism, capped at [`MAX_TEAM`].
+fn team_size() -> usize {
+    std::env::var("RAYON_NUM_THREADS")
+        .ok()
+        .and_then(|s| s.parse::<usize>().ok())
+        .filter(|&n| n > 0)
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .min(MAX_TEAM)
+}
+
+impl Team {
+    /// A team of `threads` (the caller and `threads - 1` helpers; fewer if spawning fails).
+    pub fn new(threads: usize) -> Self {
+        let want = threads.saturating_sub(1);
+        let shared = Arc::new(Shared {
+            epoch: AtomicUsize::new(0),
+            job: Mutex::new(None),
+            claims: (0..MAX_TASKS).map(|_| AtomicUsize::new(0)).collect(),
+            done: AtomicUsize::new(0),
+            active: AtomicUsize::new(0),
+            panic: Mutex::new(None),
+            sleeping: (0..want).map(|_| AtomicBool::new(false)).collect(),
+        });
+        let mut helpers = Vec::with_capacity(want);
+        for i in 0..want {
+            let sh = Arc::clone(&shared);
+            match std::thread::Builder::new()
+                .name(format!("vclay-team-{}", i + 1))
+                .spawn(move || helper(&sh, i))
+            {
+                Ok(h) => helpers.push(h.thread().clone()),
+                Err(_) => break,
+            }
+        }
+        Self {
+            shared,
+            busy: AtomicBool::new(false),
+            helpers,
+        }
+    }
+
+    /// The process-wide team, created on first use; `None` when it would have one thread.
+    pub fn global() -> Option<&'static Team> {
+        static TEAM: OnceLock<Option<Team>> = OnceLock::new();
+        TEAM.get_or_init(|| {
+            let n = team_size();
+            (n > 1).then(|| Team::new(n)).filter(|t| t.threads() > 1)
+        })
+        .as_ref()
+    }
+
+    /// Threads taking part in a program (caller included).
+    pub fn threads(&self) -> usize {
+        self.helpers.len() + 1
+    }
+
+    /// Runs the phased program `counts` / `run` (see the [module docs](self)); returns when
+    /// every task has finished. A panic in a task is re-raised here after all tasks finished.
+    pub fn run(&self, counts: &[usize], run: &TaskFn<'_>) {
+        let total: usize = counts.iter().sum();
+        if total > MAX_TASKS
+            || self
+                .busy
+                .compare_exchange(false, true, Ordering::Acquire, Ordering::Relaxed)
+                .is_err()
+        {
+            return run_inline(counts, run);
+        }
+        struct Release<'a>(&'a AtomicBool);
+        impl Drop for Release<'_> {
+            fn drop(&mut self) {
+                self.0.store(false, Ordering::Release);
+            }
+        }
+        let _release = Release(&self.busy);
+        let sh = &*self.shared;
+        // SAFETY (lifetime erasure): helpers dereference the job only while registered in
+        // `active`, and this function waits below until none is registered after closing the
+        // epoch, so the borrowed `counts` and `run` outlive every use.
+        let job = Job {
+            counts: counts as *const [usize],
+            run: unsafe { std::mem::transmute::<*const TaskFn<'_>, *const TaskFn<'static>>(run) },
+        };
+        sh.done.store(0, Ordering::Relaxed);
+        *lock(&sh.job) = Some(job);
+        let open = sh.epoch.load(Ordering::Relaxed) + 1;
+        sh.epoch.store(open, Ordering::SeqCst);
+        for (i, t) in self.helpers.iter().enumerate() {
+            if sh.sleeping[i].load(Ordering::SeqCst) {
+                t.unpark();
+            }
+        }
+        work(sh, counts, run, 0, self.threads());
+        while sh.done.load(Ordering::Acquire) < total {
+            std::hint::spin_loop();
+        }
+        sh.epoch.store(open + 1, Ordering::SeqCst);
+        while sh.active.load(Ordering::SeqCst) > 0 {
+            std::hint::spin_loop();
+        }
+        *lock(&sh.job) = None;
+        if let Some(p) = lock(&sh.panic).take() {
+            resume_unwind(p);
+        }
+    }
+}
+
+/// Runs a phased program on the [global team](Team::global), or on the calling thread alone
+/// when there is none.
+pub fn run_phases(counts: &[usize], run: &TaskFn<'_>) {
+    match Team::global() {
+        Some(t) => t.run(counts, run),
+        None => run_inline(counts, run),
+    }
+}
+
+/// Threads that [`run_phases`] uses (1 without a team).
+pub fn team_threads() -> usize {
+    Team::global().map_or(1, Team::threads)
+}
+
+fn run_inline(counts: &[usize], run: &TaskFn<'_>) {
+    for (k, &n) in counts.iter().enumerate() {
+        for t in 0..n {
+            run(k, t);
+        }
+    }
+}
+
+/// Runs the program's tasks from the thread of rank `rank` (the caller is 0): phase by
+/// phase, after the phase's barrier, first the tasks it owns (`task % threads == rank`, so
+/// that each thread keeps working on the same part of the data from phase to phase and step
+/// to step, in its own cache), then any task still unclaimed (an absent or late owner's).
+/// Panics are caught and stored.
+fn work(sh: &Shared, counts: &[usize], run: &TaskFn<'_>, rank: usize, threads: usize) {
+    let epoch = sh.epoch.load(Ordering::Relaxed);
+    let mut start = 0;
+    for (k, &c) in counts.iter().enumerate() {
+        while sh.done.load(Ordering::Acquire) < start {
+            std::hint::spin_loop();
+        }
+        let own = (rank..c).step_by(threads.max(1));
+        for t in own.chain(0..c) {
+            // Claimed by the first thread to tag it with this epoch.
+            if sh.claims[start + t].swap(epoch, Ordering::AcqRel) == epoch {
+                continue;
+            }
+            if let Err(p) = catch_unwind(AssertUnwindSafe(|| run(k, t))) {
+                lock(&sh.panic).get_or_insert(p);
+            }
+            sh.done.fetch_add(1, Ordering::AcqRel);
+        }
+        start += c;
+    }
+}
+
+fn helper(sh: &Shared, idx: usize) {
+    let mut seen = 0;
+    loop {
+        let e = wait_open(sh, idx, seen);
+        seen = e;
+        sh.active.fetch_add(1, Ordering::SeqCst);
+        if sh.epoch.load(Ordering::SeqCst) == e {
+            let job = *lock(&sh.job);
+            if let Some(job) = job {
+                // SAFETY: registered in `active` while the epoch that posted `job` is open, so
+                // the caller is inside `Team::run` and keeps both pointees alive until this
+                // helper deregisters below.
+                let (counts, run) = unsafe { (&*job.counts, &*job.run) };
+                work(sh, counts, run, idx + 1, sh.sleeping.len() + 1);
+            }
+        }
+        sh.active.fetch_sub(1, Ordering::SeqCst);
+    }
+}
+
+/// Waits for an open epoch other than `seen`: spins for [`SPIN`], then parks.
+fn wait_open(sh: &Shared, idx: usize, seen: usize) -> usize {
+    let ready = |e: usize| !e.is_multiple_of(2) && e != seen;
+    let mut since = Instant::now();
+    let mut spins = 0u32;
+    loop {
+        let e = sh.epoch.load(Ordering::Acquire);
+        if ready(e) {
+            return e;
+        }
+        spins = spins.wrapping_add(1);
+        if spins.is_multiple_of(256) && since.elapsed() > SPIN {
+            sh.sleeping[idx].store(true, Ordering::SeqCst);
+            if !ready(sh.epoch.load(Ordering::SeqCst)) {
+                std::thread::park();
+            }
+            sh.sleeping[idx].store(false, Ordering::SeqCst);
+            since = Instant::now();
+        } else {
+            std::hint::spin_loop();
+        }
+    }
+}
+
+/// A mutable slice shared by the tasks of a phased program: tasks borrow index ranges for
+/// writing ([`SharedSlice::range`]) or the whole slice for reading ([`SharedSlice::read`]).
+/// Borrows are checked at run time like a `RefCell`'s, per range: a borrow that overlaps a
+/// live conflicting one panics.
+pub struct SharedSlice<'a, T> {
+    ptr: *mut T,
+    len: usize,
+    /// Live borrows: (range, writing).
+    live: Mutex<Vec<(Range<usize>, bool)>>,
+    _borrow: PhantomData<&'a mut [T]>,
+}
+
+// SAFETY: the slice is only reached through checked borrows (no two overlapping borrows with
+// a writer are live at once), so sharing it between threads is like sharing `&mut [T]` pieces
+// (`T: Send`) and `&[T]` (`T: Sync`).
+unsafe impl<T: Send + Sync> Sync for SharedSlice<'_, T> {}
+unsafe impl<T: Send> Send for SharedSlice<'_, T> {}
+
+impl<T> std::fmt::Debug for SharedSlice<'_, T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "SharedSlice {{ len: {} }}", self.len)
+    }
+}
+
+/// A checked mutable borrow of a range of a [`SharedSlice`].
+pub struct RangeMut<'s, 'a, T> {
+    owner: &'s SharedSlice<'a, T>,
+    range: Range<usize>,
+}
+
+/// A checked shared borrow of a whole [`SharedSlice`].
+pub struct ReadAll<'s, 'a, T> {
+    owner: &'s SharedSlice<'a, T>,
+}
+
+impl<T> std::fmt::Debug for RangeMut<'_, '_, T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "RangeMut {{ range: {:?} }}", self.range)
+    }
+}
+
+impl<T> std::fmt::Debug for ReadAll<'_, '_, T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "ReadAll {{ len: {} }}", self.owner.len)
+    }
+}
+
+impl<'a, T> SharedSlice<'a, T> {
+    /// Shares `s` for the duration of `'a`.
+    pub fn new(s: &'a mut [T]) -> Self {
+        Self {
+            ptr: s.as_mut_ptr(),
+            len: s.len(),
+            live: Mutex::new(Vec::new()),
+            _borrow: PhantomData,
+        }
+    }
+
+    /// Length of the slice.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether the slice is empty.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    fn claim(&self, r: &Range<usize>, write: bool) {
+        let mut live = lock(&self.live);
+        let clash = live.iter().any(|(l, w)| {
+            (write || *w) && l.start < r.end && r.start < l.end && !r.is_empty() && !l.is_empty()
+        });
+        assert!(
+            !clash,
+            "SharedSlice: borrow {r:?} ({}) overlaps a live borrow",
+            if write { "write" } else { "read" }
+        );
+        live.push((r.clone(), write));
+    }
+
+    fn unclaim(&self, r: &Range<usize>, write: bool) {
+        let mut live = lock(&self.live);
+        if let Some(i) = live.iter().position(|(l, w)| l == r && *w == write) {
+            live.swap_remove(i);
+        }
+    }
+
+    /// Borrows `range` for writing.
+    ///
+    /// # Panics
+    /// If the range is out of bounds or overlaps a live borrow.
+    #[track_caller]
+    pub fn range(&self, range: Range<usize>) -> RangeMut<'_, 'a, T> {
+        assert!(
+            range.start <= range.end && range.end <= self.len,
+            "SharedSlice: range {range:?} out of bounds (len {})",
+            self.len
+        );
+        self.claim(&range, true);
+        RangeMut { owner: self, range }
+    }
+
+    /// Borrows the whole slice for reading.
+    ///
+    /// # Panics
+    /// If a write borrow is live.
+    #[track_caller]
+    pub fn read(&self) -> ReadAll<'_, 'a, T> {
+        self.claim(&(0..self.len), false);
+        ReadAll { owner: self }
+    }
+}
+
+impl<T> Deref for RangeMut<'_, '_, T> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
+        // SAFETY: in bounds (checked in `range`), the pointee outlives `'a`, and no
+        // conflicting borrow is live while this one is (checked in `claim`).
+        unsafe {
+            std::slice::from_raw_parts(self.owner.ptr.add(self.range.start), self.range.len())
+        }
+    }
+}
+
+impl<T> DerefMut for RangeMut<'_, '_, T> {
+    fn deref_mut(&mut self) -> &mut [T] {
+        // SAFETY: as in `deref`; this borrow is the only one overlapping its range.
+        unsafe {
+            std::slice::from_raw_parts_mut(self.owner.ptr.add(self.range.start), self.range.len())
+        }
+    }
+}
+
+impl<T> Drop for RangeMut<'_, '_, T> {
+    fn drop(&mut self) {
+        self.owner.unclaim(&self.range, true);
+    }
+}
+
+impl<T> Deref for ReadAll<'_, '_, T> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
+        // SAFETY: no write borrow is live while this one is (checked in `claim`).
+        unsafe { std::slice::from_raw_parts(self.owner.ptr, self.owner.len) }
+    }
+}
+
+impl<T> Drop for ReadAll<'_, '_, T> {
+    fn drop(&mut self) {
+        self.owner.unclaim(&(0..self.owner.len), false);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A three-phase program whose later phases read what earlier ones wrote.
+    fn program(team: Option<&Team>, n: usize) -> Vec<f64> {
+        let mut a = vec![0.0; n];
+        let mut b = vec![0.0; n];
+        let sa = SharedSlice::new(&mut a);
+        let sb = SharedSlice::new(&mut b);
+        let tasks = 7;
+        let chunk = |t: usize| n * t / tasks..n * (t + 1) / tasks;
+        let run = |k: usize, t: usize| match k {
+            0 => {
+                let r = chunk(t);
+                let mut w = sa.range(r.clone());
+                for (i, x) in r.zip(w.iter_mut()) {
+                    *x = (i as f64).sin();
+                }
+            }
+            1 => {
+                // Reads all of `a` (written by every task of phase 0).
+                let a = sa.read();
+                let r = chunk(t);
+                let mut w = sb.range(r.clone());
+                for (i, x) in r.zip(w.iter_mut()) {
+                    *x = a[i] + a[(i * 7 + 3) % n];
+                }
+            }
+            _ => {
+                let b = sb.read();
+                let mut w = sa.range(0..n);
+                for (x, y) in w.iter_mut().zip(b.iter()) {
+                    *x = 2.0 * y;
+                }
+            }
+        };
+        match team {
+            Some(team) => team.run(&[tasks, tasks, 1], &run),
+            None => run_inline(&[tasks, tasks, 1], &run),
+        }
+        drop(sa);
+        a
+    }
+
+    #[test]
+    fn a_team_computes_what_one_thread_computes() {
+        let team = Team::new(3);
+        let want = program(None, 1000);
+        for _ in 0..200 {
+            assert_eq!(program(Some(&team), 1000), want);
+        }
+        // Sleeping helpers are woken.
+        std::thread::sleep(SPIN * 3);
+        assert_eq!(program(Some(&team), 1000), want);
+    }
+
+    #[test]
+    fn a_program_started_from_a_task_runs_inline() {
+        let team = Team::new(2);
+        let hits = AtomicUsize::new(0);
+        team.run(&[2], &|_, _| {
+            team.run(&[3], &|_, _| {
+                hits.fetch_add(1, Ordering::Relaxed);
+            });
+        });
+        assert_eq!(hits.load(Ordering::Relaxed), 6);
+    }
+
+    #[test]
+    fn a_panicking_task_is_reraised_after_the_program() {
+        let team = Team::new(2);
+        let ran = AtomicUsize::new(0);
+        let r = catch_unwind(AssertUnwindSafe(|| {
+            team.run(&[4, 4], &|k, t| {
+                ran.fetch_add(1, Ordering::Relaxed);
+                assert!(!(k == 0 && t == 2), "task failed");
+            })
+        }));
+        assert!(r.is_err());
+        assert_eq!(ran.load(Ordering::Relaxed), 8);
+        // The team is usable afterwards.
+        let again = AtomicUsize::new(0);
+        team.run(&[5], &|_, _| {
+            again.fetch_add(1, Ordering::Relaxed);
+        });
+        assert_eq!(again.load(Ordering::Relaxed), 5);
+    }
+
+    #[test]
+    #[should_panic(expected = "overlaps a live borrow")]
+    fn overlapping_write_borrows_panic() {
+        let mut v = vec![0; 10];
+        let s = SharedSlice::new(&mut v);
+        let _a = s.range(0..6);
+        let _b = s.range(5..10);
+    }
+
+    #[test]
+    fn disjoint_borrows_and_reads_after_release_work() {
+        let mut v = vec![0; 10];
+        let s = SharedSlice::new(&mut v);
+        {
+            let mut a = s.range(0..5);
+            let mut b = s.range(5..10);
+            a[0] = 1;
+            b[4] = 2;
+        }
+        let r = s.read();
+        let r2 = s.read();
+        assert_eq!(r[0] + r2[9], 3);
+    }
+}

@@ -1,0 +1,634 @@
+//! The explicit and symplectic step as one phased program on the thread team
+//! ([`vclay_core::team`]), for mid-sized solids.
+//!
+//! # Why
+//! A step of the 4^3 cube at level 2 (2,197 data points, 28,548 springs) takes about 0.18 ms on
+//! one core, in five passes of 10-50 us each (springs, `A^T f` level by level, the control
+//! points, `A p` level by level). A rayon fork-join per pass costs more than it saves at that
+//! size; one program whose phases are separated by spin barriers of a persistent team does not,
+//! and it also halves each thread's working set, which at this size no longer fits one core's
+//! L2 cache.
+//!
+//! # Phases (eq 10 of `subdivision-solids-journal.txt`, as in [`DynamicSolid::step`])
+//! 1. Springs, one task per point block of the organized [`SpringSet`]: each task overwrites
+//!    its block's forces.
+//! 2. The springs that straddle blocks, and the tools (one task).
+//! 3. `A^T f` level by level, finest first, through the stored transposes, split by rows; the
+//!    last level (to the control points) is fused into phase 4.
+//! 4. Control points, split by free points: `g = A^T f - D v`, `M v` for the kinetic energy,
+//!    the finiteness check.
+//! 5. Integration, split by free points: the divergence verdict (every task computes the same
+//!    one from the energies of phases 1-4), the last good state, `p'' = (A^T M A)^-1 g` (rows of
+//!    the dense inverse, or one sparse solve), the integrator's update.
+//! 6. `d = A p` level by level, split by rows.
+//!
+//! Every task writes its own part, so the result does not depend on how many threads ran the
+//! program; it equals the one-thread step up to the order of the force sums (a few units in the
+//! last place, see the tests).
+
+use std::ops::Range;
+
+use vclay_core::team::{SharedSlice, run_phases, team_threads};
+use vclay_core::{Parallelism, Vec3};
+use vclay_lattice::{SparseMatrix, SubdivisionMap};
+
+use super::{DynamicSolid, Energy, Integrator, MassFactor, inverse_rows, verdict};
+
+/// Active data points from which [`Parallelism::Auto`] runs a step as a phased program.
+/// Below it a step takes a few microseconds and the barriers would cost a good part of that.
+pub const PHASED_POINTS: usize = 1000;
+
+/// Smallest number of rows per task of a split phase.
+const ROWS_PER_TASK: usize = 32;
+
+/// Buffers of the phased step, kept between steps.
+#[derive(Clone, Debug, Default)]
+pub(super) struct PhasedWork {
+    /// Intermediate levels of the chain (index = level; 0 and the last unused).
+    levels: Vec<Vec<Vec3>>,
+    /// `g` on the free points by coordinate (`3 m`).
+    columns: Vec<f64>,
+    /// Energies: spring blocks, then the shares of the straddling springs, then tools.
+    energies: Vec<f64>,
+    /// Per spring block, the forces of its share of the straddling springs (zero outside the
+    /// band between steps).
+    straddle: Vec<Vec<Vec3>>,
+    /// Whether `straddle` is all zero (false while a program runs, so that a panicking step
+    /// leaves it to be cleared).
+    clean: bool,
+    /// Kinetic energy per control task.
+    kinetic: Vec<f64>,
+    /// Finiteness per control task.
+    finite: Vec<bool>,
+}
+
+/// What a phase does.
+#[derive(Clone, Copy, Debug)]
+enum Phase {
+    Springs,
+    Merge,
+    Tools,
+    /// `A^(j)T` into level `j` (`1 <= j < n`).
+    Transpose(usize),
+    Control,
+    Integrate,
+    /// `A^(j)` from level `j` to `j + 1`.
+    Apply(usize),
+}
+
+/// Range `t` of `rows` split into `tasks`.
+fn chunk(rows: usize, tasks: usize, t: usize) -> Range<usize> {
+    rows * t / tasks..rows * (t + 1) / tasks
+}
+
+/// Tasks for a phase of `rows` rows on `threads` threads.
+fn tasks_for(rows: usize, threads: usize) -> usize {
+    (rows / ROWS_PER_TASK).clamp(1, threads)
+}
+
+/// Rows `rows` of `op x`, `x` read through `src`, stored in `dst` at the same rows, or at
+/// `to[row]` (sorted) when given.
+fn rows_into(
+    op: &SparseMatrix,
+    rows: Range<usize>,
+    src: impl Fn(usize) -> Vec3,
+    dst: &SharedSlice<'_, Vec3>,
+    to: Option<&[u32]>,
+) {
+    if rows.is_empty() {
+        return;
+    }
+    match to {
+        Some(o) => {
+            let base = o[rows.start] as usize;
+            let mut out = dst.range(base..o[rows.end - 1] as usize + 1);
+            op.apply_rows_with(rows, src, |i, x| out[o[i] as usize - base] = x);
+        }
+        None => {
+            let base = rows.start;
+            let mut out = dst.range(rows.clone());
+            op.apply_rows_with(rows, src, |i, x| out[i - base] = x);
+        }
+    }
+}
+
+/// `out(k, row k of op x)` for the free points `ks` (their rows in `rows`, `u32::MAX`: zero).
+fn free_rows_with(
+    op: &SparseMatrix,
+    ks: Range<usize>,
+    rows: &[u32],
+    src: impl Fn(usize) -> Vec3,
+    mut out: impl FnMut(usize, Vec3),
+) {
+    for k in ks {
+        let r = rows[k] as usize;
+        let mut g = Vec3::zeros();
+        if rows[k] != u32::MAX {
+            op.apply_rows_with(r..r + 1, &src, |_, x| g = x);
+        }
+        out(k, g);
+    }
+}
+
+impl DynamicSolid {
+    /// Whether [`DynamicSolid::step`] runs as a phased program: the explicit or symplectic
+    /// integrator with springs, a team of two or more threads, a chain small enough for stored
+    /// transposes ([`SubdivisionMap::GATHER_NNZ`]), organized springs, and under
+    /// [`Parallelism::Auto`] at least [`PHASED_POINTS`] active data points.
+    pub(super) fn phased_eligible(&self) -> bool {
+        let par = self.params.parallelism;
+        let map = match &self.restricted {
+            Some(r) => r.map(),
+            None => &self.disc.map,
+        };
+        let springs = self.active_springs.as_ref().unwrap_or(&self.springs);
+        matches!(
+            self.params.integrator,
+            Integrator::Explicit | Integrator::SymplecticEuler
+        ) && self.metric.is_none()
+            && par != Parallelism::Sequential
+            && (par == Parallelism::Rayon || self.active_count >= PHASED_POINTS)
+            && map.levels() > 0
+            && map.operators().iter().map(|a| a.nnz()).sum::<usize>() <= SubdivisionMap::GATHER_NNZ
+            && springs.blocks_for(self.d.len()).is_some()
+            && team_threads() > 1
+    }
+
+    /// One explicit or symplectic step as a phased program (see the [module docs](self)).
+    /// Returns the energies of the state at the start of the step; the state advances only if
+    /// [`DynamicSolid::verdict`] accepts them (the caller then reports the divergence).
+    pub(super) fn phased_step(&mut self) -> Energy {
+        let threads = team_threads();
+        let Self {
+            params,
+            p,
+            v,
+            good,
+            d,
+            mass,
+            springs,
+            active_springs,
+            restricted,
+            disc,
+            mp,
+            dp,
+            damping_ratio,
+            free,
+            free_rows,
+            solver,
+            boundary,
+            tools,
+            work,
+            energy_scale,
+            tool_energy_seen,
+            ..
+        } = self;
+        let dt = params.dt;
+        let explicit = params.integrator == Integrator::Explicit;
+        let springs = active_springs.as_ref().unwrap_or(springs);
+        let nd = d.len();
+        let nc = p.len();
+        let m = free.len();
+        let blocks = springs
+            .blocks_for(nd)
+            .expect("phased step: organized springs");
+        let (map, inputs, outputs) = match restricted.as_ref() {
+            Some(r) => (r.map(), Some(&r.inputs[..]), Some(&r.outputs[..])),
+            None => (&disc.map, None, None),
+        };
+        let n = map.levels();
+        // Points per level: level 0 the (restricted) control points, level n the data points.
+        let pts: Vec<usize> = std::iter::once(map.operator(0).ncols())
+            .chain(map.operators().iter().map(|a| a.nrows()))
+            .collect();
+        let transposes: Vec<_> = (0..n).map(|j| map.transpose(j)).collect();
+
+        // Phases and their task counts.
+        let nb = blocks.len();
+        let mut phases = vec![(Phase::Springs, nb), (Phase::Merge, nb)];
+        if tools.iter().any(Option::is_some) {
+            phases.push((Phase::Tools, 1));
+        }
+        for j in (1..n).rev() {
+            phases.push((Phase::Transpose(j), tasks_for(pts[j], threads)));
+        }
+        let control_tasks = tasks_for(m.max(nc), threads);
+        phases.push((Phase::Control, control_tasks));
+        let integrate_tasks = match solver.factor {
+            MassFactor::Dense(_) => tasks_for(m, threads),
+            _ => 1,
+        };
+        phases.push((Phase::Integrate, integrate_tasks));
+        for j in 0..n {
+            phases.push((Phase::Apply(j), tasks_for(pts[j + 1], threads)));
+        }
+        let counts: Vec<usize> = phases.iter().map(|p| p.1).collect();
+
+        // Shared buffers.
+        let pw = &mut work.phased;
+        pw.levels.resize_with(n + 1, Vec::new);
+        for j in 1..n {
+            pw.levels[j].resize(pts[j], Vec3::zeros());
+        }
+        pw.columns.resize(3 * m, 0.0);
+        pw.energies.resize(2 * nb + 1, 0.0);
+        if !pw.clean || pw.straddle.len() != nb || pw.straddle.iter().any(|b| b.len() != nd) {
+            pw.straddle = vec![vec![Vec3::zeros(); nd]; nb];
+        }
+        pw.clean = false;
+        let straddle: Vec<SharedSlice<'_, Vec3>> = pw
+            .straddle
+            .iter_mut()
+            .map(|b| SharedSlice::new(b))
+            .collect();
+        let band = &springs.band[..];
+        pw.kinetic.resize(control_tasks, 0.0);
+        pw.finite.resize(control_tasks, true);
+        let levels: Vec<SharedSlice<'_, Vec3>> =
+            pw.levels.iter_mut().map(|l| SharedSlice::new(l)).collect();
+        let (cx, rest) = pw.columns.split_at_mut(m);
+        let (cy, cz) = rest.split_at_mut(m);
+        let cols = [
+            SharedSlice::new(cx),
+            SharedSlice::new(cy),
+            SharedSlice::new(cz),
+        ];
+        let energies = SharedSlice::new(&mut pw.energies);
+        let kinetic = SharedSlice::new(&mut pw.kinetic);
+        let finite = SharedSlice::new(&mut pw.finite);
+        let f = SharedSlice::new(&mut work.f);
+        let dsh = SharedSlice::new(&mut d[..]);
+        let psh = SharedSlice::new(&mut p[..]);
+        let vsh = SharedSlice::new(&mut v[..]);
+        let (good_p, good_v) = (&mut good.0, &mut good.1);
+        let gp = SharedSlice::new(&mut good_p[..]);
+        let gv = SharedSlice::new(&mut good_v[..]);
+        let (dense_inverse, sparse) = match &solver.factor {
+            MassFactor::Empty => (None, None),
+            MassFactor::Dense(inv) => (Some(&inv[..]), None),
+            MassFactor::Sparse(llt) => (None, Some(llt)),
+        };
+        let (free, free_rows, mp, dp) = (&free[..], &free_rows[..], &*mp, &*dp);
+        let (mass, boundary, tools) = (&mass[..], &*boundary, &tools[..]);
+        let damping_ratio = *damping_ratio;
+        let divergence = (params.divergence_factor, *energy_scale, *tool_energy_seen);
+
+        // The energies of phases 1-4 (the same sums, in the same order, wherever computed).
+        let energy_of = |e: &[f64], k: &[f64]| Energy {
+            kinetic: k.iter().sum(),
+            internal: e[..2 * nb].iter().sum(),
+            tools: e[2 * nb],
+        };
+        // The rows of `p`, `v` and the good state that integration task `t` of `tasks` owns:
+        // from its first free point to the next task's, the first and last tasks extended to
+        // the ends, so the tasks cover every control point.
+        let owned = |t: usize, tasks: usize| -> Range<usize> {
+            let kr = chunk(m, tasks, t);
+            let lo = if t == 0 { 0 } else { free[kr.start] as usize };
+            let hi = if t + 1 == tasks {
+                nc
+            } else {
+                free[chunk(m, tasks, t + 1).start] as usize
+            };
+            lo..hi
+        };
+        let step = |x: &mut Vec3, y: &mut Vec3, a: Vec3| {
+            // x: position, y: velocity.
+            if explicit {
+                *x += *y * dt;
+                *y += a * dt;
+            } else {
+                *y += a * dt;
+                *x += *y * dt;
+            }
+        };
+
+        let run = |k: usize, t: usize| {
+            let (phase, tasks) = phases[k];
+            match phase {
+                Phase::Springs => {
+                    let dr = dsh.read();
+                    let e = springs.block_forces(t, &dr, &mut f.range(blocks[t].clone()));
+                    let es = springs.straddle_forces(&dr, &mut straddle[t].range(0..nd), t, nb);
+                    let mut er = energies.range(2 * t..2 * t + 2);
+                    er[0] = e;
+                    er[1] = es;
+                }
+                Phase::Merge => {
+                    // The band points of block `t`: add every share, and clear the shares.
+                    let r = blocks[t].clone();
+                    let lo = band.partition_point(|&i| (i as usize) < r.start);
+                    let hi = band.partition_point(|&i| (i as usize) < r.end);
+                    let mut fr = f.range(r.clone());
+                    let mut shares: Vec<_> = straddle.iter().map(|b| b.range(r.clone())).collect();
+                    for &i in &band[lo..hi] {
+                        let i = i as usize - r.start;
+                        for sh in &mut shares {
+                            fr[i] += sh[i];
+                            sh[i] = Vec3::zeros();
+                        }
+                    }
+                }
+                Phase::Tools => {
+                    let dr = dsh.read();
+                    let mut fr = f.range(0..nd);
+                    let mut te = 0.0;
+                    for tool in tools.iter().flatten() {
+                        te += tool.add_forces(&dr, mass, boundary, &mut fr);
+                    }
+                    energies.range(2 * nb..2 * nb + 1)[0] = te;
+                }
+                Phase::Transpose(j) => {
+                    let rows = chunk(pts[j], tasks, t);
+                    let op = transposes[j];
+                    if j + 1 == n {
+                        let fr = f.read();
+                        match outputs {
+                            Some(o) => rows_into(op, rows, |c| fr[o[c] as usize], &levels[j], None),
+                            None => rows_into(op, rows, |c| fr[c], &levels[j], None),
+                        }
+                    } else {
+                        let src = levels[j + 1].read();
+                        rows_into(op, rows, |c| src[c], &levels[j], None);
+                    }
+                }
+                Phase::Control => {
+                    let (pr, vr) = (psh.read(), vsh.read());
+                    let all = chunk(nc, tasks, t);
+                    let ok = pr[all.clone()]
+                        .iter()
+                        .chain(&vr[all])
+                        .all(|x| x.iter().all(|c| c.is_finite()));
+                    finite.range(t..t + 1)[0] = ok;
+                    let kr = chunk(m, tasks, t);
+                    let mut out = [
+                        cols[0].range(kr.clone()),
+                        cols[1].range(kr.clone()),
+                        cols[2].range(kr.clone()),
+                    ];
+                    // `A^(1)T` rows of the free points, from level 1 (or the forces).
+                    {
+                        let put = |k: usize, g: Vec3| {
+                            for c in 0..3 {
+                                out[c][k - kr.start] = g[c];
+                            }
+                        };
+                        let op = transposes[0];
+                        if n == 1 {
+                            let fr = f.read();
+                            match outputs {
+                                Some(o) => free_rows_with(
+                                    op,
+                                    kr.clone(),
+                                    free_rows,
+                                    |c| fr[o[c] as usize],
+                                    put,
+                                ),
+                                None => free_rows_with(op, kr.clone(), free_rows, |c| fr[c], put),
+                            }
+                        } else {
+                            let lr = levels[1].read();
+                            free_rows_with(op, kr.clone(), free_rows, |c| lr[c], put);
+                        }
+                    }
+                    let mut kin = 0.0;
+                    for k in kr.clone() {
+                        let i = free[k] as usize;
+                        let mut mv = Vec3::zeros();
+                        mp.apply_rows_with(i..i + 1, |c| vr[c], |_, x| mv = x);
+                        kin += 0.5 * vr[i].dot(&mv);
+                        let dv = match damping_ratio {
+                            Some(c) => mv * c,
+                            None => {
+                                let mut dv = Vec3::zeros();
+                                dp.apply_rows_with(i..i + 1, |c| vr[c], |_, x| dv = x);
+                                dv
+                            }
+                        };
+                        for c in 0..3 {
+                            out[c][k - kr.start] -= dv[c];
+                        }
+                    }
+                    kinetic.range(t..t + 1)[0] = kin;
+                }
+                Phase::Integrate => {
+                    let energy = energy_of(&energies.read(), &kinetic.read());
+                    let (factor, scale, seen) = divergence;
+                    let all_finite = finite.read().iter().all(|&x| x);
+                    let accepted = verdict(
+                        &energy,
+                        all_finite,
+                        factor,
+                        scale + seen.max(energy.tools.abs()),
+                    )
+                    .is_ok();
+                    if !accepted {
+                        return;
+                    }
+                    let own = owned(t, tasks);
+                    let base = own.start;
+                    let (mut pr, mut vr) = (psh.range(own.clone()), vsh.range(own.clone()));
+                    gp.range(own.clone()).copy_from_slice(&pr);
+                    gv.range(own).copy_from_slice(&vr);
+                    let c = [cols[0].read(), cols[1].read(), cols[2].read()];
+                    if let Some(inv) = dense_inverse {
+                        inverse_rows(inv, [&c[0], &c[1], &c[2]], chunk(m, tasks, t), |k, a| {
+                            let i = free[k] as usize - base;
+                            step(&mut pr[i], &mut vr[i], a);
+                        });
+                    } else if let Some(llt) = sparse {
+                        use faer::linalg::solvers::Solve;
+                        let mut rhs = faer::Mat::<f64>::from_fn(m, 3, |k, j| c[j][k]);
+                        llt.solve_in_place(rhs.as_mut());
+                        for (k, &i) in free.iter().enumerate() {
+                            let a = Vec3::new(rhs[(k, 0)], rhs[(k, 1)], rhs[(k, 2)]);
+                            let i = i as usize - base;
+                            step(&mut pr[i], &mut vr[i], a);
+                        }
+                    }
+                }
+                Phase::Apply(j) => {
+                    let rows = chunk(pts[j + 1], tasks, t);
+                    let op = map.operator(j);
+                    let (dst, to) = if j + 1 < n {
+                        (&levels[j + 1], None)
+                    } else {
+                        (&dsh, outputs)
+                    };
+                    if j == 0 {
+                        let pr = psh.read();
+                        match inputs {
+                            Some(ins) => rows_into(op, rows, |c| pr[ins[c] as usize], dst, to),
+                            None => rows_into(op, rows, |c| pr[c], dst, to),
+                        }
+                    } else {
+                        let src = levels[j].read();
+                        rows_into(op, rows, |c| src[c], dst, to);
+                    }
+                }
+            }
+        };
+        energies.range(2 * nb..2 * nb + 1)[0] = 0.0;
+        run_phases(&counts, &run);
+        let energy = energy_of(&energies.read(), &kinetic.read());
+        drop(straddle);
+        work.phased.clean = true;
+        energy
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Material, SolidParams, SolidSource, SolidsError};
+    use vclay_lattice::{BoundaryRule, primitives};
+    use vclay_spline::KnotVector;
+
+    fn cube(n: usize, level: usize) -> (SolidSource, Vec<Vec3>) {
+        let control = primitives::box_lattice([n, n, n], Vec3::zeros(), Vec3::repeat(1.0));
+        SolidSource::subdivision(control, BoundaryRule::Sharp, level)
+    }
+
+    /// A B-spline solid of `n^3` control points (a one-level map).
+    fn bspline(n: usize, samples: usize) -> (SolidSource, Vec<Vec3>) {
+        let k = KnotVector::clamped_uniform(3, n).unwrap();
+        let g = k.greville();
+        let mut p = Vec::new();
+        for &a in &g {
+            for &b in &g {
+                for &c in &g {
+                    p.push(Vec3::new(a, b, c));
+                }
+            }
+        }
+        let source = SolidSource::BSpline {
+            knots: [k.clone(), k.clone(), k],
+            weights: vec![1.0; n * n * n],
+            samples: [samples; 3],
+        };
+        (source, p)
+    }
+
+    /// Steps a model with a rope (and the control points below `fix_below` fixed) under
+    /// `parallelism`; returns the final control points, velocities and data points, and
+    /// whether the steps ran phased.
+    fn trajectory(
+        model: &(SolidSource, Vec<Vec3>),
+        integrator: Integrator,
+        parallelism: Parallelism,
+        fix_below: Option<f64>,
+        steps: usize,
+    ) -> (Vec<Vec3>, Vec<Vec3>, Vec<Vec3>, bool) {
+        let params = SolidParams {
+            integrator,
+            parallelism,
+            ..SolidParams::default()
+        };
+        let mut s = DynamicSolid::new(
+            model.0.clone(),
+            model.1.clone(),
+            Material::default(),
+            params,
+        )
+        .unwrap();
+        if let Some(z) = fix_below {
+            let low = s.control_points_where(|x| x.z < z);
+            s.set_fixed(&low, true).unwrap();
+        }
+        s.attach_rope(Vec3::new(1.3, 1.2, 1.1), 50.0, 0.0).unwrap();
+        let phased = s.phased_eligible();
+        for _ in 0..steps {
+            s.step().unwrap();
+        }
+        (s.p.clone(), s.v.clone(), s.d.clone(), phased)
+    }
+
+    /// The phased step follows the one-thread step: the force sums run in another order, so
+    /// the trajectories agree to round-off, relative to the motion.
+    fn assert_same_motion(
+        model: (SolidSource, Vec<Vec3>),
+        integrator: Integrator,
+        fix: Option<f64>,
+    ) {
+        let steps = 30;
+        let (p1, v1, d1, seq) = trajectory(&model, integrator, Parallelism::Sequential, fix, steps);
+        let (p2, v2, d2, phased) = trajectory(&model, integrator, Parallelism::Rayon, fix, steps);
+        assert!(!seq);
+        assert_eq!(phased, team_threads() > 1, "phased eligibility");
+        let motion = p1
+            .iter()
+            .zip(&model.1)
+            .map(|(a, b)| (a - b).norm())
+            .fold(0.0, f64::max);
+        let speed = v1.iter().map(|x| x.norm()).fold(0.0, f64::max);
+        assert!(motion > 1e-4, "the rope moves the model ({motion})");
+        for (a, b) in p1.iter().zip(&p2).chain(d1.iter().zip(&d2)) {
+            assert!((a - b).norm() <= 1e-9 * motion, "position {a} vs {b}");
+        }
+        for (a, b) in v1.iter().zip(&v2) {
+            assert!((a - b).norm() <= 1e-9 * speed, "velocity {a} vs {b}");
+        }
+        if let Some(z) = fix {
+            for (a, b) in p2.iter().zip(&model.1) {
+                if b.z < z {
+                    assert_eq!(a, b, "a fixed control point moved");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn phased_symplectic_step_matches_the_one_thread_step() {
+        assert_same_motion(cube(4, 2), Integrator::SymplecticEuler, None);
+    }
+
+    #[test]
+    fn phased_explicit_step_matches_the_one_thread_step() {
+        assert_same_motion(cube(3, 2), Integrator::Explicit, None);
+    }
+
+    #[test]
+    fn phased_step_with_fixed_points_matches_the_one_thread_step() {
+        // Restricted chain: inputs and outputs are index maps.
+        assert_same_motion(cube(4, 2), Integrator::SymplecticEuler, Some(0.3));
+    }
+
+    #[test]
+    fn phased_step_of_a_one_level_map_with_a_sparse_mass_matrix() {
+        // 9^3 = 729 control points: more than the dense bound, so the sparse solve runs.
+        let model = bspline(9, 12);
+        let s = DynamicSolid::new(
+            model.0.clone(),
+            model.1.clone(),
+            Material::default(),
+            SolidParams::default(),
+        )
+        .unwrap();
+        assert!(matches!(s.solver.factor, MassFactor::Sparse(_)));
+        assert_same_motion(model, Integrator::SymplecticEuler, Some(0.2));
+    }
+
+    #[test]
+    fn phased_step_detects_divergence_and_restores_the_last_good_state() {
+        let (source, p) = cube(3, 2);
+        let params = SolidParams {
+            dt: 0.5,
+            parallelism: Parallelism::Rayon,
+            ..SolidParams::default()
+        };
+        let mut s = DynamicSolid::new(source, p, Material::default(), params).unwrap();
+        s.attach_rope(Vec3::new(3.0, 3.0, 3.0), 1e3, 0.0).unwrap();
+        let mut last = s.p.clone();
+        let err = loop {
+            match s.step() {
+                Ok(_) => last.clone_from(&s.good.0),
+                Err(e) => break e,
+            }
+            assert!(s.steps() < 1000, "no divergence detected");
+        };
+        assert!(matches!(err, SolidsError::Diverged { .. }), "{err}");
+        assert!(s.p.iter().all(|x| x.iter().all(|c| c.is_finite())));
+        // Back at the last state that passed the check.
+        assert_eq!(s.p, last);
+    }
+}
