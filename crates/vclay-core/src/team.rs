@@ -306,9 +306,69 @@ fn wait_open(sh: &Shared, idx: usize, seen: usize) -> usize {
 pub struct SharedSlice<'a, T> {
     ptr: *mut T,
     len: usize,
-    /// Live borrows: (range, writing).
-    live: Mutex<Vec<(Range<usize>, bool)>>,
+    live: Borrows,
     _borrow: PhantomData<&'a mut [T]>,
+}
+
+/// Most borrows of one [`SharedSlice`] live at once.
+pub const MAX_BORROWS: usize = 32;
+
+/// The live borrows of a [`SharedSlice`] (start, end, writing), behind a spin lock: it is held
+/// for a few instructions, and threads meet at it when a phase starts, where a `Mutex` would
+/// put one of them to sleep.
+#[derive(Default)]
+struct Borrows {
+    locked: AtomicBool,
+    list: std::cell::UnsafeCell<BorrowList>,
+}
+
+#[derive(Default)]
+struct BorrowList {
+    items: [(usize, usize, bool); MAX_BORROWS],
+    len: usize,
+}
+
+impl BorrowList {
+    fn iter(&self) -> impl Iterator<Item = &(usize, usize, bool)> {
+        self.items[..self.len].iter()
+    }
+
+    #[track_caller]
+    fn push(&mut self, b: (usize, usize, bool)) {
+        assert!(
+            self.len < MAX_BORROWS,
+            "SharedSlice: more than {MAX_BORROWS} live borrows"
+        );
+        self.items[self.len] = b;
+        self.len += 1;
+    }
+
+    fn swap_remove(&mut self, i: usize) {
+        self.len -= 1;
+        self.items[i] = self.items[self.len];
+    }
+}
+
+impl Borrows {
+    fn with<R>(&self, f: impl FnOnce(&mut BorrowList) -> R) -> R {
+        while self
+            .locked
+            .compare_exchange_weak(false, true, Ordering::Acquire, Ordering::Relaxed)
+            .is_err()
+        {
+            std::hint::spin_loop();
+        }
+        struct Unlock<'a>(&'a AtomicBool);
+        impl Drop for Unlock<'_> {
+            fn drop(&mut self) {
+                self.0.store(false, Ordering::Release);
+            }
+        }
+        let _unlock = Unlock(&self.locked);
+        // SAFETY: the lock is held (released by `_unlock`, also when `f` panics), so this is
+        // the only reference to the list.
+        f(unsafe { &mut *self.list.get() })
+    }
 }
 
 // SAFETY: the slice is only reached through checked borrows (no two overlapping borrows with
@@ -352,7 +412,7 @@ impl<'a, T> SharedSlice<'a, T> {
         Self {
             ptr: s.as_mut_ptr(),
             len: s.len(),
-            live: Mutex::new(Vec::new()),
+            live: Borrows::default(),
             _borrow: PhantomData,
         }
     }
@@ -368,23 +428,26 @@ impl<'a, T> SharedSlice<'a, T> {
     }
 
     fn claim(&self, r: &Range<usize>, write: bool) {
-        let mut live = lock(&self.live);
-        let clash = live.iter().any(|(l, w)| {
-            (write || *w) && l.start < r.end && r.start < l.end && !r.is_empty() && !l.is_empty()
+        self.live.with(|live| {
+            let clash = live.iter().any(|&(s, e, w)| {
+                (write || w) && s < r.end && r.start < e && !r.is_empty() && s < e
+            });
+            assert!(
+                !clash,
+                "SharedSlice: borrow {r:?} ({}) overlaps a live borrow",
+                if write { "write" } else { "read" }
+            );
+            live.push((r.start, r.end, write));
         });
-        assert!(
-            !clash,
-            "SharedSlice: borrow {r:?} ({}) overlaps a live borrow",
-            if write { "write" } else { "read" }
-        );
-        live.push((r.clone(), write));
     }
 
     fn unclaim(&self, r: &Range<usize>, write: bool) {
-        let mut live = lock(&self.live);
-        if let Some(i) = live.iter().position(|(l, w)| l == r && *w == write) {
-            live.swap_remove(i);
-        }
+        self.live.with(|live| {
+            let found = live.iter().position(|&b| b == (r.start, r.end, write));
+            if let Some(i) = found {
+                live.swap_remove(i);
+            }
+        });
     }
 
     /// Borrows `range` for writing.

@@ -52,6 +52,8 @@ pub struct SpringSet {
     pub(crate) parts: Vec<Part>,
     /// The points of the straddling springs of an organized set, sorted.
     pub(crate) band: Vec<u32>,
+    /// The point ranges of the blocks of an organized set.
+    pub(crate) blocks: Vec<std::ops::Range<usize>>,
 }
 
 /// One block of an organized spring set: the springs whose points all lie in `points`, or (the
@@ -222,15 +224,17 @@ impl SpringSet {
         band.sort_unstable();
         band.dedup();
         self.band = band;
+        self.blocks = self.parts[..blocks]
+            .iter()
+            .map(|p| p.points.clone())
+            .collect();
     }
 
     /// The point blocks of a set [organized](SpringSet::organize) for `n` points (`None`
     /// otherwise): block `b` owns the forces on the points of its range, for phased programs
     /// ([`SpringSet::block_forces`], then [`SpringSet::straddle_forces`]).
-    pub(crate) fn blocks_for(&self, n: usize) -> Option<Vec<std::ops::Range<usize>>> {
-        let (_, blocks) = self.parts.split_last()?;
-        (blocks.len() > 1 && blocks.last()?.points.end == n)
-            .then(|| blocks.iter().map(|b| b.points.clone()).collect())
+    pub(crate) fn blocks_for(&self, n: usize) -> Option<&[std::ops::Range<usize>]> {
+        (self.blocks.len() > 1 && self.blocks.last()?.end == n).then_some(&self.blocks[..])
     }
 
     /// Overwrites `f_block` (the forces on the points of block `b`) with the forces of the

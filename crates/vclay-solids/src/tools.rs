@@ -72,6 +72,27 @@ pub struct Boundary {
 impl Tool {
     /// Adds the tool's force to `f` and returns the tool's potential energy (rope only, else 0).
     pub fn add_forces(&self, d: &[Vec3], mass: &[f64], boundary: &Boundary, f: &mut [Vec3]) -> f64 {
+        self.add_forces_in(d, mass, boundary, f, 0..d.len())
+    }
+
+    /// [`Tool::add_forces`] restricted to the data points in `range`: `f[i - range.start]` is
+    /// the force on point `i`; the energy counts when the rope's point lies in the range. The
+    /// blocks of a partition of the points together add what one call over all points adds,
+    /// so threads can apply a tool to their own blocks.
+    pub fn add_forces_in(
+        &self,
+        d: &[Vec3],
+        mass: &[f64],
+        boundary: &Boundary,
+        f: &mut [Vec3],
+        range: std::ops::Range<usize>,
+    ) -> f64 {
+        let base = range.start;
+        let mut add = |i: usize, x: Vec3| {
+            if range.contains(&i) {
+                f[i - base] += x;
+            }
+        };
         match self {
             Tool::Rope {
                 point,
@@ -81,42 +102,45 @@ impl Tool {
             } => {
                 let x = d[*point] - cursor;
                 let l = x.norm();
-                if l > *length && l > 0.0 {
-                    f[*point] -= x * (stiffness * (l - length) / l);
+                if l > *length && l > 0.0 && range.contains(point) {
+                    add(*point, -x * (stiffness * (l - length) / l));
                     0.5 * stiffness * (l - length).powi(2)
                 } else {
                     0.0
                 }
             }
             Tool::PointForce { point, force } => {
-                f[*point] += force;
+                add(*point, *force);
                 0.0
             }
             Tool::RegionForce { points, force, .. } => {
                 if !points.is_empty() {
                     let share = force / points.len() as f64;
                     for &i in points {
-                        f[i] += share;
+                        add(i, share);
                     }
                 }
                 0.0
             }
             Tool::Gravity { g } => {
-                for (fi, m) in f.iter_mut().zip(mass) {
-                    *fi += g * *m;
+                for i in range.clone() {
+                    add(i, g * mass[i]);
                 }
                 0.0
             }
             Tool::Inflation { pressure } => {
                 for w in boundary.offsets.windows(2) {
                     let lp = &boundary.verts[w[0] as usize..w[1] as usize];
+                    if !lp.iter().any(|&v| range.contains(&(v as usize))) {
+                        continue;
+                    }
                     let mut n = Vec3::zeros();
                     for i in 0..lp.len() {
                         n += d[lp[i] as usize].cross(&d[lp[(i + 1) % lp.len()] as usize]);
                     }
                     let share = n * (0.5 * pressure / lp.len() as f64);
                     for &v in lp {
-                        f[v as usize] += share;
+                        add(v as usize, share);
                     }
                 }
                 0.0
@@ -219,4 +243,67 @@ pub fn within(d: &[Vec3], c: &Vec3, radius: f64) -> Vec<usize> {
         .filter(|(_, p)| (*p - c).norm() <= radius)
         .map(|(i, _)| i)
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tools_applied_block_by_block_add_up_to_the_whole() {
+        // A 3 x 3 grid of points in the plane z = x y / 4, with boundary loops over its four
+        // cells (an open sheet is enough to exercise the loops that cross blocks).
+        let d: Vec<Vec3> = (0..9)
+            .map(|i| {
+                let (x, y) = ((i % 3) as f64, (i / 3) as f64);
+                Vec3::new(x, y, 0.25 * x * y)
+            })
+            .collect();
+        let mass: Vec<f64> = (0..9).map(|i| 1.0 + i as f64).collect();
+        let mut boundary = Boundary {
+            offsets: vec![0],
+            verts: Vec::new(),
+        };
+        for c in [0, 1, 3, 4] {
+            boundary.verts.extend([c, c + 1, c + 4, c + 3]);
+            boundary.offsets.push(boundary.verts.len() as u32);
+        }
+        let tools = [
+            Tool::Rope {
+                point: 4,
+                cursor: Vec3::new(3.0, 1.0, 2.0),
+                stiffness: 5.0,
+                length: 0.5,
+            },
+            Tool::PointForce {
+                point: 7,
+                force: Vec3::new(0.0, 1.0, 0.0),
+            },
+            Tool::RegionForce {
+                points: vec![1, 2, 5],
+                force: Vec3::new(0.3, 0.0, 0.0),
+                center: Vec3::zeros(),
+                radius: 1.0,
+            },
+            Tool::Gravity {
+                g: Vec3::new(0.0, 0.0, -9.81),
+            },
+            Tool::Inflation { pressure: 2.0 },
+        ];
+        for tool in &tools {
+            let mut whole = vec![Vec3::zeros(); 9];
+            let e = tool.add_forces(&d, &mass, &boundary, &mut whole);
+            assert!(
+                whole.iter().any(|x| x.norm() > 0.0),
+                "{tool:?} adds a force"
+            );
+            let mut parts = vec![Vec3::zeros(); 9];
+            let mut e_parts = 0.0;
+            for r in [0..4, 4..5, 5..9] {
+                e_parts += tool.add_forces_in(&d, &mass, &boundary, &mut parts[r.clone()], r);
+            }
+            assert_eq!(whole, parts, "{tool:?}");
+            assert_eq!(e, e_parts, "{tool:?}");
+        }
+    }
 }

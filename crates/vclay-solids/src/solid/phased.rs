@@ -11,8 +11,12 @@
 //!
 //! # Phases (eq 10 of `subdivision-solids-journal.txt`, as in [`DynamicSolid::step`])
 //! 1. Springs, one task per point block of the organized [`SpringSet`]: each task overwrites
-//!    its block's forces.
-//! 2. The springs that straddle blocks, and the tools (one task).
+//!    its block's forces with those of the springs inside the block, and adds its share of the
+//!    springs that straddle blocks to a buffer of its own (nonzero only on the band of points
+//!    that straddling springs touch).
+//! 2. Merge, one task per block: the block's band points collect every share (and the shares
+//!    are cleared for the next step); then the tools' forces on the block's points
+//!    ([`crate::Tool::add_forces_in`]).
 //! 3. `A^T f` level by level, finest first, through the stored transposes, split by rows; the
 //!    last level (to the control points) is fused into phase 4.
 //! 4. Control points, split by free points: `g = A^T f - D v`, `M v` for the kinetic energy,
@@ -21,6 +25,10 @@
 //!    one from the energies of phases 1-4), the last good state, `p'' = (A^T M A)^-1 g` (rows of
 //!    the dense inverse, or one sparse solve), the integrator's update.
 //! 6. `d = A p` level by level, split by rows.
+//!
+//! Tasks of the same part of the data have the same index in every phase, so with the team's
+//! owner rule ([`vclay_core::team`]) each thread keeps its half of `d`, `f` and the levels in
+//! its own cache from phase to phase and from step to step.
 //!
 //! Every task writes its own part, so the result does not depend on how many threads ran the
 //! program; it equals the one-thread step up to the order of the force sums (a few units in the
@@ -48,7 +56,8 @@ pub(super) struct PhasedWork {
     levels: Vec<Vec<Vec3>>,
     /// `g` on the free points by coordinate (`3 m`).
     columns: Vec<f64>,
-    /// Energies: spring blocks, then the shares of the straddling springs, then tools.
+    /// Energies: per spring block, its springs and its share of the straddling springs; then
+    /// per block, the tools.
     energies: Vec<f64>,
     /// Per spring block, the forces of its share of the straddling springs (zero outside the
     /// band between steps).
@@ -67,7 +76,6 @@ pub(super) struct PhasedWork {
 enum Phase {
     Springs,
     Merge,
-    Tools,
     /// `A^(j)T` into level `j` (`1 <= j < n`).
     Transpose(usize),
     Control,
@@ -206,9 +214,6 @@ impl DynamicSolid {
         // Phases and their task counts.
         let nb = blocks.len();
         let mut phases = vec![(Phase::Springs, nb), (Phase::Merge, nb)];
-        if tools.iter().any(Option::is_some) {
-            phases.push((Phase::Tools, 1));
-        }
         for j in (1..n).rev() {
             phases.push((Phase::Transpose(j), tasks_for(pts[j], threads)));
         }
@@ -231,7 +236,7 @@ impl DynamicSolid {
             pw.levels[j].resize(pts[j], Vec3::zeros());
         }
         pw.columns.resize(3 * m, 0.0);
-        pw.energies.resize(2 * nb + 1, 0.0);
+        pw.energies.resize(3 * nb, 0.0);
         if !pw.clean || pw.straddle.len() != nb || pw.straddle.iter().any(|b| b.len() != nd) {
             pw.straddle = vec![vec![Vec3::zeros(); nd]; nb];
         }
@@ -277,7 +282,7 @@ impl DynamicSolid {
         let energy_of = |e: &[f64], k: &[f64]| Energy {
             kinetic: k.iter().sum(),
             internal: e[..2 * nb].iter().sum(),
-            tools: e[2 * nb],
+            tools: e[2 * nb..].iter().sum(),
         };
         // The rows of `p`, `v` and the good state that integration task `t` of `tasks` owns:
         // from its first free point to the next task's, the first and last tasks extended to
@@ -315,28 +320,26 @@ impl DynamicSolid {
                     er[1] = es;
                 }
                 Phase::Merge => {
-                    // The band points of block `t`: add every share, and clear the shares.
+                    // The band points of block `t`: add every share, and clear the shares;
+                    // then the tools' forces on the block.
                     let r = blocks[t].clone();
                     let lo = band.partition_point(|&i| (i as usize) < r.start);
                     let hi = band.partition_point(|&i| (i as usize) < r.end);
                     let mut fr = f.range(r.clone());
-                    let mut shares: Vec<_> = straddle.iter().map(|b| b.range(r.clone())).collect();
-                    for &i in &band[lo..hi] {
-                        let i = i as usize - r.start;
-                        for sh in &mut shares {
+                    for share in &straddle {
+                        let mut sh = share.range(r.clone());
+                        for &i in &band[lo..hi] {
+                            let i = i as usize - r.start;
                             fr[i] += sh[i];
                             sh[i] = Vec3::zeros();
                         }
                     }
-                }
-                Phase::Tools => {
                     let dr = dsh.read();
-                    let mut fr = f.range(0..nd);
                     let mut te = 0.0;
                     for tool in tools.iter().flatten() {
-                        te += tool.add_forces(&dr, mass, boundary, &mut fr);
+                        te += tool.add_forces_in(&dr, mass, boundary, &mut fr, r.clone());
                     }
-                    energies.range(2 * nb..2 * nb + 1)[0] = te;
+                    energies.range(2 * nb + t..2 * nb + t + 1)[0] = te;
                 }
                 Phase::Transpose(j) => {
                     let rows = chunk(pts[j], tasks, t);
@@ -468,7 +471,6 @@ impl DynamicSolid {
                 }
             }
         };
-        energies.range(2 * nb..2 * nb + 1)[0] = 0.0;
         run_phases(&counts, &run);
         let energy = energy_of(&energies.read(), &kinetic.read());
         drop(straddle);
@@ -480,7 +482,7 @@ impl DynamicSolid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Material, SolidParams, SolidSource, SolidsError};
+    use crate::{Material, SolidParams, SolidSource, SolidsError, Tool};
     use vclay_lattice::{BoundaryRule, primitives};
     use vclay_spline::KnotVector;
 
@@ -536,6 +538,14 @@ mod tests {
             s.set_fixed(&low, true).unwrap();
         }
         s.attach_rope(Vec3::new(1.3, 1.2, 1.1), 50.0, 0.0).unwrap();
+        // Every kind of tool (they are applied block by block in the phased step).
+        s.add_tool(Tool::Gravity {
+            g: Vec3::new(0.0, 0.0, -0.5),
+        })
+        .unwrap();
+        s.add_tool(Tool::Inflation { pressure: 0.2 }).unwrap();
+        s.add_region_force(Vec3::new(0.5, 0.5, 1.0), 0.3, Vec3::new(0.0, 0.4, 0.0))
+            .unwrap();
         let phased = s.phased_eligible();
         for _ in 0..steps {
             s.step().unwrap();
