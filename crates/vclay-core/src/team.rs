@@ -557,8 +557,7 @@ mod tests {
             Some(team) => team.run(&[tasks, tasks, 1], &run),
             None => run_inline(&[tasks, tasks, 1], &run),
         }
-        drop(sa);
-        a
+        sa.read().to_vec()
     }
 
     #[test]
