@@ -196,14 +196,7 @@ impl SparseMatrix {
     pub fn apply_into<T: Coord>(&self, x: &[T], y: &mut [T], par: Parallelism) {
         assert_eq!(x.len(), self.ncols, "apply: input length");
         assert_eq!(y.len(), self.nrows, "apply: output length");
-        let row = |(i, yi): (usize, &mut T)| {
-            let r = self.row_ptr[i]..self.row_ptr[i + 1];
-            let mut acc = T::zero();
-            for (&c, &v) in self.cols[r.clone()].iter().zip(&self.vals[r]) {
-                acc.add_scaled(v, &x[c as usize]);
-            }
-            *yi = acc;
-        };
+        let row = |(i, yi): (usize, &mut T)| *yi = self.row_dot(i, |c| x[c]);
         if par.is_parallel(self.nrows) {
             y.par_iter_mut()
                 .enumerate()
@@ -228,13 +221,28 @@ impl SparseMatrix {
         mut out: impl FnMut(usize, T),
     ) {
         for i in rows {
-            let r = self.row_ptr[i]..self.row_ptr[i + 1];
-            let mut acc = T::zero();
-            for (&c, &v) in self.cols[r.clone()].iter().zip(&self.vals[r]) {
-                acc.add_scaled(v, &x(c as usize));
-            }
-            out(i, acc);
+            out(i, self.row_dot(i, &x));
         }
+    }
+
+    /// Row `i` of `A x`, `x` read through `x(column)`: two partial sums (even and odd
+    /// entries), so that a row is two independent chains of additions rather than one.
+    #[inline(always)]
+    fn row_dot<T: Coord>(&self, i: usize, x: impl Fn(usize) -> T) -> T {
+        let r = self.row_ptr[i]..self.row_ptr[i + 1];
+        let (mut a, mut b) = (T::zero(), T::zero());
+        let (cols, vals) = (&self.cols[r.clone()], &self.vals[r]);
+        let (cp, ct) = cols.as_chunks::<2>();
+        let (vp, vt) = vals.as_chunks::<2>();
+        for (c, v) in cp.iter().zip(vp) {
+            a.add_scaled(v[0], &x(c[0] as usize));
+            b.add_scaled(v[1], &x(c[1] as usize));
+        }
+        if let (Some(&c), Some(&v)) = (ct.first(), vt.first()) {
+            a.add_scaled(v, &x(c as usize));
+        }
+        b.add_scaled(1.0, &a);
+        b
     }
 
     /// `y = A^T x` without forming the transpose, allocating scratch space as needed.

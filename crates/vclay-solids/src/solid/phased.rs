@@ -346,13 +346,17 @@ impl DynamicSolid {
                     let op = transposes[j];
                     if j + 1 == n {
                         let fr = f.read();
+                        let fr: &[Vec3] = &fr;
                         match outputs {
-                            Some(o) => rows_into(op, rows, |c| fr[o[c] as usize], &levels[j], None),
-                            None => rows_into(op, rows, |c| fr[c], &levels[j], None),
+                            Some(o) => {
+                                rows_into(op, rows, move |c| fr[o[c] as usize], &levels[j], None)
+                            }
+                            None => rows_into(op, rows, move |c| fr[c], &levels[j], None),
                         }
                     } else {
                         let src = levels[j + 1].read();
-                        rows_into(op, rows, |c| src[c], &levels[j], None);
+                        let src: &[Vec3] = &src;
+                        rows_into(op, rows, move |c| src[c], &levels[j], None);
                     }
                 }
                 Phase::Control => {
@@ -379,19 +383,23 @@ impl DynamicSolid {
                         let op = transposes[0];
                         if n == 1 {
                             let fr = f.read();
+                            let fr: &[Vec3] = &fr;
                             match outputs {
                                 Some(o) => free_rows_with(
                                     op,
                                     kr.clone(),
                                     free_rows,
-                                    |c| fr[o[c] as usize],
+                                    move |c| fr[o[c] as usize],
                                     put,
                                 ),
-                                None => free_rows_with(op, kr.clone(), free_rows, |c| fr[c], put),
+                                None => {
+                                    free_rows_with(op, kr.clone(), free_rows, move |c| fr[c], put)
+                                }
                             }
                         } else {
                             let lr = levels[1].read();
-                            free_rows_with(op, kr.clone(), free_rows, |c| lr[c], put);
+                            let lr: &[Vec3] = &lr;
+                            free_rows_with(op, kr.clone(), free_rows, move |c| lr[c], put);
                         }
                     }
                     let mut kin = 0.0;
@@ -460,13 +468,15 @@ impl DynamicSolid {
                     };
                     if j == 0 {
                         let pr = psh.read();
+                        let pr: &[Vec3] = &pr;
                         match inputs {
-                            Some(ins) => rows_into(op, rows, |c| pr[ins[c] as usize], dst, to),
-                            None => rows_into(op, rows, |c| pr[c], dst, to),
+                            Some(ins) => rows_into(op, rows, move |c| pr[ins[c] as usize], dst, to),
+                            None => rows_into(op, rows, move |c| pr[c], dst, to),
                         }
                     } else {
                         let src = levels[j].read();
-                        rows_into(op, rows, |c| src[c], dst, to);
+                        let src: &[Vec3] = &src;
+                        rows_into(op, rows, move |c| src[c], dst, to);
                     }
                 }
             }
