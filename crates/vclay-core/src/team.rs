@@ -13,12 +13,20 @@
 //! whole slice for reading in a later phase.
 //!
 //! # How
-//! Tasks are numbered through the whole program and claimed from one atomic ticket counter. A
-//! thread that claims a ticket of phase `k` waits (spinning) until the count of finished tasks
-//! reaches the first ticket of phase `k`. Every smaller ticket has been claimed by a thread that
-//! is running it, so the wait always ends: the program completes even if the helpers never
-//! arrive, with the caller running every task itself. Results therefore never depend on how many
-//! threads took part, provided that each task writes only its own part.
+//! Every thread walks the phases in order. At phase `k` it waits (spinning) until the count of
+//! finished tasks reaches the number of tasks in the phases before `k`; then it claims and runs
+//! the tasks it owns (task `t` belongs to the thread of rank `t % threads`, the caller being
+//! rank 0), then any task of the phase still unclaimed. A claim tags the task's flag with the
+//! program's epoch, so flags need no reset. A thread only waits at phase `k` after every task
+//! of the earlier phases has been claimed by a thread that is running it, so the wait always
+//! ends: the program completes even if the helpers never arrive, with the caller running every
+//! task itself. Results therefore never depend on how many threads took part, provided that each
+//! task writes only its own part.
+//!
+//! The owner rule keeps each thread on the same part of the data from phase to phase and from
+//! program to program, in its own cache: with a shared ticket counter instead (tried first),
+//! which thread took which task was left to chance, and a level-2 solid step spent about a
+//! third more time in its map products reading lines the other core had written.
 //!
 //! Helpers spin for [`SPIN`] after their last program, so that a loop of steps finds them
 //! awake, then park. A caller that finds the team busy (another thread's program, or a program
@@ -67,12 +75,18 @@ struct Job {
 // `Shared::active`; `Team::run` keeps the pointees alive until no helper is registered.
 unsafe impl Send for Job {}
 
+/// A claim flag on a cache line of its own: the threads claim different tasks at the same
+/// moment, and flags sharing a line would bounce it between their cores.
+#[derive(Default)]
+#[repr(align(64))]
+struct Padded(AtomicUsize);
+
 struct Shared {
     /// Odd while a program is open; incremented to open and to close.
     epoch: AtomicUsize,
     job: Mutex<Option<Job>>,
     /// Per task (numbered through the program), the epoch of its last claim.
-    claims: Box<[AtomicUsize]>,
+    claims: Box<[Padded]>,
     done: AtomicUsize,
     /// Helpers registered with the current epoch.
     active: AtomicUsize,
@@ -116,7 +130,7 @@ impl Team {
         let shared = Arc::new(Shared {
             epoch: AtomicUsize::new(0),
             job: Mutex::new(None),
-            claims: (0..MAX_TASKS).map(|_| AtomicUsize::new(0)).collect(),
+            claims: (0..MAX_TASKS).map(|_| Padded::default()).collect(),
             done: AtomicUsize::new(0),
             active: AtomicUsize::new(0),
             panic: Mutex::new(None),
@@ -243,7 +257,10 @@ fn work(sh: &Shared, counts: &[usize], run: &TaskFn<'_>, rank: usize, threads: u
         let own = (rank..c).step_by(threads.max(1));
         for t in own.chain(0..c) {
             // Claimed by the first thread to tag it with this epoch.
-            if sh.claims[start + t].swap(epoch, Ordering::AcqRel) == epoch {
+            let claim = &sh.claims[start + t].0;
+            if claim.load(Ordering::Relaxed) == epoch
+                || claim.swap(epoch, Ordering::AcqRel) == epoch
+            {
                 continue;
             }
             if let Err(p) = catch_unwind(AssertUnwindSafe(|| run(k, t))) {

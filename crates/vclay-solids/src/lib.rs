@@ -62,5 +62,7 @@ pub mod tools;
 pub use error::SolidsError;
 pub use material::{Material, MaterialField};
 pub use model::{Discretization, SolidSource};
-pub use solid::{DynamicSolid, Energy, Integrator, SolidParams, SolidStats, StepReport, ToolId};
+pub use solid::{
+    DynamicSolid, Energy, Integrator, PHASED_POINTS, SolidParams, SolidStats, StepReport, ToolId,
+};
 pub use tools::Tool;

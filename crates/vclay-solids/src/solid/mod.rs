@@ -22,6 +22,11 @@
 //!   Hessian, [`crate::springs`]), solved by conjugate gradient preconditioned with the
 //!   factored `A^T M A`; the implicit solver the paper names as future work (section 6).
 //!
+//! Threads: an explicit or symplectic step of a mid-sized model runs as one phased program on a
+//! persistent thread team (`phased.rs`: springs by point blocks, the map passes and the control
+//! points split by rows, spin barriers in between), which at 2,000 data points costs less than
+//! one rayon fork-join per pass; see [`SolidParams::parallelism`].
+//!
 //! Fixed control points (section 5.2) are removed from the unknowns; data points that only fixed
 //! control points define are dropped from every per-step pass, as are springs between them.
 //!
@@ -53,6 +58,7 @@ use crate::springs::{ForceWorkspace, SpringSet};
 use crate::tools::{Boundary, Tool, nearest, within};
 
 mod phased;
+pub use phased::PHASED_POINTS;
 
 /// Default [`SolidParams::dt`].
 pub const DEFAULT_DT: f64 = 1e-3;
@@ -89,7 +95,12 @@ pub struct SolidParams {
     pub cg_tolerance: f64,
     /// Iteration cap of conjugate gradient. Default: [`DEFAULT_CG_MAX_ITERATIONS`].
     pub cg_max_iterations: usize,
-    /// Thread use of the per-step passes. Default: [`Parallelism::Auto`].
+    /// Thread use of the per-step passes. Default: [`Parallelism::Auto`]: explicit and
+    /// symplectic steps of models with at least [`PHASED_POINTS`] active data points (and a
+    /// chain of at most [`vclay_lattice::SubdivisionMap::GATHER_NNZ`] non-zeros) run as one
+    /// phased program on [`vclay_core::team`]'s thread team; larger models split each pass on
+    /// rayon's pool; smaller ones run on the calling thread. `Rayon` takes the team from any
+    /// size, `Sequential` never uses another thread.
     pub parallelism: Parallelism,
 }
 
