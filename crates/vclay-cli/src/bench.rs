@@ -105,22 +105,46 @@ pub fn run(seconds: f64, physics: bool, large: bool) -> Result<()> {
     Ok(())
 }
 
-/// Steps per second of `step` run for about `seconds` (at least 5 steps), after one untimed
-/// step (the D-NURBS first step assembles and factors).
-fn steps_per_second(seconds: f64, mut step: impl FnMut() -> Result<()>) -> Result<f64> {
+/// Steps per second of `step` run for about `seconds`, after one untimed step (the D-NURBS
+/// first step assembles and factors): `(median, mean)`. The steps are timed in batches of at
+/// least 2 ms (and 5 batches at least); the median is the median batch's rate, which a shared
+/// machine's pauses (another process, the host) move far less than the mean; the goals are
+/// checked against it and both are reported.
+fn steps_per_second(seconds: f64, mut step: impl FnMut() -> Result<()>) -> Result<(f64, f64)> {
     step()?;
+    // Batch size: enough steps for 2 ms.
     let t0 = Instant::now();
-    let mut n = 0;
-    while n < 5 || t0.elapsed().as_secs_f64() < seconds {
+    let mut batch = 0usize;
+    while batch == 0 || t0.elapsed().as_secs_f64() < 2e-3 {
         step()?;
-        n += 1;
+        batch += 1;
     }
-    Ok(n as f64 / t0.elapsed().as_secs_f64())
+    let mut rates = Vec::new();
+    let (mut total_steps, start) = (0usize, Instant::now());
+    while rates.len() < 5 || start.elapsed().as_secs_f64() < seconds {
+        let t = Instant::now();
+        for _ in 0..batch {
+            step()?;
+        }
+        rates.push(batch as f64 / t.elapsed().as_secs_f64());
+        total_steps += batch;
+    }
+    let mean = total_steps as f64 / start.elapsed().as_secs_f64();
+    rates.sort_by(f64::total_cmp);
+    Ok((rates[rates.len() / 2], mean))
 }
 
-/// `{value, unit, goal, met}` for a rate with a lower bound as goal.
-fn at_least(value: f64, unit: &str, goal: f64) -> serde_json::Value {
-    json!({ "value": value, "unit": unit, "goal": format!(">= {goal}"), "met": value >= goal })
+/// `{value, mean, unit, goal, met}` for a rate `(median, mean)` with a lower bound as goal
+/// (met by the median).
+fn at_least((value, mean): (f64, f64), unit: &str, goal: f64) -> serde_json::Value {
+    json!({
+        "value": value,
+        "mean": mean,
+        "statistic": "median of batches (mean: all steps)",
+        "unit": unit,
+        "goal": format!(">= {goal}"),
+        "met": value >= goal,
+    })
 }
 
 /// The simulation figures and their goals (issues 4 and 5).
@@ -135,13 +159,15 @@ fn physics_figures(seconds: f64, large: bool) -> Result<serde_json::Value> {
     let dynamic_rate = steps_per_second(seconds, || Ok(dynamic.step(implicit).map(drop)?))?;
     let mut cube = so::cube(2, SolidParams::default())?;
     so::pull(&mut cube)?;
-    let cube_rate = steps_per_second(seconds, || Ok(cube.step().map(drop)?))?;
+    let (cube_rate, cube_mean) = steps_per_second(seconds, || Ok(cube.step().map(drop)?))?;
     let cube_ms = 1e3 / cube_rate;
     let mut out = json!({
         "dnurbs_64x64_frozen_weights": at_least(frozen_rate, "steps/s", 500.0),
         "dnurbs_16x16_dynamic_weights": at_least(dynamic_rate, "steps/s", 60.0),
         "solid_cube_level2": {
             "value": cube_ms,
+            "mean": 1e3 / cube_mean,
+            "statistic": "median of batches (mean: all steps)",
             "unit": "ms/step",
             "goal": "< 0.1",
             "met": cube_ms < 0.1,
@@ -160,4 +186,40 @@ fn physics_figures(seconds: f64, large: bool) -> Result<serde_json::Value> {
 
 fn rayon_threads() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn step_rates_come_from_at_least_five_batches_and_errors_propagate() {
+        let mut calls = 0usize;
+        let (median, mean) = steps_per_second(0.0, || {
+            calls += 1;
+            black_box((0..1000).sum::<usize>());
+            Ok(())
+        })
+        .unwrap();
+        assert!(median.is_finite() && median > 0.0 && mean.is_finite() && mean > 0.0);
+        // One untimed step, a calibration batch, then at least five timed batches.
+        assert!(calls >= 7, "{calls} calls");
+        let mut n = 0;
+        let err = steps_per_second(1.0, || {
+            n += 1;
+            if n == 3 {
+                anyhow::bail!("diverged")
+            }
+            Ok(())
+        });
+        assert!(err.is_err());
+    }
+
+    #[test]
+    fn goals_are_checked_against_the_median() {
+        let v = at_least((12.0, 9.0), "steps/s", 10.0);
+        assert_eq!(v["met"], true);
+        assert_eq!(v["mean"], 9.0);
+        assert_eq!(at_least((9.0, 12.0), "steps/s", 10.0)["met"], false);
+    }
 }
