@@ -4,7 +4,8 @@
 //! [--seq] [--fix-half]` (`--seq`: one thread; `--fix-half`: lower half of the control points
 //! fixed, journal section 5.2).
 //! Prints one Markdown table row per model: data points, springs, build time, ms per step
-//! (symplectic Euler with a rope attached), bytes per data point of the per-step structures and
+//! (symplectic Euler with a rope attached; the median over batches of at least 2 ms and the
+//! mean), bytes per data point of the per-step structures and
 //! the process's peak resident memory, and the paper's figure.
 
 use std::time::Instant;
@@ -35,27 +36,41 @@ fn cpu_seconds() -> f64 {
         .unwrap_or(f64::NAN)
 }
 
-/// Wall and CPU milliseconds per step (after `benchmarks::pull`).
-fn time_steps(s: &mut DynamicSolid, seconds: f64) -> (f64, f64) {
+/// Wall milliseconds per step, as the median over batches of at least 2 ms and as the mean
+/// over all steps, and CPU milliseconds per step (after `benchmarks::pull`). The median is
+/// the figure a shared machine's pauses move least.
+fn time_steps(s: &mut DynamicSolid, seconds: f64) -> (f64, f64, f64) {
     benchmarks::pull(s).unwrap();
+    let t = Instant::now();
+    let mut batch = 0;
+    while batch == 0 || t.elapsed().as_secs_f64() < 2e-3 {
+        s.step().unwrap();
+        batch += 1;
+    }
     let t0 = Instant::now();
     let c0 = cpu_seconds();
-    let mut n = 0;
-    while t0.elapsed().as_secs_f64() < seconds || n < 5 {
-        s.step().unwrap();
-        n += 1;
+    let mut per_batch = Vec::new();
+    while per_batch.len() < 5 || t0.elapsed().as_secs_f64() < seconds {
+        let tb = Instant::now();
+        for _ in 0..batch {
+            s.step().unwrap();
+        }
+        per_batch.push(tb.elapsed().as_secs_f64() * 1e3 / batch as f64);
     }
+    let n = (per_batch.len() * batch) as f64;
+    per_batch.sort_by(f64::total_cmp);
     (
-        t0.elapsed().as_secs_f64() * 1e3 / n as f64,
-        (cpu_seconds() - c0) * 1e3 / n as f64,
+        per_batch[per_batch.len() / 2],
+        t0.elapsed().as_secs_f64() * 1e3 / n,
+        (cpu_seconds() - c0) * 1e3 / n,
     )
 }
 
 fn row(name: &str, s: &mut DynamicSolid, build: f64, seconds: f64, paper: &str) {
     let st = s.stats();
-    let (ms, cpu) = time_steps(s, seconds);
+    let (ms, mean, cpu) = time_steps(s, seconds);
     println!(
-        "| {name} | {} | {} ({}) | {} ({}) | {:.2} | {:.4} | {:.4} | {:.1} | {:.0} | {:.0} | {paper} |",
+        "| {name} | {} | {} ({}) | {} ({}) | {:.2} | {:.4} | {:.4} | {:.4} | {:.1} | {:.0} | {:.0} | {paper} |",
         st.control_points,
         st.data_points,
         st.active_data_points,
@@ -63,6 +78,7 @@ fn row(name: &str, s: &mut DynamicSolid, build: f64, seconds: f64, paper: &str) 
         st.active_springs,
         build,
         ms,
+        mean,
         cpu,
         1e3 / ms,
         s.bytes_per_data_point(),
@@ -84,9 +100,9 @@ fn main() {
         ..SolidParams::default()
     };
     println!(
-        "| model | control pts | data pts (active) | springs (active) | build s | wall ms/step | CPU ms/step | steps/s | B/data pt (per-step) | B/data pt (peak RSS) | paper ms (PIII 550) |"
+        "| model | control pts | data pts (active) | springs (active) | build s | wall ms/step (median) | wall ms/step (mean) | CPU ms/step | steps/s (median) | B/data pt (per-step) | B/data pt (peak RSS) | paper ms (PIII 550) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     let paper = ["10 (216 cells)", "72 (1,728 cells)", "-", "-", "-"];
     for level in 1..=max_level {
         let t0 = Instant::now();

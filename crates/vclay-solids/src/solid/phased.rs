@@ -529,6 +529,7 @@ mod tests {
         integrator: Integrator,
         parallelism: Parallelism,
         fix_below: Option<f64>,
+        heterogeneous: bool,
         steps: usize,
     ) -> (Vec<Vec3>, Vec<Vec3>, Vec<Vec3>, bool) {
         let params = SolidParams {
@@ -546,6 +547,11 @@ mod tests {
         if let Some(z) = fix_below {
             let low = s.control_points_where(|x| x.z < z);
             s.set_fixed(&low, true).unwrap();
+        }
+        if heterogeneous {
+            // Damping not proportional to mass: `D v` from its own matrix.
+            s.update_material(Some(&[0]), |m| m.damping *= 4.0).unwrap();
+            assert!(s.damping_ratio.is_none());
         }
         s.attach_rope(Vec3::new(1.3, 1.2, 1.1), 50.0, 0.0).unwrap();
         // Every kind of tool (they are applied block by block in the phased step).
@@ -569,10 +575,12 @@ mod tests {
         model: (SolidSource, Vec<Vec3>),
         integrator: Integrator,
         fix: Option<f64>,
+        heterogeneous: bool,
     ) {
         let steps = 30;
-        let (p1, v1, d1, seq) = trajectory(&model, integrator, Parallelism::Sequential, fix, steps);
-        let (p2, v2, d2, phased) = trajectory(&model, integrator, Parallelism::Rayon, fix, steps);
+        let run = |par| trajectory(&model, integrator, par, fix, heterogeneous, steps);
+        let (p1, v1, d1, seq) = run(Parallelism::Sequential);
+        let (p2, v2, d2, phased) = run(Parallelism::Rayon);
         assert!(!seq);
         assert_eq!(phased, team_threads() > 1, "phased eligibility");
         let motion = p1
@@ -599,18 +607,18 @@ mod tests {
 
     #[test]
     fn phased_symplectic_step_matches_the_one_thread_step() {
-        assert_same_motion(cube(4, 2), Integrator::SymplecticEuler, None);
+        assert_same_motion(cube(4, 2), Integrator::SymplecticEuler, None, false);
     }
 
     #[test]
-    fn phased_explicit_step_matches_the_one_thread_step() {
-        assert_same_motion(cube(3, 2), Integrator::Explicit, None);
+    fn phased_explicit_step_with_heterogeneous_damping_matches_the_one_thread_step() {
+        assert_same_motion(cube(3, 2), Integrator::Explicit, None, true);
     }
 
     #[test]
     fn phased_step_with_fixed_points_matches_the_one_thread_step() {
         // Restricted chain: inputs and outputs are index maps.
-        assert_same_motion(cube(4, 2), Integrator::SymplecticEuler, Some(0.3));
+        assert_same_motion(cube(4, 2), Integrator::SymplecticEuler, Some(0.3), false);
     }
 
     #[test]
@@ -625,7 +633,7 @@ mod tests {
         )
         .unwrap();
         assert!(matches!(s.solver.factor, MassFactor::Sparse(_)));
-        assert_same_motion(model, Integrator::SymplecticEuler, Some(0.2));
+        assert_same_motion(model, Integrator::SymplecticEuler, Some(0.2), false);
     }
 
     #[test]
