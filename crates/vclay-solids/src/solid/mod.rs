@@ -1013,22 +1013,13 @@ impl DynamicSolid {
         self.good.1.clone_from(&self.v);
         let mut cg_iterations = 0;
         match self.params.integrator {
-            Integrator::Explicit => {
+            Integrator::Explicit | Integrator::SymplecticEuler => {
+                let explicit = self.params.integrator == Integrator::Explicit;
                 let w = &mut self.work;
                 Self::solve_mass(&mut self.solver, &self.free, &w.g, &mut w.acc);
                 for &i in &self.free {
                     let i = i as usize;
-                    self.p[i] += self.v[i] * dt;
-                    self.v[i] += w.acc[i] * dt;
-                }
-            }
-            Integrator::SymplecticEuler => {
-                let w = &mut self.work;
-                Self::solve_mass(&mut self.solver, &self.free, &w.g, &mut w.acc);
-                for &i in &self.free {
-                    let i = i as usize;
-                    self.v[i] += w.acc[i] * dt;
-                    self.p[i] += self.v[i] * dt;
+                    advance(explicit, &mut self.p[i], &mut self.v[i], w.acc[i], dt);
                 }
             }
             Integrator::ImplicitEuler => {
@@ -1535,6 +1526,20 @@ impl DynamicSolid {
 }
 
 /// Energy of stretching every spring by its own rest length.
+/// One explicit (`explicit`: forward Euler, journal section 4.4: position from the old
+/// velocity) or symplectic Euler (velocity first, then position from the new velocity) update
+/// of a control point `x` with velocity `v` and acceleration `a`.
+#[inline]
+fn advance(explicit: bool, x: &mut Vec3, v: &mut Vec3, a: Vec3, dt: f64) {
+    if explicit {
+        *x += *v * dt;
+        *v += a * dt;
+    } else {
+        *v += a * dt;
+        *x += *v * dt;
+    }
+}
+
 /// The divergence test: the state must be finite and its total energy at most `factor` times
 /// `scale` (the spring energy scale plus the largest rope energy seen).
 fn verdict(energy: &Energy, finite: bool, factor: f64, scale: f64) -> Result<(), String> {

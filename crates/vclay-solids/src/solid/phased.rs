@@ -40,7 +40,7 @@ use vclay_core::team::{SharedSlice, run_phases, team_threads};
 use vclay_core::{Parallelism, Vec3};
 use vclay_lattice::{SparseMatrix, SubdivisionMap};
 
-use super::{DynamicSolid, Energy, Integrator, MassFactor, inverse_rows, verdict};
+use super::{DynamicSolid, Energy, Integrator, MassFactor, advance, inverse_rows, verdict};
 
 /// Active data points from which [`Parallelism::Auto`] runs a step as a phased program.
 /// Below it a step takes a few microseconds and the barriers would cost a good part of that.
@@ -297,16 +297,7 @@ impl DynamicSolid {
             };
             lo..hi
         };
-        let step = |x: &mut Vec3, y: &mut Vec3, a: Vec3| {
-            // x: position, y: velocity.
-            if explicit {
-                *x += *y * dt;
-                *y += a * dt;
-            } else {
-                *y += a * dt;
-                *x += *y * dt;
-            }
-        };
+        let step = |x: &mut Vec3, y: &mut Vec3, a: Vec3| advance(explicit, x, y, a, dt);
 
         let run = |k: usize, t: usize| {
             let (phase, tasks) = phases[k];
