@@ -1,37 +1,12 @@
 //! Properties of the dynamic core (`subdivision-solids-journal.txt` sections 4-5).
 
 use vclay_core::Vec3;
-use vclay_lattice::{BoundaryRule, Features, SubdivisionRules, primitives};
+use vclay_lattice::{BoundaryRule, Features, SubdivisionRules};
 use vclay_solids::{
     DynamicSolid, Integrator, Material, SolidParams, SolidSource, SolidsError, Tool,
 };
-use vclay_spline::KnotVector;
 
-fn cube_source(n: usize, levels: usize) -> (SolidSource, Vec<Vec3>) {
-    let cube = primitives::box_lattice([n, n, n], Vec3::zeros(), Vec3::repeat(1.0));
-    SolidSource::subdivision(cube, BoundaryRule::Sharp, levels)
-}
-
-fn bspline_source(n: usize, m: usize) -> (SolidSource, Vec<Vec3>) {
-    let k = KnotVector::clamped_uniform(3, n).unwrap();
-    let g = k.greville();
-    let mut p = Vec::new();
-    for &a in &g {
-        for &b in &g {
-            for &c in &g {
-                p.push(Vec3::new(a, b, c));
-            }
-        }
-    }
-    (
-        SolidSource::BSpline {
-            knots: [k.clone(), k.clone(), k],
-            weights: vec![1.0; n * n * n],
-            samples: [m, m, m],
-        },
-        p,
-    )
-}
+use vclay_solids::benchmarks::{bspline_box as bspline_source, subdivision_box as cube_source};
 
 fn params(integrator: Integrator, dt: f64) -> SolidParams {
     SolidParams {

@@ -484,33 +484,8 @@ impl DynamicSolid {
 mod tests {
     use super::*;
     use crate::{Material, SolidParams, SolidSource, SolidsError, Tool};
-    use vclay_lattice::{BoundaryRule, primitives};
-    use vclay_spline::KnotVector;
 
-    fn cube(n: usize, level: usize) -> (SolidSource, Vec<Vec3>) {
-        let control = primitives::box_lattice([n, n, n], Vec3::zeros(), Vec3::repeat(1.0));
-        SolidSource::subdivision(control, BoundaryRule::Sharp, level)
-    }
-
-    /// A B-spline solid of `n^3` control points (a one-level map).
-    fn bspline(n: usize, samples: usize) -> (SolidSource, Vec<Vec3>) {
-        let k = KnotVector::clamped_uniform(3, n).unwrap();
-        let g = k.greville();
-        let mut p = Vec::new();
-        for &a in &g {
-            for &b in &g {
-                for &c in &g {
-                    p.push(Vec3::new(a, b, c));
-                }
-            }
-        }
-        let source = SolidSource::BSpline {
-            knots: [k.clone(), k.clone(), k],
-            weights: vec![1.0; n * n * n],
-            samples: [samples; 3],
-        };
-        (source, p)
-    }
+    use crate::benchmarks::{bspline_box as bspline, subdivision_box as cube};
 
     /// Steps a model with a rope (and the control points below `fix_below` fixed) under
     /// `parallelism`; returns the final control points, velocities and data points, and
