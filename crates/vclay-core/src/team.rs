@@ -48,7 +48,7 @@ use std::ops::{Deref, DerefMut, Range};
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
-use std::thread::Thread;
+use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 /// Largest team (caller included). Phased programs are meant for work of tens of
@@ -92,6 +92,8 @@ struct Shared {
     active: AtomicUsize,
     panic: Mutex<Option<Box<dyn Any + Send>>>,
     sleeping: Vec<AtomicBool>,
+    /// Set when the team is dropped: helpers exit.
+    stop: AtomicBool,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -103,7 +105,18 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
 pub struct Team {
     shared: Arc<Shared>,
     busy: AtomicBool,
-    helpers: Vec<Thread>,
+    helpers: Vec<JoinHandle<()>>,
+}
+
+impl Drop for Team {
+    /// Stops the helpers (waking parked ones) and waits for them to exit.
+    fn drop(&mut self) {
+        self.shared.stop.store(true, Ordering::SeqCst);
+        for h in self.helpers.drain(..) {
+            h.thread().unpark();
+            let _ = h.join();
+        }
+    }
 }
 
 impl std::fmt::Debug for Team {
@@ -135,6 +148,7 @@ impl Team {
             active: AtomicUsize::new(0),
             panic: Mutex::new(None),
             sleeping: (0..want).map(|_| AtomicBool::new(false)).collect(),
+            stop: AtomicBool::new(false),
         });
         let mut helpers = Vec::with_capacity(want);
         for i in 0..want {
@@ -143,7 +157,7 @@ impl Team {
                 .name(format!("vclay-team-{}", i + 1))
                 .spawn(move || helper(&sh, i))
             {
-                Ok(h) => helpers.push(h.thread().clone()),
+                Ok(h) => helpers.push(h),
                 Err(_) => break,
             }
         }
@@ -200,9 +214,9 @@ impl Team {
         *lock(&sh.job) = Some(job);
         let open = sh.epoch.load(Ordering::Relaxed) + 1;
         sh.epoch.store(open, Ordering::SeqCst);
-        for (i, t) in self.helpers.iter().enumerate() {
+        for (i, h) in self.helpers.iter().enumerate() {
             if sh.sleeping[i].load(Ordering::SeqCst) {
-                t.unpark();
+                h.thread().unpark();
             }
         }
         work(sh, counts, run, 0, self.threads());
@@ -274,8 +288,7 @@ fn work(sh: &Shared, counts: &[usize], run: &TaskFn<'_>, rank: usize, threads: u
 
 fn helper(sh: &Shared, idx: usize) {
     let mut seen = 0;
-    loop {
-        let e = wait_open(sh, idx, seen);
+    while let Some(e) = wait_open(sh, idx, seen) {
         seen = e;
         sh.active.fetch_add(1, Ordering::SeqCst);
         if sh.epoch.load(Ordering::SeqCst) == e {
@@ -292,20 +305,24 @@ fn helper(sh: &Shared, idx: usize) {
     }
 }
 
-/// Waits for an open epoch other than `seen`: spins for [`SPIN`], then parks.
-fn wait_open(sh: &Shared, idx: usize, seen: usize) -> usize {
+/// Waits for an open epoch other than `seen`: spins for [`SPIN`], then parks. `None` when
+/// the team is dropped.
+fn wait_open(sh: &Shared, idx: usize, seen: usize) -> Option<usize> {
     let ready = |e: usize| !e.is_multiple_of(2) && e != seen;
     let mut since = Instant::now();
     let mut spins = 0u32;
     loop {
         let e = sh.epoch.load(Ordering::Acquire);
         if ready(e) {
-            return e;
+            return Some(e);
+        }
+        if sh.stop.load(Ordering::Acquire) {
+            return None;
         }
         spins = spins.wrapping_add(1);
         if spins.is_multiple_of(256) && since.elapsed() > SPIN {
             sh.sleeping[idx].store(true, Ordering::SeqCst);
-            if !ready(sh.epoch.load(Ordering::SeqCst)) {
+            if !ready(sh.epoch.load(Ordering::SeqCst)) && !sh.stop.load(Ordering::SeqCst) {
                 std::thread::park();
             }
             sh.sleeping[idx].store(false, Ordering::SeqCst);
@@ -587,6 +604,19 @@ mod tests {
         // Sleeping helpers are woken.
         std::thread::sleep(SPIN * 3);
         assert_eq!(program(Some(&team), 1000), want);
+    }
+
+    #[test]
+    fn dropping_a_team_ends_its_helpers() {
+        let team = Team::new(3);
+        let ran = AtomicUsize::new(0);
+        team.run(&[6], &|_, _| {
+            ran.fetch_add(1, Ordering::Relaxed);
+        });
+        // One helper parked, one spinning: both must exit (the drop joins them).
+        std::thread::sleep(SPIN * 3);
+        drop(team);
+        assert_eq!(ran.load(Ordering::Relaxed), 6);
     }
 
     #[test]

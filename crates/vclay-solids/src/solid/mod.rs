@@ -986,9 +986,9 @@ impl DynamicSolid {
         let t0 = Instant::now();
         let dt = self.params.dt;
         if self.phased_eligible() {
-            let energy = self.phased_step();
+            let (energy, finite) = self.phased_step();
             self.tool_energy_seen = self.tool_energy_seen.max(energy.tools.abs());
-            if let Err(reason) = self.verdict(&energy, true) {
+            if let Err(reason) = self.verdict(&energy, finite) {
                 return Err(self.diverged(reason));
             }
             self.time += dt;

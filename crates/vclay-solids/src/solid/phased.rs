@@ -163,9 +163,10 @@ impl DynamicSolid {
     }
 
     /// One explicit or symplectic step as a phased program (see the [module docs](self)).
-    /// Returns the energies of the state at the start of the step; the state advances only if
-    /// [`DynamicSolid::verdict`] accepts them (the caller then reports the divergence).
-    pub(super) fn phased_step(&mut self) -> Energy {
+    /// Returns the energies of the state at the start of the step and whether that state was
+    /// finite; the state advances only if [`DynamicSolid::verdict`] accepts them (the caller
+    /// then reports the divergence).
+    pub(super) fn phased_step(&mut self) -> (Energy, bool) {
         let threads = team_threads();
         let Self {
             params,
@@ -474,9 +475,10 @@ impl DynamicSolid {
         };
         run_phases(&counts, &run);
         let energy = energy_of(&energies.read(), &kinetic.read());
+        let all_finite = finite.read().iter().all(|&x| x);
         drop(straddle);
         work.phased.clean = true;
-        energy
+        (energy, all_finite)
     }
 }
 
@@ -600,6 +602,24 @@ mod tests {
         .unwrap();
         assert!(matches!(s.solver.factor, MassFactor::Sparse(_)));
         assert_same_motion(model, Integrator::SymplecticEuler, Some(0.2), false);
+    }
+
+    #[test]
+    fn phased_step_reports_a_non_finite_state_and_goes_back() {
+        let (source, p) = cube(3, 2);
+        let params = SolidParams {
+            parallelism: Parallelism::Rayon,
+            ..SolidParams::default()
+        };
+        let mut s = DynamicSolid::new(source, p, Material::default(), params).unwrap();
+        s.attach_rope(Vec3::new(1.3, 1.2, 1.1), 50.0, 0.0).unwrap();
+        s.run(3).unwrap();
+        let good = s.good.clone();
+        s.v[5].y = f64::NAN;
+        let err = s.step().unwrap_err();
+        assert!(err.to_string().contains("non-finite"), "{err}");
+        assert_eq!((&s.p, &s.v), (&good.0, &good.1));
+        assert!(s.d.iter().all(|x| x.iter().all(|c| c.is_finite())));
     }
 
     #[test]
