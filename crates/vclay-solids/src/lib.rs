@@ -12,7 +12,9 @@
 //!   ([`map`]);
 //! * integrators: the paper's explicit scheme (section 4.4), symplectic Euler (default) and a
 //!   linearized implicit Euler solved by preconditioned conjugate gradient; divergence stops a
-//!   run with the step and a suggested time step;
+//!   run with the step and a suggested time step; explicit and symplectic steps of models
+//!   from [`PHASED_POINTS`] data points run as one phased program on a persistent thread team
+//!   ([`vclay_core::team`]; see [`SolidParams::parallelism`]);
 //! * tools (section 5.4, [`tools`]): rope, point and region forces, gravity, inflation; run-time
 //!   fixing and freeing of control points (section 5.2, with the free/fixed partition
 //!   `d = A1 p1 + A2 p2`), plastic reset, material changes, extrusion and cell deletion
