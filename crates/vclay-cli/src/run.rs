@@ -10,7 +10,7 @@ use std::io::Write as _;
 use std::path::Path;
 use std::time::{Duration, Instant};
 use vclay::dynamics::scenario::{DNURBS_KINDS, DnurbsScenario};
-use vclay::solids::scenario::{Progress, SOLID_KINDS, Scenario, model_kind};
+use vclay::solids::scenario::{FrameFormat, Progress, SOLID_KINDS, Scenario, model_kind};
 
 /// Runs the scenario at `path`; `out` replaces the file's `[output] dir`.
 pub fn run(path: &Path, out: Option<&Path>, quiet: bool) -> Result<()> {
@@ -165,7 +165,7 @@ pub fn run_for_frames(path: &Path, dir: &Path, frames: usize) -> Result<Vec<std:
     } else if SOLID_KINDS.contains(&kind.as_str()) {
         let mut s = Scenario::parse(&text, &name, base)?;
         s.output.dir = dir.to_path_buf();
-        s.output.obj = true;
+        s.output.frames = vec![FrameFormat::Obj];
         s.output.every = (s.steps / frames.max(1)).max(1);
         s.run(&mut |_| {})?.files
     } else {

@@ -354,10 +354,9 @@ pub struct Scenario {
 pub struct Output {
     /// Output folder (relative paths below are inside it).
     pub dir: PathBuf,
-    /// Boundary surface as OBJ every [`Output::every`] steps.
-    pub obj: bool,
-    /// Data lattice as VTU every [`Output::every`] steps.
-    pub vtu: bool,
+    /// Frame files written every [`Output::every`] steps, one per format, in the order given
+    /// (no duplicates).
+    pub frames: Vec<FrameFormat>,
     /// Frame interval in steps.
     pub every: usize,
     /// Final model file (`.ovm` control lattice for subdivision solids, `.json` NURBS volume
@@ -365,6 +364,39 @@ pub struct Output {
     pub final_model: Option<PathBuf>,
     /// Per-step CSV (step, time, energies, step time, CG iterations).
     pub csv: Option<PathBuf>,
+}
+
+/// The file format of a frame of a running scenario (`[output] frames`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameFormat {
+    /// The boundary surface of the data lattice, Wavefront OBJ (`frame_NNNNNN.obj`).
+    Obj,
+    /// The boundary surface of the data lattice, ASCII PLY (`frame_NNNNNN.ply`).
+    Ply,
+    /// The boundary surface of the data lattice, ASCII STL (`frame_NNNNNN.stl`).
+    Stl,
+    /// The data lattice (hexahedra), VTK XML unstructured grid (`frame_NNNNNN.vtu`).
+    Vtu,
+}
+
+impl FrameFormat {
+    /// Every format, in the order of their names in [`FrameFormat::NAMES`].
+    pub const ALL: [FrameFormat; 4] = [Self::Obj, Self::Ply, Self::Stl, Self::Vtu];
+    /// The names used in scenario files (and as file extensions).
+    pub const NAMES: [&'static str; 4] = ["obj", "ply", "stl", "vtu"];
+
+    /// The format named `name` (`"obj"`, `"ply"`, `"stl"` or `"vtu"`).
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::NAMES
+            .iter()
+            .position(|&n| n == name)
+            .map(|i| Self::ALL[i])
+    }
+
+    /// The file extension (without the dot).
+    pub fn extension(self) -> &'static str {
+        Self::NAMES[Self::ALL.iter().position(|&f| f == self).unwrap_or(0)]
+    }
 }
 
 fn vec3(a: [f64; 3]) -> Vec3 {
@@ -541,8 +573,7 @@ impl Scenario {
         };
         let mut output = Output {
             dir: out.dir.unwrap_or_else(|| PathBuf::from("vclay-run")),
-            obj: false,
-            vtu: false,
+            frames: Vec::new(),
             every: out.every.unwrap_or(DEFAULT_FRAME_EVERY),
             final_model: out.final_model,
             csv: out.csv,
@@ -551,17 +582,24 @@ impl Scenario {
             return Err(src.err(&out_span, "every", "must be at least 1"));
         }
         for f in &out.frames {
-            match f.as_str() {
-                "obj" => output.obj = true,
-                "vtu" => output.vtu = true,
-                other => {
-                    return Err(src.err(
-                        &out_span,
-                        "frames",
-                        format!("unknown frame format \"{other}\"; expected \"obj\" or \"vtu\""),
-                    ));
-                }
+            let Some(format) = FrameFormat::from_name(f) else {
+                return Err(src.err(
+                    &out_span,
+                    "frames",
+                    format!(
+                        "unknown frame format \"{f}\"; expected one of {}",
+                        FrameFormat::NAMES.map(|n| format!("\"{n}\"")).join(", ")
+                    ),
+                ));
+            };
+            if output.frames.contains(&format) {
+                return Err(src.err(
+                    &out_span,
+                    "frames",
+                    format!("frame format \"{f}\" is listed twice"),
+                ));
             }
+            output.frames.push(format);
         }
         if let Some(f) = &output.final_model {
             let ext = f.extension().and_then(|e| e.to_str()).unwrap_or("");
@@ -1101,20 +1139,30 @@ impl Scenario {
     }
 
     fn write_frame(&mut self, step: usize, files: &mut Vec<PathBuf>) -> Result<(), SolidsError> {
-        if !(self.output.obj || self.output.vtu) {
+        if self.output.frames.is_empty() {
             return Ok(());
         }
-        let dir = self.output.dir.clone();
         let lattice = self.solid.data_lattice();
-        if self.output.obj {
-            let path = dir.join(format!("frame_{step:06}.obj"));
-            let mesh = vclay_lattice::boundary_mesh(lattice);
-            formats::surface::write_obj(&mesh, &path)?;
-            files.push(path);
-        }
-        if self.output.vtu {
-            let path = dir.join(format!("frame_{step:06}.vtu"));
-            formats::vtu::write(lattice, &path)?;
+        // The boundary surface, built once for the surface formats.
+        let mut surface = None;
+        let mesh_of = || vclay_lattice::boundary_mesh(lattice);
+        for &format in &self.output.frames {
+            let path = self
+                .output
+                .dir
+                .join(format!("frame_{step:06}.{}", format.extension()));
+            match format {
+                FrameFormat::Vtu => formats::vtu::write(lattice, &path)?,
+                FrameFormat::Obj => {
+                    formats::surface::write_obj(surface.get_or_insert_with(mesh_of), &path)?
+                }
+                FrameFormat::Ply => {
+                    formats::surface::write_ply(surface.get_or_insert_with(mesh_of), &path)?
+                }
+                FrameFormat::Stl => {
+                    formats::surface::write_stl(surface.get_or_insert_with(mesh_of), &path)?
+                }
+            }
             files.push(path);
         }
         Ok(())

@@ -52,7 +52,7 @@ at = 0.1
 face = 0
 
 [output]
-frames = ["obj", "vtu"]
+frames = ["obj", "vtu", "ply", "stl"]
 every = 5
 final = "final.ovm"
 csv = "energy.csv"
@@ -114,6 +114,25 @@ fn small_scenario_runs_and_writes_every_output() {
     }
     let csv = std::fs::read_to_string(out.join("energy.csv")).unwrap();
     assert_eq!(csv.lines().count(), 13, "{csv}");
+    // The surface frames hold the same boundary surface: as many vertices and triangles in
+    // the PLY header as in the OBJ, three STL vertices per triangle.
+    for step in [0, 5, 10, 12] {
+        let read = |ext: &str| std::fs::read_to_string(out.join(format!("frame_{step:06}.{ext}")));
+        let obj = read("obj").unwrap();
+        let count = |prefix: &str| obj.lines().filter(|l| l.starts_with(prefix)).count();
+        let (nv, nf) = (count("v "), count("f "));
+        assert!(nv > 0 && nf > 0);
+        let ply = read("ply").unwrap();
+        assert!(
+            ply.contains(&format!("element vertex {nv}\n")),
+            "{ply:.200}"
+        );
+        assert!(ply.contains(&format!("element face {nf}\n")), "{ply:.200}");
+        let stl = read("stl").unwrap();
+        assert_eq!(stl.matches("facet normal").count(), nf);
+        assert_eq!(stl.matches("vertex ").count(), 3 * nf);
+        assert!(read("vtu").unwrap().contains("<UnstructuredGrid>"));
+    }
     let l = vclay_lattice::formats::ovm::read(&out.join("final.ovm")).unwrap();
     assert_eq!(l.num_cells(), 2);
     assert!(summary.log.iter().any(|l| l.contains("plastic reset")));
@@ -178,6 +197,21 @@ fn errors_name_line_and_key() {
     let t = small_with("steps = 12", "steps = = 12");
     let (line, _) = error_of(&t);
     assert_eq!(line, line_of(&t, "steps = = 12"));
+    // Frame formats: unknown, and listed twice.
+    let t = small_with(
+        "frames = [\"obj\", \"vtu\", \"ply\", \"stl\"]",
+        "frames = [\"off\"]",
+    );
+    let (line, msg) = error_of(&t);
+    assert_eq!(line, line_of(&t, "frames = "), "{msg}");
+    assert!(msg.contains("\"off\"") && msg.contains("\"ply\""), "{msg}");
+    let t = small_with(
+        "frames = [\"obj\", \"vtu\", \"ply\", \"stl\"]",
+        "frames = [\"ply\", \"ply\"]",
+    );
+    let (line, msg) = error_of(&t);
+    assert_eq!(line, line_of(&t, "frames = "), "{msg}");
+    assert!(msg.contains("twice"), "{msg}");
     // Final model extension.
     let t = small_with("final = \"final.ovm\"", "final = \"final.obj\"");
     let (line, msg) = error_of(&t);
