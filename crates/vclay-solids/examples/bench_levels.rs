@@ -1,4 +1,5 @@
-//! Per-step time of dynamic solids beside `subdivision-solids-journal.txt` Tables 1-2.
+//! Per-step time of dynamic solids beside the update times of `subdivision-solids-conference.txt`
+//! Table 1 and `subdivision-solids-journal.txt` Tables 1-2 (`benchmarks::PAPER_MODELS`).
 //!
 //! Run: `cargo run --release -p vclay-solids --example bench_levels -- [max_level] [seconds]
 //! [--seq] [--fix-half]` (`--seq`: one thread; `--fix-half`: lower half of the control points
@@ -100,10 +101,10 @@ fn main() {
         ..SolidParams::default()
     };
     println!(
-        "| model | control pts | data pts (active) | springs (active) | build s | wall ms/step (median) | wall ms/step (mean) | CPU ms/step | steps/s (median) | B/data pt (per-step) | B/data pt (peak RSS) | paper ms (PIII 550) |"
+        "| model | control pts | data pts (active) | springs (active) | build s | wall ms/step (median) | wall ms/step (mean) | CPU ms/step | steps/s (median) | B/data pt (per-step) | B/data pt (peak RSS) | paper ms, conference / journal (PIII 550) |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
-    let paper = ["10 (216 cells)", "72 (1,728 cells)", "-", "-", "-"];
+    let paper = ["20 / 10", "121 / 72", "-", "-", "-"];
     for level in 1..=max_level {
         let t0 = Instant::now();
         let mut s = benchmarks::cube(level, params).unwrap();
@@ -120,7 +121,25 @@ fn main() {
     if fix_half || max_level < 2 {
         return;
     }
-    // Journal Table 1: B-spline solids.
+    // The other models of conference Table 1 / journal Table 2 that the primitives build.
+    for m in &benchmarks::PAPER_MODELS {
+        if m.name == "Cube (4^3)" {
+            continue; // above
+        }
+        let t0 = Instant::now();
+        let mut s = m.solid(params).unwrap();
+        let build = t0.elapsed().as_secs_f64();
+        let ms = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v}"));
+        let paper = format!("{} / {}", ms(m.conference_ms), ms(m.journal_ms));
+        row(
+            &format!("{} level {}", m.name, m.level),
+            &mut s,
+            build,
+            seconds,
+            &paper,
+        );
+    }
+    // Journal Table 1: B-spline solids (journal only).
     for (c, m, paper) in [
         ([4, 4, 4], 10, "40"),
         ([4, 4, 4], 12, "61"),

@@ -8,7 +8,7 @@
 
 use crate::{DynamicSolid, Material, SolidParams, SolidSource, SolidsError};
 use vclay_core::Vec3;
-use vclay_lattice::{BoundaryRule, primitives};
+use vclay_lattice::{BoundaryRule, Lattice, primitives};
 use vclay_spline::KnotVector;
 
 /// The benchmark cube at subdivision `level`, at rest.
@@ -50,6 +50,146 @@ pub fn bspline_box(n: usize, samples: usize) -> (SolidSource, Vec<Vec3>) {
     (source, p)
 }
 
+/// A subdivision solid of the papers' timing tables that [`vclay_lattice::primitives`] builds
+/// with the tables' element counts (`subdivision-solids-conference.txt` Table 1,
+/// `subdivision-solids-journal.txt` Table 2; the soccer player, cactus, spiked and holed
+/// objects are free-form meshes that no primitive reproduces). Each is about one unit across,
+/// so that the default material and the benchmark rope of [`pull`] apply unchanged.
+#[derive(Clone, Copy, Debug)]
+pub struct PaperModel {
+    /// The tables' model name.
+    pub name: &'static str,
+    /// Subdivision level of the data lattice.
+    pub level: usize,
+    /// The tables' data points (the tests check that the model has exactly these).
+    pub data_points: usize,
+    /// "Update time" in ms in the conference paper's Table 1 (Pentium III 550 MHz).
+    pub conference_ms: Option<f64>,
+    /// "Update time" in ms in the journal paper's Table 2 (same machine).
+    pub journal_ms: Option<f64>,
+    control: fn() -> Lattice,
+}
+
+impl PaperModel {
+    /// The control lattice.
+    pub fn control(&self) -> Lattice {
+        (self.control)()
+    }
+
+    /// The model as a dynamic solid at rest (sharp boundary rule, default material).
+    pub fn solid(&self, params: SolidParams) -> Result<DynamicSolid, SolidsError> {
+        let (source, p) = SolidSource::subdivision(self.control(), BoundaryRule::Sharp, self.level);
+        DynamicSolid::new(source, p, Material::default(), params)
+    }
+}
+
+fn cube3() -> Lattice {
+    primitives::box_lattice([3, 3, 3], Vec3::zeros(), Vec3::repeat(1.0))
+}
+fn cube4() -> Lattice {
+    primitives::box_lattice([4, 4, 4], Vec3::zeros(), Vec3::repeat(1.0))
+}
+fn torus() -> Lattice {
+    primitives::paper_torus(0.25, 0.5, 0.25)
+}
+fn gear() -> Lattice {
+    primitives::gear(0.25, 0.5, 0.65, 0.25)
+}
+fn tetrahedron_with_holes() -> Lattice {
+    primitives::tetrahedron_with_holes(1.0, 0.25)
+}
+fn cube_with_holes() -> Lattice {
+    primitives::cube_with_holes(1.0 / 3.0)
+}
+fn cylinder() -> Lattice {
+    primitives::cylinder(0.5, 1.0, 4, 2, 0)
+}
+
+/// The models of the papers' timing tables that the primitives build, in the conference
+/// table's order.
+pub const PAPER_MODELS: [PaperModel; 10] = [
+    PaperModel {
+        name: "Cube (3^3)",
+        level: 2,
+        data_points: 729,
+        conference_ms: Some(30.0),
+        journal_ms: None,
+        control: cube3,
+    },
+    PaperModel {
+        name: "Cube (3^3)",
+        level: 3,
+        data_points: 4913,
+        conference_ms: Some(189.0),
+        journal_ms: None,
+        control: cube3,
+    },
+    PaperModel {
+        name: "Cube (4^3)",
+        level: 1,
+        data_points: 343,
+        conference_ms: Some(20.0),
+        journal_ms: Some(10.0),
+        control: cube4,
+    },
+    PaperModel {
+        name: "Cube (4^3)",
+        level: 2,
+        data_points: 2197,
+        conference_ms: Some(121.0),
+        journal_ms: Some(72.0),
+        control: cube4,
+    },
+    PaperModel {
+        name: "Torus",
+        level: 2,
+        data_points: 680,
+        conference_ms: Some(28.0),
+        journal_ms: Some(20.0),
+        control: torus,
+    },
+    PaperModel {
+        name: "Torus",
+        level: 3,
+        data_points: 4464,
+        conference_ms: Some(163.0),
+        journal_ms: Some(122.0),
+        control: torus,
+    },
+    PaperModel {
+        name: "Gear",
+        level: 2,
+        data_points: 1480,
+        conference_ms: Some(71.0),
+        journal_ms: Some(42.0),
+        control: gear,
+    },
+    PaperModel {
+        name: "Tetrahedron w/ holes",
+        level: 3,
+        data_points: 2505,
+        conference_ms: Some(87.0),
+        journal_ms: Some(61.0),
+        control: tetrahedron_with_holes,
+    },
+    PaperModel {
+        name: "Cube w/ holes",
+        level: 2,
+        data_points: 1900,
+        conference_ms: Some(103.0),
+        journal_ms: Some(61.0),
+        control: cube_with_holes,
+    },
+    PaperModel {
+        name: "Cylinder",
+        level: 3,
+        data_points: 3553,
+        conference_ms: Some(110.0),
+        journal_ms: None,
+        control: cylinder,
+    },
+];
+
 /// Attaches the benchmark rope to `s` and takes three steps (the deformed state the figures
 /// time).
 pub fn pull(s: &mut DynamicSolid) -> Result<(), SolidsError> {
@@ -69,5 +209,35 @@ mod tests {
         pull(&mut s).unwrap();
         assert_eq!(s.steps(), 3);
         assert!(s.data_points().iter().zip(&before).any(|(a, b)| a != b));
+    }
+
+    #[test]
+    fn the_paper_models_have_the_tables_data_points_and_step() {
+        for m in &PAPER_MODELS {
+            let mut s = m.solid(SolidParams::default()).unwrap();
+            assert_eq!(
+                s.data_points().len(),
+                m.data_points,
+                "{} level {}",
+                m.name,
+                m.level
+            );
+            // About one unit across, so the rope and the default material apply.
+            let (lo, hi) = s.data_points().iter().fold(
+                (Vec3::repeat(f64::MAX), Vec3::repeat(f64::MIN)),
+                |(lo, hi), x| (lo.inf(x), hi.sup(x)),
+            );
+            let size = (hi - lo).max();
+            assert!((0.5..=1.5).contains(&size), "{}: size {size}", m.name);
+            let before = s.data_points().to_vec();
+            pull(&mut s).unwrap();
+            let moved = s
+                .data_points()
+                .iter()
+                .zip(&before)
+                .map(|(a, b)| (a - b).norm())
+                .fold(0.0, f64::max);
+            assert!(moved > 0.0 && moved < size, "{}: moved {moved}", m.name);
+        }
     }
 }

@@ -578,6 +578,35 @@ mod tests {
         assert_same_motion(cube(4, 2), Integrator::SymplecticEuler, None, false);
     }
 
+    /// A model of the papers' tables, as (source, control points).
+    fn paper(name: &str, level: usize) -> (SolidSource, Vec<Vec3>) {
+        let m = crate::benchmarks::PAPER_MODELS
+            .iter()
+            .find(|m| m.name == name && m.level == level)
+            .unwrap();
+        SolidSource::subdivision(m.control(), vclay_lattice::BoundaryRule::Sharp, m.level)
+    }
+
+    #[test]
+    fn phased_step_of_lattices_with_prisms_and_extraordinary_points_matches_the_one_thread_step() {
+        // Hexahedra and prisms (gear), with fixed points and with damping not proportional to
+        // mass; one non-convex cell of genus 3, whose subdivided lattice has points of many
+        // valences (tetrahedron with holes).
+        assert_same_motion(
+            paper("Gear", 2),
+            Integrator::SymplecticEuler,
+            Some(0.1),
+            false,
+        );
+        assert_same_motion(paper("Gear", 2), Integrator::Explicit, None, true);
+        assert_same_motion(
+            paper("Tetrahedron w/ holes", 3),
+            Integrator::SymplecticEuler,
+            Some(0.2),
+            false,
+        );
+    }
+
     #[test]
     fn phased_explicit_step_with_heterogeneous_damping_matches_the_one_thread_step() {
         assert_same_motion(cube(3, 2), Integrator::Explicit, None, true);
