@@ -5,7 +5,8 @@
 //! With `--physics` it also times the simulation benchmark models (the definitions shared with
 //! the examples: `vclay::dynamics::dnurbs::benchmarks`, `vclay::solids::benchmarks`) and puts
 //! each figure beside the speed goal it is held to (`docs/performance.md`), with whether this
-//! run met it. The machine's speed can drift between runs; the documented figures are medians
+//! run met it, and the models of the papers' timing tables (`solid_paper_models`) beside the
+//! tables' milliseconds. The machine's speed can drift between runs; the documented figures are medians
 //! of alternating runs.
 
 use anyhow::Result;
@@ -174,6 +175,25 @@ fn physics_figures(seconds: f64, large: bool) -> Result<serde_json::Value> {
             "data_points": cube.data_points().len(),
         },
     });
+    // The models of the papers' timing tables, beside the tables' milliseconds.
+    let mut paper = Vec::new();
+    for m in &so::PAPER_MODELS {
+        let mut s = m.solid(SolidParams::default())?;
+        so::pull(&mut s)?;
+        let (rate, mean) =
+            steps_per_second((seconds / 4.0).max(0.2), || Ok(s.step().map(drop)?))?;
+        paper.push(json!({
+            "model": m.name,
+            "level": m.level,
+            "data_points": s.data_points().len(),
+            "value": 1e3 / rate,
+            "mean": 1e3 / mean,
+            "unit": "ms/step",
+            "paper_conference_ms": m.conference_ms,
+            "paper_journal_ms": m.journal_ms,
+        }));
+    }
+    out["solid_paper_models"] = json!(paper);
     if large {
         let mut big = so::cube(5, SolidParams::default())?;
         so::pull(&mut big)?;
