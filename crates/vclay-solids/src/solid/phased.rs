@@ -608,6 +608,65 @@ mod tests {
     }
 
     #[test]
+    fn phased_step_follows_the_one_thread_step_through_run_time_edits() {
+        // Every edit that rebuilds or changes what the phased program reads (extrusion, fixing
+        // and freeing, plastic reset, material change, cell deletion, a moving cursor): the
+        // phased run must pick each one up exactly as the one-thread run does.
+        let run = |parallelism| {
+            let (source, p) = cube(4, 2);
+            let params = SolidParams {
+                parallelism,
+                ..SolidParams::default()
+            };
+            let mut s = DynamicSolid::new(source, p, Material::default(), params).unwrap();
+            let rope = s.attach_rope(Vec3::new(1.3, 1.2, 1.1), 50.0, 0.0).unwrap();
+            let mut phased = Vec::new();
+            let mut steps = |s: &mut DynamicSolid| {
+                phased.push(s.phased_eligible());
+                s.run(8).unwrap();
+            };
+            steps(&mut s);
+            let face = s.boundary_face_near(&Vec3::new(0.5, 0.5, 1.0)).unwrap();
+            s.extrude(face, 1.0).unwrap();
+            steps(&mut s);
+            let low = s.control_points_where(|x| x.z < 0.3);
+            s.set_fixed(&low, true).unwrap();
+            steps(&mut s);
+            s.move_cursor(rope, Vec3::new(1.5, 1.0, 1.6)).unwrap();
+            steps(&mut s);
+            s.set_fixed(&low, false).unwrap();
+            steps(&mut s);
+            s.plastic_reset();
+            steps(&mut s);
+            s.update_material(Some(&[0, 1]), |m| m.damping *= 3.0)
+                .unwrap();
+            steps(&mut s);
+            let c = s.cell_near(&Vec3::new(0.2, 0.2, 0.2)).unwrap();
+            s.delete_cell(c).unwrap();
+            steps(&mut s);
+            (s.p.clone(), s.v.clone(), s.d.clone(), phased)
+        };
+        let (p1, v1, d1, seq) = run(Parallelism::Sequential);
+        let (p2, v2, d2, phased) = run(Parallelism::Rayon);
+        assert!(seq.iter().all(|&x| !x));
+        if team_threads() > 1 {
+            assert!(
+                phased.iter().all(|&x| x),
+                "phased after every edit: {phased:?}"
+            );
+        }
+        let scale = 1.0 + p1.iter().map(|x| x.norm()).fold(0.0, f64::max);
+        let speed = v1.iter().map(|x| x.norm()).fold(0.0, f64::max);
+        assert!(speed > 1e-3, "the model moves ({speed})");
+        for (a, b) in p1.iter().zip(&p2).chain(d1.iter().zip(&d2)) {
+            assert!((a - b).norm() <= 1e-9 * scale, "position {a} vs {b}");
+        }
+        for (a, b) in v1.iter().zip(&v2) {
+            assert!((a - b).norm() <= 1e-9 * speed, "velocity {a} vs {b}");
+        }
+    }
+
+    #[test]
     fn phased_explicit_step_with_heterogeneous_damping_matches_the_one_thread_step() {
         assert_same_motion(cube(3, 2), Integrator::Explicit, None, true);
     }
