@@ -6,8 +6,8 @@
 //! fixed, journal section 5.2).
 //! Prints one Markdown table row per model: data points, springs, build time, ms per step
 //! (symplectic Euler with a rope attached; the median over batches of at least 2 ms and the
-//! mean), bytes per data point of the per-step structures and
-//! the process's peak resident memory, and the paper's figure.
+//! mean), bytes per data point of the per-step structures and of the process's peak resident
+//! memory (only for a model larger than all before it), and the papers' figures.
 
 use std::time::Instant;
 use vclay_core::Vec3;
@@ -67,11 +67,21 @@ fn time_steps(s: &mut DynamicSolid, seconds: f64) -> (f64, f64, f64) {
     )
 }
 
+/// The most data points of any model timed so far in this process: the peak resident size
+/// per data point means something only for the largest model yet.
+static LARGEST: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
 fn row(name: &str, s: &mut DynamicSolid, build: f64, seconds: f64, paper: &str) {
     let st = s.stats();
     let (ms, mean, cpu) = time_steps(s, seconds);
+    let largest = LARGEST.fetch_max(st.data_points, std::sync::atomic::Ordering::Relaxed);
+    let peak = if st.data_points >= largest {
+        format!("{:.0}", peak_rss_mb() * 1048576.0 / st.data_points as f64)
+    } else {
+        "-".to_string()
+    };
     println!(
-        "| {name} | {} | {} ({}) | {} ({}) | {:.2} | {:.4} | {:.4} | {:.4} | {:.1} | {:.0} | {:.0} | {paper} |",
+        "| {name} | {} | {} ({}) | {} ({}) | {:.2} | {:.4} | {:.4} | {:.4} | {:.1} | {:.0} | {peak} | {paper} |",
         st.control_points,
         st.data_points,
         st.active_data_points,
@@ -83,7 +93,6 @@ fn row(name: &str, s: &mut DynamicSolid, build: f64, seconds: f64, paper: &str) 
         cpu,
         1e3 / ms,
         s.bytes_per_data_point(),
-        peak_rss_mb() * 1048576.0 / st.data_points as f64,
     );
 }
 
