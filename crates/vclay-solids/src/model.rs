@@ -110,6 +110,17 @@ impl SolidSource {
                         "at least 2 samples per direction",
                     ));
                 }
+                if let Some(a) = (0..3).find(|&a| samples[a] < knots[a].control_points()) {
+                    return Err(invalid(
+                        &format!("samples[{a}]"),
+                        samples[a],
+                        &format!(
+                            "at least {} (the control points along axis {a}): fewer samples \
+                             cannot determine the control points (A^T M A would be singular)",
+                            knots[a].control_points()
+                        ),
+                    ));
+                }
                 let n: usize = knots.iter().map(KnotVector::control_points).product();
                 if weights.len() != n {
                     return Err(invalid(

@@ -81,6 +81,7 @@ struct ModelSpec {
     radius: Option<f64>,
     height: Option<f64>,
     // bspline-solid
+    entity: Option<usize>,
     control: Option<[usize; 3]>,
     degree: Option<[usize; 3]>,
     samples: Option<[usize; 3]>,
@@ -543,8 +544,15 @@ impl Scenario {
                 (d / params.dt).round() as usize
             }
         };
-        let mut solid = DynamicSolid::with_material(source, p, field, params)
-            .map_err(|e| src.err(&mspan, "kind", e))?;
+        let mut solid = DynamicSolid::with_material(source, p, field, params).map_err(|e| {
+            let key = match &e {
+                SolidsError::InvalidParameter { name, .. } if name.starts_with("samples") => {
+                    "samples"
+                }
+                _ => "kind",
+            };
+            src.err(&mspan, key, e)
+        })?;
         if let Some((span, c)) = metric {
             solid
                 .use_metric_energy(Some(c.unwrap_or(DEFAULT_METRIC_STIFFNESS)))
@@ -661,6 +669,20 @@ fn build_model(
             forbid("control", m.control.is_some(), &m.kind)?;
             forbid("degree", m.degree.is_some(), &m.kind)?;
             forbid("samples", m.samples.is_some(), &m.kind)?;
+            forbid("entity", m.entity.is_some(), &m.kind)?;
+            if m.file.is_some() {
+                from_file_only(
+                    src,
+                    span,
+                    [
+                        ("points", m.points.is_some()),
+                        ("min", m.min.is_some()),
+                        ("max", m.max.is_some()),
+                        ("radius", m.radius.is_some()),
+                        ("height", m.height.is_some()),
+                    ],
+                )?;
+            }
             let lattice: Lattice = match (&m.primitive, &m.file) {
                 (Some(_), Some(_)) => {
                     return Err(src.err(
@@ -670,12 +692,7 @@ fn build_model(
                     ));
                 }
                 (None, Some(f)) => {
-                    let path = if f.is_absolute() {
-                        f.clone()
-                    } else {
-                        base.join(f)
-                    };
-                    formats::ovm::read(&path).map_err(|e| src.err(span, "file", e))?
+                    formats::ovm::read(&resolve(base, f)).map_err(|e| src.err(span, "file", e))?
                 }
                 (prim, None) => {
                     build_primitive(src, span, prim.as_deref().unwrap_or("box"), m, min, max)?
@@ -702,25 +719,52 @@ fn build_model(
         "bspline-solid" => {
             for (k, present) in [
                 ("primitive", m.primitive.is_some()),
-                ("file", m.file.is_some()),
                 ("level", m.level.is_some()),
                 ("boundary", m.boundary.is_some()),
                 ("points", m.points.is_some()),
+                ("radius", m.radius.is_some()),
+                ("height", m.height.is_some()),
             ] {
                 forbid(k, present, &m.kind)?;
             }
-            let control = m.control.unwrap_or([4; 3]);
-            let degree = m.degree.unwrap_or([3; 3]);
             let samples = m.samples.unwrap_or([10; 3]);
-            let mut knots = Vec::with_capacity(3);
-            for a in 0..3 {
-                if samples[a] < 2 {
+            for (a, &n) in samples.iter().enumerate() {
+                if n < 2 {
                     return Err(src.err(
                         span,
                         "samples",
-                        format!("{} samples along axis {a}; at least 2 needed", samples[a]),
+                        format!("{n} samples along axis {a}; at least 2 needed"),
                     ));
                 }
+            }
+            if let Some(f) = &m.file {
+                from_file_only(
+                    src,
+                    span,
+                    [
+                        ("control", m.control.is_some()),
+                        ("degree", m.degree.is_some()),
+                        ("min", m.min.is_some()),
+                        ("max", m.max.is_some()),
+                    ],
+                )?;
+                let vol = read_volume(src, span, &resolve(base, f), m.entity.unwrap_or(0))?;
+                return Ok((
+                    SolidSource::BSpline {
+                        knots: vol.knots().clone(),
+                        weights: vol.weights().to_vec(),
+                        samples,
+                    },
+                    vol.control_points().to_vec(),
+                ));
+            }
+            if m.entity.is_some() {
+                return Err(src.err(span, "entity", "selects an entity of `file`; give `file`"));
+            }
+            let control = m.control.unwrap_or([4; 3]);
+            let degree = m.degree.unwrap_or([3; 3]);
+            let mut knots = Vec::with_capacity(3);
+            for a in 0..3 {
                 knots.push(
                     KnotVector::clamped_uniform(degree[a], control[a])
                         .map_err(|e| src.err(span, "control", format!("axis {a}: {e}")))?,
@@ -742,6 +786,64 @@ fn build_model(
             span,
             "kind",
             format!("unknown model kind \"{other}\"; this runner reads {SOLID_KINDS:?}"),
+        )),
+    }
+}
+
+/// `f` relative to the scenario's folder `base` (unless absolute).
+fn resolve(base: &Path, f: &Path) -> PathBuf {
+    if f.is_absolute() {
+        f.to_path_buf()
+    } else {
+        base.join(f)
+    }
+}
+
+/// Rejects the keys that describe a primitive when the model is read from `file`.
+fn from_file_only<const N: usize>(
+    src: &Source<'_>,
+    span: &Range<usize>,
+    keys: [(&str, bool); N],
+) -> Result<(), SolidsError> {
+    match keys.iter().find(|k| k.1) {
+        Some((key, _)) => Err(src.err(
+            span,
+            key,
+            "describes a primitive; it does not apply to a model read from `file`",
+        )),
+        None => Ok(()),
+    }
+}
+
+/// Entity `idx` of the model file at `path` (`docs/formats.md` section 1), which must be a
+/// `nurbs-volume`.
+fn read_volume(
+    src: &Source<'_>,
+    span: &Range<usize>,
+    path: &Path,
+    idx: usize,
+) -> Result<NurbsVolume, SolidsError> {
+    let entities =
+        vclay_io::model::read_model(path).map_err(|e| src.err(span, "file", e.to_string()))?;
+    let count = entities.len();
+    match entities.into_iter().nth(idx) {
+        Some(vclay_io::Entity::Volume(v)) => Ok(v),
+        Some(other) => Err(src.err(
+            span,
+            "entity",
+            format!(
+                "entity {idx} of {} is a {}, not a nurbs-volume",
+                path.display(),
+                other.type_name()
+            ),
+        )),
+        None => Err(src.err(
+            span,
+            "entity",
+            format!(
+                "{} has {count} entities; there is no entity {idx}",
+                path.display()
+            ),
         )),
     }
 }

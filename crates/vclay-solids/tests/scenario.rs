@@ -245,3 +245,80 @@ fn shipped_scenarios_parse() {
     }
     assert!(n >= 5, "found {n} scenarios");
 }
+
+const BSPLINE: &str = r#"
+[model]
+kind = "bspline-solid"
+control = [4, 4, 5]
+samples = [5, 5, 6]
+
+[simulation]
+dt = 0.002
+steps = 10
+
+[[timeline]]
+action = "rope"
+at = 0.0
+from = [1.0, 1.0, 1.0]
+to = [1.3, 1.2, 1.1]
+
+[output]
+final = "final.json"
+"#;
+
+#[test]
+fn a_bspline_solid_saved_by_one_run_is_the_model_of_the_next() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut first = Scenario::parse(BSPLINE, "first.toml", dir.path()).unwrap();
+    first.output.dir = dir.path().to_path_buf();
+    let initial = first.solid.control_points().to_vec();
+    first.run(&mut |_| {}).unwrap();
+    let saved = match &vclay_io::model::read_model(dir.path().join("final.json")).unwrap()[..] {
+        [vclay_io::Entity::Volume(v)] => v.control_points().to_vec(),
+        other => panic!("final.json holds {} entities, not one volume", other.len()),
+    };
+    assert!(
+        saved.iter().zip(&initial).any(|(a, b)| a != b),
+        "the rope moved the solid"
+    );
+    // The next scenario reads `final.json` (relative to its own folder) and keeps the
+    // control points, the knots (5 control points along w) and the sampling it asks for.
+    let next = BSPLINE
+        .replace("control = [4, 4, 5]\n", "file = \"final.json\"\n")
+        .replace("samples = [5, 5, 6]", "samples = [4, 4, 5]");
+    let second = Scenario::parse(&next, "next.toml", dir.path()).unwrap();
+    assert_eq!(second.solid.control_points(), &saved[..]);
+    assert_eq!(second.solid.data_points().len(), 80);
+    // Keys that describe a primitive do not go with `file`; a missing entity, a file that
+    // does not exist.
+    let parse = |text: &str| match Scenario::parse(text, "t.toml", dir.path()) {
+        Err(SolidsError::Scenario { line, message, .. }) => (line, message),
+        other => panic!("accepted or unlocated: {other:?}"),
+    };
+    let t = next.replace(
+        "samples = [4, 4, 5]",
+        "samples = [4, 4, 5]\ndegree = [2, 2, 2]",
+    );
+    let (line, msg) = parse(&t);
+    assert_eq!(line, line_of(&t, "degree ="), "{msg}");
+    assert!(msg.contains("file"), "{msg}");
+    let t = next.replace("samples = [4, 4, 5]", "samples = [4, 4, 5]\nentity = 3");
+    let (line, msg) = parse(&t);
+    assert_eq!(line, line_of(&t, "entity ="), "{msg}");
+    assert!(msg.contains("no entity 3"), "{msg}");
+    let t = next.replace("final.json\"\n", "missing.json\"\n");
+    let (line, msg) = parse(&t);
+    assert_eq!(line, line_of(&t, "missing.json"), "{msg}");
+    // Fewer samples than control points along an axis (5 along w) cannot determine them.
+    let t = next.replace("samples = [4, 4, 5]", "samples = [6, 6, 4]");
+    let (line, msg) = parse(&t);
+    assert_eq!(line, line_of(&t, "samples ="), "{msg}");
+    assert!(
+        msg.contains("samples[2]") && msg.contains("at least 5"),
+        "{msg}"
+    );
+    // `entity` without `file`.
+    let t = BSPLINE.replace("samples = [5, 5, 6]", "samples = [5, 5, 6]\nentity = 0");
+    let (line, msg) = parse(&t);
+    assert_eq!(line, line_of(&t, "entity ="), "{msg}");
+}
