@@ -401,6 +401,28 @@ fn vtu_structure_types_and_orientation() {
                     .map(|f| f.iter().map(|&i| cp[i]).collect())
                     .collect()
             };
+            // VTK's convention, the one its code computes positive volumes for (VTK 9.7's
+            // vtkCellSizeFilter; the vtkWedge documentation says the opposite for wedges): the
+            // base's right-hand normal points into the cell, towards its other points.
+            let base_len = match types[c] {
+                vtu::VTK_TETRA | vtu::VTK_WEDGE => 3,
+                vtu::VTK_PYRAMID | vtu::VTK_HEXAHEDRON => 4,
+                _ => 0,
+            };
+            if base_len > 0 {
+                let b: Vec<Vec3> = cp[..base_len].iter().map(|&i| points[i]).collect();
+                let normal: Vec3 = (0..base_len)
+                    .map(|k| b[k].cross(&b[(k + 1) % base_len]))
+                    .sum();
+                let centre = b.iter().sum::<Vec3>() / base_len as f64;
+                let rest = cp[base_len..].iter().map(|&i| points[i]).sum::<Vec3>()
+                    / (cp.len() - base_len) as f64;
+                assert!(
+                    normal.dot(&(rest - centre)) > 0.0,
+                    "{name} cell {c} (type {}): the base's normal points out of the cell",
+                    types[c]
+                );
+            }
             let vol = signed_volume(&points, &faces_of);
             let want = l.cell_signed_volume(cid);
             assert!(

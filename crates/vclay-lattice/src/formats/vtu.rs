@@ -8,9 +8,16 @@
 //! | --- | --- | --- | --- |
 //! | tetrahedron | 4 triangles | `VTK_TETRA` = 10 | `0 1 2` with its right-hand normal towards `3` |
 //! | hexahedron | 6 quads, 8 points of degree 3 | `VTK_HEXAHEDRON` = 12 | `0 1 2 3` normal towards `4 5 6 7`, `4 + i` joined to `i` |
-//! | wedge | 2 triangles + 3 quads | `VTK_WEDGE` = 13 | `0 1 2` normal away from `3 4 5`, `3 + i` joined to `i` |
+//! | wedge | 2 triangles + 3 quads | `VTK_WEDGE` = 13 | `0 1 2` normal towards `3 4 5`, `3 + i` joined to `i` |
 //! | pyramid | 1 quad + 4 triangles | `VTK_PYRAMID` = 14 | `0 1 2 3` normal towards the apex `4` |
 //! | anything else | | `VTK_POLYHEDRON` = 42 | the cell's points in id order, faces listed outward |
+//!
+//! Every linear type thus has its base's right-hand normal pointing into the cell, which is
+//! what VTK computes positive volumes and Jacobians for (checked with VTK 9.7's
+//! `vtkCellSizeFilter`). For the wedge this contradicts the `vtkWedge` class documentation ("a
+//! triangle whose normal points outward"), which VTK's own code does not follow: wedges written
+//! by that text get negative volumes in ParaView, a known trap (meshio, GEOS and 4C fixed their
+//! writers for it).
 //!
 //! After ordering, the faces implied by the VTK reference cell must be exactly the cell's faces;
 //! a cell that fails this check (it cannot for valid lattices) is written as a polyhedron.
@@ -51,11 +58,11 @@ const HEX_FACES: &[&[usize]] = &[
     &[4, 5, 6, 7],
 ];
 const WEDGE_FACES: &[&[usize]] = &[
-    &[0, 1, 2],
-    &[3, 5, 4],
-    &[0, 3, 4, 1],
-    &[1, 4, 5, 2],
-    &[2, 5, 3, 0],
+    &[0, 2, 1],
+    &[3, 4, 5],
+    &[0, 1, 4, 3],
+    &[1, 2, 5, 4],
+    &[2, 0, 3, 5],
 ];
 const PYRAMID_FACES: &[&[usize]] = &[
     &[0, 3, 2, 1],
@@ -96,9 +103,9 @@ pub fn vtk_cell(lattice: &Lattice, c: CellId) -> (u8, Vec<VertexId>) {
             (apex.len() == 1).then(|| (VTK_PYRAMID, vec![b[0], b[3], b[2], b[1], apex[0]]))
         }
         (5, 2, 3) => {
-            // Base: a triangle as it is (its outward normal points away from the top).
+            // Base: a triangle, reversed so that its normal points inward (towards the top).
             let b = loops.iter().find(|l| l.len() == 3).unwrap();
-            let base = b.clone();
+            let base = vec![b[0], b[2], b[1]];
             lift(lattice, c, &base).map(|top| (VTK_WEDGE, [base, top].concat()))
         }
         (6, 0, 6) => {
