@@ -28,7 +28,8 @@ pub struct SubdivideArgs {
     /// (smooth), or smooth plus automatic creases and corners (sharp).
     #[arg(long, value_enum, default_value_t = BoundaryArg::Smooth)]
     pub boundary: BoundaryArg,
-    /// Print {"points": P, "edges": E, "faces": F, "cells": C} of the result on stdout.
+    /// Print {"points": P, "edges": E, "faces": F, "cells": C, "inverted_cells": I} of the
+    /// result on stdout.
     #[arg(long)]
     pub stats: bool,
     /// Output file: .ovm or .vtu (the lattice), .obj, .ply or .stl (its boundary surface).
@@ -74,6 +75,14 @@ pub fn run(args: &SubdivideArgs) -> Result<()> {
     let outcome = subdivide_command(&options).context("vclay subdivide failed")?;
     if args.stats {
         println!("{}", outcome.stats_json());
+    }
+    if outcome.inverted_cells > 0 {
+        eprintln!(
+            "warning: {} of {} cells of the subdivided lattice have non-positive volume \
+             (folded; a single non-convex cell such as the tetrahedron with holes does this, \
+             docs/formats.md)",
+            outcome.inverted_cells, outcome.counts.cells
+        );
     }
     Ok(())
 }

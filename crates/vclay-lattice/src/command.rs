@@ -16,6 +16,7 @@ use crate::boundary::boundary_mesh;
 use crate::error::LatticeError;
 use crate::formats::{FormatError, ovm, surface, vtu};
 use crate::hierarchy::SubdivisionSolid;
+use crate::ids::CellId;
 use crate::lattice::{ElementCounts, Lattice};
 use crate::primitives;
 use crate::subdivide::{BoundaryRule, Features, SubdivisionRules};
@@ -182,15 +183,20 @@ pub struct SubdivideOutcome {
     pub counts: ElementCounts,
     /// The file written and its format, if any.
     pub written: Option<(PathBuf, OutputFormat)>,
+    /// Cells of the subdivided lattice whose signed volume
+    /// ([`Lattice::cell_signed_volume`]) is not positive: folded or degenerate cells (the
+    /// subdivided tetrahedron with holes has many; see `docs/formats.md`).
+    pub inverted_cells: usize,
 }
 
 impl SubdivideOutcome {
-    /// `{"points": P, "edges": E, "faces": F, "cells": C}` of the subdivided lattice.
+    /// `{"points": P, "edges": E, "faces": F, "cells": C, "inverted_cells": I}` of the
+    /// subdivided lattice.
     pub fn stats_json(&self) -> String {
         let c = self.counts;
         format!(
-            "{{\"points\": {}, \"edges\": {}, \"faces\": {}, \"cells\": {}}}",
-            c.points, c.edges, c.faces, c.cells
+            "{{\"points\": {}, \"edges\": {}, \"faces\": {}, \"cells\": {}, \"inverted_cells\": {}}}",
+            c.points, c.edges, c.faces, c.cells, self.inverted_cells
         )
     }
 }
@@ -232,10 +238,14 @@ pub fn subdivide_command(options: &SubdivideOptions) -> Result<SubdivideOutcome,
         }
         _ => None,
     };
+    let inverted_cells = (0..finest.num_cells())
+        .filter(|&c| finest.cell_signed_volume(CellId::new(c)) <= 0.0)
+        .count();
     Ok(SubdivideOutcome {
         control: control_counts,
         counts: finest.counts(),
         written,
+        inverted_cells,
     })
 }
 

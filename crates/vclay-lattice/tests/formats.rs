@@ -523,8 +523,17 @@ fn command_subdivides_primitives_and_files_and_writes_every_format() {
     assert_eq!(r.counts.to_array(), [2197, 6084, 5616, 1728]);
     assert_eq!(
         r.stats_json(),
-        "{\"points\": 2197, \"edges\": 6084, \"faces\": 5616, \"cells\": 1728}"
+        "{\"points\": 2197, \"edges\": 6084, \"faces\": 5616, \"cells\": 1728, \"inverted_cells\": 0}"
     );
+    // The tetrahedron with holes folds when subdivided (docs/formats.md): 12 of its 16
+    // level-1 cells have negative volume (VTK's vtkCellSizeFilter agrees, bench/check_vtk.sh).
+    let t = subdivide_command(&opts(
+        LatticeSource::Primitive("tetrahedron-with-holes".into()),
+        1,
+        None,
+    ))
+    .unwrap();
+    assert_eq!((t.counts.cells, t.inverted_cells), (16, 12));
     assert_eq!(r.control.cells, 27);
     let dir = scratch("command");
     let input = dir.join("gear.ovm");
