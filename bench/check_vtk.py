@@ -8,8 +8,10 @@ Usage: check_vtk.py VCLAY WORKDIR (see check_vtk.sh).
    (VTK's own orientation conventions); the same lattice's boundary surface written as OBJ is
    closed, consistently oriented outward and encloses the cells' total volume.
 2. `vclay run` of a short scenario on a pulled 4^3 cube with frames in every format: each VTU
-   frame has positive cell volumes; the OBJ, PLY and STL frames read by vtkOBJReader,
-   vtkPLYReader and vtkSTLReader are the same closed surface, enclosing the VTU's volume.
+   frame has positive cell volumes and its point data (points minus `displacement` is the
+   first frame's shape; `mass` adds up to the cube's); the OBJ, PLY and STL frames read by
+   vtkOBJReader, vtkPLYReader and vtkSTLReader are the same closed surface, enclosing the
+   VTU's volume.
 
 Exits non-zero with a message naming the file on the first failure.
 """
@@ -209,11 +211,33 @@ def check_frames(vclay, work):
     steps = sorted({p.stem for p in out.glob("frame_*.vtu")})
     if len(steps) < 2:
         fail(f"{out}: {len(steps)} VTU frames written")
+    rest = None
     for stem in steps:
         grid = read_vtu(out / f"{stem}.vtu")
         vols = cell_volumes(grid)
         if vols.min() <= 0:
             fail(f"{stem}.vtu: a cell has volume {vols.min()}")
+        # Point data as VTK reads it: points minus displacement is the rest shape, the same in
+        # every frame (the first frame's points); masses add up to the cube's (density 1).
+        pd = grid.GetPointData()
+        arrays = {pd.GetArrayName(i): pd.GetArray(i) for i in range(pd.GetNumberOfArrays())}
+        want = {"displacement": 3, "velocity": 3, "spring_force": 3, "mass": 1}
+        for name, comps in want.items():
+            a = arrays.get(name)
+            if a is None or a.GetNumberOfComponents() != comps \
+                    or a.GetNumberOfTuples() != grid.GetNumberOfPoints():
+                fail(f"{stem}.vtu: point data {name} missing or mis-shaped")
+                return len(steps)
+        pts = vtk_to_numpy(grid.GetPoints().GetData())
+        this_rest = pts - vtk_to_numpy(arrays["displacement"])
+        if rest is None:
+            rest = pts.copy()
+        if np.abs(this_rest - rest).max() > 1e-9:
+            fail(f"{stem}.vtu: points - displacement is not the rest shape "
+                 f"(off by {np.abs(this_rest - rest).max():.3g})")
+        mass = vtk_to_numpy(arrays["mass"]).sum()
+        if abs(mass - 1.0) > 1e-9:
+            fail(f"{stem}.vtu: masses add up to {mass}, not the unit cube's 1")
         counts = []
         for ext in ("obj", "ply", "stl"):
             path = out / f"{stem}.{ext}"

@@ -619,3 +619,54 @@ fn command_primitive_specs() {
         );
     }
 }
+
+#[test]
+fn vtu_point_data_is_written_and_checked() {
+    use vtu::PointData;
+    let l = primitives::box_lattice([2, 2, 3], Vec3::zeros(), Vec3::repeat(1.0));
+    let n = l.num_points();
+    let disp: Vec<Vec3> = (0..n).map(|i| Vec3::new(i as f64, 0.5, -0.25)).collect();
+    let mass: Vec<f64> = (0..n).map(|i| 1.0 / (i + 1) as f64).collect();
+    let mut buf = Vec::new();
+    vtu::write_with_point_data_to(
+        &l,
+        &[
+            PointData::Vectors("displacement", &disp),
+            PointData::Scalars("mass", &mass),
+        ],
+        &mut buf,
+    )
+    .unwrap();
+    let xml = String::from_utf8(buf).unwrap();
+    assert!(xml.contains("<PointData>"));
+    assert!(xml.contains("Name=\"displacement\" NumberOfComponents=\"3\""));
+    let d = data_array(&xml, "displacement");
+    assert_eq!(d.len(), 3 * n);
+    assert_eq!((d[3], d[4], d[5]), (1.0, 0.5, -0.25));
+    let m = data_array(&xml, "mass");
+    assert_eq!(m, mass, "scalars round-trip exactly");
+    // Without data arrays: no PointData element (the plain writer).
+    assert!(!vtu::to_string(&l).contains("<PointData>"));
+    // Wrong length, repeated name, bad name: InvalidInput naming the array; nothing written.
+    let short = &mass[..n - 1];
+    for (data, needle) in [
+        (
+            vec![PointData::Scalars("mass", short)],
+            "11 values for 12 points",
+        ),
+        (
+            vec![
+                PointData::Scalars("mass", &mass),
+                PointData::Scalars("mass", &mass),
+            ],
+            "used twice",
+        ),
+        (vec![PointData::Scalars("a b", &mass)], "name must be"),
+    ] {
+        let mut buf = Vec::new();
+        let err = vtu::write_with_point_data_to(&l, &data, &mut buf).unwrap_err();
+        assert_eq!(err.kind(), std::io::ErrorKind::InvalidInput);
+        assert!(err.to_string().contains(needle), "{err}");
+        assert!(buf.is_empty());
+    }
+}

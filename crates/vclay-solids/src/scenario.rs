@@ -18,6 +18,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use toml::Spanned;
 use vclay_core::Vec3;
+use vclay_lattice::formats::vtu::PointData;
 use vclay_lattice::{BoundaryRule, Lattice, formats, primitives};
 use vclay_spline::{KnotVector, NurbsVolume};
 
@@ -376,7 +377,9 @@ pub enum FrameFormat {
     Ply,
     /// The boundary surface of the data lattice, ASCII STL (`frame_NNNNNN.stl`).
     Stl,
-    /// The data lattice (hexahedra), VTK XML unstructured grid (`frame_NNNNNN.vtu`).
+    /// The data lattice (hexahedra), VTK XML unstructured grid (`frame_NNNNNN.vtu`), with the
+    /// point data `displacement` (from the rest shape), `velocity`, `spring_force` (not under
+    /// the metric-tensor energy) and `mass`.
     Vtu,
 }
 
@@ -1244,6 +1247,27 @@ impl Scenario {
         if self.output.frames.is_empty() {
             return Ok(());
         }
+        // Per data point, for the VTU frames: displacement from the rest shape, velocity
+        // `A p'`, the springs' force (none under the metric-tensor energy, which acts on the
+        // control points), lumped mass.
+        let fields = if self.output.frames.contains(&FrameFormat::Vtu) {
+            let s = &self.solid;
+            let rest = s.map_to_data(s.rest_control_points())?;
+            let disp: Vec<Vec3> = s
+                .data_points()
+                .iter()
+                .zip(&rest)
+                .map(|(d, r)| d - r)
+                .collect();
+            (
+                disp,
+                s.map_to_data(s.velocities())?,
+                (!s.uses_metric_energy()).then(|| s.internal_forces()),
+                s.masses().to_vec(),
+            )
+        } else {
+            Default::default()
+        };
         let lattice = self.solid.data_lattice();
         // The boundary surface, built once for the surface formats.
         let mut surface = None;
@@ -1254,7 +1278,18 @@ impl Scenario {
                 .dir
                 .join(format!("frame_{step:06}.{}", format.extension()));
             match format {
-                FrameFormat::Vtu => formats::vtu::write(lattice, &path)?,
+                FrameFormat::Vtu => {
+                    let (disp, vel, force, mass) = &fields;
+                    let mut data = vec![
+                        PointData::Vectors("displacement", disp),
+                        PointData::Vectors("velocity", vel),
+                    ];
+                    if let Some(force) = force {
+                        data.push(PointData::Vectors("spring_force", force));
+                    }
+                    data.push(PointData::Scalars("mass", mass));
+                    formats::vtu::write_with_point_data(lattice, &data, &path)?
+                }
                 FrameFormat::Obj => {
                     formats::surface::write_obj(surface.get_or_insert_with(mesh_of), &path)?
                 }

@@ -74,6 +74,19 @@ fn error_of(text: &str) -> (usize, String) {
     }
 }
 
+/// The values of the data array `name` of a `.vtu` text.
+fn data_array(xml: &str, name: &str) -> Vec<f64> {
+    let at = xml
+        .find(&format!("Name=\"{name}\""))
+        .unwrap_or_else(|| panic!("no array {name}"));
+    let start = at + xml[at..].find('>').unwrap() + 1;
+    let end = start + xml[start..].find("</DataArray>").unwrap();
+    xml[start..end]
+        .split_whitespace()
+        .map(|t| t.parse().unwrap())
+        .collect()
+}
+
 /// Replaces the first occurrence of `from` in SMALL.
 fn small_with(from: &str, to: &str) -> String {
     assert!(SMALL.contains(from), "{from}");
@@ -133,6 +146,32 @@ fn small_scenario_runs_and_writes_every_output() {
         assert_eq!(stl.matches("vertex ").count(), 3 * nf);
         assert!(read("vtu").unwrap().contains("<UnstructuredGrid>"));
     }
+    // The VTU frames carry point data: no displacement at the start, the unit cube's mass,
+    // motion later; one value (or vector) per point.
+    let vtu0 = std::fs::read_to_string(out.join("frame_000000.vtu")).unwrap();
+    let points = |xml: &str| -> usize {
+        let at = xml.find("NumberOfPoints=\"").unwrap() + 16;
+        xml[at..].split('"').next().unwrap().parse().unwrap()
+    };
+    let n0 = points(&vtu0);
+    let disp = data_array(&vtu0, "displacement");
+    assert_eq!(disp.len(), 3 * n0);
+    assert!(
+        disp.iter().all(|x| x.abs() < 1e-12),
+        "displacement at step 0"
+    );
+    let mass = data_array(&vtu0, "mass");
+    assert_eq!(mass.len(), n0);
+    assert!((mass.iter().sum::<f64>() - 1.0).abs() < 1e-9);
+    assert_eq!(data_array(&vtu0, "spring_force").len(), 3 * n0);
+    let vtu12 = std::fs::read_to_string(out.join("frame_000012.vtu")).unwrap();
+    let n12 = points(&vtu12);
+    let vel = data_array(&vtu12, "velocity");
+    assert_eq!(vel.len(), 3 * n12);
+    assert!(
+        vel.iter().any(|x| x.abs() > 1e-6),
+        "the rope moved the solid"
+    );
     let l = vclay_lattice::formats::ovm::read(&out.join("final.ovm")).unwrap();
     assert_eq!(l.num_cells(), 2);
     assert!(summary.log.iter().any(|l| l.contains("plastic reset")));

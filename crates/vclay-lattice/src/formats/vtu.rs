@@ -27,7 +27,9 @@
 //! types. These two arrays are only written when there is at least one polyhedron.
 //!
 //! Besides the points and cells the file carries one cell-data array, `cell_id` (the lattice cell
-//! id), so a viewer can map picks back to the lattice.
+//! id), so a viewer can map picks back to the lattice, and optionally point-data arrays
+//! ([`write_with_point_data`]; `vclay run` writes the displacement, velocity, spring force and mass
+//! of each data point).
 
 use std::io::{self, Write};
 use std::path::Path;
@@ -35,6 +37,7 @@ use std::path::Path;
 use crate::formats::{FormatError, Real, write_atomic};
 use crate::ids::{CellId, VertexId};
 use crate::lattice::Lattice;
+use vclay_core::Vec3;
 
 /// `VTK_TETRA`.
 pub const VTK_TETRA: u8 = 10;
@@ -188,8 +191,70 @@ fn faces_match(loops: &[Vec<VertexId>], pts: &[VertexId], reference: &[&[usize]]
     have == want
 }
 
+/// A point-data array of a `.vtu` file: one value per lattice point, in point order (shown by
+/// ParaView as a colouring or glyph field).
+#[derive(Clone, Copy, Debug)]
+pub enum PointData<'a> {
+    /// One scalar per point (`Float64`, 1 component).
+    Scalars(&'a str, &'a [f64]),
+    /// One vector per point (`Float64`, 3 components).
+    Vectors(&'a str, &'a [Vec3]),
+}
+
+impl PointData<'_> {
+    fn name(&self) -> &str {
+        match self {
+            PointData::Scalars(n, _) | PointData::Vectors(n, _) => n,
+        }
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            PointData::Scalars(_, v) => v.len(),
+            PointData::Vectors(_, v) => v.len(),
+        }
+    }
+}
+
 /// Writes `lattice` as a VTK XML unstructured grid.
 pub fn write_to(lattice: &Lattice, w: &mut dyn Write) -> io::Result<()> {
+    write_with_point_data_to(lattice, &[], w)
+}
+
+/// Writes `lattice` as a VTK XML unstructured grid with the point-data arrays `data`. An array
+/// whose length is not the number of points, or whose name is empty, repeated or not plain
+/// (letters, digits, `_`, `-`), is an `InvalidInput` error naming it, and nothing is written.
+pub fn write_with_point_data_to(
+    lattice: &Lattice,
+    data: &[PointData<'_>],
+    w: &mut dyn Write,
+) -> io::Result<()> {
+    for (i, d) in data.iter().enumerate() {
+        let name = d.name();
+        let plain = !name.is_empty()
+            && name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+        let problem = if !plain {
+            Some("its name must be letters, digits, '_' or '-'".to_string())
+        } else if data[..i].iter().any(|e| e.name() == name) {
+            Some("the name is used twice".to_string())
+        } else if d.len() != lattice.num_points() {
+            Some(format!(
+                "{} values for {} points",
+                d.len(),
+                lattice.num_points()
+            ))
+        } else {
+            None
+        };
+        if let Some(p) = problem {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!("point-data array {i} \"{name}\": {p}"),
+            ));
+        }
+    }
     let nc = lattice.num_cells();
     let mut connectivity: Vec<u32> = Vec::new();
     let mut offsets: Vec<usize> = Vec::with_capacity(nc);
@@ -244,6 +309,27 @@ pub fn write_to(lattice: &Lattice, w: &mut dyn Write) -> io::Result<()> {
         array(w, "Int64", "faceoffsets", faceoffsets.iter())?;
     }
     writeln!(w, "      </Cells>")?;
+    if !data.is_empty() {
+        writeln!(w, "      <PointData>")?;
+        for d in data {
+            match d {
+                PointData::Scalars(name, v) => {
+                    array(w, "Float64", name, v.iter().map(|&x| Real(x)))?;
+                }
+                PointData::Vectors(name, v) => {
+                    writeln!(
+                        w,
+                        "        <DataArray type=\"Float64\" Name=\"{name}\" NumberOfComponents=\"3\" format=\"ascii\">"
+                    )?;
+                    for p in v.iter() {
+                        writeln!(w, "          {} {} {}", Real(p.x), Real(p.y), Real(p.z))?;
+                    }
+                    writeln!(w, "        </DataArray>")?;
+                }
+            }
+        }
+        writeln!(w, "      </PointData>")?;
+    }
     writeln!(w, "      <CellData>")?;
     array(w, "Int64", "cell_id", 0..nc)?;
     writeln!(w, "      </CellData>")?;
@@ -293,4 +379,14 @@ pub fn to_string(lattice: &Lattice) -> String {
 /// Writes `lattice` to `path` (atomically: a temporary file renamed over the target).
 pub fn write(lattice: &Lattice, path: &Path) -> Result<(), FormatError> {
     write_atomic(path, |w| write_to(lattice, w))
+}
+
+/// Writes `lattice` with point-data arrays to `path` (atomically), see
+/// [`write_with_point_data_to`].
+pub fn write_with_point_data(
+    lattice: &Lattice,
+    data: &[PointData<'_>],
+    path: &Path,
+) -> Result<(), FormatError> {
+    write_atomic(path, |w| write_with_point_data_to(lattice, data, w))
 }

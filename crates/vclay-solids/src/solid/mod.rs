@@ -654,6 +654,26 @@ impl DynamicSolid {
     pub fn masses(&self) -> &[f64] {
         &self.mass
     }
+    /// The data points of the control-point configuration `x` (`A x` over all data points,
+    /// in the data lattice's point order): `x` = [`DynamicSolid::rest_control_points`] gives
+    /// the rest positions (journal eq 4 / eq 3), `x` = [`DynamicSolid::velocities`] the data
+    /// points' velocities `A p'` (section 4.4).
+    pub fn map_to_data(&self, x: &[Vec3]) -> Result<Vec<Vec3>, SolidsError> {
+        if x.len() != self.p.len() {
+            return Err(invalid(
+                "x",
+                x.len(),
+                &format!("{} values, one per control point", self.p.len()),
+            ));
+        }
+        let mut out = vec![Vec3::zeros(); self.d.len()];
+        let mut ws = vclay_lattice::ChainWorkspace::default();
+        self.disc
+            .map
+            .apply_into(x, &mut out, &mut ws, self.params.parallelism);
+        Ok(out)
+    }
+
     /// The data lattice with its points at the current `d`.
     pub fn data_lattice(&mut self) -> &Lattice {
         self.disc.data.points_mut().copy_from_slice(&self.d);
