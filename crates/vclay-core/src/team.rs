@@ -94,6 +94,9 @@ struct Shared {
     sleeping: Vec<AtomicBool>,
     /// Set when the team is dropped: helpers exit.
     stop: AtomicBool,
+    /// Tests: milliseconds a helper waits between taking a program and running it.
+    #[cfg(test)]
+    helper_delay_ms: std::sync::atomic::AtomicU64,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -149,6 +152,8 @@ impl Team {
             panic: Mutex::new(None),
             sleeping: (0..want).map(|_| AtomicBool::new(false)).collect(),
             stop: AtomicBool::new(false),
+            #[cfg(test)]
+            helper_delay_ms: std::sync::atomic::AtomicU64::new(0),
         });
         let mut helpers = Vec::with_capacity(want);
         for i in 0..want {
@@ -219,7 +224,7 @@ impl Team {
                 h.thread().unpark();
             }
         }
-        work(sh, counts, run, 0, self.threads());
+        work(sh, open, counts, run, 0, self.threads());
         while sh.done.load(Ordering::Acquire) < total {
             std::hint::spin_loop();
         }
@@ -261,8 +266,21 @@ fn run_inline(counts: &[usize], run: &TaskFn<'_>) {
 /// that each thread keeps working on the same part of the data from phase to phase and step
 /// to step, in its own cache), then any task still unclaimed (an absent or late owner's).
 /// Panics are caught and stored.
-fn work(sh: &Shared, counts: &[usize], run: &TaskFn<'_>, rank: usize, threads: usize) {
-    let epoch = sh.epoch.load(Ordering::Relaxed);
+///
+/// `epoch` is the (odd) epoch of the program, as the thread saw it open: never re-read here.
+/// A helper can be delayed between registering and arriving here while the caller runs every
+/// task and closes the epoch; re-reading it would then give the closed (even) value, which no
+/// claim carries, and the late helper would run the whole program a second time before the
+/// caller returns (a race seen once in CI as a test whose tasks ran twice). With the program's
+/// own epoch every claim is already taken and the late helper runs nothing.
+fn work(
+    sh: &Shared,
+    epoch: usize,
+    counts: &[usize],
+    run: &TaskFn<'_>,
+    rank: usize,
+    threads: usize,
+) {
     let mut start = 0;
     for (k, &c) in counts.iter().enumerate() {
         while sh.done.load(Ordering::Acquire) < start {
@@ -298,7 +316,11 @@ fn helper(sh: &Shared, idx: usize) {
                 // the caller is inside `Team::run` and keeps both pointees alive until this
                 // helper deregisters below.
                 let (counts, run) = unsafe { (&*job.counts, &*job.run) };
-                work(sh, counts, run, idx + 1, sh.sleeping.len() + 1);
+                #[cfg(test)]
+                std::thread::sleep(Duration::from_millis(
+                    sh.helper_delay_ms.load(Ordering::Relaxed),
+                ));
+                work(sh, e, counts, run, idx + 1, sh.sleeping.len() + 1);
             }
         }
         sh.active.fetch_sub(1, Ordering::SeqCst);
@@ -629,6 +651,23 @@ mod tests {
             });
         });
         assert_eq!(hits.load(Ordering::Relaxed), 6);
+    }
+
+    #[test]
+    fn a_helper_that_arrives_after_the_program_finished_runs_nothing() {
+        // The helper takes the program, then is delayed past its end: the caller runs every
+        // task, closes the epoch and waits for the helper, which must not run the tasks again
+        // (it did when it read the closed epoch instead of its program's).
+        let team = Team::new(2);
+        team.shared.helper_delay_ms.store(60, Ordering::Relaxed);
+        for _ in 0..3 {
+            let ran = AtomicUsize::new(0);
+            team.run(&[3, 2], &|_, _| {
+                std::thread::sleep(Duration::from_millis(3));
+                ran.fetch_add(1, Ordering::Relaxed);
+            });
+            assert_eq!(ran.load(Ordering::Relaxed), 5);
+        }
     }
 
     #[test]
