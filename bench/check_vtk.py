@@ -13,7 +13,10 @@ Usage: check_vtk.py VCLAY WORKDIR (see check_vtk.sh).
    vtkOBJReader, vtkPLYReader and vtkSTLReader are the same closed surface, enclosing the
    VTU's volume.
 
-Exits non-zero with a message naming the file on the first failure.
+3. The closed surfaces of `vclay demo` (the NURBS torus, the twisted volume's boundary, the
+   FFD bottles, subdivided lattices' boundaries) are closed and oriented outward.
+
+Prints every failure with the file it concerns and exits non-zero if there was any.
 """
 
 import subprocess
@@ -253,15 +256,41 @@ def check_frames(vclay, work):
     return len(steps)
 
 
+# Closed surfaces that `vclay demo` writes: each must be closed and oriented outward.
+DEMO_CLOSED = [
+    "torus.obj",
+    "twisted_volume.obj",
+    "ffd/fig3a-bottle.obj",
+    "ffd/fig3b-bottle.obj",
+    "subdivision/gear-level2.obj",
+    "subdivision/tetrahedron-with-holes-level3.obj",
+]
+
+
+def check_demo(vclay, work):
+    out = work / "demo"
+    subprocess.run([vclay, "demo", "--out", str(out)], check=True, capture_output=True)
+    for name in DEMO_CLOSED:
+        path = out / name
+        if not path.exists():
+            fail(f"{path}: not written by vclay demo")
+            continue
+        tris, vol = surface_checks(path, read_surface(path), None, "")
+        print(f"ok demo/{name}: {tris} triangles, closed and outward, encloses {vol:.6g}")
+    return len(DEMO_CLOSED)
+
+
 def main():
     vclay, work = sys.argv[1], Path(sys.argv[2])
     print(f"check_vtk: VTK {vtk.vtkVersion.GetVTKVersion()}")
     lattices = check_lattices(vclay, work)
     frames = check_frames(vclay, work)
+    demo = check_demo(vclay, work)
     if failures:
         print(f"check_vtk: FAILED ({len(failures)} problems)")
         sys.exit(1)
-    print(f"check_vtk: passed: {lattices} lattices, {frames} scenario frames")
+    print(f"check_vtk: passed: {lattices} lattices, {frames} scenario frames, "
+          f"{demo} closed demo surfaces")
 
 
 if __name__ == "__main__":

@@ -2,8 +2,9 @@
 # External check of vclay's lattice and frame files with VTK itself (the engine of ParaView),
 # bench/check_vtk.py: `vclay subdivide` output of every primitive (control lattices with wedges
 # and polyhedra, subdivided lattices) and the frames of a `vclay run` scenario (VTU, OBJ, PLY,
-# STL) are read by VTK's readers; every cell must have positive volume by vtkCellSizeFilter, the
-# surfaces must be closed and consistently oriented, and they must enclose the lattice's volume.
+# STL) and the closed surfaces of `vclay demo` are read by VTK's readers; every cell must have
+# positive volume by vtkCellSizeFilter, the surfaces must be closed and oriented outward, and the
+# lattices' surfaces must enclose the cells' volume.
 # Uses bench/.venv and installs the `vtk` wheel there when pip can (VCLAY_NO_INSTALL=1 forbids
 # it). Says SKIPPED and exits 0 otherwise.
 set -euo pipefail

@@ -58,7 +58,9 @@ impl NurbsCurve {
 
 impl NurbsSurface {
     /// Revolves `profile` (given in the xz-plane, x >= 0 the distance from the axis) a full turn
-    /// around the z axis. Parameter u follows the profile, v the rotation.
+    /// around the z axis, counter-clockwise seen from +z. Parameter u follows the profile, v the
+    /// rotation; the normal `S_u x S_v` points away from the axis where the profile runs
+    /// downwards (towards -z).
     pub fn revolve(profile: &NurbsCurve) -> Result<Self, SplineError> {
         let (circle, cw) = unit_circle();
         let n = profile.control_points().len();
@@ -76,26 +78,30 @@ impl NurbsSurface {
     }
 
     /// The exact torus around the z axis with major radius `major` and tube radius `minor`
-    /// (`0 < minor < major`).
+    /// (`0 < minor < major`). Its normal `S_u x S_v` points out of the solid torus: the tube
+    /// circle runs clockwise in the xz-plane (downwards on its outer side), so that with the
+    /// counter-clockwise sweep of [`NurbsSurface::revolve`] the closed surface is oriented
+    /// outward, as mesh and CAD consumers expect.
     pub fn torus(major: f64, minor: f64) -> Result<Self, SplineError> {
-        let c = NurbsCurve::circle(Vec3::new(major, 0., 0.), Vec3::x(), Vec3::z(), minor)?;
+        let c = NurbsCurve::circle(Vec3::new(major, 0., 0.), Vec3::x(), -Vec3::z(), minor)?;
         Self::revolve(&c)
     }
 
-    /// The exact sphere of `radius` around the origin (poles on the z axis).
+    /// The exact sphere of `radius` around the origin (poles on the z axis), oriented outward
+    /// (`S_u x S_v` points away from the centre): u runs from the north pole to the south pole.
     pub fn sphere(radius: f64) -> Result<Self, SplineError> {
-        // Half circle from the south pole to the north pole in the xz-plane.
+        // Half circle from the north pole to the south pole in the xz-plane.
         let h = std::f64::consts::FRAC_1_SQRT_2;
         let r = radius;
         let profile = NurbsCurve::new(
             2,
             vec![0., 0., 0., 0.5, 0.5, 1., 1., 1.],
             vec![
-                Vec3::new(0., 0., -r),
-                Vec3::new(r, 0., -r),
-                Vec3::new(r, 0., 0.),
-                Vec3::new(r, 0., r),
                 Vec3::new(0., 0., r),
+                Vec3::new(r, 0., r),
+                Vec3::new(r, 0., 0.),
+                Vec3::new(r, 0., -r),
+                Vec3::new(0., 0., -r),
             ],
             Some(vec![1., h, 1., h, 1.]),
         )?;

@@ -80,3 +80,48 @@ fn sphere_normals_are_radial_even_at_the_poles() {
         assert!(cos > 1.0 - 1e-9, "normal {n:?} at {p:?}: cos {cos}");
     }
 }
+
+#[test]
+fn closed_primitives_are_oriented_outward() {
+    // The torus and the sphere are closed: their tessellations must enclose positive volume
+    // (triangles counter-clockwise seen from outside) and their normals must point out, as
+    // renderers with back-face culling and mesh tools expect.
+    for (name, s, volume) in [
+        (
+            "torus",
+            NurbsSurface::torus(2.0, 0.5).unwrap(),
+            2.0 * std::f64::consts::PI.powi(2) * 2.0 * 0.25,
+        ),
+        (
+            "sphere",
+            NurbsSurface::sphere(1.5).unwrap(),
+            4.0 / 3.0 * std::f64::consts::PI * 1.5f64.powi(3),
+        ),
+    ] {
+        let mut m = TriMesh::new();
+        tessellate_surface(&s, [65, 65], &mut m).unwrap();
+        let v6: f64 = m
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, d] = t.map(|i| m.positions[i as usize]);
+                a.dot(&b.cross(&d))
+            })
+            .sum();
+        let v = v6 / 6.0;
+        assert!(
+            v > 0.0 && (v - volume).abs() < 0.01 * volume,
+            "{name}: encloses {v}, the solid's volume is {volume}"
+        );
+        // Normals point out: away from the centre (sphere) or from the tube's core circle.
+        for (p, n) in m.positions.iter().zip(&m.normals) {
+            let out = if name == "sphere" {
+                *p
+            } else {
+                let rho = (p.x * p.x + p.y * p.y).sqrt();
+                *p - Vec3::new(p.x / rho * 2.0, p.y / rho * 2.0, 0.0)
+            };
+            assert!(n.dot(&out) > 0.0, "{name}: normal {n:?} at {p:?} points in");
+        }
+    }
+}
