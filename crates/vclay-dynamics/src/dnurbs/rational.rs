@@ -880,6 +880,11 @@ pub mod profiles {
 
 impl SwungGeometry {
     /// The sphere of `d-nurbs.txt` Fig 9a: quadratic profiles with 4 and 7 control points.
+    ///
+    /// The profile runs from the south pole (`u = 0`) to the north pole (`u = 1`), so the
+    /// normal `S_u x S_v` points into the sphere, the opposite of
+    /// `vclay_spline::NurbsSurface::sphere`; meshes of it are inside out for renderers with
+    /// back-face culling. Kept because scenarios and tests address the poles by `u`.
     pub fn sphere(r: f64) -> Result<Self, DynamicsError> {
         Self::new(&profiles::semicircle4(r)?, &profiles::circle7(1.0)?, 1.0)
     }
