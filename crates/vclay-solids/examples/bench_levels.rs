@@ -67,19 +67,25 @@ fn time_steps(s: &mut DynamicSolid, seconds: f64) -> (f64, f64, f64) {
     )
 }
 
-/// The most data points of any model timed so far in this process: the peak resident size
-/// per data point means something only for the largest model yet.
-static LARGEST: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-
-fn row(name: &str, s: &mut DynamicSolid, build: f64, seconds: f64, paper: &str) {
+/// Prints one table row. `largest` is the most data points of any model timed before in this
+/// process: the peak resident size per data point means something only for a model at least
+/// that large.
+fn row(
+    name: &str,
+    s: &mut DynamicSolid,
+    build: f64,
+    seconds: f64,
+    paper: &str,
+    largest: &mut usize,
+) {
     let st = s.stats();
     let (ms, mean, cpu) = time_steps(s, seconds);
-    let largest = LARGEST.fetch_max(st.data_points, std::sync::atomic::Ordering::Relaxed);
-    let peak = if st.data_points >= largest {
+    let peak = if st.data_points >= *largest {
         format!("{:.0}", peak_rss_mb() * 1048576.0 / st.data_points as f64)
     } else {
         "-".to_string()
     };
+    *largest = (*largest).max(st.data_points);
     println!(
         "| {name} | {} | {} ({}) | {} ({}) | {:.2} | {:.4} | {:.4} | {:.4} | {:.1} | {:.0} | {peak} | {paper} |",
         st.control_points,
@@ -114,6 +120,7 @@ fn main() {
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     let paper = ["20 / 10", "121 / 72", "-", "-", "-"];
+    let mut largest = 0;
     for level in 1..=max_level {
         let t0 = Instant::now();
         let mut s = benchmarks::cube(level, params).unwrap();
@@ -125,7 +132,14 @@ fn main() {
             s.set_fixed(&low, true).unwrap();
             name += ", all but top layer fixed";
         }
-        row(&name, &mut s, build, seconds, paper[level - 1]);
+        row(
+            &name,
+            &mut s,
+            build,
+            seconds,
+            paper[level - 1],
+            &mut largest,
+        );
     }
     if fix_half || max_level < 2 {
         return;
@@ -146,6 +160,7 @@ fn main() {
             build,
             seconds,
             &paper,
+            &mut largest,
         );
     }
     // Journal Table 1: B-spline solids (journal only).
@@ -178,6 +193,6 @@ fn main() {
         .unwrap();
         let build = t0.elapsed().as_secs_f64();
         let name = format!("B-spline {}x{}x{}, {m}^3 samples", c[0], c[1], c[2]);
-        row(&name, &mut s, build, seconds, paper);
+        row(&name, &mut s, build, seconds, paper, &mut largest);
     }
 }

@@ -384,22 +384,22 @@ pub enum FrameFormat {
 }
 
 impl FrameFormat {
-    /// Every format, in the order of their names in [`FrameFormat::NAMES`].
+    /// Every format.
     pub const ALL: [FrameFormat; 4] = [Self::Obj, Self::Ply, Self::Stl, Self::Vtu];
-    /// The names used in scenario files (and as file extensions).
-    pub const NAMES: [&'static str; 4] = ["obj", "ply", "stl", "vtu"];
 
-    /// The format named `name` (`"obj"`, `"ply"`, `"stl"` or `"vtu"`).
+    /// The format named `name` (its extension: `"obj"`, `"ply"`, `"stl"` or `"vtu"`).
     pub fn from_name(name: &str) -> Option<Self> {
-        Self::NAMES
-            .iter()
-            .position(|&n| n == name)
-            .map(|i| Self::ALL[i])
+        Self::ALL.into_iter().find(|f| f.extension() == name)
     }
 
-    /// The file extension (without the dot).
+    /// The file extension (without the dot), which is also its name in scenario files.
     pub fn extension(self) -> &'static str {
-        Self::NAMES[Self::ALL.iter().position(|&f| f == self).unwrap_or(0)]
+        match self {
+            Self::Obj => "obj",
+            Self::Ply => "ply",
+            Self::Stl => "stl",
+            Self::Vtu => "vtu",
+        }
     }
 }
 
@@ -599,7 +599,9 @@ impl Scenario {
                     "frames",
                     format!(
                         "unknown frame format \"{f}\"; expected one of {}",
-                        FrameFormat::NAMES.map(|n| format!("\"{n}\"")).join(", ")
+                        FrameFormat::ALL
+                            .map(|f| format!("\"{}\"", f.extension()))
+                            .join(", ")
                     ),
                 ));
             };

@@ -27,15 +27,7 @@ fn box_volume_boundary_is_closed_and_outward() {
         assert!(n.dot(&(p - c)) > 0.0);
     }
     // Divergence theorem: enclosed volume of an outward closed mesh is 2*1*3.
-    let vol6: f64 = m
-        .triangles
-        .iter()
-        .map(|t| {
-            let [a, b, d] = t.map(|i| m.positions[i as usize]);
-            a.dot(&b.cross(&d))
-        })
-        .sum();
-    assert!((vol6 / 6.0 - 6.0).abs() < 1e-12);
+    assert!((enclosed_volume(&m) - 6.0).abs() < 1e-12);
 }
 
 #[test]
@@ -49,15 +41,8 @@ fn mirrored_volume_is_still_outward() {
     );
     let mut m = TriMesh::new();
     tessellate_volume_boundary(&vol, [3, 3, 3], &mut m).unwrap();
-    let v6: f64 = m
-        .triangles
-        .iter()
-        .map(|t| {
-            let [a, b, d] = t.map(|i| m.positions[i as usize]);
-            a.dot(&b.cross(&d))
-        })
-        .sum();
-    assert!((v6 / 6.0 - 1.0).abs() < 1e-12, "signed volume {}", v6 / 6.0);
+    let v = enclosed_volume(&m);
+    assert!((v - 1.0).abs() < 1e-12, "signed volume {v}");
 }
 
 #[test]
@@ -100,15 +85,7 @@ fn closed_primitives_are_oriented_outward() {
     ] {
         let mut m = TriMesh::new();
         tessellate_surface(&s, [65, 65], &mut m).unwrap();
-        let v6: f64 = m
-            .triangles
-            .iter()
-            .map(|t| {
-                let [a, b, d] = t.map(|i| m.positions[i as usize]);
-                a.dot(&b.cross(&d))
-            })
-            .sum();
-        let v = v6 / 6.0;
+        let v = enclosed_volume(&m);
         assert!(
             v > 0.0 && (v - volume).abs() < 0.01 * volume,
             "{name}: encloses {v}, the solid's volume is {volume}"
@@ -124,4 +101,17 @@ fn closed_primitives_are_oriented_outward() {
             assert!(n.dot(&out) > 0.0, "{name}: normal {n:?} at {p:?} points in");
         }
     }
+}
+
+/// Signed volume enclosed by a closed triangle mesh (divergence theorem): positive when its
+/// triangles run counter-clockwise seen from outside.
+fn enclosed_volume(m: &TriMesh) -> f64 {
+    m.triangles
+        .iter()
+        .map(|t| {
+            let [a, b, d] = t.map(|i| m.positions[i as usize]);
+            a.dot(&b.cross(&d))
+        })
+        .sum::<f64>()
+        / 6.0
 }

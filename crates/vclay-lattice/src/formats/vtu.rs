@@ -378,7 +378,7 @@ pub fn to_string(lattice: &Lattice) -> String {
 
 /// Writes `lattice` to `path` (atomically: a temporary file renamed over the target).
 pub fn write(lattice: &Lattice, path: &Path) -> Result<(), FormatError> {
-    write_atomic(path, |w| write_to(lattice, w))
+    write_with_point_data(lattice, &[], path)
 }
 
 /// Writes `lattice` with point-data arrays to `path` (atomically), see
