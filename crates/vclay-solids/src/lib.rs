@@ -65,6 +65,7 @@ pub use error::SolidsError;
 pub use material::{Material, MaterialField};
 pub use model::{Discretization, SolidSource};
 pub use solid::{
-    DynamicSolid, Energy, Integrator, PHASED_POINTS, SolidParams, SolidStats, StepReport, ToolId,
+    DynamicSolid, Energy, Integrator, PHASED_POINTS, SolidParams, SolidRest, SolidState,
+    SolidStats, StepReport, ToolId,
 };
 pub use tools::Tool;

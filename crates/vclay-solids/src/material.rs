@@ -102,6 +102,14 @@ impl MaterialField {
         }
     }
 
+    /// One material per control cell, each validated (the error names the cell's field).
+    pub fn from_cells(cells: Vec<Material>) -> Result<Self, SolidsError> {
+        for m in &cells {
+            m.validate()?;
+        }
+        Ok(Self { cells })
+    }
+
     /// Material of control cell `c`.
     pub fn cell(&self, c: usize) -> &Material {
         &self.cells[c]

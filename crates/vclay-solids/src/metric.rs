@@ -22,6 +22,9 @@ use vclay_spline::{KnotVector, knots::BasisWorkspace};
 /// One Gauss point along one axis: first control index, basis values, their derivatives, weight.
 type AxisPoint = (usize, Vec<f64>, Vec<f64>, f64);
 
+/// Default weight `c` of the metric-tensor energy (`[material] metric_stiffness`).
+pub const DEFAULT_METRIC_STIFFNESS: f64 = 100.0;
+
 /// Precomputed quadrature data of the metric-tensor energy.
 #[derive(Clone, Debug)]
 pub struct MetricEnergy {

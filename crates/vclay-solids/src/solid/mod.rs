@@ -1660,3 +1660,206 @@ mod tests {
         assert!((e1.kinetic - e2.kinetic).abs() <= 1e-12 * e1.kinetic.abs());
     }
 }
+
+// ----------------------------------------------------------------------------------------
+// State: snapshots for undo and session files
+// ----------------------------------------------------------------------------------------
+
+/// The part of a [`DynamicSolid`] that evolves from step to step: control points `p`, their
+/// velocities `p'`, the data points `d = A p` as the last step left them (data points that only
+/// fixed control points define are not recomputed per step, so they are kept as they are), the
+/// tools, the clock and the running maximum of the tool energy (which enters the divergence
+/// bound). Copying it costs a few arrays (level 4 of the 4^3 cube: about 3 MB), so the session
+/// layer takes one before every command; [`DynamicSolid::set_state`] puts it back bit for bit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SolidState {
+    /// Control points `p`.
+    pub control_points: Vec<Vec3>,
+    /// Control point velocities `p'`.
+    pub velocities: Vec<Vec3>,
+    /// Data points `d`.
+    pub data_points: Vec<Vec3>,
+    /// Tools by handle (`None`: removed).
+    pub tools: Vec<Option<Tool>>,
+    /// Simulated time.
+    pub time: f64,
+    /// Steps taken.
+    pub steps: u64,
+    /// Largest tool energy seen (divergence bound).
+    pub tool_energy_seen: f64,
+}
+
+/// What a [`DynamicSolid`] holds besides its source, material, parameters and [`SolidState`]:
+/// the rest shape (control points and data points: after a plastic reset the data rest shape
+/// is `A p_rest` as that reset computed it, which need not equal a fresh subdivision bit for
+/// bit), the fixed set, the metric-tensor energy's weight if it is on, and the divergence
+/// energy scale. With these, [`DynamicSolid::from_parts`] rebuilds a solid that continues
+/// exactly as the original would.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SolidRest {
+    /// Rest control points.
+    pub control_points: Vec<Vec3>,
+    /// Rest data points.
+    pub data_points: Vec<Vec3>,
+    /// Fixed flag per control point.
+    pub fixed: Vec<bool>,
+    /// `Some(c)` when the metric-tensor energy (weight `c`) replaces the springs.
+    pub metric_stiffness: Option<f64>,
+    /// Energy scale of the divergence bound.
+    pub energy_scale: f64,
+}
+
+impl DynamicSolid {
+    /// The evolving state (see [`SolidState`]).
+    pub fn state(&self) -> SolidState {
+        SolidState {
+            control_points: self.p.clone(),
+            velocities: self.v.clone(),
+            data_points: self.d.clone(),
+            tools: self.tools.clone(),
+            time: self.time,
+            steps: self.steps,
+            tool_energy_seen: self.tool_energy_seen,
+        }
+    }
+
+    /// Puts back a state taken by [`DynamicSolid::state`] from this solid with the same
+    /// topology (array lengths are checked; a state from before an extrusion or deletion does
+    /// not fit). Tool point indices are validated.
+    pub fn set_state(&mut self, s: &SolidState) -> Result<(), SolidsError> {
+        let n = self.p.len();
+        let nd = self.d.len();
+        for (what, len, want) in [
+            ("state control points", s.control_points.len(), n),
+            ("state velocities", s.velocities.len(), n),
+            ("state data points", s.data_points.len(), nd),
+        ] {
+            if len != want {
+                return Err(invalid(what, len, &format!("{want} values")));
+            }
+        }
+        if let Some(i) = s
+            .control_points
+            .iter()
+            .chain(&s.velocities)
+            .chain(&s.data_points)
+            .position(|x| !x.iter().all(|c| c.is_finite()))
+        {
+            return Err(invalid("state", format!("value {i}"), "finite"));
+        }
+        for t in s.tools.iter().flatten() {
+            t.validate(nd)?;
+        }
+        self.p.clone_from(&s.control_points);
+        self.v.clone_from(&s.velocities);
+        self.d.clone_from(&s.data_points);
+        self.tools.clone_from(&s.tools);
+        self.time = s.time;
+        self.steps = s.steps;
+        self.tool_energy_seen = s.tool_energy_seen;
+        self.good = (self.p.clone(), self.v.clone());
+        Ok(())
+    }
+
+    /// The rest shape, fixed set and energy settings (see [`SolidRest`]).
+    pub fn rest(&self) -> SolidRest {
+        SolidRest {
+            control_points: self.p_rest.clone(),
+            data_points: self.d_rest.clone(),
+            fixed: self.fixed.clone(),
+            metric_stiffness: self.metric.as_ref().map(|m| m.stiffness),
+            energy_scale: self.energy_scale,
+        }
+    }
+
+    /// Rebuilds a solid from its parts (a session file): `source` with its control lattice's
+    /// topology, the material per control cell, the parameters, the rest shape and fixed set,
+    /// and the state. The result steps exactly (bitwise) as the solid these parts were taken
+    /// from.
+    pub fn from_parts(
+        source: SolidSource,
+        material: MaterialField,
+        params: SolidParams,
+        rest: &SolidRest,
+        state: &SolidState,
+    ) -> Result<Self, SolidsError> {
+        let mut s = Self::with_material(source, rest.control_points.clone(), material, params)?;
+        if rest.data_points.len() != s.d.len() {
+            return Err(invalid(
+                "rest data points",
+                rest.data_points.len(),
+                &format!("{} values", s.d.len()),
+            ));
+        }
+        if rest.fixed.len() != s.p.len() {
+            return Err(invalid(
+                "fixed",
+                rest.fixed.len(),
+                &format!("{} flags", s.p.len()),
+            ));
+        }
+        if !(rest.energy_scale.is_finite() && rest.energy_scale > 0.0) {
+            return Err(invalid(
+                "energy_scale",
+                rest.energy_scale,
+                "positive and finite",
+            ));
+        }
+        s.d_rest.clone_from(&rest.data_points);
+        s.d.clone_from(&rest.data_points);
+        s.rebuild_physics()?;
+        if rest.metric_stiffness.is_some() {
+            s.use_metric_energy(rest.metric_stiffness)?;
+        }
+        s.fixed.clone_from(&rest.fixed);
+        s.rebuild_active()?;
+        s.set_state(state)?;
+        s.energy_scale = rest.energy_scale;
+        Ok(s)
+    }
+
+    /// Replaces the material field wholesale (per control cell; the same count), rebuilding
+    /// masses, stiffnesses and the factorization from the rest shape (the exact inverse of a
+    /// material change, for undo).
+    pub fn set_material(&mut self, material: MaterialField) -> Result<(), SolidsError> {
+        if material.len() != self.material.len() {
+            return Err(invalid(
+                "material",
+                material.len(),
+                &format!("{} cell materials", self.material.len()),
+            ));
+        }
+        for m in material.cells() {
+            m.validate()?;
+        }
+        let old = std::mem::replace(&mut self.material, material);
+        if let Err(e) = self.rebuild_physics() {
+            self.material = old;
+            self.rebuild_physics()?;
+            return Err(e);
+        }
+        Ok(())
+    }
+}
+
+impl DynamicSolid {
+    /// The outward boundary face loops of the data lattice as `(offsets, vertices)`: loop `k`
+    /// is `vertices[offsets[k]..offsets[k + 1]]`, data point indices at [`Self::data_points`]
+    /// (what inflation pushes on; viewers draw it).
+    pub fn boundary_loops(&self) -> (&[u32], &[u32]) {
+        (&self.boundary.offsets, &self.boundary.verts)
+    }
+
+    /// A copy of the data lattice with its points at the current `d` (for writers that take a
+    /// lattice; [`Self::data_lattice`] lends it without copying but needs `&mut self`).
+    pub fn data_lattice_copy(&self) -> Lattice {
+        let mut l = self.disc.data.clone();
+        l.points_mut().copy_from_slice(&self.d);
+        l
+    }
+
+    /// Control cell of each data cell.
+    pub fn data_cell_parents(&self) -> &[u32] {
+        &self.disc.cell_parent
+    }
+}

@@ -1,0 +1,613 @@
+//! Commands: every edit of a session is a plain serializable value.
+//!
+//! A [`Command`] names the model it is addressed to (or the session's first model) and an
+//! [`Edit`]. The same values are a scenario's timeline entries (TOML, `action = "rope"`), the
+//! session file's command log (JSON) and what the studio and the Python module send. Applying
+//! one either succeeds or leaves the session unchanged with an error that names the command
+//! and the reason ([`crate::SessionError::Command`]).
+//!
+//! Points are chosen by position (`near`, `from`, `min`/`max`) or by id (`points`, `face`,
+//! `cell`, `index`); positions survive topology edits, ids do not.
+
+use serde::{Deserialize, Serialize};
+
+/// A 3-vector as it appears in files.
+pub type V3 = [f64; 3];
+
+/// One edit addressed to a model of the session.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Command {
+    /// The model's name; `None` addresses the session's first model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<String>,
+    /// The edit.
+    #[serde(flatten)]
+    pub edit: Edit,
+}
+
+impl Command {
+    /// A command for the first model.
+    pub fn new(edit: Edit) -> Self {
+        Self { model: None, edit }
+    }
+    /// A command for the model named `model`.
+    pub fn to(model: &str, edit: Edit) -> Self {
+        Self {
+            model: Some(model.to_string()),
+            edit,
+        }
+    }
+}
+
+/// The edits of the papers' tools, plus the traditional direct edits. Which kinds take which
+/// edit is listed in `docs/formats.md` (section "Commands"); an edit a kind does not take is a
+/// [`crate::SessionError::Command`] naming the kind.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "action", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Edit {
+    /// Attach a rope (a spring that only pulls; `subdivision-solids-journal.txt` section 5.4,
+    /// `d-nurbs.txt` eq 19) from the model point nearest `from` (or the material point `param`
+    /// of a D-NURBS) to a cursor that starts at `from`, optionally moves linearly to `to` by
+    /// time `until` or with `velocity`, and is removed at time `release`.
+    Rope {
+        /// Tool name (default `rope<N>`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        name: Option<String>,
+        /// Where the rope grabs the model, and the cursor's start.
+        from: V3,
+        /// D-NURBS: the material point `[u, v]` to attach to instead of the nearest one.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        param: Option<[f64; 2]>,
+        /// Cursor end position (default: stays at `from`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        to: Option<V3>,
+        /// Time the cursor reaches `to` (default: at once).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        until: Option<f64>,
+        /// Cursor velocity: the cursor is at `from + velocity t` at session time `t` (the
+        /// moving spring target of `d-nurbs.txt` Fig 9a). Not with `to`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        velocity: Option<V3>,
+        /// Time the rope is removed (default: never).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        release: Option<f64>,
+        /// Spring stiffness (solids default 50; D-NURBS: the preset's `k`, else 50).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        stiffness: Option<f64>,
+        /// Rope length: no force below it (solids; default 0).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        length: Option<f64>,
+        /// D-NURBS: Gaussian kernel width in parameter units instead of the delta of eq 19.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        kernel: Option<f64>,
+        /// Time the cursor starts moving towards `to` (default: when the edit applies; a
+        /// scenario sets it to the entry's `at`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        start: Option<f64>,
+    },
+    /// Move the cursor of the rope `name` (an interactive drag).
+    MoveRope {
+        /// The rope.
+        name: String,
+        /// New cursor position.
+        to: V3,
+    },
+    /// A constant force on the model point nearest `near` (or the material point `param`).
+    Force {
+        /// Tool name (default `force<N>`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        name: Option<String>,
+        /// Where.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        near: Option<V3>,
+        /// D-NURBS material point.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        param: Option<[f64; 2]>,
+        /// The force.
+        force: V3,
+        /// Time it is removed.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        until: Option<f64>,
+    },
+    /// A total force shared by the data points within `radius` of `center` (solids).
+    RegionForce {
+        /// Tool name (default `region<N>`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        name: Option<String>,
+        /// Centre.
+        center: V3,
+        /// Radius.
+        radius: f64,
+        /// Total force.
+        force: V3,
+        /// Time it is removed.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        until: Option<f64>,
+    },
+    /// Gravity `g` (an acceleration). Giving an existing name changes its strength.
+    Gravity {
+        /// Tool name (default `gravity<N>`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        name: Option<String>,
+        /// Acceleration.
+        g: V3,
+        /// Time it is removed.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        until: Option<f64>,
+    },
+    /// Pressure on the boundary surface (negative deflates). Giving an existing name changes
+    /// its strength.
+    Inflate {
+        /// Tool name (default `inflate<N>`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        name: Option<String>,
+        /// Pressure.
+        pressure: f64,
+        /// Time it is removed.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        until: Option<f64>,
+    },
+    /// Data points, each pulling the nearest point of a D-NURBS with a spring (fitting,
+    /// `d-nurbs.txt` section 7.3).
+    Data {
+        /// Tool name (default `data<N>`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        name: Option<String>,
+        /// The points.
+        points: Vec<V3>,
+        /// Spring stiffness (default: the preset's `k`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        stiffness: Option<f64>,
+    },
+    /// Remove the tool (rope, force, gravity, ...) or constraint named `name`.
+    Release {
+        /// The tool.
+        name: String,
+    },
+    /// Fix control points: by id (`points`), by rest position in a box (`min`, `max`), or
+    /// the one nearest `near` (a picked point).
+    Fix {
+        /// Control point ids.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        points: Option<Vec<usize>>,
+        /// Box corner.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        min: Option<V3>,
+        /// Box corner.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        max: Option<V3>,
+        /// The control point nearest this position.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        near: Option<V3>,
+    },
+    /// Free control points (the same selections as [`Edit::Fix`]).
+    Free {
+        /// Control point ids.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        points: Option<Vec<usize>>,
+        /// Box corner.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        min: Option<V3>,
+        /// Box corner.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        max: Option<V3>,
+        /// The control point nearest this position.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        near: Option<V3>,
+    },
+    /// Change the material: solids per control cell (`cells`, or those whose centroid is in
+    /// `min`/`max`, else all), D-NURBS everywhere.
+    Material {
+        /// Control cells (solids).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        cells: Option<Vec<usize>>,
+        /// Box corner (solids: cells whose centroid is inside).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        min: Option<V3>,
+        /// Box corner.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        max: Option<V3>,
+        /// Solids: mass per volume.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        density: Option<f64>,
+        /// Solids: damping per volume.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        damping: Option<f64>,
+        /// Solids: edge spring modulus.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        edge_stiffness: Option<f64>,
+        /// Solids: virtual spring modulus.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        virtual_stiffness: Option<f64>,
+        /// Solids: stiffness scale per axis.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        anisotropy: Option<V3>,
+        /// D-NURBS: mass density `mu`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        mu: Option<f64>,
+        /// D-NURBS: damping density `gamma`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        gamma: Option<f64>,
+        /// D-NURBS: tension `alpha` (all directions).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        alpha: Option<f64>,
+        /// D-NURBS: rigidity `beta` (all pairs).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        beta: Option<f64>,
+    },
+    /// Extrude a boundary face of the control lattice into a new cell (subdivision solids,
+    /// journal section 5.4): by id or nearest centroid.
+    Extrude {
+        /// Face id.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        face: Option<usize>,
+        /// The boundary face whose centroid is nearest.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        near: Option<V3>,
+        /// Extrusion length relative to the face size (default 1).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        factor: Option<f64>,
+    },
+    /// Delete a control cell ("trimming", subdivision solids): by id or nearest centroid.
+    #[serde(alias = "trim")]
+    DeleteCell {
+        /// Cell id.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        cell: Option<usize>,
+        /// The cell whose centroid is nearest.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        near: Option<V3>,
+    },
+    /// The current shape becomes the rest shape.
+    PlasticReset,
+    /// Zero all velocities.
+    Stop,
+    /// Move control point `index` to `to` directly (the traditional way).
+    MovePoint {
+        /// Control point (FFD: lattice control point; PDE: not available).
+        index: usize,
+        /// New position.
+        to: V3,
+    },
+    /// Set the weight of control point `index` (NURBS models).
+    SetWeight {
+        /// Control point.
+        index: usize,
+        /// New weight (> 0).
+        weight: f64,
+    },
+    /// FFD direct manipulation (`ffd-direct-manipulation.txt` eqs 7 and 12): move the
+    /// embedded points `from` (positions in the current deformed object) exactly to `to`.
+    FfdMove {
+        /// Point moves.
+        moves: Vec<PointMove>,
+    },
+    /// Set a named constant of a PDE surface's boundary functions (`dynamic-pde-surfaces.txt`
+    /// eq 3), or the time `t`.
+    PdeSet {
+        /// The constant's name as the spec lists it, or `t`.
+        name: String,
+        /// Its new value.
+        value: f64,
+    },
+    /// Set a named model or simulation parameter (see `Model::params`).
+    Set {
+        /// Parameter name.
+        name: String,
+        /// New value.
+        value: f64,
+    },
+    /// Change the integrator and/or the time step.
+    Integrator {
+        /// Integrator name (solids: `symplectic`, `explicit`, `implicit`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        integrator: Option<String>,
+        /// Time step.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        dt: Option<f64>,
+    },
+    /// Add a geometric constraint (D-NURBS, `d-nurbs.txt` section 6.2): `kind = "point"` keeps
+    /// the material point `param` at `target`; `kind = "normal"` keeps the surface normal at
+    /// `param` along `normal`. Removed by [`Edit::Release`] with its name.
+    Constraint {
+        /// Constraint name (default `constraint<N>`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        name: Option<String>,
+        /// `point` or `normal`.
+        #[serde(rename = "type")]
+        kind: String,
+        /// Material point.
+        param: [f64; 2],
+        /// Point constraint: the position.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        target: Option<V3>,
+        /// Normal constraint: the direction.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        normal: Option<V3>,
+    },
+}
+
+/// One point move of [`Edit::FfdMove`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointMove {
+    /// The point (in the current deformed object).
+    pub from: V3,
+    /// Where it goes.
+    pub to: V3,
+}
+
+impl Edit {
+    /// The edit's name as files spell its `action`.
+    pub fn action(&self) -> &'static str {
+        match self {
+            Edit::Rope { .. } => "rope",
+            Edit::MoveRope { .. } => "move-rope",
+            Edit::Force { .. } => "force",
+            Edit::RegionForce { .. } => "region-force",
+            Edit::Gravity { .. } => "gravity",
+            Edit::Inflate { .. } => "inflate",
+            Edit::Data { .. } => "data",
+            Edit::Release { .. } => "release",
+            Edit::Fix { .. } => "fix",
+            Edit::Free { .. } => "free",
+            Edit::Material { .. } => "material",
+            Edit::Extrude { .. } => "extrude",
+            Edit::DeleteCell { .. } => "delete-cell",
+            Edit::PlasticReset => "plastic-reset",
+            Edit::Stop => "stop",
+            Edit::MovePoint { .. } => "move-point",
+            Edit::SetWeight { .. } => "set-weight",
+            Edit::FfdMove { .. } => "ffd-move",
+            Edit::PdeSet { .. } => "pde-set",
+            Edit::Set { .. } => "set",
+            Edit::Integrator { .. } => "integrator",
+            Edit::Constraint { .. } => "constraint",
+        }
+    }
+
+    /// Checks what can be checked without a model: finite numbers, positive stiffnesses and
+    /// radii, `until`/`release` not before `at`, exclusive keys. `at` is the time the edit is
+    /// scheduled for (0 for an immediate edit).
+    pub fn validate(&self, at: f64) -> Result<(), String> {
+        fn fin(key: &str, v: &[f64]) -> Result<(), String> {
+            match v.iter().find(|x| !x.is_finite()) {
+                Some(x) => Err(format!("`{key}`: {x} is not finite")),
+                None => Ok(()),
+            }
+        }
+        fn pos(key: &str, v: Option<f64>, allow_zero: bool) -> Result<(), String> {
+            match v {
+                Some(x) if !(x.is_finite() && (x > 0.0 || (allow_zero && x == 0.0))) => {
+                    Err(format!(
+                        "`{key}`: {x} must be {} and finite",
+                        if allow_zero {
+                            "non-negative"
+                        } else {
+                            "positive"
+                        }
+                    ))
+                }
+                _ => Ok(()),
+            }
+        }
+        fn after(key: &str, v: Option<f64>, at: f64) -> Result<(), String> {
+            match v {
+                Some(x) if !x.is_finite() || x < at => {
+                    Err(format!("`{key}`: {x} is before the edit's time {at}"))
+                }
+                _ => Ok(()),
+            }
+        }
+        fn opt3(key: &str, v: &Option<V3>) -> Result<(), String> {
+            v.as_ref().map_or(Ok(()), |v| fin(key, v))
+        }
+        fn sel(
+            points: &Option<Vec<usize>>,
+            min: &Option<V3>,
+            max: &Option<V3>,
+            near: &Option<V3>,
+        ) -> Result<(), String> {
+            opt3("min", min)?;
+            opt3("max", max)?;
+            opt3("near", near)?;
+            let n = points.is_some() as u8
+                + (min.is_some() || max.is_some()) as u8
+                + near.is_some() as u8;
+            if n != 1 {
+                return Err("give exactly one of `points`, `min` and `max`, or `near`".into());
+            }
+            if min.is_some() != max.is_some() {
+                return Err("`min` and `max` go together".into());
+            }
+            Ok(())
+        }
+        match self {
+            Edit::Rope {
+                from,
+                param,
+                to,
+                until,
+                velocity,
+                release,
+                stiffness,
+                length,
+                kernel,
+                ..
+            } => {
+                fin("from", from)?;
+                opt3("to", to)?;
+                opt3("velocity", velocity)?;
+                if let Some(p) = param {
+                    fin("param", p)?;
+                }
+                if to.is_some() && velocity.is_some() {
+                    return Err("`to` and `velocity` exclude each other".into());
+                }
+                if until.is_some() && to.is_none() {
+                    return Err("`until` needs `to`".into());
+                }
+                after("until", *until, at)?;
+                after("release", *release, at)?;
+                pos("stiffness", *stiffness, false)?;
+                pos("length", *length, true)?;
+                pos("kernel", *kernel, false)?;
+            }
+            Edit::MoveRope { to, .. } => fin("to", to)?,
+            Edit::Force {
+                near,
+                param,
+                force,
+                until,
+                ..
+            } => {
+                fin("force", force)?;
+                opt3("near", near)?;
+                if near.is_some() == param.is_some() {
+                    return Err("give one of `near` and `param`".into());
+                }
+                after("until", *until, at)?;
+            }
+            Edit::RegionForce {
+                center,
+                radius,
+                force,
+                until,
+                ..
+            } => {
+                fin("center", center)?;
+                fin("force", force)?;
+                pos("radius", Some(*radius), true)?;
+                after("until", *until, at)?;
+            }
+            Edit::Gravity { g, until, .. } => {
+                fin("g", g)?;
+                after("until", *until, at)?;
+            }
+            Edit::Inflate {
+                pressure, until, ..
+            } => {
+                fin("pressure", &[*pressure])?;
+                after("until", *until, at)?;
+            }
+            Edit::Data {
+                points, stiffness, ..
+            } => {
+                if points.is_empty() {
+                    return Err("`points`: no data points".into());
+                }
+                for p in points {
+                    fin("points", p)?;
+                }
+                pos("stiffness", *stiffness, false)?;
+            }
+            Edit::Release { .. } | Edit::PlasticReset | Edit::Stop => {}
+            Edit::Fix {
+                points,
+                min,
+                max,
+                near,
+            }
+            | Edit::Free {
+                points,
+                min,
+                max,
+                near,
+            } => sel(points, min, max, near)?,
+            Edit::Material {
+                min,
+                max,
+                cells,
+                density,
+                damping,
+                edge_stiffness,
+                virtual_stiffness,
+                anisotropy,
+                mu,
+                gamma,
+                alpha,
+                beta,
+            } => {
+                opt3("min", min)?;
+                opt3("max", max)?;
+                if min.is_some() != max.is_some() {
+                    return Err("`min` and `max` go together".into());
+                }
+                if cells.is_some() && min.is_some() {
+                    return Err("give `cells` or `min` and `max`, not both".into());
+                }
+                pos("density", *density, false)?;
+                pos("damping", *damping, true)?;
+                pos("edge_stiffness", *edge_stiffness, true)?;
+                pos("virtual_stiffness", *virtual_stiffness, true)?;
+                if let Some(a) = anisotropy {
+                    for &x in a {
+                        pos("anisotropy", Some(x), false)?;
+                    }
+                }
+                pos("mu", *mu, true)?;
+                pos("gamma", *gamma, true)?;
+                pos("alpha", *alpha, true)?;
+                pos("beta", *beta, true)?;
+            }
+            Edit::Extrude { face, near, factor } => {
+                opt3("near", near)?;
+                if face.is_some() == near.is_some() {
+                    return Err("give one of `face` and `near`".into());
+                }
+                pos("factor", *factor, false)?;
+            }
+            Edit::DeleteCell { cell, near } => {
+                opt3("near", near)?;
+                if cell.is_some() == near.is_some() {
+                    return Err("give one of `cell` and `near`".into());
+                }
+            }
+            Edit::MovePoint { to, .. } => fin("to", to)?,
+            Edit::SetWeight { weight, .. } => pos("weight", Some(*weight), false)?,
+            Edit::FfdMove { moves } => {
+                if moves.is_empty() {
+                    return Err("`moves`: no point moves".into());
+                }
+                for m in moves {
+                    fin("moves.from", &m.from)?;
+                    fin("moves.to", &m.to)?;
+                }
+            }
+            Edit::PdeSet { value, .. } | Edit::Set { value, .. } => fin("value", &[*value])?,
+            Edit::Integrator { integrator, dt } => {
+                if integrator.is_none() && dt.is_none() {
+                    return Err("give `integrator` and/or `dt`".into());
+                }
+                pos("dt", *dt, false)?;
+            }
+            Edit::Constraint {
+                kind,
+                param,
+                target,
+                normal,
+                ..
+            } => {
+                fin("param", param)?;
+                opt3("target", target)?;
+                opt3("normal", normal)?;
+                match (kind.as_str(), target, normal) {
+                    ("point", Some(_), None) => {}
+                    ("normal", None, Some(n)) => {
+                        if n.iter().all(|x| *x == 0.0) {
+                            return Err("`normal` must not be zero".into());
+                        }
+                    }
+                    ("point", ..) => return Err("a point constraint takes `target`".into()),
+                    ("normal", ..) => return Err("a normal constraint takes `normal`".into()),
+                    (o, ..) => {
+                        return Err(format!(
+                            "`type`: \"{o}\" is not a constraint type (point, normal)"
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,372 @@
+//! The one interface every model kind implements ([`Model`]) and the values it exchanges with
+//! front ends: step reports, display geometry, pick hits, parameters, undo records.
+
+use std::any::Any;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+use vclay_core::{TriMesh, Vec3};
+
+use crate::command::Edit;
+use crate::error::SessionError;
+
+/// The kinds of model a session holds (`[model] kind` in scenarios, `kind` in session files).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ModelKind {
+    /// D-NURBS curve (`d-nurbs.txt` section 4.2).
+    DnurbsCurve,
+    /// D-NURBS tensor-product surface (section 4.2).
+    DnurbsSurface,
+    /// Swung D-NURBS surface (section 4.3, eq 7).
+    DnurbsSwung,
+    /// MacCracken-Joy subdivision solid (`subdivision-solids-journal.txt` section 4.2).
+    SubdivisionSolid,
+    /// Trivariate B-spline solid (journal section 4.1).
+    BsplineSolid,
+    /// FFD lattice with an embedded mesh (`ffd-direct-manipulation.txt`).
+    Ffd,
+    /// Dynamic PDE surface (`dynamic-pde-surfaces.txt`).
+    PdeSurface,
+}
+
+impl ModelKind {
+    /// Every kind, in the order files document them.
+    pub const ALL: [ModelKind; 7] = [
+        ModelKind::DnurbsCurve,
+        ModelKind::DnurbsSurface,
+        ModelKind::DnurbsSwung,
+        ModelKind::SubdivisionSolid,
+        ModelKind::BsplineSolid,
+        ModelKind::Ffd,
+        ModelKind::PdeSurface,
+    ];
+
+    /// The name files use.
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelKind::DnurbsCurve => "dnurbs-curve",
+            ModelKind::DnurbsSurface => "dnurbs-surface",
+            ModelKind::DnurbsSwung => "dnurbs-swung",
+            ModelKind::SubdivisionSolid => "subdivision-solid",
+            ModelKind::BsplineSolid => "bspline-solid",
+            ModelKind::Ffd => "ffd",
+            ModelKind::PdeSurface => "pde-surface",
+        }
+    }
+
+    /// The kind with file name `name`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// All names, comma separated (for error messages).
+    pub fn names() -> String {
+        Self::ALL.map(ModelKind::name).join(", ")
+    }
+}
+
+impl std::fmt::Display for ModelKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Energies of a model's state (zero where a kind has no such energy).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Energy {
+    /// Kinetic energy.
+    pub kinetic: f64,
+    /// Elastic (internal) energy.
+    pub elastic: f64,
+    /// Energy stored in tools (ropes).
+    pub tools: f64,
+}
+
+impl Energy {
+    /// Kinetic plus elastic.
+    pub fn total(&self) -> f64 {
+        self.kinetic + self.elastic
+    }
+}
+
+/// What one step did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepReport {
+    /// Simulated time after the step.
+    pub time: f64,
+    /// Energies the kernel reported for the step (solids: at its start; D-NURBS: see
+    /// `vclay_dynamics::dnurbs::StepReport`).
+    pub energy: Energy,
+    /// Iterations of the step's iterative solver (0 if none).
+    pub iterations: usize,
+    /// Wall time of the step in seconds.
+    pub seconds: f64,
+}
+
+/// What a set of display lines shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LineRole {
+    /// The control net / control lattice edges.
+    ControlNet,
+    /// The edges of the data (finest) lattice or the FFD lattice.
+    LatticeEdges,
+    /// Data points (markers).
+    DataPoints,
+    /// Ropes and springs, from the model point to the cursor.
+    Ropes,
+    /// Forces, drawn from their point along the force (scaled to the model size).
+    Forces,
+    /// Fixed control points (markers).
+    Fixed,
+    /// Constraints (markers at their targets).
+    Constraints,
+    /// A curve model itself (a polyline).
+    Curve,
+}
+
+/// Lines and markers for a viewer: `segments` index `points`; a set without segments is a
+/// set of markers.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LineSet {
+    /// What the set shows.
+    pub role: Option<LineRole>,
+    /// Points.
+    pub points: Vec<Vec3>,
+    /// Segments as pairs of point indices.
+    pub segments: Vec<[u32; 2]>,
+}
+
+impl LineSet {
+    /// An empty set for `role`.
+    pub fn new(role: LineRole) -> Self {
+        Self {
+            role: Some(role),
+            ..Default::default()
+        }
+    }
+    /// Adds a segment from `a` to `b`.
+    pub fn segment(&mut self, a: Vec3, b: Vec3) {
+        let i = self.points.len() as u32;
+        self.points.push(a);
+        self.points.push(b);
+        self.segments.push([i, i + 1]);
+    }
+    /// Adds a polyline through `pts`.
+    pub fn polyline(&mut self, pts: &[Vec3]) {
+        let i = self.points.len() as u32;
+        self.points.extend_from_slice(pts);
+        for k in 1..pts.len() as u32 {
+            self.segments.push([i + k - 1, i + k]);
+        }
+    }
+}
+
+/// A ray for picking: `origin + s direction`, `s >= 0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Origin (the eye).
+    pub origin: Vec3,
+    /// Direction (any length but zero).
+    pub direction: Vec3,
+}
+
+/// The element of a model that a pick hit.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "element", rename_all = "kebab-case")]
+pub enum Element {
+    /// A point of a surface (D-NURBS: with its parameters `[u, v]`; PDE: `[u, v]` too).
+    SurfacePoint {
+        /// Parameters.
+        param: [f64; 2],
+    },
+    /// A point of a curve at parameter `u`.
+    CurvePoint {
+        /// Parameter.
+        u: f64,
+    },
+    /// A control point.
+    ControlPoint {
+        /// Its index.
+        index: usize,
+    },
+    /// A data point (solids: a point of the finest lattice).
+    DataPoint {
+        /// Its index.
+        index: usize,
+    },
+    /// A boundary face of the control lattice (subdivision solids), hit through the display
+    /// surface.
+    Face {
+        /// Face id of the control lattice.
+        index: usize,
+    },
+    /// A control cell, hit through the display surface.
+    Cell {
+        /// Cell id of the control lattice.
+        index: usize,
+    },
+    /// A vertex of an embedded mesh (FFD).
+    MeshVertex {
+        /// Its index.
+        index: usize,
+    },
+}
+
+/// The nearest hit of a ray on a model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Distance along the ray (in units of `|direction|`).
+    pub distance: f64,
+    /// The point hit (on the surface, or the point element itself).
+    pub point: Vec3,
+    /// What was hit.
+    pub element: Element,
+    /// For hits through the display surface, the control face and cell under the hit
+    /// (subdivision solids) as extra elements.
+    pub extra: [Option<Element>; 2],
+}
+
+/// A model or simulation parameter that front ends can show and change ([`Edit::Set`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Param {
+    /// Name used by [`Edit::Set`].
+    pub name: String,
+    /// Current value.
+    pub value: f64,
+    /// Smallest sensible value (a slider's end; values below are rejected where they are
+    /// invalid).
+    pub min: f64,
+    /// Largest sensible value.
+    pub max: f64,
+    /// What it is.
+    pub doc: String,
+}
+
+/// An opaque copy of a model's evolving state, taken by [`Model::snapshot`].
+pub struct Snapshot(pub Box<dyn Any + Send + Sync>);
+
+impl std::fmt::Debug for Snapshot {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Snapshot(..)")
+    }
+}
+
+impl Snapshot {
+    /// Wraps a value.
+    pub fn new<T: Any + Send + Sync>(t: T) -> Self {
+        Self(Box::new(t))
+    }
+    /// The value, if it is a `T`.
+    pub fn get<T: Any>(&self) -> Option<&T> {
+        self.0.downcast_ref()
+    }
+}
+
+/// How to undo an applied edit.
+#[derive(Debug)]
+pub enum Undo {
+    /// Put back a snapshot of the state taken just before the edit.
+    State(Snapshot),
+    /// Apply an exact inverse edit (FFD moves, fix/free, material), then put back the state
+    /// taken just before the edit (time may have passed since).
+    Inverse {
+        /// The inverse edit.
+        edit: Edit,
+        /// The state before the edit.
+        state: Snapshot,
+    },
+    /// Replace the whole model by the copy taken before the edit (topology edits).
+    Model(Box<dyn Model>),
+}
+
+/// What applying an edit did.
+#[derive(Debug)]
+pub struct Applied {
+    /// One line for the log ("rope `rope0` attached to data point 2196").
+    pub message: String,
+    /// How to undo it.
+    pub undo: Undo,
+}
+
+/// Export formats, chosen by file extension.
+pub const EXPORT_EXTENSIONS: [&str; 9] = [
+    "json", "obj", "ply", "stl", "vtu", "ovm", "glb", "step", "igs",
+];
+
+/// One model of a session, whatever its kind. Every front end drives models only through
+/// this trait (via [`crate::Session`]).
+pub trait Model: Send + Sync + std::fmt::Debug {
+    /// The kind.
+    fn kind(&self) -> ModelKind;
+    /// One line about the model (sizes).
+    fn summary(&self) -> String;
+    /// Simulated time.
+    fn time(&self) -> f64;
+    /// Time step.
+    fn dt(&self) -> f64;
+    /// Steps taken.
+    fn steps(&self) -> u64;
+    /// Advances one time step (after moving scheduled rope cursors and removing expired tools).
+    fn step(&mut self) -> Result<StepReport, SessionError>;
+    /// Energies of the current state.
+    fn energy(&self) -> Energy;
+    /// Size of the model (bounding box diagonal of its rest shape): tolerances scale with it.
+    fn size(&self) -> f64;
+    /// A counter that grows whenever what [`Model::display_mesh`] or
+    /// [`Model::display_lines`] return changes (a viewer re-uploads only then).
+    fn revision(&self) -> u64;
+    /// Triangles with normals for shading (curves: empty).
+    fn display_mesh(&self) -> Result<TriMesh, SessionError>;
+    /// Control net, lattice edges, data points, ropes, forces, fixed points, constraints.
+    fn display_lines(&self) -> Vec<LineSet>;
+    /// The nearest element the ray hits within `tolerance` (a distance in model units from the
+    /// ray, for points and curves; surfaces are hit exactly).
+    fn pick(&self, ray: &Ray, tolerance: f64) -> Option<Hit>;
+    /// Material and simulation parameters.
+    fn params(&self) -> Vec<Param>;
+    /// Applies an edit, or fails leaving the model unchanged.
+    fn apply(&mut self, edit: &Edit) -> Result<Applied, SessionError>;
+    /// Undoes an edit ([`Undo::State`] and [`Undo::Inverse`]; the session handles
+    /// [`Undo::Model`]).
+    fn undo(&mut self, undo: Undo) -> Result<(), SessionError>;
+    /// A copy of the evolving state.
+    fn snapshot(&self) -> Snapshot;
+    /// Puts back a snapshot of this model.
+    fn restore(&mut self, snapshot: &Snapshot) -> Result<(), SessionError>;
+    /// A full copy.
+    fn clone_model(&self) -> Box<dyn Model>;
+    /// Writes the model to `path` in the format its extension names (one of
+    /// [`EXPORT_EXTENSIONS`] that the kind supports); an extension the kind does not write is
+    /// an error that names the ones it does.
+    fn export(&self, path: &Path) -> Result<(), SessionError>;
+    /// Everything needed to rebuild the model exactly (session files; see `docs/formats.md`).
+    fn save(&self) -> Result<serde_json::Value, SessionError>;
+}
+
+/// Builds the error for an extension a kind does not export.
+pub fn unsupported_export(kind: ModelKind, path: &Path, supported: &[&str]) -> SessionError {
+    SessionError::io(
+        path,
+        format!(
+            "a {kind} model cannot be written as .{}; it writes {}",
+            path.extension()
+                .and_then(|e| e.to_str())
+                .unwrap_or("(no extension)"),
+            supported
+                .iter()
+                .map(|e| format!(".{e}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    )
+}
+
+/// The lower-case extension of `path`.
+pub fn extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
+}

@@ -1,0 +1,97 @@
+//! The model kinds behind [`crate::Model`]: how each is built from a scenario's tables and
+//! rebuilt from a session file.
+
+pub mod dnurbs;
+pub mod ffd;
+pub mod pde;
+pub mod solid;
+
+use std::path::Path;
+
+use serde::de::DeserializeOwned;
+
+use crate::error::SessionError;
+use crate::model::{Model, ModelKind};
+
+/// The tables of a scenario that describe one model.
+#[derive(Debug, Clone, Copy)]
+pub struct Spec<'a> {
+    /// `[model]` (or one `[[model]]` entry).
+    pub model: &'a toml::Table,
+    /// `[material]`, if present.
+    pub material: Option<&'a toml::Table>,
+    /// `[simulation]` without the run-length keys (`steps`, `duration`), if present.
+    pub simulation: Option<&'a toml::Table>,
+    /// Folder that relative file names are resolved against (the scenario's folder).
+    pub base: &'a Path,
+}
+
+/// An error in a model's tables: which table, which key, what is wrong (the scenario parser
+/// adds the file and line).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpecError {
+    /// `model`, `material` or `simulation`.
+    pub table: String,
+    /// The key.
+    pub key: String,
+    /// What is wrong.
+    pub what: String,
+}
+
+impl SpecError {
+    /// An error at `table.key`.
+    pub fn new(table: &str, key: &str, what: impl std::fmt::Display) -> Self {
+        Self {
+            table: table.to_string(),
+            key: key.to_string(),
+            what: what.to_string(),
+        }
+    }
+}
+
+/// Deserializes a table into `T`, turning serde's message into a [`SpecError`] whose key is
+/// the first name it quotes (``unknown field `fro` `` names `fro`).
+pub fn typed<T: DeserializeOwned>(table: &str, t: &toml::Table) -> Result<T, SpecError> {
+    T::deserialize(toml::Value::Table(t.clone())).map_err(|e| {
+        let msg = e.message().to_string();
+        let key = msg
+            .split('`')
+            .nth(1)
+            .filter(|k| !k.contains(' '))
+            .unwrap_or(table)
+            .to_string();
+        SpecError {
+            table: table.to_string(),
+            key,
+            what: msg,
+        }
+    })
+}
+
+/// Builds a model of `kind` from its scenario tables.
+pub fn build(kind: ModelKind, spec: &Spec<'_>) -> Result<Box<dyn Model>, SpecError> {
+    Ok(match kind {
+        ModelKind::SubdivisionSolid | ModelKind::BsplineSolid => {
+            Box::new(solid::SolidModel::from_spec(kind, spec)?)
+        }
+        ModelKind::DnurbsCurve | ModelKind::DnurbsSurface | ModelKind::DnurbsSwung => {
+            dnurbs::build(kind, spec)?
+        }
+        ModelKind::Ffd => ffd::build(spec)?,
+        ModelKind::PdeSurface => pde::build(spec)?,
+    })
+}
+
+/// Rebuilds a model of `kind` from what its [`Model::save`] wrote.
+pub fn load(kind: ModelKind, saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
+    Ok(match kind {
+        ModelKind::SubdivisionSolid | ModelKind::BsplineSolid => {
+            Box::new(solid::SolidModel::load(saved)?)
+        }
+        ModelKind::DnurbsCurve | ModelKind::DnurbsSurface | ModelKind::DnurbsSwung => {
+            dnurbs::load(kind, saved)?
+        }
+        ModelKind::Ffd => ffd::load(saved)?,
+        ModelKind::PdeSurface => pde::load(saved)?,
+    })
+}

@@ -1,0 +1,1917 @@
+//! Dynamic solids in a session: [`SolidModel`] wraps `vclay_solids::DynamicSolid` (B-spline
+//! solids, `subdivision-solids-journal.txt` section 4.1, eq 3, and MacCracken-Joy subdivision
+//! solids, section 4.2, eq 4: data points `d = A p` moved by eq 10).
+//!
+//! Undo: tool edits, stop, direct point moves, parameter and material changes restore a
+//! [`SolidState`] snapshot (plus the old parameters and material field); fix/free apply the
+//! exact inverse (free exactly the points that the fix fixed) and restore the state; topology
+//! edits (extrude, delete cell) and the plastic reset keep a full copy of the model.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+use vclay_core::{TriMesh, Vec3};
+use vclay_lattice::{
+    BoundaryRule, EdgeId, Features, Lattice, SubdivisionRules, VertexId, formats, primitives,
+};
+use vclay_solids::{
+    DynamicSolid, Integrator, Material, MaterialField, SolidParams, SolidRest, SolidSource,
+    SolidState, SolidsError, Tool, ToolId,
+};
+use vclay_spline::{KnotVector, NurbsVolume};
+
+use super::{Spec, SpecError, typed};
+use crate::command::{Edit, V3};
+use crate::error::SessionError;
+use crate::model::{
+    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
+    StepReport, Undo, extension, unsupported_export,
+};
+use crate::tools::{CursorPath, ToolTable, a3, v3};
+
+/// Default rope stiffness of the solids.
+pub const DEFAULT_ROPE_STIFFNESS: f64 = 50.0;
+/// Default `[simulation] duration` of a solid scenario (s).
+pub const DEFAULT_DURATION: f64 = 1.0;
+
+/// A dynamic solid with its named tools.
+#[derive(Clone, Debug)]
+pub struct SolidModel {
+    solid: DynamicSolid,
+    tools: ToolTable,
+    revision: u64,
+}
+
+#[derive(Clone, Debug)]
+struct SolidSnap {
+    state: SolidState,
+    tools: ToolTable,
+    params: SolidParams,
+    material: MaterialField,
+}
+
+fn kernel(e: SolidsError) -> SessionError {
+    match e {
+        SolidsError::Diverged { .. } => SessionError::Diverged {
+            model: String::new(),
+            what: e.to_string(),
+        },
+        e => SessionError::model(e),
+    }
+}
+
+fn cmd(reason: impl std::fmt::Display) -> SessionError {
+    SessionError::command("", "", reason)
+}
+
+impl SolidModel {
+    /// Wraps a solid (no tools).
+    pub fn new(solid: DynamicSolid) -> Self {
+        Self {
+            solid,
+            tools: ToolTable::default(),
+            revision: 1,
+        }
+    }
+
+    /// The solid.
+    pub fn solid(&self) -> &DynamicSolid {
+        &self.solid
+    }
+
+    /// The named tools.
+    pub fn tools(&self) -> &ToolTable {
+        &self.tools
+    }
+
+    fn snap(&self) -> SolidSnap {
+        SolidSnap {
+            state: self.solid.state(),
+            tools: self.tools.clone(),
+            params: *self.solid.params(),
+            material: self.solid.material().clone(),
+        }
+    }
+
+    fn put(&mut self, s: &SolidSnap) -> Result<(), SessionError> {
+        if self.solid.material() != &s.material {
+            self.solid
+                .set_material(s.material.clone())
+                .map_err(kernel)?;
+        }
+        self.solid.set_params(s.params).map_err(kernel)?;
+        self.solid.set_state(&s.state).map_err(kernel)?;
+        self.tools = s.tools.clone();
+        self.revision += 1;
+        Ok(())
+    }
+
+    fn is_subdivision(&self) -> bool {
+        matches!(self.solid.source(), SolidSource::Subdivision { .. })
+    }
+
+    /// Control points selected by ids, a box around rest positions, or the nearest one.
+    fn select(
+        &self,
+        points: &Option<Vec<usize>>,
+        min: &Option<V3>,
+        max: &Option<V3>,
+        near: &Option<V3>,
+    ) -> Result<Vec<usize>, SessionError> {
+        let n = self.solid.control_points().len();
+        if let Some(p) = points {
+            if let Some(&i) = p.iter().find(|&&i| i >= n) {
+                return Err(cmd(format!(
+                    "control point {i} does not exist (there are {n})"
+                )));
+            }
+            return Ok(p.clone());
+        }
+        if let (Some(lo), Some(hi)) = (min, max) {
+            return Ok(self
+                .solid
+                .control_points_where(|x| (0..3).all(|a| x[a] >= lo[a] && x[a] <= hi[a])));
+        }
+        if let Some(x) = near {
+            return Ok(
+                vclay_solids::tools::nearest(self.solid.control_points(), &v3(*x))
+                    .into_iter()
+                    .collect(),
+            );
+        }
+        Ok(Vec::new())
+    }
+
+    fn add_tool(&mut self, tool: Tool) -> Result<usize, SessionError> {
+        self.solid.add_tool(tool).map(|id| id.0).map_err(|e| cmd(e))
+    }
+
+    fn label(
+        &self,
+        name: &Option<String>,
+        what: &str,
+        handle: usize,
+    ) -> Result<String, SessionError> {
+        self.tools.label(name.as_deref(), what, handle).map_err(cmd)
+    }
+
+    /// Adds a scheduled tool entry.
+    fn track(
+        &mut self,
+        label: &str,
+        action: &str,
+        handle: usize,
+        path: Option<CursorPath>,
+        release: Option<f64>,
+    ) {
+        self.tools.tools.push(crate::tools::ScheduledTool {
+            name: label.to_string(),
+            action: action.to_string(),
+            handle,
+            path,
+            release,
+        });
+    }
+
+    /// Gravity and inflation: an existing tool of that name changes strength.
+    fn replace_field_tool(
+        &mut self,
+        name: &Option<String>,
+        action: &str,
+        tool: Tool,
+        until: Option<f64>,
+    ) -> Result<String, SessionError> {
+        if let Some(n) = name
+            && let Some(t) = self.tools.get(n).cloned()
+        {
+            if t.action != action {
+                return Err(cmd(format!(
+                    "the tool `{n}` is a {}, not {action}",
+                    t.action
+                )));
+            }
+            let id = self.add_tool(tool)?;
+            let _ = self.solid.remove_tool(ToolId(t.handle));
+            let e = self.tools.get_mut(n).expect("present");
+            e.handle = id;
+            e.release = until.or(e.release);
+            return Ok(format!("{action} `{n}` changed"));
+        }
+        let id = self.add_tool(tool)?;
+        let label = self.label(name, action, id)?;
+        self.track(&label, action, id, None, until);
+        Ok(format!("{action} `{label}` on"))
+    }
+
+    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
+        let before = self.snap();
+        let state_undo = |s: SolidSnap| Undo::State(Snapshot::new(s));
+        let message = match edit {
+            Edit::Rope {
+                name,
+                from,
+                param,
+                to,
+                until,
+                velocity,
+                release,
+                stiffness,
+                length,
+                kernel,
+                start,
+            } => {
+                if param.is_some() || kernel.is_some() {
+                    return Err(cmd("`param` and `kernel` are for D-NURBS models"));
+                }
+                let f = v3(*from);
+                let id = self
+                    .solid
+                    .attach_rope(
+                        f,
+                        stiffness.unwrap_or(DEFAULT_ROPE_STIFFNESS),
+                        length.unwrap_or(0.0),
+                    )
+                    .map_err(cmd)?
+                    .0;
+                let Some(Tool::Rope { point, .. }) = self.solid.tool(ToolId(id)) else {
+                    unreachable!("just added a rope")
+                };
+                let point = *point;
+                let label = match self.label(name, "rope", id) {
+                    Ok(l) => l,
+                    Err(e) => {
+                        let _ = self.solid.remove_tool(ToolId(id));
+                        return Err(e);
+                    }
+                };
+                let start = start.unwrap_or(self.solid.time());
+                let path = match (to, velocity) {
+                    (_, Some(v)) => CursorPath::Velocity {
+                        from: *from,
+                        velocity: *v,
+                    },
+                    (to, None) => CursorPath::Linear {
+                        from: *from,
+                        to: to.unwrap_or(*from),
+                        start,
+                        end: until.unwrap_or(start),
+                    },
+                };
+                self.track(&label, "rope", id, Some(path), *release);
+                format!("rope `{label}` attached to data point {point}")
+            }
+            Edit::MoveRope { name, to } => {
+                let t = self
+                    .tools
+                    .get(name)
+                    .ok_or_else(|| cmd(format!("no active rope named `{name}`")))?;
+                if t.action != "rope" {
+                    return Err(cmd(format!("`{name}` is a {}, not a rope", t.action)));
+                }
+                let h = t.handle;
+                self.solid.move_cursor(ToolId(h), v3(*to)).map_err(cmd)?;
+                self.tools.get_mut(name).expect("present").path = None;
+                format!("rope `{name}` cursor at {to:?}")
+            }
+            Edit::Force {
+                name,
+                near,
+                param,
+                force,
+                until,
+            } => {
+                let Some(near) = near else {
+                    let _ = param;
+                    return Err(cmd("solids take `near`, not `param`"));
+                };
+                let point =
+                    vclay_solids::tools::nearest(self.solid.data_points(), &v3(*near)).unwrap_or(0);
+                let id = self.add_tool(Tool::PointForce {
+                    point,
+                    force: v3(*force),
+                })?;
+                let label = self.label(name, "force", id).inspect_err(|_| {
+                    let _ = self.solid.remove_tool(ToolId(id));
+                })?;
+                self.track(&label, "force", id, None, *until);
+                format!("force `{label}` on data point {point}")
+            }
+            Edit::RegionForce {
+                name,
+                center,
+                radius,
+                force,
+                until,
+            } => {
+                let id = self
+                    .solid
+                    .add_region_force(v3(*center), *radius, v3(*force))
+                    .map_err(cmd)?
+                    .0;
+                let label = self.label(name, "region", id).inspect_err(|_| {
+                    let _ = self.solid.remove_tool(ToolId(id));
+                })?;
+                self.track(&label, "region-force", id, None, *until);
+                let n = match self.solid.tool(ToolId(id)) {
+                    Some(Tool::RegionForce { points, .. }) => points.len(),
+                    _ => 0,
+                };
+                format!("region force `{label}` on {n} data points")
+            }
+            Edit::Gravity { name, g, until } => {
+                self.replace_field_tool(name, "gravity", Tool::Gravity { g: v3(*g) }, *until)?
+            }
+            Edit::Inflate {
+                name,
+                pressure,
+                until,
+            } => self.replace_field_tool(
+                name,
+                "inflate",
+                Tool::Inflation {
+                    pressure: *pressure,
+                },
+                *until,
+            )?,
+            Edit::Release { name } => {
+                let t = self
+                    .tools
+                    .remove(name)
+                    .ok_or_else(|| cmd(format!("no active tool named `{name}`")))?;
+                let _ = self.solid.remove_tool(ToolId(t.handle));
+                format!("released `{name}`")
+            }
+            Edit::Fix {
+                points,
+                min,
+                max,
+                near,
+            }
+            | Edit::Free {
+                points,
+                min,
+                max,
+                near,
+            } => {
+                let fix = matches!(edit, Edit::Fix { .. });
+                let pts = self.select(points, min, max, near)?;
+                let changed: Vec<usize> = pts
+                    .iter()
+                    .copied()
+                    .filter(|&i| self.solid.is_fixed(i) != fix)
+                    .collect();
+                let t0 = std::time::Instant::now();
+                self.solid.set_fixed(&pts, fix).map_err(cmd)?;
+                let st = self.solid.stats();
+                let message = if fix {
+                    format!(
+                        "fixed {} control points ({} of {} data points and {} springs remain active; rebuilt in {:.1} ms)",
+                        pts.len(),
+                        st.active_data_points,
+                        st.data_points,
+                        st.active_springs,
+                        t0.elapsed().as_secs_f64() * 1e3
+                    )
+                } else {
+                    format!("freed {} control points", pts.len())
+                };
+                let inverse = if fix {
+                    Edit::Free {
+                        points: Some(changed),
+                        min: None,
+                        max: None,
+                        near: None,
+                    }
+                } else {
+                    Edit::Fix {
+                        points: Some(changed),
+                        min: None,
+                        max: None,
+                        near: None,
+                    }
+                };
+                self.revision += 1;
+                return Ok(Applied {
+                    message,
+                    undo: Undo::Inverse {
+                        edit: inverse,
+                        state: Snapshot::new(before),
+                    },
+                });
+            }
+            Edit::Material {
+                cells,
+                min,
+                max,
+                density,
+                damping,
+                edge_stiffness,
+                virtual_stiffness,
+                anisotropy,
+                mu,
+                gamma,
+                alpha,
+                beta,
+            } => {
+                if mu.is_some() || gamma.is_some() || alpha.is_some() || beta.is_some() {
+                    return Err(cmd(
+                        "`mu`, `gamma`, `alpha`, `beta` are D-NURBS materials; solids take density, damping, edge_stiffness, virtual_stiffness, anisotropy",
+                    ));
+                }
+                let list: Option<Vec<usize>> = match (cells, min, max) {
+                    (Some(c), _, _) => Some(c.clone()),
+                    (None, Some(lo), Some(hi)) => Some(self.cells_in_box(lo, hi)),
+                    _ => None,
+                };
+                let f = |m: &mut Material| {
+                    if let Some(x) = density {
+                        m.density = *x;
+                    }
+                    if let Some(x) = damping {
+                        m.damping = *x;
+                    }
+                    if let Some(x) = edge_stiffness {
+                        m.edge_stiffness = *x;
+                    }
+                    if let Some(x) = virtual_stiffness {
+                        m.virtual_stiffness = *x;
+                    }
+                    if let Some(x) = anisotropy {
+                        m.anisotropy = *x;
+                    }
+                };
+                self.solid
+                    .update_material(list.as_deref(), f)
+                    .map_err(cmd)?;
+                match &list {
+                    Some(l) => format!("material changed in {} control cells", l.len()),
+                    None => "material changed".to_string(),
+                }
+            }
+            Edit::Extrude { face, near, factor } => {
+                let f = match (face, near) {
+                    (Some(f), _) => *f,
+                    (None, Some(x)) => self
+                        .solid
+                        .boundary_face_near(&v3(*x))
+                        .ok_or_else(|| cmd("only subdivision solids can be extruded"))?,
+                    (None, None) => return Err(cmd("give `face` or `near`")),
+                };
+                let full = self.clone();
+                let t0 = std::time::Instant::now();
+                self.solid.extrude(f, factor.unwrap_or(1.0)).map_err(cmd)?;
+                self.revision += 1;
+                return Ok(Applied {
+                    message: format!(
+                        "extruded control face {f}: {} data points, rebuilt in {:.1} ms",
+                        self.solid.data_points().len(),
+                        t0.elapsed().as_secs_f64() * 1e3
+                    ),
+                    undo: Undo::Model(Box::new(full)),
+                });
+            }
+            Edit::DeleteCell { cell, near } => {
+                let c = match (cell, near) {
+                    (Some(c), _) => *c,
+                    (None, Some(x)) => self
+                        .solid
+                        .cell_near(&v3(*x))
+                        .ok_or_else(|| cmd("only subdivision solids can be trimmed"))?,
+                    (None, None) => return Err(cmd("give `cell` or `near`")),
+                };
+                let full = self.clone();
+                let t0 = std::time::Instant::now();
+                self.solid.delete_cell(c).map_err(cmd)?;
+                self.revision += 1;
+                return Ok(Applied {
+                    message: format!(
+                        "deleted control cell {c}: {} data points, rebuilt in {:.1} ms",
+                        self.solid.data_points().len(),
+                        t0.elapsed().as_secs_f64() * 1e3
+                    ),
+                    undo: Undo::Model(Box::new(full)),
+                });
+            }
+            Edit::PlasticReset => {
+                let full = self.clone();
+                let e = self.solid.energy().internal;
+                self.solid.plastic_reset();
+                self.revision += 1;
+                return Ok(Applied {
+                    message: format!(
+                        "plastic reset (internal energy {e:.4e} -> {:.4e})",
+                        self.solid.energy().internal
+                    ),
+                    undo: Undo::Model(Box::new(full)),
+                });
+            }
+            Edit::Stop => {
+                self.solid.stop();
+                "stopped all motion".to_string()
+            }
+            Edit::MovePoint { index, to } => {
+                let n = self.solid.control_points().len();
+                if *index >= n {
+                    return Err(cmd(format!(
+                        "control point {index} does not exist (there are {n})"
+                    )));
+                }
+                let mut st = self.solid.state();
+                st.control_points[*index] = v3(*to);
+                st.velocities[*index] = Vec3::zeros();
+                st.data_points = self.solid.map_to_data(&st.control_points).map_err(cmd)?;
+                self.solid.set_state(&st).map_err(cmd)?;
+                format!("moved control point {index} to {to:?}")
+            }
+            Edit::SetWeight { .. } => {
+                return Err(cmd(
+                    "the weights of a dynamic solid are frozen (journal section 4.1: c = B q with fixed weights)",
+                ));
+            }
+            Edit::Set { name, value } => self.set_param(name, *value)?,
+            Edit::Integrator { integrator, dt } => {
+                let mut p = *self.solid.params();
+                if let Some(i) = integrator {
+                    p.integrator = parse_integrator(i).ok_or_else(|| {
+                        cmd(format!(
+                            "unknown integrator \"{i}\"; expected \"explicit\", \"symplectic\" or \"implicit\""
+                        ))
+                    })?;
+                }
+                if let Some(dt) = dt {
+                    p.dt = *dt;
+                }
+                self.solid.set_params(p).map_err(cmd)?;
+                format!("integrator {:?}, dt {}", p.integrator, p.dt)
+            }
+            Edit::Data { .. }
+            | Edit::Constraint { .. }
+            | Edit::FfdMove { .. }
+            | Edit::PdeSet { .. } => {
+                return Err(cmd(format!(
+                    "`{}` does not apply to a {} model",
+                    edit.action(),
+                    self.kind()
+                )));
+            }
+        };
+        self.revision += 1;
+        Ok(Applied {
+            message,
+            undo: state_undo(before),
+        })
+    }
+
+    fn cells_in_box(&self, lo: &V3, hi: &V3) -> Vec<usize> {
+        let p = self.solid.control_points();
+        match self.solid.source() {
+            SolidSource::Subdivision { control, .. } => (0..control.num_cells())
+                .filter(|&c| {
+                    let vs = control.cell_vertices(vclay_lattice::CellId::new(c));
+                    let ctr = vs.iter().map(|v| p[v.index()]).sum::<Vec3>() / vs.len() as f64;
+                    (0..3).all(|a| ctr[a] >= lo[a] && ctr[a] <= hi[a])
+                })
+                .collect(),
+            SolidSource::BSpline { knots, .. } => {
+                let dims = knots.each_ref().map(KnotVector::control_points);
+                let cells = dims.map(|d| d.saturating_sub(1).max(1));
+                let mut out = Vec::new();
+                for i in 0..cells[0] {
+                    for j in 0..cells[1] {
+                        for k in 0..cells[2] {
+                            let mut ctr = Vec3::zeros();
+                            let mut cnt = 0.0;
+                            for (a, b, c) in [
+                                (0, 0, 0),
+                                (1, 0, 0),
+                                (0, 1, 0),
+                                (0, 0, 1),
+                                (1, 1, 0),
+                                (1, 0, 1),
+                                (0, 1, 1),
+                                (1, 1, 1),
+                            ] {
+                                let (ii, jj, kk) = (
+                                    (i + a).min(dims[0] - 1),
+                                    (j + b).min(dims[1] - 1),
+                                    (k + c).min(dims[2] - 1),
+                                );
+                                ctr += p[(ii * dims[1] + jj) * dims[2] + kk];
+                                cnt += 1.0;
+                            }
+                            ctr /= cnt;
+                            if (0..3).all(|a| ctr[a] >= lo[a] && ctr[a] <= hi[a]) {
+                                out.push((i * cells[1] + j) * cells[2] + k);
+                            }
+                        }
+                    }
+                }
+                out
+            }
+        }
+    }
+
+    fn set_param(&mut self, name: &str, value: f64) -> Result<String, SessionError> {
+        let mut p = *self.solid.params();
+        match name {
+            "dt" => p.dt = value,
+            "divergence_factor" => p.divergence_factor = value,
+            "cg_tolerance" => p.cg_tolerance = value,
+            "cg_max_iterations" => {
+                if !(value >= 1.0 && value.fract() == 0.0 && value <= 1e9) {
+                    return Err(cmd(format!(
+                        "cg_max_iterations = {value}: a whole number from 1 to 1e9"
+                    )));
+                }
+                p.cg_max_iterations = value as usize;
+            }
+            "density" | "damping" | "edge_stiffness" | "virtual_stiffness" => {
+                let f = |m: &mut Material| match name {
+                    "density" => m.density = value,
+                    "damping" => m.damping = value,
+                    "edge_stiffness" => m.edge_stiffness = value,
+                    _ => m.virtual_stiffness = value,
+                };
+                self.solid.update_material(None, f).map_err(cmd)?;
+                return Ok(format!("{name} = {value} in every cell"));
+            }
+            _ => {
+                return Err(cmd(format!(
+                    "no parameter `{name}`; a solid has {}",
+                    self.params()
+                        .iter()
+                        .map(|p| p.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )));
+            }
+        }
+        self.solid.set_params(p).map_err(cmd)?;
+        Ok(format!("{name} = {value}"))
+    }
+
+    fn boundary_mesh(&self) -> TriMesh {
+        let (off, verts) = self.solid.boundary_loops();
+        let d = self.solid.data_points();
+        let mut map = vec![u32::MAX; d.len()];
+        let mut mesh = TriMesh::new();
+        for k in 0..off.len().saturating_sub(1) {
+            let lp = &verts[off[k] as usize..off[k + 1] as usize];
+            let ids: Vec<u32> = lp
+                .iter()
+                .map(|&v| {
+                    if map[v as usize] == u32::MAX {
+                        map[v as usize] = mesh.positions.len() as u32;
+                        mesh.positions.push(d[v as usize]);
+                    }
+                    map[v as usize]
+                })
+                .collect();
+            for j in 1..ids.len().saturating_sub(1) {
+                mesh.triangles.push([ids[0], ids[j], ids[j + 1]]);
+            }
+        }
+        mesh.compute_normals();
+        mesh
+    }
+
+    fn control_net(&self) -> LineSet {
+        let mut set = LineSet::new(LineRole::ControlNet);
+        let p = self.solid.control_points();
+        match self.solid.source() {
+            SolidSource::Subdivision { control, .. } => {
+                set.points = p.to_vec();
+                for e in 0..control.num_edges() {
+                    let [a, b] = control.edge_vertices(EdgeId::new(e));
+                    set.segments.push([a.0, b.0]);
+                }
+            }
+            SolidSource::BSpline { knots, .. } => {
+                let dims = knots.each_ref().map(KnotVector::control_points);
+                set.points = p.to_vec();
+                let idx = |i: usize, j: usize, k: usize| ((i * dims[1] + j) * dims[2] + k) as u32;
+                for i in 0..dims[0] {
+                    for j in 0..dims[1] {
+                        for k in 0..dims[2] {
+                            if i + 1 < dims[0] {
+                                set.segments.push([idx(i, j, k), idx(i + 1, j, k)]);
+                            }
+                            if j + 1 < dims[1] {
+                                set.segments.push([idx(i, j, k), idx(i, j + 1, k)]);
+                            }
+                            if k + 1 < dims[2] {
+                                set.segments.push([idx(i, j, k), idx(i, j, k + 1)]);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        set
+    }
+
+    /// Builds a solid from a scenario's `[model]`, `[material]` and `[simulation]` tables.
+    pub fn from_spec(kind: ModelKind, spec: &Spec<'_>) -> Result<Self, SpecError> {
+        let m: ModelKeys = typed("model", spec.model)?;
+        let (source, p) = build_source(kind, &m, spec.base)?;
+        let mut field = MaterialField::uniform(Material::default(), source.control_cells());
+        let mut metric: Option<f64> = None;
+        if let Some(t) = spec.material {
+            let mk: MaterialKeys = typed("material", t)?;
+            let merr = |e: SolidsError, cells: bool| match e {
+                SolidsError::InvalidParameter {
+                    name,
+                    value,
+                    expected,
+                } => SpecError::new(
+                    "material",
+                    name.split('[').next().unwrap_or(&name),
+                    format!("{value} is invalid: {expected}"),
+                ),
+                SolidsError::NoSuchElement { index, count, .. } => SpecError::new(
+                    "material",
+                    if cells { "cells" } else { "material" },
+                    format!("control cell {index} does not exist (there are {count})"),
+                ),
+                e => SpecError::new("material", "material", e),
+            };
+            let base_values = Values {
+                density: mk.density,
+                damping: mk.damping,
+                edge_stiffness: mk.edge_stiffness,
+                virtual_stiffness: mk.virtual_stiffness,
+                anisotropy: mk.anisotropy,
+            };
+            field
+                .update(None, |x| base_values.apply(x))
+                .map_err(|e| merr(e, false))?;
+            match mk.energy.as_deref() {
+                None | Some("springs") => {
+                    if mk.metric_stiffness.is_some() {
+                        return Err(SpecError::new(
+                            "material",
+                            "metric_stiffness",
+                            "needs `energy = \"metric-tensor\"`",
+                        ));
+                    }
+                }
+                Some("metric-tensor") => {
+                    metric = Some(
+                        mk.metric_stiffness
+                            .unwrap_or(vclay_solids::metric::DEFAULT_METRIC_STIFFNESS),
+                    )
+                }
+                Some(o) => {
+                    return Err(SpecError::new(
+                        "material",
+                        "energy",
+                        format!(
+                            "unknown energy \"{o}\"; expected \"springs\" or \"metric-tensor\""
+                        ),
+                    ));
+                }
+            }
+            for c in &mk.cells {
+                field
+                    .update(Some(&c.cells), |x| c.values().apply(x))
+                    .map_err(|e| merr(e, true))?;
+            }
+        }
+        let sim: SimKeys = match spec.simulation {
+            Some(t) => typed("simulation", t)?,
+            None => SimKeys::default(),
+        };
+        let mut params = SolidParams::default();
+        if let Some(i) = &sim.integrator {
+            params.integrator = parse_integrator(i).ok_or_else(|| {
+                SpecError::new("simulation", "integrator", format!("unknown integrator \"{i}\"; expected \"explicit\", \"symplectic\" or \"implicit\""))
+            })?;
+        }
+        if let Some(dt) = sim.dt {
+            params.dt = dt;
+        }
+        if let Some(f) = sim.divergence_factor {
+            params.divergence_factor = f;
+        }
+        if let Some(t) = sim.cg_tolerance {
+            params.cg_tolerance = t;
+        }
+        if let Some(n) = sim.cg_max_iterations {
+            params.cg_max_iterations = n;
+        }
+        params.validate().map_err(|e| match e {
+            SolidsError::InvalidParameter {
+                name,
+                value,
+                expected,
+            } => SpecError::new(
+                "simulation",
+                &name,
+                format!("{value} is invalid: {expected}"),
+            ),
+            e => SpecError::new("simulation", "simulation", e),
+        })?;
+        let mut solid = DynamicSolid::with_material(source, p, field, params).map_err(|e| {
+            let key = match &e {
+                SolidsError::InvalidParameter { name, .. } if name.starts_with("samples") => {
+                    "samples"
+                }
+                _ => "kind",
+            };
+            SpecError::new("model", key, e)
+        })?;
+        if metric.is_some() {
+            solid.use_metric_energy(metric).map_err(|e| match e {
+                SolidsError::InvalidParameter {
+                    name,
+                    value,
+                    expected,
+                } => SpecError::new("material", &name, format!("{value} is invalid: {expected}")),
+                e => SpecError::new("material", "energy", e),
+            })?;
+        }
+        Ok(Self::new(solid))
+    }
+
+    /// Rebuilds a model saved by [`Model::save`].
+    pub fn load(v: &serde_json::Value) -> Result<Self, SessionError> {
+        let s: Saved = serde_json::from_value(v.clone()).map_err(SessionError::model)?;
+        let source = match &s.source {
+            SavedSource::Subdivision {
+                lattice,
+                creases,
+                corners,
+                boundary,
+                levels,
+            } => {
+                let control =
+                    formats::ovm::parse(lattice, "session lattice").map_err(SessionError::model)?;
+                let mut features = Features::none(&control);
+                for &e in creases {
+                    features
+                        .tag_crease(EdgeId::new(e))
+                        .map_err(SessionError::model)?;
+                }
+                for &c in corners {
+                    features
+                        .tag_corner(VertexId::new(c))
+                        .map_err(SessionError::model)?;
+                }
+                SolidSource::Subdivision {
+                    control,
+                    features,
+                    rules: SubdivisionRules::new(parse_boundary(boundary).ok_or_else(|| {
+                        SessionError::model(format!("unknown boundary rule \"{boundary}\""))
+                    })?),
+                    levels: *levels,
+                }
+            }
+            SavedSource::Bspline {
+                knots,
+                degrees,
+                weights,
+                samples,
+            } => {
+                let mut kv = Vec::new();
+                for a in 0..3 {
+                    let n = knots[a].len().checked_sub(degrees[a] + 1).ok_or_else(|| {
+                        SessionError::model(format!(
+                            "knot vector {a}: too short for degree {}",
+                            degrees[a]
+                        ))
+                    })?;
+                    kv.push(
+                        KnotVector::new(knots[a].clone(), degrees[a], n)
+                            .map_err(SessionError::model)?,
+                    );
+                }
+                SolidSource::BSpline {
+                    knots: kv.try_into().expect("three axes"),
+                    weights: weights.clone(),
+                    samples: *samples,
+                }
+            }
+        };
+        let material =
+            MaterialField::from_cells(s.material.iter().map(|m| m.to_material()).collect())
+                .map_err(SessionError::model)?;
+        let params = SolidParams {
+            integrator: parse_integrator(&s.params.integrator).ok_or_else(|| {
+                SessionError::model(format!("unknown integrator \"{}\"", s.params.integrator))
+            })?,
+            dt: s.params.dt,
+            divergence_factor: s.params.divergence_factor,
+            cg_tolerance: s.params.cg_tolerance,
+            cg_max_iterations: s.params.cg_max_iterations,
+            ..SolidParams::default()
+        };
+        let rest = SolidRest {
+            control_points: s.rest.control_points.iter().map(|a| v3(*a)).collect(),
+            data_points: s.rest.data_points.iter().map(|a| v3(*a)).collect(),
+            fixed: s.rest.fixed.clone(),
+            metric_stiffness: s.rest.metric_stiffness,
+            energy_scale: s.rest.energy_scale,
+        };
+        let state = SolidState {
+            control_points: s.state.control_points.iter().map(|a| v3(*a)).collect(),
+            velocities: s.state.velocities.iter().map(|a| v3(*a)).collect(),
+            data_points: s.state.data_points.iter().map(|a| v3(*a)).collect(),
+            tools: s
+                .state
+                .tools
+                .iter()
+                .map(|t| t.as_ref().map(SavedTool::to_tool))
+                .collect(),
+            time: s.state.time,
+            steps: s.state.steps,
+            tool_energy_seen: s.state.tool_energy_seen,
+        };
+        let solid = DynamicSolid::from_parts(source, material, params, &rest, &state)
+            .map_err(SessionError::model)?;
+        for t in &s.tools.tools {
+            if solid.tool(ToolId(t.handle)).is_none() {
+                return Err(SessionError::model(format!(
+                    "tool `{}` refers to kernel tool {} which does not exist",
+                    t.name, t.handle
+                )));
+            }
+        }
+        Ok(Self {
+            solid,
+            tools: s.tools,
+            revision: 1,
+        })
+    }
+}
+
+fn parse_integrator(s: &str) -> Option<Integrator> {
+    match s {
+        "explicit" => Some(Integrator::Explicit),
+        "symplectic" | "symplectic-euler" => Some(Integrator::SymplecticEuler),
+        "implicit" | "implicit-euler" => Some(Integrator::ImplicitEuler),
+        _ => None,
+    }
+}
+
+fn integrator_name(i: Integrator) -> &'static str {
+    match i {
+        Integrator::Explicit => "explicit",
+        Integrator::SymplecticEuler => "symplectic",
+        Integrator::ImplicitEuler => "implicit",
+    }
+}
+
+fn parse_boundary(s: &str) -> Option<BoundaryRule> {
+    match s {
+        "sharp" => Some(BoundaryRule::Sharp),
+        "smooth" => Some(BoundaryRule::Smooth),
+        "interior" => Some(BoundaryRule::Interior),
+        _ => None,
+    }
+}
+
+fn boundary_name(b: BoundaryRule) -> &'static str {
+    match b {
+        BoundaryRule::Sharp => "sharp",
+        BoundaryRule::Smooth => "smooth",
+        BoundaryRule::Interior => "interior",
+    }
+}
+
+impl Model for SolidModel {
+    fn kind(&self) -> ModelKind {
+        if self.is_subdivision() {
+            ModelKind::SubdivisionSolid
+        } else {
+            ModelKind::BsplineSolid
+        }
+    }
+
+    fn summary(&self) -> String {
+        let st = self.solid.stats();
+        format!(
+            "{}: {} control points ({} free), {} data points ({} active), {} springs ({} active)",
+            self.kind(),
+            st.control_points,
+            st.free_control_points,
+            st.data_points,
+            st.active_data_points,
+            st.edge_springs + st.virtual_springs,
+            st.active_springs
+        )
+    }
+
+    fn time(&self) -> f64 {
+        self.solid.time()
+    }
+    fn dt(&self) -> f64 {
+        self.solid.params().dt
+    }
+    fn steps(&self) -> u64 {
+        self.solid.steps()
+    }
+
+    fn step(&mut self) -> Result<StepReport, SessionError> {
+        let t = self.solid.time();
+        let due = self.tools.due(t, self.solid.params().dt);
+        for e in &due.expired {
+            let _ = self.solid.remove_tool(ToolId(e.handle));
+        }
+        for (h, c) in &due.cursors {
+            self.solid.move_cursor(ToolId(*h), *c).map_err(kernel)?;
+        }
+        self.revision += 1;
+        let r = self.solid.step().map_err(kernel)?;
+        Ok(StepReport {
+            time: self.solid.time(),
+            energy: Energy {
+                kinetic: r.energy.kinetic,
+                elastic: r.energy.internal,
+                tools: r.energy.tools,
+            },
+            iterations: r.cg_iterations,
+            seconds: r.seconds,
+        })
+    }
+
+    fn energy(&self) -> Energy {
+        let e = self.solid.energy();
+        Energy {
+            kinetic: e.kinetic,
+            elastic: e.internal,
+            tools: e.tools,
+        }
+    }
+
+    fn size(&self) -> f64 {
+        let mut lo = Vec3::repeat(f64::INFINITY);
+        let mut hi = Vec3::repeat(f64::NEG_INFINITY);
+        for p in self.solid.rest_control_points() {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
+        }
+        (hi - lo).norm().max(f64::MIN_POSITIVE)
+    }
+
+    fn revision(&self) -> u64 {
+        self.revision
+    }
+
+    fn display_mesh(&self) -> Result<TriMesh, SessionError> {
+        Ok(self.boundary_mesh())
+    }
+
+    fn display_lines(&self) -> Vec<LineSet> {
+        let mut out = vec![self.control_net()];
+        let p = self.solid.control_points();
+        let mut fixed = LineSet::new(LineRole::Fixed);
+        fixed.points = (0..p.len())
+            .filter(|&i| self.solid.is_fixed(i))
+            .map(|i| p[i])
+            .collect();
+        out.push(fixed);
+        let d = self.solid.data_points();
+        if d.len() <= 20_000 {
+            let mut dp = LineSet::new(LineRole::DataPoints);
+            dp.points = d.to_vec();
+            out.push(dp);
+        }
+        let mut ropes = LineSet::new(LineRole::Ropes);
+        let mut forces = LineSet::new(LineRole::Forces);
+        let size = self.size();
+        for t in &self.tools.tools {
+            match self.solid.tool(ToolId(t.handle)) {
+                Some(Tool::Rope { point, cursor, .. }) => ropes.segment(d[*point], *cursor),
+                Some(Tool::PointForce { point, force }) => {
+                    let n = force.norm();
+                    if n > 0.0 {
+                        forces.segment(d[*point], d[*point] + force / n * (0.2 * size));
+                    }
+                }
+                Some(Tool::RegionForce { center, force, .. }) => {
+                    let n = force.norm();
+                    if n > 0.0 {
+                        forces.segment(*center, center + force / n * (0.2 * size));
+                    }
+                }
+                _ => {}
+            }
+        }
+        out.push(ropes);
+        out.push(forces);
+        out
+    }
+
+    fn pick(&self, ray: &Ray, tolerance: f64) -> Option<Hit> {
+        let p = self.solid.control_points();
+        let cp = crate::pick::ray_points(ray, p, tolerance).map(|(i, s)| Hit {
+            distance: s,
+            point: p[i],
+            element: Element::ControlPoint { index: i },
+            extra: [None, None],
+        });
+        let mesh = self.boundary_mesh();
+        let surf = crate::pick::ray_mesh(ray, &mesh).map(|(s, _, _)| {
+            let x = ray.origin + ray.direction * s;
+            let dp = vclay_solids::tools::nearest(self.solid.data_points(), &x).unwrap_or(0);
+            Hit {
+                distance: s,
+                point: x,
+                element: Element::DataPoint { index: dp },
+                extra: [
+                    self.solid
+                        .boundary_face_near(&x)
+                        .map(|index| Element::Face { index }),
+                    self.solid
+                        .cell_near(&x)
+                        .map(|index| Element::Cell { index }),
+                ],
+            }
+        });
+        match (cp, surf) {
+            // A control point in front of (or just behind) the surface wins.
+            (Some(c), Some(s)) if c.distance <= s.distance + tolerance => Some(c),
+            (c, s) => s.or(c),
+        }
+    }
+
+    fn params(&self) -> Vec<Param> {
+        let p = self.solid.params();
+        let m = self.solid.material().cell(0);
+        let par = |name: &str, value: f64, min: f64, max: f64, doc: &str| Param {
+            name: name.into(),
+            value,
+            min,
+            max,
+            doc: doc.into(),
+        };
+        vec![
+            par("dt", p.dt, 1e-5, 0.05, "time step (s)"),
+            par(
+                "density",
+                m.density,
+                0.01,
+                100.0,
+                "mass per volume (cell 0 shown; set applies to every cell)",
+            ),
+            par("damping", m.damping, 0.0, 100.0, "damping per volume"),
+            par(
+                "edge_stiffness",
+                m.edge_stiffness,
+                0.0,
+                10_000.0,
+                "edge spring modulus",
+            ),
+            par(
+                "virtual_stiffness",
+                m.virtual_stiffness,
+                0.0,
+                10_000.0,
+                "virtual spring modulus",
+            ),
+            par(
+                "divergence_factor",
+                p.divergence_factor,
+                1.0,
+                1e9,
+                "divergence bound / spring energy scale",
+            ),
+            par(
+                "cg_tolerance",
+                p.cg_tolerance,
+                1e-14,
+                1e-2,
+                "implicit: CG relative residual",
+            ),
+            par(
+                "cg_max_iterations",
+                p.cg_max_iterations as f64,
+                1.0,
+                10_000.0,
+                "implicit: CG iteration cap",
+            ),
+        ]
+    }
+
+    fn apply(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
+        self.apply_edit(edit)
+    }
+
+    fn undo(&mut self, undo: Undo) -> Result<(), SessionError> {
+        match undo {
+            Undo::State(s) => {
+                let s = s
+                    .get::<SolidSnap>()
+                    .ok_or_else(|| SessionError::model("undo record of another kind"))?
+                    .clone();
+                self.put(&s)
+            }
+            Undo::Inverse { edit, state } => {
+                self.apply_edit(&edit)?;
+                let s = state
+                    .get::<SolidSnap>()
+                    .ok_or_else(|| SessionError::model("undo record of another kind"))?
+                    .clone();
+                self.put(&s)
+            }
+            Undo::Model(_) => Err(SessionError::model("whole-model undo is the session's")),
+        }
+    }
+
+    fn snapshot(&self) -> Snapshot {
+        Snapshot::new(self.snap())
+    }
+
+    fn restore(&mut self, snapshot: &Snapshot) -> Result<(), SessionError> {
+        let s = snapshot
+            .get::<SolidSnap>()
+            .ok_or_else(|| SessionError::model("snapshot of another kind"))?
+            .clone();
+        self.put(&s)
+    }
+
+    fn clone_model(&self) -> Box<dyn Model> {
+        Box::new(self.clone())
+    }
+
+    fn export(&self, path: &Path) -> Result<(), SessionError> {
+        let ext = extension(path);
+        let io = |e: &dyn std::fmt::Display| SessionError::io(path, e);
+        match (ext.as_str(), self.solid.source()) {
+            ("ovm", SolidSource::Subdivision { .. }) => {
+                let l = self.solid.control_lattice().expect("subdivision solid");
+                formats::ovm::write(&l, path).map_err(|e| io(&e))
+            }
+            ("json", SolidSource::BSpline { knots, weights, .. }) => {
+                let vol = NurbsVolume::from_flat(
+                    knots.clone(),
+                    self.solid.control_points().to_vec(),
+                    weights.clone(),
+                )
+                .map_err(|e| io(&e))?;
+                vclay_io::write_model(path, &[vclay_io::Entity::Volume(vol)]).map_err(|e| io(&e))
+            }
+            ("obj" | "ply" | "stl", _) => {
+                let mesh = vclay_lattice::boundary_mesh(&self.solid.data_lattice_copy());
+                match ext.as_str() {
+                    "obj" => formats::surface::write_obj(&mesh, path),
+                    "ply" => formats::surface::write_ply(&mesh, path),
+                    _ => formats::surface::write_stl(&mesh, path),
+                }
+                .map_err(|e| io(&e))
+            }
+            ("vtu", _) => {
+                use vclay_lattice::formats::vtu::PointData;
+                let s = &self.solid;
+                let rest = s.map_to_data(s.rest_control_points()).map_err(|e| io(&e))?;
+                let disp: Vec<Vec3> = s
+                    .data_points()
+                    .iter()
+                    .zip(&rest)
+                    .map(|(d, r)| d - r)
+                    .collect();
+                let vel = s.map_to_data(s.velocities()).map_err(|e| io(&e))?;
+                let force = (!s.uses_metric_energy()).then(|| s.internal_forces());
+                let mass = s.masses().to_vec();
+                let mut data = vec![
+                    PointData::Vectors("displacement", &disp),
+                    PointData::Vectors("velocity", &vel),
+                ];
+                if let Some(f) = &force {
+                    data.push(PointData::Vectors("spring_force", f));
+                }
+                data.push(PointData::Scalars("mass", &mass));
+                formats::vtu::write_with_point_data(&s.data_lattice_copy(), &data, path)
+                    .map_err(|e| io(&e))
+            }
+            _ => Err(unsupported_export(
+                self.kind(),
+                path,
+                if self.is_subdivision() {
+                    &["ovm", "obj", "ply", "stl", "vtu"]
+                } else {
+                    &["json", "obj", "ply", "stl", "vtu"]
+                },
+            )),
+        }
+    }
+
+    fn save(&self) -> Result<serde_json::Value, SessionError> {
+        let s = &self.solid;
+        let source = match s.source() {
+            SolidSource::Subdivision {
+                control,
+                features,
+                rules,
+                levels,
+            } => SavedSource::Subdivision {
+                lattice: formats::ovm::to_string(control),
+                creases: features.creases().map(|e| e.index()).collect(),
+                corners: features.corners().map(|v| v.index()).collect(),
+                boundary: boundary_name(rules.boundary).to_string(),
+                levels: *levels,
+            },
+            SolidSource::BSpline {
+                knots,
+                weights,
+                samples,
+            } => SavedSource::Bspline {
+                knots: knots.each_ref().map(|k| k.as_slice().to_vec()),
+                degrees: knots.each_ref().map(KnotVector::degree),
+                weights: weights.clone(),
+                samples: *samples,
+            },
+        };
+        let p = s.params();
+        let rest = s.rest();
+        let st = s.state();
+        let arr = |v: &[Vec3]| v.iter().map(a3).collect::<Vec<_>>();
+        let saved = Saved {
+            source,
+            material: s
+                .material()
+                .cells()
+                .iter()
+                .map(SavedMaterial::from)
+                .collect(),
+            params: SavedParams {
+                integrator: integrator_name(p.integrator).into(),
+                dt: p.dt,
+                divergence_factor: p.divergence_factor,
+                cg_tolerance: p.cg_tolerance,
+                cg_max_iterations: p.cg_max_iterations,
+            },
+            rest: SavedRest {
+                control_points: arr(&rest.control_points),
+                data_points: arr(&rest.data_points),
+                fixed: rest.fixed,
+                metric_stiffness: rest.metric_stiffness,
+                energy_scale: rest.energy_scale,
+            },
+            state: SavedState {
+                control_points: arr(&st.control_points),
+                velocities: arr(&st.velocities),
+                data_points: arr(&st.data_points),
+                tools: st
+                    .tools
+                    .iter()
+                    .map(|t| t.as_ref().map(SavedTool::from))
+                    .collect(),
+                time: st.time,
+                steps: st.steps,
+                tool_energy_seen: st.tool_energy_seen,
+            },
+            tools: self.tools.clone(),
+        };
+        serde_json::to_value(saved).map_err(SessionError::model)
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Scenario keys
+// ---------------------------------------------------------------------------------------
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ModelKeys {
+    #[allow(dead_code)]
+    kind: String,
+    #[serde(default)]
+    name: Option<String>,
+    primitive: Option<String>,
+    file: Option<std::path::PathBuf>,
+    entity: Option<usize>,
+    points: Option<[usize; 3]>,
+    min: Option<V3>,
+    max: Option<V3>,
+    radius: Option<f64>,
+    height: Option<f64>,
+    level: Option<usize>,
+    boundary: Option<String>,
+    control: Option<[usize; 3]>,
+    degree: Option<[usize; 3]>,
+    samples: Option<[usize; 3]>,
+}
+
+#[derive(Debug, Default)]
+struct Values {
+    density: Option<f64>,
+    damping: Option<f64>,
+    edge_stiffness: Option<f64>,
+    virtual_stiffness: Option<f64>,
+    anisotropy: Option<V3>,
+}
+
+impl Values {
+    fn apply(&self, m: &mut Material) {
+        if let Some(x) = self.density {
+            m.density = x;
+        }
+        if let Some(x) = self.damping {
+            m.damping = x;
+        }
+        if let Some(x) = self.edge_stiffness {
+            m.edge_stiffness = x;
+        }
+        if let Some(x) = self.virtual_stiffness {
+            m.virtual_stiffness = x;
+        }
+        if let Some(x) = self.anisotropy {
+            m.anisotropy = x;
+        }
+    }
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CellKeys {
+    cells: Vec<usize>,
+    density: Option<f64>,
+    damping: Option<f64>,
+    edge_stiffness: Option<f64>,
+    virtual_stiffness: Option<f64>,
+    anisotropy: Option<V3>,
+}
+
+impl CellKeys {
+    fn values(&self) -> Values {
+        Values {
+            density: self.density,
+            damping: self.damping,
+            edge_stiffness: self.edge_stiffness,
+            virtual_stiffness: self.virtual_stiffness,
+            anisotropy: self.anisotropy,
+        }
+    }
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MaterialKeys {
+    density: Option<f64>,
+    damping: Option<f64>,
+    edge_stiffness: Option<f64>,
+    virtual_stiffness: Option<f64>,
+    anisotropy: Option<V3>,
+    energy: Option<String>,
+    metric_stiffness: Option<f64>,
+    #[serde(default)]
+    cells: Vec<CellKeys>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SimKeys {
+    integrator: Option<String>,
+    dt: Option<f64>,
+    divergence_factor: Option<f64>,
+    cg_tolerance: Option<f64>,
+    cg_max_iterations: Option<usize>,
+}
+
+fn build_source(
+    kind: ModelKind,
+    m: &ModelKeys,
+    base: &Path,
+) -> Result<(SolidSource, Vec<Vec3>), SpecError> {
+    let err = |key: &str, what: String| SpecError::new("model", key, what);
+    let _ = &m.name;
+    let min = v3(m.min.unwrap_or([0.0; 3]));
+    let max = v3(m.max.unwrap_or([1.0; 3]));
+    for (k, v) in [("min", &min), ("max", &max)] {
+        if !v.iter().all(|c| c.is_finite()) {
+            return Err(err(k, "coordinates must be finite".into()));
+        }
+    }
+    if (0..3).any(|a| max[a] <= min[a]) {
+        return Err(err("max", "must exceed `min` along every axis".into()));
+    }
+    let forbid = |key: &str, present: bool| {
+        if present {
+            Err(err(key, format!("is not a key of kind \"{kind}\"")))
+        } else {
+            Ok(())
+        }
+    };
+    let from_file_only = |keys: &[(&str, bool)]| match keys.iter().find(|k| k.1) {
+        Some((key, _)) => Err(err(
+            key,
+            "describes a primitive; it does not apply to a model read from `file`".into(),
+        )),
+        None => Ok(()),
+    };
+    let resolve = |f: &Path| {
+        if f.is_absolute() {
+            f.to_path_buf()
+        } else {
+            base.join(f)
+        }
+    };
+    match kind {
+        ModelKind::SubdivisionSolid => {
+            forbid("control", m.control.is_some())?;
+            forbid("degree", m.degree.is_some())?;
+            forbid("samples", m.samples.is_some())?;
+            forbid("entity", m.entity.is_some())?;
+            if m.file.is_some() {
+                from_file_only(&[
+                    ("points", m.points.is_some()),
+                    ("min", m.min.is_some()),
+                    ("max", m.max.is_some()),
+                    ("radius", m.radius.is_some()),
+                    ("height", m.height.is_some()),
+                ])?;
+            }
+            let lattice: Lattice = match (&m.primitive, &m.file) {
+                (Some(_), Some(_)) => {
+                    return Err(err(
+                        "file",
+                        "give either `primitive` or `file`, not both".into(),
+                    ));
+                }
+                (None, Some(f)) => {
+                    formats::ovm::read(&resolve(f)).map_err(|e| err("file", e.to_string()))?
+                }
+                (prim, None) => build_primitive(prim.as_deref().unwrap_or("box"), m, min, max)?,
+            };
+            let level = m.level.unwrap_or(2);
+            if level > vclay_solids::model::MAX_LEVEL {
+                return Err(err(
+                    "level",
+                    format!(
+                        "{level} is above the maximum {}",
+                        vclay_solids::model::MAX_LEVEL
+                    ),
+                ));
+            }
+            let boundary =
+                parse_boundary(m.boundary.as_deref().unwrap_or("sharp")).ok_or_else(|| {
+                    err(
+                        "boundary",
+                        format!(
+                            "unknown rule \"{}\"; expected \"sharp\", \"smooth\" or \"interior\"",
+                            m.boundary.as_deref().unwrap_or("")
+                        ),
+                    )
+                })?;
+            Ok(SolidSource::subdivision(lattice, boundary, level))
+        }
+        ModelKind::BsplineSolid => {
+            for (k, present) in [
+                ("primitive", m.primitive.is_some()),
+                ("level", m.level.is_some()),
+                ("boundary", m.boundary.is_some()),
+                ("points", m.points.is_some()),
+                ("radius", m.radius.is_some()),
+                ("height", m.height.is_some()),
+            ] {
+                forbid(k, present)?;
+            }
+            let samples = m.samples.unwrap_or([10; 3]);
+            for (a, &n) in samples.iter().enumerate() {
+                if n < 2 {
+                    return Err(err(
+                        "samples",
+                        format!("{n} samples along axis {a}; at least 2 needed"),
+                    ));
+                }
+                if n > MAX_SAMPLES {
+                    return Err(err(
+                        "samples",
+                        format!("{n} samples along axis {a}; at most {MAX_SAMPLES}"),
+                    ));
+                }
+            }
+            if samples.iter().product::<usize>() > MAX_SAMPLE_POINTS {
+                return Err(err(
+                    "samples",
+                    format!(
+                        "{samples:?} makes {} data points; at most {MAX_SAMPLE_POINTS}",
+                        samples.iter().product::<usize>()
+                    ),
+                ));
+            }
+            if let Some(f) = &m.file {
+                from_file_only(&[
+                    ("control", m.control.is_some()),
+                    ("degree", m.degree.is_some()),
+                    ("min", m.min.is_some()),
+                    ("max", m.max.is_some()),
+                ])?;
+                let path = resolve(f);
+                let idx = m.entity.unwrap_or(0);
+                let entities =
+                    vclay_io::model::read_model(&path).map_err(|e| err("file", e.to_string()))?;
+                let count = entities.len();
+                let vol = match entities.into_iter().nth(idx) {
+                    Some(vclay_io::Entity::Volume(v)) => v,
+                    Some(other) => {
+                        return Err(err(
+                            "entity",
+                            format!(
+                                "entity {idx} of {} is a {}, not a nurbs-volume",
+                                path.display(),
+                                other.type_name()
+                            ),
+                        ));
+                    }
+                    None => {
+                        return Err(err(
+                            "entity",
+                            format!(
+                                "{} has {count} entities; there is no entity {idx}",
+                                path.display()
+                            ),
+                        ));
+                    }
+                };
+                return Ok((
+                    SolidSource::BSpline {
+                        knots: vol.knots().clone(),
+                        weights: vol.weights().to_vec(),
+                        samples,
+                    },
+                    vol.control_points().to_vec(),
+                ));
+            }
+            if m.entity.is_some() {
+                return Err(err(
+                    "entity",
+                    "selects an entity of `file`; give `file`".into(),
+                ));
+            }
+            let control = m.control.unwrap_or([4; 3]);
+            let degree = m.degree.unwrap_or([3; 3]);
+            if let Some(a) = (0..3).find(|&a| control[a] > 256) {
+                return Err(err(
+                    "control",
+                    format!("{} control points along axis {a}; at most 256", control[a]),
+                ));
+            }
+            let mut knots = Vec::with_capacity(3);
+            for a in 0..3 {
+                knots.push(
+                    KnotVector::clamped_uniform(degree[a], control[a])
+                        .map_err(|e| err("control", format!("axis {a}: {e}")))?,
+                );
+            }
+            let knots: [KnotVector; 3] = knots.try_into().expect("three axes");
+            let vol = NurbsVolume::box_lattice(degree, control, min, max)
+                .map_err(|e| err("control", e.to_string()))?;
+            Ok((
+                SolidSource::BSpline {
+                    knots,
+                    weights: vec![1.0; vol.control_points().len()],
+                    samples,
+                },
+                vol.control_points().to_vec(),
+            ))
+        }
+        _ => Err(err("kind", format!("{kind} is not a solid"))),
+    }
+}
+
+/// Most samples of a B-spline solid along one direction.
+pub const MAX_SAMPLES: usize = 1024;
+/// Most data points of a B-spline solid (`m0 m1 m2`).
+pub const MAX_SAMPLE_POINTS: usize = 4_000_000;
+
+fn build_primitive(name: &str, m: &ModelKeys, min: Vec3, max: Vec3) -> Result<Lattice, SpecError> {
+    let err = |key: &str, what: String| SpecError::new("model", key, what);
+    let size = (max - min).min();
+    let r = m.radius.unwrap_or(0.5 * size);
+    let h = m.height.unwrap_or(size);
+    if !(r.is_finite() && r > 0.0) {
+        return Err(err("radius", format!("{r} must be positive")));
+    }
+    if !(h.is_finite() && h > 0.0) {
+        return Err(err("height", format!("{h} must be positive")));
+    }
+    Ok(match name {
+        "box" => {
+            let n = m.points.unwrap_or([4; 3]);
+            if let Some(a) = (0..3).find(|&a| n[a] < 2 || n[a] > 64) {
+                return Err(err(
+                    "points",
+                    format!("{} points along axis {a}; expected 2 to 64", n[a]),
+                ));
+            }
+            primitives::box_lattice(n, min, max)
+        }
+        "cylinder" => primitives::cylinder(r, h, 4, 2, 0),
+        "torus" => primitives::torus(r, 0.4 * r, 8, 4),
+        "paper-torus" => primitives::paper_torus(0.5 * r, r, h),
+        "gear" => primitives::gear(0.5 * r, r, 1.3 * r, h),
+        "cube-with-holes" => primitives::cube_with_holes(size / 3.0),
+        "l-solid" => primitives::l_solid(2, 1, size / 3.0),
+        "t-solid" => primitives::t_solid(2, 1, size / 3.0),
+        other => {
+            return Err(err(
+                "primitive",
+                format!(
+                    "unknown primitive \"{other}\"; expected box, cylinder, torus, paper-torus, gear, cube-with-holes, l-solid or t-solid"
+                ),
+            ));
+        }
+    })
+}
+
+// ---------------------------------------------------------------------------------------
+// Session file form
+// ---------------------------------------------------------------------------------------
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Saved {
+    source: SavedSource,
+    material: Vec<SavedMaterial>,
+    params: SavedParams,
+    rest: SavedRest,
+    state: SavedState,
+    tools: ToolTable,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+enum SavedSource {
+    Subdivision {
+        lattice: String,
+        creases: Vec<usize>,
+        corners: Vec<usize>,
+        boundary: String,
+        levels: usize,
+    },
+    Bspline {
+        knots: [Vec<f64>; 3],
+        degrees: [usize; 3],
+        weights: Vec<f64>,
+        samples: [usize; 3],
+    },
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SavedMaterial {
+    density: f64,
+    damping: f64,
+    edge_stiffness: f64,
+    virtual_stiffness: f64,
+    anisotropy: V3,
+}
+
+impl From<&Material> for SavedMaterial {
+    fn from(m: &Material) -> Self {
+        Self {
+            density: m.density,
+            damping: m.damping,
+            edge_stiffness: m.edge_stiffness,
+            virtual_stiffness: m.virtual_stiffness,
+            anisotropy: m.anisotropy,
+        }
+    }
+}
+
+impl SavedMaterial {
+    fn to_material(&self) -> Material {
+        Material {
+            density: self.density,
+            damping: self.damping,
+            edge_stiffness: self.edge_stiffness,
+            virtual_stiffness: self.virtual_stiffness,
+            anisotropy: self.anisotropy,
+        }
+    }
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SavedParams {
+    integrator: String,
+    dt: f64,
+    divergence_factor: f64,
+    cg_tolerance: f64,
+    cg_max_iterations: usize,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SavedRest {
+    control_points: Vec<V3>,
+    data_points: Vec<V3>,
+    fixed: Vec<bool>,
+    metric_stiffness: Option<f64>,
+    energy_scale: f64,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SavedState {
+    control_points: Vec<V3>,
+    velocities: Vec<V3>,
+    data_points: Vec<V3>,
+    tools: Vec<Option<SavedTool>>,
+    time: f64,
+    steps: u64,
+    tool_energy_seen: f64,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+enum SavedTool {
+    Rope {
+        point: usize,
+        cursor: V3,
+        stiffness: f64,
+        length: f64,
+    },
+    PointForce {
+        point: usize,
+        force: V3,
+    },
+    RegionForce {
+        points: Vec<usize>,
+        force: V3,
+        center: V3,
+        radius: f64,
+    },
+    Gravity {
+        g: V3,
+    },
+    Inflation {
+        pressure: f64,
+    },
+}
+
+impl From<&Tool> for SavedTool {
+    fn from(t: &Tool) -> Self {
+        match t {
+            Tool::Rope {
+                point,
+                cursor,
+                stiffness,
+                length,
+            } => SavedTool::Rope {
+                point: *point,
+                cursor: a3(cursor),
+                stiffness: *stiffness,
+                length: *length,
+            },
+            Tool::PointForce { point, force } => SavedTool::PointForce {
+                point: *point,
+                force: a3(force),
+            },
+            Tool::RegionForce {
+                points,
+                force,
+                center,
+                radius,
+            } => SavedTool::RegionForce {
+                points: points.clone(),
+                force: a3(force),
+                center: a3(center),
+                radius: *radius,
+            },
+            Tool::Gravity { g } => SavedTool::Gravity { g: a3(g) },
+            Tool::Inflation { pressure } => SavedTool::Inflation {
+                pressure: *pressure,
+            },
+        }
+    }
+}
+
+impl SavedTool {
+    fn to_tool(&self) -> Tool {
+        match self {
+            SavedTool::Rope {
+                point,
+                cursor,
+                stiffness,
+                length,
+            } => Tool::Rope {
+                point: *point,
+                cursor: v3(*cursor),
+                stiffness: *stiffness,
+                length: *length,
+            },
+            SavedTool::PointForce { point, force } => Tool::PointForce {
+                point: *point,
+                force: v3(*force),
+            },
+            SavedTool::RegionForce {
+                points,
+                force,
+                center,
+                radius,
+            } => Tool::RegionForce {
+                points: points.clone(),
+                force: v3(*force),
+                center: v3(*center),
+                radius: *radius,
+            },
+            SavedTool::Gravity { g } => Tool::Gravity { g: v3(*g) },
+            SavedTool::Inflation { pressure } => Tool::Inflation {
+                pressure: *pressure,
+            },
+        }
+    }
+}

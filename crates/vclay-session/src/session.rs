@@ -1,0 +1,367 @@
+//! [`Session`]: named models of any kind, a schedule of timed commands, the command log, and
+//! undo/redo.
+//!
+//! # Time
+//! Each model keeps its own clock and time step; [`Session::step`] advances every model by one
+//! of its steps, [`Session::advance_to`] steps each model until its clock reaches a time.
+//! Before a model steps, the scheduled commands addressed to it whose time `at` satisfies
+//! `at <= t + dt / 2` are applied in time order (a scenario's timeline), then the model moves
+//! its rope cursors and drops expired tools.
+//!
+//! # Undo
+//! Every applied command is logged with the model's step count and time, and gets an undo
+//! record ([`crate::model::Undo`]): an exact inverse where the mathematics gives one, always
+//! with a snapshot of the state just before the command, so that undo after simulated time has
+//! passed puts the model back as it was just before the command (its clock included). Redo
+//! applies the undone command again to that state, which reproduces the state just after it.
+//! A new command, or a step, clears the redo list. Scheduled commands that have fired are
+//! ordinary log entries: undoing one does not schedule it again.
+
+use serde::{Deserialize, Serialize};
+
+use crate::command::Command;
+use crate::error::SessionError;
+use crate::model::{Hit, Model, Ray, StepReport, Undo};
+
+/// A command scheduled for a time (a scenario's timeline entry).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Timed {
+    /// Time at which it applies.
+    pub at: f64,
+    /// The command.
+    #[serde(flatten)]
+    pub command: Command,
+}
+
+/// A command as applied.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LogEntry {
+    /// The target model's step count when it was applied.
+    pub step: u64,
+    /// The target model's time when it was applied.
+    pub time: f64,
+    /// The model's name.
+    pub model: String,
+    /// The command (its `model` resolved).
+    pub command: Command,
+    /// What it did.
+    pub message: String,
+}
+
+#[derive(Debug)]
+struct UndoEntry {
+    model: usize,
+    undo: Undo,
+}
+
+#[derive(Debug)]
+struct Entry {
+    name: String,
+    model: Box<dyn Model>,
+}
+
+/// Models of any kind, their commands and history (see the [module docs](self)).
+#[derive(Debug, Default)]
+pub struct Session {
+    models: Vec<Entry>,
+    schedule: Vec<Timed>,
+    log: Vec<LogEntry>,
+    undo: Vec<UndoEntry>,
+    redo: Vec<LogEntry>,
+    revision: u64,
+}
+
+impl Session {
+    /// An empty session.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// A session with one model.
+    pub fn with_model(name: &str, model: Box<dyn Model>) -> Result<Self, SessionError> {
+        let mut s = Self::new();
+        s.add_model(name, model)?;
+        Ok(s)
+    }
+
+    /// Adds a model; names are unique and non-empty.
+    pub fn add_model(&mut self, name: &str, model: Box<dyn Model>) -> Result<(), SessionError> {
+        if name.is_empty() || self.index(name).is_some() {
+            return Err(SessionError::Model {
+                model: name.to_string(),
+                what: if name.is_empty() {
+                    "a model name must not be empty".into()
+                } else {
+                    "a model of this name is already in the session".into()
+                },
+            });
+        }
+        self.models.push(Entry {
+            name: name.to_string(),
+            model,
+        });
+        self.revision += 1;
+        Ok(())
+    }
+
+    /// Names of the models, in order.
+    pub fn model_names(&self) -> Vec<&str> {
+        self.models.iter().map(|e| e.name.as_str()).collect()
+    }
+
+    /// Number of models.
+    pub fn len(&self) -> usize {
+        self.models.len()
+    }
+
+    /// Whether the session has no model.
+    pub fn is_empty(&self) -> bool {
+        self.models.is_empty()
+    }
+
+    fn index(&self, name: &str) -> Option<usize> {
+        self.models.iter().position(|e| e.name == name)
+    }
+
+    fn resolve(&self, name: Option<&str>) -> Result<usize, SessionError> {
+        match name {
+            None if !self.models.is_empty() => Ok(0),
+            None => Err(SessionError::NoSuchModel {
+                name: "(first model)".into(),
+                known: "no models".into(),
+            }),
+            Some(n) => self.index(n).ok_or_else(|| SessionError::NoSuchModel {
+                name: n.to_string(),
+                known: self.model_names().join(", "),
+            }),
+        }
+    }
+
+    /// The model named `name` (`None`: the first), read-only: display, pick, params, export.
+    pub fn model(&self, name: Option<&str>) -> Result<&dyn Model, SessionError> {
+        let i = self.resolve(name)?;
+        Ok(self.models[i].model.as_ref())
+    }
+
+    /// A counter that grows with every change of any model (steps, commands, undo).
+    pub fn revision(&self) -> u64 {
+        self.revision + self.models.iter().map(|e| e.model.revision()).sum::<u64>()
+    }
+
+    /// Time of the session: the earliest model clock (0 without models).
+    pub fn time(&self) -> f64 {
+        self.models
+            .iter()
+            .map(|e| e.model.time())
+            .reduce(f64::min)
+            .unwrap_or(0.0)
+    }
+
+    /// The command log (what produced the current state from the initial models).
+    pub fn log(&self) -> &[LogEntry] {
+        &self.log
+    }
+
+    /// Commands scheduled and not yet applied.
+    pub fn schedule(&self) -> &[Timed] {
+        &self.schedule
+    }
+
+    /// Schedules commands (a scenario's timeline): each is checked now (model name, values);
+    /// they apply in time order (ties in the given order) before the step that reaches `at`.
+    pub fn schedule_commands(&mut self, timed: Vec<Timed>) -> Result<(), SessionError> {
+        for (k, t) in timed.iter().enumerate() {
+            let i = self.resolve(t.command.model.as_deref())?;
+            if !(t.at.is_finite() && t.at >= 0.0) {
+                return Err(SessionError::command(
+                    t.command.edit.action(),
+                    &self.models[i].name,
+                    format!(
+                        "scheduled entry {k}: `at` = {} must be >= 0 and finite",
+                        t.at
+                    ),
+                ));
+            }
+            t.command.edit.validate(t.at).map_err(|r| {
+                SessionError::command(t.command.edit.action(), &self.models[i].name, r)
+            })?;
+        }
+        self.schedule.extend(timed);
+        // Stable: equal times keep their order.
+        self.schedule.sort_by(|a, b| a.at.total_cmp(&b.at));
+        Ok(())
+    }
+
+    /// Applies a command now; on error the session is unchanged.
+    pub fn apply(&mut self, command: Command) -> Result<String, SessionError> {
+        let i = self.resolve(command.model.as_deref())?;
+        let msg = self.apply_to(i, command)?;
+        self.redo.clear();
+        Ok(msg)
+    }
+
+    fn apply_to(&mut self, i: usize, mut command: Command) -> Result<String, SessionError> {
+        let e = &mut self.models[i];
+        let name = e.name.clone();
+        command.model = Some(name.clone());
+        let edit = &command.edit;
+        edit.validate(e.model.time())
+            .map_err(|r| SessionError::command(edit.action(), &name, r))?;
+        let (step, time) = (e.model.steps(), e.model.time());
+        let applied = e.model.apply(edit).map_err(|err| match err {
+            SessionError::Command { reason, .. } => {
+                SessionError::command(edit.action(), &name, reason)
+            }
+            other => SessionError::command(edit.action(), &name, other),
+        })?;
+        self.undo.push(UndoEntry {
+            model: i,
+            undo: applied.undo,
+        });
+        self.log.push(LogEntry {
+            step,
+            time,
+            model: name,
+            command,
+            message: applied.message.clone(),
+        });
+        self.revision += 1;
+        Ok(applied.message)
+    }
+
+    /// Undoes the last command; returns its log entry.
+    pub fn undo(&mut self) -> Result<LogEntry, SessionError> {
+        let entry = self.undo.pop().ok_or(SessionError::History("undo"))?;
+        let log = self.log.pop().ok_or(SessionError::History("undo"))?;
+        let e = &mut self.models[entry.model];
+        let r = match entry.undo {
+            Undo::Model(m) => {
+                e.model = m;
+                Ok(())
+            }
+            u => e.model.undo(u),
+        };
+        r.map_err(|err| err.in_model(&log.model))?;
+        self.redo.push(log.clone());
+        self.revision += 1;
+        Ok(log)
+    }
+
+    /// Applies the last undone command again.
+    pub fn redo(&mut self) -> Result<String, SessionError> {
+        let log = self.redo.pop().ok_or(SessionError::History("redo"))?;
+        let i = self.resolve(Some(&log.model))?;
+        match self.apply_to(i, log.command.clone()) {
+            Ok(m) => Ok(m),
+            Err(e) => {
+                self.redo.push(log);
+                Err(e)
+            }
+        }
+    }
+
+    /// Whether there is something to undo / redo.
+    pub fn can_undo(&self) -> bool {
+        !self.undo.is_empty()
+    }
+    /// See [`Session::can_undo`].
+    pub fn can_redo(&self) -> bool {
+        !self.redo.is_empty()
+    }
+
+    /// Applies the scheduled commands due for model `i`; returns their log lines.
+    fn apply_due(&mut self, i: usize) -> Result<Vec<String>, SessionError> {
+        let mut lines = Vec::new();
+        loop {
+            let (t, dt) = (self.models[i].model.time(), self.models[i].model.dt());
+            let name = &self.models[i].name;
+            let pos = self.schedule.iter().position(|s| {
+                s.command.model.as_deref().map_or(i == 0, |m| m == name) && s.at <= t + 0.5 * dt
+            });
+            let Some(k) = pos else { break };
+            let timed = self.schedule.remove(k);
+            let msg = self.apply_to(i, timed.command)?;
+            lines.push(format!("t = {t:.4}: {msg}"));
+        }
+        Ok(lines)
+    }
+
+    fn step_model(
+        &mut self,
+        i: usize,
+        lines: &mut Vec<String>,
+    ) -> Result<StepReport, SessionError> {
+        lines.extend(self.apply_due(i)?);
+        self.redo.clear();
+        let e = &mut self.models[i];
+        e.model.step().map_err(|err| err.in_model(&e.name))
+    }
+
+    /// Advances every model by one step; returns one report per model and the log lines of
+    /// the scheduled commands applied.
+    pub fn step(&mut self) -> Result<(Vec<StepReport>, Vec<String>), SessionError> {
+        let mut lines = Vec::new();
+        let mut reports = Vec::with_capacity(self.models.len());
+        for i in 0..self.models.len() {
+            reports.push(self.step_model(i, &mut lines)?);
+        }
+        Ok((reports, lines))
+    }
+
+    /// Advances every model by `n` steps.
+    pub fn run(&mut self, n: u64) -> Result<Vec<String>, SessionError> {
+        let mut lines = Vec::new();
+        for _ in 0..n {
+            lines.extend(self.step()?.1);
+        }
+        Ok(lines)
+    }
+
+    /// Steps each model until its clock is within half a step of `t`.
+    pub fn advance_to(&mut self, t: f64) -> Result<Vec<String>, SessionError> {
+        let mut lines = Vec::new();
+        for i in 0..self.models.len() {
+            while self.models[i].model.time() + 0.5 * self.models[i].model.dt() < t {
+                self.step_model(i, &mut lines)?;
+            }
+        }
+        Ok(lines)
+    }
+
+    /// The nearest hit of `ray` on any model within `tolerance`: `(model name, hit)`.
+    pub fn pick(&self, ray: &Ray, tolerance: f64) -> Option<(String, Hit)> {
+        if !crate::pick::valid_ray(ray) || !(tolerance.is_finite() && tolerance >= 0.0) {
+            return None;
+        }
+        self.models
+            .iter()
+            .filter_map(|e| e.model.pick(ray, tolerance).map(|h| (e.name.clone(), h)))
+            .min_by(|a, b| a.1.distance.total_cmp(&b.1.distance))
+    }
+
+    /// Applies the due scheduled commands of every model without stepping (used before
+    /// writing the first frame of a run).
+    pub fn apply_due_now(&mut self) -> Result<Vec<String>, SessionError> {
+        let mut lines = Vec::new();
+        for i in 0..self.models.len() {
+            lines.extend(self.apply_due(i)?);
+        }
+        Ok(lines)
+    }
+
+    pub(crate) fn parts(&self) -> (Vec<(&str, &dyn Model)>, &[Timed], &[LogEntry]) {
+        (
+            self.models
+                .iter()
+                .map(|e| (e.name.as_str(), e.model.as_ref()))
+                .collect(),
+            &self.schedule,
+            &self.log,
+        )
+    }
+
+    pub(crate) fn set_history(&mut self, schedule: Vec<Timed>, log: Vec<LogEntry>) {
+        self.schedule = schedule;
+        self.log = log;
+    }
+}

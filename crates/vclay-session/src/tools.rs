@@ -1,0 +1,160 @@
+//! Named tools and their schedules, shared by every model kind: a tool's name, the kernel's
+//! handle for it, a cursor path (a rope whose cursor moves by itself) and a release time.
+//! Before each step a model asks [`ToolTable::due`] which tools expire and where the moving
+//! cursors are now.
+
+use serde::{Deserialize, Serialize};
+use vclay_core::Vec3;
+
+use crate::command::V3;
+
+/// How a rope's cursor moves by itself.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "path", rename_all = "kebab-case")]
+pub enum CursorPath {
+    /// From `from` at time `start` to `to` at time `end`, linearly, then stays.
+    Linear {
+        /// Start position.
+        from: V3,
+        /// End position.
+        to: V3,
+        /// Start time.
+        start: f64,
+        /// End time.
+        end: f64,
+    },
+    /// At `from + velocity t` at time `t`.
+    Velocity {
+        /// Position at time 0.
+        from: V3,
+        /// Velocity.
+        velocity: V3,
+    },
+}
+
+impl CursorPath {
+    /// The cursor at time `t`.
+    pub fn at(&self, t: f64) -> Vec3 {
+        match *self {
+            CursorPath::Linear {
+                from,
+                to,
+                start,
+                end,
+            } => {
+                let (from, to) = (v3(from), v3(to));
+                let s = if end > start {
+                    ((t - start) / (end - start)).clamp(0.0, 1.0)
+                } else {
+                    1.0
+                };
+                from + (to - from) * s
+            }
+            CursorPath::Velocity { from, velocity } => v3(from) + v3(velocity) * t,
+        }
+    }
+}
+
+/// One named tool.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ScheduledTool {
+    /// Name.
+    pub name: String,
+    /// The action that made it (`rope`, `force`, ...).
+    pub action: String,
+    /// The kernel's handle (solids: tool id; D-NURBS: an id the model maps to its forces).
+    pub handle: usize,
+    /// A moving cursor (ropes), moved before each step.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<CursorPath>,
+    /// Release time.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub release: Option<f64>,
+}
+
+/// The named tools of one model.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ToolTable {
+    /// Tools in the order they were added.
+    pub tools: Vec<ScheduledTool>,
+}
+
+/// What is due before a step.
+#[derive(Debug, Default)]
+pub struct Due {
+    /// Tools whose release time has come (already removed from the table).
+    pub expired: Vec<ScheduledTool>,
+    /// Cursor positions of the moving ropes: `(handle, position)`.
+    pub cursors: Vec<(usize, Vec3)>,
+}
+
+impl ToolTable {
+    /// The tool named `name`.
+    pub fn get(&self, name: &str) -> Option<&ScheduledTool> {
+        self.tools.iter().find(|t| t.name == name)
+    }
+
+    /// The tool named `name`, mutably.
+    pub fn get_mut(&mut self, name: &str) -> Option<&mut ScheduledTool> {
+        self.tools.iter_mut().find(|t| t.name == name)
+    }
+
+    /// Removes and returns the tool named `name`.
+    pub fn remove(&mut self, name: &str) -> Option<ScheduledTool> {
+        let i = self.tools.iter().position(|t| t.name == name)?;
+        Some(self.tools.remove(i))
+    }
+
+    /// The name for a new tool: `name` if given (an error if taken), else `what` followed by
+    /// the handle.
+    pub fn label(&self, name: Option<&str>, what: &str, handle: usize) -> Result<String, String> {
+        match name {
+            Some(n) if self.get(n).is_some() => Err(format!(
+                "a tool named `{n}` is already active (release it first)"
+            )),
+            Some(n) if n.is_empty() => Err("a tool name must not be empty".into()),
+            Some(n) => Ok(n.to_string()),
+            None => {
+                let mut label = format!("{what}{handle}");
+                let mut k = 1;
+                while self.get(&label).is_some() {
+                    label = format!("{what}{handle}_{k}");
+                    k += 1;
+                }
+                Ok(label)
+            }
+        }
+    }
+
+    /// Removes the tools released at or before `t + dt / 2` and returns them with the cursor
+    /// positions of the remaining moving ropes at `t` (the order the scenario runner has always
+    /// used: commands of the step first, then expiry, then cursors).
+    pub fn due(&mut self, t: f64, dt: f64) -> Due {
+        let mut due = Due::default();
+        let limit = t + 0.5 * dt;
+        let mut k = 0;
+        while k < self.tools.len() {
+            if self.tools[k].release.is_some_and(|r| r <= limit) {
+                due.expired.push(self.tools.remove(k));
+            } else {
+                k += 1;
+            }
+        }
+        for tool in &self.tools {
+            if let Some(p) = &tool.path {
+                due.cursors.push((tool.handle, p.at(t)));
+            }
+        }
+        due
+    }
+}
+
+/// A `Vec3` from an array.
+pub fn v3(a: V3) -> Vec3 {
+    Vec3::new(a[0], a[1], a[2])
+}
+
+/// An array from a `Vec3`.
+pub fn a3(v: &Vec3) -> V3 {
+    [v.x, v.y, v.z]
+}
