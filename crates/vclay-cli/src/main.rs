@@ -72,11 +72,21 @@ enum Command {
     Ffd(ffd::FfdArgs),
     /// Solve a dynamic PDE surface spec at --t or over --frames; write meshes, print residuals.
     Pde(pde::PdeArgs),
-    /// Run a scenario file (TOML, see docs/formats.md): dynamic solids and their tool timeline.
+    /// Run a scenario (TOML, docs/formats.md section 8) or continue a saved session
+    /// (docs/formats.md section 10); writes to --out DIR, else ./vclay-run/<name>/.
     Run {
-        /// Scenario file.
-        scenario: PathBuf,
-        /// Output folder (replaces the file's `[output] dir`).
+        /// Scenario (.toml) or session file.
+        file: PathBuf,
+        /// Steps to run (default: to the scenario's end).
+        #[arg(long, conflicts_with = "until")]
+        steps: Option<u64>,
+        /// Run until the first model's clock reaches this time (s).
+        #[arg(long)]
+        until: Option<f64>,
+        /// Save the whole session here at the end (continue it with `vclay run SESSION`).
+        #[arg(long)]
+        save: Option<PathBuf>,
+        /// Output folder.
         #[arg(long)]
         out: Option<PathBuf>,
         /// No progress bar.
@@ -106,10 +116,20 @@ fn main() -> ExitCode {
         Command::Ffd(args) => ffd::run(&args),
         Command::Pde(args) => pde::run(&args),
         Command::Run {
-            scenario,
+            file,
+            steps,
+            until,
+            save,
             out,
             quiet,
-        } => run::run(&scenario, out.as_deref(), quiet),
+        } => run::run(&run::RunArgs {
+            file,
+            steps,
+            until,
+            save,
+            out,
+            quiet,
+        }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,48 +1,121 @@
-//! `vclay run SCENARIO.toml [--out DIR] [--quiet]`: runs a scenario file.
-//!
-//! The `[model] kind` key chooses the module that reads and runs the file; dynamic solids
-//! (`subdivision-solid`, `bspline-solid`) are run by `vclay_solids::scenario`, D-NURBS
-//! (`dnurbs-curve`, `dnurbs-surface`, `dnurbs-swung`) by `vclay_dynamics::scenario`. A progress bar
-//! goes to stderr, the summary (steps, mean and max step time, final energy, files) to stdout.
+//! `vclay run FILE [--steps N | --until T] [--save SESSION] [--out DIR] [--quiet]`: runs a
+//! scenario or continues a saved session through the session layer (`vclay_session`), for
+//! every model kind. Output goes to `--out DIR`, else `./vclay-run/<scenario name>/`. A
+//! progress bar goes to stderr; the timeline log, the summary and every file written to
+//! stdout.
 
 use anyhow::{Context, Result, bail};
 use std::io::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
-use vclay::dynamics::scenario::{DNURBS_KINDS, DnurbsScenario};
-use vclay::solids::scenario::{FrameFormat, Progress, SOLID_KINDS, Scenario, model_kind};
+use vclay::session::file::{self, RunInfo};
+use vclay::session::run::{Progress, RunSummary};
+use vclay::session::scenario::{OutputSpec, Scenario, default_out_dir};
+use vclay::session::{Session, SessionError};
 
-/// Runs the scenario at `path`; `out` replaces the file's `[output] dir`.
-pub fn run(path: &Path, out: Option<&Path>, quiet: bool) -> Result<()> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("cannot read scenario {}", path.display()))?;
+/// The arguments of `vclay run`.
+#[derive(Debug)]
+pub struct RunArgs {
+    /// Scenario or session file.
+    pub file: PathBuf,
+    /// Steps to run.
+    pub steps: Option<u64>,
+    /// Time to run to.
+    pub until: Option<f64>,
+    /// Where to save the session at the end.
+    pub save: Option<PathBuf>,
+    /// Output folder.
+    pub out: Option<PathBuf>,
+    /// No progress bar.
+    pub quiet: bool,
+}
+
+/// A scenario or session opened for running.
+struct Opened {
+    session: Session,
+    info: RunInfo,
+}
+
+/// Whether `path` holds a session file (JSON whose `format` is `vclay-session`) rather than a
+/// TOML scenario.
+fn is_session(path: &Path, text: &str) -> bool {
+    path.extension()
+        .is_some_and(|e| e == "session" || e == "json")
+        || text.trim_start().starts_with('{')
+}
+
+fn open(path: &Path) -> Result<Opened> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let name = path.display().to_string();
-    let kind = model_kind(&text, &name)?;
-    if DNURBS_KINDS.contains(&kind.as_str()) {
-        return run_dnurbs(path, &text, &name, out, quiet);
+    if is_session(path, &text) {
+        let (session, info) = file::parse(&text, &name)?;
+        let info = info.unwrap_or_else(|| RunInfo {
+            name: path
+                .file_stem()
+                .map_or("session".into(), |s| s.to_string_lossy().to_string()),
+            end_step: 0,
+            output: OutputSpec {
+                every: vclay::session::scenario::DEFAULT_FRAME_EVERY,
+                ..OutputSpec::default()
+            },
+        });
+        return Ok(Opened { session, info });
     }
-    if !SOLID_KINDS.contains(&kind.as_str()) {
-        bail!(
-            "{name}: [model] kind \"{kind}\" is not known; known kinds: {}, {}",
-            SOLID_KINDS.join(", "),
-            DNURBS_KINDS.join(", ")
-        );
-    }
-    let base = path.parent().unwrap_or(Path::new("."));
+    let stem = path
+        .file_stem()
+        .map_or("scenario".into(), |s| s.to_string_lossy().to_string());
+    let sc = Scenario::parse(&text, &name, &stem, path.parent().unwrap_or(Path::new(".")))?;
+    let start = sc.session.model(None)?.steps();
+    Ok(Opened {
+        info: RunInfo {
+            name: sc.name,
+            end_step: start + sc.steps,
+            output: sc.output,
+        },
+        session: sc.session,
+    })
+}
+
+/// Runs `vclay run`.
+pub fn run(args: &RunArgs) -> Result<()> {
+    let name = args.file.display().to_string();
     let t0 = Instant::now();
-    let mut scenario = Scenario::parse(&text, &name, base)?;
-    if let Some(o) = out {
-        scenario.output.dir = o.to_path_buf();
+    let Opened { mut session, info } = open(&args.file)?;
+    let first = session.model(None)?;
+    let now = first.steps();
+    let steps = match (args.steps, args.until) {
+        (Some(n), _) => n,
+        (None, Some(t)) => {
+            if !(t.is_finite() && t >= 0.0) {
+                bail!("--until {t}: a time in seconds, >= 0");
+            }
+            let n = ((t - first.time()) / first.dt()).round().max(0.0);
+            if n > vclay::session::scenario::MAX_STEPS as f64 {
+                bail!(
+                    "--until {t}: {n} steps of {} s; at most {}",
+                    first.dt(),
+                    vclay::session::scenario::MAX_STEPS
+                );
+            }
+            n as u64
+        }
+        (None, None) => info.end_step.saturating_sub(now),
+    };
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out_dir(&info.name));
+    for n in session.model_names() {
+        eprintln!("{name}: {n}: {}", session.model(Some(n))?.summary());
     }
-    let st = scenario.solid.stats();
     eprintln!(
-        "{name}: {kind}, {} control points, {} data points, {} springs; built in {:.2} s; {} steps",
-        st.control_points,
-        st.data_points,
-        st.edge_springs + st.virtual_springs,
+        "{name}: opened in {:.2} s; {steps} steps from step {now} (t = {:.4}) into {}",
         t0.elapsed().as_secs_f64(),
-        scenario.steps
+        first.time(),
+        dir.display()
     );
+    let quiet = args.quiet;
     let mut last = Instant::now() - Duration::from_secs(1);
     let mut bar = |p: Progress| {
         if quiet || (last.elapsed() < Duration::from_millis(100) && p.step != p.steps) {
@@ -53,11 +126,11 @@ pub fn run(path: &Path, out: Option<&Path>, quiet: bool) -> Result<()> {
         let done = (p.step * width)
             .checked_div(p.steps)
             .unwrap_or(width)
-            .min(width);
+            .min(width) as usize;
         eprint!(
             "\r[{}{}] {}/{} t = {:.3} E = {:.4e}",
             "#".repeat(done),
-            " ".repeat(width - done),
+            " ".repeat(width as usize - done),
             p.step,
             p.steps,
             p.time,
@@ -68,120 +141,70 @@ pub fn run(path: &Path, out: Option<&Path>, quiet: bool) -> Result<()> {
             eprintln!();
         }
     };
-    let result = scenario.run(&mut bar);
-    if !quiet {
-        eprintln!();
+    let result = vclay::session::run::run(&mut session, steps, &dir, &info.output, &mut bar);
+    let s = match result {
+        Ok(s) => s,
+        Err(e) => {
+            if let Some(p) = &args.save
+                && matches!(e, SessionError::Diverged { .. })
+            {
+                eprintln!("(not saving {}: the run diverged)", p.display());
+            }
+            return Err(e).with_context(|| format!("running {name}"));
+        }
+    };
+    print_summary(&s);
+    if let Some(p) = &args.save {
+        file::save(p, &session, Some(&info))?;
+        println!("  session saved -> {}", p.display());
     }
-    let s = result.with_context(|| format!("running {name}"))?;
+    Ok(())
+}
+
+fn print_summary(s: &RunSummary) {
     for l in &s.log {
         println!("  {l}");
     }
-    println!(
-        "vclay run: {} steps, mean {:.3} ms/step, max {:.3} ms, final energy {:.6e}",
-        s.steps, s.mean_step_ms, s.max_step_ms, s.final_energy
-    );
-    println!(
-        "  model: {} control points ({} free), {} data points ({} active), {} springs ({} active)",
-        s.stats.control_points,
-        s.stats.free_control_points,
-        s.stats.data_points,
-        s.stats.active_data_points,
-        s.stats.edge_springs + s.stats.virtual_springs,
-        s.stats.active_springs
-    );
-    println!("  {} files written", s.files.len());
-    for f in s.files.iter().filter(|f| {
-        !f.file_name()
-            .is_some_and(|n| n.to_string_lossy().starts_with("frame_"))
-    }) {
-        println!("  -> {}", f.display());
-    }
-    Ok(())
-}
-
-/// Runs a D-NURBS scenario (`vclay_dynamics::scenario`).
-fn run_dnurbs(path: &Path, text: &str, name: &str, out: Option<&Path>, quiet: bool) -> Result<()> {
-    let base = path.parent().unwrap_or(Path::new("."));
-    let mut scenario = DnurbsScenario::parse(text, name, base)?;
-    if let Some(o) = out {
-        scenario.out_dir = o.to_path_buf();
-    }
-    eprintln!("{name}: {}; {} steps", scenario.description, scenario.steps);
-    let mut last = Instant::now() - Duration::from_secs(1);
-    let mut bar = |step: usize, steps: usize, energy: f64| {
-        if quiet || (last.elapsed() < Duration::from_millis(100) && step != steps) {
-            return;
-        }
-        last = Instant::now();
-        let width = 30;
-        let done = (step * width)
-            .checked_div(steps)
-            .unwrap_or(width)
-            .min(width);
-        eprint!(
-            "\r[{}{}] {step}/{steps} E = {energy:.4e}",
-            "#".repeat(done),
-            " ".repeat(width - done)
-        );
-        let _ = std::io::stderr().flush();
-        if step == steps {
-            eprintln!();
-        }
-    };
-    let s = scenario
-        .run(&mut bar)
-        .with_context(|| format!("running {name}"))?;
-    println!(
-        "vclay run: {} steps, mean {:.3} ms/step, max {:.3} ms, final energy {:.6e}",
-        s.steps, s.mean_step_ms, s.max_step_ms, s.final_energy
-    );
-    println!(
-        "  largest constraint violation {:.3e}, data RMS distance {:.4e}",
-        s.constraint_violation, s.data_rms
-    );
-    println!("  {} files written", s.files.len());
-    for f in s.files.iter().filter(|f| {
-        !f.file_name()
-            .is_some_and(|n| n.to_string_lossy().starts_with("frame_"))
-    }) {
-        println!("  -> {}", f.display());
-    }
-    Ok(())
-}
-
-/// Runs a scenario quietly into `dir`, writing about `frames` OBJ frames, and returns the frame
-/// files in order (used by `vclay render SCENARIO.toml`).
-pub fn run_for_frames(path: &Path, dir: &Path, frames: usize) -> Result<Vec<std::path::PathBuf>> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("cannot read scenario {}", path.display()))?;
-    let name = path.display().to_string();
-    let kind = model_kind(&text, &name)?;
-    let base = path.parent().unwrap_or(Path::new("."));
-    let files = if DNURBS_KINDS.contains(&kind.as_str()) {
-        let mut s = DnurbsScenario::parse(&text, &name, base)?;
-        s.out_dir = dir.to_path_buf();
-        s.every = (s.steps / frames.max(1)).max(1);
-        s.run(&mut |_, _, _| {})?.files
-    } else if SOLID_KINDS.contains(&kind.as_str()) {
-        let mut s = Scenario::parse(&text, &name, base)?;
-        s.output.dir = dir.to_path_buf();
-        s.output.frames = vec![FrameFormat::Obj];
-        s.output.every = (s.steps / frames.max(1)).max(1);
-        s.run(&mut |_| {})?.files
-    } else {
-        bail!("{name}: [model] kind \"{kind}\" is not known");
-    };
-    let mut frames: Vec<_> = files
-        .into_iter()
-        .filter(|f| {
-            f.extension().is_some_and(|e| e == "obj")
-                && f.file_name()
-                    .is_some_and(|n| n.to_string_lossy().starts_with("frame_"))
-        })
+    let energies: Vec<String> = s
+        .final_energy
+        .iter()
+        .map(|(n, e)| format!("{n} {e:.6e}"))
         .collect();
-    frames.sort();
-    if frames.is_empty() {
-        bail!("{name}: the scenario wrote no frames to render");
+    println!(
+        "vclay run: {} steps, mean {:.3} ms/step, max {:.3} ms, final energy {}",
+        s.steps,
+        s.mean_step_ms,
+        s.max_step_ms,
+        energies.join(", ")
+    );
+    for m in &s.models {
+        println!("  model {m}");
     }
-    Ok(frames)
+    println!(
+        "  {} files written: {} frames, {} other",
+        s.frames.len() + s.files.len(),
+        s.frames.len(),
+        s.files.len()
+    );
+    for f in s.frames.iter().chain(&s.files) {
+        println!("  -> {}", f.display());
+    }
+}
+
+/// Runs a scenario or session quietly into `dir`, writing about `frames` OBJ frames, and
+/// returns the frame files in order (used by `vclay render SCENARIO.toml`).
+pub fn run_for_frames(path: &Path, dir: &Path, frames: usize) -> Result<Vec<PathBuf>> {
+    let Opened { mut session, info } = open(path)?;
+    let steps = info.end_step.saturating_sub(session.model(None)?.steps());
+    let output = OutputSpec {
+        frames: vec![vclay::session::scenario::FrameFormat::Obj],
+        every: (steps / frames.max(1) as u64).max(1),
+        final_files: Vec::new(),
+        csv: None,
+    };
+    let s = vclay::session::run::run(&mut session, steps, dir, &output, &mut |_| {})?;
+    if s.frames.is_empty() {
+        bail!("{}: the scenario wrote no frames to render", path.display());
+    }
+    Ok(s.frames)
 }

@@ -23,6 +23,7 @@ pub mod file;
 pub mod model;
 pub mod models;
 pub mod pick;
+pub mod run;
 pub mod scenario;
 pub mod session;
 pub mod tools;

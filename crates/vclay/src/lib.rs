@@ -23,6 +23,7 @@ pub use vclay_io as io;
 pub use vclay_lattice as lattice;
 pub use vclay_pde as pde;
 pub use vclay_render as render;
+pub use vclay_session as session;
 pub use vclay_solids as solids;
 pub use vclay_spline as spline;
 

@@ -460,6 +460,76 @@ pub trait GeneralizedGeometry: Clone + Send + Sync + std::fmt::Debug {
     }
 }
 
+/// The evolving state of a [`GeneralizedDnurbs`] ([`GeneralizedDnurbs::state`]): the
+/// generalized coordinates `p` and their velocity `p'` of eq (15), the coordinates the rest
+/// shape was taken at, the held coordinates (section 6.2), the weight penalty and its targets,
+/// the elastic reference, and the counters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GeneralizedState {
+    /// Generalized coordinates `p` (control points and weights, see the geometry).
+    pub coordinates: Vec<f64>,
+    /// Coordinate velocity `p'`.
+    pub velocity: Vec<f64>,
+    /// Coordinates of the rest shape (the shape at construction or at the last plastic reset).
+    pub rest_coordinates: Vec<f64>,
+    /// Held coordinates.
+    pub fixed: Vec<bool>,
+    /// Weight values the penalty pulls towards (one per weight coordinate).
+    pub weight_targets: Vec<f64>,
+    /// Weight penalty `c`.
+    pub weight_penalty: f64,
+    /// Elastic reference.
+    pub reference: ElasticReference,
+    /// Simulated time.
+    pub time: f64,
+    /// Steps taken.
+    pub steps: usize,
+    /// Sub-steps taken (see [`GeneralizedDnurbs::substeps`]).
+    pub substeps: usize,
+    /// Weight projections made (see [`GeneralizedDnurbs::weight_projections`]).
+    pub weight_projections: usize,
+}
+
+fn same_bits(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
+/// Checks a material against a geometry of parametric dimension `dim` with `ne` elements.
+fn validate_material(dim: usize, ne: usize, material: &Material) -> Result<(), DynamicsError> {
+    material.mu.validate("mu", ne)?;
+    material.gamma.validate("gamma", ne)?;
+    if material.alpha.len() != dim || material.beta.len() != if dim == 1 { 1 } else { 3 } {
+        return Err(DynamicsError::Parameter {
+            name: "material",
+            value: material.alpha.len() as f64,
+            why: "needs one alpha per parametric direction and one beta per second-derivative pair (1 and 1 for curves, 2 and 3 for surfaces)",
+        });
+    }
+    for a in &material.alpha {
+        a.validate("alpha", ne)?;
+    }
+    for b in &material.beta {
+        b.validate("beta", ne)?;
+    }
+    Ok(())
+}
+
+/// The six values `s, s_u, ...` of `g` at every quadrature point (the rest shape of eq 17).
+fn rest_values<G: GeneralizedGeometry>(
+    g: &G,
+    quad: &[Quadrature],
+) -> Result<Vec<Vec<[Vec3; 6]>>, DynamicsError> {
+    quad.par_iter()
+        .map(|q| {
+            let mut lj = LocalJacobian::default();
+            q.params
+                .iter()
+                .map(|&p| g.jacobian_at(p, &mut lj).map(|_| lj.s))
+                .collect::<Result<Vec<_>, _>>()
+        })
+        .collect()
+}
+
 /// A geometric constraint (`d-nurbs.txt` section 6.2).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Constraint {
@@ -540,6 +610,8 @@ pub struct GeneralizedDnurbs<G: GeneralizedGeometry> {
     /// Element work buffers kept between steps (scratch; no state).
     work_pool: Vec<ElementWork>,
     rest: Vec<Vec<[Vec3; 6]>>,
+    /// The coordinates `rest` was evaluated at (see [`GeneralizedState::rest_coordinates`]).
+    rest_coordinates: Vec<f64>,
     velocity: Vec<f64>,
     fixed: Vec<bool>,
     forces: Vec<Force>,
@@ -586,21 +658,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         let geometry_solver = geometry.default_solver();
         let elements = geometry.elements();
         let ne = elements.len();
-        material.mu.validate("mu", ne)?;
-        material.gamma.validate("gamma", ne)?;
-        if material.alpha.len() != dim || material.beta.len() != if dim == 1 { 1 } else { 3 } {
-            return Err(DynamicsError::Parameter {
-                name: "material",
-                value: material.alpha.len() as f64,
-                why: "needs one alpha per parametric direction and one beta per second-derivative pair (1 and 1 for curves, 2 and 3 for surfaces)",
-            });
-        }
-        for a in &material.alpha {
-            a.validate("alpha", ne)?;
-        }
-        for b in &material.beta {
-            b.validate("beta", ne)?;
-        }
+        validate_material(dim, ne, &material)?;
         let n = geometry.coordinates().len();
         let g = GaussLegendre::new((geometry.max_degree() + 1).clamp(4, 7)).map_err(|_| {
             DynamicsError::Parameter {
@@ -648,6 +706,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             pattern: None,
             work_pool: Vec::new(),
             rest: vec![],
+            rest_coordinates: vec![],
             fixed,
             forces: vec![],
             constraints: vec![],
@@ -784,19 +843,141 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
 
     /// Plastic reset: the current shape becomes the rest shape, and the motion stops.
     pub fn set_rest_shape_to_current(&mut self) -> Result<(), DynamicsError> {
-        let g = &self.geometry;
-        self.rest = self
-            .quad
-            .par_iter()
-            .map(|q| {
-                let mut lj = LocalJacobian::default();
-                q.params
-                    .iter()
-                    .map(|&p| g.jacobian_at(p, &mut lj).map(|_| lj.s))
-                    .collect::<Result<Vec<_>, _>>()
-            })
-            .collect::<Result<_, _>>()?;
+        self.rest = rest_values(&self.geometry, &self.quad)?;
+        self.rest_coordinates = self.geometry.coordinates().to_vec();
         self.velocity = vec![0.0; self.velocity.len()];
+        Ok(())
+    }
+
+    /// Steps taken.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// The material.
+    pub fn material(&self) -> &Material {
+        &self.material
+    }
+
+    /// Replaces the material (validated as in [`GeneralizedDnurbs::new`]); the state is kept.
+    /// The matrices of eqs (16)-(17) are integrated every step, so the next step uses it.
+    pub fn set_material(&mut self, material: Material) -> Result<(), DynamicsError> {
+        validate_material(
+            self.geometry.parametric_dimension(),
+            self.quad.len(),
+            &material,
+        )?;
+        self.material = material;
+        Ok(())
+    }
+
+    /// The applied forces.
+    pub fn forces(&self) -> &[Force] {
+        &self.forces
+    }
+
+    /// The coordinate velocity `p'` (of the last step).
+    pub fn velocity(&self) -> &[f64] {
+        &self.velocity
+    }
+
+    /// Stops the motion: the coordinate velocity becomes zero (the shape and its rest stay).
+    pub fn stop(&mut self) {
+        self.velocity.iter_mut().for_each(|v| *v = 0.0);
+    }
+
+    /// The weight penalty `c` (see [`GeneralizedDnurbs::set_weight_penalty`]).
+    pub fn weight_penalty(&self) -> f64 {
+        self.weight_penalty
+    }
+
+    /// What the elastic energy is measured against.
+    pub fn elastic_reference(&self) -> ElasticReference {
+        self.reference
+    }
+
+    /// A copy of the evolving state (everything a step reads and writes except the forces,
+    /// the constraints and the tunable fields): with [`GeneralizedDnurbs::set_state`] on a
+    /// model built from the same initial geometry and material, with the same forces and
+    /// constraints, the continued simulation is bit for bit the same.
+    pub fn state(&self) -> GeneralizedState {
+        GeneralizedState {
+            coordinates: self.geometry.coordinates().to_vec(),
+            velocity: self.velocity.clone(),
+            rest_coordinates: self.rest_coordinates.clone(),
+            fixed: self.fixed.clone(),
+            weight_targets: self.weight_targets.clone(),
+            weight_penalty: self.weight_penalty,
+            reference: self.reference,
+            time: self.time,
+            steps: self.steps,
+            substeps: self.substeps,
+            weight_projections: self.weight_projections,
+        }
+    }
+
+    /// Puts back a state taken by [`GeneralizedDnurbs::state`] (of this model or of one built
+    /// from the same initial geometry). Checked first (lengths, finite values, positive
+    /// weights); on error the model is unchanged. The rest values of eq (17)'s reference shape
+    /// are evaluated again at `rest_coordinates` (the same computation as the plastic reset,
+    /// hence the same bits) when they differ from the current ones.
+    pub fn set_state(&mut self, s: &GeneralizedState) -> Result<(), DynamicsError> {
+        let n = self.geometry.coordinates().len();
+        let nw = self.weight_targets.len();
+        for (len, want) in [
+            (s.coordinates.len(), n),
+            (s.velocity.len(), n),
+            (s.rest_coordinates.len(), n),
+            (s.fixed.len(), n),
+            (s.weight_targets.len(), nw),
+        ] {
+            if len != want {
+                return Err(DynamicsError::NoSuchCoordinate {
+                    index: len,
+                    count: want,
+                });
+            }
+        }
+        let finite = |name: &'static str, v: &[f64]| match v.iter().find(|x| !x.is_finite()) {
+            Some(&x) => Err(DynamicsError::Parameter {
+                name,
+                value: x,
+                why: "must be finite",
+            }),
+            None => Ok(()),
+        };
+        finite("velocity", &s.velocity)?;
+        finite("weight target", &s.weight_targets)?;
+        finite("time", &[s.time])?;
+        if !(s.weight_penalty.is_finite() && s.weight_penalty >= 0.0) {
+            return Err(DynamicsError::Parameter {
+                name: "weight penalty",
+                value: s.weight_penalty,
+                why: "must be finite and non-negative",
+            });
+        }
+        let mut geometry = self.geometry.clone();
+        let rest = if same_bits(&s.rest_coordinates, &self.rest_coordinates) {
+            None
+        } else {
+            geometry.set_coordinates(&s.rest_coordinates)?;
+            Some(rest_values(&geometry, &self.quad)?)
+        };
+        geometry.set_coordinates(&s.coordinates)?;
+        self.geometry = geometry;
+        if let Some(r) = rest {
+            self.rest = r;
+            self.rest_coordinates = s.rest_coordinates.clone();
+        }
+        self.velocity = s.velocity.clone();
+        self.fixed = s.fixed.clone();
+        self.weight_targets = s.weight_targets.clone();
+        self.weight_penalty = s.weight_penalty;
+        self.reference = s.reference;
+        self.time = s.time;
+        self.steps = s.steps;
+        self.substeps = s.substeps;
+        self.weight_projections = s.weight_projections;
         Ok(())
     }
 

@@ -45,7 +45,9 @@ pub mod presets;
 pub mod rational;
 mod system;
 
-pub use generalized::{Constraint, GeneralizedDnurbs, GeneralizedGeometry, LocalJacobian};
+pub use generalized::{
+    Constraint, GeneralizedDnurbs, GeneralizedGeometry, GeneralizedState, LocalJacobian,
+};
 pub use geometry::{ClosedCurve, DnurbsGeometry, ElementSamples};
 pub use presets::{Preset, TABLE_1};
 pub use rational::{RationalGeometry, SwungGeometry};
@@ -350,6 +352,31 @@ struct StepCache {
     products: Option<[Vec<Vec3>; 4]>,
 }
 
+/// The evolving state of a frozen-weight [`Dnurbs`] ([`Dnurbs::state`]): the control points
+/// `p(t)` and `p(t - dt)` of eq (18), the rest shape, the fixed points, the counters, and the
+/// matrix products `[M p, D p, M p_prev, D p_prev]` the last step left for the next one's
+/// right-hand side (recomputing them in another order could change the last bit, so they are
+/// part of the state).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DnurbsState {
+    /// Control points `p(t)`.
+    pub points: Vec<Vec3>,
+    /// Control points of the previous step `p(t - dt)`.
+    pub previous: Vec<Vec3>,
+    /// Rest shape.
+    pub rest: Vec<Vec3>,
+    /// Elastic reference.
+    pub reference: ElasticReference,
+    /// Fixed control points.
+    pub fixed: Vec<bool>,
+    /// Simulated time.
+    pub time: f64,
+    /// Steps taken.
+    pub steps: usize,
+    /// `[M p, D p, M p_prev, D p_prev]` carried to the next step (`None`: computed then).
+    pub products: Option<[Vec<Vec3>; 4]>,
+}
+
 /// A dynamic NURBS curve.
 pub type DnurbsCurve = Dnurbs<NurbsCurve>;
 /// A dynamic tensor-product NURBS surface.
@@ -447,6 +474,126 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
     /// Chooses what the elastic energy is measured against.
     pub fn set_elastic_reference(&mut self, reference: ElasticReference) {
         self.reference = reference;
+    }
+
+    /// Steps taken.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// The applied forces.
+    pub fn forces(&self) -> &[Force] {
+        &self.forces
+    }
+
+    /// Replaces the material: the element matrices of eqs (16)-(17) are integrated again
+    /// (validated as in [`Dnurbs::new`]); the state (points, previous points, rest, fixed
+    /// points, time) is kept, the carried products and the factorization are dropped. On error
+    /// the model is unchanged.
+    pub fn set_material(&mut self, material: Material) -> Result<(), DynamicsError> {
+        let ne = self.samples.len();
+        if material.alpha.len() != G::DIM || material.beta.len() != G::PAIRS {
+            return Err(DynamicsError::Parameter {
+                name: "alpha/beta count",
+                value: material.alpha.len() as f64,
+                why: "curves take 1 alpha and 1 beta, surfaces 2 alphas and 3 betas",
+            });
+        }
+        material.mu.validate("mu", ne)?;
+        material.gamma.validate("gamma", ne)?;
+        for a in &material.alpha {
+            a.validate("alpha", ne)?;
+        }
+        for b in &material.beta {
+            b.validate("beta", ne)?;
+        }
+        self.system = build_system::<G>(&self.geometry, &material, &self.samples)?;
+        self.material = material;
+        self.direct = None;
+        self.cache = StepCache::default();
+        Ok(())
+    }
+
+    /// Stops the motion: the previous points become the current ones (zero velocity in eq 18;
+    /// the carried products are updated exactly: `M p_prev = M p`, `D p_prev = D p`).
+    pub fn stop(&mut self) {
+        self.previous = self.geometry.points().to_vec();
+        if let Some([mp, dp, mpp, dpp]) = &mut self.cache.products {
+            mpp.clone_from(mp);
+            dpp.clone_from(dp);
+        }
+    }
+
+    /// A copy of the evolving state: with [`Dnurbs::set_state`] on a model built from the same
+    /// initial geometry and material, with the same forces, the continued simulation is bit
+    /// for bit the same.
+    pub fn state(&self) -> DnurbsState {
+        DnurbsState {
+            points: self.geometry.points().to_vec(),
+            previous: self.previous.clone(),
+            rest: self.rest.clone(),
+            reference: self.reference,
+            fixed: self.fixed.clone(),
+            time: self.time,
+            steps: self.steps,
+            products: self.cache.products.clone(),
+        }
+    }
+
+    /// Puts back a state taken by [`Dnurbs::state`]. Checked first (lengths, finite values);
+    /// on error the model is unchanged.
+    pub fn set_state(&mut self, s: &DnurbsState) -> Result<(), DynamicsError> {
+        let n = self.fixed.len();
+        let mut lens = vec![
+            s.points.len(),
+            s.previous.len(),
+            s.rest.len(),
+            s.fixed.len(),
+        ];
+        if let Some(p) = &s.products {
+            lens.extend(p.iter().map(Vec::len));
+        }
+        if let Some(&bad) = lens.iter().find(|&&l| l != n) {
+            return Err(DynamicsError::NoSuchControlPoint {
+                index: bad,
+                count: n,
+            });
+        }
+        let all = s
+            .previous
+            .iter()
+            .chain(&s.rest)
+            .chain(s.products.iter().flatten().flatten());
+        for v in all {
+            if let Some(&x) = v.iter().find(|x| !x.is_finite()) {
+                return Err(DynamicsError::Parameter {
+                    name: "state",
+                    value: x,
+                    why: "must be finite",
+                });
+            }
+        }
+        if !s.time.is_finite() {
+            return Err(DynamicsError::Parameter {
+                name: "time",
+                value: s.time,
+                why: "must be finite",
+            });
+        }
+        let mut geometry = self.geometry.clone();
+        geometry.set_points(s.points.clone())?;
+        self.geometry = geometry;
+        if self.rest != s.rest {
+            self.cache.k_rest = None;
+        }
+        self.previous = s.previous.clone();
+        self.rest = s.rest.clone();
+        self.reference = s.reference;
+        self.fixed = s.fixed.clone();
+        self.time = s.time;
+        self.steps = s.steps;
+        self.cache.products = s.products.clone();
+        Ok(())
     }
 
     /// Plastic reset: the current shape becomes the rest shape.

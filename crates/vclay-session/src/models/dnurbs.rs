@@ -1,20 +1,2522 @@
-//! Placeholder: the dnurbs model kind is being written.
+//! D-NURBS in a session: [`DnurbsModel`] wraps the D-NURBS engines of `vclay_dynamics`
+//! (`d-nurbs.txt`: the Lagrangian equations of motion eq 15 with the mass, damping and
+//! stiffness matrices of eqs 16-17, integrated by eq 18; applied forces of section 6.1, among
+//! them the spring of eq 19; constraints of section 6.2).
+//!
+//! Kinds `dnurbs-curve`, `dnurbs-surface` and `dnurbs-swung`. Engines (`[model] engine`):
+//! `"generalized"` (default) is `GeneralizedDnurbs` over `RationalGeometry` (curves, surfaces)
+//! or `SwungGeometry` (swung surfaces), exactly as the old D-NURBS scenario runner built them,
+//! so that scenarios give the same bits; `"frozen"` is the frozen-weight engine `Dnurbs`
+//! (footnote 2: weights held, constant matrices), for curves and tensor-product surfaces only
+//! and without constraints.
+//!
+//! Tools: every force-producing edit (rope, force, gravity, inflate, data) is one *slot*: a
+//! serializable description of its forces ([`ForceDesc`]) under a handle that the
+//! [`ToolTable`] names. The engine's force list is the concatenation of the slots' forces in
+//! the order the slots were added, rebuilt whenever a slot changes, so a rope with a
+//! `velocity` is the same `Target::Moving` closure the old runner made, and a session file
+//! rebuilds it from its description.
+//!
+//! Undo: every edit but fix/free restores a snapshot of the engine state (the engines'
+//! `state()`/`set_state()`), the slots, constraints, material and time step; fix/free apply
+//! the exact inverse (free exactly the control points that the fix fixed) and restore the
+//! snapshot.
+//!
+//! Limitations: materials are uniform (constant densities); a material change on the frozen
+//! engine integrates its element matrices again (the state is kept). Swung surfaces: control
+//! point indices (fix, free, move-point, set-weight) count the profile curve's control points,
+//! then the trajectory curve's, in their own planes (profile x-z, trajectory x-y); the scale
+//! `alpha` has no index. Swung control points are not picked (the control net shown is the
+//! tensor-product net of the exact surface, which has no simulated coordinates of its own).
 
-use super::{Spec, SpecError};
+use std::ops::Range;
+use std::path::Path;
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+use vclay_core::{TriMesh, Vec3};
+use vclay_dynamics::DynamicsError;
+use vclay_dynamics::dnurbs::{
+    Constraint, Density, Dnurbs, DnurbsGeometry, DnurbsState, ElasticReference, Force,
+    GeneralizedDnurbs, GeneralizedGeometry, GeneralizedState, Integrator, LocalJacobian, Material,
+    Preset, RationalGeometry, SwungGeometry, Target,
+};
+use vclay_dynamics::{DnurbsCurve, DnurbsSurface};
+use vclay_io::model::Entity;
+use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
+
+use super::{Spec, SpecError, typed};
+use crate::command::{Edit, V3};
 use crate::error::SessionError;
-#[allow(unused_imports)]
-use crate::model::{Model, ModelKind};
+use crate::model::{
+    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
+    StepReport, Undo, extension, unsupported_export,
+};
+use crate::tools::{CursorPath, ScheduledTool, ToolTable, a3, v3};
+
+/// Rope and data spring stiffness when neither the edit nor a preset (its `k`) gives one.
+pub const DEFAULT_ROPE_STIFFNESS: f64 = 50.0;
+/// Tessellation grid of the display mesh (the old `[output] grid` default).
+pub const DISPLAY_GRID: [usize; 2] = [32, 32];
+/// Most control points of a sheet along one direction.
+pub const MAX_SHEET_SIZE: usize = 512;
+/// Most control points of a line.
+pub const MAX_LINE_SIZE: usize = 100_000;
+/// Highest degree (`vclay_spline::MAX_DEGREE`).
+pub const MAX_DEGREE: usize = vclay_spline::MAX_DEGREE;
+/// Default material `(mu, gamma, alpha, beta)` without `[material]` (the old reader's).
+pub const DEFAULT_MATERIAL: [f64; 4] = [1.0, 2.0, 1.0, 0.1];
+
+// ---------------------------------------------------------------------------------------
+// Engines
+// ---------------------------------------------------------------------------------------
+
+#[derive(Clone, Debug)]
+enum Engine {
+    Rational(GeneralizedDnurbs<RationalGeometry>),
+    Swung(GeneralizedDnurbs<SwungGeometry>),
+    FrozenSurface(DnurbsSurface),
+    FrozenCurve(DnurbsCurve),
+}
+
+/// Dispatches an expression over the two generalized engines and the two frozen ones.
+macro_rules! each {
+    ($e:expr, gen $g:ident => $a:expr, frozen $f:ident => $b:expr) => {
+        match $e {
+            Engine::Rational($g) => $a,
+            Engine::Swung($g) => $a,
+            Engine::FrozenSurface($f) => $b,
+            Engine::FrozenCurve($f) => $b,
+        }
+    };
+}
+
+#[derive(Clone, Debug, PartialEq)]
+enum EngineState {
+    Generalized(GeneralizedState),
+    Frozen(DnurbsState),
+}
+
+fn dyn_err(e: DynamicsError) -> SessionError {
+    match e {
+        DynamicsError::Diverged { .. } => SessionError::Diverged {
+            model: String::new(),
+            what: e.to_string(),
+        },
+        e => SessionError::model(e),
+    }
+}
+
+fn cmd(reason: impl std::fmt::Display) -> SessionError {
+    SessionError::command("", "", reason)
+}
+
+fn gen_point<G: GeneralizedGeometry>(g: &G, param: [f64; 2]) -> Result<Vec3, DynamicsError> {
+    let mut lj = LocalJacobian::default();
+    g.jacobian_at(param, &mut lj)?;
+    Ok(lj.s[0])
+}
+
+impl Engine {
+    fn is_frozen(&self) -> bool {
+        matches!(self, Engine::FrozenSurface(_) | Engine::FrozenCurve(_))
+    }
+    fn is_curve(&self) -> bool {
+        match self {
+            Engine::Rational(d) => d.geometry().parametric_dimension() == 1,
+            Engine::FrozenCurve(_) => true,
+            _ => false,
+        }
+    }
+    fn time(&self) -> f64 {
+        each!(self, gen d => d.time(), frozen d => d.time())
+    }
+    fn steps(&self) -> u64 {
+        each!(self, gen d => d.steps() as u64, frozen d => d.steps() as u64)
+    }
+    fn step(&mut self, dt: f64) -> Result<vclay_dynamics::StepReport, DynamicsError> {
+        let i = Integrator::Implicit { dt };
+        each!(self, gen d => d.step(i), frozen d => d.step(i))
+    }
+    fn set_forces(&mut self, f: Vec<Force>) {
+        each!(self, gen d => *d.forces_mut() = f, frozen d => *d.forces_mut() = f)
+    }
+    fn state(&self) -> EngineState {
+        each!(self, gen d => EngineState::Generalized(d.state()),
+            frozen d => EngineState::Frozen(d.state()))
+    }
+    fn set_state(&mut self, s: &EngineState) -> Result<(), DynamicsError> {
+        let wrong = || DynamicsError::Parameter {
+            name: "state",
+            value: 0.0,
+            why: "belongs to the other engine",
+        };
+        match (self, s) {
+            (Engine::Rational(d), EngineState::Generalized(s)) => d.set_state(s),
+            (Engine::Swung(d), EngineState::Generalized(s)) => d.set_state(s),
+            (Engine::FrozenSurface(d), EngineState::Frozen(s)) => d.set_state(s),
+            (Engine::FrozenCurve(d), EngineState::Frozen(s)) => d.set_state(s),
+            _ => Err(wrong()),
+        }
+    }
+    fn set_material(&mut self, m: Material) -> Result<(), DynamicsError> {
+        each!(self, gen d => d.set_material(m), frozen d => d.set_material(m))
+    }
+    fn stop(&mut self) {
+        each!(self, gen d => d.stop(), frozen d => d.stop())
+    }
+    fn plastic_reset(&mut self) -> Result<(), DynamicsError> {
+        each!(self, gen d => d.set_rest_shape_to_current(),
+            frozen d => { d.set_rest_shape_to_current(); Ok(()) })
+    }
+    fn elastic_energy(&self) -> f64 {
+        each!(self, gen d => d.elastic_energy().unwrap_or(f64::NAN), frozen d => d.elastic_energy())
+    }
+    fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
+        each!(self, gen d => d.geometry().nearest_param(x),
+            frozen d => d.geometry().nearest_param(x))
+    }
+    fn point_at(&self, param: [f64; 2]) -> Result<Vec3, DynamicsError> {
+        match self {
+            Engine::Rational(d) => gen_point(d.geometry(), param),
+            Engine::Swung(d) => gen_point(d.geometry(), param),
+            Engine::FrozenSurface(d) => Ok(d.geometry().basis_at(&param[..2])?.2),
+            Engine::FrozenCurve(d) => Ok(d.geometry().basis_at(&param[..1])?.2),
+        }
+    }
+    /// Coordinate ranges of the control points (x, y, z, w) of a generalized engine.
+    fn groups(&self) -> Vec<Range<usize>> {
+        let g = match self {
+            Engine::Rational(d) => d.geometry().coordinate_groups(),
+            Engine::Swung(d) => d.geometry().coordinate_groups(),
+            _ => return Vec::new(),
+        };
+        g.into_iter().filter(|g| g.len() == 4).collect()
+    }
+    fn default_fixed(&self) -> Vec<usize> {
+        match self {
+            Engine::Rational(d) => d.geometry().default_fixed_coordinates(),
+            Engine::Swung(d) => d.geometry().default_fixed_coordinates(),
+            _ => Vec::new(),
+        }
+    }
+    /// Control points (current, or rest) as the fix/free/move-point indices count them.
+    fn control_points(&self, rest: bool) -> Vec<Vec3> {
+        let from = |q: &[f64], groups: Vec<Range<usize>>| {
+            groups
+                .iter()
+                .map(|g| Vec3::new(q[g.start], q[g.start + 1], q[g.start + 2]))
+                .collect()
+        };
+        match self {
+            Engine::Rational(d) => {
+                let q = if rest {
+                    d.state().rest_coordinates
+                } else {
+                    d.geometry().coordinates().to_vec()
+                };
+                from(&q, self.groups())
+            }
+            Engine::Swung(d) => {
+                let q = if rest {
+                    d.state().rest_coordinates
+                } else {
+                    d.geometry().coordinates().to_vec()
+                };
+                from(&q, self.groups())
+            }
+            Engine::FrozenSurface(d) if rest => d.rest_shape().to_vec(),
+            Engine::FrozenCurve(d) if rest => d.rest_shape().to_vec(),
+            Engine::FrozenSurface(d) => d.geometry().points().to_vec(),
+            Engine::FrozenCurve(d) => d.geometry().points().to_vec(),
+        }
+    }
+    /// The x, y, z coordinates of control point `i` that fix/free act on (a generalized
+    /// geometry's default-held coordinates stay held).
+    fn point_coords(&self, i: usize) -> Vec<usize> {
+        let groups = self.groups();
+        let held = self.default_fixed();
+        groups
+            .get(i)
+            .map(|g| {
+                (g.start..g.start + 3)
+                    .filter(|c| !held.contains(c))
+                    .collect()
+            })
+            .unwrap_or_default()
+    }
+    fn is_point_fixed(&self, i: usize) -> bool {
+        match self {
+            Engine::Rational(d) => self
+                .point_coords(i)
+                .first()
+                .is_some_and(|&c| d.is_fixed_coordinate(c)),
+            Engine::Swung(d) => self
+                .point_coords(i)
+                .first()
+                .is_some_and(|&c| d.is_fixed_coordinate(c)),
+            Engine::FrozenSurface(d) => d.is_fixed(i),
+            Engine::FrozenCurve(d) => d.is_fixed(i),
+        }
+    }
+    fn set_point_fixed(&mut self, i: usize, fixed: bool) -> Result<(), DynamicsError> {
+        let coords = self.point_coords(i);
+        match self {
+            Engine::Rational(d) => coords
+                .iter()
+                .try_for_each(|&c| d.set_fixed_coordinate(c, fixed)),
+            Engine::Swung(d) => coords
+                .iter()
+                .try_for_each(|&c| d.set_fixed_coordinate(c, fixed)),
+            Engine::FrozenSurface(d) => d.set_fixed(i, fixed),
+            Engine::FrozenCurve(d) => d.set_fixed(i, fixed),
+        }
+    }
+    fn surface(&self) -> Result<Option<NurbsSurface>, DynamicsError> {
+        Ok(match self {
+            Engine::Rational(d) if d.geometry().parametric_dimension() == 2 => {
+                Some(d.geometry().to_surface()?)
+            }
+            Engine::Swung(d) => Some(d.geometry().to_surface()?),
+            Engine::FrozenSurface(d) => Some(d.geometry().clone()),
+            _ => None,
+        })
+    }
+    fn curve(&self) -> Result<Option<NurbsCurve>, DynamicsError> {
+        Ok(match self {
+            Engine::Rational(d) if d.geometry().parametric_dimension() == 1 => {
+                Some(d.geometry().to_curve()?)
+            }
+            Engine::FrozenCurve(d) => Some(d.geometry().clone()),
+            _ => None,
+        })
+    }
+    fn sync_constraints(&mut self, cs: &[NamedConstraint]) -> Result<(), SessionError> {
+        fn put<G: GeneralizedGeometry>(
+            d: &mut GeneralizedDnurbs<G>,
+            cs: &[NamedConstraint],
+        ) -> Result<(), SessionError> {
+            d.clear_constraints();
+            for c in cs {
+                d.add_constraint(c.constraint.to_constraint())
+                    .map_err(|e| cmd(format!("constraint `{}`: {e}", c.name)))?;
+            }
+            Ok(())
+        }
+        match self {
+            Engine::Rational(d) => put(d, cs),
+            Engine::Swung(d) => put(d, cs),
+            _ if cs.is_empty() => Ok(()),
+            _ => Err(cmd(
+                "the frozen-weight engine has no constraints (section 6.2 needs the generalized engine: `engine = \"generalized\"`)",
+            )),
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Serializable descriptions
+// ---------------------------------------------------------------------------------------
+
+/// One force of a tool slot, as it is saved (`d-nurbs.txt` section 6.1).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum ForceDesc {
+    /// The spring of eq 19 at the material point `param`, pulling towards `target` (at time
+    /// `t`: `target + velocity t` when `velocity` is given).
+    Spring {
+        /// Material point.
+        param: [f64; 2],
+        /// Target (at time 0 for a moving target).
+        target: V3,
+        /// Target velocity.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        velocity: Option<V3>,
+        /// Stiffness `k`.
+        stiffness: f64,
+        /// Gaussian kernel width instead of the delta of eq 19.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        kernel: Option<f64>,
+    },
+    /// A constant force at a material point.
+    Point {
+        /// Material point.
+        param: [f64; 2],
+        /// The force.
+        force: V3,
+    },
+    /// Gravity (force density `mu g`).
+    Gravity {
+        /// Acceleration.
+        g: V3,
+    },
+    /// Pressure along the normal (surfaces).
+    Inflation {
+        /// Pressure.
+        pressure: f64,
+    },
+    /// A data point pulling the nearest point of the model (section 7.3).
+    DataPoint {
+        /// The point.
+        point: V3,
+        /// Stiffness.
+        stiffness: f64,
+    },
+}
+
+impl ForceDesc {
+    /// The engine's force (a moving spring target is the closure `t0 + vel t` of the old
+    /// scenario reader, bit for bit).
+    pub fn to_force(&self) -> Force {
+        match self {
+            ForceDesc::Spring {
+                param,
+                target,
+                velocity,
+                stiffness,
+                kernel,
+            } => {
+                let t0 = v3(*target);
+                let target = match velocity {
+                    Some(vel) => {
+                        let vel = v3(*vel);
+                        Target::Moving(Arc::new(move |t| t0 + vel * t))
+                    }
+                    None => Target::Fixed(t0),
+                };
+                Force::Spring {
+                    param: *param,
+                    target,
+                    stiffness: *stiffness,
+                    kernel: *kernel,
+                }
+            }
+            ForceDesc::Point { param, force } => Force::Point {
+                param: *param,
+                force: v3(*force),
+            },
+            ForceDesc::Gravity { g } => Force::Gravity(v3(*g)),
+            ForceDesc::Inflation { pressure } => Force::Inflation(*pressure),
+            ForceDesc::DataPoint { point, stiffness } => Force::DataPoint {
+                point: v3(*point),
+                stiffness: *stiffness,
+            },
+        }
+    }
+}
+
+/// The forces of one named tool.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Slot {
+    handle: usize,
+    forces: Vec<ForceDesc>,
+}
+
+/// A geometric constraint as saved (section 6.2).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+enum ConstraintDesc {
+    Point { param: [f64; 2], target: V3 },
+    Normal { param: [f64; 2], normal: V3 },
+}
+
+impl ConstraintDesc {
+    fn to_constraint(&self) -> Constraint {
+        match self {
+            ConstraintDesc::Point { param, target } => Constraint::Point {
+                param: *param,
+                target: v3(*target),
+            },
+            ConstraintDesc::Normal { param, normal } => Constraint::Normal {
+                param: *param,
+                normal: v3(*normal),
+            },
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NamedConstraint {
+    name: String,
+    constraint: ConstraintDesc,
+}
+
+/// Uniform material constants (`d-nurbs.txt` eqs 16-17).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Mat {
+    mu: f64,
+    gamma: f64,
+    alpha: Vec<f64>,
+    beta: Vec<f64>,
+}
+
+impl Mat {
+    fn to_material(&self) -> Material {
+        Material {
+            mu: Density::Constant(self.mu),
+            gamma: Density::Constant(self.gamma),
+            alpha: self.alpha.iter().map(|&a| Density::Constant(a)).collect(),
+            beta: self.beta.iter().map(|&b| Density::Constant(b)).collect(),
+        }
+    }
+    fn from_material(m: &Material) -> Option<Self> {
+        let c = |d: &Density| match d {
+            Density::Constant(v) => Some(*v),
+            _ => None,
+        };
+        Some(Self {
+            mu: c(&m.mu)?,
+            gamma: c(&m.gamma)?,
+            alpha: m.alpha.iter().map(c).collect::<Option<_>>()?,
+            beta: m.beta.iter().map(c).collect::<Option<_>>()?,
+        })
+    }
+}
+
+/// A NURBS curve as saved.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CurveData {
+    degree: usize,
+    knots: Vec<f64>,
+    points: Vec<V3>,
+    weights: Vec<f64>,
+}
+
+impl CurveData {
+    fn of(c: &NurbsCurve) -> Self {
+        Self {
+            degree: c.degree(),
+            knots: c.knots().as_slice().to_vec(),
+            points: c.control_points().iter().map(a3).collect(),
+            weights: c.weights().to_vec(),
+        }
+    }
+    fn curve(&self) -> Result<NurbsCurve, SessionError> {
+        let kv = KnotVector::new(self.knots.clone(), self.degree, self.points.len())
+            .map_err(SessionError::model)?;
+        NurbsCurve::from_knot_vector(
+            kv,
+            self.points.iter().map(|p| v3(*p)).collect(),
+            self.weights.clone(),
+        )
+        .map_err(SessionError::model)
+    }
+}
+
+/// The initial geometry (engines are rebuilt from it, so construction-time scales match).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+enum Source {
+    Curve {
+        curve: CurveData,
+    },
+    Surface {
+        degree: [usize; 2],
+        knots: [Vec<f64>; 2],
+        points: Vec<V3>,
+        weights: Vec<f64>,
+    },
+    Swung {
+        profile: CurveData,
+        trajectory: CurveData,
+        alpha: f64,
+    },
+}
+
+impl Source {
+    fn of_surface(s: &NurbsSurface) -> Self {
+        Source::Surface {
+            degree: s.degree(),
+            knots: s.knots().each_ref().map(|k| k.as_slice().to_vec()),
+            points: s.control_points().iter().map(a3).collect(),
+            weights: s.weights().to_vec(),
+        }
+    }
+    fn surface(&self) -> Result<Option<NurbsSurface>, SessionError> {
+        let Source::Surface {
+            degree,
+            knots,
+            points,
+            weights,
+        } = self
+        else {
+            return Ok(None);
+        };
+        let mut kv = Vec::new();
+        for a in 0..2 {
+            let n = knots[a].len().checked_sub(degree[a] + 1).ok_or_else(|| {
+                SessionError::model(format!(
+                    "knot vector {a}: too short for degree {}",
+                    degree[a]
+                ))
+            })?;
+            kv.push(KnotVector::new(knots[a].clone(), degree[a], n).map_err(SessionError::model)?);
+        }
+        let kv: [KnotVector; 2] = kv.try_into().expect("two axes");
+        NurbsSurface::from_flat(kv, points.iter().map(|p| v3(*p)).collect(), weights.clone())
+            .map(Some)
+            .map_err(SessionError::model)
+    }
+    /// The engine over this geometry.
+    fn engine(&self, frozen: bool, material: Material) -> Result<Engine, SessionError> {
+        let e = |e: DynamicsError| SessionError::model(e);
+        Ok(match (self, frozen) {
+            (Source::Curve { curve }, false) => Engine::Rational(
+                GeneralizedDnurbs::new(RationalGeometry::from_curve(&curve.curve()?), material)
+                    .map_err(e)?,
+            ),
+            (Source::Curve { curve }, true) => {
+                Engine::FrozenCurve(Dnurbs::new(curve.curve()?, material).map_err(e)?)
+            }
+            (Source::Surface { .. }, false) => Engine::Rational(
+                GeneralizedDnurbs::new(
+                    RationalGeometry::from_surface(&self.surface()?.expect("surface")),
+                    material,
+                )
+                .map_err(e)?,
+            ),
+            (Source::Surface { .. }, true) => Engine::FrozenSurface(
+                Dnurbs::new(self.surface()?.expect("surface"), material).map_err(e)?,
+            ),
+            (
+                Source::Swung {
+                    profile,
+                    trajectory,
+                    alpha,
+                },
+                false,
+            ) => Engine::Swung(
+                GeneralizedDnurbs::new(
+                    SwungGeometry::new(&profile.curve()?, &trajectory.curve()?, *alpha)
+                        .map_err(e)?,
+                    material,
+                )
+                .map_err(e)?,
+            ),
+            (Source::Swung { .. }, true) => {
+                return Err(SessionError::model(
+                    "swung surfaces need the generalized engine",
+                ));
+            }
+        })
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The model
+// ---------------------------------------------------------------------------------------
+
+/// A D-NURBS curve, surface or swung surface with its named tools and constraints (see the
+/// [module docs](self)).
+#[derive(Clone, Debug)]
+pub struct DnurbsModel {
+    kind: ModelKind,
+    engine: Engine,
+    source: Source,
+    material: Mat,
+    dt: f64,
+    default_k: f64,
+    size: f64,
+    slots: Vec<Slot>,
+    next_handle: usize,
+    constraints: Vec<NamedConstraint>,
+    tools: ToolTable,
+    kinetic: f64,
+    revision: u64,
+}
+
+#[derive(Clone, Debug)]
+struct Snap {
+    state: EngineState,
+    material: Mat,
+    dt: f64,
+    slots: Vec<Slot>,
+    next_handle: usize,
+    constraints: Vec<NamedConstraint>,
+    tools: ToolTable,
+    kinetic: f64,
+}
+
+fn bbox_diagonal(pts: &[Vec3]) -> f64 {
+    let mut lo = Vec3::repeat(f64::INFINITY);
+    let mut hi = Vec3::repeat(f64::NEG_INFINITY);
+    for p in pts {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    if pts.is_empty() {
+        return 1.0;
+    }
+    (hi - lo).norm().max(f64::MIN_POSITIVE)
+}
+
+impl DnurbsModel {
+    fn new(
+        kind: ModelKind,
+        engine: Engine,
+        source: Source,
+        material: Mat,
+        dt: f64,
+    ) -> Result<Self, SessionError> {
+        let size = match engine.surface().map_err(dyn_err)? {
+            Some(s) => bbox_diagonal(s.control_points()),
+            None => bbox_diagonal(&engine.control_points(false)),
+        };
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(SessionError::model(format!("dt = {dt} must be positive")));
+        }
+        Ok(Self {
+            kind,
+            engine,
+            source,
+            material,
+            dt,
+            default_k: DEFAULT_ROPE_STIFFNESS,
+            size,
+            slots: Vec::new(),
+            next_handle: 0,
+            constraints: Vec::new(),
+            tools: ToolTable::default(),
+            kinetic: 0.0,
+            revision: 1,
+        })
+    }
+
+    fn constants(d: &Material) -> Result<Mat, SessionError> {
+        Mat::from_material(d).ok_or_else(|| {
+            SessionError::model("only constant material densities can be used in a session")
+        })
+    }
+
+    /// Wraps a frozen-weight surface (`Dnurbs<NurbsSurface>`, e.g. the 64x64 benchmark
+    /// sheet) stepped by eq 18 with `dt`. Its forces and fixed points are kept: they become
+    /// one anonymous slot (`forces0`) of the tool table. Errors: a non-constant material, a
+    /// time step that is not positive, forces with moving targets (not serializable).
+    pub fn frozen_surface(d: DnurbsSurface, dt: f64) -> Result<Self, SessionError> {
+        let mat = Self::constants(d.material())?;
+        let source = Source::of_surface(d.geometry());
+        let forces = d.forces().to_vec();
+        let mut m = Self::new(
+            ModelKind::DnurbsSurface,
+            Engine::FrozenSurface(d),
+            source,
+            mat,
+            dt,
+        )?;
+        m.adopt_forces(&forces)?;
+        Ok(m)
+    }
+
+    /// Wraps a frozen-weight curve (`Dnurbs<NurbsCurve>`); see [`DnurbsModel::frozen_surface`].
+    pub fn frozen_curve(d: DnurbsCurve, dt: f64) -> Result<Self, SessionError> {
+        let mat = Self::constants(d.material())?;
+        let source = Source::Curve {
+            curve: CurveData::of(d.geometry()),
+        };
+        let forces = d.forces().to_vec();
+        let mut m = Self::new(
+            ModelKind::DnurbsCurve,
+            Engine::FrozenCurve(d),
+            source,
+            mat,
+            dt,
+        )?;
+        m.adopt_forces(&forces)?;
+        Ok(m)
+    }
+
+    /// Wraps a generalized curve or surface (`GeneralizedDnurbs<RationalGeometry>`) that has
+    /// not stepped yet, stepped by eq 18 with `dt`; its forces become the slot `forces0`, its
+    /// constraints `constraint<N>`. The initial geometry saved in session files is its current
+    /// shape (so it must be at its construction shape: `steps() == 0`).
+    pub fn generalized(
+        d: GeneralizedDnurbs<RationalGeometry>,
+        dt: f64,
+    ) -> Result<Self, SessionError> {
+        if d.steps() != 0 {
+            return Err(SessionError::model(
+                "wrap a generalized model before it steps (its initial shape is saved)",
+            ));
+        }
+        let mat = Self::constants(d.material())?;
+        let curve = d.geometry().parametric_dimension() == 1;
+        let source = if curve {
+            Source::Curve {
+                curve: CurveData::of(&d.geometry().to_curve().map_err(dyn_err)?),
+            }
+        } else {
+            Source::of_surface(&d.geometry().to_surface().map_err(dyn_err)?)
+        };
+        let kind = if curve {
+            ModelKind::DnurbsCurve
+        } else {
+            ModelKind::DnurbsSurface
+        };
+        Self::wrap_generalized(kind, Engine::Rational(d), source, mat, dt)
+    }
+
+    /// Wraps a swung surface (`GeneralizedDnurbs<SwungGeometry>`) that has not stepped yet;
+    /// see [`DnurbsModel::generalized`].
+    pub fn swung(d: GeneralizedDnurbs<SwungGeometry>, dt: f64) -> Result<Self, SessionError> {
+        if d.steps() != 0 {
+            return Err(SessionError::model(
+                "wrap a generalized model before it steps (its initial shape is saved)",
+            ));
+        }
+        let mat = Self::constants(d.material())?;
+        let g = d.geometry();
+        let source = Source::Swung {
+            profile: CurveData::of(&g.profile().map_err(dyn_err)?),
+            trajectory: CurveData::of(&g.trajectory().map_err(dyn_err)?),
+            alpha: g.alpha(),
+        };
+        Self::wrap_generalized(ModelKind::DnurbsSwung, Engine::Swung(d), source, mat, dt)
+    }
+
+    fn wrap_generalized(
+        kind: ModelKind,
+        engine: Engine,
+        source: Source,
+        mat: Mat,
+        dt: f64,
+    ) -> Result<Self, SessionError> {
+        let (forces, constraints) = match &engine {
+            Engine::Rational(d) => (d.forces().to_vec(), d.constraints().to_vec()),
+            Engine::Swung(d) => (d.forces().to_vec(), d.constraints().to_vec()),
+            _ => unreachable!("generalized"),
+        };
+        let mut m = Self::new(kind, engine, source, mat, dt)?;
+        m.adopt_forces(&forces)?;
+        for (k, c) in constraints.iter().enumerate() {
+            m.constraints.push(NamedConstraint {
+                name: format!("constraint{k}"),
+                constraint: match c {
+                    Constraint::Point { param, target } => ConstraintDesc::Point {
+                        param: *param,
+                        target: a3(target),
+                    },
+                    Constraint::Normal { param, normal } => ConstraintDesc::Normal {
+                        param: *param,
+                        normal: a3(normal),
+                    },
+                },
+            });
+        }
+        Ok(m)
+    }
+
+    fn adopt_forces(&mut self, forces: &[Force]) -> Result<(), SessionError> {
+        if forces.is_empty() {
+            return Ok(());
+        }
+        let mut descs = Vec::new();
+        for f in forces {
+            descs.push(match f {
+                Force::Spring {
+                    param,
+                    target: Target::Fixed(t),
+                    stiffness,
+                    kernel,
+                } => ForceDesc::Spring {
+                    param: *param,
+                    target: a3(t),
+                    velocity: None,
+                    stiffness: *stiffness,
+                    kernel: *kernel,
+                },
+                Force::Spring { .. } => {
+                    return Err(SessionError::model(
+                        "a spring with a moving target cannot be described; add it with a `rope` command with `velocity`",
+                    ));
+                }
+                Force::Point { param, force } => ForceDesc::Point {
+                    param: *param,
+                    force: a3(force),
+                },
+                Force::Gravity(g) => ForceDesc::Gravity { g: a3(g) },
+                Force::Inflation(p) => ForceDesc::Inflation { pressure: *p },
+                Force::DataPoint { point, stiffness } => ForceDesc::DataPoint {
+                    point: a3(point),
+                    stiffness: *stiffness,
+                },
+            });
+        }
+        let h = self.add_slot(descs);
+        let label = self.label(&None, "forces", h)?;
+        self.track(&label, "forces", h, None, None);
+        Ok(())
+    }
+
+    /// Which engine runs the model: `"generalized"` or `"frozen"`.
+    pub fn engine_name(&self) -> &'static str {
+        if self.engine.is_frozen() {
+            "frozen"
+        } else {
+            "generalized"
+        }
+    }
+
+    /// The named tools.
+    pub fn tools(&self) -> &ToolTable {
+        &self.tools
+    }
+
+    /// Current control points (the indices fix/free/move-point use; see the module docs for
+    /// swung surfaces).
+    pub fn control_points(&self) -> Vec<Vec3> {
+        self.engine.control_points(false)
+    }
+
+    /// The generalized coordinates (generalized engine) or the control point coordinates
+    /// x, y, z (frozen engine), flat: for exact comparisons.
+    pub fn coordinates(&self) -> Vec<f64> {
+        match &self.engine {
+            Engine::Rational(d) => d.geometry().coordinates().to_vec(),
+            Engine::Swung(d) => d.geometry().coordinates().to_vec(),
+            Engine::FrozenSurface(d) => d.geometry().points().iter().flat_map(a3).collect(),
+            Engine::FrozenCurve(d) => d.geometry().points().iter().flat_map(a3).collect(),
+        }
+    }
+
+    fn snap(&self) -> Snap {
+        Snap {
+            state: self.engine.state(),
+            material: self.material.clone(),
+            dt: self.dt,
+            slots: self.slots.clone(),
+            next_handle: self.next_handle,
+            constraints: self.constraints.clone(),
+            tools: self.tools.clone(),
+            kinetic: self.kinetic,
+        }
+    }
+
+    fn put(&mut self, s: &Snap) -> Result<(), SessionError> {
+        if self.material != s.material {
+            self.engine
+                .set_material(s.material.to_material())
+                .map_err(dyn_err)?;
+            self.material = s.material.clone();
+        }
+        self.engine.set_state(&s.state).map_err(dyn_err)?;
+        self.slots = s.slots.clone();
+        self.sync_forces();
+        self.constraints = s.constraints.clone();
+        self.engine.sync_constraints(&self.constraints)?;
+        self.dt = s.dt;
+        self.next_handle = s.next_handle;
+        self.tools = s.tools.clone();
+        self.kinetic = s.kinetic;
+        self.revision += 1;
+        Ok(())
+    }
+
+    fn sync_forces(&mut self) {
+        let f = self
+            .slots
+            .iter()
+            .flat_map(|s| s.forces.iter().map(ForceDesc::to_force))
+            .collect();
+        self.engine.set_forces(f);
+    }
+
+    fn add_slot(&mut self, forces: Vec<ForceDesc>) -> usize {
+        let h = self.next_handle;
+        self.next_handle += 1;
+        self.slots.push(Slot { handle: h, forces });
+        self.sync_forces();
+        h
+    }
+
+    fn remove_slot(&mut self, h: usize) {
+        self.slots.retain(|s| s.handle != h);
+        self.sync_forces();
+    }
+
+    fn slot_mut(&mut self, h: usize) -> Option<&mut Slot> {
+        self.slots.iter_mut().find(|s| s.handle == h)
+    }
+
+    fn label(
+        &self,
+        name: &Option<String>,
+        what: &str,
+        handle: usize,
+    ) -> Result<String, SessionError> {
+        let taken = |n: &str| self.constraints.iter().any(|c| c.name == n);
+        if let Some(n) = name
+            && taken(n)
+        {
+            return Err(cmd(format!(
+                "a constraint named `{n}` is active (release it first)"
+            )));
+        }
+        let mut l = self
+            .tools
+            .label(name.as_deref(), what, handle)
+            .map_err(cmd)?;
+        let mut k = 1;
+        while taken(&l) {
+            l = format!("{what}{handle}_c{k}");
+            k += 1;
+        }
+        Ok(l)
+    }
+
+    fn track(
+        &mut self,
+        label: &str,
+        action: &str,
+        handle: usize,
+        path: Option<CursorPath>,
+        release: Option<f64>,
+    ) {
+        self.tools.tools.push(ScheduledTool {
+            name: label.to_string(),
+            action: action.to_string(),
+            handle,
+            path,
+            release,
+        });
+    }
+
+    /// Adds a slot under a new name; on a taken name nothing changes.
+    fn add_tool(
+        &mut self,
+        name: &Option<String>,
+        what: &str,
+        action: &str,
+        forces: Vec<ForceDesc>,
+        path: Option<CursorPath>,
+        release: Option<f64>,
+    ) -> Result<String, SessionError> {
+        let label = self.label(name, what, self.next_handle)?;
+        let h = self.add_slot(forces);
+        self.track(&label, action, h, path, release);
+        Ok(label)
+    }
+
+    fn param_or_near(
+        &self,
+        param: &Option<[f64; 2]>,
+        near: Option<&V3>,
+    ) -> Result<[f64; 2], SessionError> {
+        let p = match (param, near) {
+            (Some(p), _) => *p,
+            (None, Some(x)) => self.engine.nearest_param(&v3(*x)).map_err(cmd)?,
+            (None, None) => return Err(cmd("give `param` or a position")),
+        };
+        // Checks the parameter (an error names a parameter outside the domain).
+        self.engine
+            .point_at(p)
+            .map_err(|e| cmd(format!("material point {p:?}: {e}")))?;
+        Ok(p)
+    }
+
+    fn stiffness(&self, s: Option<f64>) -> f64 {
+        s.unwrap_or(self.default_k)
+    }
+
+    /// Gravity and inflation: an existing tool of that name changes strength.
+    fn field_tool(
+        &mut self,
+        name: &Option<String>,
+        action: &str,
+        force: ForceDesc,
+        until: Option<f64>,
+    ) -> Result<String, SessionError> {
+        if let Some(n) = name
+            && let Some(t) = self.tools.get(n).cloned()
+        {
+            if t.action != action {
+                return Err(cmd(format!(
+                    "the tool `{n}` is a {}, not {action}",
+                    t.action
+                )));
+            }
+            self.slot_mut(t.handle).expect("slot of a tool").forces = vec![force];
+            self.sync_forces();
+            let e = self.tools.get_mut(n).expect("present");
+            e.release = until.or(e.release);
+            return Ok(format!("{action} `{n}` changed"));
+        }
+        let label = self.add_tool(name, action, action, vec![force], None, until)?;
+        Ok(format!("{action} `{label}` on"))
+    }
+
+    /// Control points selected by ids, a box around rest positions, or the nearest one.
+    fn select(
+        &self,
+        points: &Option<Vec<usize>>,
+        min: &Option<V3>,
+        max: &Option<V3>,
+        near: &Option<V3>,
+    ) -> Result<Vec<usize>, SessionError> {
+        let n = self.engine.control_points(false).len();
+        if let Some(p) = points {
+            if let Some(&i) = p.iter().find(|&&i| i >= n) {
+                return Err(cmd(format!(
+                    "control point {i} does not exist (there are {n})"
+                )));
+            }
+            return Ok(p.clone());
+        }
+        if let (Some(lo), Some(hi)) = (min, max) {
+            let rest = self.engine.control_points(true);
+            return Ok((0..n)
+                .filter(|&i| (0..3).all(|a| rest[i][a] >= lo[a] && rest[i][a] <= hi[a]))
+                .collect());
+        }
+        if let Some(x) = near {
+            let x = v3(*x);
+            let p = self.engine.control_points(false);
+            return Ok((0..n)
+                .min_by(|&a, &b| (p[a] - x).norm().total_cmp(&(p[b] - x).norm()))
+                .into_iter()
+                .collect());
+        }
+        Ok(Vec::new())
+    }
+
+    fn set_material_values(
+        &mut self,
+        mu: Option<f64>,
+        gamma: Option<f64>,
+        alpha: Option<f64>,
+        beta: Option<f64>,
+    ) -> Result<(), SessionError> {
+        let mut m = self.material.clone();
+        for (key, v) in [
+            ("mu", mu),
+            ("gamma", gamma),
+            ("alpha", alpha),
+            ("beta", beta),
+        ] {
+            if let Some(v) = v {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(cmd(format!(
+                        "`{key}` = {v} must be finite and non-negative"
+                    )));
+                }
+                match key {
+                    "mu" => m.mu = v,
+                    "gamma" => m.gamma = v,
+                    "alpha" => m.alpha.iter_mut().for_each(|a| *a = v),
+                    _ => m.beta.iter_mut().for_each(|b| *b = v),
+                }
+            }
+        }
+        self.engine.set_material(m.to_material()).map_err(cmd)?;
+        self.material = m;
+        Ok(())
+    }
+
+    fn unsupported(&self, edit: &Edit) -> SessionError {
+        cmd(format!(
+            "`{}` does not apply to a {} model",
+            edit.action(),
+            self.kind
+        ))
+    }
+
+    /// Sets x, y, z (and zeroes their velocity) or the weight of control point `i` of a
+    /// generalized engine through its state.
+    fn edit_coords(&mut self, i: usize, values: &[(usize, f64)]) -> Result<(), SessionError> {
+        let groups = self.engine.groups();
+        let Some(g) = groups.get(i) else {
+            return Err(cmd(format!(
+                "control point {i} does not exist (there are {})",
+                groups.len()
+            )));
+        };
+        let EngineState::Generalized(mut s) = self.engine.state() else {
+            unreachable!("generalized engines only")
+        };
+        for &(k, v) in values {
+            s.coordinates[g.start + k] = v;
+            s.velocity[g.start + k] = 0.0;
+        }
+        self.engine
+            .set_state(&EngineState::Generalized(s))
+            .map_err(cmd)
+    }
+
+    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
+        let before = self.snap();
+        let surface = !self.engine.is_curve();
+        let message = match edit {
+            Edit::Rope {
+                name,
+                from,
+                param,
+                to,
+                until,
+                velocity,
+                release,
+                stiffness,
+                length,
+                kernel,
+                start,
+            } => {
+                if length.is_some_and(|l| l > 0.0) {
+                    return Err(cmd(
+                        "`length` is for solids; a D-NURBS spring (eq 19) pulls at any length",
+                    ));
+                }
+                let prm = self.param_or_near(param, Some(from))?;
+                let spring = ForceDesc::Spring {
+                    param: prm,
+                    target: *from,
+                    velocity: *velocity,
+                    stiffness: self.stiffness(*stiffness),
+                    kernel: *kernel,
+                };
+                let path = to.map(|to| {
+                    let start = start.unwrap_or(self.engine.time());
+                    CursorPath::Linear {
+                        from: *from,
+                        to,
+                        start,
+                        end: until.unwrap_or(start),
+                    }
+                });
+                let label = self.add_tool(name, "rope", "rope", vec![spring], path, *release)?;
+                format!("rope `{label}` attached at material point {prm:?}")
+            }
+            Edit::MoveRope { name, to } => {
+                let t = self
+                    .tools
+                    .get(name)
+                    .ok_or_else(|| cmd(format!("no active rope named `{name}`")))?;
+                if t.action != "rope" {
+                    return Err(cmd(format!("`{name}` is a {}, not a rope", t.action)));
+                }
+                let h = t.handle;
+                if let Some(ForceDesc::Spring {
+                    target, velocity, ..
+                }) = self.slot_mut(h).and_then(|s| s.forces.first_mut())
+                {
+                    *target = *to;
+                    *velocity = None;
+                }
+                self.sync_forces();
+                self.tools.get_mut(name).expect("present").path = None;
+                format!("rope `{name}` cursor at {to:?}")
+            }
+            Edit::Force {
+                name,
+                near,
+                param,
+                force,
+                until,
+            } => {
+                let prm = self.param_or_near(param, near.as_ref())?;
+                let f = ForceDesc::Point {
+                    param: prm,
+                    force: *force,
+                };
+                let label = self.add_tool(name, "force", "force", vec![f], None, *until)?;
+                format!("force `{label}` at material point {prm:?}")
+            }
+            Edit::Gravity { name, g, until } => {
+                self.field_tool(name, "gravity", ForceDesc::Gravity { g: *g }, *until)?
+            }
+            Edit::Inflate {
+                name,
+                pressure,
+                until,
+            } => {
+                if !surface {
+                    return Err(cmd("inflation needs a surface (s_u x s_v), not a curve"));
+                }
+                self.field_tool(
+                    name,
+                    "inflate",
+                    ForceDesc::Inflation {
+                        pressure: *pressure,
+                    },
+                    *until,
+                )?
+            }
+            Edit::Data {
+                name,
+                points,
+                stiffness,
+            } => {
+                let k = self.stiffness(*stiffness);
+                let f = points
+                    .iter()
+                    .map(|p| ForceDesc::DataPoint {
+                        point: *p,
+                        stiffness: k,
+                    })
+                    .collect();
+                let label = self.add_tool(name, "data", "data", f, None, None)?;
+                format!("data `{label}`: {} points", points.len())
+            }
+            Edit::Release { name } => {
+                if let Some(t) = self.tools.remove(name) {
+                    self.remove_slot(t.handle);
+                } else if let Some(i) = self.constraints.iter().position(|c| &c.name == name) {
+                    let mut cs = self.constraints.clone();
+                    cs.remove(i);
+                    self.engine.sync_constraints(&cs)?;
+                    self.constraints = cs;
+                } else {
+                    return Err(cmd(format!("no active tool or constraint named `{name}`")));
+                }
+                format!("released `{name}`")
+            }
+            Edit::Fix {
+                points,
+                min,
+                max,
+                near,
+            }
+            | Edit::Free {
+                points,
+                min,
+                max,
+                near,
+            } => {
+                let fix = matches!(edit, Edit::Fix { .. });
+                let pts = self.select(points, min, max, near)?;
+                let changed: Vec<usize> = pts
+                    .iter()
+                    .copied()
+                    .filter(|&i| self.engine.is_point_fixed(i) != fix)
+                    .collect();
+                for &i in &pts {
+                    if let Err(e) = self.engine.set_point_fixed(i, fix) {
+                        self.put(&before)?;
+                        return Err(cmd(e));
+                    }
+                }
+                let sel = |points: Vec<usize>| (Some(points), None, None, None);
+                let (points, min, max, near) = sel(changed);
+                let inverse = if fix {
+                    Edit::Free {
+                        points,
+                        min,
+                        max,
+                        near,
+                    }
+                } else {
+                    Edit::Fix {
+                        points,
+                        min,
+                        max,
+                        near,
+                    }
+                };
+                self.revision += 1;
+                return Ok(Applied {
+                    message: format!(
+                        "{} {} control points",
+                        if fix { "fixed" } else { "freed" },
+                        pts.len()
+                    ),
+                    undo: Undo::Inverse {
+                        edit: inverse,
+                        state: Snapshot::new(before),
+                    },
+                });
+            }
+            Edit::Material {
+                cells,
+                min,
+                max,
+                density,
+                damping,
+                edge_stiffness,
+                virtual_stiffness,
+                anisotropy,
+                mu,
+                gamma,
+                alpha,
+                beta,
+            } => {
+                if density.is_some()
+                    || damping.is_some()
+                    || edge_stiffness.is_some()
+                    || virtual_stiffness.is_some()
+                    || anisotropy.is_some()
+                {
+                    return Err(cmd(
+                        "`density`, `damping`, `edge_stiffness`, `virtual_stiffness`, `anisotropy` are solid materials; D-NURBS take mu, gamma, alpha, beta",
+                    ));
+                }
+                if cells.is_some() || min.is_some() || max.is_some() {
+                    return Err(cmd(
+                        "a D-NURBS material is uniform: `cells`, `min` and `max` do not apply",
+                    ));
+                }
+                if mu.is_none() && gamma.is_none() && alpha.is_none() && beta.is_none() {
+                    return Err(cmd("give at least one of mu, gamma, alpha, beta"));
+                }
+                self.set_material_values(*mu, *gamma, *alpha, *beta)?;
+                "material changed".to_string()
+            }
+            Edit::PlasticReset => {
+                let e = self.engine.elastic_energy();
+                self.engine.plastic_reset().map_err(cmd)?;
+                format!("plastic reset (elastic energy {e:.4e} -> 0)")
+            }
+            Edit::Stop => {
+                self.engine.stop();
+                self.kinetic = 0.0;
+                "stopped all motion".to_string()
+            }
+            Edit::MovePoint { index, to } => {
+                match &mut self.engine {
+                    Engine::FrozenSurface(d) => {
+                        d.move_control_point(*index, v3(*to)).map_err(cmd)?
+                    }
+                    Engine::FrozenCurve(d) => d.move_control_point(*index, v3(*to)).map_err(cmd)?,
+                    _ => self.edit_coords(*index, &[(0, to[0]), (1, to[1]), (2, to[2])])?,
+                }
+                format!("moved control point {index} to {to:?}")
+            }
+            Edit::SetWeight { index, weight } => {
+                if self.engine.is_frozen() {
+                    return Err(cmd(
+                        "the frozen-weight engine holds its weights (footnote 2 of d-nurbs.txt); use `engine = \"generalized\"`",
+                    ));
+                }
+                self.edit_coords(*index, &[(3, *weight)])?;
+                format!("weight of control point {index} = {weight}")
+            }
+            Edit::Set { name, value } => self.set_param(name, *value)?,
+            Edit::Integrator { integrator, dt } => {
+                if let Some(i) = integrator
+                    && i != "implicit"
+                {
+                    return Err(cmd(format!(
+                        "unknown integrator \"{i}\": D-NURBS integrate by eq 18 (\"implicit\") only"
+                    )));
+                }
+                if let Some(dt) = dt {
+                    self.dt = *dt;
+                }
+                format!("integrator implicit (eq 18), dt {}", self.dt)
+            }
+            Edit::Constraint {
+                name,
+                kind,
+                param,
+                target,
+                normal,
+            } => {
+                if self.engine.is_frozen() {
+                    return Err(cmd(
+                        "the frozen-weight engine has no constraints (section 6.2 needs the generalized engine: `engine = \"generalized\"`)",
+                    ));
+                }
+                let c = match (kind.as_str(), target, normal) {
+                    ("point", Some(t), _) => ConstraintDesc::Point {
+                        param: *param,
+                        target: *t,
+                    },
+                    ("normal", _, Some(n)) => ConstraintDesc::Normal {
+                        param: *param,
+                        normal: *n,
+                    },
+                    _ => {
+                        return Err(cmd(
+                            "a point constraint takes `target`, a normal one `normal`",
+                        ));
+                    }
+                };
+                let label = match name {
+                    Some(n) if self.tools.get(n).is_some() => {
+                        return Err(cmd(format!("a tool named `{n}` is active")));
+                    }
+                    Some(n) if self.constraints.iter().any(|c| &c.name == n) => {
+                        return Err(cmd(format!(
+                            "a constraint named `{n}` is active (release it first)"
+                        )));
+                    }
+                    Some(n) if n.is_empty() => return Err(cmd("a name must not be empty")),
+                    Some(n) => n.clone(),
+                    None => {
+                        let mut k = self.constraints.len();
+                        loop {
+                            let l = format!("constraint{k}");
+                            if self.tools.get(&l).is_none()
+                                && !self.constraints.iter().any(|c| c.name == l)
+                            {
+                                break l;
+                            }
+                            k += 1;
+                        }
+                    }
+                };
+                let mut cs = self.constraints.clone();
+                cs.push(NamedConstraint {
+                    name: label.clone(),
+                    constraint: c,
+                });
+                if let Err(e) = self.engine.sync_constraints(&cs) {
+                    self.engine.sync_constraints(&self.constraints)?;
+                    return Err(e);
+                }
+                self.constraints = cs;
+                format!("{kind} constraint `{label}` at {param:?}")
+            }
+            Edit::RegionForce { .. }
+            | Edit::Extrude { .. }
+            | Edit::DeleteCell { .. }
+            | Edit::FfdMove { .. }
+            | Edit::PdeSet { .. } => return Err(self.unsupported(edit)),
+        };
+        self.revision += 1;
+        Ok(Applied {
+            message,
+            undo: Undo::State(Snapshot::new(before)),
+        })
+    }
+
+    fn set_param(&mut self, name: &str, value: f64) -> Result<String, SessionError> {
+        match name {
+            "mu" => self.set_material_values(Some(value), None, None, None)?,
+            "gamma" => self.set_material_values(None, Some(value), None, None)?,
+            "alpha" => self.set_material_values(None, None, Some(value), None)?,
+            "beta" => self.set_material_values(None, None, None, Some(value))?,
+            "dt" => {
+                if !(value.is_finite() && value > 0.0) {
+                    return Err(cmd(format!("dt = {value} must be positive")));
+                }
+                self.dt = value;
+            }
+            "weight_penalty" => match &mut self.engine {
+                Engine::Rational(d) => d.set_weight_penalty(value).map_err(cmd)?,
+                Engine::Swung(d) => d.set_weight_penalty(value).map_err(cmd)?,
+                _ => {
+                    return Err(cmd(
+                        "the frozen-weight engine has no weight penalty (its weights are held)",
+                    ));
+                }
+            },
+            _ => {
+                return Err(cmd(format!(
+                    "no parameter `{name}`; a {} model has {}",
+                    self.kind,
+                    self.params()
+                        .iter()
+                        .map(|p| p.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )));
+            }
+        }
+        Ok(format!("{name} = {value}"))
+    }
+
+    /// Samples of the curve (curves only): `(parameter, point)`.
+    fn curve_samples(&self) -> Vec<(f64, Vec3)> {
+        let Ok(Some(c)) = self.engine.curve() else {
+            return Vec::new();
+        };
+        let dom = vclay_spline::ParametricCurve::domain(&c);
+        let n = DISPLAY_GRID[0].max(2) * 4;
+        (0..=n)
+            .filter_map(|i| {
+                let u = dom.min + dom.length() * i as f64 / n as f64;
+                vclay_spline::ParametricCurve::point(&c, u)
+                    .ok()
+                    .map(|p| (u, p))
+            })
+            .collect()
+    }
+
+    /// The display mesh and the parameters of its vertices.
+    fn mesh_with_params(&self) -> Result<(TriMesh, Vec<[f64; 2]>), SessionError> {
+        let mut mesh = TriMesh::new();
+        let Some(s) = self.engine.surface().map_err(dyn_err)? else {
+            return Ok((mesh, Vec::new()));
+        };
+        vclay_spline::tessellate_surface(&s, DISPLAY_GRID, &mut mesh)
+            .map_err(SessionError::model)?;
+        let [du, dv] = vclay_spline::ParametricSurface::domain(&s);
+        let [nu, nv] = DISPLAY_GRID.map(|n| n.max(2));
+        let (us, vs) = (du.linspace(nu), dv.linspace(nv));
+        let params = us
+            .iter()
+            .flat_map(|&u| vs.iter().map(move |&v| [u, v]))
+            .collect();
+        Ok((mesh, params))
+    }
+
+    fn control_net(&self) -> LineSet {
+        let mut set = LineSet::new(LineRole::ControlNet);
+        if let Ok(Some(s)) = self.engine.surface() {
+            let [nu, nv] = s.dims();
+            set.points = s.control_points().to_vec();
+            for i in 0..nu {
+                for j in 0..nv {
+                    let k = (i * nv + j) as u32;
+                    if i + 1 < nu {
+                        set.segments.push([k, k + nv as u32]);
+                    }
+                    if j + 1 < nv {
+                        set.segments.push([k, k + 1]);
+                    }
+                }
+            }
+        } else {
+            set.polyline(&self.engine.control_points(false));
+        }
+        set
+    }
+
+    /// Builds a model from a scenario's `[model]`, `[material]` and `[simulation]` tables
+    /// (`docs/formats.md`, D-NURBS keys).
+    pub fn from_spec(kind: ModelKind, spec: &Spec<'_>) -> Result<Self, SpecError> {
+        let m: ModelKeys = typed("model", spec.model)?;
+        let _ = (&m.kind, &m.name);
+        let err = |table: &str, key: &str, what: String| SpecError::new(table, key, what);
+        let surface = kind != ModelKind::DnurbsCurve;
+        let frozen = match m.engine.as_deref() {
+            None | Some("generalized") => false,
+            Some("frozen") => true,
+            Some(o) => {
+                return Err(err(
+                    "model",
+                    "engine",
+                    format!("\"{o}\": expected \"generalized\" or \"frozen\""),
+                ));
+            }
+        };
+        // Material.
+        let mk: MaterialKeys = match spec.material {
+            Some(t) => typed("material", t)?,
+            None => MaterialKeys::default(),
+        };
+        let preset = match &mk.preset {
+            Some(p) => Some(Preset::by_name(p).ok_or_else(|| {
+                err(
+                    "material",
+                    "preset",
+                    format!("no Table 1 preset named \"{p}\""),
+                )
+            })?),
+            None => None,
+        };
+        let [mu0, g0, a0, b0] = DEFAULT_MATERIAL;
+        let mut mat = match (preset, surface) {
+            (Some(p), true) => p.surface_material(),
+            (Some(p), false) => p.curve_material(),
+            (None, true) => Material::surface(mu0, g0, a0, b0),
+            (None, false) => Material::curve(mu0, g0, a0, b0),
+        };
+        for (key, v) in [
+            ("mu", mk.mu),
+            ("gamma", mk.gamma),
+            ("alpha", mk.alpha),
+            ("beta", mk.beta),
+        ] {
+            if let Some(v) = v {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(err(
+                        "material",
+                        key,
+                        format!("{v} must be finite and non-negative"),
+                    ));
+                }
+                let d = Density::Constant(v);
+                match key {
+                    "mu" => mat.mu = d,
+                    "gamma" => mat.gamma = d,
+                    "alpha" => mat.alpha.iter_mut().for_each(|a| *a = d.clone()),
+                    _ => mat.beta.iter_mut().for_each(|b| *b = d.clone()),
+                }
+            }
+        }
+        let consts = Mat::from_material(&mat).expect("constant densities");
+        // Simulation.
+        let sim: SimKeys = match spec.simulation {
+            Some(t) => typed("simulation", t)?,
+            None => SimKeys::default(),
+        };
+        let dt = sim.dt.or(preset.map(|p| p.dt)).ok_or_else(|| {
+            err(
+                "simulation",
+                "dt",
+                "missing (give dt or a material preset)".into(),
+            )
+        })?;
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(err("simulation", "dt", format!("{dt} must be positive")));
+        }
+        let reference = match sim.reference.as_deref() {
+            None | Some("rest") => ElasticReference::RestShape,
+            Some("absolute") => ElasticReference::Absolute,
+            Some(o) => {
+                return Err(err(
+                    "simulation",
+                    "reference",
+                    format!("\"{o}\": expected \"rest\" or \"absolute\""),
+                ));
+            }
+        };
+        let penalty = sim.weight_penalty.unwrap_or(0.0);
+        let dynamic_weights = match m.weights.as_deref() {
+            None => !frozen,
+            Some("dynamic") if frozen => {
+                return Err(err(
+                    "model",
+                    "weights",
+                    "\"dynamic\" needs `engine = \"generalized\"` (the frozen engine holds its weights)".into(),
+                ));
+            }
+            Some("dynamic") => true,
+            Some("frozen") => false,
+            Some(o) => {
+                return Err(err(
+                    "model",
+                    "weights",
+                    format!("\"{o}\": expected \"dynamic\" or \"frozen\""),
+                ));
+            }
+        };
+        if frozen && sim.weight_penalty.is_some() {
+            return Err(err(
+                "simulation",
+                "weight_penalty",
+                "the frozen-weight engine holds its weights; a penalty needs `engine = \"generalized\"`".into(),
+            ));
+        }
+        if !(penalty.is_finite() && penalty >= 0.0) {
+            return Err(err(
+                "simulation",
+                "weight_penalty",
+                format!("{penalty} must be finite and non-negative"),
+            ));
+        }
+        // Geometry.
+        let source = build_source(kind, &m, spec.base)?;
+        if frozen && kind == ModelKind::DnurbsSwung {
+            return Err(err(
+                "model",
+                "engine",
+                "swung surfaces need the generalized engine (their coordinates are not control points)".into(),
+            ));
+        }
+        let engine = source
+            .engine(frozen, mat)
+            .map_err(|e| err("model", "material", e.to_string()))?;
+        let mut model = Self::new(kind, engine, source, consts, dt)
+            .map_err(|e| err("simulation", "dt", e.to_string()))?;
+        if let Some(p) = preset
+            && p.k > 0.0
+        {
+            model.default_k = p.k;
+        }
+        match &mut model.engine {
+            Engine::Rational(d) => setup(d, reference, penalty, dynamic_weights, &m.fix)?,
+            Engine::Swung(d) => setup(d, reference, penalty, dynamic_weights, &m.fix)?,
+            Engine::FrozenSurface(d) => {
+                d.set_elastic_reference(reference);
+                fix_frozen(d, &m.fix)?;
+            }
+            Engine::FrozenCurve(d) => {
+                d.set_elastic_reference(reference);
+                fix_frozen(d, &m.fix)?;
+            }
+        }
+        Ok(model)
+    }
+
+    /// Rebuilds a model saved by [`Model::save`].
+    pub fn load(kind: ModelKind, v: &serde_json::Value) -> Result<Self, SessionError> {
+        let s: Saved = serde_json::from_value(v.clone()).map_err(SessionError::model)?;
+        let frozen = match s.engine.as_str() {
+            "generalized" => false,
+            "frozen" => true,
+            o => return Err(SessionError::model(format!("unknown engine \"{o}\""))),
+        };
+        let engine = s.source.engine(frozen, s.material.to_material())?;
+        let mut m = Self::new(kind, engine, s.source, s.material, s.dt)?;
+        if m.engine.is_curve() != (kind == ModelKind::DnurbsCurve) {
+            return Err(SessionError::model(format!(
+                "the saved geometry is not a {kind}"
+            )));
+        }
+        m.default_k = s.default_k;
+        m.size = s.size;
+        for t in &s.tools.tools {
+            if !s.slots.iter().any(|x| x.handle == t.handle) {
+                return Err(SessionError::model(format!(
+                    "tool `{}` refers to slot {} which does not exist",
+                    t.name, t.handle
+                )));
+            }
+        }
+        let state = match s.state {
+            SavedState::Generalized {
+                coordinates,
+                velocity,
+                rest_coordinates,
+                fixed,
+                weight_targets,
+                weight_penalty,
+                absolute,
+                time,
+                steps,
+                substeps,
+                weight_projections,
+            } => EngineState::Generalized(GeneralizedState {
+                coordinates,
+                velocity,
+                rest_coordinates,
+                fixed,
+                weight_targets,
+                weight_penalty,
+                reference: reference(absolute),
+                time,
+                steps,
+                substeps,
+                weight_projections,
+            }),
+            SavedState::Frozen {
+                points,
+                previous,
+                rest,
+                absolute,
+                fixed,
+                time,
+                steps,
+                products,
+            } => {
+                let f = |v: Vec<V3>| v.into_iter().map(v3).collect::<Vec<_>>();
+                EngineState::Frozen(DnurbsState {
+                    points: f(points),
+                    previous: f(previous),
+                    rest: f(rest),
+                    reference: reference(absolute),
+                    fixed,
+                    time,
+                    steps,
+                    products: products.map(|p| p.map(f)),
+                })
+            }
+        };
+        let snap = Snap {
+            state,
+            material: m.material.clone(),
+            dt: s.dt,
+            slots: s.slots,
+            next_handle: s.next_handle,
+            constraints: s.constraints,
+            tools: s.tools,
+            kinetic: s.kinetic,
+        };
+        m.put(&snap)?;
+        m.revision = 1;
+        Ok(m)
+    }
+}
+
+fn reference(absolute: bool) -> ElasticReference {
+    if absolute {
+        ElasticReference::Absolute
+    } else {
+        ElasticReference::RestShape
+    }
+}
+
+/// The old runner's setup: reference, weight penalty, frozen weights, fixed control points
+/// (x, y, z of the n-th control point's coordinate group).
+fn setup<G: GeneralizedGeometry>(
+    d: &mut GeneralizedDnurbs<G>,
+    reference: ElasticReference,
+    penalty: f64,
+    dynamic_weights: bool,
+    fix: &[usize],
+) -> Result<(), SpecError> {
+    d.set_elastic_reference(reference);
+    d.set_weight_penalty(penalty)
+        .map_err(|e| SpecError::new("simulation", "weight_penalty", e))?;
+    if !dynamic_weights {
+        for i in d.geometry().weight_coordinates() {
+            d.set_fixed_coordinate(i, true)
+                .map_err(|e| SpecError::new("model", "weights", e))?;
+        }
+    }
+    let groups = d.geometry().coordinate_groups();
+    for &cp in fix {
+        let g = groups
+            .iter()
+            .filter(|g| g.len() == 4)
+            .nth(cp)
+            .cloned()
+            .ok_or_else(|| {
+                SpecError::new("model", "fix", format!("control point {cp} does not exist"))
+            })?;
+        for i in g.start..g.start + 3 {
+            d.set_fixed_coordinate(i, true)
+                .map_err(|e| SpecError::new("model", "fix", e))?;
+        }
+    }
+    Ok(())
+}
+
+fn fix_frozen<G: DnurbsGeometry>(d: &mut Dnurbs<G>, fix: &[usize]) -> Result<(), SpecError> {
+    for &cp in fix {
+        d.set_fixed(cp, true).map_err(|_| {
+            SpecError::new("model", "fix", format!("control point {cp} does not exist"))
+        })?;
+    }
+    Ok(())
+}
+
+fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, SpecError> {
+    let err = |key: &str, what: String| SpecError::new("model", key, what);
+    let surface = kind != ModelKind::DnurbsCurve;
+    if let Some(x) = m.extent
+        && !(x.is_finite() && x > 0.0)
+    {
+        return Err(err("extent", format!("{x} must be positive and finite")));
+    }
+    if let Some(d) = &m.degree
+        && let Some(&p) = d.iter().find(|&&p| p > MAX_DEGREE || p == 0)
+    {
+        return Err(err(
+            "degree",
+            format!("{p}: degrees run from 1 to {MAX_DEGREE}"),
+        ));
+    }
+    if kind == ModelKind::DnurbsSwung {
+        let ext = m.extent.unwrap_or(1.0);
+        let g = match m.primitive.as_deref() {
+            Some("sphere") => SwungGeometry::sphere(ext),
+            Some("torus") => SwungGeometry::torus(2.0 * ext, 0.5 * ext),
+            Some("hat") => SwungGeometry::hat(),
+            Some("wine-glass") => SwungGeometry::wine_glass(),
+            Some(o) => {
+                return Err(err(
+                    "primitive",
+                    format!(
+                        "unknown swung primitive \"{o}\"; expected sphere, torus, hat or wine-glass"
+                    ),
+                ));
+            }
+            None => {
+                return Err(err(
+                    "primitive",
+                    "missing (sphere, torus, hat or wine-glass)".into(),
+                ));
+            }
+        }
+        .map_err(|e| err("primitive", e.to_string()))?;
+        return Ok(Source::Swung {
+            profile: CurveData::of(&g.profile().map_err(|e| err("primitive", e.to_string()))?),
+            trajectory: CurveData::of(
+                &g.trajectory()
+                    .map_err(|e| err("primitive", e.to_string()))?,
+            ),
+            alpha: g.alpha(),
+        });
+    }
+    if let Some(file) = &m.file {
+        let path = base.join(file);
+        let ents = vclay_io::model::read_model(&path).map_err(|e| err("file", e.to_string()))?;
+        let idx = m.entity.unwrap_or(0);
+        let e = ents
+            .into_iter()
+            .nth(idx)
+            .ok_or_else(|| err("entity", format!("the file has no entity {idx}")))?;
+        return match (e, surface) {
+            (Entity::Curve(c), false) => Ok(Source::Curve {
+                curve: CurveData::of(&c),
+            }),
+            (Entity::Surface(s), true) => Ok(Source::of_surface(&s)),
+            _ => Err(err(
+                "entity",
+                format!(
+                    "entity {idx} is not a {}",
+                    if surface {
+                        "nurbs-surface"
+                    } else {
+                        "nurbs-curve"
+                    }
+                ),
+            )),
+        };
+    }
+    let extent = m.extent.unwrap_or(2.0);
+    match (m.primitive.as_deref(), surface) {
+        (Some("sheet") | None, true) => {
+            let size = m.size.clone().unwrap_or(vec![8, 8]);
+            let deg = m.degree.clone().unwrap_or(vec![3, 3]);
+            if size.len() != 2 || deg.len() != 2 {
+                return Err(err(
+                    "size",
+                    "a sheet needs size = [nu, nv] and degree = [p, q]".into(),
+                ));
+            }
+            if let Some(&n) = size.iter().find(|&&n| n > MAX_SHEET_SIZE || n < 2) {
+                return Err(err(
+                    "size",
+                    format!(
+                        "{n} control points along a direction; a sheet takes 2 to {MAX_SHEET_SIZE}"
+                    ),
+                ));
+            }
+            let mut pts = Vec::with_capacity(size[0] * size[1]);
+            for i in 0..size[0] {
+                for j in 0..size[1] {
+                    pts.push(Vec3::new(
+                        extent * (i as f64 / (size[0].max(2) - 1) as f64 - 0.5),
+                        extent * (j as f64 / (size[1].max(2) - 1) as f64 - 0.5),
+                        0.0,
+                    ));
+                }
+            }
+            let s = NurbsSurface::clamped_uniform([deg[0], deg[1]], [size[0], size[1]], pts)
+                .map_err(|e| err("size", e.to_string()))?;
+            Ok(Source::of_surface(&s))
+        }
+        (Some("circle"), false) => Ok(Source::Curve {
+            curve: CurveData::of(
+                &NurbsCurve::circle(Vec3::zeros(), Vec3::x(), Vec3::y(), 0.5 * extent)
+                    .map_err(|e| err("primitive", e.to_string()))?,
+            ),
+        }),
+        (Some("line") | None, false) => {
+            let n = m
+                .size
+                .as_ref()
+                .and_then(|s| s.first().copied())
+                .unwrap_or(8);
+            let deg = m
+                .degree
+                .as_ref()
+                .and_then(|s| s.first().copied())
+                .unwrap_or(3);
+            if !(2..=MAX_LINE_SIZE).contains(&n) {
+                return Err(err(
+                    "size",
+                    format!("{n} control points; a line takes 2 to {MAX_LINE_SIZE}"),
+                ));
+            }
+            let pts = (0..n)
+                .map(|i| Vec3::new(extent * (i as f64 / (n.max(2) - 1) as f64 - 0.5), 0.0, 0.0))
+                .collect();
+            Ok(Source::Curve {
+                curve: CurveData::of(
+                    &NurbsCurve::clamped_uniform(deg, pts)
+                        .map_err(|e| err("size", e.to_string()))?,
+                ),
+            })
+        }
+        (Some(o), _) => Err(err(
+            "primitive",
+            format!(
+                "unknown primitive \"{o}\" for {kind}; expected {}",
+                if surface { "sheet" } else { "line or circle" }
+            ),
+        )),
+    }
+}
+
+impl Model for DnurbsModel {
+    fn kind(&self) -> ModelKind {
+        self.kind
+    }
+
+    fn summary(&self) -> String {
+        format!(
+            "{} ({} engine): {} control points, {} tools, {} constraints",
+            self.kind,
+            self.engine_name(),
+            self.engine.control_points(false).len(),
+            self.tools.tools.len(),
+            self.constraints.len()
+        )
+    }
+
+    fn time(&self) -> f64 {
+        self.engine.time()
+    }
+    fn dt(&self) -> f64 {
+        self.dt
+    }
+    fn steps(&self) -> u64 {
+        self.engine.steps()
+    }
+
+    fn step(&mut self) -> Result<StepReport, SessionError> {
+        let due = self.tools.due(self.engine.time(), self.dt);
+        let mut changed = !due.expired.is_empty();
+        for e in &due.expired {
+            self.slots.retain(|s| s.handle != e.handle);
+        }
+        for (h, c) in &due.cursors {
+            if let Some(ForceDesc::Spring {
+                target,
+                velocity: None,
+                ..
+            }) = self.slot_mut(*h).and_then(|s| s.forces.first_mut())
+            {
+                *target = a3(c);
+                changed = true;
+            }
+        }
+        if changed {
+            self.sync_forces();
+        }
+        self.revision += 1;
+        let t0 = std::time::Instant::now();
+        let r = self.engine.step(self.dt).map_err(dyn_err)?;
+        self.kinetic = r.kinetic_energy;
+        Ok(StepReport {
+            time: r.time,
+            energy: Energy {
+                kinetic: r.kinetic_energy,
+                elastic: r.elastic_energy,
+                tools: 0.0,
+            },
+            iterations: r.solver.iterations,
+            seconds: t0.elapsed().as_secs_f64(),
+        })
+    }
+
+    fn energy(&self) -> Energy {
+        Energy {
+            kinetic: self.kinetic,
+            elastic: self.engine.elastic_energy(),
+            tools: 0.0,
+        }
+    }
+
+    fn size(&self) -> f64 {
+        self.size
+    }
+
+    fn revision(&self) -> u64 {
+        self.revision
+    }
+
+    fn display_mesh(&self) -> Result<TriMesh, SessionError> {
+        Ok(self.mesh_with_params()?.0)
+    }
+
+    fn display_lines(&self) -> Vec<LineSet> {
+        let mut out = vec![self.control_net()];
+        if self.engine.is_curve() {
+            let mut c = LineSet::new(LineRole::Curve);
+            let pts: Vec<Vec3> = self.curve_samples().into_iter().map(|s| s.1).collect();
+            c.polyline(&pts);
+            out.push(c);
+        }
+        let p = self.engine.control_points(false);
+        let mut fixed = LineSet::new(LineRole::Fixed);
+        fixed.points = (0..p.len())
+            .filter(|&i| self.engine.is_point_fixed(i))
+            .map(|i| p[i])
+            .collect();
+        out.push(fixed);
+        let t = self.engine.time();
+        let size = self.size;
+        let mut ropes = LineSet::new(LineRole::Ropes);
+        let mut forces = LineSet::new(LineRole::Forces);
+        let mut data = LineSet::new(LineRole::DataPoints);
+        let centre = {
+            let n = p.len().max(1) as f64;
+            p.iter().sum::<Vec3>() / n
+        };
+        let arrow = |set: &mut LineSet, at: Vec3, f: Vec3| {
+            let n = f.norm();
+            if n > 0.0 {
+                set.segment(at, at + f / n * (0.2 * size));
+            }
+        };
+        for s in &self.slots {
+            for f in &s.forces {
+                match f {
+                    ForceDesc::Spring {
+                        param,
+                        target,
+                        velocity,
+                        ..
+                    } => {
+                        let d0 = v3(*target) + velocity.map_or(Vec3::zeros(), |v| v3(v) * t);
+                        if let Ok(x) = self.engine.point_at(*param) {
+                            ropes.segment(x, d0);
+                        }
+                    }
+                    ForceDesc::Point { param, force } => {
+                        if let Ok(x) = self.engine.point_at(*param) {
+                            arrow(&mut forces, x, v3(*force));
+                        }
+                    }
+                    ForceDesc::Gravity { g } => arrow(&mut forces, centre, v3(*g)),
+                    ForceDesc::Inflation { .. } => {}
+                    ForceDesc::DataPoint { point, .. } => data.points.push(v3(*point)),
+                }
+            }
+        }
+        let mut cons = LineSet::new(LineRole::Constraints);
+        for c in &self.constraints {
+            match &c.constraint {
+                ConstraintDesc::Point { target, .. } => cons.points.push(v3(*target)),
+                ConstraintDesc::Normal { param, normal } => {
+                    if let Ok(x) = self.engine.point_at(*param) {
+                        arrow(&mut cons, x, v3(*normal));
+                    }
+                }
+            }
+        }
+        out.extend([ropes, forces, data, cons]);
+        out
+    }
+
+    fn pick(&self, ray: &Ray, tolerance: f64) -> Option<Hit> {
+        let cp = if matches!(self.engine, Engine::Swung(_)) {
+            None
+        } else {
+            let p = self.engine.control_points(false);
+            crate::pick::ray_points(ray, &p, tolerance).map(|(i, s)| Hit {
+                distance: s,
+                point: p[i],
+                element: Element::ControlPoint { index: i },
+                extra: [None, None],
+            })
+        };
+        let model = if self.engine.is_curve() {
+            let mut best: Option<(f64, f64, Vec3)> = None;
+            for (u, x) in self.curve_samples() {
+                let (d, s) = crate::pick::ray_point(ray, &x);
+                if d <= tolerance && best.is_none_or(|b| s < b.1) {
+                    best = Some((u, s, x));
+                }
+            }
+            best.map(|(u, s, x)| Hit {
+                distance: s,
+                point: x,
+                element: Element::CurvePoint { u },
+                extra: [None, None],
+            })
+        } else {
+            let (mesh, params) = self.mesh_with_params().ok()?;
+            crate::pick::ray_mesh(ray, &mesh).map(|(s, tri, w)| {
+                let x = ray.origin + ray.direction * s;
+                let ids = mesh.triangles[tri];
+                let param = if params.len() == mesh.positions.len() {
+                    let mut q = [0.0; 2];
+                    for (k, &i) in ids.iter().enumerate() {
+                        q[0] += w[k] * params[i as usize][0];
+                        q[1] += w[k] * params[i as usize][1];
+                    }
+                    q
+                } else {
+                    self.engine.nearest_param(&x).unwrap_or([0.0; 2])
+                };
+                Hit {
+                    distance: s,
+                    point: x,
+                    element: Element::SurfacePoint { param },
+                    extra: [None, None],
+                }
+            })
+        };
+        match (cp, model) {
+            // A control point in front of (or just behind) the model wins.
+            (Some(c), Some(s)) if c.distance <= s.distance + tolerance => Some(c),
+            (c, s) => s.or(c),
+        }
+    }
+
+    fn params(&self) -> Vec<Param> {
+        let par = |name: &str, value: f64, min: f64, max: f64, doc: &str| Param {
+            name: name.into(),
+            value,
+            min,
+            max,
+            doc: doc.into(),
+        };
+        let m = &self.material;
+        let mut v = vec![
+            par("mu", m.mu, 0.0, 100.0, "mass density (eq 16)"),
+            par("gamma", m.gamma, 0.0, 100.0, "damping density (eq 16)"),
+            par(
+                "alpha",
+                m.alpha.first().copied().unwrap_or(0.0),
+                0.0,
+                1000.0,
+                "tension (eq 17; first direction shown, set applies to all)",
+            ),
+            par(
+                "beta",
+                m.beta.first().copied().unwrap_or(0.0),
+                0.0,
+                1000.0,
+                "rigidity (eq 17; first pair shown, set applies to all)",
+            ),
+            par("dt", self.dt, 1e-5, 0.1, "time step of eq 18 (s)"),
+        ];
+        let penalty = match &self.engine {
+            Engine::Rational(d) => Some(d.weight_penalty()),
+            Engine::Swung(d) => Some(d.weight_penalty()),
+            _ => None,
+        };
+        if let Some(c) = penalty {
+            v.push(par(
+                "weight_penalty",
+                c,
+                0.0,
+                1e6,
+                "penalty c/2 sum (w - w0)^2 holding the weights",
+            ));
+        }
+        v
+    }
+
+    fn apply(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
+        self.apply_edit(edit)
+    }
+
+    fn undo(&mut self, undo: Undo) -> Result<(), SessionError> {
+        let get = |s: &Snapshot| {
+            s.get::<Snap>()
+                .cloned()
+                .ok_or_else(|| SessionError::model("undo record of another kind"))
+        };
+        match undo {
+            Undo::State(s) => {
+                let s = get(&s)?;
+                self.put(&s)
+            }
+            Undo::Inverse { edit, state } => {
+                self.apply_edit(&edit)?;
+                let s = get(&state)?;
+                self.put(&s)
+            }
+            Undo::Model(_) => Err(SessionError::model("whole-model undo is the session's")),
+        }
+    }
+
+    fn snapshot(&self) -> Snapshot {
+        Snapshot::new(self.snap())
+    }
+
+    fn restore(&mut self, snapshot: &Snapshot) -> Result<(), SessionError> {
+        let s = snapshot
+            .get::<Snap>()
+            .ok_or_else(|| SessionError::model("snapshot of another kind"))?
+            .clone();
+        self.put(&s)
+    }
+
+    fn clone_model(&self) -> Box<dyn Model> {
+        Box::new(self.clone())
+    }
+
+    fn export(&self, path: &Path) -> Result<(), SessionError> {
+        let ext = extension(path);
+        let io = |e: &dyn std::fmt::Display| SessionError::io(path, e);
+        let surface = self.engine.surface().map_err(|e| io(&e))?;
+        let entity = match &surface {
+            Some(s) => Entity::Surface(s.clone()),
+            None => Entity::Curve(
+                self.engine
+                    .curve()
+                    .map_err(|e| io(&e))?
+                    .expect("a curve or a surface"),
+            ),
+        };
+        match (ext.as_str(), surface.is_some()) {
+            ("json", _) => vclay_io::model::write_model(path, &[entity]).map_err(|e| io(&e)),
+            ("step", _) => vclay_io::step::write_step(path, &[entity.into()]).map_err(|e| io(&e)),
+            ("igs", _) => vclay_io::iges::write_iges(path, &[entity.into()]).map_err(|e| io(&e)),
+            ("obj" | "stl" | "ply", true) => {
+                let mesh = self.display_mesh()?;
+                vclay_io::mesh::write_mesh(path, &mesh).map_err(|e| io(&e))
+            }
+            ("glb", true) => {
+                let mesh = self.display_mesh()?;
+                vclay_io::gltf::write_glb(path, &[vclay_io::gltf::GlbMesh::new("dnurbs", mesh)])
+                    .map_err(|e| io(&e))
+            }
+            ("obj", false) => {
+                use std::fmt::Write as _;
+                let mut text = String::from("# vclay D-NURBS curve\n");
+                let pts = self.curve_samples();
+                for (_, p) in &pts {
+                    let _ = writeln!(text, "v {} {} {}", p.x, p.y, p.z);
+                }
+                text.push('l');
+                for i in 1..=pts.len() {
+                    let _ = write!(text, " {i}");
+                }
+                text.push('\n');
+                vclay_io::write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(|e| io(&e))
+            }
+            _ => Err(unsupported_export(
+                self.kind,
+                path,
+                if surface.is_some() {
+                    &["json", "obj", "stl", "ply", "glb", "step", "igs"]
+                } else {
+                    &["json", "obj", "step", "igs"]
+                },
+            )),
+        }
+    }
+
+    fn save(&self) -> Result<serde_json::Value, SessionError> {
+        let arr = |v: &[Vec3]| v.iter().map(a3).collect::<Vec<_>>();
+        let state = match self.engine.state() {
+            EngineState::Generalized(s) => SavedState::Generalized {
+                coordinates: s.coordinates,
+                velocity: s.velocity,
+                rest_coordinates: s.rest_coordinates,
+                fixed: s.fixed,
+                weight_targets: s.weight_targets,
+                weight_penalty: s.weight_penalty,
+                absolute: s.reference == ElasticReference::Absolute,
+                time: s.time,
+                steps: s.steps,
+                substeps: s.substeps,
+                weight_projections: s.weight_projections,
+            },
+            EngineState::Frozen(s) => SavedState::Frozen {
+                points: arr(&s.points),
+                previous: arr(&s.previous),
+                rest: arr(&s.rest),
+                absolute: s.reference == ElasticReference::Absolute,
+                fixed: s.fixed,
+                time: s.time,
+                steps: s.steps,
+                products: s.products.map(|p| p.map(|v| arr(&v))),
+            },
+        };
+        let saved = Saved {
+            engine: self.engine_name().to_string(),
+            source: self.source.clone(),
+            material: self.material.clone(),
+            dt: self.dt,
+            default_k: self.default_k,
+            size: self.size,
+            state,
+            slots: self.slots.clone(),
+            next_handle: self.next_handle,
+            constraints: self.constraints.clone(),
+            tools: self.tools.clone(),
+            kinetic: self.kinetic,
+        };
+        serde_json::to_value(saved).map_err(SessionError::model)
+    }
+}
 
 /// Builds a model from its scenario tables.
 pub fn build(kind: ModelKind, spec: &Spec<'_>) -> Result<Box<dyn Model>, SpecError> {
-    let _ = kind;
-    let _ = spec;
-    Err(SpecError::new("model", "kind", "not yet available"))
+    Ok(Box::new(DnurbsModel::from_spec(kind, spec)?))
 }
 
 /// Rebuilds a saved model.
 pub fn load(kind: ModelKind, saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
-    let _ = kind;
-    let _ = saved;
-    Err(SessionError::model("not yet available"))
+    Ok(Box::new(DnurbsModel::load(kind, saved)?))
+}
+
+// ---------------------------------------------------------------------------------------
+// Scenario keys
+// ---------------------------------------------------------------------------------------
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ModelKeys {
+    kind: String,
+    #[serde(default)]
+    name: Option<String>,
+    #[serde(default)]
+    engine: Option<String>,
+    #[serde(default)]
+    primitive: Option<String>,
+    #[serde(default)]
+    file: Option<std::path::PathBuf>,
+    #[serde(default)]
+    entity: Option<usize>,
+    #[serde(default)]
+    size: Option<Vec<usize>>,
+    #[serde(default)]
+    degree: Option<Vec<usize>>,
+    #[serde(default)]
+    extent: Option<f64>,
+    #[serde(default)]
+    weights: Option<String>,
+    #[serde(default)]
+    fix: Vec<usize>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MaterialKeys {
+    preset: Option<String>,
+    mu: Option<f64>,
+    gamma: Option<f64>,
+    alpha: Option<f64>,
+    beta: Option<f64>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SimKeys {
+    dt: Option<f64>,
+    reference: Option<String>,
+    weight_penalty: Option<f64>,
+}
+
+// ---------------------------------------------------------------------------------------
+// Session file form
+// ---------------------------------------------------------------------------------------
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Saved {
+    engine: String,
+    source: Source,
+    material: Mat,
+    dt: f64,
+    default_k: f64,
+    size: f64,
+    state: SavedState,
+    slots: Vec<Slot>,
+    next_handle: usize,
+    constraints: Vec<NamedConstraint>,
+    tools: ToolTable,
+    kinetic: f64,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+enum SavedState {
+    Generalized {
+        coordinates: Vec<f64>,
+        velocity: Vec<f64>,
+        rest_coordinates: Vec<f64>,
+        fixed: Vec<bool>,
+        weight_targets: Vec<f64>,
+        weight_penalty: f64,
+        absolute: bool,
+        time: f64,
+        steps: usize,
+        substeps: usize,
+        weight_projections: usize,
+    },
+    Frozen {
+        points: Vec<V3>,
+        previous: Vec<V3>,
+        rest: Vec<V3>,
+        absolute: bool,
+        fixed: Vec<bool>,
+        time: f64,
+        steps: usize,
+        products: Option<[Vec<V3>; 4]>,
+    },
 }

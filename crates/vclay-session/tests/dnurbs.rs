@@ -1,0 +1,513 @@
+//! D-NURBS models in a session: every command applies, undoes and redoes bit for bit, and a
+//! saved model continues exactly like the uninterrupted one (`d-nurbs.txt` eqs 15-19,
+//! sections 6.1-6.2).
+
+use std::path::Path;
+
+use vclay_session::models::{self, Spec};
+use vclay_session::{Command, Edit, Model, ModelKind, Session};
+
+fn build(kind: ModelKind, model: &str, material: &str, sim: &str) -> Box<dyn Model> {
+    let m: toml::Table = toml::from_str(model).unwrap();
+    let mat: toml::Table = toml::from_str(material).unwrap();
+    let s: toml::Table = toml::from_str(sim).unwrap();
+    models::build(
+        kind,
+        &Spec {
+            model: &m,
+            material: (!mat.is_empty()).then_some(&mat),
+            simulation: Some(&s),
+            base: Path::new("."),
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e:?}"))
+}
+
+fn sheet() -> Box<dyn Model> {
+    build(
+        ModelKind::DnurbsSurface,
+        "kind = \"dnurbs-surface\"\nsize = [6, 6]\ndegree = [3, 3]\nname = \"s\"",
+        "",
+        "dt = 0.01",
+    )
+}
+fn frozen_sheet() -> Box<dyn Model> {
+    build(
+        ModelKind::DnurbsSurface,
+        "kind = \"dnurbs-surface\"\nsize = [6, 6]\ndegree = [3, 3]\nengine = \"frozen\"",
+        "",
+        "dt = 0.01",
+    )
+}
+fn line() -> Box<dyn Model> {
+    build(
+        ModelKind::DnurbsCurve,
+        "kind = \"dnurbs-curve\"\nsize = [7]\ndegree = [3]\nfix = [0]",
+        "mu = 1.0",
+        "dt = 0.01",
+    )
+}
+fn sphere() -> Box<dyn Model> {
+    build(
+        ModelKind::DnurbsSwung,
+        "kind = \"dnurbs-swung\"\nprimitive = \"sphere\"",
+        "",
+        "dt = 0.01",
+    )
+}
+
+fn saved(s: &Session) -> serde_json::Value {
+    s.model(None).unwrap().save().unwrap()
+}
+
+fn kind(s: &Session) -> ModelKind {
+    s.model(None).unwrap().kind()
+}
+
+/// Save -> string -> load, then n steps of both: identical saves (every f64 bit).
+fn check_continue(s: &mut Session, n: u64) {
+    let text = serde_json::to_string(&saved(s)).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let loaded = models::load(kind(s), &v).unwrap();
+    let mut s2 = Session::with_model("m", loaded).unwrap();
+    assert_eq!(saved(&s2), v, "load did not reproduce the saved state");
+    s.run(n).unwrap();
+    s2.run(n).unwrap();
+    assert_eq!(saved(s), saved(&s2), "continued runs differ");
+}
+
+/// Apply, undo (== before), redo (== after), steps then undo (== before), redo, and
+/// save/load continuation.
+fn check(mut s: Session, edit: Edit) {
+    s.run(2).unwrap();
+    let before = saved(&s);
+    s.apply(Command::new(edit.clone()))
+        .unwrap_or_else(|e| panic!("{}: {e}", edit.action()));
+    let after = saved(&s);
+    s.undo().unwrap();
+    assert_eq!(saved(&s), before, "{}: undo", edit.action());
+    s.redo().unwrap();
+    assert_eq!(saved(&s), after, "{}: redo", edit.action());
+    s.run(3).unwrap();
+    s.undo().unwrap();
+    assert_eq!(saved(&s), before, "{}: undo after steps", edit.action());
+    s.apply(Command::new(edit.clone())).unwrap();
+    check_continue(&mut s, 3);
+}
+
+fn fails(mut s: Session, edit: Edit) {
+    s.run(1).unwrap();
+    let before = saved(&s);
+    assert!(s.apply(Command::new(edit.clone())).is_err(), "{edit:?}");
+    assert_eq!(saved(&s), before);
+}
+
+fn session(m: Box<dyn Model>) -> Session {
+    Session::with_model("m", m).unwrap()
+}
+
+fn rope(param: Option<[f64; 2]>, velocity: Option<[f64; 3]>, to: Option<[f64; 3]>) -> Edit {
+    Edit::Rope {
+        name: None,
+        from: [0.2, 0.1, 0.5],
+        param,
+        to,
+        until: to.map(|_| 0.1),
+        velocity,
+        release: Some(0.08),
+        stiffness: None,
+        length: None,
+        kernel: None,
+        start: None,
+    }
+}
+
+fn common_edits(surface: bool, frozen: bool) -> Vec<Edit> {
+    let p = if surface { [0.4, 0.6] } else { [0.4, 0.0] };
+    let mut v = vec![
+        rope(Some(p), None, None),
+        rope(None, Some([0.0, 0.0, 1.0]), None),
+        rope(Some(p), None, Some([0.0, 0.0, 1.0])),
+        Edit::Force {
+            name: Some("f".into()),
+            near: None,
+            param: Some(p),
+            force: [0.0, 0.0, 3.0],
+            until: Some(0.05),
+        },
+        Edit::Force {
+            name: None,
+            near: Some([0.1, 0.0, 0.0]),
+            param: None,
+            force: [0.0, 1.0, 0.0],
+            until: None,
+        },
+        Edit::Gravity {
+            name: None,
+            g: [0.0, 0.0, -9.8],
+            until: None,
+        },
+        Edit::Data {
+            name: None,
+            points: vec![[0.1, 0.1, 0.3], [-0.2, 0.0, 0.2]],
+            stiffness: Some(20.0),
+        },
+        Edit::Fix {
+            points: Some(vec![1, 2]),
+            min: None,
+            max: None,
+            near: None,
+        },
+        Edit::Fix {
+            points: None,
+            min: Some([-5.0, -5.0, -5.0]),
+            max: Some([0.0, 5.0, 5.0]),
+            near: None,
+        },
+        Edit::Free {
+            points: None,
+            min: None,
+            max: None,
+            near: Some([-1.0, 0.0, 0.0]),
+        },
+        Edit::Material {
+            cells: None,
+            min: None,
+            max: None,
+            density: None,
+            damping: None,
+            edge_stiffness: None,
+            virtual_stiffness: None,
+            anisotropy: None,
+            mu: Some(2.0),
+            gamma: None,
+            alpha: Some(3.0),
+            beta: Some(0.2),
+        },
+        Edit::PlasticReset,
+        Edit::Stop,
+        Edit::MovePoint {
+            index: 3,
+            to: [0.0, 0.1, 0.3],
+        },
+        Edit::Set {
+            name: "gamma".into(),
+            value: 0.5,
+        },
+        Edit::Set {
+            name: "dt".into(),
+            value: 0.005,
+        },
+        Edit::Integrator {
+            integrator: Some("implicit".into()),
+            dt: Some(0.02),
+        },
+    ];
+    if surface {
+        v.push(Edit::Inflate {
+            name: None,
+            pressure: 0.5,
+            until: None,
+        });
+    }
+    if !frozen {
+        v.push(Edit::SetWeight {
+            index: 2,
+            weight: 1.5,
+        });
+        v.push(Edit::Set {
+            name: "weight_penalty".into(),
+            value: 2.0,
+        });
+        v.push(Edit::Constraint {
+            name: Some("c".into()),
+            kind: "point".into(),
+            param: p,
+            target: Some([0.1, 0.1, 0.1]),
+            normal: None,
+        });
+        if surface {
+            v.push(Edit::Constraint {
+                name: None,
+                kind: "normal".into(),
+                param: p,
+                target: None,
+                normal: Some([0.0, 0.0, 1.0]),
+            });
+        }
+    }
+    v
+}
+
+fn not_applicable() -> Vec<Edit> {
+    vec![
+        Edit::Extrude {
+            face: Some(0),
+            near: None,
+            factor: None,
+        },
+        Edit::DeleteCell {
+            cell: Some(0),
+            near: None,
+        },
+        Edit::RegionForce {
+            name: None,
+            center: [0.0; 3],
+            radius: 1.0,
+            force: [0.0, 0.0, 1.0],
+            until: None,
+        },
+        Edit::PdeSet {
+            name: "a".into(),
+            value: 1.0,
+        },
+        Edit::Integrator {
+            integrator: Some("explicit".into()),
+            dt: None,
+        },
+        Edit::Set {
+            name: "nope".into(),
+            value: 1.0,
+        },
+        Edit::Release {
+            name: "nobody".into(),
+        },
+        Edit::Material {
+            cells: None,
+            min: None,
+            max: None,
+            density: Some(1.0),
+            damping: None,
+            edge_stiffness: None,
+            virtual_stiffness: None,
+            anisotropy: None,
+            mu: None,
+            gamma: None,
+            alpha: None,
+            beta: None,
+        },
+        Edit::MovePoint {
+            index: 10_000,
+            to: [0.0; 3],
+        },
+    ]
+}
+
+#[test]
+fn surface_commands() {
+    for e in common_edits(true, false) {
+        check(session(sheet()), e);
+    }
+}
+
+#[test]
+fn frozen_surface_commands() {
+    for e in common_edits(true, true) {
+        check(session(frozen_sheet()), e);
+    }
+    let mut s = session(frozen_sheet());
+    fails(
+        s,
+        Edit::Constraint {
+            name: None,
+            kind: "point".into(),
+            param: [0.5, 0.5],
+            target: Some([0.0; 3]),
+            normal: None,
+        },
+    );
+    s = session(frozen_sheet());
+    fails(
+        s,
+        Edit::SetWeight {
+            index: 0,
+            weight: 2.0,
+        },
+    );
+}
+
+#[test]
+fn curve_commands() {
+    for e in common_edits(false, false) {
+        check(session(line()), e);
+    }
+    fails(
+        session(line()),
+        Edit::Inflate {
+            name: None,
+            pressure: 1.0,
+            until: None,
+        },
+    );
+}
+
+#[test]
+fn swung_commands() {
+    let p = [0.4, 0.3];
+    let edits = vec![
+        rope(Some(p), None, None),
+        rope(Some(p), Some([0.0, 0.0, 1.0]), None),
+        Edit::Gravity {
+            name: None,
+            g: [0.0, 0.0, -1.0],
+            until: None,
+        },
+        Edit::Inflate {
+            name: None,
+            pressure: 0.5,
+            until: None,
+        },
+        Edit::Fix {
+            points: Some(vec![0]),
+            min: None,
+            max: None,
+            near: None,
+        },
+        Edit::Stop,
+        Edit::PlasticReset,
+        Edit::SetWeight {
+            index: 1,
+            weight: 0.9,
+        },
+        Edit::Constraint {
+            name: None,
+            kind: "point".into(),
+            param: p,
+            target: Some([0.5, 0.0, 0.0]),
+            normal: None,
+        },
+        Edit::Set {
+            name: "mu".into(),
+            value: 2.0,
+        },
+    ];
+    for e in edits {
+        check(session(sphere()), e);
+    }
+}
+
+#[test]
+fn inapplicable_commands_leave_the_model_unchanged() {
+    for e in not_applicable() {
+        fails(session(sheet()), e.clone());
+        fails(session(line()), e);
+    }
+}
+
+#[test]
+fn release_and_gravity_rename() {
+    let mut s = session(sheet());
+    s.apply(Command::new(Edit::Gravity {
+        name: Some("g".into()),
+        g: [0.0, 0.0, -1.0],
+        until: None,
+    }))
+    .unwrap();
+    s.apply(Command::new(Edit::Constraint {
+        name: Some("c".into()),
+        kind: "point".into(),
+        param: [0.5, 0.5],
+        target: Some([0.0, 0.0, 0.1]),
+        normal: None,
+    }))
+    .unwrap();
+    s.run(2).unwrap();
+    for edit in [
+        Edit::Gravity {
+            name: Some("g".into()),
+            g: [0.0, 0.0, -2.0],
+            until: None,
+        },
+        Edit::Release { name: "g".into() },
+        Edit::Release { name: "c".into() },
+        Edit::MoveRope {
+            name: "r".into(),
+            to: [0.0; 3],
+        },
+    ] {
+        let mut s2 = session(models::load(kind(&s), &saved(&s)).unwrap());
+        if let Edit::MoveRope { .. } = edit {
+            s2.apply(Command::new(Edit::Rope {
+                name: Some("r".into()),
+                from: [0.1, 0.1, 0.2],
+                param: None,
+                to: None,
+                until: None,
+                velocity: None,
+                release: None,
+                stiffness: Some(10.0),
+                length: None,
+                kernel: None,
+                start: None,
+            }))
+            .unwrap();
+        }
+        check(s2, edit);
+    }
+}
+
+#[test]
+fn frozen_benchmark_sheet_wraps() {
+    let d = vclay_dynamics::dnurbs::benchmarks::frozen_sheet(6).unwrap();
+    let m = models::dnurbs::DnurbsModel::frozen_surface(d, 0.01).unwrap();
+    let mut s = session(Box::new(m));
+    s.run(2).unwrap();
+    check_continue(&mut s, 3);
+}
+
+#[test]
+fn display_pick_export() {
+    let dir = tempfile::tempdir().unwrap();
+    for m in [sheet(), line(), sphere(), frozen_sheet()] {
+        let mesh = m.display_mesh().unwrap();
+        let lines = m.display_lines();
+        assert!(!lines.is_empty());
+        let ray = vclay_session::Ray {
+            origin: vclay_core::Vec3::new(0.05, 0.03, 5.0),
+            direction: vclay_core::Vec3::new(0.0, 0.0, -1.0),
+        };
+        if m.kind() == ModelKind::DnurbsSurface {
+            assert!(!mesh.triangles.is_empty());
+            let h = m.pick(&ray, 1e-3).expect("hit");
+            assert!(matches!(
+                h.element,
+                vclay_session::Element::SurfacePoint { .. }
+            ));
+        }
+        for ext in ["json", "obj"] {
+            m.export(&dir.path().join(format!("x.{ext}"))).unwrap();
+        }
+        assert!(m.export(&dir.path().join("x.vtu")).is_err());
+    }
+}
+
+#[test]
+fn spec_errors() {
+    let m: toml::Table = toml::from_str("kind = \"dnurbs-surface\"\nsize = [600, 6]").unwrap();
+    let s: toml::Table = toml::from_str("dt = 0.01").unwrap();
+    let e = models::build(
+        ModelKind::DnurbsSurface,
+        &Spec {
+            model: &m,
+            material: None,
+            simulation: Some(&s),
+            base: Path::new("."),
+        },
+    )
+    .unwrap_err();
+    assert_eq!(e.key, "size");
+    let m: toml::Table =
+        toml::from_str("kind = \"dnurbs-swung\"\nprimitive = \"sphere\"\nengine = \"frozen\"")
+            .unwrap();
+    let e = models::build(
+        ModelKind::DnurbsSwung,
+        &Spec {
+            model: &m,
+            material: None,
+            simulation: Some(&s),
+            base: Path::new("."),
+        },
+    )
+    .unwrap_err();
+    assert_eq!(e.key, "engine");
+}

@@ -1,0 +1,286 @@
+//! The `pde-surface` model kind in a session (`dynamic-pde-surfaces.txt` eqs 1-12): setting a
+//! named constant, the time or `dt` applies, undoes to the same bits and redoes to the same
+//! bits; steps advance the PDE's t; a saved model reloads and continues bit for bit; edits that
+//! cannot apply leave the model unchanged.
+
+use std::path::Path;
+
+use vclay_core::Vec3;
+use vclay_session::models::{self, Spec};
+use vclay_session::{Command, Edit, Element, Model, ModelKind, Ray, Session};
+
+fn table(text: &str) -> toml::Table {
+    toml::from_str(text).expect("valid toml")
+}
+
+fn build_at(
+    model: &str,
+    simulation: Option<&str>,
+    base: &Path,
+) -> Result<Box<dyn Model>, models::SpecError> {
+    let m = table(model);
+    let s = simulation.map(table);
+    models::build(
+        ModelKind::PdeSurface,
+        &Spec {
+            model: &m,
+            material: None,
+            simulation: s.as_ref(),
+            base,
+        },
+    )
+}
+
+fn build(model: &str) -> Box<dyn Model> {
+    build_at(model, Some("dt = 0.1"), Path::new(".")).expect("builds")
+}
+
+/// The glass of Fig 2 on a coarse grid.
+fn session() -> Session {
+    let m = build("kind = \"pde-surface\"\nname = \"g\"\nbuiltin = \"glass\"\ngrid = [8, 12]");
+    Session::with_model("g", m).unwrap()
+}
+
+fn saved(s: &Session) -> String {
+    serde_json::to_string(&s.model(None).unwrap().save().unwrap()).unwrap()
+}
+
+fn positions(s: &Session) -> Vec<Vec3> {
+    s.model(None).unwrap().display_mesh().unwrap().positions
+}
+
+fn round_trip(s: &mut Session, edit: Edit) {
+    let before = (saved(s), positions(s));
+    s.apply(Command::new(edit.clone()))
+        .unwrap_or_else(|e| panic!("{edit:?}: {e}"));
+    let after = (saved(s), positions(s));
+    assert_ne!(before.0, after.0, "{edit:?} changed nothing");
+    s.undo().unwrap();
+    assert_eq!((saved(s), positions(s)), before, "undo of {edit:?}");
+    s.redo().unwrap();
+    assert_eq!((saved(s), positions(s)), after, "redo of {edit:?}");
+}
+
+fn param(s: &Session, name: &str) -> f64 {
+    s.model(None)
+        .unwrap()
+        .params()
+        .iter()
+        .find(|p| p.name == name)
+        .unwrap_or_else(|| panic!("no param {name}"))
+        .value
+}
+
+#[test]
+fn setting_a_constant_reshapes_and_undoes() {
+    let mut s = session();
+    let before = positions(&s);
+    round_trip(
+        &mut s,
+        Edit::PdeSet {
+            name: "a".into(),
+            value: 1.5,
+        },
+    );
+    assert_eq!(param(&s, "a"), 1.5);
+    // The rim (u = 0 of the bowl) is x = a cos v at t = 0: its first vertex (v = 0) moved.
+    let now = positions(&s);
+    assert!((now[0].x - 1.5).abs() < 1e-9, "{:?}", now[0]);
+    assert!((before[0].x - 1.0).abs() < 1e-9, "{:?}", before[0]);
+    // `set` reaches the same constants.
+    round_trip(
+        &mut s,
+        Edit::Set {
+            name: "h0".into(),
+            value: 3.5,
+        },
+    );
+    assert!((positions(&s)[0].z - 3.5).abs() < 1e-9);
+    round_trip(
+        &mut s,
+        Edit::Set {
+            name: "dt".into(),
+            value: 0.25,
+        },
+    );
+    assert_eq!(s.model(None).unwrap().dt(), 0.25);
+}
+
+#[test]
+fn setting_the_time_reshapes_and_undoes() {
+    let mut s = session();
+    round_trip(
+        &mut s,
+        Edit::PdeSet {
+            name: "t".into(),
+            value: 1.0,
+        },
+    );
+    let m = s.model(None).unwrap();
+    assert_eq!(m.time(), 1.0);
+    // At t = 1 the rim carries the petals: x(0, 0) = a cos 0 + b sin 0 = 1, but z = h0 + h01 sin(5v).
+    let p = positions(&s);
+    let nv = 12;
+    let v = std::f64::consts::TAU / (nv - 1) as f64;
+    assert!(
+        (p[1].z - (3.0 + 0.25 * (5.0 * v).sin())).abs() < 1e-9,
+        "{:?}",
+        p[1]
+    );
+}
+
+#[test]
+fn steps_advance_t_and_undo_restores_the_state_before_the_edit() {
+    let mut s = session();
+    let before = (saved(&s), positions(&s));
+    s.apply(Command::new(Edit::PdeSet {
+        name: "b".into(),
+        value: 0.3,
+    }))
+    .unwrap();
+    let at0 = positions(&s);
+    s.run(3).unwrap();
+    let m = s.model(None).unwrap();
+    assert_eq!(m.steps(), 3);
+    assert!((m.time() - 0.3).abs() < 1e-12);
+    assert_eq!(m.energy().total(), 0.0);
+    assert_ne!(positions(&s), at0, "the petals grow with t");
+    s.undo().unwrap();
+    assert_eq!((saved(&s), positions(&s)), before);
+    assert_eq!(s.model(None).unwrap().time(), 0.0);
+}
+
+#[test]
+fn saved_model_continues_bit_for_bit() {
+    let mut s = session();
+    s.apply(Command::new(Edit::PdeSet {
+        name: "h01".into(),
+        value: 0.4,
+    }))
+    .unwrap();
+    s.run(2).unwrap();
+    let text = saved(&s);
+    let value: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let loaded = models::load(ModelKind::PdeSurface, &value).unwrap();
+    let mut t = Session::with_model("g", loaded).unwrap();
+    assert_eq!(saved(&t), text);
+    assert_eq!(positions(&t), positions(&s));
+    s.run(3).unwrap();
+    t.run(3).unwrap();
+    assert_eq!(saved(&t), saved(&s));
+    assert_eq!(positions(&t), positions(&s));
+    assert_eq!(t.model(None).unwrap().time(), s.model(None).unwrap().time());
+}
+
+#[test]
+fn edits_that_cannot_apply_leave_the_model_unchanged() {
+    let mut s = session();
+    let before = (saved(&s), positions(&s));
+    let bad = [
+        Edit::PdeSet {
+            name: "nope".into(),
+            value: 1.0,
+        },
+        Edit::Set {
+            name: "stiffness".into(),
+            value: 1.0,
+        },
+        Edit::MovePoint {
+            index: 0,
+            to: [0.0; 3],
+        },
+        Edit::Stop,
+        Edit::FfdMove {
+            moves: vec![vclay_session::PointMove {
+                from: [0.0; 3],
+                to: [1.0; 3],
+            }],
+        },
+    ];
+    for edit in bad {
+        let e = s.apply(Command::new(edit.clone())).unwrap_err();
+        let msg = e.to_string();
+        assert!(msg.contains(edit.action()), "{msg}");
+        if !matches!(edit, Edit::PdeSet { .. } | Edit::Set { .. }) {
+            assert!(msg.contains("pde-surface"), "{msg}");
+        }
+        assert_eq!((saved(&s), positions(&s)), before, "{edit:?}");
+    }
+    assert!(!s.can_undo());
+}
+
+#[test]
+fn pick_reports_surface_parameters() {
+    let s = session();
+    let m = s.model(None).unwrap();
+    let ray = Ray {
+        origin: Vec3::new(5.0, 0.01, 2.8),
+        direction: Vec3::new(-1.0, 0.0, 0.0),
+    };
+    let hit = m.pick(&ray, 1e-3).expect("hits the bowl");
+    let Element::SurfacePoint { param } = hit.element else {
+        panic!("{hit:?}")
+    };
+    assert!(param[0] > 0.0 && param[0] < 0.5, "{param:?}");
+    assert!((0.0..0.6).contains(&param[1]), "{param:?}");
+    assert!(hit.point.x > 0.5, "{hit:?}");
+    let lines = m.display_lines();
+    assert_eq!(
+        lines[0].points.len(),
+        3 * 2 * 12,
+        "two boundary curves per patch"
+    );
+}
+
+#[test]
+fn spec_files_constants_and_keys() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("vase.json"), vclay_pde::builtin::VASE).unwrap();
+    let spec: vclay_pde::SpecFile = serde_json::from_str(vclay_pde::builtin::VASE).unwrap();
+    let (name, value) = spec.params.iter().next().expect("the vase has constants");
+    let m = build_at(
+        &format!(
+            "spec = \"vase.json\"\ngrid = [6, 6]\nparams = {{ {name} = {} }}",
+            value + 0.01
+        ),
+        None,
+        dir.path(),
+    )
+    .unwrap();
+    let p = m.params();
+    assert_eq!(
+        p.iter().find(|p| &p.name == name).unwrap().value,
+        value + 0.01
+    );
+    assert_eq!(m.dt(), 1.0 / 30.0);
+    let dir_path = dir.path();
+    for (text, key) in [
+        ("builtin = \"teapot\"", "builtin"),
+        ("builtin = \"glass\"\ngrid = [1, 8]", "grid"),
+        ("builtin = \"glass\"\ngrid = [8, 2000]", "grid"),
+        ("builtin = \"glass\"\nparams = { zz = 1.0 }", "params"),
+        ("spec = \"missing.json\"", "spec"),
+        ("grid = [8, 8]", "spec"),
+        ("builtin = \"glass\"\ncolour = 1", "colour"),
+    ] {
+        let e = build_at(text, None, dir_path).expect_err(text);
+        assert_eq!(e.key, key, "{text}: {e:?}");
+    }
+    let e = build_at("builtin = \"glass\"", Some("dt = -1"), dir_path).expect_err("dt");
+    assert_eq!((e.table.as_str(), e.key.as_str()), ("simulation", "dt"));
+}
+
+#[test]
+fn exports_the_surface_and_the_spec() {
+    let s = session();
+    let m = s.model(None).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    for ext in ["obj", "ply", "stl", "glb", "json"] {
+        let path = dir.path().join(format!("g.{ext}"));
+        m.export(&path).unwrap();
+        assert!(std::fs::metadata(&path).unwrap().len() > 0);
+    }
+    // The exported spec compiles.
+    vclay_pde::PdeModel::read(dir.path().join("g.json")).unwrap();
+    assert!(m.export(&dir.path().join("g.vtu")).is_err());
+}
