@@ -107,7 +107,8 @@ pub fn run(args: &RunArgs) -> Result<()> {
         .clone()
         .unwrap_or_else(|| default_out_dir(&info.name));
     for n in session.model_names() {
-        eprintln!("{name}: {n}: {}", session.model(Some(n))?.summary());
+        let m = session.model(Some(n))?;
+        eprintln!("{name}: model `{n}` ({}): {}", m.kind(), m.summary());
     }
     eprintln!(
         "{name}: opened in {:.2} s; {steps} steps from step {now} (t = {:.4}) into {}",

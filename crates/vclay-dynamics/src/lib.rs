@@ -9,7 +9,7 @@
 //! factored once) and [`GeneralizedDnurbs`](dnurbs::GeneralizedDnurbs), where control points
 //! **and weights** (and a swung surface's profile curves and scale, eq 7) are dynamic, with the
 //! generalized inertial force `g_p`, weight positivity and point/normal constraints by Lagrange
-//! multipliers. [`scenario`] reads the D-NURBS kinds of `vclay run` scenario files.
+//! multipliers. Scenario files of the D-NURBS kinds are read by `vclay-session`.
 //!
 //! Not yet: triangular D-NURBS (a later issue; they plug in as a
 //! [`GeneralizedGeometry`](dnurbs::GeneralizedGeometry)).
@@ -17,7 +17,6 @@
 
 pub mod dnurbs;
 pub mod error;
-pub mod scenario;
 
 pub use dnurbs::{
     Density, DnurbsClosedCurve, DnurbsCurve, DnurbsSurface, ElasticReference, ElementSystem, Force,

@@ -266,6 +266,7 @@ impl Snapshot {
 
 /// How to undo an applied edit.
 #[derive(Debug)]
+#[allow(clippy::large_enum_variant)] // one per history entry; boxing would only add an indirection
 pub enum Undo {
     /// Put back a snapshot of the state taken just before the edit.
     State(Snapshot),
@@ -343,6 +344,11 @@ pub trait Model: Send + Sync + std::fmt::Debug {
     fn export(&self, path: &Path) -> Result<(), SessionError>;
     /// Everything needed to rebuild the model exactly (session files; see `docs/formats.md`).
     fn save(&self) -> Result<serde_json::Value, SessionError>;
+    /// The extensions [`Model::export`] writes (checked when a scenario is read, so a run
+    /// does not fail at its end). Default: every one of [`EXPORT_EXTENSIONS`].
+    fn export_formats(&self) -> Vec<&'static str> {
+        EXPORT_EXTENSIONS.to_vec()
+    }
 }
 
 /// Builds the error for an extension a kind does not export.

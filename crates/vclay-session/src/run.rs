@@ -143,7 +143,9 @@ pub fn run(
         summary
             .final_energy
             .push((name.clone(), m.energy().total()));
-        summary.models.push(format!("{name}: {}", m.summary()));
+        summary
+            .models
+            .push(format!("`{name}` ({}): {}", m.kind(), m.summary()));
     }
     summary.mean_step_ms = if summary.steps > 0 {
         sum_ms / summary.steps as f64

@@ -194,11 +194,21 @@ impl Scenario {
         let src = Src { file, text };
         let f: File = toml::from_str(text).map_err(|e| {
             let span = e.span().unwrap_or(0..0);
+            let msg = e.message().to_string();
+            let field = msg
+                .strip_prefix("unknown field `")
+                .and_then(|r| r.split('`').next())
+                .map(str::to_string);
+            let what = if field.as_deref() == Some("dir") {
+                format!("{msg}; a run writes to `vclay run --out DIR`, else ./vclay-run/<scenario name>/")
+            } else {
+                msg
+            };
             SessionError::File {
                 file: file.to_string(),
                 line: vclay_core::text::line_at(text, span.start),
-                key: "syntax".into(),
-                what: e.message().to_string(),
+                key: field.unwrap_or_else(|| "syntax".into()),
+                what,
             }
         })?;
         let name = f.name.clone().unwrap_or_else(|| stem.to_string());
@@ -313,6 +323,11 @@ impl Scenario {
             };
             let model = crate::models::build(kind, &spec).map_err(|e: SpecError| {
                 let span = match e.table.as_str() {
+                    // `[[material.cells]]` entries follow the [material] table's own span.
+                    "material" if !in_array && e.key == "cells" => f
+                        .material
+                        .as_ref()
+                        .map_or(mspan.clone(), |m| m.span().start..text.len()),
                     "material" if !in_array => f
                         .material
                         .as_ref()
@@ -505,21 +520,46 @@ impl Scenario {
                 ));
             }
         }
-        // Final files must be formats every model writes: checked by writing at the end, but
-        // an unknown extension is caught now.
-        for f in &output.final_files {
-            let ext = crate::model::extension(Path::new(f));
-            if !crate::model::EXPORT_EXTENSIONS.contains(&ext.as_str()) {
-                return Err(src.err(
-                    &ospan,
-                    "final",
-                    format!(
-                        "\"{f}\": unknown extension; vclay writes {}",
-                        crate::model::EXPORT_EXTENSIONS
-                            .map(|e| format!(".{e}"))
-                            .join(", ")
-                    ),
-                ));
+        // Final files and frames must be formats every model writes (checked now, so that a
+        // run does not fail at its end).
+        for n in session.model_names() {
+            let m = session.model(Some(n))?;
+            let formats = m.export_formats();
+            for f in &output.final_files {
+                let ext = crate::model::extension(Path::new(f));
+                if !formats.contains(&ext.as_str()) {
+                    return Err(src.err(
+                        &ospan,
+                        "final",
+                        format!(
+                            "\"{f}\": a {} model writes {}",
+                            m.kind(),
+                            formats
+                                .iter()
+                                .map(|e| format!(".{e}"))
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ),
+                    ));
+                }
+            }
+            for f in &output.frames {
+                if !formats.contains(&f.extension()) {
+                    return Err(src.err(
+                        &ospan,
+                        "frames",
+                        format!(
+                            "\"{}\": a {} model writes {}",
+                            f.extension(),
+                            m.kind(),
+                            formats
+                                .iter()
+                                .map(|e| format!("\"{e}\""))
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ),
+                    ));
+                }
             }
         }
         Ok(Self {

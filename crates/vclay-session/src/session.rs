@@ -48,6 +48,9 @@ pub struct LogEntry {
     pub message: String,
 }
 
+/// Borrowed parts of a session for saving: models by name, schedule, log.
+pub(crate) type SessionParts<'a> = (Vec<(&'a str, &'a dyn Model)>, &'a [Timed], &'a [LogEntry]);
+
 #[derive(Debug)]
 struct UndoEntry {
     model: usize,
@@ -330,7 +333,7 @@ impl Session {
 
     /// The nearest hit of `ray` on any model within `tolerance`: `(model name, hit)`.
     pub fn pick(&self, ray: &Ray, tolerance: f64) -> Option<(String, Hit)> {
-        if !crate::pick::valid_ray(ray) || !(tolerance.is_finite() && tolerance >= 0.0) {
+        if !(crate::pick::valid_ray(ray) && tolerance.is_finite() && tolerance >= 0.0) {
             return None;
         }
         self.models
@@ -349,7 +352,7 @@ impl Session {
         Ok(lines)
     }
 
-    pub(crate) fn parts(&self) -> (Vec<(&str, &dyn Model)>, &[Timed], &[LogEntry]) {
+    pub(crate) fn parts(&self) -> SessionParts<'_> {
         (
             self.models
                 .iter()

@@ -112,7 +112,7 @@ impl ToolTable {
             Some(n) if self.get(n).is_some() => Err(format!(
                 "a tool named `{n}` is already active (release it first)"
             )),
-            Some(n) if n.is_empty() => Err("a tool name must not be empty".into()),
+            Some("") => Err("a tool name must not be empty".into()),
             Some(n) => Ok(n.to_string()),
             None => {
                 let mut label = format!("{what}{handle}");

@@ -19,8 +19,9 @@
 //!   fixing and freeing of control points (section 5.2, with the free/fixed partition
 //!   `d = A1 p1 + A2 p2`), plastic reset, material changes, extrusion and cell deletion
 //!   mid-run;
-//! * [`scenario`]: a TOML scenario format (model, material, integrator, a timeline of tool
-//!   actions, outputs) and its runner, used by `vclay run`.
+//! * scenarios, commands, undo and session files live one layer up, in `vclay-session`,
+//!   which drives [`DynamicSolid`] through [`DynamicSolid::state`] /
+//!   [`DynamicSolid::set_state`] / [`DynamicSolid::from_parts`] (bitwise snapshots).
 //!
 //! ```
 //! use vclay_solids::{DynamicSolid, Material, SolidParams, SolidSource};
@@ -56,7 +57,6 @@ pub mod map;
 pub mod material;
 pub mod metric;
 pub mod model;
-pub mod scenario;
 pub mod solid;
 pub mod springs;
 pub mod tools;

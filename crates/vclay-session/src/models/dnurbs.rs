@@ -627,6 +627,9 @@ pub struct DnurbsModel {
     tools: ToolTable,
     kinetic: f64,
     revision: u64,
+    /// Forces of a wrapped engine that have no description (closures): they come first in the
+    /// engine's force list, and a model holding them cannot be saved.
+    external: Vec<Force>,
 }
 
 #[derive(Clone, Debug)]
@@ -683,6 +686,7 @@ impl DnurbsModel {
             tools: ToolTable::default(),
             kinetic: 0.0,
             revision: 1,
+            external: Vec::new(),
         })
     }
 
@@ -694,8 +698,10 @@ impl DnurbsModel {
 
     /// Wraps a frozen-weight surface (`Dnurbs<NurbsSurface>`, e.g. the 64x64 benchmark
     /// sheet) stepped by eq 18 with `dt`. Its forces and fixed points are kept: they become
-    /// one anonymous slot (`forces0`) of the tool table. Errors: a non-constant material, a
-    /// time step that is not positive, forces with moving targets (not serializable).
+    /// one slot (`forces0`) of the tool table; if one of them is a spring with a closure
+    /// target (the benchmark's), they are all kept as they are and the model cannot be saved
+    /// ([`Model::save`] names the reason). Errors: a non-constant material, a time step that
+    /// is not positive.
     pub fn frozen_surface(d: DnurbsSurface, dt: f64) -> Result<Self, SessionError> {
         let mat = Self::constants(d.material())?;
         let source = Source::of_surface(d.geometry());
@@ -829,9 +835,11 @@ impl DnurbsModel {
                     kernel: *kernel,
                 },
                 Force::Spring { .. } => {
-                    return Err(SessionError::model(
-                        "a spring with a moving target cannot be described; add it with a `rope` command with `velocity`",
-                    ));
+                    // A closure target: keep every force as it is (order matters to the
+                    // bits); the model then cannot be saved.
+                    self.external = forces.to_vec();
+                    self.sync_forces();
+                    return Ok(());
                 }
                 Force::Point { param, force } => ForceDesc::Point {
                     param: *param,
@@ -917,9 +925,14 @@ impl DnurbsModel {
 
     fn sync_forces(&mut self) {
         let f = self
-            .slots
+            .external
             .iter()
-            .flat_map(|s| s.forces.iter().map(ForceDesc::to_force))
+            .cloned()
+            .chain(
+                self.slots
+                    .iter()
+                    .flat_map(|s| s.forces.iter().map(ForceDesc::to_force)),
+            )
             .collect();
         self.engine.set_forces(f);
     }
@@ -1959,7 +1972,7 @@ fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, S
                     "a sheet needs size = [nu, nv] and degree = [p, q]".into(),
                 ));
             }
-            if let Some(&n) = size.iter().find(|&&n| n > MAX_SHEET_SIZE || n < 2) {
+            if let Some(&n) = size.iter().find(|&&n| !(2..=MAX_SHEET_SIZE).contains(&n)) {
                 return Err(err(
                     "size",
                     format!(
@@ -2370,6 +2383,11 @@ impl Model for DnurbsModel {
     }
 
     fn save(&self) -> Result<serde_json::Value, SessionError> {
+        if !self.external.is_empty() {
+            return Err(SessionError::model(
+                "the wrapped engine's forces include a spring with a closure target, which a session file cannot describe (add such springs with `rope` and `velocity`)",
+            ));
+        }
         let arr = |v: &[Vec3]| v.iter().map(a3).collect::<Vec<_>>();
         let state = match self.engine.state() {
             EngineState::Generalized(s) => SavedState::Generalized {

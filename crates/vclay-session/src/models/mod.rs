@@ -52,14 +52,29 @@ impl SpecError {
 /// Deserializes a table into `T`, turning serde's message into a [`SpecError`] whose key is
 /// the first name it quotes (``unknown field `fro` `` names `fro`).
 pub fn typed<T: DeserializeOwned>(table: &str, t: &toml::Table) -> Result<T, SpecError> {
-    T::deserialize(toml::Value::Table(t.clone())).map_err(|e| {
+    // Parse the table's own TOML text, so that a type error carries a span, which names the
+    // key (serde's message for a wrong type does not).
+    let text = toml::to_string(t).unwrap_or_default();
+    toml::from_str::<T>(&text).map_err(|e| {
         let msg = e.message().to_string();
-        let key = msg
+        let from_span = e.span().and_then(|sp| {
+            let start = text[..sp.start.min(text.len())]
+                .rfind('\n')
+                .map_or(0, |i| i + 1);
+            let line = text[start..].lines().next()?;
+            let (k, _) = line.split_once('=')?;
+            let k = k.trim().trim_matches('"');
+            (!k.is_empty() && !k.starts_with('[')).then(|| k.to_string())
+        });
+        let quoted = msg
             .split('`')
             .nth(1)
             .filter(|k| !k.contains(' '))
-            .unwrap_or(table)
-            .to_string();
+            .map(str::to_string);
+        let key = quoted
+            .filter(|_| msg.starts_with("unknown field") || msg.starts_with("missing field"))
+            .or(from_span)
+            .unwrap_or_else(|| table.to_string());
         SpecError {
             table: table.to_string(),
             key,

@@ -143,7 +143,7 @@ impl SolidModel {
     }
 
     fn add_tool(&mut self, tool: Tool) -> Result<usize, SessionError> {
-        self.solid.add_tool(tool).map(|id| id.0).map_err(|e| cmd(e))
+        self.solid.add_tool(tool).map(|id| id.0).map_err(cmd)
     }
 
     fn label(
@@ -990,8 +990,7 @@ impl Model for SolidModel {
     fn summary(&self) -> String {
         let st = self.solid.stats();
         format!(
-            "{}: {} control points ({} free), {} data points ({} active), {} springs ({} active)",
-            self.kind(),
+            "{} control points ({} free), {} data points ({} active), {} springs ({} active)",
             st.control_points,
             st.free_control_points,
             st.data_points,
@@ -1287,12 +1286,16 @@ impl Model for SolidModel {
             _ => Err(unsupported_export(
                 self.kind(),
                 path,
-                if self.is_subdivision() {
-                    &["ovm", "obj", "ply", "stl", "vtu"]
-                } else {
-                    &["json", "obj", "ply", "stl", "vtu"]
-                },
+                &self.export_formats(),
             )),
+        }
+    }
+
+    fn export_formats(&self) -> Vec<&'static str> {
+        if self.is_subdivision() {
+            vec!["ovm", "obj", "ply", "stl", "vtu"]
+        } else {
+            vec!["json", "obj", "ply", "stl", "vtu"]
         }
     }
 

@@ -1,0 +1,318 @@
+//! The one scenario format: parsing, error locations, a small run with every output, the
+//! shipped examples, and a B-spline solid saved by one run and read by the next.
+
+use std::path::Path;
+
+use vclay_session::SessionError;
+use vclay_session::scenario::{Scenario, model_kind};
+
+const SMALL: &str = r#"
+[model]
+kind = "subdivision-solid"
+primitive = "box"
+points = [2, 2, 2]
+level = 1
+
+[material]
+damping = 3.0
+
+[[material.cells]]
+cells = [0]
+edge_stiffness = 150.0
+
+[simulation]
+integrator = "implicit"
+dt = 0.01
+steps = 12
+
+[[timeline]]
+action = "rope"
+name = "r"
+at = 0.0
+from = [1.0, 1.0, 1.0]
+to = [1.3, 1.0, 1.0]
+until = 0.05
+
+[[timeline]]
+action = "fix"
+at = 0.02
+points = [0, 1]
+
+[[timeline]]
+action = "plastic-reset"
+at = 0.08
+
+[[timeline]]
+action = "release"
+at = 0.08
+name = "r"
+
+[[timeline]]
+action = "extrude"
+at = 0.1
+face = 0
+
+[output]
+frames = ["obj", "vtu", "ply", "stl"]
+every = 5
+final = "final.ovm"
+csv = "energy.csv"
+"#;
+
+fn parse(text: &str, base: &Path) -> Result<Scenario, SessionError> {
+    Scenario::parse(text, "t.toml", "t", base)
+}
+
+/// Parses `text` and returns the error's line, key and message (file `t.toml`).
+fn error_of(text: &str) -> (usize, String, String) {
+    match parse(text, Path::new(".")) {
+        Err(SessionError::File {
+            file,
+            line,
+            key,
+            what,
+        }) => {
+            assert_eq!(file, "t.toml");
+            (line, key, what)
+        }
+        Err(e) => panic!("not a located scenario error: {e}"),
+        Ok(_) => panic!("accepted a bad scenario"),
+    }
+}
+
+fn small_with(from: &str, to: &str) -> String {
+    assert!(SMALL.contains(from), "{from}");
+    SMALL.replacen(from, to, 1)
+}
+
+fn line_of(text: &str, needle: &str) -> usize {
+    text.lines().position(|l| l.contains(needle)).unwrap() + 1
+}
+
+#[test]
+fn small_scenario_runs_and_writes_every_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut sc = parse(SMALL, Path::new(".")).unwrap();
+    assert_eq!(sc.steps, 12);
+    assert_eq!(sc.name, "t");
+    let steps = sc.steps;
+    let s = vclay_session::run::run(&mut sc.session, steps, dir.path(), &sc.output, &mut |_| {})
+        .unwrap();
+    assert_eq!(s.steps, 12);
+    // Frames at steps 0, 5, 10 and 12, in four formats.
+    assert_eq!(s.frames.len(), 16, "{:?}", s.frames);
+    for f in [
+        "frame_000000.obj",
+        "frame_000005.vtu",
+        "frame_000010.ply",
+        "frame_000012.stl",
+    ] {
+        assert!(dir.path().join(f).exists(), "{f}");
+    }
+    let csv = std::fs::read_to_string(dir.path().join("energy.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 13);
+    assert!(csv.starts_with("step,model,time,kinetic,elastic,tools,total,step_ms,iterations"));
+    // Every timeline action ran, in order, and the log says so.
+    assert_eq!(s.log.len(), 5, "{:?}", s.log);
+    assert!(s.log[0].contains("rope `r` attached"));
+    assert!(s.log[1].contains("fixed 2 control points"));
+    assert!(s.log[4].contains("extruded control face 0"));
+    // The extrusion added a cell: 12 control points.
+    let l = vclay_lattice::formats::ovm::read(&dir.path().join("final.ovm")).unwrap();
+    assert_eq!(l.num_cells(), 2);
+    assert_eq!(l.num_points(), 12);
+    // The command log holds what was applied.
+    assert_eq!(sc.session.log().len(), 5);
+    assert!(sc.session.schedule().is_empty());
+}
+
+#[test]
+fn errors_name_line_and_key() {
+    // Unknown key (typo) in a timeline entry.
+    let t = small_with("points = [0, 1]", "pointz = [0, 1]");
+    let (line, key, msg) = error_of(&t);
+    assert_eq!(key, "pointz", "{msg}");
+    assert_eq!(line, line_of(&t, "pointz = [0, 1]"), "{msg}");
+    // Wrong type.
+    let t = small_with("dt = 0.01", "dt = \"fast\"");
+    let (line, _, msg) = error_of(&t);
+    assert_eq!(line, line_of(&t, "dt = \"fast\""), "{msg}");
+    // Out of range value, checked after parsing.
+    let t = small_with("dt = 0.01", "dt = -0.01");
+    let (line, key, msg) = error_of(&t);
+    assert_eq!(line, line_of(&t, "dt = -0.01"), "{msg}");
+    assert_eq!(key, "dt");
+    // Material out of range.
+    let t = small_with("edge_stiffness = 150.0", "edge_stiffness = -5.0");
+    let (line, key, msg) = error_of(&t);
+    assert_eq!(key, "edge_stiffness", "{msg}");
+    assert!(line > 0, "{msg}");
+    // A cell that does not exist.
+    let t = small_with("cells = [0]", "cells = [7]");
+    let (line, _, msg) = error_of(&t);
+    assert_eq!(line, line_of(&t, "cells = [7]"), "{msg}");
+    // Time order.
+    let t = small_with("until = 0.05", "until = -1.0");
+    let (line, key, msg) = error_of(&t);
+    assert_eq!(line, line_of(&t, "until = -1.0"), "{msg}");
+    assert_eq!(key, "until");
+    // Unknown action.
+    let t = small_with("action = \"fix\"", "action = \"glue\"");
+    let (line, _, msg) = error_of(&t);
+    assert!(msg.contains("glue"), "{msg}");
+    assert_eq!(line, line_of(&t, "\"glue\""), "{msg}");
+    // Unknown kind.
+    let t = small_with("kind = \"subdivision-solid\"", "kind = \"dnurbs-blob\"");
+    let (line, _, msg) = error_of(&t);
+    assert_eq!(line, line_of(&t, "dnurbs-blob"), "{msg}");
+    assert!(
+        msg.contains("dnurbs-blob") && msg.contains("pde-surface"),
+        "{msg}"
+    );
+    // Level too high.
+    let t = small_with("level = 1", "level = 9");
+    let (line, _, msg) = error_of(&t);
+    assert_eq!(line, line_of(&t, "level = 9"), "{msg}");
+    // Key of the other kind.
+    let t = small_with("level = 1", "level = 1\nsamples = [4, 4, 4]");
+    let (line, _, msg) = error_of(&t);
+    assert_eq!(line, line_of(&t, "samples ="), "{msg}");
+    // Syntax error.
+    let t = small_with("steps = 12", "steps = = 12");
+    let (line, _, _) = error_of(&t);
+    assert_eq!(line, line_of(&t, "steps = = 12"));
+    // Frame formats: unknown, listed twice, not written by the kind.
+    let frames = "frames = [\"obj\", \"vtu\", \"ply\", \"stl\"]";
+    let t = small_with(frames, "frames = [\"off\"]");
+    let (line, _, msg) = error_of(&t);
+    assert_eq!(line, line_of(&t, "frames = "), "{msg}");
+    assert!(msg.contains("\"off\"") && msg.contains("\"ply\""), "{msg}");
+    let t = small_with(frames, "frames = [\"ply\", \"ply\"]");
+    let (_, _, msg) = error_of(&t);
+    assert!(msg.contains("twice"), "{msg}");
+    let t = small_with(frames, "frames = [\"glb\"]");
+    let (_, _, msg) = error_of(&t);
+    assert!(msg.contains("subdivision-solid model writes"), "{msg}");
+    // Final model extension the kind does not write.
+    let t = small_with("final = \"final.ovm\"", "final = \"final.json\"");
+    let (line, _, msg) = error_of(&t);
+    assert_eq!(line, line_of(&t, "final.json"), "{msg}");
+    // Outputs are plain names: no folders (one output rule).
+    let t = small_with("csv = \"energy.csv\"", "csv = \"../energy.csv\"");
+    let (_, key, _) = error_of(&t);
+    assert_eq!(key, "csv");
+    let t = small_with("[output]", "[output]\ndir = \"elsewhere\"");
+    let (line, key, _) = error_of(&t);
+    assert_eq!((line, key.as_str()), (line_of(&t, "dir = "), "dir"));
+    // A timeline entry for a model that does not exist.
+    let t = small_with(
+        "action = \"plastic-reset\"",
+        "action = \"plastic-reset\"\nmodel = \"other\"",
+    );
+    let (line, key, _) = error_of(&t);
+    assert_eq!(
+        (line, key.as_str()),
+        (line_of(&t, "model = \"other\""), "model")
+    );
+    // Run length out of bounds.
+    let t = small_with("steps = 12", "steps = 1000000000000");
+    let (_, key, _) = error_of(&t);
+    assert_eq!(key, "steps");
+}
+
+#[test]
+fn kind_is_read_for_dispatch() {
+    assert_eq!(model_kind(SMALL).unwrap(), "subdivision-solid");
+    assert_eq!(model_kind("[model]\nkin = 1\n"), None);
+}
+
+#[test]
+fn shipped_scenarios_parse() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenarios");
+    let mut n = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let text = std::fs::read_to_string(&path).unwrap();
+            assert!(text.starts_with("# "), "{path:?} needs a header comment");
+            let sc =
+                Scenario::from_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            assert!(sc.steps > 0);
+            n += 1;
+        }
+    }
+    assert!(n >= 8, "found {n} scenarios");
+}
+
+const BSPLINE: &str = r#"
+[model]
+kind = "bspline-solid"
+control = [4, 4, 5]
+samples = [5, 5, 6]
+
+[simulation]
+dt = 0.002
+steps = 10
+
+[[timeline]]
+action = "rope"
+at = 0.0
+from = [1.0, 1.0, 1.0]
+to = [1.3, 1.2, 1.1]
+
+[output]
+final = "final.json"
+"#;
+
+#[test]
+fn a_bspline_solid_saved_by_one_run_is_the_model_of_the_next() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut first = parse(BSPLINE, dir.path()).unwrap();
+    let initial = first.session.model(None).unwrap().save().unwrap();
+    vclay_session::run::run(
+        &mut first.session,
+        10,
+        dir.path(),
+        &first.output,
+        &mut |_| {},
+    )
+    .unwrap();
+    let saved = match &vclay_io::model::read_model(dir.path().join("final.json")).unwrap()[..] {
+        [vclay_io::Entity::Volume(v)] => v.control_points().to_vec(),
+        other => panic!("final.json holds {} entities, not one volume", other.len()),
+    };
+    assert_ne!(initial, first.session.model(None).unwrap().save().unwrap());
+    let next = BSPLINE
+        .replace("control = [4, 4, 5]\n", "file = \"final.json\"\n")
+        .replace("samples = [5, 5, 6]", "samples = [4, 4, 5]");
+    let second = parse(&next, dir.path()).unwrap();
+    let m = second.session.model(None).unwrap();
+    assert!(
+        m.summary().starts_with("80 control points") || m.summary().contains("80 data points"),
+        "{}",
+        m.summary()
+    );
+    let st: serde_json::Value = m.save().unwrap();
+    let cps: Vec<[f64; 3]> = serde_json::from_value(st["state"]["control_points"].clone()).unwrap();
+    assert_eq!(cps.len(), saved.len());
+    for (a, b) in cps.iter().zip(&saved) {
+        assert_eq!(*a, [b.x, b.y, b.z]);
+    }
+    // Keys that describe a primitive do not go with `file`.
+    let t = next.replace(
+        "samples = [4, 4, 5]",
+        "samples = [4, 4, 5]\ndegree = [2, 2, 2]",
+    );
+    match parse(&t, dir.path()) {
+        Err(SessionError::File { key, line, .. }) => {
+            assert_eq!(key, "degree");
+            assert_eq!(line, line_of(&t, "degree ="));
+        }
+        other => panic!("{other:?}"),
+    }
+    let t = next.replace("final.json\"", "missing.json\"");
+    match parse(&t, dir.path()) {
+        Err(SessionError::File { key, .. }) => assert_eq!(key, "file"),
+        other => panic!("{other:?}"),
+    }
+}
