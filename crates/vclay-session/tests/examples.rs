@@ -30,14 +30,21 @@ fn every_example_ends_as_before_the_session_layer() {
         vclay_session::run::run(&mut sc.session, steps, &dir, &sc.output, &mut |_| {})
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         let Ok(entries) = std::fs::read_dir(before.join(&name)) else {
-            panic!("{name}: no reference in tests/data/before (a new example needs none only if the old format could not express it; then list it here)");
+            panic!(
+                "{name}: no reference in tests/data/before (a new example needs none only if the old format could not express it; then list it here)"
+            );
         };
         for f in entries {
             let f = f.unwrap().path();
             let new = dir.join(f.file_name().unwrap());
             let a = std::fs::read(&f).unwrap();
-            let b = std::fs::read(&new).unwrap_or_else(|e| panic!("{name}: {}: {e}", new.display()));
-            assert!(a == b, "{name}: {} differs from the run before the session layer", f.display());
+            let b =
+                std::fs::read(&new).unwrap_or_else(|e| panic!("{name}: {}: {e}", new.display()));
+            assert!(
+                a == b,
+                "{name}: {} differs from the run before the session layer",
+                f.display()
+            );
             compared += 1;
         }
     }

@@ -908,6 +908,7 @@ impl SolidModel {
         let rest = SolidRest {
             control_points: s.rest.control_points.iter().map(|a| v3(*a)).collect(),
             data_points: s.rest.data_points.iter().map(|a| v3(*a)).collect(),
+            physics_data_points: s.rest.physics_data_points.iter().map(|a| v3(*a)).collect(),
             fixed: s.rest.fixed.clone(),
             metric_stiffness: s.rest.metric_stiffness,
             energy_scale: s.rest.energy_scale,
@@ -1347,6 +1348,7 @@ impl Model for SolidModel {
             rest: SavedRest {
                 control_points: arr(&rest.control_points),
                 data_points: arr(&rest.data_points),
+                physics_data_points: arr(&rest.physics_data_points),
                 fixed: rest.fixed,
                 metric_stiffness: rest.metric_stiffness,
                 energy_scale: rest.energy_scale,
@@ -1801,6 +1803,7 @@ struct SavedParams {
 struct SavedRest {
     control_points: Vec<V3>,
     data_points: Vec<V3>,
+    physics_data_points: Vec<V3>,
     fixed: Vec<bool>,
     metric_stiffness: Option<f64>,
     energy_scale: f64,

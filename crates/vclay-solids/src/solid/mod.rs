@@ -352,6 +352,9 @@ pub struct DynamicSolid {
     disc: Discretization,
     d: Vec<Vec3>,
     d_rest: Vec<Vec3>,
+    /// The data points masses, damping and spring stiffnesses were last built from (the rest
+    /// shape before any plastic reset since; a reset renews rest lengths only).
+    d_phys: Vec<Vec3>,
     mass: Vec<f64>,
     damp: Vec<f64>,
     springs: SpringSet,
@@ -422,6 +425,7 @@ impl DynamicSolid {
             good: (p.clone(), vec![Vec3::zeros(); n]),
             p,
             d_rest: d.clone(),
+            d_phys: Vec::new(),
             d,
             disc,
             mass: Vec::new(),
@@ -459,6 +463,7 @@ impl DynamicSolid {
 
     /// Masses, damping, springs, reduced matrices and boundary from the rest configuration.
     fn rebuild_physics(&mut self) -> Result<(), SolidsError> {
+        self.d_phys.clone_from(&self.d_rest);
         let data = &mut self.disc.data;
         data.points_mut().copy_from_slice(&self.d_rest);
         let nd = data.num_points();
@@ -1699,8 +1704,12 @@ pub struct SolidState {
 pub struct SolidRest {
     /// Rest control points.
     pub control_points: Vec<Vec3>,
-    /// Rest data points.
+    /// Rest data points (spring rest lengths).
     pub data_points: Vec<Vec3>,
+    /// The data points that masses, damping and spring stiffnesses were built from: the rest
+    /// shape before the plastic resets since the last rebuild (a reset renews rest lengths
+    /// only, journal section 5.4).
+    pub physics_data_points: Vec<Vec3>,
     /// Fixed flag per control point.
     pub fixed: Vec<bool>,
     /// `Some(c)` when the metric-tensor energy (weight `c`) replaces the springs.
@@ -1766,6 +1775,7 @@ impl DynamicSolid {
         SolidRest {
             control_points: self.p_rest.clone(),
             data_points: self.d_rest.clone(),
+            physics_data_points: self.d_phys.clone(),
             fixed: self.fixed.clone(),
             metric_stiffness: self.metric.as_ref().map(|m| m.stiffness),
             energy_scale: self.energy_scale,
@@ -1784,12 +1794,13 @@ impl DynamicSolid {
         state: &SolidState,
     ) -> Result<Self, SolidsError> {
         let mut s = Self::with_material(source, rest.control_points.clone(), material, params)?;
-        if rest.data_points.len() != s.d.len() {
-            return Err(invalid(
-                "rest data points",
-                rest.data_points.len(),
-                &format!("{} values", s.d.len()),
-            ));
+        for (what, len) in [
+            ("rest data points", rest.data_points.len()),
+            ("physics data points", rest.physics_data_points.len()),
+        ] {
+            if len != s.d.len() {
+                return Err(invalid(what, len, &format!("{} values", s.d.len())));
+            }
         }
         if rest.fixed.len() != s.p.len() {
             return Err(invalid(
@@ -1805,9 +1816,23 @@ impl DynamicSolid {
                 "positive and finite",
             ));
         }
-        s.d_rest.clone_from(&rest.data_points);
-        s.d.clone_from(&rest.data_points);
+        if let Some(i) = rest
+            .data_points
+            .iter()
+            .chain(&rest.physics_data_points)
+            .position(|x| !x.iter().all(|c| c.is_finite()))
+        {
+            return Err(invalid("rest data points", format!("value {i}"), "finite"));
+        }
+        // Masses and stiffnesses from the shape they were built from, then the rest lengths
+        // of the plastic resets since.
+        s.d_rest.clone_from(&rest.physics_data_points);
+        s.d.clone_from(&rest.physics_data_points);
         s.rebuild_physics()?;
+        if rest.data_points != rest.physics_data_points {
+            s.springs.reset_rest(&rest.data_points);
+        }
+        s.d_rest.clone_from(&rest.data_points);
         if rest.metric_stiffness.is_some() {
             s.use_metric_energy(rest.metric_stiffness)?;
         }

@@ -1,0 +1,509 @@
+//! Dynamic solids in a session (`subdivision-solids-journal.txt` eqs 3-10, section 5): every
+//! command applies, undoes and redoes bit for bit, undo after simulated time returns to the
+//! state just before the command, and a saved model continues exactly like the uninterrupted
+//! one.
+
+use std::path::Path;
+
+mod common;
+use common::assert_same;
+
+use vclay_session::models::{self, Spec};
+use vclay_session::{Command, Edit, Element, Model, ModelKind, Ray, Session};
+
+fn build(kind: ModelKind, model: &str, sim: &str) -> Box<dyn Model> {
+    let m: toml::Table = toml::from_str(model).unwrap();
+    let s: toml::Table = toml::from_str(sim).unwrap();
+    models::build(
+        kind,
+        &Spec {
+            model: &m,
+            material: None,
+            simulation: Some(&s),
+            base: Path::new("."),
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e:?}"))
+}
+
+fn cube() -> Box<dyn Model> {
+    build(
+        ModelKind::SubdivisionSolid,
+        "kind = \"subdivision-solid\"\nprimitive = \"box\"\npoints = [3, 3, 3]\nlevel = 1",
+        "dt = 0.002",
+    )
+}
+
+fn bspline() -> Box<dyn Model> {
+    build(
+        ModelKind::BsplineSolid,
+        "kind = \"bspline-solid\"\ncontrol = [4, 4, 4]\nsamples = [5, 5, 5]",
+        "dt = 0.002\nintegrator = \"implicit\"",
+    )
+}
+
+fn saved(s: &Session) -> serde_json::Value {
+    s.model(None).unwrap().save().unwrap()
+}
+
+/// Save -> string -> load, then n steps of both: identical.
+fn check_continue(s: &mut Session, n: u64, what: &str) {
+    let text = serde_json::to_string(&saved(s)).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let kind = s.model(None).unwrap().kind();
+    let mut s2 = Session::with_model("m", models::load(kind, &v).unwrap()).unwrap();
+    assert_same(
+        &saved(&s2),
+        &v,
+        &format!("{what}: load did not reproduce the saved state"),
+    );
+    s.run(n).unwrap();
+    s2.run(n).unwrap();
+    assert_same(
+        &saved(s),
+        &saved(&s2),
+        &format!("{what}: continued runs differ"),
+    );
+}
+
+/// Apply, undo (== before), redo (== after), steps then undo (== before), redo again.
+fn round_trip(make: fn() -> Box<dyn Model>, warmup: u64, edit: Edit) {
+    let mut s = Session::with_model("m", make()).unwrap();
+    s.apply(Command::new(Edit::Rope {
+        name: Some("warm".into()),
+        from: [1.0, 1.0, 1.0],
+        param: None,
+        to: Some([1.2, 1.1, 1.0]),
+        until: Some(0.01),
+        velocity: None,
+        release: None,
+        stiffness: None,
+        length: None,
+        kernel: None,
+        start: None,
+    }))
+    .unwrap();
+    s.run(warmup).unwrap();
+    let before = saved(&s);
+    let what = edit.action();
+    s.apply(Command::new(edit.clone()))
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
+    let after = saved(&s);
+    s.undo().unwrap();
+    assert_same(&saved(&s), &before, &format!("{what}: undo"));
+    s.redo().unwrap();
+    assert_same(&saved(&s), &after, &format!("{what}: redo"));
+    s.run(5).unwrap();
+    assert!(saved(&s) != after, "{what}: steps changed nothing");
+    s.undo().unwrap();
+    assert_same(&saved(&s), &before, &format!("{what}: undo after steps"));
+    s.redo().unwrap();
+    assert_same(
+        &saved(&s),
+        &after,
+        &format!("{what}: redo after undo after steps"),
+    );
+    check_continue(&mut s, 4, what);
+}
+
+fn every_edit(subdivision: bool) -> Vec<Edit> {
+    let mut v = vec![
+        Edit::Rope {
+            name: Some("r".into()),
+            from: [0.0, 0.0, 1.0],
+            param: None,
+            to: Some([-0.2, 0.0, 1.2]),
+            until: Some(0.02),
+            velocity: None,
+            release: Some(0.05),
+            stiffness: Some(40.0),
+            length: Some(0.01),
+            kernel: None,
+            start: None,
+        },
+        Edit::MoveRope {
+            name: "warm".into(),
+            to: [1.3, 1.3, 1.3],
+        },
+        Edit::Force {
+            name: None,
+            near: Some([0.5, 0.5, 1.0]),
+            param: None,
+            force: [0.0, 0.0, 3.0],
+            until: Some(0.1),
+        },
+        Edit::RegionForce {
+            name: Some("push".into()),
+            center: [0.5, 0.5, 0.0],
+            radius: 0.4,
+            force: [0.0, 0.0, -2.0],
+            until: None,
+        },
+        Edit::Gravity {
+            name: Some("g".into()),
+            g: [0.0, 0.0, -9.8],
+            until: None,
+        },
+        Edit::Inflate {
+            name: None,
+            pressure: 2.0,
+            until: None,
+        },
+        Edit::Release {
+            name: "warm".into(),
+        },
+        Edit::Fix {
+            points: None,
+            min: Some([-0.1, -0.1, -0.1]),
+            max: Some([1.1, 1.1, 0.1]),
+            near: None,
+        },
+        Edit::Free {
+            points: Some(vec![0, 1]),
+            min: None,
+            max: None,
+            near: None,
+        },
+        Edit::Fix {
+            points: None,
+            min: None,
+            max: None,
+            near: Some([1.0, 0.0, 0.0]),
+        },
+        Edit::Material {
+            cells: None,
+            min: Some([0.0, 0.0, 0.0]),
+            max: Some([0.6, 0.6, 0.6]),
+            density: Some(2.0),
+            damping: Some(1.0),
+            edge_stiffness: Some(300.0),
+            virtual_stiffness: None,
+            anisotropy: Some([1.0, 2.0, 1.0]),
+            mu: None,
+            gamma: None,
+            alpha: None,
+            beta: None,
+        },
+        Edit::PlasticReset,
+        Edit::Stop,
+        Edit::MovePoint {
+            index: 3,
+            to: [0.1, 0.2, 0.3],
+        },
+        Edit::Set {
+            name: "edge_stiffness".into(),
+            value: 120.0,
+        },
+        Edit::Set {
+            name: "dt".into(),
+            value: 0.001,
+        },
+        Edit::Integrator {
+            integrator: Some("explicit".into()),
+            dt: Some(0.0005),
+        },
+    ];
+    if subdivision {
+        v.push(Edit::Extrude {
+            face: None,
+            near: Some([1.0, 0.8, 0.8]),
+            factor: Some(0.5),
+        });
+        v.push(Edit::DeleteCell {
+            cell: Some(0),
+            near: None,
+        });
+    }
+    v
+}
+
+#[test]
+fn every_subdivision_command_undoes_and_redoes_bit_for_bit() {
+    for e in every_edit(true) {
+        round_trip(cube, 3, e);
+    }
+}
+
+#[test]
+fn every_bspline_command_undoes_and_redoes_bit_for_bit() {
+    for e in every_edit(false) {
+        round_trip(bspline, 3, e);
+    }
+}
+
+#[test]
+fn commands_that_cannot_apply_name_the_reason_and_change_nothing() {
+    for (make, bad) in [
+        (
+            cube as fn() -> Box<dyn Model>,
+            Edit::Release {
+                name: "nope".into(),
+            },
+        ),
+        (
+            cube,
+            Edit::MoveRope {
+                name: "nope".into(),
+                to: [0.0; 3],
+            },
+        ),
+        (
+            cube,
+            Edit::Fix {
+                points: Some(vec![999]),
+                min: None,
+                max: None,
+                near: None,
+            },
+        ),
+        (
+            cube,
+            Edit::DeleteCell {
+                cell: Some(999),
+                near: None,
+            },
+        ),
+        (
+            cube,
+            Edit::Extrude {
+                face: Some(999_999),
+                near: None,
+                factor: None,
+            },
+        ),
+        (
+            cube,
+            Edit::SetWeight {
+                index: 0,
+                weight: 2.0,
+            },
+        ),
+        (
+            cube,
+            Edit::PdeSet {
+                name: "a".into(),
+                value: 1.0,
+            },
+        ),
+        (
+            cube,
+            Edit::FfdMove {
+                moves: vec![vclay_session::PointMove {
+                    from: [0.0; 3],
+                    to: [1.0; 3],
+                }],
+            },
+        ),
+        (
+            cube,
+            Edit::Set {
+                name: "nope".into(),
+                value: 1.0,
+            },
+        ),
+        (
+            cube,
+            Edit::Set {
+                name: "dt".into(),
+                value: -1.0,
+            },
+        ),
+        (
+            cube,
+            Edit::Integrator {
+                integrator: Some("leapfrog".into()),
+                dt: None,
+            },
+        ),
+        (
+            cube,
+            Edit::Material {
+                cells: Some(vec![77]),
+                min: None,
+                max: None,
+                density: Some(1.0),
+                damping: None,
+                edge_stiffness: None,
+                virtual_stiffness: None,
+                anisotropy: None,
+                mu: None,
+                gamma: None,
+                alpha: None,
+                beta: None,
+            },
+        ),
+        (
+            cube,
+            Edit::Gravity {
+                name: None,
+                g: [f64::NAN, 0.0, 0.0],
+                until: None,
+            },
+        ),
+        (
+            bspline,
+            Edit::Extrude {
+                face: Some(0),
+                near: None,
+                factor: None,
+            },
+        ),
+        (
+            bspline,
+            Edit::Constraint {
+                name: None,
+                kind: "point".into(),
+                param: [0.0, 0.0],
+                target: Some([0.0; 3]),
+                normal: None,
+            },
+        ),
+    ] {
+        let mut s = Session::with_model("m", make()).unwrap();
+        s.run(2).unwrap();
+        let before = saved(&s);
+        let what = format!("{bad:?}");
+        let err = s.apply(Command::new(bad)).expect_err(&what);
+        let msg = err.to_string();
+        assert!(msg.starts_with("command `"), "{what}: {msg}");
+        assert!(msg.contains("on model `m`"), "{what}: {msg}");
+        assert_same(&saved(&s), &before, &format!("{what}: the model changed"));
+        assert!(s.log().is_empty(), "{what}: logged");
+    }
+}
+
+#[test]
+fn scheduled_ropes_move_and_expire_and_the_display_follows() {
+    let mut s = Session::with_model("m", cube()).unwrap();
+    s.schedule_commands(vec![vclay_session::Timed {
+        at: 0.004,
+        command: Command::new(Edit::Rope {
+            name: Some("r".into()),
+            from: [1.0, 1.0, 1.0],
+            param: None,
+            to: Some([1.4, 1.0, 1.0]),
+            until: Some(0.02),
+            velocity: None,
+            release: Some(0.03),
+            stiffness: None,
+            length: None,
+            kernel: None,
+            start: Some(0.004),
+        }),
+    }])
+    .unwrap();
+    let r0 = s.revision();
+    let lines = s.run(5).unwrap();
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    assert!(
+        lines[0].starts_with("t = 0.0040: rope `r` attached"),
+        "{lines:?}"
+    );
+    assert!(s.revision() > r0);
+    let m = s.model(None).unwrap();
+    let ropes = m
+        .display_lines()
+        .into_iter()
+        .find(|l| l.role == Some(vclay_session::LineRole::Ropes))
+        .unwrap();
+    assert_eq!(ropes.segments.len(), 1);
+    // The cursor moves towards `to` (0.4 over 0.016 s), placed before each step: the last
+    // step started at t = 0.008, where it is at x = 1.1.
+    let cursor = ropes.points[1];
+    assert!((cursor.x - 1.1).abs() < 1e-12, "{cursor:?}");
+    s.advance_to(0.04).unwrap();
+    let m = s.model(None).unwrap();
+    let ropes = m
+        .display_lines()
+        .into_iter()
+        .find(|l| l.role == Some(vclay_session::LineRole::Ropes))
+        .unwrap();
+    assert!(ropes.segments.is_empty(), "released at 0.03");
+    // The display mesh is the closed boundary with unit normals.
+    let mesh = m.display_mesh().unwrap();
+    assert_eq!(mesh.normals.len(), mesh.positions.len());
+    assert!(mesh.triangles.len() >= 2 * 6 * 4 * 4);
+}
+
+#[test]
+fn picking_finds_control_points_and_the_surface() {
+    let s = Session::with_model("m", cube()).unwrap();
+    // Straight down onto the top face's centre: the control point (0.5, 0.5, 1) is there.
+    let ray = Ray {
+        origin: vclay_core::Vec3::new(0.5, 0.5, 3.0),
+        direction: vclay_core::Vec3::new(0.0, 0.0, -1.0),
+    };
+    let (name, hit) = s.pick(&ray, 0.01).unwrap();
+    assert_eq!(name, "m");
+    match hit.element {
+        Element::ControlPoint { index } => {
+            let p =
+                s.model(None).unwrap().save().unwrap()["state"]["control_points"][index].clone();
+            assert_eq!(p, serde_json::json!([0.5, 0.5, 1.0]));
+        }
+        e => panic!("{e:?}"),
+    }
+    // Off the control points: the surface, with a data point, a face and a cell.
+    let ray = Ray {
+        origin: vclay_core::Vec3::new(0.3, 0.2, 3.0),
+        direction: vclay_core::Vec3::new(0.0, 0.0, -2.0),
+    };
+    let (_, hit) = s.pick(&ray, 0.01).unwrap();
+    assert!(matches!(hit.element, Element::DataPoint { .. }), "{hit:?}");
+    assert!((hit.point.z - 1.0).abs() < 1e-9, "{hit:?}");
+    assert!(
+        (hit.distance - 1.0).abs() < 1e-9,
+        "distance in units of |direction|: {hit:?}"
+    );
+    assert!(matches!(hit.extra[0], Some(Element::Face { .. })));
+    assert!(matches!(hit.extra[1], Some(Element::Cell { .. })));
+    // A miss, and a bad ray.
+    let miss = Ray {
+        origin: vclay_core::Vec3::new(5.0, 5.0, 3.0),
+        direction: vclay_core::Vec3::new(0.0, 0.0, -1.0),
+    };
+    assert!(s.pick(&miss, 0.01).is_none());
+    let bad = Ray {
+        origin: vclay_core::Vec3::zeros(),
+        direction: vclay_core::Vec3::zeros(),
+    };
+    assert!(s.pick(&bad, 0.01).is_none());
+}
+
+#[test]
+fn exports_write_every_format_the_kind_names() {
+    let dir = tempfile::tempdir().unwrap();
+    for make in [cube as fn() -> Box<dyn Model>, bspline] {
+        let m = make();
+        for ext in m.export_formats() {
+            let p = dir.path().join(format!("m.{ext}"));
+            m.export(&p).unwrap_or_else(|e| panic!("{ext}: {e}"));
+            assert!(std::fs::metadata(&p).unwrap().len() > 0);
+        }
+        let e = m.export(&dir.path().join("m.xyz")).unwrap_err().to_string();
+        assert!(e.contains("cannot be written as .xyz"), "{e}");
+    }
+}
+
+#[test]
+fn a_model_at_rest_and_one_with_a_moving_rope_continue_exactly() {
+    let mut s = Session::with_model("m", cube()).unwrap();
+    check_continue(&mut s, 4, "plain");
+    let mut s = Session::with_model("m", cube()).unwrap();
+    s.apply(Command::new(Edit::Rope {
+        name: Some("warm".into()),
+        from: [1.0, 1.0, 1.0],
+        param: None,
+        to: Some([1.2, 1.1, 1.0]),
+        until: Some(0.01),
+        velocity: None,
+        release: None,
+        stiffness: None,
+        length: None,
+        kernel: None,
+        start: None,
+    }))
+    .unwrap();
+    s.run(3).unwrap();
+    check_continue(&mut s, 1, "rope");
+}
