@@ -194,6 +194,7 @@ fn physics_figures(seconds: f64, large: bool) -> Result<serde_json::Value> {
         }));
     }
     out["solid_paper_models"] = json!(paper);
+    out["session_layer"] = session_figures(seconds)?;
     if large {
         let mut big = so::cube(5, SolidParams::default())?;
         so::pull(&mut big)?;
@@ -202,6 +203,119 @@ fn physics_figures(seconds: f64, large: bool) -> Result<serde_json::Value> {
         out["solid_cube_level5"]["bytes_per_data_point"] = json!(big.bytes_per_data_point());
     }
     Ok(out)
+}
+
+/// Batches of `a` and `b` alternated for about `seconds` (each batch at least 2 ms, at least
+/// 7 of each), so that both see the same machine: the median milliseconds per step of each.
+fn paired_ms(
+    seconds: f64,
+    mut a: impl FnMut() -> Result<()>,
+    mut b: impl FnMut() -> Result<()>,
+) -> Result<(f64, f64)> {
+    a()?;
+    b()?;
+    let t0 = Instant::now();
+    let mut batch = 0usize;
+    while batch == 0 || t0.elapsed().as_secs_f64() < 2e-3 {
+        a()?;
+        batch += 1;
+    }
+    let (mut ta, mut tb) = (Vec::new(), Vec::new());
+    let start = Instant::now();
+    while ta.len() < 7 || start.elapsed().as_secs_f64() < seconds {
+        for (f, times) in [
+            (&mut a as &mut dyn FnMut() -> Result<()>, &mut ta),
+            (&mut b, &mut tb),
+        ] {
+            let t = Instant::now();
+            for _ in 0..batch {
+                f()?;
+            }
+            times.push(t.elapsed().as_secs_f64() * 1e3 / batch as f64);
+        }
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    Ok((median(&mut ta), median(&mut tb)))
+}
+
+/// What the session layer adds (issue 15): a level-2 cube step and a 64x64 frozen D-NURBS
+/// step, bare and through `Session::step` (alternating batches); the undo snapshot of a
+/// level-4 cube (and the full copy that topology edits keep).
+fn session_figures(seconds: f64) -> Result<serde_json::Value> {
+    use vclay::dynamics::Integrator;
+    use vclay::dynamics::dnurbs::benchmarks as dn;
+    use vclay::session::models::{dnurbs::DnurbsModel, solid::SolidModel};
+    use vclay::session::{Model, Session};
+    use vclay::solids::{SolidParams, benchmarks as so};
+    let overhead = |bare: f64, session: f64, name: &str| {
+        let pct = 100.0 * (session - bare) / bare;
+        json!({
+            "model": name,
+            "bare_ms": bare,
+            "session_ms": session,
+            "overhead_percent": pct,
+            "statistic": "median of alternating batches",
+            "goal": "< 2 %",
+            "met": pct < 2.0,
+        })
+    };
+    let mut bare = so::cube(2, SolidParams::default())?;
+    so::pull(&mut bare)?;
+    let mut wrapped = so::cube(2, SolidParams::default())?;
+    so::pull(&mut wrapped)?;
+    let mut s = Session::with_model("cube", Box::new(SolidModel::new(wrapped)))?;
+    let (b, w) = paired_ms(
+        seconds,
+        || Ok(bare.step().map(drop)?),
+        || Ok(s.step().map(drop)?),
+    )?;
+    let cube = overhead(b, w, "4^3 cube, level 2");
+    let implicit = Integrator::Implicit { dt: dn::DT };
+    let mut bare = dn::frozen_sheet(64)?;
+    let mut s = Session::with_model(
+        "sheet",
+        Box::new(DnurbsModel::frozen_surface(dn::frozen_sheet(64)?, dn::DT)?),
+    )?;
+    let (b, w) = paired_ms(
+        seconds,
+        || Ok(bare.step(implicit).map(drop)?),
+        || Ok(s.step().map(drop)?),
+    )?;
+    let sheet = overhead(b, w, "64x64 D-NURBS sheet, frozen weights");
+    // Snapshots of a level-4 cube (about 117,000 data points).
+    let mut big = so::cube(4, SolidParams::default())?;
+    so::pull(&mut big)?;
+    let data_points = big.data_points().len();
+    let model = SolidModel::new(big);
+    let time = |f: &dyn Fn()| {
+        let mut v: Vec<f64> = (0..7)
+            .map(|_| {
+                let t = Instant::now();
+                f();
+                t.elapsed().as_secs_f64() * 1e3
+            })
+            .collect();
+        v.sort_by(f64::total_cmp);
+        v[3]
+    };
+    let snap_ms = time(&|| drop(model.snapshot()));
+    let full_ms = time(&|| drop(model.clone_model()));
+    Ok(json!({
+        "solid_cube_level2_step": cube,
+        "dnurbs_64x64_frozen_step": sheet,
+        "undo_snapshot_cube_level4": {
+            "value": snap_ms,
+            "unit": "ms",
+            "statistic": "median of 7",
+            "data_points": data_points,
+            "goal": "< 10",
+            "met": snap_ms < 10.0,
+            "full_copy_ms": full_ms,
+        },
+    }))
 }
 
 fn rayon_threads() -> usize {
