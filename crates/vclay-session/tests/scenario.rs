@@ -190,7 +190,7 @@ fn errors_name_line_and_key() {
     let t = small_with(frames, "frames = [\"ply\", \"ply\"]");
     let (_, _, msg) = error_of(&t);
     assert!(msg.contains("twice"), "{msg}");
-    let t = small_with(frames, "frames = [\"glb\"]");
+    let t = small_with("final = \"final.ovm\"", "final = \"final.step\"");
     let (_, _, msg) = error_of(&t);
     assert!(msg.contains("subdivision-solid model writes"), "{msg}");
     // Final model extension the kind does not write.

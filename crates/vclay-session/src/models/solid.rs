@@ -1260,6 +1260,11 @@ impl Model for SolidModel {
                 }
                 .map_err(|e| io(&e))
             }
+            ("glb", _) => vclay_io::gltf::write_glb(
+                path,
+                &[vclay_io::gltf::GlbMesh::new(self.kind().name(), self.boundary_mesh())],
+            )
+            .map_err(|e| io(&e)),
             ("vtu", _) => {
                 use vclay_lattice::formats::vtu::PointData;
                 let s = &self.solid;
@@ -1294,9 +1299,9 @@ impl Model for SolidModel {
 
     fn export_formats(&self) -> Vec<&'static str> {
         if self.is_subdivision() {
-            vec!["ovm", "obj", "ply", "stl", "vtu"]
+            vec!["ovm", "obj", "ply", "stl", "vtu", "glb"]
         } else {
-            vec!["json", "obj", "ply", "stl", "vtu"]
+            vec!["json", "obj", "ply", "stl", "vtu", "glb"]
         }
     }
 
