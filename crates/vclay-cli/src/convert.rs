@@ -81,7 +81,23 @@ pub fn read_any(path: &Path) -> Result<Loaded> {
 }
 
 /// Tessellates the surfaces and volume boundaries of a model into one mesh.
+///
+/// The mesh's size (`samples^2` vertices per surface, `6 samples^2` per volume) is checked
+/// against `--max-memory` first.
 pub fn tessellate_entities(ents: &[NamedEntity], samples: usize) -> Result<TriMesh> {
+    let s2 = (samples as f64).powi(2);
+    let vertices: f64 = ents
+        .iter()
+        .map(|e| match &e.entity {
+            Entity::Curve(_) => 0.0,
+            Entity::Surface(_) => s2,
+            Entity::Volume(_) => 6.0 * s2,
+        })
+        .sum();
+    crate::limits::check_memory(
+        &format!("--samples {samples} (a mesh of about {vertices:.3e} vertices)"),
+        vertices * crate::limits::BYTES_PER_MESH_VERTEX,
+    )?;
     let mut mesh = TriMesh::new();
     for (i, e) in ents.iter().enumerate() {
         let mut m = TriMesh::new();
@@ -152,10 +168,19 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
             }
         ),
     }
-    eprintln!(
-        "vclay convert: {} -> {}",
-        args.input.display(),
-        out.display()
-    );
+    if !crate::quiet() {
+        eprintln!(
+            "vclay convert: {} -> {}",
+            args.input.display(),
+            out.display()
+        );
+    }
+    if crate::verbose() {
+        let bytes = std::fs::metadata(out).map_or(0, |m| m.len());
+        eprintln!(
+            "vclay convert: {bytes} bytes written; memory limit {} (--max-memory)",
+            crate::limits::human(crate::limits::max_memory() as f64)
+        );
+    }
     Ok(())
 }

@@ -17,8 +17,8 @@ use vclay::ffd::{
     DEFAULT_MARGIN, EmbeddedMesh, FfdError, FfdLattice, LatticeSpec, Manipulation, PointConstraint,
     SolveOptions,
 };
-use vclay::io::mesh::{MeshFormat, read_mesh, write_mesh};
-use vclay::io::model::{Entity, write_model};
+use vclay::io::mesh::{MeshFormat, read_mesh, stage_mesh};
+use vclay::io::model::{Entity, stage_model};
 
 use crate::args;
 
@@ -71,6 +71,12 @@ pub fn run(a: &FfdArgs) -> Result<()> {
     // Everything that can be checked without reading the mesh first.
     MeshFormat::from_path(&a.out).context("--out")?;
     let dims = args::triple_usize(&a.lattice, "--lattice")?;
+    // Control points, rest points, weights and the solve's rows: about 128 bytes per control
+    // point (1000x1000x1000 asked for 24 GB at once).
+    crate::limits::check_memory(
+        &format!("--lattice {}", crate::limits::quote(&a.lattice)),
+        dims.iter().map(|&n| n as f64).product::<f64>() * 128.0,
+    )?;
     let spec = LatticeSpec {
         degree: [a.degree; 3],
         control_points: dims,
@@ -142,7 +148,12 @@ pub fn run(a: &FfdArgs) -> Result<()> {
         ),
         e => anyhow::anyhow!(e),
     })?;
-    lattice.apply(&manipulation);
+    lattice.try_apply(&manipulation).map_err(|e| {
+        anyhow::anyhow!(
+            "--move: the targets are too far away: the lattice's control points would leave the \
+             finite numbers ({e})"
+        )
+    })?;
     let solve_ms = ms(t);
 
     let t = Instant::now();
@@ -169,9 +180,19 @@ pub fn run(a: &FfdArgs) -> Result<()> {
         .count();
 
     let t = Instant::now();
-    write_mesh(&a.out, embedded.mesh())?;
-    if let Some(path) = &a.lattice_out {
-        write_model(path, &[Entity::Volume(lattice.volume().clone())])?;
+    // All or none: both files are written to temporaries first and renamed only when both
+    // succeeded (issue 17: a failed lattice write left the mesh written).
+    let mesh_file = stage_mesh(&a.out, embedded.mesh())?;
+    let lattice_file = match &a.lattice_out {
+        Some(path) => Some(stage_model(
+            path,
+            &[Entity::Volume(lattice.volume().clone())],
+        )?),
+        None => None,
+    };
+    mesh_file.commit()?;
+    if let Some(f) = lattice_file {
+        f.commit()?;
     }
     let write_ms = ms(t);
 

@@ -7,6 +7,7 @@
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 mod args;
 mod bench;
@@ -14,6 +15,7 @@ mod convert;
 mod demo;
 mod eval;
 mod ffd;
+mod limits;
 mod pde;
 mod render;
 mod run;
@@ -25,11 +27,35 @@ mod subdivide;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Largest estimated memory a command may use (4G, 512M, bytes); sizes from arguments and
+    /// files are checked against it before anything is allocated (docs/limits.md).
+    #[arg(long, global = true, value_name = "SIZE", default_value = "4G",
+          value_parser = limits::parse_bytes)]
+    max_memory: u64,
+    /// Print nothing but results and errors (no progress, no notes on stderr).
+    #[arg(long, short, global = true, conflicts_with = "verbose")]
+    quiet: bool,
+    /// Print more about what is done (timings, files) on stderr.
+    #[arg(long, short, global = true)]
+    verbose: bool,
+}
+
+static QUIET: AtomicBool = AtomicBool::new(false);
+static VERBOSE: AtomicBool = AtomicBool::new(false);
+
+/// Whether `--quiet` was given: no notes or progress on stderr.
+pub(crate) fn quiet() -> bool {
+    QUIET.load(Ordering::Relaxed)
+}
+
+/// Whether `--verbose` was given.
+pub(crate) fn verbose() -> bool {
+    VERBOSE.load(Ordering::Relaxed)
 }
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Render a model or mesh headless to a PNG (or a turntable GIF).
+    /// Render a model, mesh or scenario headless to a PNG (or a turntable or animation GIF).
     Render(render::RenderArgs),
     /// Convert between file formats, chosen by extension (model, geomdl, STEP, meshes, glTF).
     Convert(convert::ConvertArgs),
@@ -38,8 +64,11 @@ enum Command {
         /// Model file (JSON, see docs/formats.md).
         model: PathBuf,
         /// JSON file with an array of parameter tuples ([u], [u,v] or [u,v,w]).
-        #[arg(long)]
-        params: PathBuf,
+        #[arg(long, required_unless_present = "at", conflicts_with = "at")]
+        params: Option<PathBuf>,
+        /// Parameters inline instead of --params: U, U,V or U,V,W (repeat for several).
+        #[arg(long, value_name = "U[,V[,W]]", allow_hyphen_values = true)]
+        at: Vec<String>,
         /// Also print partial derivatives up to this total order.
         #[arg(long)]
         derivatives: Option<usize>,
@@ -89,21 +118,29 @@ enum Command {
         /// Output folder.
         #[arg(long)]
         out: Option<PathBuf>,
-        /// No progress bar.
-        #[arg(long)]
-        quiet: bool,
     },
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    limits::set_max_memory(cli.max_memory);
+    QUIET.store(cli.quiet, Ordering::Relaxed);
+    VERBOSE.store(cli.verbose, Ordering::Relaxed);
+    let quiet = cli.quiet;
     let result = match cli.command {
         Command::Eval {
             model,
             params,
+            at,
             derivatives,
             entity,
-        } => eval::run(&model, &params, derivatives, entity),
+        } => {
+            let params = match params {
+                Some(p) => eval::Params::File(p),
+                None => eval::Params::Inline(at),
+            };
+            eval::run(&model, &params, derivatives, entity)
+        }
         Command::Demo { out } => demo::run(&out),
         Command::Bench {
             seconds,
@@ -121,7 +158,6 @@ fn main() -> ExitCode {
             until,
             save,
             out,
-            quiet,
         } => run::run(&run::RunArgs {
             file,
             steps,
@@ -134,8 +170,26 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", message(&e));
             ExitCode::from(2)
         }
     }
+}
+
+/// The error and its causes joined by `: `, each said once: many typed errors print their
+/// source in their own message too, so a cause whose text is already there is left out (issue
+/// 17: messages were repeated two or three times).
+fn message(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if out.contains(&text) {
+            continue;
+        }
+        if !out.is_empty() {
+            out.push_str(": ");
+        }
+        out.push_str(&text);
+    }
+    out
 }

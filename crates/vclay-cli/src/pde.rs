@@ -163,6 +163,10 @@ fn write(path: &Path, m: &TriMesh) -> Result<()> {
 pub fn run(args: &PdeArgs) -> Result<()> {
     let (nu, nv) = grid(&args.grid)?;
     let model = PdeModel::read(&args.spec)?;
+    crate::limits::check_memory(
+        &format!("--grid {nu}x{nv} for {} patch(es)", model.patches.len()),
+        (nu * nv * model.patches.len()) as f64 * crate::limits::BYTES_PER_MESH_VERTEX,
+    )?;
     let mut anim = Animator::new(&model);
     if let Some(t) = args.t {
         if !t.is_finite() {
@@ -192,6 +196,7 @@ pub fn run(args: &PdeArgs) -> Result<()> {
     }
     let text = args.frames.as_deref().context("give --t or --frames")?;
     let (t0, t1, count) = frames(text)?;
+    crate::limits::check_frames("--frames", count)?;
     let dir = args.out_dir.as_ref().context("--frames needs --out-dir")?;
     let ext = args.format.to_ascii_lowercase();
     if !matches!(ext.as_str(), "obj" | "ply" | "stl") {

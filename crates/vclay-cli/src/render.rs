@@ -20,9 +20,11 @@ use vclay::spline::{ParametricCurve, tessellate_surface, tessellate_volume_bound
 /// Arguments of `vclay render`.
 #[derive(Debug, Args)]
 pub struct RenderArgs {
-    /// Model file (vclay or geomdl JSON) or mesh (.obj, .ply, .stl, .glb).
+    /// Model file (vclay or geomdl JSON), mesh (.obj, .ply, .stl, .glb) or scenario (.toml,
+    /// as `vclay run` reads: it is run in a scratch folder and its frames animated).
     pub input: PathBuf,
-    /// Output picture: .png (one view) or .gif (turntable).
+    /// Output picture: .png (one view; for a scenario, numbered PNGs beside it) or .gif
+    /// (a turntable; for a scenario, its animation).
     #[arg(long)]
     pub out: PathBuf,
     /// View: iso, front, top or side.
@@ -34,7 +36,7 @@ pub struct RenderArgs {
     /// Draw control nets and lattices (or, for a mesh, its triangle edges).
     #[arg(long)]
     pub wireframe: bool,
-    /// Number of turntable frames for a .gif.
+    /// Number of frames: of the turntable for a .gif, or of a scenario's animation.
     #[arg(long, default_value_t = 36)]
     pub frames: usize,
     /// Orthographic instead of perspective projection.
@@ -154,6 +156,50 @@ pub fn mesh_to_png(mesh_path: &Path, png_path: &Path, width: u32, height: u32) -
     Ok(())
 }
 
+/// At most `n` of `items`, evenly spaced, the first and the last included (a scenario writes
+/// about `--frames` frames; `--frames N` gives N pictures when it wrote at least N).
+fn pick_evenly<T: Clone>(items: &[T], n: usize) -> Vec<T> {
+    if items.len() <= n || n == 0 {
+        return items.to_vec();
+    }
+    if n == 1 {
+        return vec![items[items.len() - 1].clone()];
+    }
+    (0..n)
+        .map(|k| items[k * (items.len() - 1) / (n - 1)].clone())
+        .collect()
+}
+
+/// Checks the picture buffers against `--max-memory` before any rendering: per frame drawn at
+/// once (one per thread) a supersampled colour and depth buffer of 16 bytes per sample, and
+/// 3 bytes per pixel for every frame kept until the file is written.
+fn check_render_memory(args: &RenderArgs, opts: &RenderOptions) -> Result<()> {
+    let pixels = f64::from(opts.width) * f64::from(opts.height);
+    let ss = f64::from(opts.supersample.clamp(1, 8));
+    let single = !is_scenario(&args.input)
+        && args
+            .out
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    let frames = if single { 1 } else { args.frames };
+    let at_once = frames.min(rayon_threads()) as f64;
+    let bytes = pixels * (ss * ss * 16.0 * at_once + 3.0 * frames as f64);
+    crate::limits::check_memory(
+        &format!("--size {} with --frames {frames}", args.size),
+        bytes,
+    )
+}
+
+fn is_scenario(input: &Path) -> bool {
+    input
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+}
+
+fn rayon_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
 /// Runs `vclay render`.
 pub fn run(args: &RenderArgs) -> Result<()> {
     let (width, height) = parse_size(&args.size)?;
@@ -162,6 +208,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.frames == 0 {
         bail!("--frames must be at least 1");
     }
+    crate::limits::check_frames("--frames", args.frames)?;
     let ext = args
         .out
         .extension()
@@ -172,19 +219,18 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         orthographic: args.ortho,
         ..RenderOptions::sized(width, height)
     };
-    if args
-        .input
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
-    {
+    check_render_memory(args, &opts)?;
+    let file = || format!("rendering {}", args.input.display());
+    if is_scenario(&args.input) {
         // A scenario: run it, then animate its frames with one camera.
         let dir = tempfile::tempdir().context("cannot create a scratch folder")?;
         let frames = crate::run::run_for_frames(&args.input, dir.path(), args.frames)?;
+        let frames = pick_evenly(&frames, args.frames);
         let scenes = frames
             .iter()
             .map(|f| scene_from_file(f, args.wireframe))
             .collect::<Result<Vec<_>>>()?;
-        let written = write_animation(&args.out, &scenes, &opts, 80)?;
+        let written = write_animation(&args.out, &scenes, &opts, 80).with_context(file)?;
         eprintln!(
             "vclay render: {} frames of {} -> {} file(s), first {}",
             scenes.len(),
@@ -198,9 +244,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     let scene = scene_from_file(&args.input, args.wireframe)?;
     match ext.as_deref() {
-        Some("png") => render(&scene, &opts)?.write_png(&args.out)?,
+        Some("png") => render(&scene, &opts)
+            .with_context(file)?
+            .write_png(&args.out)?,
         Some("gif") => {
-            let frames = turntable(&scene, args.frames, &opts)?;
+            let frames = turntable(&scene, args.frames, &opts).with_context(file)?;
             write_gif(&args.out, &frames, 80)?;
         }
         _ => bail!(
@@ -208,6 +256,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             args.out.display()
         ),
     }
-    eprintln!("vclay render: wrote {}", args.out.display());
+    if !crate::quiet() {
+        eprintln!("vclay render: wrote {}", args.out.display());
+    }
     Ok(())
 }

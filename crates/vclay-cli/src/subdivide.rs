@@ -4,9 +4,9 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use vclay::lattice::BoundaryRule;
-use vclay::lattice::command::{LatticeSource, SubdivideOptions, subdivide_command};
+use vclay::lattice::command::{CommandError, LatticeSource, SubdivideOptions, subdivide_command};
 
 /// Subdivide a lattice N times (MacCracken-Joy); print counts (--stats) and/or write --out.
 #[derive(Debug, clap::Args)]
@@ -70,11 +70,31 @@ pub fn run(args: &SubdivideArgs) -> Result<()> {
         levels: args.levels,
         boundary: args.boundary.into(),
         out: args.out.clone(),
+        max_memory: crate::limits::max_memory(),
     };
     // The errors name the file, line and element (or the primitive); add the command.
-    let outcome = subdivide_command(&options).context("vclay subdivide failed")?;
+    let outcome = subdivide_command(&options).map_err(|e| match e {
+        CommandError::TooMuchMemory { .. } => {
+            anyhow::anyhow!("--levels {}: {e} (or raise --max-memory)", args.levels)
+        }
+        e => anyhow::Error::new(e).context("vclay subdivide failed"),
+    })?;
     if args.stats {
         println!("{}", outcome.stats_json());
+    }
+    if !crate::quiet() {
+        let c = &outcome.counts;
+        eprintln!(
+            "vclay subdivide: {} levels: {} points, {} cells{}",
+            args.levels,
+            c.points,
+            c.cells,
+            match &outcome.written {
+                Some((path, _)) => format!(" -> {}", path.display()),
+                None if args.stats => String::new(),
+                None => " (nothing written: give --out FILE or --stats)".to_string(),
+            }
+        );
     }
     if outcome.inverted_cells > 0 {
         eprintln!(

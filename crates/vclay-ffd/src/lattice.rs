@@ -278,9 +278,22 @@ impl FfdLattice {
     /// `P_ijk <- P_ijk + delta_ijk` (`ffd-direct-manipulation.txt` eq 3).
     ///
     /// # Panics
-    /// If the manipulation was made for a lattice with other dimensions (programmer error).
+    /// If the manipulation was made for a lattice with other dimensions (programmer error), or if
+    /// a control point would overflow to infinity (a displacement near `f64::MAX`); use
+    /// [`FfdLattice::try_apply`] for displacements that come from user input.
     #[track_caller]
     pub fn apply(&mut self, manipulation: &Manipulation) {
+        self.try_apply(manipulation)
+            .expect("finite displacements keep control points finite");
+    }
+
+    /// [`FfdLattice::apply`] that reports a control point that would leave the finite numbers
+    /// ([`FfdError::Spline`] with `NonFiniteControlPoint`) and leaves the lattice unchanged then.
+    ///
+    /// # Panics
+    /// If the manipulation was made for a lattice with other dimensions (programmer error).
+    #[track_caller]
+    pub fn try_apply(&mut self, manipulation: &Manipulation) -> Result<(), FfdError> {
         assert_eq!(
             manipulation.dims(),
             self.dims(),
@@ -290,10 +303,9 @@ impl FfdLattice {
         for (i, d) in manipulation.iter() {
             pts[i] += d;
         }
-        self.volume
-            .set_control_points(pts)
-            .expect("finite displacements keep control points finite");
+        self.volume.set_control_points(pts)?;
         self.sync_homogeneous();
+        Ok(())
     }
 
     fn sync_homogeneous(&mut self) {

@@ -133,6 +133,15 @@ pub enum IoError {
         #[source]
         source: MeshError,
     },
+    /// A mesh value that the target format cannot store: a non-finite normal, or a coordinate
+    /// beyond the `f32` range of binary STL (it would be written as `inf`).
+    #[error("cannot write {}: {message}; nothing written", path.display())]
+    Unwritable {
+        /// The target file.
+        path: PathBuf,
+        /// What cannot be stored.
+        message: String,
+    },
     /// The file extension does not name a supported mesh format.
     #[error("{}: unknown mesh format {}; expected .obj, .stl or .ply", path.display(), match ext { Some(e) => format!("\".{e}\""), None => "(no extension)".to_string() })]
     UnknownExtension {

@@ -185,6 +185,23 @@ pub fn to_glb(meshes: &[GlbMesh]) -> Result<Vec<u8>, IoError> {
         m.mesh
             .validate()
             .map_err(|e| err(&place, format!("invalid mesh: {e}")))?;
+        // glTF stores f32: a larger coordinate would be written as `inf` (issue 17).
+        let max = f64::from(f32::MAX);
+        if let Some(v) = m
+            .mesh
+            .positions
+            .iter()
+            .chain(&m.mesh.normals)
+            .position(|p| p.iter().any(|c| c.is_nan() || c.abs() > max))
+        {
+            return Err(err(
+                &place,
+                format!(
+                    "vertex or normal {v} has a coordinate beyond glTF's 32-bit floats \
+                     (about 3.4e38)"
+                ),
+            ));
+        }
         if m.mesh.triangles.is_empty() {
             return Err(err(&place, "mesh has no triangles"));
         }
@@ -401,6 +418,34 @@ pub fn decode_glb(b: &[u8]) -> Result<Vec<TriMesh>, IoError> {
         let stride = v["byteStride"]
             .as_u64()
             .map_or(ncomp * size, |s| s as usize);
+        // Issue 17: `count` comes from the file; check it against the buffer before allocating
+        // (a count of 4e9 over a few bytes was taken at face value).
+        if stride < ncomp * size {
+            return Err(err(
+                &vp,
+                format!(
+                    "byteStride {stride} is smaller than one element ({} bytes)",
+                    ncomp * size
+                ),
+            ));
+        }
+        let end = count
+            .checked_sub(1)
+            .map(|last| {
+                last.checked_mul(stride)
+                    .and_then(|x| x.checked_add(start))
+                    .and_then(|x| x.checked_add(ncomp * size))
+            })
+            .unwrap_or(Some(start));
+        if end.is_none_or(|end| end > bin.len()) {
+            return Err(err(
+                &ap,
+                format!(
+                    "count {count} does not fit in the binary buffer of {} bytes",
+                    bin.len()
+                ),
+            ));
+        }
         let mut out = Vec::with_capacity(count * ncomp);
         for e in 0..count {
             for c in 0..ncomp {

@@ -38,11 +38,12 @@ mod util;
 
 pub use error::{IoError, MeshLocation};
 pub use mesh::{
-    Encoding, MeshFormat, decode_mesh, encode_mesh, read_mesh, write_mesh, write_mesh_with,
+    Encoding, MeshFormat, decode_mesh, encode_mesh, read_mesh, stage_mesh, write_mesh,
+    write_mesh_with,
 };
 pub use model::{
     ENTITY_TYPES, Entity, NamedEntity, parse_model, parse_named_model, read_model,
-    read_named_model, to_json, write_model, write_named_model,
+    read_named_model, stage_model, to_json, write_model, write_named_model,
 };
 pub use params::{parse_params, read_params};
-pub use util::write_atomic;
+pub use util::{STALE_TEMP_AGE, Staged, TEMP_PREFIX, stage, write_atomic};

@@ -189,6 +189,13 @@ pub fn write_named_model(path: impl AsRef<Path>, entities: &[NamedEntity]) -> Re
     write_json(path.as_ref(), &named_to_json(entities))
 }
 
+/// [`write_model`] up to the rename: the model written to a temporary file beside `path`,
+/// renamed over it by [`crate::Staged::commit`].
+pub fn stage_model(path: impl AsRef<Path>, entities: &[Entity]) -> Result<crate::Staged, IoError> {
+    let text = json::pretty(&to_json(entities));
+    crate::util::stage(path.as_ref(), |w| w.write_all(text.as_bytes()))
+}
+
 /// Formats a model as the text [`write_model`] writes.
 pub fn to_json_string(entities: &[Entity]) -> String {
     json::pretty(&to_json(entities))

@@ -182,11 +182,35 @@ fn failed_write_keeps_existing_file() {
     assert_eq!(std::fs::read(&p).unwrap(), before);
     // No temporary file is left behind.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
-    // Missing directory: the error names the target.
-    let msg = write_mesh(dir.path().join("nope/x.ply"), &cube())
+    // Missing folder: created (issue 17; it was an error naming a temporary file).
+    write_mesh(dir.path().join("nope/x.ply"), &cube()).unwrap();
+    assert!(dir.path().join("nope/x.ply").is_file());
+    // A folder that cannot be created (a file is in the way): the error names the target.
+    let msg = write_mesh(dir.path().join("keep.obj/x.ply"), &cube())
         .unwrap_err()
         .to_string();
     assert!(msg.contains("x.ply"), "{msg}");
+}
+
+/// Issue 17: what a format would write as `inf` is refused, nothing written.
+#[test]
+fn values_beyond_the_format_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut big = cube();
+    big.positions[3].y = 1e300;
+    let p = dir.path().join("big.stl");
+    let msg = write_mesh(&p, &big).unwrap_err().to_string();
+    assert!(msg.contains("big.stl") && msg.contains("vertex 3"), "{msg}");
+    assert!(!p.exists());
+    // OBJ and PLY store f64: written.
+    write_mesh(dir.path().join("big.obj"), &big).unwrap();
+    let mut nan_normal = cube();
+    nan_normal.compute_normals();
+    nan_normal.normals[1].x = f64::NAN;
+    let msg = write_mesh(dir.path().join("n.obj"), &nan_normal)
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("normal 1"), "{msg}");
 }
 
 #[cfg(unix)]

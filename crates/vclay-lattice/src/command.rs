@@ -32,6 +32,15 @@ l[:ARMxWIDTH] (L solid, default 2x1), t[:ARMxWIDTH] (T solid, default 1x1)";
 /// Largest predicted cell count (`cells * 8^levels`) [`subdivide_command`] accepts: 50 million.
 pub const MAX_PREDICTED_CELLS: u128 = 50_000_000;
 
+/// Estimated peak memory of [`subdivide_command`] per cell of the finest level, in bytes: the
+/// whole hierarchy (every level's lattice and level operator) plus the written file's buffers.
+/// Measured peak resident sizes of `vclay subdivide --primitive box --stats`: 724 B per cell at
+/// level 5 (884,736 cells, 641 MB) and 661 B at level 6 (7,077,888 cells, 4.7 GB); rounded up.
+pub const BYTES_PER_CELL: u64 = 760;
+
+/// Default of [`SubdivideOptions::max_memory`]: 4 GiB, what a laptop can spare.
+pub const DEFAULT_MAX_MEMORY: u64 = 4 << 30;
+
 /// Errors of [`subdivide_command`] and [`primitive`].
 #[derive(Debug, Error)]
 pub enum CommandError {
@@ -45,6 +54,15 @@ pub enum CommandError {
         spec: String,
         /// What is wrong.
         message: String,
+    },
+    /// A primitive's arguments are in range but give a degenerate lattice (a hole so small
+    /// that its points coincide).
+    #[error("primitive '{spec}': the lattice is degenerate: {source}; use a less extreme size")]
+    DegeneratePrimitive {
+        /// The specification as given.
+        spec: String,
+        /// What the lattice's validation found.
+        source: LatticeError,
     },
     /// The output file's extension names no supported format.
     #[error("{}: unknown output format (use .ovm, .vtu, .obj, .ply or .stl)", path.display())]
@@ -67,6 +85,23 @@ pub enum CommandError {
         levels: usize,
         /// Predicted cell count.
         predicted: u128,
+    },
+    /// Subdivision would need more memory than [`SubdivideOptions::max_memory`].
+    #[error(
+        "{levels} levels would give about {predicted} cells and need about {:.1} GB of memory, \
+         more than the limit of {:.1} GB; use fewer levels",
+        *bytes as f64 / 1e9,
+        *max as f64 / 1e9
+    )]
+    TooMuchMemory {
+        /// Levels asked for.
+        levels: usize,
+        /// Predicted cell count.
+        predicted: u128,
+        /// Estimated peak memory in bytes ([`BYTES_PER_CELL`] per cell).
+        bytes: u128,
+        /// The limit, [`SubdivideOptions::max_memory`].
+        max: u64,
     },
     /// Subdivision failed.
     #[error("subdividing {source_name}: {source}")]
@@ -172,6 +207,9 @@ pub struct SubdivideOptions {
     pub boundary: BoundaryRule,
     /// Output file; its extension picks the [`OutputFormat`].
     pub out: Option<PathBuf>,
+    /// Largest estimated peak memory in bytes ([`BYTES_PER_CELL`] per predicted cell) that the
+    /// command accepts before it subdivides; default [`DEFAULT_MAX_MEMORY`].
+    pub max_memory: u64,
 }
 
 /// What [`subdivide_command`] did.
@@ -216,6 +254,15 @@ pub fn subdivide_command(options: &SubdivideOptions) -> Result<SubdivideOutcome,
         return Err(CommandError::TooManyLevels {
             levels: options.levels,
             predicted,
+        });
+    }
+    let bytes = predicted.saturating_mul(BYTES_PER_CELL as u128);
+    if bytes > options.max_memory as u128 {
+        return Err(CommandError::TooMuchMemory {
+            levels: options.levels,
+            predicted,
+            bytes,
+            max: options.max_memory,
         });
     }
     let control_counts = control.counts();
@@ -336,7 +383,12 @@ pub fn primitive(spec: &str) -> Result<Lattice, CommandError> {
                     }
                 },
             };
-            Ok(primitives::tetrahedron_with_holes(2.0, hole))
+            primitives::try_tetrahedron_with_holes(2.0, hole).map_err(|source| {
+                CommandError::DegeneratePrimitive {
+                    spec: spec.to_string(),
+                    source,
+                }
+            })
         }
         "l" | "t" => {
             let v = nums(2, 1)?;

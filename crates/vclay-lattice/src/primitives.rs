@@ -376,9 +376,25 @@ pub fn t_solid(arm: usize, width: usize, cell: f64) -> Lattice {
 /// single-cell model.
 ///
 /// # Panics
-/// If `edge <= 0` or `hole` is not in `(0, 1)`.
+/// If `edge <= 0` or `hole` is not in `(0, 1)`, or if the lattice is degenerate (a hole so
+/// small or so large that points coincide, such as `hole = 1e-300`); use
+/// [`try_tetrahedron_with_holes`] for sizes that come from user input.
 #[track_caller]
 pub fn tetrahedron_with_holes(edge: f64, hole: f64) -> Lattice {
+    assert!(
+        edge > 0.0 && hole > 0.0 && hole < 1.0,
+        "tetrahedron_with_holes parameters"
+    );
+    try_tetrahedron_with_holes(edge, hole).expect("the tetrahedron with holes is valid")
+}
+
+/// [`tetrahedron_with_holes`] that returns the lattice's validation error (a degenerate edge,
+/// coinciding points) instead of panicking, for parameters that come from user input.
+///
+/// # Panics
+/// If `edge <= 0` or `hole` is not in `(0, 1)` (check these first).
+#[track_caller]
+pub fn try_tetrahedron_with_holes(edge: f64, hole: f64) -> Result<Lattice, LatticeError> {
     assert!(
         edge > 0.0 && hole > 0.0 && hole < 1.0,
         "tetrahedron_with_holes parameters"
@@ -450,5 +466,5 @@ pub fn tetrahedron_with_holes(edge: f64, hole: f64) -> Lattice {
         }
         cell.push(tri);
     }
-    Lattice::from_cells(points, &[cell]).expect("the tetrahedron with holes is valid")
+    Lattice::from_cells(points, &[cell])
 }

@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 
 use vclay_core::Vec3;
 use vclay_lattice::command::{
-    CommandError, LatticeSource, OutputFormat, SubdivideOptions, primitive, subdivide_command,
+    CommandError, DEFAULT_MAX_MEMORY, LatticeSource, OutputFormat, SubdivideOptions, primitive,
+    subdivide_command,
 };
 use vclay_lattice::formats::{FormatError, ovm, surface, vtu};
 use vclay_lattice::{
@@ -512,6 +513,7 @@ fn opts(source: LatticeSource, levels: usize, out: Option<&Path>) -> SubdivideOp
         levels,
         boundary: BoundaryRule::Smooth,
         out: out.map(Path::to_path_buf),
+        max_memory: DEFAULT_MAX_MEMORY,
     }
 }
 
@@ -579,7 +581,41 @@ fn command_subdivides_primitives_and_files_and_writes_every_format() {
     let err =
         subdivide_command(&opts(LatticeSource::Primitive("box".into()), 12, None)).unwrap_err();
     assert!(matches!(err, CommandError::TooManyLevels { .. }), "{err}");
+    // Issue 17: the default box at level 6 (7 million cells, 4.7 GB measured) is over the default
+    // memory limit and refused before anything is subdivided; a small limit refuses level 2.
+    let err =
+        subdivide_command(&opts(LatticeSource::Primitive("box".into()), 6, None)).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            CommandError::TooMuchMemory {
+                levels: 6,
+                predicted: 7_077_888,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    assert!(err.to_string().contains("GB of memory"), "{err}");
+    let mut small = opts(LatticeSource::Primitive("box".into()), 2, None);
+    small.max_memory = 1 << 20;
+    let err = subdivide_command(&small).unwrap_err();
+    assert!(matches!(err, CommandError::TooMuchMemory { .. }), "{err}");
+    small.max_memory = 1 << 30;
+    assert!(subdivide_command(&small).is_ok());
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 17: a hole so small that its points coincide was an `expect`.
+#[test]
+fn degenerate_primitive_is_an_error() {
+    let err = primitive("tetrahedron-with-holes:1e-300").unwrap_err();
+    assert!(
+        matches!(err, CommandError::DegeneratePrimitive { .. }),
+        "{err}"
+    );
+    assert!(err.to_string().contains("degenerate"), "{err}");
+    assert!(primitive("tetrahedron-with-holes:0.01").is_ok());
 }
 
 #[test]

@@ -27,6 +27,14 @@
 //!
 //! Limitations: no implicit multiplication (`2v` is an error: write `2*v`); no user functions.
 //! Errors carry the 1-based column (in characters) of the offending place.
+//!
+//! Size limits (issue 17): the parser, the evaluator and the differentiator recurse on the
+//! tree, so an expression has at most [`MAX_TOKENS`] tokens and a tree at most [`MAX_DEPTH`]
+//! deep (a chain `v+v+...+v` of 30,000 terms or 30,000 unary minuses overflowed the stack);
+//! [`Expr::try_derivative`] bounds the size and depth of a derivative before building it
+//! ([`MAX_DERIVED_NODES`], [`MAX_DERIVED_DEPTH`]: `v^v^...^v` doubles with every level). A
+//! constant part that folds to a non-finite number (`1/0`, `0/0`, `0*(1/0)`, `exp(1000)`,
+//! `1e400`) is an error at its column.
 
 use std::fmt;
 
@@ -169,10 +177,47 @@ pub enum ExprErrorKind {
     VariableNotAllowed(&'static str),
     /// Parentheses nested deeper than [`MAX_NESTING`].
     TooDeep,
+    /// More than [`MAX_TOKENS`] tokens.
+    TooLong,
+    /// An expression tree deeper than [`MAX_DEPTH`] (a long chain of operators).
+    TooDeepTree {
+        /// Its depth.
+        depth: usize,
+    },
+    /// A derivative would exceed [`MAX_DERIVED_NODES`] nodes or [`MAX_DERIVED_DEPTH`] levels.
+    DerivativeTooLarge {
+        /// The variable.
+        var: &'static str,
+        /// Upper bound of its node count.
+        nodes: f64,
+        /// Upper bound of its depth.
+        depth: f64,
+    },
+    /// A constant part folds to a non-finite number (`1/0`, `0/0`, `exp(1000)`).
+    NotFinite(f64),
 }
 
 /// Deepest parenthesis nesting accepted (the parser is recursive).
 pub const MAX_NESTING: usize = 64;
+
+/// Most tokens (numbers, names, operators, parentheses) in one expression: 10,000, far more
+/// than a boundary function of the papers (tens) and few enough that every recursion on the
+/// tree stays shallow.
+pub const MAX_TOKENS: usize = 10_000;
+
+/// Deepest expression tree accepted from text: 256 levels (a sum of 256 terms is 256 deep, as
+/// is `-` repeated 256 times or `v^v^...^v` with 256 powers).
+pub const MAX_DEPTH: usize = 256;
+
+/// Most nodes of a derivative built by [`Expr::try_derivative`] (an upper bound is checked
+/// before it is built): 100,000 nodes, about 4 MB, and 100,000 operations per evaluation.
+pub const MAX_DERIVED_NODES: f64 = 100_000.0;
+
+/// Deepest derivative tree [`Expr::try_derivative`] builds: 512 levels. Differentiating,
+/// evaluating, cloning, printing and dropping such a tree fits a 2 MB thread stack (the
+/// default of spawned threads and rayon's workers) even unoptimized, where differentiation
+/// takes about 2 kB of stack per level (tested).
+pub const MAX_DERIVED_DEPTH: f64 = 512.0;
 
 /// A parse error with the 1-based character column where it was found.
 #[derive(Clone, Debug, PartialEq)]
@@ -217,16 +262,71 @@ impl fmt::Display for ExprError {
             ExprErrorKind::TooDeep => {
                 write!(f, "parentheses nested deeper than {MAX_NESTING}")
             }
+            ExprErrorKind::TooLong => write!(
+                f,
+                "the expression has more than {MAX_TOKENS} tokens (numbers, names, operators)"
+            ),
+            ExprErrorKind::TooDeepTree { depth } => write!(
+                f,
+                "the expression nests {depth} operations deep (a chain of that many terms or \
+                 operators), more than the limit of {MAX_DEPTH}"
+            ),
+            ExprErrorKind::DerivativeTooLarge { var, nodes, depth } => write!(
+                f,
+                "its derivative in {var} would have up to {nodes:.2e} nodes and {depth:.0} levels, \
+                 more than the limits of {MAX_DERIVED_NODES:.0} nodes and {MAX_DERIVED_DEPTH:.0} \
+                 levels; simplify the expression"
+            ),
+            ExprErrorKind::NotFinite(x) => write!(
+                f,
+                "this constant part evaluates to {x} (division by zero or overflow)"
+            ),
         }
     }
 }
 
 impl std::error::Error for ExprError {}
 
+/// At most `max` characters of `text`, with `...` when cut (for error messages).
+pub fn shorten(text: &str, max: usize) -> String {
+    if text.chars().count() <= max {
+        text.to_string()
+    } else {
+        let head: String = text.chars().take(max).collect();
+        format!("{head}...")
+    }
+}
+
 impl ExprError {
+    /// The message without the column (for errors about a derived expression).
+    pub fn kind_text(&self) -> String {
+        let full = self.to_string();
+        match full.split_once(": ") {
+            Some((_, rest)) => rest.to_string(),
+            None => full,
+        }
+    }
+
     /// The expression text with a caret under the error column (two lines, no trailing newline).
+    ///
+    /// A text longer than 80 characters is shown as a window of 80 characters around the
+    /// column (`...` marks cuts), so that a 30,000-term expression gives a short message.
     pub fn pointer(&self, text: &str) -> String {
-        format!("  {text}\n  {}^", " ".repeat(self.column.saturating_sub(1)))
+        const WIDTH: usize = 80;
+        let chars: Vec<char> = text.chars().collect();
+        let col = self.column.saturating_sub(1);
+        if chars.len() <= WIDTH {
+            return format!("  {text}\n  {}^", " ".repeat(col));
+        }
+        let start = col.saturating_sub(WIDTH / 2).min(chars.len() - WIDTH);
+        let end = (start + WIDTH).min(chars.len());
+        let lead = if start > 0 { "..." } else { "" };
+        let tail = if end < chars.len() { "..." } else { "" };
+        let window: String = chars[start..end].iter().collect();
+        format!(
+            "  {lead}{window}{tail}\n  {}^",
+            " ".repeat(lead.len() + col.saturating_sub(start))
+        )
     }
 }
 
@@ -270,6 +370,12 @@ fn lex(text: &str) -> Result<Vec<(Tok, usize)>, ExprError> {
     while i < chars.len() {
         let c = chars[i];
         let col = i + 1;
+        if out.len() >= MAX_TOKENS {
+            return Err(ExprError {
+                column: col,
+                kind: ExprErrorKind::TooLong,
+            });
+        }
         if c.is_whitespace() {
             i += 1;
         } else if c.is_ascii_digit() || c == '.' {
@@ -291,10 +397,14 @@ fn lex(text: &str) -> Result<Vec<(Tok, usize)>, ExprError> {
                 }
             }
             let s: String = chars[start..i].iter().collect();
-            let x: f64 = s.parse().map_err(|_| ExprError {
-                column: col,
-                kind: ExprErrorKind::BadNumber(s.clone()),
-            })?;
+            let x: f64 = s
+                .parse()
+                .ok()
+                .filter(|x: &f64| x.is_finite())
+                .ok_or_else(|| ExprError {
+                    column: col,
+                    kind: ExprErrorKind::BadNumber(s.chars().take(40).collect()),
+                })?;
             out.push((Tok::Num(x), col));
         } else if c.is_alphabetic() || c == '_' {
             let start = i;
@@ -326,6 +436,19 @@ struct Parser<'a> {
     pos: usize,
     end_col: usize,
     params: &'a dyn Fn(&str) -> Option<f64>,
+    /// Current recursion depth of `unary` (unary minus and powers recurse).
+    nest: usize,
+}
+
+/// `e`, or an error at `column` when it is a number that is not finite.
+fn finite(e: Expr, column: usize) -> Result<Expr, ExprError> {
+    match e {
+        Expr::Num(x) if !x.is_finite() => Err(ExprError {
+            column,
+            kind: ExprErrorKind::NotFinite(x),
+        }),
+        e => Ok(e),
+    }
 }
 
 impl Parser<'_> {
@@ -346,9 +469,10 @@ impl Parser<'_> {
         let mut a = self.term()?;
         while let Some(Tok::Op(op @ ('+' | '-'))) = self.peek() {
             let op = *op;
+            let col = self.col();
             self.pos += 1;
             let b = self.term()?;
-            a = if op == '+' { add(a, b) } else { sub(a, b) };
+            a = finite(if op == '+' { add(a, b) } else { sub(a, b) }, col)?;
         }
         Ok(a)
     }
@@ -357,33 +481,41 @@ impl Parser<'_> {
         let mut a = self.unary()?;
         while let Some(Tok::Op(op @ ('*' | '/'))) = self.peek() {
             let op = *op;
+            let col = self.col();
             self.pos += 1;
             let b = self.unary()?;
-            a = if op == '*' { mul(a, b) } else { div(a, b) };
+            a = finite(if op == '*' { mul(a, b) } else { div(a, b) }, col)?;
         }
         Ok(a)
     }
 
     fn unary(&mut self) -> Result<Expr, ExprError> {
-        match self.peek() {
+        self.nest += 1;
+        if self.nest > MAX_DEPTH {
+            return self.err(ExprErrorKind::TooDeepTree { depth: self.nest });
+        }
+        let e = match self.peek() {
             Some(Tok::Op('-')) => {
                 self.pos += 1;
-                Ok(neg(self.unary()?))
+                self.unary().map(neg)
             }
             Some(Tok::Op('+')) => {
                 self.pos += 1;
                 self.unary()
             }
             _ => self.power(),
-        }
+        };
+        self.nest -= 1;
+        e
     }
 
     fn power(&mut self) -> Result<Expr, ExprError> {
         let a = self.atom()?;
         if let Some(Tok::Op('^')) = self.peek() {
+            let col = self.col();
             self.pos += 1;
             let b = self.unary()?;
-            return Ok(pow(a, b));
+            return finite(pow(a, b), col);
         }
         Ok(a)
     }
@@ -421,7 +553,7 @@ impl Parser<'_> {
                         Some(Tok::Close) => self.pos += 1,
                         _ => return self.err(ExprErrorKind::ExpectedOperand),
                     }
-                    return Ok(call(f, arg));
+                    return finite(call(f, arg), col);
                 }
                 if Func::from_name(&name).is_some() {
                     return Err(ExprError {
@@ -473,10 +605,115 @@ impl Expr {
             pos: 0,
             end_col: text.chars().count() + 1,
             params,
+            nest: 0,
         };
         let e = p.expr()?;
         if p.pos < p.toks.len() {
             return p.err(ExprErrorKind::TrailingInput);
+        }
+        let depth = e.depth();
+        if depth > MAX_DEPTH {
+            return Err(ExprError {
+                column: 1,
+                kind: ExprErrorKind::TooDeepTree { depth },
+            });
+        }
+        Ok(e)
+    }
+
+    /// Depth of the tree (a number or variable has depth 1), computed without recursion.
+    pub fn depth(&self) -> usize {
+        let mut stack = vec![(self, 1usize)];
+        let mut max = 0;
+        while let Some((e, d)) = stack.pop() {
+            max = max.max(d);
+            match e {
+                Expr::Num(_) | Expr::Var(_) => {}
+                Expr::Neg(a) | Expr::Call(_, a) => stack.push((a, d + 1)),
+                Expr::Add(a, b)
+                | Expr::Sub(a, b)
+                | Expr::Mul(a, b)
+                | Expr::Div(a, b)
+                | Expr::Pow(a, b) => {
+                    stack.push((a, d + 1));
+                    stack.push((b, d + 1));
+                }
+            }
+        }
+        max
+    }
+
+    /// Upper bounds of `(size, depth)` of [`Expr::derivative`]`(x)`, and this tree's
+    /// `(size, depth)`, in `f64` (they can exceed every integer type), without building it.
+    /// The bounds follow the differentiation rules before simplification, which only shrinks.
+    fn derivative_bound(&self) -> [f64; 4] {
+        // [size, depth, derivative size bound, derivative depth bound]
+        let leaf = [1.0, 1.0, 1.0, 1.0];
+        match self {
+            Expr::Num(_) | Expr::Var(_) => leaf,
+            Expr::Neg(a) => {
+                let [s, d, ds, dd] = a.derivative_bound();
+                [s + 1.0, d + 1.0, ds + 1.0, dd + 1.0]
+            }
+            Expr::Call(_, a) => {
+                let [s, d, ds, dd] = a.derivative_bound();
+                [s + 1.0, d + 1.0, ds + s + 5.0, dd.max(d + 3.0) + 1.0]
+            }
+            Expr::Add(a, b) | Expr::Sub(a, b) => {
+                let ([sa, da, dsa, dda], [sb, db, dsb, ddb]) =
+                    (a.derivative_bound(), b.derivative_bound());
+                [
+                    sa + sb + 1.0,
+                    da.max(db) + 1.0,
+                    dsa + dsb + 1.0,
+                    dda.max(ddb) + 1.0,
+                ]
+            }
+            Expr::Mul(a, b) | Expr::Div(a, b) | Expr::Pow(a, b) => {
+                let ([sa, da, dsa, dda], [sb, db, dsb, ddb]) =
+                    (a.derivative_bound(), b.derivative_bound());
+                let size = sa + sb + 1.0;
+                let depth = da.max(db) + 1.0;
+                // Every rule of a binary node uses each operand's derivative once and the
+                // operands (and the node itself for a^b) at most three times, within two new
+                // levels for a product (a' b + a b') and four for a quotient or a power.
+                let levels = if matches!(self, Expr::Mul(..)) {
+                    2.0
+                } else {
+                    4.0
+                };
+                [
+                    size,
+                    depth,
+                    dsa + dsb + 3.0 * size + 8.0,
+                    dda.max(ddb).max(depth) + levels,
+                ]
+            }
+        }
+    }
+
+    /// [`Expr::derivative`] with its size and depth bounded first ([`MAX_DERIVED_NODES`],
+    /// [`MAX_DERIVED_DEPTH`]): the error (column 1) says how large it would be.
+    pub fn try_derivative(&self, x: Var) -> Result<Expr, ExprError> {
+        let [_, _, nodes, depth] = self.derivative_bound();
+        if nodes > MAX_DERIVED_NODES || depth > MAX_DERIVED_DEPTH {
+            return Err(ExprError {
+                column: 1,
+                kind: ExprErrorKind::DerivativeTooLarge {
+                    var: x.name(),
+                    nodes,
+                    depth,
+                },
+            });
+        }
+        Ok(self.derivative(x))
+    }
+
+    /// [`Expr::nth_derivative`] with every step checked as [`Expr::try_derivative`] does.
+    pub fn try_nth_derivative(&self, x: Var, k: usize) -> Result<Expr, ExprError> {
+        let mut e = self.clone();
+        for _ in 0..k {
+            e = e.try_derivative(x)?;
         }
         Ok(e)
     }
@@ -526,7 +763,9 @@ impl Expr {
         }
     }
 
-    /// Exact partial derivative with respect to `x`, simplified.
+    /// Exact partial derivative with respect to `x`, simplified. Unbounded: its size can grow
+    /// exponentially with the depth (`v^v^...^v`); use [`Expr::try_derivative`] for expressions
+    /// that come from a file.
     pub fn derivative(&self, x: Var) -> Expr {
         match self {
             Expr::Num(_) => Expr::Num(0.0),
@@ -591,17 +830,26 @@ impl Expr {
         e
     }
 
-    /// Number of nodes (a measure of evaluation cost).
+    /// Number of nodes (a measure of evaluation cost), counted without recursion.
     pub fn size(&self) -> usize {
-        match self {
-            Expr::Num(_) | Expr::Var(_) => 1,
-            Expr::Neg(a) | Expr::Call(_, a) => 1 + a.size(),
-            Expr::Add(a, b)
-            | Expr::Sub(a, b)
-            | Expr::Mul(a, b)
-            | Expr::Div(a, b)
-            | Expr::Pow(a, b) => 1 + a.size() + b.size(),
+        let mut stack = vec![self];
+        let mut n = 0;
+        while let Some(e) = stack.pop() {
+            n += 1;
+            match e {
+                Expr::Num(_) | Expr::Var(_) => {}
+                Expr::Neg(a) | Expr::Call(_, a) => stack.push(a),
+                Expr::Add(a, b)
+                | Expr::Sub(a, b)
+                | Expr::Mul(a, b)
+                | Expr::Div(a, b)
+                | Expr::Pow(a, b) => {
+                    stack.push(a);
+                    stack.push(b);
+                }
+            }
         }
+        n
     }
 }
 
@@ -678,7 +926,8 @@ pub fn mul(a: Expr, b: Expr) -> Expr {
 #[allow(clippy::redundant_guards)] // guards read better than float patterns
 pub fn div(a: Expr, b: Expr) -> Expr {
     match (a, b) {
-        (Expr::Num(x), Expr::Num(y)) if y != 0.0 => Expr::Num(x / y),
+        // 1/0 and 0/0 fold to inf and NaN, which the parser reports at their column.
+        (Expr::Num(x), Expr::Num(y)) => Expr::Num(x / y),
         (Expr::Num(x), _) if x == 0.0 => Expr::Num(0.0),
         (a, Expr::Num(y)) if y == 1.0 => a,
         (a, Expr::Num(y)) if y != 0.0 => mul(Expr::Num(1.0 / y), a),

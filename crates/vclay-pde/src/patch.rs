@@ -75,7 +75,8 @@ pub struct BasicFunction {
 }
 
 impl BasicFunction {
-    /// Differentiates `g` symbolically.
+    /// Differentiates `g` symbolically. Unbounded (see [`Expr::derivative`]); use
+    /// [`BasicFunction::try_new`] for functions that come from a file.
     pub fn new(g: Expr) -> Self {
         let g_v = g.derivative(Var::V);
         let g_vv = g_v.derivative(Var::V);
@@ -91,6 +92,25 @@ impl BasicFunction {
             g_t,
             g_tt,
         }
+    }
+
+    /// [`BasicFunction::new`] with every derivative's size bounded first
+    /// ([`Expr::try_derivative`]).
+    pub fn try_new(g: Expr) -> Result<Self, crate::expr::ExprError> {
+        let g_v = g.try_derivative(Var::V)?;
+        let g_vv = g_v.try_derivative(Var::V)?;
+        let g_vvvv = g_vv.try_nth_derivative(Var::V, 2)?;
+        let g_t = g.try_derivative(Var::T)?;
+        let g_tt = g_t.try_derivative(Var::T)?;
+        Ok(BasicFunction {
+            name: g.to_string(),
+            g,
+            g_v,
+            g_vv,
+            g_vvvv,
+            g_t,
+            g_tt,
+        })
     }
 }
 

@@ -34,6 +34,27 @@ pub const DEFAULT_ETA: f64 = 0.0;
 /// Default smallest collocation count per direction (6 x 6 = 36, the paper's M).
 pub const DEFAULT_MIN_COLLOCATION: usize = 6;
 
+/// The basic function `g` with its derivatives, their size bounded (issue 17); `place` is
+/// the component's field path.
+fn basic_function(g: Expr, place: &str) -> Result<BasicFunction, PdeError> {
+    let text = g.to_string();
+    BasicFunction::try_new(g).map_err(|e| PdeError::InvalidValue {
+        place: place.to_string(),
+        message: format!(
+            "basic function '{}': {}",
+            crate::expr::shorten(&text, 80),
+            e.kind_text()
+        ),
+    })
+}
+
+/// Most collocation points per patch (`nu * nv`): a million.
+pub const MAX_COLLOCATION_POINTS: usize = 1_000_000;
+
+/// Most entries of one component's dense collocation matrix (points x unknown constants):
+/// 2 x 10^7, 160 MB of `f64` (the QR works on a copy).
+pub const MAX_COLLOCATION_ENTRIES: usize = 20_000_000;
+
 /// A number or an expression text.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(untagged)]
@@ -538,7 +559,7 @@ impl Ctx<'_> {
                         Some(j) => j,
                         None => {
                             keys.push(key);
-                            basics.push(BasicFunction::new(term.basic()));
+                            basics.push(basic_function(term.basic(), &cp)?);
                             coefficients.push([0.0; 4]);
                             keys.len() - 1
                         }
@@ -552,7 +573,7 @@ impl Ctx<'_> {
                     let key = term.key();
                     if !keys.contains(&key) {
                         keys.push(key);
-                        basics.push(BasicFunction::new(term.basic()));
+                        basics.push(basic_function(term.basic(), &cp)?);
                         coefficients.push([0.0; 4]);
                     }
                 }
@@ -625,6 +646,39 @@ impl Ctx<'_> {
             Some(CollocationSpec::Count(m)) => Collocation::from_count(*m),
             Some(CollocationSpec::Grid([nu, nv])) => Collocation { nu: *nu, nv: *nv },
         };
+        // Issue 17: the dense collocation matrix (points x unknowns per component) is checked
+        // before anything is assembled (100000 x 100000 points, or 2,000 basic functions with
+        // the default grid, asked for terabytes).
+        let points = collocation.nu as f64 * collocation.nv as f64;
+        let unknowns = (jmax * per_basic).max(1) as f64;
+        if points > MAX_COLLOCATION_POINTS as f64
+            || points * unknowns > MAX_COLLOCATION_ENTRIES as f64
+        {
+            let given = p.collocation.is_some() || file.collocation.is_some();
+            return Err(PdeError::InvalidValue {
+                place: if given {
+                    format!("{place}.collocation")
+                } else {
+                    place.clone()
+                },
+                message: format!(
+                    "{} x {} collocation points and {} unknown constants ({jmax} basic \
+                     functions x {per_basic} trial terms) make a {:.2e}-entry matrix; the \
+                     limits are {MAX_COLLOCATION_POINTS} points and {MAX_COLLOCATION_ENTRIES} \
+                     entries ({} MB){}",
+                    collocation.nu,
+                    collocation.nv,
+                    jmax * per_basic,
+                    points * unknowns,
+                    MAX_COLLOCATION_ENTRIES * 8 / 1_000_000,
+                    if given {
+                        ""
+                    } else {
+                        "; use fewer basic functions"
+                    }
+                ),
+            });
+        }
         let mut local = Vec::with_capacity(p.local.len());
         for (q, l) in p.local.iter().enumerate() {
             let lp = format!("{place}.local[{q}]");

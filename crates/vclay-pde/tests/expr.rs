@@ -1,7 +1,7 @@
 //! Expressions: parsing, errors with columns, exact derivatives, splitting into basic functions.
 
 use vclay_pde::basis::{split, split_u_polynomial};
-use vclay_pde::expr::{Expr, ExprErrorKind, Var};
+use vclay_pde::expr::{Expr, ExprErrorKind, MAX_DEPTH, MAX_DERIVED_DEPTH, Var};
 
 fn parse(s: &str) -> Expr {
     Expr::parse(s).unwrap_or_else(|e| panic!("{s}: {e}"))
@@ -213,4 +213,112 @@ fn deep_nesting_is_an_error_not_a_stack_overflow() {
     let e = Expr::parse(&s).unwrap_err();
     assert_eq!(e.kind, ExprErrorKind::TooDeep);
     assert!(Expr::parse(&format!("{}v{}", "(".repeat(30), ")".repeat(30))).is_ok());
+}
+
+/// Issue 17: long flat chains overflowed the stack (only parentheses had a limit).
+#[test]
+fn long_chains_are_errors_not_stack_overflows() {
+    let chain = |op: &str, n: usize| vec!["v"; n].join(op);
+    for text in [
+        chain("+", 30_000),
+        chain("*", 100_000),
+        chain("^", 100_000),
+        format!("{}v", "-".repeat(30_000)),
+    ] {
+        let e = Expr::parse(&text).unwrap_err();
+        assert!(
+            matches!(
+                e.kind,
+                ExprErrorKind::TooLong | ExprErrorKind::TooDeepTree { .. }
+            ),
+            "{e}"
+        );
+        // The message quotes at most a window of the text.
+        assert!(e.pointer(&text).len() < 300);
+    }
+    // Within the token limit but deeper than MAX_DEPTH: a flat chain, a unary chain, powers.
+    let deep = MAX_DEPTH + 1;
+    for text in [
+        chain("+", deep),
+        format!("{}v", "-".repeat(deep)),
+        chain("^", deep),
+    ] {
+        let e = Expr::parse(&text).unwrap_err();
+        assert!(matches!(e.kind, ExprErrorKind::TooDeepTree { .. }), "{e}");
+    }
+    // Just under the limit parses, evaluates and differentiates.
+    let ok = parse(&chain("+", MAX_DEPTH - 1));
+    assert_eq!(ok.eval(0.0, 2.0, 0.0), 2.0 * (MAX_DEPTH - 1) as f64);
+    assert_eq!(
+        ok.try_derivative(Var::V).unwrap().eval(0.0, 1.0, 0.0),
+        (MAX_DEPTH - 1) as f64
+    );
+}
+
+/// Issue 17: `v^v^...^v` of 400 characters grew to 4 GB while differentiating.
+#[test]
+fn derivatives_that_would_explode_are_refused_before_they_are_built() {
+    let tower = parse(&vec!["v"; 200].join("^"));
+    let e = tower.try_derivative(Var::V).unwrap_err();
+    assert!(
+        matches!(e.kind, ExprErrorKind::DerivativeTooLarge { .. }),
+        "{e}"
+    );
+    assert!(e.to_string().contains("simplify"), "{e}");
+    // Ordinary functions keep their derivatives (and the bound is not in the way).
+    let g = parse("4.763 + 0.017*sin(v) - 3.395*exp(0.1*v)*t^2");
+    assert_eq!(g.try_derivative(Var::V).unwrap(), g.derivative(Var::V));
+    assert_eq!(
+        g.try_nth_derivative(Var::V, 4).unwrap(),
+        g.nth_derivative(Var::V, 4)
+    );
+}
+
+/// The deepest derived trees allowed evaluate, clone and drop on a 2 MB thread stack (the
+/// default of spawned threads and rayon workers).
+#[test]
+fn deepest_allowed_trees_fit_a_small_stack() {
+    std::thread::Builder::new()
+        .stack_size(2 << 20)
+        .spawn(|| {
+            let mut e = Expr::Var(Var::V);
+            for k in 0..MAX_DERIVED_DEPTH as usize + 8 {
+                e = if k % 2 == 0 {
+                    Expr::Add(Box::new(e), Box::new(Expr::Var(Var::T)))
+                } else {
+                    Expr::Mul(Box::new(Expr::Num(0.5)), Box::new(e))
+                };
+            }
+            assert!(e.eval(0.0, 1.0, 1.0).is_finite());
+            assert!(e.derivative(Var::V).eval(0.0, 1.0, 1.0).is_finite());
+            let c = e.clone();
+            assert_eq!(c.size(), e.size());
+            assert!(!c.to_string().is_empty());
+            drop(c);
+        })
+        .unwrap()
+        .join()
+        .unwrap();
+}
+
+/// Issue 17: `0/0` and `0*(1/0)` were simplified to 0; they are errors like `1/0`.
+#[test]
+fn constant_division_by_zero_is_an_error() {
+    for (text, column) in [
+        ("1/0", 2),
+        ("0/0", 2),
+        ("0*(1/0)", 5),
+        ("v + exp(1000)", 5),
+        ("2^2000", 2),
+    ] {
+        let e = Expr::parse(text).unwrap_err();
+        assert!(matches!(e.kind, ExprErrorKind::NotFinite(_)), "{text}: {e}");
+        assert_eq!(e.column, column, "{text}: {e}");
+    }
+    assert!(matches!(
+        Expr::parse("1e400").unwrap_err().kind,
+        ExprErrorKind::BadNumber(_)
+    ));
+    // Zero over a variable is still 0 (the usual simplification).
+    assert_eq!(parse("0/v"), Expr::Num(0.0));
 }

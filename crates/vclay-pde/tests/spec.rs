@@ -176,9 +176,16 @@ fn a_vanishing_basic_function_is_harmless() {
 
 #[test]
 fn nan_shape_function_is_reported() {
-    let e = with("\"b\": 1,", "\"b\": \"sqrt(-1)\",")
+    let e = with("\"b\": 1,", "\"b\": \"sqrt(-1 - u)\",")
         .unwrap()
         .solve(0.0)
         .unwrap_err();
     assert!(matches!(e, PdeError::NonFinite { .. }), "{e}");
+    // A constant that folds to NaN is reported when the spec is read (issue 17).
+    let e = with("\"b\": 1,", "\"b\": \"sqrt(-1)\",").unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("shape.b: column 1: this constant part evaluates to NaN"),
+        "{e}"
+    );
 }

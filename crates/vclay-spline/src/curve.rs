@@ -197,6 +197,7 @@ impl ParametricCurve for NurbsCurve {
     }
 
     fn derivatives(&self, u: f64, order: usize) -> Result<Vec<Vec3>, SplineError> {
+        crate::util::check_order(order)?;
         let u = check_param(&self.knots, 0, u)?;
         let a = self.homogeneous_derivatives(u, order);
         Ok(rational_curve_derivatives(&a))

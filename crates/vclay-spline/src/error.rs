@@ -170,6 +170,14 @@ pub enum SplineError {
         /// Parametric dimension of the object.
         dims: usize,
     },
+    /// A derivative order above [`crate::MAX_DERIVATIVE_ORDER`] was requested.
+    #[error("derivative order {order} exceeds the supported maximum {max}")]
+    DerivativeOrderTooHigh {
+        /// Requested order.
+        order: usize,
+        /// Supported maximum.
+        max: usize,
+    },
     /// A parameter is NaN or infinite.
     #[error("parameter {} is not finite ({value})", AXIS_NAMES[*axis])]
     NonFiniteParameter {

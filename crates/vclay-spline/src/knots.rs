@@ -22,6 +22,13 @@ use vclay_core::{Interval, Tolerance};
 /// in principle, Rhino limits curves to 11).
 pub const MAX_DEGREE: usize = 31;
 
+/// Highest derivative order that `derivatives` of curves, surfaces and volumes computes (issue 17).
+/// The quotient rule costs O(K^2) per curve point, O(K^4) per surface point and O(K^6) per volume
+/// point, and the table holds O(K^3) entries for volumes: K = 10,000 took minutes and K = 2^32
+/// gigabytes. Orders above the degree of a polynomial spline are zero, and the rational ones are
+/// rounding noise long before 64 (a volume of order 64 takes about a second per point).
+pub const MAX_DERIVATIVE_ORDER: usize = 64;
+
 /// A validated, non-decreasing knot vector of a given degree.
 ///
 /// Invariants (checked by every constructor): all knots finite and non-decreasing; length

@@ -37,7 +37,7 @@ pub use curve::NurbsCurve;
 pub use error::{KnotError, NetIndex, SplineError};
 pub use grid::{AxisBasis, SurfaceGrid};
 pub use jacobian::{SparseJacobian, generalized_coordinates};
-pub use knots::{BasisWorkspace, KnotVector, MAX_DEGREE};
+pub use knots::{BasisWorkspace, KnotVector, MAX_DEGREE, MAX_DERIVATIVE_ORDER};
 pub use surface::NurbsSurface;
 pub use tessellate::{tessellate_surface, tessellate_volume_boundary};
 pub use traits::{ParametricCurve, ParametricSurface, ParametricVolume};

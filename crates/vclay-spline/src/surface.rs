@@ -306,6 +306,7 @@ impl ParametricSurface for NurbsSurface {
     }
 
     fn derivatives(&self, u: f64, v: f64, order: usize) -> Result<Vec<Vec<Vec3>>, SplineError> {
+        crate::util::check_order(order)?;
         let u = check_param(&self.knots[0], 0, u)?;
         let v = check_param(&self.knots[1], 1, v)?;
         Ok(rational_surface_derivatives(

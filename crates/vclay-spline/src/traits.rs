@@ -12,7 +12,8 @@ pub trait ParametricCurve {
     fn domain(&self) -> Interval;
     /// The point `c(u)`.
     fn point(&self, u: f64) -> Result<Vec3, SplineError>;
-    /// `d^k c / du^k` for `k = 0..=order` (entry 0 is the point).
+    /// `d^k c / du^k` for `k = 0..=order` (entry 0 is the point). Errors for an order above
+    /// [`crate::MAX_DERIVATIVE_ORDER`].
     fn derivatives(&self, u: f64, order: usize) -> Result<Vec<Vec3>, SplineError>;
     /// The first derivative `c'(u)`.
     fn tangent(&self, u: f64) -> Result<Vec3, SplineError> {
@@ -27,7 +28,8 @@ pub trait ParametricSurface {
     /// The point `s(u, v)`.
     fn point(&self, u: f64, v: f64) -> Result<Vec3, SplineError>;
     /// Partial derivatives `d[a][b] = d^(a+b) s / du^a dv^b` for `a + b <= order`: a triangular
-    /// array where `d[a]` has `order - a + 1` entries.
+    /// array where `d[a]` has `order - a + 1` entries. Errors for an order above
+    /// [`crate::MAX_DERIVATIVE_ORDER`].
     fn derivatives(&self, u: f64, v: f64, order: usize) -> Result<Vec<Vec<Vec3>>, SplineError>;
     /// Unit normal `s_u x s_v / |s_u x s_v|`, or `None` where the surface is degenerate.
     fn normal(&self, u: f64, v: f64) -> Result<Option<Vec3>, SplineError> {
@@ -46,6 +48,7 @@ pub trait ParametricVolume {
     fn point(&self, u: f64, v: f64, w: f64) -> Result<Vec3, SplineError>;
     /// Partial derivatives `d[a][b][c] = d^(a+b+c) V / du^a dv^b dw^c` for `a + b + c <= order`
     /// (triangular: `d[a]` has `order - a + 1` entries, `d[a][b]` has `order - a - b + 1`).
+    /// Errors for an order above [`crate::MAX_DERIVATIVE_ORDER`].
     fn derivatives(
         &self,
         u: f64,

@@ -6,6 +6,17 @@ use vclay_core::{Vec3, Vec4};
 
 /// Checks that `u` is finite and inside the knot vector's domain up to its parameter tolerance;
 /// returns `u` clamped into the domain.
+/// Rejects derivative orders above [`crate::MAX_DERIVATIVE_ORDER`] before anything is allocated.
+pub(crate) fn check_order(order: usize) -> Result<(), SplineError> {
+    if order > crate::knots::MAX_DERIVATIVE_ORDER {
+        return Err(SplineError::DerivativeOrderTooHigh {
+            order,
+            max: crate::knots::MAX_DERIVATIVE_ORDER,
+        });
+    }
+    Ok(())
+}
+
 pub(crate) fn check_param(kv: &KnotVector, axis: usize, u: f64) -> Result<f64, SplineError> {
     if !u.is_finite() {
         return Err(SplineError::NonFiniteParameter { axis, value: u });

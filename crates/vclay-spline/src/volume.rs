@@ -306,6 +306,7 @@ impl ParametricVolume for NurbsVolume {
         w: f64,
         order: usize,
     ) -> Result<Vec<Vec<Vec<Vec3>>>, SplineError> {
+        crate::util::check_order(order)?;
         let t = [
             check_param(&self.knots[0], 0, u)?,
             check_param(&self.knots[1], 1, v)?,

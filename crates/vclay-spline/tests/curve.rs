@@ -228,3 +228,40 @@ fn end_points_are_interpolated_with_clamped_knots() {
     assert!((c.point(0.0).unwrap() - c.control_points()[0]).norm() < 1e-15);
     assert!((c.point(1.0).unwrap() - c.control_points()[7]).norm() < 1e-14);
 }
+
+/// Issue 17: `vclay eval --derivatives 18446744073709551615` overflowed an index, and 2^32
+/// asked for 137 GB; orders above MAX_DERIVATIVE_ORDER are an error before any allocation.
+#[test]
+fn derivative_orders_above_the_limit_are_errors() {
+    use vclay_spline::{MAX_DERIVATIVE_ORDER, NurbsVolume, ParametricVolume};
+    let c = NurbsCurve::new(
+        1,
+        vec![0.0, 0.0, 1.0, 1.0],
+        vec![Vec3::zeros(), Vec3::new(1.0, 0.0, 0.0)],
+        None,
+    )
+    .unwrap();
+    for k in [MAX_DERIVATIVE_ORDER + 1, 1 << 32, usize::MAX] {
+        assert_eq!(
+            c.derivatives(0.5, k).unwrap_err(),
+            SplineError::DerivativeOrderTooHigh {
+                order: k,
+                max: MAX_DERIVATIVE_ORDER
+            }
+        );
+    }
+    let d = c.derivatives(0.5, MAX_DERIVATIVE_ORDER).unwrap();
+    assert_eq!(d.len(), MAX_DERIVATIVE_ORDER + 1);
+    assert_eq!(d[1], Vec3::new(1.0, 0.0, 0.0));
+    let v = NurbsVolume::box_lattice(
+        [1, 1, 1],
+        [2, 2, 2],
+        Vec3::zeros(),
+        Vec3::new(1.0, 1.0, 1.0),
+    )
+    .unwrap();
+    assert!(matches!(
+        v.derivatives(0.5, 0.5, 0.5, usize::MAX),
+        Err(SplineError::DerivativeOrderTooHigh { .. })
+    ));
+}

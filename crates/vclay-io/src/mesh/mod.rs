@@ -119,7 +119,23 @@ pub fn write_mesh_with(
         path: path.to_path_buf(),
         source,
     })?;
+    check_representable(path, mesh, format, encoding)?;
     crate::util::write_atomic(path, |w| write_valid(w, mesh, format, encoding))
+}
+
+/// [`write_mesh`] up to the rename: the checked mesh written to a temporary file beside `path`,
+/// renamed over it by [`crate::Staged::commit`] (for commands that write several files all or
+/// none).
+pub fn stage_mesh(path: impl AsRef<Path>, mesh: &TriMesh) -> Result<crate::Staged, IoError> {
+    let path = path.as_ref();
+    let format = MeshFormat::from_path(path)?;
+    let encoding = Encoding::Binary;
+    mesh.validate().map_err(|source| IoError::InvalidMesh {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    check_representable(path, mesh, format, encoding)?;
+    crate::util::stage(path, |w| write_valid(w, mesh, format, encoding))
 }
 
 /// Encodes a mesh in memory.
@@ -157,6 +173,41 @@ pub fn decode_mesh(
     mesh.validate()
         .map_err(|e| ctx.err(MeshLocation::File, e.to_string()))?;
     Ok(mesh)
+}
+
+/// Rejects what a format would write as `inf` or `nan` (issue 17): non-finite normals, and
+/// coordinates beyond `f32::MAX` in binary STL (which stores `f32`).
+fn check_representable(
+    path: &Path,
+    mesh: &TriMesh,
+    format: MeshFormat,
+    encoding: Encoding,
+) -> Result<(), IoError> {
+    let err = |message: String| IoError::Unwritable {
+        path: path.to_path_buf(),
+        message,
+    };
+    if let Some(i) = mesh
+        .normals
+        .iter()
+        .position(|n| !n.iter().all(|c| c.is_finite()))
+    {
+        return Err(err(format!("normal {i} has a non-finite coordinate")));
+    }
+    if format == MeshFormat::Stl && encoding == Encoding::Binary {
+        let max = f64::from(f32::MAX);
+        if let Some(i) = mesh
+            .positions
+            .iter()
+            .position(|p| p.iter().any(|c| c.abs() > max))
+        {
+            return Err(err(format!(
+                "vertex {i} has a coordinate beyond the range of binary STL's 32-bit floats \
+                 (about 3.4e38); write .obj or .ply"
+            )));
+        }
+    }
+    Ok(())
 }
 
 fn write_valid(

@@ -119,8 +119,10 @@ pub(crate) fn display_name(path: &Path) -> String {
 
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 
-/// Writes a file atomically: `write` fills a temporary file next to `path`, which is then renamed
-/// over `path`. On any error the temporary file is removed and `path` is left untouched.
+/// Writes a file atomically: `write` fills a temporary file next to `path`
+/// (`.NAME.tmp-PID-N`), which is then renamed over `path`. On any error the temporary file is
+/// removed and `path` is left untouched. A missing folder is created; temporary files of earlier,
+/// killed writes of the same name are removed (see [`STALE_TEMP_AGE`]).
 pub fn write_atomic(
     path: &Path,
     write: impl FnOnce(&mut dyn Write) -> io::Result<()>,
@@ -139,6 +141,10 @@ pub fn write_atomic(
         })?
         .to_string_lossy()
         .into_owned();
+    if !dir.is_dir() {
+        fs::create_dir_all(&dir).map_err(|e| FormatError::io(path, e))?;
+    }
+    remove_stale_temps(&dir, &name);
     let tmp = dir.join(format!(
         ".{name}.tmp-{}-{}",
         std::process::id(),
@@ -157,6 +163,44 @@ pub fn write_atomic(
         return Err(FormatError::io(path, e));
     }
     Ok(())
+}
+
+/// Age after which a temporary file `.NAME.tmp-PID-N` is taken for the leftover of a killed
+/// write even when process PID runs (or cannot be checked: not Linux): one hour, far longer than
+/// any write takes. A file whose process is gone (Linux: no `/proc/PID`) is removed at once.
+pub const STALE_TEMP_AGE: std::time::Duration = std::time::Duration::from_secs(3600);
+
+/// Removes stale temporary files of target `name` from `dir` (best effort).
+fn remove_stale_temps(dir: &Path, name: &str) {
+    let Ok(entries) = fs::read_dir(dir) else {
+        return;
+    };
+    let prefix = format!(".{name}.tmp-");
+    let now = std::time::SystemTime::now();
+    let linux = cfg!(target_os = "linux") && Path::new("/proc/self").exists();
+    for entry in entries.flatten() {
+        let file = entry.file_name();
+        let file = file.to_string_lossy();
+        let Some(rest) = file.strip_prefix(&prefix) else {
+            continue;
+        };
+        let pid = rest.split('-').next().and_then(|p| p.parse::<u32>().ok());
+        let Some(meta) = entry.metadata().ok().filter(|m| m.is_file()) else {
+            continue;
+        };
+        let old = meta
+            .modified()
+            .ok()
+            .and_then(|t| now.duration_since(t).ok())
+            .is_some_and(|age| age > STALE_TEMP_AGE);
+        let dead = linux
+            && pid.is_some_and(|p| {
+                p != std::process::id() && !Path::new(&format!("/proc/{p}")).exists()
+            });
+        if old || dead {
+            let _ = fs::remove_file(entry.path());
+        }
+    }
 }
 
 /// Reads a whole text file, mapping errors to [`FormatError::Io`].
