@@ -1,0 +1,232 @@
+//! `Ffd`: a free-form deformation lattice over a box (`vclay_ffd::FfdLattice`) with direct
+//! manipulation (`ffd-direct-manipulation.txt` eq 7 for one point, eq 12 for many) and
+//! deformation of `(n, 3)` point arrays (in parallel, without the GIL).
+
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use vclay_core::Vec3;
+use vclay_ffd::{FfdLattice, LatticeSpec, Manipulation, PointConstraint, SolveOptions};
+use vclay_io::model::Entity as IoEntity;
+
+use crate::errors::{GeometryError, PyResultExt};
+use crate::util;
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Ffd>()
+}
+
+/// A trivariate NURBS lattice over a box, the identity at rest: `Q(u, v, w)` with control
+/// points at the Greville abscissae. Moving points of space (direct manipulation) moves the
+/// control points by the least-norm displacement field (eqs 7, 12); `deform` maps points.
+#[pyclass(module = "vclay")]
+#[derive(Debug)]
+pub struct Ffd {
+    lattice: FfdLattice,
+}
+
+fn spec(degree: usize, control_points: &Bound<'_, PyAny>) -> PyResult<LatticeSpec> {
+    let cp: [usize; 3] = if let Ok(n) = control_points.extract::<usize>() {
+        [n; 3]
+    } else {
+        control_points.extract().map_err(|_| {
+            PyValueError::new_err("control_points: an integer or three integers (per axis)")
+        })?
+    };
+    Ok(LatticeSpec {
+        degree: [degree; 3],
+        control_points: cp,
+    })
+}
+
+#[pymethods]
+impl Ffd {
+    /// `Ffd(lo, hi, degree=3, control_points=4)`: a lattice over the box `[lo, hi]`;
+    /// `control_points` is one count or three (per axis), each at least `degree + 1`.
+    #[new]
+    #[pyo3(signature = (lo, hi, degree = vclay_ffd::DEFAULT_DEGREE, control_points = None))]
+    fn new(
+        lo: &Bound<'_, PyAny>,
+        hi: &Bound<'_, PyAny>,
+        degree: usize,
+        control_points: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let s = match control_points {
+            Some(c) => spec(degree, c)?,
+            None => LatticeSpec {
+                degree: [degree; 3],
+                control_points: [vclay_ffd::DEFAULT_CONTROL_POINTS.max(degree + 1); 3],
+            },
+        };
+        let lattice = FfdLattice::new(s, util::vec3(lo, "lo")?, util::vec3(hi, "hi")?).py()?;
+        Ok(Self { lattice })
+    }
+
+    /// `Ffd.enclosing(points, degree=3, control_points=4, margin=0.05)`: a lattice around the
+    /// bounding box of an `(n, 3)` array, grown by `margin` times its extent.
+    #[staticmethod]
+    #[pyo3(signature = (points, degree = vclay_ffd::DEFAULT_DEGREE, control_points = None, margin = vclay_ffd::DEFAULT_MARGIN))]
+    fn enclosing(
+        points: &Bound<'_, PyAny>,
+        degree: usize,
+        control_points: Option<&Bound<'_, PyAny>>,
+        margin: f64,
+    ) -> PyResult<Self> {
+        let pts = util::points(points, "points")?;
+        let s = match control_points {
+            Some(c) => spec(degree, c)?,
+            None => LatticeSpec {
+                degree: [degree; 3],
+                control_points: [vclay_ffd::DEFAULT_CONTROL_POINTS.max(degree + 1); 3],
+            },
+        };
+        let lattice = FfdLattice::enclosing(&pts, s, margin).py()?;
+        Ok(Self { lattice })
+    }
+
+    /// Control points per axis.
+    #[getter]
+    fn dims(&self) -> [usize; 3] {
+        self.lattice.dims()
+    }
+
+    /// The box `(lo, hi)`.
+    #[getter]
+    fn bounds(&self) -> ([f64; 3], [f64; 3]) {
+        let (lo, hi) = self.lattice.bounds();
+        (lo.into(), hi.into())
+    }
+
+    /// Current control points, `(nu, nv, nw, 3)` (a copy).
+    #[getter]
+    fn control_points<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArrayDyn<f64>> {
+        let d = self.lattice.dims();
+        let v: Vec<f64> = self
+            .lattice
+            .control_points()
+            .iter()
+            .flat_map(|p| [p.x, p.y, p.z])
+            .collect();
+        util::array_dyn(py, v, &[d[0], d[1], d[2], 3])
+    }
+
+    /// Parameters `(n, 3)` in `[0, 1]^3` of rest-space points `(n, 3)` (the linear map of
+    /// section 2); a point outside the box raises `GeometryError`.
+    fn parameters<'py>(
+        &self,
+        py: Python<'py>,
+        points: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+        let pts = util::points(points, "points")?;
+        let mut out = Vec::with_capacity(pts.len() * 3);
+        for (i, p) in pts.iter().enumerate() {
+            let t = self.lattice.parameters(p).ok_or_else(|| {
+                GeometryError::new_err(format!(
+                    "points[{i}] = ({}, {}, {}) is outside the lattice box",
+                    p.x, p.y, p.z
+                ))
+            })?;
+            out.extend_from_slice(&t);
+        }
+        Ok(util::array2(py, out, pts.len(), 3))
+    }
+
+    /// Where the deformation takes rest-space points: an `(n, 3)` array to an `(n, 3)` array
+    /// (`Q(u(x), v(x), w(x))` inside the box, `x` itself outside). In parallel, GIL released.
+    fn deform<'py>(
+        &self,
+        py: Python<'py>,
+        points: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+        let (x, n) = util::rows(points, 3, "points")?;
+        let mut out = vec![0.0; n * 3];
+        let lat = &self.lattice;
+        py.detach(|| {
+            util::fill(&mut out, 3, |start, chunk| {
+                for (k, o) in chunk.chunks_exact_mut(3).enumerate() {
+                    let i = start + k;
+                    let p = lat.deform_point(&Vec3::new(x[3 * i], x[3 * i + 1], x[3 * i + 2]));
+                    o.copy_from_slice(&[p.x, p.y, p.z]);
+                }
+                Ok::<(), ()>(())
+            })
+        })
+        .expect("deform_point does not fail");
+        Ok(util::array2(py, out, n, 3))
+    }
+
+    /// Direct manipulation of one point (eq 7): the rest-space point `source` goes to
+    /// `target`. Afterwards `deform([source])` is `target`.
+    fn move_point(&mut self, source: &Bound<'_, PyAny>, target: &Bound<'_, PyAny>) -> PyResult<()> {
+        let c = PointConstraint::from_rest_point(
+            &self.lattice,
+            util::vec3(source, "source")?,
+            util::vec3(target, "target")?,
+        )
+        .py()?;
+        let m = Manipulation::single(&self.lattice, &c).py()?;
+        // `apply` panics only if a control point would overflow to infinity (pyo3 turns that
+        // into a PanicException); `try_apply` (uncommitted in vclay-ffd) will report it.
+        self.lattice.apply(&m);
+        Ok(())
+    }
+
+    /// Direct manipulation of many points at once (eq 12): rest-space `sources` `(m, 3)` go to
+    /// `targets` `(m, 3)` by the least-norm displacement. Conflicting constraints raise
+    /// `GeometryError` naming them unless `least_squares=True`.
+    #[pyo3(signature = (sources, targets, least_squares = false))]
+    fn move_points(
+        &mut self,
+        py: Python<'_>,
+        sources: &Bound<'_, PyAny>,
+        targets: &Bound<'_, PyAny>,
+        least_squares: bool,
+    ) -> PyResult<()> {
+        let s = util::points(sources, "sources")?;
+        let t = util::points(targets, "targets")?;
+        if s.len() != t.len() {
+            return Err(PyValueError::new_err(format!(
+                "sources ({}) and targets ({}) differ in length",
+                s.len(),
+                t.len()
+            )));
+        }
+        let cs = s
+            .iter()
+            .zip(&t)
+            .map(|(a, b)| PointConstraint::from_rest_point(&self.lattice, *a, *b))
+            .collect::<Result<Vec<_>, _>>()
+            .py()?;
+        let opts = if least_squares {
+            SolveOptions::least_squares()
+        } else {
+            SolveOptions::default()
+        };
+        let lat = &self.lattice;
+        let m = py.detach(|| Manipulation::multi(lat, &cs, &opts)).py()?;
+        // `apply` panics only if a control point would overflow to infinity (pyo3 turns that
+        // into a PanicException); `try_apply` (uncommitted in vclay-ffd) will report it.
+        self.lattice.apply(&m);
+        Ok(())
+    }
+
+    /// Back to the rest lattice.
+    fn reset(&mut self) {
+        self.lattice.reset();
+    }
+
+    /// The lattice as a `Volume` (current control points and weights).
+    fn volume(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        crate::nurbs::wrap(py, IoEntity::Volume(self.lattice.volume().clone()), None)
+    }
+
+    fn __repr__(&self) -> String {
+        let (lo, hi) = self.lattice.bounds();
+        format!(
+            "<vclay Ffd degree {:?}, {:?} control points over [{:?}, {:?}]>",
+            self.lattice.degree(),
+            self.lattice.dims(),
+            <[f64; 3]>::from(lo),
+            <[f64; 3]>::from(hi)
+        )
+    }
+}

@@ -1,0 +1,175 @@
+//! `Lattice`: a subdivision-solid cell complex (`vclay_lattice`): the papers' primitives,
+//! `.ovm` read and write, MacCracken-Joy subdivision (`subdivision-solids-journal.txt`
+//! sections 3.3, 4.2), counts, points as arrays, and the boundary surface as triangles.
+
+use std::path::PathBuf;
+
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use vclay_lattice::command::{MAX_PREDICTED_CELLS, OutputFormat, primitive};
+use vclay_lattice::formats::ovm;
+use vclay_lattice::{
+    BoundaryRule, CellId, Features, Lattice as KLattice, SubdivisionRules, boundary_mesh, subdivide,
+};
+
+use crate::errors::{FileError, GeometryError, PyResultExt};
+use crate::util;
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Lattice>()
+}
+
+/// A polyhedral cell complex (points, edges, faces, cells), validated on construction: the
+/// control or subdivided lattice of a subdivision solid.
+#[pyclass(module = "vclay", frozen)]
+#[derive(Debug)]
+pub struct Lattice {
+    lattice: KLattice,
+}
+
+fn boundary_rule(name: &str) -> PyResult<BoundaryRule> {
+    match name {
+        "interior" => Ok(BoundaryRule::Interior),
+        "smooth" => Ok(BoundaryRule::Smooth),
+        "sharp" => Ok(BoundaryRule::Sharp),
+        other => Err(PyValueError::new_err(format!(
+            "boundary \"{other}\": expected \"interior\", \"smooth\" or \"sharp\""
+        ))),
+    }
+}
+
+#[pymethods]
+impl Lattice {
+    /// `Lattice.primitive(spec)`: one of the papers' models by the `vclay subdivide
+    /// --primitive` names: `box[:AxBxC]`, `cylinder[:SxLxR]`, `torus`, `torus:SxC`, `gear`,
+    /// `cube-with-holes`, `tetrahedron-with-holes[:HOLE]`, `l[:AxW]`, `t[:AxW]`.
+    #[staticmethod]
+    fn primitive(spec: &str) -> PyResult<Self> {
+        Ok(Self {
+            lattice: primitive(spec).py()?,
+        })
+    }
+
+    /// `Lattice.read(path)`: an OpenVolumeMesh `.ovm` file (errors name the line).
+    #[staticmethod]
+    fn read(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let lattice = py.detach(|| ovm::read(&path)).py()?;
+        Ok(Self { lattice })
+    }
+
+    /// Writes the lattice (`.ovm`, `.vtu`) or its boundary surface (`.obj`, `.ply`, `.stl`).
+    fn write(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let f = OutputFormat::from_path(&path).py()?;
+        py.detach(|| f.write(&self.lattice, &path)).py()
+    }
+
+    /// The lattice as `.ovm` text.
+    fn to_ovm(&self) -> String {
+        ovm::to_string(&self.lattice)
+    }
+
+    /// `levels` MacCracken-Joy subdivision steps with the boundary rule `"interior"`,
+    /// `"smooth"` or `"sharp"`: a new lattice. Refused above 50 million predicted cells.
+    #[pyo3(signature = (levels = 1, boundary = "sharp"))]
+    fn subdivide(&self, py: Python<'_>, levels: usize, boundary: &str) -> PyResult<Self> {
+        let rules = SubdivisionRules::new(boundary_rule(boundary)?);
+        let predicted = (self.lattice.num_cells() as u128)
+            .saturating_mul(8u128.saturating_pow(levels.min(64) as u32));
+        if predicted > MAX_PREDICTED_CELLS {
+            return Err(GeometryError::new_err(format!(
+                "{levels} levels would give about {predicted} cells (more than {MAX_PREDICTED_CELLS}); use fewer levels"
+            )));
+        }
+        let start = &self.lattice;
+        let out = py.detach(|| {
+            let mut lat = start.clone();
+            let mut features = Features::none(&lat);
+            for _ in 0..levels {
+                let r = subdivide(&lat, &features, &rules)?;
+                lat = r.lattice;
+                features = r.features;
+            }
+            Ok::<_, vclay_lattice::LatticeError>(lat)
+        });
+        Ok(Self { lattice: out.py()? })
+    }
+
+    /// Counts and checks as a dict: points, edges, faces, cells, boundary_faces and
+    /// inverted_cells (cells of non-positive signed volume).
+    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let l = &self.lattice;
+        let c = l.counts();
+        let (inverted, boundary) = py.detach(|| {
+            let inv = (0..l.num_cells())
+                .filter(|&k| l.cell_signed_volume(CellId::new(k)) <= 0.0)
+                .count();
+            let b = (0..l.num_faces())
+                .filter(|&f| l.is_boundary_face(vclay_lattice::FaceId::new(f)))
+                .count();
+            (inv, b)
+        });
+        let d = PyDict::new(py);
+        d.set_item("points", c.points)?;
+        d.set_item("edges", c.edges)?;
+        d.set_item("faces", c.faces)?;
+        d.set_item("cells", c.cells)?;
+        d.set_item("boundary_faces", boundary)?;
+        d.set_item("inverted_cells", inverted)?;
+        Ok(d)
+    }
+
+    /// The points, `(n, 3)` (a copy).
+    #[getter]
+    fn points<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray2<f64>> {
+        util::points_array(py, self.lattice.points())
+    }
+
+    /// A lattice of the same topology with new points `(n, 3)`.
+    fn with_points(&self, points: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let p = util::points(points, "points")?;
+        if p.len() != self.lattice.num_points() {
+            return Err(PyValueError::new_err(format!(
+                "points: expected {} points, got {}",
+                self.lattice.num_points(),
+                p.len()
+            )));
+        }
+        if let Some(i) = p.iter().position(|q| !q.iter().all(|c| c.is_finite())) {
+            return Err(GeometryError::new_err(format!("points[{i}] is not finite")));
+        }
+        let mut lattice = self.lattice.clone();
+        lattice.set_points(p);
+        Ok(Self { lattice })
+    }
+
+    /// Edges as a `(m, 2)` array of point indices.
+    #[getter]
+    fn edges<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray2<f64>> {
+        let v: Vec<f64> = self
+            .lattice
+            .edges()
+            .iter()
+            .flat_map(|e| [e[0].index() as f64, e[1].index() as f64])
+            .collect();
+        util::array2(py, v, self.lattice.num_edges(), 2)
+    }
+
+    /// The outward boundary surface: `(vertices, triangles, normals)`.
+    fn boundary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let l = &self.lattice;
+        let mesh = py.detach(|| boundary_mesh(l));
+        util::mesh_arrays(py, &mesh)
+    }
+
+    fn __repr__(&self) -> String {
+        let c = self.lattice.counts();
+        format!(
+            "<vclay Lattice: {} points, {} edges, {} faces, {} cells>",
+            c.points, c.edges, c.faces, c.cells
+        )
+    }
+}
+
+#[allow(dead_code)]
+fn unused(_: FileError) {}

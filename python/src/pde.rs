@@ -1,0 +1,126 @@
+//! `PdeSurface`: a dynamic PDE surface (`dynamic-pde-surfaces.txt` eq 1) compiled from a spec
+//! dict (the JSON of `docs/formats.md` section 6), solved at an instant by collocation least
+//! squares (`vclay_pde`), evaluated at parameter arrays or tessellated.
+
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use vclay_core::TriMesh;
+use vclay_pde::{ModelSolution, PdeModel};
+
+use crate::errors::PyResultExt;
+use crate::util;
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PdeSurface>()
+}
+
+/// A PDE surface model: one or more patches from a spec (dict or JSON text; errors name the
+/// place in the spec: `PdeError`).
+#[pyclass(module = "vclay", frozen)]
+#[derive(Debug)]
+pub struct PdeSurface {
+    model: PdeModel,
+}
+
+impl PdeSurface {
+    fn solve_at(&self, py: Python<'_>, t: f64) -> PyResult<ModelSolution> {
+        let m = &self.model;
+        py.detach(|| m.solve(t)).py()
+    }
+}
+
+#[pymethods]
+impl PdeSurface {
+    /// `PdeSurface(spec)`: `spec` a dict (or JSON text) in the spec format of `vclay pde`.
+    #[new]
+    fn new(spec: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let v = util::py_to_json(spec)?;
+        let text = serde_json::to_string(&v).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        Ok(Self {
+            model: PdeModel::from_json(&text, "spec").py()?,
+        })
+    }
+
+    /// `PdeSurface.read(path)`: a spec file (JSON, or TOML by extension).
+    #[staticmethod]
+    fn read(path: std::path::PathBuf) -> PyResult<Self> {
+        Ok(Self {
+            model: PdeModel::read(&path).py()?,
+        })
+    }
+
+    /// Patch names, in order.
+    #[getter]
+    fn patches(&self) -> Vec<String> {
+        self.model.patches.iter().map(|p| p.name.clone()).collect()
+    }
+
+    /// Points of patch `patch` at time `t` for an `(n, 2)` array of `(u, v)`: `(n, 3)`.
+    #[pyo3(signature = (params, t = 0.0, patch = 0))]
+    fn evaluate<'py>(
+        &self,
+        py: Python<'py>,
+        params: &Bound<'py, PyAny>,
+        t: f64,
+        patch: usize,
+    ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+        let p = self.model.patches.get(patch).ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "patch {patch}: the model has {} patches",
+                self.model.patches.len()
+            ))
+        })?;
+        let (uv, n) = util::rows(params, 2, "params")?;
+        let sol = self.solve_at(py, t)?;
+        let s = &sol.patches[patch];
+        let mut out = vec![0.0; n * 3];
+        py.detach(|| {
+            util::fill(&mut out, 3, |start, chunk| {
+                for (k, o) in chunk.chunks_exact_mut(3).enumerate() {
+                    let i = start + k;
+                    let q = vclay_pde::surface::point(p, s, uv[2 * i], uv[2 * i + 1]);
+                    o.copy_from_slice(&[q.x, q.y, q.z]);
+                }
+                Ok::<(), ()>(())
+            })
+        })
+        .expect("evaluation does not fail");
+        Ok(util::array2(py, out, n, 3))
+    }
+
+    /// Every patch at time `t` tessellated on `grid = (nu, nv)` samples: `(vertices, triangles,
+    /// normals)`.
+    #[pyo3(signature = (t = 0.0, grid = (64, 64)))]
+    fn mesh<'py>(
+        &self,
+        py: Python<'py>,
+        t: f64,
+        grid: (usize, usize),
+    ) -> PyResult<Bound<'py, PyAny>> {
+        if grid.0 < 2 || grid.1 < 2 {
+            return Err(PyValueError::new_err("grid: at least 2 x 2 samples"));
+        }
+        let sol = self.solve_at(py, t)?;
+        let m = &self.model;
+        let mesh = py.detach(|| {
+            let mut mesh = TriMesh::new();
+            m.tessellate(&sol, grid.0, grid.1, &mut mesh);
+            mesh
+        });
+        util::mesh_arrays(py, &mesh)
+    }
+
+    /// Largest root-mean-square collocation residual over the patches at time `t`.
+    #[pyo3(signature = (t = 0.0))]
+    fn residual(&self, py: Python<'_>, t: f64) -> PyResult<f64> {
+        Ok(self.solve_at(py, t)?.residual_rms())
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "<vclay PdeSurface {:?}: {} patches>",
+            self.model.name,
+            self.model.patches.len()
+        )
+    }
+}

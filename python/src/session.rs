@@ -1,0 +1,387 @@
+//! `Session`: the session layer (`vclay_session`) from Python: load a scenario (`.toml`) or a
+//! saved session (`.json`), apply commands given as dicts (the same values as a scenario's
+//! timeline entries and the session file's log), undo and redo, step with the GIL released,
+//! read state as numpy arrays, save bit for bit.
+//!
+//! Arrays of a model come from its [`Model::save`] JSON (control and data points) or its
+//! display geometry (`mesh`); the session layer has no direct array accessor yet, so reading
+//! points serializes the model's state once per call.
+
+use std::path::{Path, PathBuf};
+
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use vclay_core::Vec3;
+use vclay_session::file::{self, RunInfo};
+use vclay_session::scenario::{OutputSpec, Scenario};
+use vclay_session::{Command, Model, Session as KSession};
+
+use crate::errors::{PyResultExt, SessionError};
+use crate::util;
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Session>()
+}
+
+/// A session: named models of any kind (D-NURBS, subdivision and B-spline solids, FFD, PDE
+/// surfaces), their scheduled commands, the command log, undo and redo.
+#[pyclass(module = "vclay")]
+#[derive(Debug)]
+pub struct Session {
+    session: KSession,
+    /// Scenario or saved run information (name, end step, outputs).
+    run: Option<RunInfo>,
+}
+
+impl Session {
+    fn model(&self, name: Option<&str>) -> PyResult<&dyn Model> {
+        self.session.model(name).py()
+    }
+}
+
+/// Looks up `key` in the model state: first under `state`, then at the top level.
+fn find_points(v: &serde_json::Value, keys: &[&str]) -> Option<Vec<Vec3>> {
+    let scopes = [v.get("state"), Some(v)];
+    for scope in scopes.into_iter().flatten() {
+        for k in keys {
+            if let Some(serde_json::Value::Array(a)) = scope.get(*k) {
+                let pts: Option<Vec<Vec3>> = a
+                    .iter()
+                    .map(|p| {
+                        let c = p.as_array()?;
+                        match c.as_slice() {
+                            [x, y, z] => Some(Vec3::new(x.as_f64()?, y.as_f64()?, z.as_f64()?)),
+                            _ => None,
+                        }
+                    })
+                    .collect();
+                if pts.is_some() {
+                    return pts;
+                }
+            }
+        }
+    }
+    None
+}
+
+fn is_toml(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+}
+
+#[pymethods]
+impl Session {
+    /// An empty session (models come from `Session.load`).
+    #[new]
+    fn new() -> Self {
+        Self {
+            session: KSession::new(),
+            run: None,
+        }
+    }
+
+    /// `Session.load(path)`: a scenario (`.toml`: models plus a scheduled timeline) or a saved
+    /// session (`.json`). Errors name the file, line and key (`FileError`).
+    #[staticmethod]
+    fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        py.detach(|| {
+            if is_toml(&path) {
+                let sc = Scenario::from_file(&path).py()?;
+                Ok(Self {
+                    session: sc.session,
+                    run: Some(RunInfo {
+                        name: sc.name,
+                        end_step: sc.steps,
+                        output: sc.output,
+                    }),
+                })
+            } else {
+                let (session, run) = file::load(&path).py()?;
+                Ok(Self { session, run })
+            }
+        })
+    }
+
+    /// Writes the session (every model's full state, the schedule, the command log) to a
+    /// `.json` session file, atomically. Loading it and stepping continues bit for bit.
+    fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let s = &self.session;
+        let run = self.run.as_ref();
+        py.detach(|| file::save(&path, s, run)).py()
+    }
+
+    /// The session file's content as a dict.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let v = file::to_value(&self.session, self.run.as_ref()).py()?;
+        util::json_to_py(py, &v)
+    }
+
+    /// Model names, in order.
+    #[getter]
+    fn models(&self) -> Vec<String> {
+        self.session
+            .model_names()
+            .iter()
+            .map(|s| s.to_string())
+            .collect()
+    }
+
+    /// Session time: the earliest model clock.
+    #[getter]
+    fn time(&self) -> f64 {
+        self.session.time()
+    }
+
+    /// The scenario's run length in steps (None for a session without run information).
+    #[getter]
+    fn scenario_steps(&self) -> Option<u64> {
+        self.run.as_ref().map(|r| r.end_step)
+    }
+
+    /// Steps taken by model `model` (default: the first).
+    #[pyo3(signature = (model = None))]
+    fn steps(&self, model: Option<&str>) -> PyResult<u64> {
+        Ok(self.model(model)?.steps())
+    }
+
+    /// `kind` of model `model`: `dnurbs-curve`, `subdivision-solid`, ...
+    #[pyo3(signature = (model = None))]
+    fn kind(&self, model: Option<&str>) -> PyResult<String> {
+        Ok(self.model(model)?.kind().name().to_string())
+    }
+
+    /// One line about model `model` (sizes).
+    #[pyo3(signature = (model = None))]
+    fn summary(&self, model: Option<&str>) -> PyResult<String> {
+        Ok(self.model(model)?.summary())
+    }
+
+    /// Applies a command now: a dict (or JSON text) such as `{"action": "rope", "from": [1, 1,
+    /// 1], "to": [1.5, 1.4, 1.6], "until": 0.5}` or `{"action": "set", "name":
+    /// "edge_stiffness", "value": 80}`, optionally with `"model": name`. Returns the log line.
+    /// A command that cannot apply raises `CommandError` and leaves the session unchanged.
+    fn apply(&mut self, py: Python<'_>, command: &Bound<'_, PyAny>) -> PyResult<String> {
+        let v = util::py_to_json(command)?;
+        let c: Command = serde_json::from_value(v)
+            .map_err(|e| crate::errors::CommandError::new_err(format!("command: {e}")))?;
+        let s = &mut self.session;
+        py.detach(|| s.apply(c)).py()
+    }
+
+    /// Schedules commands (dicts with `"at"`: seconds) like a scenario's timeline.
+    fn schedule(&mut self, commands: &Bound<'_, PyAny>) -> PyResult<()> {
+        let v = util::py_to_json(commands)?;
+        let timed: Vec<vclay_session::Timed> = serde_json::from_value(v)
+            .map_err(|e| crate::errors::CommandError::new_err(format!("schedule: {e}")))?;
+        self.session.schedule_commands(timed).py()
+    }
+
+    /// Undoes the last command; returns its log entry as a dict.
+    fn undo<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let entry = self.session.undo().py()?;
+        let v = serde_json::to_value(&entry).map_err(|e| SessionError::new_err(e.to_string()))?;
+        util::json_to_py(py, &v)
+    }
+
+    /// Applies the last undone command again; returns its log line.
+    fn redo(&mut self) -> PyResult<String> {
+        self.session.redo().py()
+    }
+
+    /// Whether there is something to undo.
+    #[getter]
+    fn can_undo(&self) -> bool {
+        self.session.can_undo()
+    }
+
+    /// Whether there is something to redo.
+    #[getter]
+    fn can_redo(&self) -> bool {
+        self.session.can_redo()
+    }
+
+    /// Advances every model by `n` steps (scheduled commands fire on the way), with the GIL
+    /// released. Returns the log lines of the scheduled commands applied. A diverging model
+    /// raises `DivergedError`.
+    #[pyo3(signature = (n = 1))]
+    fn step(&mut self, py: Python<'_>, n: u64) -> PyResult<Vec<String>> {
+        let s = &mut self.session;
+        py.detach(|| s.run(n)).py()
+    }
+
+    /// Steps each model until its clock reaches `t` (within half a step).
+    fn advance_to(&mut self, py: Python<'_>, t: f64) -> PyResult<Vec<String>> {
+        let s = &mut self.session;
+        py.detach(|| s.advance_to(t)).py()
+    }
+
+    /// Runs `steps` steps (default: the rest of the scenario) writing the scenario's
+    /// `[output]` (frames, final files, energy table) into `out_dir`, like `vclay run`.
+    /// Returns a dict: steps, mean_step_ms, frames, files, log.
+    #[pyo3(signature = (out_dir, steps = None))]
+    fn run<'py>(
+        &mut self,
+        py: Python<'py>,
+        out_dir: PathBuf,
+        steps: Option<u64>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let output = self.run.as_ref().map_or_else(
+            || OutputSpec {
+                every: vclay_session::scenario::DEFAULT_FRAME_EVERY,
+                ..OutputSpec::default()
+            },
+            |r| r.output.clone(),
+        );
+        let done = self.model(None)?.steps();
+        let steps = match (steps, &self.run) {
+            (Some(n), _) => n,
+            (None, Some(r)) => r.end_step.saturating_sub(done),
+            (None, None) => {
+                return Err(PyValueError::new_err(
+                    "run: give `steps` (this session has no scenario run length)",
+                ));
+            }
+        };
+        let s = &mut self.session;
+        let summary = py
+            .detach(|| vclay_session::run::run(s, steps, &out_dir, &output, &mut |_| {}))
+            .py()?;
+        let d = PyDict::new(py);
+        d.set_item("steps", summary.steps)?;
+        d.set_item("mean_step_ms", summary.mean_step_ms)?;
+        d.set_item("max_step_ms", summary.max_step_ms)?;
+        d.set_item("frames", summary.frames)?;
+        d.set_item("files", summary.files)?;
+        d.set_item("log", summary.log)?;
+        Ok(d)
+    }
+
+    /// Energies of model `model`: dict kinetic, elastic, tools, total.
+    #[pyo3(signature = (model = None))]
+    fn energy<'py>(&self, py: Python<'py>, model: Option<&str>) -> PyResult<Bound<'py, PyDict>> {
+        let e = self.model(model)?.energy();
+        let d = PyDict::new(py);
+        d.set_item("kinetic", e.kinetic)?;
+        d.set_item("elastic", e.elastic)?;
+        d.set_item("tools", e.tools)?;
+        d.set_item("total", e.total())?;
+        Ok(d)
+    }
+
+    /// Material and simulation parameters of model `model`: a list of dicts (name, value,
+    /// min, max, doc); change one with `apply({"action": "set", "name": ..., "value": ...})`.
+    #[pyo3(signature = (model = None))]
+    fn params<'py>(&self, py: Python<'py>, model: Option<&str>) -> PyResult<Bound<'py, PyList>> {
+        let ps = self.model(model)?.params();
+        let items = ps
+            .iter()
+            .map(|p| {
+                let d = PyDict::new(py);
+                d.set_item("name", &p.name)?;
+                d.set_item("value", p.value)?;
+                d.set_item("min", p.min)?;
+                d.set_item("max", p.max)?;
+                d.set_item("doc", &p.doc)?;
+                Ok(d)
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        PyList::new(py, items)
+    }
+
+    /// The command log: a list of dicts (step, time, model, command, message).
+    #[getter]
+    fn log<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let v = serde_json::to_value(self.session.log())
+            .map_err(|e| SessionError::new_err(e.to_string()))?;
+        util::json_to_py(py, &v)
+    }
+
+    /// Everything model `model` saves (its session-file entry) as a dict.
+    #[pyo3(signature = (model = None))]
+    fn state<'py>(&self, py: Python<'py>, model: Option<&str>) -> PyResult<Bound<'py, PyAny>> {
+        let v = self.model(model)?.save().py()?;
+        util::json_to_py(py, &v)
+    }
+
+    /// Control points of model `model`, `(n, 3)` (flat, last parametric index fastest): the
+    /// D-NURBS control net, a solid's control lattice, an FFD lattice.
+    #[pyo3(signature = (model = None))]
+    fn control_points<'py>(
+        &self,
+        py: Python<'py>,
+        model: Option<&str>,
+    ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+        let m = self.model(model)?;
+        let v = m.save().py()?;
+        let pts = find_points(&v, &["control_points", "points"]).ok_or_else(|| {
+            SessionError::new_err(format!(
+                "a {} model has no control points (use mesh())",
+                m.kind()
+            ))
+        })?;
+        Ok(util::points_array(py, &pts))
+    }
+
+    /// Data points of model `model`, `(n, 3)`: a solid's data (finest) lattice points; for the
+    /// other kinds the vertices of the display mesh (curves: the display polyline).
+    #[pyo3(signature = (model = None))]
+    fn data_points<'py>(
+        &self,
+        py: Python<'py>,
+        model: Option<&str>,
+    ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+        let m = self.model(model)?;
+        let v = m.save().py()?;
+        if let Some(p) = v
+            .get("state")
+            .and_then(|_| find_points(&v, &["data_points"]))
+        {
+            return Ok(util::points_array(py, &p));
+        }
+        let mesh = m.display_mesh().py()?;
+        if !mesh.positions.is_empty() {
+            return Ok(util::points_array(py, &mesh.positions));
+        }
+        let curve = m
+            .display_lines()
+            .into_iter()
+            .find(|l| l.role == Some(vclay_session::LineRole::Curve))
+            .map(|l| l.points)
+            .unwrap_or_default();
+        Ok(util::points_array(py, &curve))
+    }
+
+    /// The display surface of model `model`: `(vertices, triangles, normals)`.
+    #[pyo3(signature = (model = None))]
+    fn mesh<'py>(&self, py: Python<'py>, model: Option<&str>) -> PyResult<Bound<'py, PyAny>> {
+        let mesh = self.model(model)?.display_mesh().py()?;
+        util::mesh_arrays(py, &mesh)
+    }
+
+    /// Writes model `model` to `path` in the format its extension names (`.json`, `.obj`,
+    /// `.ply`, `.stl`, `.vtu`, `.ovm`, `.glb`, `.step`, `.igs`, as the kind supports).
+    #[pyo3(signature = (path, model = None))]
+    fn export(&self, py: Python<'_>, path: PathBuf, model: Option<&str>) -> PyResult<()> {
+        let m = self.model(model)?;
+        py.detach(|| m.export(&path)).py()
+    }
+
+    fn __repr__(&self) -> String {
+        let names = self.session.model_names();
+        let kinds: Vec<String> = names
+            .iter()
+            .filter_map(|n| {
+                self.session
+                    .model(Some(n))
+                    .ok()
+                    .map(|m| format!("{n} ({})", m.kind()))
+            })
+            .collect();
+        format!(
+            "<vclay Session t = {}: {}>",
+            self.session.time(),
+            kinds.join(", ")
+        )
+    }
+}
