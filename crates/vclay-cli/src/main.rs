@@ -19,6 +19,7 @@ mod limits;
 mod pde;
 mod render;
 mod run;
+mod studio;
 mod subdivide;
 
 /// vclay: physics-based free-form modeling (virtual clay).
@@ -119,6 +120,13 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Start the interactive studio (the `vclay-studio` binary): `vclay studio [FILE]
+    /// [--autosave PATH]`; build it with `cargo build --release -p vclay-studio`.
+    Studio {
+        /// Arguments passed to `vclay-studio` (FILE, --autosave PATH, ...).
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -166,6 +174,7 @@ fn main() -> ExitCode {
             out,
             quiet,
         }),
+        Command::Studio { args } => studio::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

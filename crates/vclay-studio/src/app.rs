@@ -1,0 +1,1226 @@
+//! The studio's window: start page, menus, tool and parameter panels, the 3D viewport, energy
+//! plot, log and status bar. [`Studio::show`] draws one egui frame and is all the UI logic;
+//! `eframe::App::ui` calls it in the real window and `egui_kittest` calls it in the tests.
+//!
+//! The UI never touches a model: it sends [`Request`]s to the simulation thread
+//! ([`crate::worker`]) and draws the [`Frame`]s it gets back.
+
+use std::collections::{BTreeMap, VecDeque};
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant, SystemTime};
+
+use egui::{Color32, Key, Modifiers, PointerButton, Pos2, Rect, Sense, Ui, Vec2};
+use vclay_core::Vec3;
+use vclay_session::{Command, Edit, ModelKind, Session};
+
+use crate::camera::{Camera, View};
+use crate::load;
+use crate::render::{DrawParams, Layers, SceneBuffers, SharedScene};
+use crate::worker::{AUTOSAVE_INTERVAL, Frame, Grab, Notice, Request, Worker};
+
+/// Pick tolerance in screen points.
+pub const PICK_POINTS: f64 = 8.0;
+/// Log lines kept.
+pub const LOG_LINES: usize = 200;
+
+/// The tool a press in the viewport uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tool {
+    /// Drag orbits the camera.
+    Orbit,
+    /// Rope (spring) drag.
+    Rope,
+    /// Push/pull force brush.
+    Force,
+    /// Fix the control point nearest the click.
+    Fix,
+    /// Free the control point nearest the click.
+    Free,
+    /// Extrude the face under the click.
+    Extrude,
+    /// Delete the cell under the click.
+    DeleteCell,
+    /// Paint material on the cell under the click.
+    Paint,
+    /// Drag a control point.
+    ControlPoint,
+    /// FFD direct manipulation of a mesh point.
+    FfdPoint,
+}
+
+impl Tool {
+    /// Button label.
+    pub fn label(self) -> &'static str {
+        match self {
+            Tool::Orbit => "Orbit",
+            Tool::Rope => "Rope",
+            Tool::Force => "Force brush",
+            Tool::Fix => "Fix",
+            Tool::Free => "Free",
+            Tool::Extrude => "Extrude face",
+            Tool::DeleteCell => "Delete cell",
+            Tool::Paint => "Paint material",
+            Tool::ControlPoint => "Control point",
+            Tool::FfdPoint => "FFD point",
+        }
+    }
+
+    /// The tools a kind takes, the default first.
+    pub fn for_kind(kind: ModelKind) -> Vec<Tool> {
+        use Tool::*;
+        match kind {
+            ModelKind::SubdivisionSolid => vec![
+                Rope,
+                Force,
+                Fix,
+                Free,
+                Extrude,
+                DeleteCell,
+                Paint,
+                ControlPoint,
+                Orbit,
+            ],
+            ModelKind::BsplineSolid => vec![Rope, Force, Fix, Free, Paint, ControlPoint, Orbit],
+            ModelKind::DnurbsCurve | ModelKind::DnurbsSurface | ModelKind::DnurbsSwung => {
+                vec![Rope, Force, Fix, Free, ControlPoint, Orbit]
+            }
+            ModelKind::Ffd => vec![FfdPoint, ControlPoint, Orbit],
+            ModelKind::PdeSurface => vec![Orbit],
+        }
+    }
+}
+
+/// Options of the tools.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ToolOptions {
+    /// Rope stiffness (0: the kind's default).
+    pub rope_stiffness: f64,
+    /// Force brush strength.
+    pub force: f64,
+    /// Force brush radius relative to the model size.
+    pub radius: f64,
+    /// Force brush duration, simulated seconds.
+    pub duration: f64,
+    /// Pull instead of push.
+    pub pull: bool,
+    /// Material painting: density, damping, edge stiffness.
+    pub paint: [f64; 3],
+    /// Gravity on, and its strength.
+    pub gravity: (bool, f64),
+    /// Inflation on, and its pressure.
+    pub inflate: (bool, f64),
+}
+
+impl Default for ToolOptions {
+    fn default() -> Self {
+        Self {
+            rope_stiffness: 0.0,
+            force: 20.0,
+            radius: 0.15,
+            duration: 0.1,
+            pull: false,
+            paint: [1.0, 2.0, 400.0],
+            gravity: (false, 9.81),
+            inflate: (false, 5.0),
+        }
+    }
+}
+
+enum Dialog {
+    Error(String),
+    Open(String),
+    SaveAs(String),
+    Export(String),
+    Screenshot(String),
+    Recover(PathBuf),
+    ConfirmClose,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Press {
+    /// Waiting for the worker's pick.
+    Waiting,
+    /// Dragging the grabbed point; the cursor is at the point.
+    Grabbed(Vec3),
+    /// Nothing hit: the drag orbits.
+    Orbit,
+}
+
+/// Start-up options.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// File to open.
+    pub file: Option<PathBuf>,
+    /// Autosave file (`None`: the default place).
+    pub autosave: Option<PathBuf>,
+    /// Start with the simulation paused.
+    pub paused: bool,
+    /// Do not offer recovery (tests, scripts).
+    pub no_recovery: bool,
+}
+
+/// The studio (see the [module docs](self)).
+pub struct Studio {
+    worker: Option<Worker>,
+    frame: Frame,
+    scene: Arc<SceneBuffers>,
+    gl: SharedScene,
+    /// The camera.
+    pub camera: Camera,
+    /// Layers drawn.
+    pub layers: Layers,
+    /// The active tool.
+    pub tool: Tool,
+    /// Tool options.
+    pub options: ToolOptions,
+    file: Option<PathBuf>,
+    autosave: Option<PathBuf>,
+    opts: Options,
+    dialog: Option<Dialog>,
+    log: VecDeque<String>,
+    energy: Vec<[f64; 3]>,
+    press: Option<Press>,
+    fitted: bool,
+    edits: BTreeMap<String, f64>,
+    frame_times: VecDeque<Instant>,
+    allow_close: bool,
+    shots: Arc<Mutex<Vec<Result<PathBuf, String>>>>,
+    kind: Option<ModelKind>,
+    pde_t: f64,
+    viewport: Rect,
+}
+
+impl std::fmt::Debug for Studio {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Studio")
+            .field("file", &self.file)
+            .field("tool", &self.tool)
+            .finish()
+    }
+}
+
+/// The default autosave file: beside `file`, else in the user's data folder.
+pub fn default_autosave(file: Option<&Path>) -> PathBuf {
+    if let Some(f) = file {
+        let name = f
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_else(|| "vclay".into());
+        return f.with_file_name(format!(".{name}.autosave.session"));
+    }
+    let base = std::env::var_os("XDG_DATA_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".local/share")))
+        .unwrap_or_else(std::env::temp_dir);
+    base.join("vclay").join("studio-autosave.session")
+}
+
+fn modified(p: &Path) -> Option<SystemTime> {
+    std::fs::metadata(p).and_then(|m| m.modified()).ok()
+}
+
+impl Studio {
+    /// A studio: opens `options.file` (an error shows in a dialog and the start page opens).
+    pub fn new(options: Options) -> Self {
+        let mut s = Self {
+            worker: None,
+            frame: Frame::default(),
+            scene: Arc::new(SceneBuffers::default()),
+            gl: Arc::new(Mutex::new(None)),
+            camera: Camera::default(),
+            layers: Layers::default(),
+            tool: Tool::Orbit,
+            options: ToolOptions::default(),
+            file: None,
+            autosave: None,
+            opts: options.clone(),
+            dialog: None,
+            log: VecDeque::new(),
+            energy: Vec::new(),
+            press: None,
+            fitted: false,
+            edits: BTreeMap::new(),
+            frame_times: VecDeque::new(),
+            allow_close: false,
+            shots: Arc::new(Mutex::new(Vec::new())),
+            kind: None,
+            pde_t: 0.0,
+            viewport: Rect::NOTHING,
+        };
+        if let Some(f) = &options.file {
+            match load::open(f) {
+                Ok(session) => s.set_session(session, Some(f.clone())),
+                Err(e) => s.dialog = Some(Dialog::Error(e)),
+            }
+        }
+        if !options.no_recovery && s.dialog.is_none() {
+            let auto = options
+                .autosave
+                .clone()
+                .unwrap_or_else(|| default_autosave(options.file.as_deref()));
+            let newer = match (modified(&auto), options.file.as_deref().and_then(modified)) {
+                (Some(a), Some(f)) => a > f,
+                (Some(_), None) => true,
+                _ => false,
+            };
+            if newer {
+                s.dialog = Some(Dialog::Recover(auto));
+            }
+        }
+        s
+    }
+
+    /// Replaces the session (a new simulation thread if none runs).
+    pub fn set_session(&mut self, session: Session, file: Option<PathBuf>) {
+        self.kind = session
+            .model_names()
+            .first()
+            .and_then(|n| session.model(Some(n)).ok().map(|m| m.kind()));
+        self.tool = self
+            .kind
+            .map(|k| Tool::for_kind(k)[0])
+            .unwrap_or(Tool::Orbit);
+        match &self.worker {
+            Some(w) => w.send(Request::Replace(Box::new(session))),
+            None => self.worker = Some(Worker::start(session, !self.opts.paused)),
+        }
+        self.file = file;
+        let auto = self
+            .opts
+            .autosave
+            .clone()
+            .unwrap_or_else(|| default_autosave(self.file.as_deref()));
+        if let Some(dir) = auto.parent() {
+            let _ = std::fs::create_dir_all(dir);
+        }
+        self.send(Request::Autosave(Some(auto.clone()), AUTOSAVE_INTERVAL));
+        self.autosave = Some(auto);
+        self.fitted = false;
+        self.energy.clear();
+        self.edits.clear();
+        self.press = None;
+        self.frame = Frame::default();
+    }
+
+    /// The simulation thread's handle (tests and the benchmark query the session through it).
+    pub fn worker(&self) -> Option<&Worker> {
+        self.worker.as_ref()
+    }
+
+    /// The last frame received.
+    pub fn frame(&self) -> &Frame {
+        &self.frame
+    }
+
+    /// The viewport's rectangle in the last frame (screen points).
+    pub fn viewport(&self) -> Rect {
+        self.viewport
+    }
+
+    /// The error shown in a dialog, if any.
+    pub fn error(&self) -> Option<&str> {
+        match &self.dialog {
+            Some(Dialog::Error(e)) => Some(e),
+            _ => None,
+        }
+    }
+
+    /// Log lines, oldest first.
+    pub fn log(&self) -> impl Iterator<Item = &String> {
+        self.log.iter()
+    }
+
+    /// Whether the session has changes not saved explicitly.
+    pub fn dirty(&self) -> bool {
+        self.frame.dirty
+    }
+
+    fn send(&self, r: Request) {
+        if let Some(w) = &self.worker {
+            w.send(r);
+        }
+    }
+
+    fn push_log(&mut self, l: String) {
+        self.log.push_back(l);
+        while self.log.len() > LOG_LINES {
+            self.log.pop_front();
+        }
+    }
+
+    fn model_name(&self) -> Option<String> {
+        self.frame.models.first().map(|m| m.name.clone())
+    }
+
+    fn apply(&self, edit: Edit) {
+        if let Some(m) = self.model_name() {
+            self.send(Request::Apply(Command::to(&m, edit)));
+        }
+    }
+
+    /// Polls the worker: frames and notices.
+    fn poll(&mut self, ctx: &egui::Context) {
+        let Some(w) = &self.worker else { return };
+        let notices = w.notices();
+        let frame = w.take_frame();
+        for n in notices {
+            match n {
+                Notice::Log(l) => self.push_log(l),
+                Notice::Error { message, .. } => {
+                    self.push_log(format!("error: {message}"));
+                    self.dialog = Some(Dialog::Error(message));
+                    self.press = None;
+                }
+                Notice::Grabbed { point, .. } => {
+                    if self.press == Some(Press::Waiting) {
+                        self.press = Some(Press::Grabbed(point));
+                    }
+                }
+                Notice::Missed => {
+                    if self.press == Some(Press::Waiting) {
+                        self.press = Some(Press::Orbit);
+                    }
+                }
+                Notice::Saved(p) => {
+                    self.push_log(format!("saved {}", p.display()));
+                    self.file = Some(p);
+                }
+                Notice::Autosaved(_) => {}
+            }
+        }
+        if let Some(f) = frame {
+            self.energy.extend_from_slice(&f.samples);
+            if self.energy.len() > crate::worker::ENERGY_SAMPLES {
+                let cut = self.energy.len() - crate::worker::ENERGY_SAMPLES;
+                self.energy.drain(..cut);
+            }
+            self.frame = f;
+            if let Some(m) = self.frame.models.first()
+                && m.kind == ModelKind::PdeSurface
+            {
+                self.pde_t = m.time;
+            }
+            self.rebuild_scene();
+            if !self.fitted && !self.frame.models.is_empty() {
+                self.fit();
+                self.fitted = true;
+            }
+            ctx.request_repaint();
+        }
+    }
+
+    fn rebuild_scene(&mut self) {
+        self.scene = Arc::new(SceneBuffers::build(&self.frame, &self.layers));
+    }
+
+    /// Fits the camera to the scene.
+    pub fn fit(&mut self) {
+        if let Some((lo, hi)) = self.scene.bounds {
+            self.camera.fit(lo, hi);
+        }
+    }
+
+    fn model_size(&self) -> f64 {
+        self.frame
+            .models
+            .iter()
+            .map(|m| m.size)
+            .fold(0.0, f64::max)
+            .max(1e-9)
+    }
+
+    /// Draws one frame of the whole window.
+    pub fn show(&mut self, ui: &mut Ui) {
+        let ctx = ui.ctx().clone();
+        if let Some(w) = &self.worker {
+            let c = ctx.clone();
+            w.set_wake(move || c.request_repaint());
+        }
+        self.poll(&ctx);
+        let now = Instant::now();
+        self.frame_times.push_back(now);
+        while self
+            .frame_times
+            .front()
+            .is_some_and(|t| now.duration_since(*t) > Duration::from_secs(1))
+        {
+            self.frame_times.pop_front();
+        }
+        self.shortcuts(&ctx);
+        self.handle_close(&ctx);
+        self.handle_screenshot();
+
+        egui::Panel::top("menu").show(ui, |ui| self.menu(ui));
+        egui::Panel::bottom("status").show(ui, |ui| self.status(ui));
+        if self.worker.is_some() {
+            egui::Panel::left("tools")
+                .default_size(230.0)
+                .show(ui, |ui| {
+                    egui::ScrollArea::vertical().show(ui, |ui| self.tools_panel(ui));
+                });
+            egui::Panel::right("plot")
+                .default_size(260.0)
+                .show(ui, |ui| self.plot_panel(ui));
+            egui::CentralPanel::default().show(ui, |ui| self.viewport_ui(ui));
+        } else {
+            egui::CentralPanel::default().show(ui, |ui| self.start_page(ui));
+        }
+        self.dialogs(&ctx);
+        if self.frame.running || self.press.is_some() {
+            // The worker wakes us with each new frame; this keeps the frame-rate figure alive.
+            ctx.request_repaint_after(Duration::from_millis(250));
+        }
+    }
+
+    fn shortcuts(&mut self, ctx: &egui::Context) {
+        let (undo, redo) = ctx.input_mut(|i| {
+            let redo = i.consume_key(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z)
+                || i.consume_key(Modifiers::COMMAND, Key::Y);
+            let undo = i.consume_key(Modifiers::COMMAND, Key::Z);
+            (undo, redo)
+        });
+        if redo {
+            self.send(Request::Redo);
+        } else if undo {
+            self.send(Request::Undo);
+        }
+        if ctx.input_mut(|i| i.consume_key(Modifiers::COMMAND, Key::S)) {
+            self.save();
+        }
+    }
+
+    fn handle_close(&mut self, ctx: &egui::Context) {
+        if ctx.input(|i| i.viewport().close_requested()) && self.dirty() && !self.allow_close {
+            ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
+            self.dialog = Some(Dialog::ConfirmClose);
+        }
+    }
+
+    fn handle_screenshot(&mut self) {
+        let done: Vec<Result<PathBuf, String>> = match self.shots.lock() {
+            Ok(mut v) => v.drain(..).collect(),
+            Err(_) => Vec::new(),
+        };
+        for r in done {
+            match r {
+                Ok(p) => self.push_log(format!("screenshot {}", p.display())),
+                Err(e) => self.dialog = Some(Dialog::Error(e)),
+            }
+        }
+    }
+
+    /// Requests a screenshot of the window into `path` (a PNG written when the image arrives).
+    pub fn screenshot(&mut self, ctx: &egui::Context, path: PathBuf) {
+        let shots = self.shots.clone();
+        let c = ctx.clone();
+        let cb = egui::ScreenshotCallback::new(move |img| {
+            let r = write_png(&path, &img).map(|()| path);
+            if let Ok(mut v) = shots.lock() {
+                v.push(r);
+            }
+            c.request_repaint();
+        });
+        ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(cb));
+    }
+
+    fn save(&mut self) {
+        match &self.file {
+            Some(f) if load::is_session_file(f) => self.send(Request::Save(f.clone())),
+            _ => {
+                let suggestion = self
+                    .file
+                    .as_ref()
+                    .map(|f| f.with_extension("session"))
+                    .unwrap_or_else(|| PathBuf::from("model.session"));
+                self.dialog = Some(Dialog::SaveAs(suggestion.display().to_string()));
+            }
+        }
+    }
+
+    fn menu(&mut self, ui: &mut Ui) {
+        ui.horizontal(|ui| {
+            ui.menu_button("File", |ui| {
+                if ui.button("Open...").clicked() {
+                    self.dialog = Some(Dialog::Open(String::new()));
+                }
+                if ui.button("Start page").clicked() {
+                    self.worker = None;
+                    self.frame = Frame::default();
+                    self.scene = Arc::new(SceneBuffers::default());
+                }
+                ui.separator();
+                let has = self.worker.is_some();
+                if ui.add_enabled(has, egui::Button::new("Save")).clicked() {
+                    self.save();
+                }
+                if ui
+                    .add_enabled(has, egui::Button::new("Save as..."))
+                    .clicked()
+                {
+                    self.dialog = Some(Dialog::SaveAs("model.session".into()));
+                }
+                if ui
+                    .add_enabled(has, egui::Button::new("Export..."))
+                    .clicked()
+                {
+                    self.dialog = Some(Dialog::Export("model.obj".into()));
+                }
+                if ui.button("Screenshot...").clicked() {
+                    self.dialog = Some(Dialog::Screenshot("vclay-studio.png".into()));
+                }
+                ui.separator();
+                if ui.button("Quit").clicked() {
+                    ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                }
+            });
+            ui.menu_button("Edit", |ui| {
+                if ui
+                    .add_enabled(self.frame.can_undo, egui::Button::new("Undo (Ctrl+Z)"))
+                    .clicked()
+                {
+                    self.send(Request::Undo);
+                }
+                if ui
+                    .add_enabled(
+                        self.frame.can_redo,
+                        egui::Button::new("Redo (Ctrl+Shift+Z)"),
+                    )
+                    .clicked()
+                {
+                    self.send(Request::Redo);
+                }
+            });
+            ui.menu_button("View", |ui| self.view_buttons(ui));
+            ui.separator();
+            if self.worker.is_some() {
+                self.view_buttons(ui);
+            }
+        });
+    }
+
+    fn view_buttons(&mut self, ui: &mut Ui) {
+        if ui.button("Fit").clicked() {
+            self.fit();
+        }
+        for (label, v) in [
+            ("Front", View::Front),
+            ("Top", View::Top),
+            ("Side", View::Side),
+            ("Iso", View::Iso),
+        ] {
+            if ui.button(label).clicked() {
+                self.camera.set_view(v);
+            }
+        }
+        let before = self.layers;
+        ui.checkbox(&mut self.layers.shaded, "Shaded");
+        ui.checkbox(&mut self.layers.wireframe, "Wireframe");
+        ui.checkbox(&mut self.layers.control_net, "Control net");
+        ui.checkbox(&mut self.layers.data_points, "Data points");
+        if before != self.layers {
+            self.rebuild_scene();
+        }
+    }
+
+    fn start_page(&mut self, ui: &mut Ui) {
+        ui.heading("vclay studio");
+        ui.label("Physics-based free-form modeling. Open a built-in model:");
+        ui.add_space(8.0);
+        let mut chosen = None;
+        for b in &load::BUILTINS {
+            if ui.button(b.title).clicked() {
+                chosen = Some(*b);
+            }
+        }
+        ui.add_space(8.0);
+        ui.label(
+            "Or File > Open: a scenario (.toml), a session (.session), a lattice (.ovm), a model \
+             (.json) or a mesh (.obj, .stl, .ply).",
+        );
+        if let Some(b) = chosen {
+            self.open_builtin(&b);
+        }
+    }
+
+    /// Opens a built-in model by value.
+    pub fn open_builtin(&mut self, b: &load::Builtin) {
+        match load::builtin(b) {
+            Ok(s) => self.set_session(s, None),
+            Err(e) => self.dialog = Some(Dialog::Error(e)),
+        }
+    }
+
+    fn tools_panel(&mut self, ui: &mut Ui) {
+        ui.heading("Tools");
+        let tools = self.kind.map(Tool::for_kind).unwrap_or_default();
+        ui.horizontal_wrapped(|ui| {
+            for t in tools {
+                ui.selectable_value(&mut self.tool, t, t.label());
+            }
+        });
+        let o = &mut self.options;
+        match self.tool {
+            Tool::Rope => {
+                ui.add(
+                    egui::Slider::new(&mut o.rope_stiffness, 0.0..=500.0)
+                        .text("stiffness (0: default)"),
+                );
+                ui.small("Drag on the model; Alt+drag moves along the view direction.");
+            }
+            Tool::Force => {
+                ui.add(egui::Slider::new(&mut o.force, 0.0..=500.0).text("strength"));
+                ui.add(egui::Slider::new(&mut o.radius, 0.01..=1.0).text("radius (x size)"));
+                ui.add(egui::Slider::new(&mut o.duration, 0.01..=2.0).text("duration (s)"));
+                ui.checkbox(&mut o.pull, "pull (towards the viewer)");
+            }
+            Tool::Paint => {
+                ui.add(egui::Slider::new(&mut o.paint[0], 0.01..=100.0).text("density"));
+                ui.add(egui::Slider::new(&mut o.paint[1], 0.0..=100.0).text("damping"));
+                ui.add(
+                    egui::Slider::new(&mut o.paint[2], 0.0..=10_000.0)
+                        .logarithmic(true)
+                        .text("edge stiffness"),
+                );
+            }
+            _ => {}
+        }
+        ui.separator();
+        ui.heading("Simulation");
+        ui.horizontal(|ui| {
+            let running = self.frame.running;
+            if ui.button(if running { "Pause" } else { "Run" }).clicked() {
+                self.send(Request::Run(!running));
+            }
+            if ui.button("Step").clicked() {
+                self.send(Request::Step(1));
+            }
+            if ui.button("Stop motion").clicked() {
+                self.apply(Edit::Stop);
+            }
+        });
+        let solid_or_dnurbs = matches!(
+            self.kind,
+            Some(
+                ModelKind::SubdivisionSolid
+                    | ModelKind::BsplineSolid
+                    | ModelKind::DnurbsCurve
+                    | ModelKind::DnurbsSurface
+                    | ModelKind::DnurbsSwung
+            )
+        );
+        if solid_or_dnurbs {
+            if ui.button("Plastic reset").clicked() {
+                self.apply(Edit::PlasticReset);
+            }
+            let (mut on, mut g) = self.options.gravity;
+            let c1 = ui.checkbox(&mut on, "Gravity").changed();
+            let r = ui.add(egui::Slider::new(&mut g, 0.0..=50.0).text("g"));
+            let c2 = on && (r.drag_stopped() || (r.changed() && !r.dragged()));
+            self.options.gravity = (on, g);
+            if c1 || c2 {
+                self.apply(if on {
+                    Edit::Gravity {
+                        name: Some("studio-gravity".into()),
+                        g: [0.0, 0.0, -g],
+                        until: None,
+                    }
+                } else {
+                    Edit::Release {
+                        name: "studio-gravity".into(),
+                    }
+                });
+            }
+            if matches!(
+                self.kind,
+                Some(ModelKind::SubdivisionSolid | ModelKind::BsplineSolid)
+            ) {
+                let (mut on, mut p) = self.options.inflate;
+                let c1 = ui.checkbox(&mut on, "Inflation").changed();
+                let r = ui.add(egui::Slider::new(&mut p, -50.0..=50.0).text("pressure"));
+                let c2 = on && (r.drag_stopped() || (r.changed() && !r.dragged()));
+                self.options.inflate = (on, p);
+                if c1 || c2 {
+                    self.apply(if on {
+                        Edit::Inflate {
+                            name: Some("studio-inflate".into()),
+                            pressure: p,
+                            until: None,
+                        }
+                    } else {
+                        Edit::Release {
+                            name: "studio-inflate".into(),
+                        }
+                    });
+                }
+            }
+        }
+        let mut speed = 1.0_f64;
+        ui.horizontal(|ui| {
+            ui.label("Speed:");
+            for (l, s) in [("real time", 1.0), ("0.25x", 0.25), ("max", 0.0)] {
+                if ui.button(l).clicked() {
+                    speed = s;
+                    self.send(Request::Speed(s));
+                }
+            }
+        });
+        let _ = speed;
+        if self.kind == Some(ModelKind::PdeSurface) {
+            let mut t = self.pde_t;
+            let r = ui.add(egui::Slider::new(&mut t, 0.0..=10.0).text("time t"));
+            self.pde_t = t;
+            if r.drag_stopped() || (r.changed() && !r.dragged()) {
+                self.apply(Edit::PdeSet {
+                    name: "t".into(),
+                    value: t,
+                });
+            }
+        }
+        ui.separator();
+        ui.heading("Parameters");
+        self.params_ui(ui);
+    }
+
+    fn params_ui(&mut self, ui: &mut Ui) {
+        let Some(m) = self.frame.models.first().cloned() else {
+            return;
+        };
+        ui.label(egui::RichText::new(&m.summary).small());
+        for p in &m.params {
+            let mut v = *self.edits.get(&p.name).unwrap_or(&p.value);
+            let (lo, hi) = (p.min.min(v), p.max.max(v));
+            if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                continue;
+            }
+            let log = lo > 0.0 && hi / lo > 100.0;
+            let r = ui
+                .add(
+                    egui::Slider::new(&mut v, lo..=hi)
+                        .logarithmic(log)
+                        .text(&p.name),
+                )
+                .on_hover_text(&p.doc);
+            if r.changed() {
+                self.edits.insert(p.name.clone(), v);
+            }
+            if r.drag_stopped() || (r.changed() && !r.dragged()) {
+                self.edits.remove(&p.name);
+                let edit = if m.kind == ModelKind::PdeSurface && p.name != "dt" {
+                    Edit::PdeSet {
+                        name: p.name.clone(),
+                        value: v,
+                    }
+                } else {
+                    Edit::Set {
+                        name: p.name.clone(),
+                        value: v,
+                    }
+                };
+                self.send(Request::Apply(Command::to(&m.name, edit)));
+            }
+        }
+    }
+
+    fn plot_panel(&mut self, ui: &mut Ui) {
+        ui.heading("Energy");
+        let kin: egui_plot::PlotPoints<'_> = self.energy.iter().map(|s| [s[0], s[1]]).collect();
+        let ela: egui_plot::PlotPoints<'_> = self.energy.iter().map(|s| [s[0], s[2]]).collect();
+        egui_plot::Plot::new("energy")
+            .height(200.0)
+            .legend(egui_plot::Legend::default())
+            .show(ui, |p| {
+                p.line(egui_plot::Line::new("kinetic", kin));
+                p.line(egui_plot::Line::new("elastic", ela));
+            });
+        ui.label(format!(
+            "kinetic {:.4e}  elastic {:.4e}",
+            self.frame.energy.kinetic, self.frame.energy.elastic
+        ));
+        ui.separator();
+        ui.heading("Log");
+        egui::ScrollArea::vertical()
+            .stick_to_bottom(true)
+            .show(ui, |ui| {
+                for l in &self.log {
+                    ui.label(egui::RichText::new(l).small());
+                }
+            });
+    }
+
+    fn status(&mut self, ui: &mut Ui) {
+        ui.horizontal(|ui| {
+            let fps = self.frame_times.len();
+            ui.label(format!("{fps} frames/s"));
+            ui.separator();
+            ui.label(format!(
+                "t = {:.4}  steps {}  {:.0} steps/s  step {:.2} ms  display {:.1} ms",
+                self.frame.time,
+                self.frame.steps,
+                self.frame.steps_per_second,
+                self.frame.step_seconds * 1e3,
+                self.frame.build_seconds * 1e3
+            ));
+            ui.separator();
+            ui.label(format!("{} triangles", self.scene.tri_indices.len() / 3));
+            if self.frame.scheduled > 0 {
+                ui.separator();
+                ui.label(format!("{} scheduled", self.frame.scheduled));
+            }
+            if self.frame.dirty {
+                ui.separator();
+                ui.label("modified");
+            }
+            if let Some(f) = &self.file {
+                ui.separator();
+                ui.label(f.display().to_string());
+            }
+        });
+    }
+
+    fn viewport_ui(&mut self, ui: &mut Ui) {
+        let (rect, resp) = ui.allocate_exact_size(ui.available_size(), Sense::click_and_drag());
+        self.viewport = rect;
+        ui.painter()
+            .rect_filled(rect, 0.0, Color32::from_rgb(38, 42, 50));
+        let (w, h) = (rect.width() as f64, rect.height() as f64);
+        let input = ui.input(|i| {
+            (
+                i.pointer.primary_pressed(),
+                i.pointer.primary_released(),
+                i.pointer.interact_pos(),
+                i.pointer.delta(),
+                i.modifiers,
+                i.smooth_scroll_delta.y,
+                i.pointer.button_down(PointerButton::Middle),
+                i.pointer.button_down(PointerButton::Primary),
+            )
+        });
+        let (pressed, released, pos, delta, mods, scroll, middle, primary) = input;
+        let local = |p: Pos2| ((p.x - rect.min.x) as f64, (p.y - rect.min.y) as f64);
+        // Press: start a grab with the tool, or orbit/pan.
+        if pressed
+            && let Some(p) = pos
+            && rect.contains(p)
+        {
+            if self.tool == Tool::Orbit || mods.shift {
+                self.press = Some(Press::Orbit);
+            } else if let Some(grab) = self.grab_for_tool() {
+                let (x, y) = local(p);
+                let ray = self.camera.ray(x, y, w, h);
+                let per_point =
+                    2.0 * self.camera.distance * (crate::camera::FOV_Y / 2.0).tan() / h.max(1.0);
+                self.send(Request::Grab {
+                    ray,
+                    tolerance: PICK_POINTS * per_point,
+                    grab,
+                });
+                self.press = Some(Press::Waiting);
+            }
+        }
+        // Drag.
+        if primary && delta != Vec2::ZERO {
+            match self.press {
+                Some(Press::Grabbed(cursor)) => {
+                    let next = if mods.alt {
+                        let per_point =
+                            2.0 * self.camera.distance * (crate::camera::FOV_Y / 2.0).tan()
+                                / h.max(1.0);
+                        cursor - self.camera.back() * (delta.y as f64 * per_point)
+                    } else if let Some(p) = pos {
+                        let (x, y) = local(p);
+                        let ray = self.camera.ray(x, y, w, h);
+                        self.camera.on_view_plane(&ray, cursor)
+                    } else {
+                        cursor
+                    };
+                    self.press = Some(Press::Grabbed(next));
+                    self.send(Request::Drag { to: next });
+                }
+                Some(Press::Orbit) if mods.shift => {
+                    self.camera.pan(delta.x as f64, delta.y as f64, h)
+                }
+                Some(Press::Orbit) => self.camera.orbit(delta.x as f64, delta.y as f64),
+                _ => {}
+            }
+        }
+        if middle && delta != Vec2::ZERO && resp.hovered() {
+            self.camera.pan(delta.x as f64, delta.y as f64, h);
+        }
+        if released || (!primary && self.press.is_some()) {
+            if matches!(self.press, Some(Press::Grabbed(_)) | Some(Press::Waiting)) {
+                self.send(Request::Drop);
+            }
+            self.press = None;
+        }
+        if resp.hovered() && scroll != 0.0 {
+            self.camera.zoom(scroll as f64 / 50.0);
+        }
+        if resp.double_clicked() {
+            self.fit();
+        }
+        // Grab cursor marker.
+        if let Some(Press::Grabbed(c)) = self.press
+            && let Some((x, y)) = self.camera.project(c, w, h)
+        {
+            ui.painter().circle_stroke(
+                rect.min + Vec2::new(x as f32, y as f32),
+                6.0,
+                egui::Stroke::new(1.5, Color32::YELLOW),
+            );
+        }
+        self.paint_3d(ui, rect);
+    }
+
+    fn grab_for_tool(&self) -> Option<Grab> {
+        let o = &self.options;
+        Some(match self.tool {
+            Tool::Orbit => return None,
+            Tool::Rope => Grab::Rope {
+                stiffness: (o.rope_stiffness > 0.0).then_some(o.rope_stiffness),
+            },
+            Tool::Force => {
+                let back = self.camera.back();
+                Grab::Force {
+                    direction: if o.pull { back } else { -back },
+                    strength: o.force,
+                    radius: o.radius * self.model_size(),
+                    duration: o.duration,
+                }
+            }
+            Tool::Fix => Grab::Fix,
+            Tool::Free => Grab::Free,
+            Tool::Extrude => Grab::Extrude,
+            Tool::DeleteCell => Grab::DeleteCell,
+            Tool::Paint => Grab::PaintMaterial {
+                density: o.paint[0],
+                damping: o.paint[1],
+                edge_stiffness: o.paint[2],
+            },
+            Tool::ControlPoint => Grab::ControlPoint,
+            Tool::FfdPoint => Grab::FfdPoint,
+        })
+    }
+
+    fn paint_3d(&self, ui: &mut Ui, rect: Rect) {
+        let aspect = rect.width() as f64 / rect.height().max(1.0) as f64;
+        let size = self
+            .scene
+            .bounds
+            .map(|(lo, hi)| (hi - lo).norm())
+            .unwrap_or(1.0);
+        let m = self.camera.projection_matrix(aspect, size) * self.camera.view_matrix();
+        let mut mvp = [0.0_f32; 16];
+        for (k, v) in m.as_slice().iter().enumerate() {
+            mvp[k] = *v as f32;
+        }
+        let b = self.camera.back();
+        let params = DrawParams {
+            mvp,
+            light: [b.x as f32, b.y as f32, b.z as f32],
+            shaded: self.layers.shaded,
+            wireframe: self.layers.wireframe,
+        };
+        let scene = self.scene.clone();
+        let gl_scene = self.gl.clone();
+        let cb = eframe::egui_glow::CallbackFn::new(move |info, painter| {
+            let gl = painter.gl();
+            let Ok(mut slot) = gl_scene.lock() else {
+                return;
+            };
+            let s = slot.get_or_insert_with(|| crate::render::GlScene::new(gl));
+            if let Ok(s) = s {
+                s.upload(gl, &scene);
+                let v = info.viewport_in_pixels();
+                s.draw(
+                    gl,
+                    &params,
+                    [v.left_px, v.from_bottom_px, v.width_px, v.height_px],
+                );
+            }
+        });
+        ui.painter().add(egui::PaintCallback {
+            rect,
+            callback: Arc::new(cb),
+        });
+        if let Ok(slot) = self.gl.lock()
+            && let Some(Err(e)) = slot.as_ref()
+        {
+            ui.painter().text(
+                rect.center(),
+                egui::Align2::CENTER_CENTER,
+                format!("OpenGL: {e}"),
+                egui::FontId::proportional(14.0),
+                Color32::RED,
+            );
+        }
+    }
+
+    fn dialogs(&mut self, ctx: &egui::Context) {
+        let Some(d) = self.dialog.take() else { return };
+        let mut keep = true;
+        let mut next: Option<Dialog> = None;
+        let modal = egui::Modal::new(egui::Id::unique("vclay-studio-dialog"));
+        let d = match d {
+            Dialog::Error(msg) => {
+                modal.show(ctx, |ui| {
+                    ui.heading("Error");
+                    ui.label(&msg);
+                    if ui.button("OK").clicked() {
+                        keep = false;
+                    }
+                });
+                Dialog::Error(msg)
+            }
+            Dialog::Open(mut path) => {
+                modal.show(ctx, |ui| {
+                    ui.heading("Open");
+                    ui.text_edit_singleline(&mut path);
+                    ui.horizontal(|ui| {
+                        if ui.button("Open").clicked() {
+                            keep = false;
+                            match load::open(Path::new(&path)) {
+                                Ok(s) => self.set_session(s, Some(PathBuf::from(&path))),
+                                Err(e) => next = Some(Dialog::Error(e)),
+                            }
+                        }
+                        if ui.button("Cancel").clicked() {
+                            keep = false;
+                        }
+                    });
+                });
+                Dialog::Open(path)
+            }
+            Dialog::SaveAs(mut path) => {
+                modal.show(ctx, |ui| {
+                    ui.heading("Save session as");
+                    ui.text_edit_singleline(&mut path);
+                    ui.horizontal(|ui| {
+                        if ui.button("Save").clicked() {
+                            keep = false;
+                            self.send(Request::Save(PathBuf::from(&path)));
+                        }
+                        if ui.button("Cancel").clicked() {
+                            keep = false;
+                        }
+                    });
+                });
+                Dialog::SaveAs(path)
+            }
+            Dialog::Export(mut path) => {
+                modal.show(ctx, |ui| {
+                    ui.heading("Export the model");
+                    ui.label(format!(
+                        "By extension: {}",
+                        vclay_session::model::EXPORT_EXTENSIONS.join(", ")
+                    ));
+                    ui.text_edit_singleline(&mut path);
+                    ui.horizontal(|ui| {
+                        if ui.button("Export").clicked() {
+                            keep = false;
+                            if let Some(m) = self.model_name() {
+                                self.send(Request::Export {
+                                    model: m,
+                                    path: PathBuf::from(&path),
+                                });
+                            }
+                        }
+                        if ui.button("Cancel").clicked() {
+                            keep = false;
+                        }
+                    });
+                });
+                Dialog::Export(path)
+            }
+            Dialog::Screenshot(mut path) => {
+                modal.show(ctx, |ui| {
+                    ui.heading("Screenshot (PNG)");
+                    ui.text_edit_singleline(&mut path);
+                    ui.horizontal(|ui| {
+                        if ui.button("Take").clicked() {
+                            keep = false;
+                            self.screenshot(ctx, PathBuf::from(&path));
+                        }
+                        if ui.button("Cancel").clicked() {
+                            keep = false;
+                        }
+                    });
+                });
+                Dialog::Screenshot(path)
+            }
+            Dialog::Recover(path) => {
+                modal.show(ctx, |ui| {
+                    ui.heading("Recover?");
+                    ui.label(format!(
+                        "An autosaved session newer than the file exists:\n{}",
+                        path.display()
+                    ));
+                    ui.horizontal(|ui| {
+                        if ui.button("Recover").clicked() {
+                            keep = false;
+                            match load::open(&path) {
+                                Ok(s) => {
+                                    let f = self.file.clone();
+                                    self.set_session(s, f);
+                                }
+                                Err(e) => next = Some(Dialog::Error(e)),
+                            }
+                        }
+                        if ui.button("Discard").clicked() {
+                            keep = false;
+                        }
+                    });
+                });
+                Dialog::Recover(path)
+            }
+            Dialog::ConfirmClose => {
+                modal.show(ctx, |ui| {
+                    ui.heading("Unsaved changes");
+                    ui.label("The session has changes that are not saved.");
+                    ui.horizontal(|ui| {
+                        if ui.button("Save").clicked() {
+                            keep = false;
+                            self.save();
+                        }
+                        if ui.button("Discard and quit").clicked() {
+                            keep = false;
+                            self.allow_close = true;
+                            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+                        }
+                        if ui.button("Cancel").clicked() {
+                            keep = false;
+                        }
+                    });
+                });
+                Dialog::ConfirmClose
+            }
+        };
+        if next.is_some() {
+            self.dialog = next;
+        } else if keep && self.dialog.is_none() {
+            self.dialog = Some(d);
+        }
+    }
+}
+
+/// Writes an egui image as PNG.
+pub fn write_png(path: &Path, img: &egui::ColorImage) -> Result<(), String> {
+    let err = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
+    let f = std::fs::File::create(path).map_err(|e| err(&e))?;
+    let mut enc = png::Encoder::new(
+        std::io::BufWriter::new(f),
+        img.size[0] as u32,
+        img.size[1] as u32,
+    );
+    enc.set_color(png::ColorType::Rgba);
+    enc.set_depth(png::BitDepth::Eight);
+    let mut w = enc.write_header().map_err(|e| err(&e))?;
+    let bytes: Vec<u8> = img.pixels.iter().flat_map(|c| c.to_array()).collect();
+    w.write_image_data(&bytes).map_err(|e| err(&e))
+}
+
+impl eframe::App for Studio {
+    fn ui(&mut self, ui: &mut Ui, _frame: &mut eframe::Frame) {
+        self.show(ui);
+    }
+}

@@ -1,0 +1,1006 @@
+//! The simulation thread: it owns the [`Session`], applies what the UI sends, steps while
+//! running, autosaves, and hands the UI display data ([`Frame`]) when something changed.
+//!
+//! # Protocol
+//! The UI sends [`Request`]s over a channel and never waits for them (tests and the benchmark
+//! may, through [`Worker::query`]). The worker publishes the newest [`Frame`] in a one-slot
+//! mailbox and builds the next one only after the UI has taken the last, so a slow window never
+//! queues frames and never slows the simulation by more than one display build per frame.
+//! Notices (log lines, errors, pick results) go back over a second channel.
+//!
+//! # Undo groups
+//! One user action may produce several commands (a rope drag: attach, cursor moves, release).
+//! The worker records the log range of each such action and undoes or redoes it as one.
+//! Cursor moves are coalesced: at most one `move-rope` (or FFD move) per
+//! [`DRAG_INTERVAL`], because the session layer keeps a state snapshot per command.
+//!
+//! # Divergence
+//! A step that fails pauses the simulation and sends [`Notice::Error`] with the kernel's
+//! message (it names the step and a stable time step) and what to do.
+
+use std::path::PathBuf;
+use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use vclay_core::{TriMesh, Vec3};
+use vclay_session::{
+    Command, Edit, Element, Energy, Hit, LineSet, ModelKind, Param, PointMove, Ray, Session,
+};
+
+/// Least time between two applied cursor moves of one drag.
+pub const DRAG_INTERVAL: Duration = Duration::from_millis(40);
+/// Default autosave interval.
+pub const AUTOSAVE_INTERVAL: Duration = Duration::from_secs(3);
+/// Name of the studio's rope tool.
+pub const ROPE: &str = "studio-rope";
+/// Energy samples kept for the plot.
+pub const ENERGY_SAMPLES: usize = 4000;
+
+/// What a press on the model does (the tool of the toolbar).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Grab {
+    /// Attach a rope at the hit; drags move its cursor.
+    Rope {
+        /// Spring stiffness (`None`: the kind's default).
+        stiffness: Option<f64>,
+    },
+    /// Drag the control point hit (or nearest the hit).
+    ControlPoint,
+    /// FFD direct manipulation: drag the embedded point hit (eq 7).
+    FfdPoint,
+    /// A force at the hit, along `direction` scaled by `strength`, for `duration` seconds;
+    /// solids spread it over `radius`.
+    Force {
+        /// Direction (unit; the view direction for a push).
+        direction: Vec3,
+        /// Magnitude.
+        strength: f64,
+        /// Brush radius (solids).
+        radius: f64,
+        /// Seconds of simulated time it acts.
+        duration: f64,
+    },
+    /// Fix the control point nearest the hit.
+    Fix,
+    /// Free the control point nearest the hit.
+    Free,
+    /// Extrude the control face under the hit (subdivision solids).
+    Extrude,
+    /// Delete the control cell under the hit (subdivision solids).
+    DeleteCell,
+    /// Paint a material on the control cell under the hit (solids).
+    PaintMaterial {
+        /// Density.
+        density: f64,
+        /// Damping.
+        damping: f64,
+        /// Edge spring modulus.
+        edge_stiffness: f64,
+    },
+}
+
+/// One model's display data.
+#[derive(Clone, Debug)]
+pub struct ModelView {
+    /// Name in the session.
+    pub name: String,
+    /// Kind.
+    pub kind: ModelKind,
+    /// Summary line.
+    pub summary: String,
+    /// Shaded triangles with normals.
+    pub mesh: Arc<TriMesh>,
+    /// Lines and markers.
+    pub lines: Arc<Vec<LineSet>>,
+    /// Parameters (sliders).
+    pub params: Vec<Param>,
+    /// Model size (tolerances).
+    pub size: f64,
+    /// Time step.
+    pub dt: f64,
+    /// Simulated time.
+    pub time: f64,
+}
+
+/// What the UI draws: the session's models at one revision.
+#[derive(Clone, Debug, Default)]
+pub struct Frame {
+    /// The session revision shown.
+    pub revision: u64,
+    /// Models.
+    pub models: Vec<ModelView>,
+    /// Session time.
+    pub time: f64,
+    /// Steps taken by the first model.
+    pub steps: u64,
+    /// Energies of the models, summed.
+    pub energy: Energy,
+    /// Energy samples `(time, kinetic, elastic)` since the last frame.
+    pub samples: Vec<[f64; 3]>,
+    /// Mean wall time of the recent steps, seconds.
+    pub step_seconds: f64,
+    /// Steps per wall second recently.
+    pub steps_per_second: f64,
+    /// Whether the simulation runs.
+    pub running: bool,
+    /// Undo / redo available.
+    pub can_undo: bool,
+    /// See `can_undo`.
+    pub can_redo: bool,
+    /// Changes since the last explicit save (or the load).
+    pub dirty: bool,
+    /// Commands scheduled and not yet applied (a scenario's timeline).
+    pub scheduled: usize,
+    /// Wall time to build this frame's display data, seconds.
+    pub build_seconds: f64,
+}
+
+/// Messages from the UI to the worker.
+pub enum Request {
+    /// Apply a command (one undo group).
+    Apply(Command),
+    /// Undo the last action (a whole drag counts as one).
+    Undo,
+    /// Redo.
+    Redo,
+    /// Run or pause.
+    Run(bool),
+    /// Take `n` steps (while paused).
+    Step(u64),
+    /// Simulated seconds per wall second while running (0: as fast as possible).
+    Speed(f64),
+    /// Press on the model: pick with `ray` within `tolerance` (model units) and start
+    /// `grab`.
+    Grab {
+        /// The mouse ray.
+        ray: Ray,
+        /// Pick tolerance (model units).
+        tolerance: f64,
+        /// What to do.
+        grab: Grab,
+    },
+    /// Move the grabbed point's cursor to `to`.
+    Drag {
+        /// The cursor.
+        to: Vec3,
+    },
+    /// Release the grab.
+    Drop,
+    /// Replace the session (open, new); `path` is where explicit saves go.
+    Replace(Box<Session>),
+    /// Save the session to `path` (clears the dirty flag).
+    Save(PathBuf),
+    /// Set the autosave file (`None`: off).
+    Autosave(Option<PathBuf>, Duration),
+    /// Export model `model` to `path` through `Model::export`.
+    Export {
+        /// Model name.
+        model: String,
+        /// File.
+        path: PathBuf,
+    },
+    /// Run a closure on the session (tests, benchmark).
+    Query(Box<dyn FnOnce(&mut Session) + Send>),
+    /// Stop the thread.
+    Quit,
+}
+
+impl std::fmt::Debug for Request {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Request::Apply(_) => "Apply",
+            Request::Undo => "Undo",
+            Request::Redo => "Redo",
+            Request::Run(_) => "Run",
+            Request::Step(_) => "Step",
+            Request::Speed(_) => "Speed",
+            Request::Grab { .. } => "Grab",
+            Request::Drag { .. } => "Drag",
+            Request::Drop => "Drop",
+            Request::Replace(_) => "Replace",
+            Request::Save(_) => "Save",
+            Request::Autosave(..) => "Autosave",
+            Request::Export { .. } => "Export",
+            Request::Query(_) => "Query",
+            Request::Quit => "Quit",
+        })
+    }
+}
+
+/// Messages from the worker to the UI.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Notice {
+    /// A log line (a command applied, a file saved).
+    Log(String),
+    /// Something failed; `paused` says the simulation was paused (divergence).
+    Error {
+        /// The message.
+        message: String,
+        /// Whether the simulation was paused because of it.
+        paused: bool,
+    },
+    /// A grab started at `point` on model `model`.
+    Grabbed {
+        /// Model name.
+        model: String,
+        /// The hit point (the drag's anchor).
+        point: Vec3,
+        /// What was hit.
+        element: Element,
+    },
+    /// A press hit nothing.
+    Missed,
+    /// The session was saved to the path.
+    Saved(PathBuf),
+    /// The session was autosaved to the path.
+    Autosaved(PathBuf),
+}
+
+struct Shared {
+    frame: Mutex<Option<Frame>>,
+    wake: Mutex<Option<Box<dyn Fn() + Send>>>,
+}
+
+/// The handle the UI keeps: request sender, notice receiver, frame mailbox.
+pub struct Worker {
+    tx: Sender<Request>,
+    notices: Receiver<Notice>,
+    shared: Arc<Shared>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl std::fmt::Debug for Worker {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Worker(..)")
+    }
+}
+
+impl Worker {
+    /// Starts the thread with `session`; `running` starts the simulation at once.
+    pub fn start(session: Session, running: bool) -> Self {
+        let (tx, rx) = channel();
+        let (ntx, notices) = channel();
+        let shared = Arc::new(Shared {
+            frame: Mutex::new(None),
+            wake: Mutex::new(None),
+        });
+        let sh = shared.clone();
+        let thread = std::thread::Builder::new()
+            .name("vclay-sim".into())
+            .spawn(move || State::new(session, running, sh, ntx).run(rx))
+            .ok();
+        Self {
+            tx,
+            notices,
+            shared,
+            thread,
+        }
+    }
+
+    /// Sets what the worker calls when a new frame or notice is ready (the UI's repaint).
+    pub fn set_wake(&self, wake: impl Fn() + Send + 'static) {
+        if let Ok(mut w) = self.shared.wake.lock() {
+            *w = Some(Box::new(wake));
+        }
+    }
+
+    /// Sends a request (ignored if the thread has stopped).
+    pub fn send(&self, r: Request) {
+        let _ = self.tx.send(r);
+    }
+
+    /// The newest frame, if one is ready since the last call.
+    pub fn take_frame(&self) -> Option<Frame> {
+        self.shared.frame.lock().ok()?.take()
+    }
+
+    /// Notices since the last call.
+    pub fn notices(&self) -> Vec<Notice> {
+        self.notices.try_iter().collect()
+    }
+
+    /// Runs `f` on the session and waits for its result (`None` if the thread has stopped).
+    pub fn query<R: Send + 'static>(
+        &self,
+        f: impl FnOnce(&mut Session) -> R + Send + 'static,
+    ) -> Option<R> {
+        let (tx, rx) = channel();
+        self.send(Request::Query(Box::new(move |s| {
+            let _ = tx.send(f(s));
+        })));
+        rx.recv_timeout(Duration::from_secs(120)).ok()
+    }
+}
+
+impl Drop for Worker {
+    fn drop(&mut self) {
+        let _ = self.tx.send(Request::Quit);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+enum Active {
+    Rope,
+    ControlPoint { model: String, index: usize },
+    Ffd { model: String, last: Vec3 },
+}
+
+struct Drag {
+    model: String,
+    active: Active,
+    group_start: usize,
+    pending: Option<Vec3>,
+    last_applied: Instant,
+}
+
+struct State {
+    session: Session,
+    running: bool,
+    shared: Arc<Shared>,
+    notices: Sender<Notice>,
+    groups: Vec<(usize, usize)>,
+    redo_groups: Vec<usize>,
+    drag: Option<Drag>,
+    speed: f64,
+    clock: (Instant, f64),
+    samples: Vec<[f64; 3]>,
+    step_times: std::collections::VecDeque<(Instant, f64)>,
+    shown_revision: Option<u64>,
+    saved_revision: u64,
+    autosave: Option<(PathBuf, Duration)>,
+    autosaved: (Instant, u64),
+}
+
+impl State {
+    fn new(session: Session, running: bool, shared: Arc<Shared>, notices: Sender<Notice>) -> Self {
+        let rev = session.revision();
+        let t = session.time();
+        Self {
+            session,
+            running,
+            shared,
+            notices,
+            groups: Vec::new(),
+            redo_groups: Vec::new(),
+            drag: None,
+            speed: 1.0,
+            clock: (Instant::now(), t),
+            samples: Vec::new(),
+            step_times: Default::default(),
+            shown_revision: None,
+            saved_revision: rev,
+            autosave: None,
+            autosaved: (Instant::now(), rev),
+        }
+    }
+
+    fn notify(&self, n: Notice) {
+        let _ = self.notices.send(n);
+        self.wake();
+    }
+
+    fn wake(&self) {
+        if let Ok(w) = self.shared.wake.lock()
+            && let Some(w) = w.as_ref()
+        {
+            w();
+        }
+    }
+
+    fn run(mut self, rx: Receiver<Request>) {
+        loop {
+            // Wait for requests while there is nothing to do.
+            let idle = !self.running && self.drag.as_ref().is_none_or(|d| d.pending.is_none());
+            let first = if idle {
+                match rx.recv_timeout(Duration::from_millis(100)) {
+                    Ok(r) => Some(r),
+                    Err(RecvTimeoutError::Timeout) => None,
+                    Err(RecvTimeoutError::Disconnected) => return,
+                }
+            } else {
+                None
+            };
+            for r in first.into_iter().chain(rx.try_iter().collect::<Vec<_>>()) {
+                if matches!(r, Request::Quit) {
+                    return;
+                }
+                self.handle(r);
+                // Flags in the frame (running, dirty, undo) may have changed.
+                self.shown_revision = None;
+            }
+            self.apply_drag(false);
+            if self.running {
+                if self.ahead_of_wall_clock() {
+                    std::thread::sleep(Duration::from_millis(1));
+                } else {
+                    self.step_once();
+                }
+            }
+            self.publish();
+            self.autosave_if_due();
+        }
+    }
+
+    fn ahead_of_wall_clock(&self) -> bool {
+        self.speed > 0.0
+            && self.session.time() - self.clock.1
+                > self.speed * self.clock.0.elapsed().as_secs_f64()
+    }
+
+    fn step_once(&mut self) {
+        let t0 = Instant::now();
+        match self.session.step() {
+            Ok((reports, lines)) => {
+                let dt = t0.elapsed().as_secs_f64();
+                self.redo_groups.clear();
+                let now = Instant::now();
+                self.step_times.push_back((now, dt));
+                while self
+                    .step_times
+                    .front()
+                    .is_some_and(|(t, _)| now.duration_since(*t) > Duration::from_secs(1))
+                {
+                    self.step_times.pop_front();
+                }
+                let (mut k, mut e) = (0.0, 0.0);
+                for r in &reports {
+                    k += r.energy.kinetic;
+                    e += r.energy.elastic;
+                }
+                self.samples.push([self.session.time(), k, e]);
+                if self.samples.len() > ENERGY_SAMPLES {
+                    self.samples.drain(..self.samples.len() - ENERGY_SAMPLES);
+                }
+                for l in lines {
+                    self.notify(Notice::Log(l));
+                }
+            }
+            Err(err) => {
+                self.running = false;
+                self.notify(Notice::Error {
+                    message: format!(
+                        "{err}\nThe simulation is paused. Lower the time step (Simulation \
+                         panel: dt; the message above suggests a stable one), or undo the last \
+                         edit, then run again."
+                    ),
+                    paused: true,
+                });
+            }
+        }
+    }
+
+    fn log_len(&self) -> usize {
+        self.session.log().len()
+    }
+
+    fn apply(&mut self, c: Command) -> bool {
+        match self.session.apply(c) {
+            Ok(m) => {
+                self.notify(Notice::Log(m));
+                true
+            }
+            Err(e) => {
+                self.notify(Notice::Error {
+                    message: e.to_string(),
+                    paused: false,
+                });
+                false
+            }
+        }
+    }
+
+    fn close_group(&mut self, start: usize) {
+        let end = self.log_len();
+        if end > start {
+            self.groups.push((start, end));
+            self.redo_groups.clear();
+        }
+    }
+
+    fn handle(&mut self, r: Request) {
+        match r {
+            Request::Apply(c) => {
+                let start = self.log_len();
+                self.apply(c);
+                self.close_group(start);
+            }
+            Request::Undo => self.undo(),
+            Request::Redo => self.redo(),
+            Request::Run(on) => {
+                self.running = on;
+                self.clock = (Instant::now(), self.session.time());
+            }
+            Request::Step(n) => {
+                for _ in 0..n {
+                    self.step_once();
+                }
+            }
+            Request::Speed(s) => {
+                self.speed = if s.is_finite() { s.max(0.0) } else { 0.0 };
+                self.clock = (Instant::now(), self.session.time());
+            }
+            Request::Grab {
+                ray,
+                tolerance,
+                grab,
+            } => self.grab(ray, tolerance, grab),
+            Request::Drag { to } => {
+                if let Some(d) = self.drag.as_mut() {
+                    d.pending = Some(to);
+                }
+            }
+            Request::Drop => self.drop_grab(),
+            Request::Replace(s) => {
+                self.drop_grab();
+                self.session = *s;
+                self.groups.clear();
+                self.redo_groups.clear();
+                self.samples.clear();
+                self.shown_revision = None;
+                self.saved_revision = self.session.revision();
+                self.autosaved = (Instant::now(), self.saved_revision);
+                self.clock = (Instant::now(), self.session.time());
+            }
+            Request::Save(path) => match vclay_session::file::save(&path, &self.session, None) {
+                Ok(()) => {
+                    self.saved_revision = self.session.revision();
+                    self.shown_revision = None;
+                    self.notify(Notice::Saved(path));
+                }
+                Err(e) => self.notify(Notice::Error {
+                    message: e.to_string(),
+                    paused: false,
+                }),
+            },
+            Request::Autosave(p, every) => {
+                self.autosave = p.map(|p| (p, every));
+            }
+            Request::Export { model, path } => {
+                let r = self
+                    .session
+                    .model(Some(&model))
+                    .and_then(|m| m.export(&path));
+                match r {
+                    Ok(()) => self.notify(Notice::Log(format!(
+                        "exported `{model}` to {}",
+                        path.display()
+                    ))),
+                    Err(e) => self.notify(Notice::Error {
+                        message: e.to_string(),
+                        paused: false,
+                    }),
+                }
+            }
+            Request::Query(f) => {
+                f(&mut self.session);
+                self.shown_revision = None;
+            }
+            Request::Quit => {}
+        }
+    }
+
+    fn undo(&mut self) {
+        self.drop_grab();
+        let n = self.log_len();
+        let count = match self.groups.last() {
+            Some(&(s, e)) if e == n => {
+                self.groups.pop();
+                e - s
+            }
+            _ => 1,
+        };
+        let mut done = 0;
+        for _ in 0..count {
+            match self.session.undo() {
+                Ok(_) => done += 1,
+                Err(e) => {
+                    self.notify(Notice::Error {
+                        message: e.to_string(),
+                        paused: false,
+                    });
+                    break;
+                }
+            }
+        }
+        if done > 0 {
+            self.redo_groups.push(done);
+            self.notify(Notice::Log(format!("undone ({done} command(s))")));
+        }
+    }
+
+    fn redo(&mut self) {
+        let count = self.redo_groups.pop().unwrap_or(1);
+        let start = self.log_len();
+        let mut done = 0;
+        for _ in 0..count {
+            match self.session.redo() {
+                Ok(_) => done += 1,
+                Err(e) => {
+                    self.notify(Notice::Error {
+                        message: e.to_string(),
+                        paused: false,
+                    });
+                    break;
+                }
+            }
+        }
+        if done > 1 {
+            self.groups.push((start, self.log_len()));
+        }
+        if done > 0 {
+            self.notify(Notice::Log(format!("redone ({done} command(s))")));
+        }
+    }
+
+    fn grab(&mut self, ray: Ray, tolerance: f64, grab: Grab) {
+        self.drop_grab();
+        let Some((model, hit)) = self.session.pick(&ray, tolerance) else {
+            self.notify(Notice::Missed);
+            return;
+        };
+        let kind = match self.session.model(Some(&model)) {
+            Ok(m) => m.kind(),
+            Err(_) => return,
+        };
+        let start = self.log_len();
+        let time = self.session.model(Some(&model)).map_or(0.0, |m| m.time());
+        let p = [hit.point.x, hit.point.y, hit.point.z];
+        let param = match hit.element {
+            Element::SurfacePoint { param } => Some(param),
+            Element::CurvePoint { u } => Some([u, 0.0]),
+            _ => None,
+        };
+        let is_dnurbs = matches!(
+            kind,
+            ModelKind::DnurbsCurve | ModelKind::DnurbsSurface | ModelKind::DnurbsSwung
+        );
+        let cell = |h: &Hit| {
+            h.extra.iter().find_map(|e| match e {
+                Some(Element::Cell { index }) => Some(*index),
+                _ => None,
+            })
+        };
+        let one = |edit: Edit| Command::to(&model, edit);
+        let mut active = None;
+        match grab {
+            Grab::Rope { stiffness } => {
+                let edit = Edit::Rope {
+                    name: Some(ROPE.into()),
+                    from: p,
+                    param: if is_dnurbs { param } else { None },
+                    to: None,
+                    until: None,
+                    velocity: None,
+                    release: None,
+                    stiffness,
+                    length: None,
+                    kernel: None,
+                    start: None,
+                };
+                if self.apply(one(edit)) {
+                    active = Some(Active::Rope);
+                }
+            }
+            Grab::ControlPoint => {
+                if let Element::ControlPoint { index } = hit.element {
+                    active = Some(Active::ControlPoint {
+                        model: model.clone(),
+                        index,
+                    });
+                } else {
+                    self.notify(Notice::Error {
+                        message: "no control point under the mouse (show the control net and \
+                                  press on one of its points)"
+                            .into(),
+                        paused: false,
+                    });
+                }
+            }
+            Grab::FfdPoint => {
+                active = Some(Active::Ffd {
+                    model: model.clone(),
+                    last: hit.point,
+                });
+            }
+            Grab::Force {
+                direction,
+                strength,
+                radius,
+                duration,
+            } => {
+                let f = direction * strength;
+                let force = [f.x, f.y, f.z];
+                let until = Some(time + duration.max(0.0));
+                let edit = match kind {
+                    ModelKind::SubdivisionSolid | ModelKind::BsplineSolid => Edit::RegionForce {
+                        name: None,
+                        center: p,
+                        radius: radius.max(1e-9),
+                        force,
+                        until,
+                    },
+                    _ => Edit::Force {
+                        name: None,
+                        near: if is_dnurbs && param.is_some() {
+                            None
+                        } else {
+                            Some(p)
+                        },
+                        param: if is_dnurbs { param } else { None },
+                        force,
+                        until,
+                    },
+                };
+                self.apply(one(edit));
+            }
+            Grab::Fix | Grab::Free => {
+                let near = match hit.element {
+                    Element::ControlPoint { index } => {
+                        let edit = if grab == Grab::Fix {
+                            Edit::Fix {
+                                points: Some(vec![index]),
+                                min: None,
+                                max: None,
+                                near: None,
+                            }
+                        } else {
+                            Edit::Free {
+                                points: Some(vec![index]),
+                                min: None,
+                                max: None,
+                                near: None,
+                            }
+                        };
+                        self.apply(one(edit));
+                        None
+                    }
+                    _ => Some(p),
+                };
+                if let Some(near) = near {
+                    let edit = if grab == Grab::Fix {
+                        Edit::Fix {
+                            points: None,
+                            min: None,
+                            max: None,
+                            near: Some(near),
+                        }
+                    } else {
+                        Edit::Free {
+                            points: None,
+                            min: None,
+                            max: None,
+                            near: Some(near),
+                        }
+                    };
+                    self.apply(one(edit));
+                }
+            }
+            Grab::Extrude => {
+                let face = hit.extra.iter().find_map(|e| match e {
+                    Some(Element::Face { index }) => Some(*index),
+                    _ => None,
+                });
+                let edit = Edit::Extrude {
+                    face,
+                    near: if face.is_none() { Some(p) } else { None },
+                    factor: None,
+                };
+                self.apply(one(edit));
+            }
+            Grab::DeleteCell => {
+                let c = cell(&hit);
+                let edit = Edit::DeleteCell {
+                    cell: c,
+                    near: if c.is_none() { Some(p) } else { None },
+                };
+                self.apply(one(edit));
+            }
+            Grab::PaintMaterial {
+                density,
+                damping,
+                edge_stiffness,
+            } => {
+                let cells = cell(&hit).map(|c| vec![c]);
+                if cells.is_none() {
+                    self.notify(Notice::Error {
+                        message: "material painting needs a solid's control cell under the mouse"
+                            .into(),
+                        paused: false,
+                    });
+                } else {
+                    let edit = Edit::Material {
+                        cells,
+                        min: None,
+                        max: None,
+                        density: Some(density),
+                        damping: Some(damping),
+                        edge_stiffness: Some(edge_stiffness),
+                        virtual_stiffness: None,
+                        anisotropy: None,
+                        mu: None,
+                        gamma: None,
+                        alpha: None,
+                        beta: None,
+                    };
+                    self.apply(one(edit));
+                }
+            }
+        }
+        self.notify(Notice::Grabbed {
+            model: model.clone(),
+            point: hit.point,
+            element: hit.element,
+        });
+        match active {
+            Some(active) => {
+                self.drag = Some(Drag {
+                    model,
+                    active,
+                    group_start: start,
+                    pending: None,
+                    last_applied: Instant::now() - DRAG_INTERVAL,
+                });
+            }
+            None => self.close_group(start),
+        }
+    }
+
+    /// Applies the pending cursor move of the drag, at most once per [`DRAG_INTERVAL`]
+    /// (`force`: now).
+    fn apply_drag(&mut self, force: bool) {
+        let Some(d) = self.drag.as_mut() else { return };
+        let Some(to) = d.pending else { return };
+        if !force && d.last_applied.elapsed() < DRAG_INTERVAL {
+            if !self.running {
+                // Nothing else to do: wait out the interval without spinning.
+                std::thread::sleep(Duration::from_millis(2));
+            }
+            return;
+        }
+        d.pending = None;
+        d.last_applied = Instant::now();
+        let t = [to.x, to.y, to.z];
+        let cmd = match &mut d.active {
+            Active::Rope => Command::to(
+                &d.model,
+                Edit::MoveRope {
+                    name: ROPE.into(),
+                    to: t,
+                },
+            ),
+            Active::ControlPoint { model, index } => Command::to(
+                model,
+                Edit::MovePoint {
+                    index: *index,
+                    to: t,
+                },
+            ),
+            Active::Ffd { model, last } => {
+                let from = [last.x, last.y, last.z];
+                *last = to;
+                Command::to(
+                    model,
+                    Edit::FfdMove {
+                        moves: vec![PointMove { from, to: t }],
+                    },
+                )
+            }
+        };
+        self.apply(cmd);
+    }
+
+    fn drop_grab(&mut self) {
+        if self.drag.is_none() {
+            return;
+        }
+        self.apply_drag(true);
+        let Some(d) = self.drag.take() else { return };
+        if matches!(d.active, Active::Rope) {
+            self.apply(Command::to(
+                &d.model,
+                Edit::Release {
+                    name: ROPE.to_string(),
+                },
+            ));
+        }
+        self.close_group(d.group_start);
+    }
+
+    fn publish(&mut self) {
+        let rev = self.session.revision();
+        if self.shown_revision == Some(rev) {
+            return;
+        }
+        let Ok(mut slot) = self.shared.frame.lock() else {
+            return;
+        };
+        if slot.is_some() {
+            // The UI has not taken the last frame: do not build another.
+            return;
+        }
+        let t0 = Instant::now();
+        let (models, energy) = model_views(&self.session);
+        let n = self.step_times.len().max(1) as f64;
+        let step_seconds = self.step_times.iter().map(|s| s.1).sum::<f64>() / n;
+        let steps = self
+            .session
+            .model(None)
+            .map(|m| m.steps())
+            .unwrap_or_default();
+        *slot = Some(Frame {
+            revision: rev,
+            models,
+            time: self.session.time(),
+            steps,
+            energy,
+            samples: std::mem::take(&mut self.samples),
+            step_seconds,
+            steps_per_second: self.step_times.len() as f64,
+            running: self.running,
+            can_undo: self.session.can_undo(),
+            can_redo: self.session.can_redo(),
+            dirty: rev != self.saved_revision,
+            scheduled: self.session.schedule().len(),
+            build_seconds: t0.elapsed().as_secs_f64(),
+        });
+        drop(slot);
+        self.shown_revision = Some(rev);
+        self.wake();
+    }
+
+    fn autosave_if_due(&mut self) {
+        let Some((path, every)) = &self.autosave else {
+            return;
+        };
+        let rev = self.session.revision();
+        if rev == self.autosaved.1 || self.autosaved.0.elapsed() < *every {
+            return;
+        }
+        let path = path.clone();
+        match vclay_session::file::save(&path, &self.session, None) {
+            Ok(()) => {
+                self.autosaved = (Instant::now(), rev);
+                let _ = self.notices.send(Notice::Autosaved(path));
+            }
+            Err(e) => {
+                self.autosave = None;
+                self.notify(Notice::Error {
+                    message: format!("autosave failed and is off: {e}"),
+                    paused: false,
+                });
+            }
+        }
+    }
+}
+
+/// The display data of every model of `session` and their summed energies (what a frame
+/// carries; the benchmark times exactly this).
+pub fn model_views(session: &Session) -> (Vec<ModelView>, Energy) {
+    let mut models = Vec::new();
+    let mut energy = Energy::default();
+    for name in session.model_names() {
+        let Ok(m) = session.model(Some(name)) else {
+            continue;
+        };
+        let e = m.energy();
+        energy.kinetic += e.kinetic;
+        energy.elastic += e.elastic;
+        energy.tools += e.tools;
+        models.push(ModelView {
+            name: name.to_string(),
+            kind: m.kind(),
+            summary: m.summary(),
+            mesh: Arc::new(m.display_mesh().unwrap_or_default()),
+            lines: Arc::new(m.display_lines()),
+            params: m.params(),
+            size: m.size(),
+            dt: m.dt(),
+            time: m.time(),
+        });
+    }
+    (models, energy)
+}
