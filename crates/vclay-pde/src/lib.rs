@@ -16,7 +16,9 @@
 //! collocation points by a column-pivoted QR ([`solve`], [`lsq`], eq 6-12). Animation is a solve
 //! per instant ([`model::Animator`]); local deformations add a blended term of G0 or G1
 //! continuity ([`patch::LocalDeformation`], eq 30-32); three- and four-sided patches add side
-//! conditions as exact linear constraints ([`solve`], eq 33-37).
+//! conditions as exact linear constraints ([`solve`], eq 33-37). For section III's comparison
+//! a patch can instead be solved by Bloor and Wilson's Fourier series or their pseudospectral
+//! method ([`spectral`], eq 19-23; the spec's `solver` key).
 //!
 //! Limitations: as in the paper, the constants p_ijn are treated as independent of t when the
 //! PDE's time derivatives are taken (eq 7), so each instant is an independent solve rather than
@@ -36,6 +38,7 @@ pub mod model;
 pub mod patch;
 pub mod solve;
 pub mod spec;
+pub mod spectral;
 pub mod surface;
 pub mod trial;
 
@@ -45,4 +48,5 @@ pub use model::{Animator, ModelSolution, frame_times};
 pub use patch::{Continuity, Field, LocalDeformation, PdePatch};
 pub use solve::{PatchSolution, SolveStats, Solver};
 pub use spec::{PdeModel, SpecFile};
+pub use spectral::{Method, SpectralSolution};
 pub use trial::PatchKind;

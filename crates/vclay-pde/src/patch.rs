@@ -9,6 +9,7 @@
 
 use crate::error::PdeError;
 use crate::expr::{Expr, Var};
+use crate::spectral::Method;
 use crate::trial::{PatchKind, TrialBasis, TrialTable};
 
 /// A coefficient field of (u, v, t): a constant (fast path) or an expression.
@@ -272,6 +273,10 @@ pub struct PdePatch {
     pub collocation: Collocation,
     /// Local deformations (section VI-A).
     pub local: Vec<LocalDeformation>,
+    /// How the patch is solved: collocation (the paper's method, the default) or one of the
+    /// methods section III compares it with ([`crate::spectral`], eq 19-23). Set by the spec's
+    /// `solver` key, which checks the spectral methods' conditions.
+    pub method: Method,
     /// Collocation u values.
     pub(crate) colloc_u: Vec<f64>,
     /// Collocation v values.
@@ -389,6 +394,7 @@ impl PdePatch {
             v_range,
             collocation,
             local,
+            method: Method::Collocation,
             colloc_u,
             colloc_v,
             colloc_table,

@@ -24,6 +24,7 @@
 use crate::error::PdeError;
 use crate::lsq::{self, LsqWork, RANK_TOLERANCE};
 use crate::patch::{COMPONENT_NAMES, Component, PdePatch, SideCondition};
+use crate::spectral::{Method, SpectralSolution};
 use crate::trial::{PatchKind, Poly, TrialTable};
 use nalgebra::DMatrix;
 
@@ -73,6 +74,10 @@ pub struct PatchSolution {
     pub weights: [Vec<f64>; 3],
     /// Residuals and conditioning.
     pub stats: SolveStats,
+    /// The Fourier-series or pseudospectral solution when the patch uses one of those methods
+    /// ([`crate::spectral`], eq 19-23); then `constants` and `weights` are empty and the stats
+    /// report only the constants determined (the spectral methods have no collocation residual).
+    pub spectral: Option<SpectralSolution>,
 }
 
 /// Reusable workspace for solving patches (repeated solves allocate nothing for patches
@@ -120,6 +125,21 @@ impl Solver {
             });
         }
         out.t = t;
+        if patch.method != Method::Collocation {
+            let spectral = SpectralSolution::solve(patch, t)?;
+            out.stats = SolveStats {
+                unknowns: spectral.constants(),
+                condition: 1.0,
+                ..SolveStats::default()
+            };
+            for i in 0..3 {
+                out.constants[i].clear();
+                out.weights[i].clear();
+            }
+            out.spectral = Some(spectral);
+            return Ok(());
+        }
+        out.spectral = None;
         let m = patch.collocation.points();
         let mut sum_sq = 0.0;
         let mut condition: f64 = 1.0;

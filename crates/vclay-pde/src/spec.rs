@@ -14,6 +14,7 @@ use crate::patch::{
     BasicFunction, Collocation, Component, Continuity, Field, LocalDeformation, PdePatch,
     ShapeFunctions, SideCondition, Sides,
 };
+use crate::spectral::{DEFAULT_FOURIER_TERMS, MAX_FOURIER_TERMS, Method};
 use crate::trial::PatchKind;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -54,6 +55,9 @@ pub const MAX_COLLOCATION_POINTS: usize = 1_000_000;
 /// Most entries of one component's dense collocation matrix (points x unknown constants):
 /// 2 x 10^7, 160 MB of `f64` (the QR works on a copy).
 pub const MAX_COLLOCATION_ENTRIES: usize = 20_000_000;
+
+/// The names the `solver` key accepts.
+pub const SOLVERS: [&str; 3] = ["collocation", "fourier", "pseudospectral"];
 
 /// A number or an expression text.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -217,6 +221,12 @@ pub struct PatchSpec {
     /// Local deformations.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub local: Vec<LocalSpec>,
+    /// Solver: `"collocation"` (default), `"fourier"` or `"pseudospectral"` ([`SOLVERS`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solver: Option<String>,
+    /// N of the spectral solvers (default [`DEFAULT_FOURIER_TERMS`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fourier_terms: Option<usize>,
 }
 
 /// A spec file: shared settings and parameters, and the patches.
@@ -251,6 +261,14 @@ pub struct SpecFile {
     /// Damping for all patches (default 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub eta: Option<Value>,
+    /// Solver for all patches: `"collocation"` (default), `"fourier"` or `"pseudospectral"`
+    /// (section III's comparison, eq 19-23; see [`crate::spectral`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solver: Option<String>,
+    /// N (Fourier terms) of the spectral solvers for all patches (default
+    /// [`DEFAULT_FOURIER_TERMS`], at most [`MAX_FOURIER_TERMS`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fourier_terms: Option<usize>,
     /// The patches.
     pub patches: Vec<PatchSpec>,
 }
@@ -714,7 +732,8 @@ impl Ctx<'_> {
                 place: place.clone(),
                 message: "three components expected".into(),
             })?;
-        PdePatch::new(
+        let method = self.method(file, p, &place)?;
+        let mut patch = PdePatch::new(
             name,
             kind,
             n_max,
@@ -724,6 +743,104 @@ impl Ctx<'_> {
             v_range,
             collocation,
             local,
-        )
+        )?;
+        if method != Method::Collocation {
+            check_spectral(&patch, p, &place, method)?;
+        }
+        patch.method = method;
+        Ok(patch)
     }
+
+    /// The `solver` and `fourier_terms` keys (the patch's over the file's), sizes checked.
+    fn method(&self, file: &SpecFile, p: &PatchSpec, place: &str) -> Result<Method, PdeError> {
+        let (name, name_place) = match (&p.solver, &file.solver) {
+            (Some(s), _) => (s.as_str(), format!("{place}.solver")),
+            (None, Some(s)) => (s.as_str(), "solver".to_string()),
+            (None, None) => ("collocation", String::new()),
+        };
+        let (terms, terms_place) = match (p.fourier_terms, file.fourier_terms) {
+            (Some(n), _) => (n, format!("{place}.fourier_terms")),
+            (None, Some(n)) => (n, "fourier_terms".to_string()),
+            (None, None) => (DEFAULT_FOURIER_TERMS, String::new()),
+        };
+        let spectral = name != "collocation";
+        if spectral && !(1..=MAX_FOURIER_TERMS).contains(&terms) {
+            return Err(PdeError::InvalidValue {
+                place: terms_place,
+                message: format!(
+                    "{terms} Fourier terms; expected 1 to {MAX_FOURIER_TERMS} (N of eq 19-21)"
+                ),
+            });
+        }
+        match name {
+            "collocation" => Ok(Method::Collocation),
+            "fourier" => Ok(Method::Fourier { terms }),
+            "pseudospectral" => Ok(Method::Pseudospectral { terms }),
+            other => Err(PdeError::InvalidValue {
+                place: name_place,
+                message: format!(
+                    "unknown solver '{other}'; expected one of {}",
+                    SOLVERS.join(", ")
+                ),
+            }),
+        }
+    }
+}
+
+/// The conditions of the Fourier-series and pseudospectral solvers ([`crate::spectral`]):
+/// constant shape functions with `b != 0`, no density or damping, conditions at both ends, no
+/// side conditions or local deformations. Errors name the field.
+fn check_spectral(
+    patch: &PdePatch,
+    p: &PatchSpec,
+    place: &str,
+    method: Method,
+) -> Result<(), PdeError> {
+    let why = |field: String, what: &str| PdeError::InvalidValue {
+        place: field,
+        message: format!(
+            "the {} solver (Bloor and Wilson's, eq 19-23) needs {what}; use \"solver\": \"collocation\"",
+            method.name()
+        ),
+    };
+    if patch.kind() != PatchKind::TwoEnds {
+        return Err(why(
+            place.to_string(),
+            "conditions at u = 0 and u = 1 (not a three-sided patch)",
+        ));
+    }
+    if p.sides.is_some() {
+        return Err(why(format!("{place}.sides"), "no side conditions"));
+    }
+    if !patch.local.is_empty() {
+        return Err(why(format!("{place}.local"), "no local deformations"));
+    }
+    for (i, c) in patch.components.iter().enumerate() {
+        for (key, f) in [("b", &c.shape.b), ("c", &c.shape.c), ("d", &c.shape.d)] {
+            match f.as_const() {
+                None => {
+                    return Err(why(
+                        format!("{place}.shape.{key}"),
+                        "constant shape functions (one ODE per Fourier mode)",
+                    ));
+                }
+                Some(x) if key == "b" && x == 0.0 => {
+                    return Err(why(
+                        format!("{place}.shape.b"),
+                        &format!("b != 0 (component {i} has b = 0, no fourth-order ODE)"),
+                    ));
+                }
+                Some(_) => {}
+            }
+        }
+    }
+    for (key, f) in [("rho", &patch.rho), ("eta", &patch.eta)] {
+        if f.as_const() != Some(0.0) {
+            return Err(why(
+                format!("{place}.{key}"),
+                "a static PDE (rho = eta = 0)",
+            ));
+        }
+    }
+    Ok(())
 }

@@ -27,6 +27,10 @@ fn horner(p: &[f64], u: f64) -> f64 {
 
 /// Point of a solved patch at (u, v), local deformations included.
 pub fn point(patch: &PdePatch, sol: &PatchSolution, u: f64, v: f64) -> Vec3 {
+    if let Some(s) = &sol.spectral {
+        let [x, y, z] = s.point(patch, u, v, sol.t);
+        return Vec3::new(x, y, z);
+    }
     let n1 = patch.trial.n_max + 1;
     let t = sol.t;
     let mut x = [0.0; 3];
@@ -75,6 +79,10 @@ pub fn eval_grid_into(
     let nv = vs.len();
     let t = sol.t;
     assert_eq!(out.len(), us.len() * nv, "eval_grid_into: output length");
+    if let Some(s) = &sol.spectral {
+        s.eval_grid(patch, t, us, vs, out);
+        return;
+    }
     for i in 0..3 {
         let basics = &patch.components[i].basics;
         let g = &mut work.gvals[i];
