@@ -49,7 +49,21 @@ fn open(path: &Path) -> Result<Opened> {
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let name = path.display().to_string();
     if is_session(path, &text) {
-        let (session, info) = file::parse(&text, &name)?;
+        let (session, info) = file::parse(&text, &name).map_err(|e| {
+            // A JSON file that is not a session: say what it looks like and what reads it.
+            let v: Option<serde_json::Value> = serde_json::from_str(&text).ok();
+            let has = |k: &str| v.as_ref().is_some_and(|v| v.get(k).is_some());
+            let hint = if has("format") {
+                ""
+            } else if has("patches") || has("boundary") || has("u0") {
+                "; this looks like a PDE spec: `vclay pde FILE`, or a scenario with `kind = \"pde-surface\"` and `spec = \"FILE\"`"
+            } else if has("entities") {
+                "; this looks like a model file: `vclay eval`/`vclay convert`, or a scenario whose [model] reads it with `file = \"FILE\"`"
+            } else {
+                ""
+            };
+            anyhow::anyhow!("{e}{hint}")
+        })?;
         let info = info.unwrap_or_else(|| RunInfo {
             name: path
                 .file_stem()

@@ -17,10 +17,10 @@ primitive = "sphere"
 dt = 0.05
 steps = 12
 
-[[force]]
-type = "spring"
+[[timeline]]
+action = "rope"
 param = [1.0, 0.0]
-target = [0.0, 0.0, 1.5]
+from = [0.0, 0.0, 1.5]
 stiffness = 30.0
 "#;
 

@@ -11,6 +11,12 @@
 
 use serde::{Deserialize, Serialize};
 
+/// Most data points of one [`Edit::Data`] (each finds its nearest model point every step; 2,000
+/// points cost about a second per step on a 16x16 sheet).
+pub const MAX_DATA_POINTS: usize = 2_000;
+/// Most point moves of one [`Edit::FfdMove`] (eq 12 solves a dense system of 3 rows per move).
+pub const MAX_FFD_MOVES: usize = 1_000;
+
 /// A 3-vector as it appears in files.
 pub type V3 = [f64; 3];
 
@@ -496,6 +502,12 @@ impl Edit {
                 if points.is_empty() {
                     return Err("`points`: no data points".into());
                 }
+                if points.len() > MAX_DATA_POINTS {
+                    return Err(format!(
+                        "`points`: {} data points; at most {MAX_DATA_POINTS} (each is matched to the nearest model point every step)",
+                        points.len()
+                    ));
+                }
                 for p in points {
                     fin("points", p)?;
                 }
@@ -568,6 +580,12 @@ impl Edit {
             Edit::FfdMove { moves } => {
                 if moves.is_empty() {
                     return Err("`moves`: no point moves".into());
+                }
+                if moves.len() > MAX_FFD_MOVES {
+                    return Err(format!(
+                        "`moves`: {} point moves; at most {MAX_FFD_MOVES}",
+                        moves.len()
+                    ));
                 }
                 for m in moves {
                     fin("moves.from", &m.from)?;

@@ -344,6 +344,16 @@ pub trait Model: Send + Sync + std::fmt::Debug {
     fn export(&self, path: &Path) -> Result<(), SessionError>;
     /// Everything needed to rebuild the model exactly (session files; see `docs/formats.md`).
     fn save(&self) -> Result<serde_json::Value, SessionError>;
+    /// The control points at the current state (solids and D-NURBS: the generalized
+    /// coordinates' positions; FFD: the lattice's control points; empty where a kind has none).
+    fn control_points(&self) -> Vec<Vec3> {
+        Vec::new()
+    }
+    /// The sample points the physics acts on (solids: the data points `d = A p`; FFD: the
+    /// embedded mesh's vertices; empty where a kind has none).
+    fn data_points(&self) -> Vec<Vec3> {
+        Vec::new()
+    }
     /// The extensions [`Model::export`] writes (checked when a scenario is read, so a run
     /// does not fail at its end). Default: every one of [`EXPORT_EXTENSIONS`].
     fn export_formats(&self) -> Vec<&'static str> {

@@ -507,6 +507,15 @@ impl Scenario {
                 return Err(src.err(&ospan, "final", "must be a file name or a list of them"));
             }
         };
+        let mut names: Vec<&String> = output.final_files.iter().chain(&output.csv).collect();
+        names.sort();
+        if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
+            return Err(src.err(
+                &ospan,
+                "final",
+                format!("\"{}\" is named by two outputs", w[0]),
+            ));
+        }
         for f in output.final_files.iter().chain(&output.csv) {
             if f.is_empty() || f.contains(['/', '\\']) {
                 return Err(src.err(

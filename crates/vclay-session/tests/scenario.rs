@@ -316,3 +316,41 @@ fn a_bspline_solid_saved_by_one_run_is_the_model_of_the_next() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn sizes_are_checked_before_anything_is_built() {
+    // A level-6 solid of the 4^3 cube: about 7 million data cells, refused with the estimate.
+    let t = small_with(
+        "points = [2, 2, 2]\nlevel = 1",
+        "points = [4, 4, 4]\nlevel = 6",
+    );
+    let (line, key, msg) = error_of(&t);
+    assert_eq!(key, "level", "{msg}");
+    assert_eq!(line, line_of(&t, "level = 6"));
+    assert!(msg.contains("GB"), "{msg}");
+    // A B-spline control net of 10^9 points; samples past the bound.
+    let b = "[model]\nkind = \"bspline-solid\"\ncontrol = [1000, 1000, 1000]\n";
+    let (_, key, _) = error_of(b);
+    assert_eq!(key, "control");
+    let b = "[model]\nkind = \"bspline-solid\"\ncontrol = [100, 100, 100]\n";
+    let (_, key, msg) = error_of(b);
+    assert_eq!(key, "control", "{msg}");
+    let b = "[model]\nkind = \"bspline-solid\"\nsamples = [9223372036854775807, 6, 6]\n";
+    let (_, key, _) = error_of(b);
+    assert_eq!(key, "samples");
+    // Run length from a tiny time step or a huge duration.
+    let t = small_with("steps = 12", "duration = 1e308");
+    let (_, key, msg) = error_of(&t);
+    assert_eq!(key, "duration", "{msg}");
+    let t = small_with("dt = 0.01\nsteps = 12", "dt = 1e-300\nduration = 1.0");
+    let (_, key, _) = error_of(&t);
+    assert_eq!(key, "duration");
+    // Two outputs naming one file.
+    let t = small_with("csv = \"energy.csv\"", "csv = \"final.ovm\"");
+    let (_, _, msg) = error_of(&t);
+    assert!(msg.contains("two outputs"), "{msg}");
+    // NaN positions and too many data points are refused where they are written.
+    let t = small_with("from = [1.0, 1.0, 1.0]", "from = [nan, 1.0, 1.0]");
+    let (line, key, _) = error_of(&t);
+    assert_eq!((line, key.as_str()), (line_of(&t, "nan"), "from"));
+}

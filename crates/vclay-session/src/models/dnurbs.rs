@@ -2382,6 +2382,10 @@ impl Model for DnurbsModel {
         }
     }
 
+    fn control_points(&self) -> Vec<Vec3> {
+        self.engine.control_points(false)
+    }
+
     fn save(&self) -> Result<serde_json::Value, SessionError> {
         if !self.external.is_empty() {
             return Err(SessionError::model(

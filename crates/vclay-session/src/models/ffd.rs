@@ -252,7 +252,7 @@ impl FfdModel {
             )),
             e => cmd(e),
         })?;
-        self.lattice.apply(&manipulation);
+        self.lattice.try_apply(&manipulation).map_err(cmd)?;
         self.embedded.deform(&self.lattice, PAR);
         Ok(format!(
             "{} point{} moved by direct manipulation (eq {}): {} control points moved",
@@ -820,6 +820,14 @@ impl Model for FfdModel {
                 &["obj", "ply", "stl", "glb", "json"],
             )),
         }
+    }
+
+    fn control_points(&self) -> Vec<Vec3> {
+        self.lattice.control_points().to_vec()
+    }
+
+    fn data_points(&self) -> Vec<Vec3> {
+        self.embedded.mesh().positions.clone()
     }
 
     fn save(&self) -> Result<serde_json::Value, SessionError> {

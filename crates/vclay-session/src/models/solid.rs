@@ -1262,7 +1262,10 @@ impl Model for SolidModel {
             }
             ("glb", _) => vclay_io::gltf::write_glb(
                 path,
-                &[vclay_io::gltf::GlbMesh::new(self.kind().name(), self.boundary_mesh())],
+                &[vclay_io::gltf::GlbMesh::new(
+                    self.kind().name(),
+                    self.boundary_mesh(),
+                )],
             )
             .map_err(|e| io(&e)),
             ("vtu", _) => {
@@ -1295,6 +1298,14 @@ impl Model for SolidModel {
                 &self.export_formats(),
             )),
         }
+    }
+
+    fn control_points(&self) -> Vec<Vec3> {
+        self.solid.control_points().to_vec()
+    }
+
+    fn data_points(&self) -> Vec<Vec3> {
+        self.solid.data_points().to_vec()
     }
 
     fn export_formats(&self) -> Vec<&'static str> {
@@ -1554,6 +1565,23 @@ fn build_source(
                     ),
                 ));
             }
+            // Memory: every level multiplies the cells by about 8 (hexahedra; other cells by
+            // their vertex count); the dynamic solid keeps the hierarchy, springs and per-step
+            // arrays (about BYTES_PER_DATA_CELL per finest cell).
+            let cells = lattice.num_cells() as f64 * 8f64.powi(level as i32);
+            let bytes = cells * BYTES_PER_DATA_CELL;
+            if bytes > MAX_SOLID_BYTES as f64 {
+                return Err(err(
+                    "level",
+                    format!(
+                        "level {level} of this lattice makes about {cells:.3e} data cells, an \
+                         estimated {:.1} GB; the limit is {:.1} GB (a lower level, or fewer \
+                         control cells)",
+                        bytes / 1e9,
+                        MAX_SOLID_BYTES as f64 / 1e9
+                    ),
+                ));
+            }
             let boundary =
                 parse_boundary(m.boundary.as_deref().unwrap_or("sharp")).ok_or_else(|| {
                     err(
@@ -1658,6 +1686,15 @@ fn build_source(
                     format!("{} control points along axis {a}; at most 256", control[a]),
                 ));
             }
+            let total: usize = control.iter().product();
+            if total > MAX_CONTROL_POINTS {
+                return Err(err(
+                    "control",
+                    format!(
+                        "{control:?} makes {total} control points; at most {MAX_CONTROL_POINTS}"
+                    ),
+                ));
+            }
             let mut knots = Vec::with_capacity(3);
             for a in 0..3 {
                 knots.push(
@@ -1680,6 +1717,16 @@ fn build_source(
         _ => Err(err("kind", format!("{kind} is not a solid"))),
     }
 }
+
+/// Estimated bytes a dynamic subdivision solid holds per finest-level cell (about 850 bytes per
+/// data point in the per-step structures, measured, plus the subdivision hierarchy while it is
+/// built; `vclay_lattice::command::BYTES_PER_CELL` measures the hierarchy alone at 760).
+pub const BYTES_PER_DATA_CELL: f64 = 2000.0;
+/// Largest estimated memory of one dynamic solid built from a scenario (4 GB, a laptop).
+pub const MAX_SOLID_BYTES: u64 = 4_000_000_000;
+/// Most control points of a B-spline solid (the mass matrix is factored once; 100,000 control
+/// points take minutes).
+pub const MAX_CONTROL_POINTS: usize = 100_000;
 
 /// Most samples of a B-spline solid along one direction.
 pub const MAX_SAMPLES: usize = 1024;
