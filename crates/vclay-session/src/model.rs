@@ -264,6 +264,58 @@ impl Snapshot {
     }
 }
 
+/// What every kind shares for undo: the type of its state snapshot, how to take and put it,
+/// and how to apply an inverse edit. [`undo_by_state`] and [`restore_state`] then implement
+/// [`Model::undo`] and [`Model::restore`] the same way for every kind.
+pub(crate) trait Stateful {
+    /// The snapshot of the evolving state.
+    type State: Clone + Any + Send + Sync;
+    /// Takes a snapshot.
+    fn take_state(&self) -> Self::State;
+    /// Puts a snapshot back (bit for bit).
+    fn put_state(&mut self, state: &Self::State) -> Result<(), SessionError>;
+    /// Applies the exact inverse edit of an [`Undo::Inverse`] record (before the snapshot is
+    /// put back). Kinds whose snapshot covers everything the edit changed may ignore a failure.
+    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError>;
+}
+
+impl Snapshot {
+    /// A copy of the value, or an error naming the mismatch (a record of another kind).
+    pub fn take<T: Any + Clone>(&self) -> Result<T, SessionError> {
+        self.get::<T>()
+            .cloned()
+            .ok_or_else(|| SessionError::model("snapshot or undo record of another model kind"))
+    }
+}
+
+/// [`Model::undo`] for a [`Stateful`] kind: the inverse edit (if any), then the snapshot.
+pub(crate) fn undo_by_state<M: Stateful>(model: &mut M, undo: Undo) -> Result<(), SessionError> {
+    match undo {
+        Undo::State(s) => model.put_state(&s.take::<M::State>()?),
+        Undo::Inverse { edit, state } => {
+            let s = state.take::<M::State>()?;
+            model.apply_inverse(&edit)?;
+            model.put_state(&s)
+        }
+        Undo::Model(_) => Err(SessionError::model(
+            "a whole-model undo record is the session's to apply",
+        )),
+    }
+}
+
+/// [`Model::snapshot`] for a [`Stateful`] kind.
+pub(crate) fn snapshot_of<M: Stateful>(model: &M) -> Snapshot {
+    Snapshot::new(model.take_state())
+}
+
+/// [`Model::restore`] for a [`Stateful`] kind.
+pub(crate) fn restore_state<M: Stateful>(
+    model: &mut M,
+    snapshot: &Snapshot,
+) -> Result<(), SessionError> {
+    model.put_state(&snapshot.take::<M::State>()?)
+}
+
 /// How to undo an applied edit.
 #[derive(Debug)]
 #[allow(clippy::large_enum_variant)] // one per history entry; boxing would only add an indirection

@@ -50,7 +50,7 @@ use crate::command::{Edit, V3};
 use crate::error::SessionError;
 use crate::model::{
     Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, unsupported_export,
+    StepReport, Undo, extension, restore_state, snapshot_of, undo_by_state, unsupported_export,
 };
 use crate::tools::{CursorPath, ScheduledTool, ToolTable, a3, v3};
 
@@ -633,7 +633,7 @@ pub struct DnurbsModel {
 }
 
 #[derive(Clone, Debug)]
-struct Snap {
+pub(crate) struct Snap {
     state: EngineState,
     material: Mat,
     dt: f64,
@@ -2037,6 +2037,19 @@ fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, S
     }
 }
 
+impl crate::model::Stateful for DnurbsModel {
+    type State = Snap;
+    fn take_state(&self) -> Snap {
+        self.snap()
+    }
+    fn put_state(&mut self, state: &Snap) -> Result<(), SessionError> {
+        self.put(state)
+    }
+    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError> {
+        self.apply_edit(edit).map(drop)
+    }
+}
+
 impl Model for DnurbsModel {
     fn kind(&self) -> ModelKind {
         self.kind
@@ -2295,35 +2308,15 @@ impl Model for DnurbsModel {
     }
 
     fn undo(&mut self, undo: Undo) -> Result<(), SessionError> {
-        let get = |s: &Snapshot| {
-            s.get::<Snap>()
-                .cloned()
-                .ok_or_else(|| SessionError::model("undo record of another kind"))
-        };
-        match undo {
-            Undo::State(s) => {
-                let s = get(&s)?;
-                self.put(&s)
-            }
-            Undo::Inverse { edit, state } => {
-                self.apply_edit(&edit)?;
-                let s = get(&state)?;
-                self.put(&s)
-            }
-            Undo::Model(_) => Err(SessionError::model("whole-model undo is the session's")),
-        }
+        undo_by_state(self, undo)
     }
 
     fn snapshot(&self) -> Snapshot {
-        Snapshot::new(self.snap())
+        snapshot_of(self)
     }
 
     fn restore(&mut self, snapshot: &Snapshot) -> Result<(), SessionError> {
-        let s = snapshot
-            .get::<Snap>()
-            .ok_or_else(|| SessionError::model("snapshot of another kind"))?
-            .clone();
-        self.put(&s)
+        restore_state(self, snapshot)
     }
 
     fn clone_model(&self) -> Box<dyn Model> {

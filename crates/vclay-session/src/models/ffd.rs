@@ -41,7 +41,7 @@ use crate::command::{Edit, PointMove, V3};
 use crate::error::SessionError;
 use crate::model::{
     Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, unsupported_export,
+    StepReport, Undo, extension, restore_state, snapshot_of, undo_by_state, unsupported_export,
 };
 use crate::tools::{a3, v3};
 
@@ -73,7 +73,7 @@ pub struct FfdModel {
 
 /// The evolving state: control points, weights, clock and parameters.
 #[derive(Clone, Debug, PartialEq)]
-struct FfdSnap {
+pub(crate) struct FfdSnap {
     control_points: Vec<Vec3>,
     weights: Vec<f64>,
     mode: SolveMode,
@@ -636,6 +636,22 @@ fn reason(e: SessionError) -> String {
     }
 }
 
+impl crate::model::Stateful for FfdModel {
+    type State = FfdSnap;
+    fn take_state(&self) -> FfdSnap {
+        self.snap()
+    }
+    fn put_state(&mut self, state: &FfdSnap) -> Result<(), SessionError> {
+        self.put(state)
+    }
+    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError> {
+        // The snapshot put back after it is the exact state either way; the inverse can fail
+        // where the forward edit did not (FFD: the inversion of `Q` at the target).
+        let _ = self.apply_edit(edit);
+        Ok(())
+    }
+}
+
 impl Model for FfdModel {
     fn kind(&self) -> ModelKind {
         ModelKind::Ffd
@@ -756,39 +772,15 @@ impl Model for FfdModel {
     }
 
     fn undo(&mut self, undo: Undo) -> Result<(), SessionError> {
-        match undo {
-            Undo::State(s) => {
-                let s = s
-                    .get::<FfdSnap>()
-                    .ok_or_else(|| SessionError::model("undo record of another kind"))?
-                    .clone();
-                self.put(&s)
-            }
-            Undo::Inverse { edit, state } => {
-                let s = state
-                    .get::<FfdSnap>()
-                    .ok_or_else(|| SessionError::model("undo record of another kind"))?
-                    .clone();
-                // The group inverse (section 4). It can fail where the forward edit did not
-                // (the inversion of `Q` at the target); the snapshot below is the exact
-                // state either way.
-                let _ = self.apply_edit(&edit);
-                self.put(&s)
-            }
-            Undo::Model(_) => Err(SessionError::model("whole-model undo is the session's")),
-        }
+        undo_by_state(self, undo)
     }
 
     fn snapshot(&self) -> Snapshot {
-        Snapshot::new(self.snap())
+        snapshot_of(self)
     }
 
     fn restore(&mut self, snapshot: &Snapshot) -> Result<(), SessionError> {
-        let s = snapshot
-            .get::<FfdSnap>()
-            .ok_or_else(|| SessionError::model("snapshot of another kind"))?
-            .clone();
-        self.put(&s)
+        restore_state(self, snapshot)
     }
 
     fn clone_model(&self) -> Box<dyn Model> {

@@ -36,7 +36,7 @@ use crate::command::Edit;
 use crate::error::SessionError;
 use crate::model::{
     Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, unsupported_export,
+    StepReport, Undo, extension, restore_state, snapshot_of, undo_by_state, unsupported_export,
 };
 
 /// Default `[simulation] dt`: 1/30 s (one display frame).
@@ -120,7 +120,7 @@ pub struct PdeSurfaceModel {
 
 /// The evolving state.
 #[derive(Clone, Debug, PartialEq)]
-struct PdeSnap {
+pub(crate) struct PdeSnap {
     constants: BTreeMap<String, f64>,
     dt: f64,
     time: f64,
@@ -447,6 +447,22 @@ impl PdeSurfaceModel {
     }
 }
 
+impl crate::model::Stateful for PdeSurfaceModel {
+    type State = PdeSnap;
+    fn take_state(&self) -> PdeSnap {
+        self.snap()
+    }
+    fn put_state(&mut self, state: &PdeSnap) -> Result<(), SessionError> {
+        self.put(state)
+    }
+    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError> {
+        // The snapshot put back after it is the exact state either way; the inverse can fail
+        // where the forward edit did not (FFD: the inversion of `Q` at the target).
+        let _ = self.apply_edit(edit);
+        Ok(())
+    }
+}
+
 impl Model for PdeSurfaceModel {
     fn kind(&self) -> ModelKind {
         ModelKind::PdeSurface
@@ -571,38 +587,15 @@ impl Model for PdeSurfaceModel {
     }
 
     fn undo(&mut self, undo: Undo) -> Result<(), SessionError> {
-        match undo {
-            Undo::State(s) => {
-                let s = s
-                    .get::<PdeSnap>()
-                    .ok_or_else(|| SessionError::model("undo record of another kind"))?
-                    .clone();
-                self.put(&s)
-            }
-            Undo::Inverse { edit, state } => {
-                let s = state
-                    .get::<PdeSnap>()
-                    .ok_or_else(|| SessionError::model("undo record of another kind"))?
-                    .clone();
-                // The old value; the snapshot then restores time and steps as well. If the
-                // inverse fails (it cannot, it was the state before), the snapshot still does.
-                let _ = self.apply_edit(&edit);
-                self.put(&s)
-            }
-            Undo::Model(_) => Err(SessionError::model("whole-model undo is the session's")),
-        }
+        undo_by_state(self, undo)
     }
 
     fn snapshot(&self) -> Snapshot {
-        Snapshot::new(self.snap())
+        snapshot_of(self)
     }
 
     fn restore(&mut self, snapshot: &Snapshot) -> Result<(), SessionError> {
-        let s = snapshot
-            .get::<PdeSnap>()
-            .ok_or_else(|| SessionError::model("snapshot of another kind"))?
-            .clone();
-        self.put(&s)
+        restore_state(self, snapshot)
     }
 
     fn clone_model(&self) -> Box<dyn Model> {

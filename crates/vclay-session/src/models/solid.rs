@@ -25,7 +25,7 @@ use crate::command::{Edit, V3};
 use crate::error::SessionError;
 use crate::model::{
     Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, unsupported_export,
+    StepReport, Undo, extension, restore_state, snapshot_of, undo_by_state, unsupported_export,
 };
 use crate::tools::{CursorPath, ToolTable, a3, v3};
 
@@ -43,7 +43,7 @@ pub struct SolidModel {
 }
 
 #[derive(Clone, Debug)]
-struct SolidSnap {
+pub(crate) struct SolidSnap {
     state: SolidState,
     tools: ToolTable,
     params: SolidParams,
@@ -979,6 +979,19 @@ fn boundary_name(b: BoundaryRule) -> &'static str {
     }
 }
 
+impl crate::model::Stateful for SolidModel {
+    type State = SolidSnap;
+    fn take_state(&self) -> SolidSnap {
+        self.snap()
+    }
+    fn put_state(&mut self, state: &SolidSnap) -> Result<(), SessionError> {
+        self.put(state)
+    }
+    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError> {
+        self.apply_edit(edit).map(drop)
+    }
+}
+
 impl Model for SolidModel {
     fn kind(&self) -> ModelKind {
         if self.is_subdivision() {
@@ -1198,36 +1211,15 @@ impl Model for SolidModel {
     }
 
     fn undo(&mut self, undo: Undo) -> Result<(), SessionError> {
-        match undo {
-            Undo::State(s) => {
-                let s = s
-                    .get::<SolidSnap>()
-                    .ok_or_else(|| SessionError::model("undo record of another kind"))?
-                    .clone();
-                self.put(&s)
-            }
-            Undo::Inverse { edit, state } => {
-                self.apply_edit(&edit)?;
-                let s = state
-                    .get::<SolidSnap>()
-                    .ok_or_else(|| SessionError::model("undo record of another kind"))?
-                    .clone();
-                self.put(&s)
-            }
-            Undo::Model(_) => Err(SessionError::model("whole-model undo is the session's")),
-        }
+        undo_by_state(self, undo)
     }
 
     fn snapshot(&self) -> Snapshot {
-        Snapshot::new(self.snap())
+        snapshot_of(self)
     }
 
     fn restore(&mut self, snapshot: &Snapshot) -> Result<(), SessionError> {
-        let s = snapshot
-            .get::<SolidSnap>()
-            .ok_or_else(|| SessionError::model("snapshot of another kind"))?
-            .clone();
-        self.put(&s)
+        restore_state(self, snapshot)
     }
 
     fn clone_model(&self) -> Box<dyn Model> {
