@@ -1,6 +1,7 @@
-//! Reproduces `dynamic-pde-surfaces.txt` Fig 5(a)-(b) (shape functions (29), d0 = -1300 and
-//! -9000) and Fig 6(a)-(b) (density rho = 8, damping eta = 9) at t = 0.5, and prints the mean
-//! radius of the middle row u = 0.5 of each. Writes `fig5a.obj`, `fig5b.obj`, `fig6a.obj`,
+//! Reproduces `dynamic-pde-surfaces.txt` Fig 5(a)-(b) (shape functions (29) with b0 = -1,
+//! c0 = -2, d0 = -1.3 and -9, the reading of `docs/pde-figures.md`; the text prints 1, 2, -1300
+//! and -9000) and Fig 6(a)-(b) (density rho = 8, damping eta = 9) at t = 0.5, and prints the
+//! mean radius of the middle row u = 0.5 of each. Writes `fig5a.obj`, `fig5b.obj`, `fig6a.obj`,
 //! `fig6b.obj`.
 //!
 //! Run: `cargo run --release -p vclay-pde --example manipulation [OUT_DIR]`
@@ -16,7 +17,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     std::fs::create_dir_all(&out)?;
     let base: SpecFile = serde_json::from_str(FIG5A)?;
     let mut b = base.clone();
-    b.params.insert("d0".into(), -9000.0);
+    b.params.insert("d0".into(), -9.0);
     let mut c = base.clone();
     c.rho = Some(8.0.into());
     let mut d = base.clone();
