@@ -12,7 +12,6 @@ use std::path::{Path, PathBuf};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use vclay_core::Vec3;
 use vclay_session::file::{self, RunInfo};
 use vclay_session::scenario::{OutputSpec, Scenario};
 use vclay_session::{Command, Model, Session as KSession};
@@ -38,31 +37,6 @@ impl Session {
     fn model(&self, name: Option<&str>) -> PyResult<&dyn Model> {
         self.session.model(name).py()
     }
-}
-
-/// Looks up `key` in the model state: first under `state`, then at the top level.
-fn find_points(v: &serde_json::Value, keys: &[&str]) -> Option<Vec<Vec3>> {
-    let scopes = [v.get("state"), Some(v)];
-    for scope in scopes.into_iter().flatten() {
-        for k in keys {
-            if let Some(serde_json::Value::Array(a)) = scope.get(*k) {
-                let pts: Option<Vec<Vec3>> = a
-                    .iter()
-                    .map(|p| {
-                        let c = p.as_array()?;
-                        match c.as_slice() {
-                            [x, y, z] => Some(Vec3::new(x.as_f64()?, y.as_f64()?, z.as_f64()?)),
-                            _ => None,
-                        }
-                    })
-                    .collect();
-                if pts.is_some() {
-                    return pts;
-                }
-            }
-        }
-    }
-    None
 }
 
 fn is_toml(path: &Path) -> bool {
@@ -313,13 +287,13 @@ impl Session {
         model: Option<&str>,
     ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
         let m = self.model(model)?;
-        let v = m.save().py()?;
-        let pts = find_points(&v, &["control_points", "points"]).ok_or_else(|| {
-            SessionError::new_err(format!(
+        let pts = m.control_points();
+        if pts.is_empty() {
+            return Err(SessionError::new_err(format!(
                 "a {} model has no control points (use mesh())",
                 m.kind()
-            ))
-        })?;
+            )));
+        }
         Ok(util::points_array(py, &pts))
     }
 
@@ -332,11 +306,8 @@ impl Session {
         model: Option<&str>,
     ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
         let m = self.model(model)?;
-        let v = m.save().py()?;
-        if let Some(p) = v
-            .get("state")
-            .and_then(|_| find_points(&v, &["data_points"]))
-        {
+        let p = m.data_points();
+        if !p.is_empty() {
             return Ok(util::points_array(py, &p));
         }
         let mesh = m.display_mesh().py()?;
