@@ -155,3 +155,34 @@ pub fn open(path: &Path) -> Result<Session, String> {
         )),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_builtin_opens_and_displays() {
+        for b in &BUILTINS {
+            let s = builtin(b).unwrap_or_else(|e| panic!("{}: {e}", b.name));
+            let m = s.model(None).unwrap();
+            let mesh = m.display_mesh().unwrap();
+            assert!(!mesh.triangles.is_empty(), "{}: empty mesh", b.name);
+            assert_eq!(mesh.normals.len(), mesh.positions.len(), "{}", b.name);
+        }
+    }
+
+    #[test]
+    fn unreadable_files_are_located_errors() {
+        let dir = std::env::temp_dir().join(format!("vclay-studio-load-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let missing = dir.join("missing.toml");
+        assert!(open(&missing).unwrap_err().contains("missing.toml"));
+        let odd = dir.join("x.xyz");
+        std::fs::write(&odd, "1").unwrap();
+        assert!(open(&odd).unwrap_err().contains("cannot open .xyz"));
+        let ovm = dir.join("bad.ovm");
+        std::fs::write(&ovm, "not a lattice").unwrap();
+        let e = open(&ovm).unwrap_err();
+        assert!(e.contains("bad.ovm"), "{e}");
+    }
+}
