@@ -52,7 +52,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("as printed", 1.0, 2.0, -1300.0, -9000.0),
         ("decimal points lost", 1.0, 2.0, -1.3, -9.0),
         ("d0 sign and decimal points lost", 1.0, 2.0, 1.3, 9.0),
-        ("b0, c0 signs and decimal points lost (used)", -1.0, -2.0, -1.3, -9.0),
+        (
+            "b0, c0 signs and decimal points lost (used)",
+            -1.0,
+            -2.0,
+            -1.3,
+            -9.0,
+        ),
     ] {
         let at = |fb: f64, fc: f64, d: f64, rho: f64, eta: f64| {
             let mut s = base.clone();

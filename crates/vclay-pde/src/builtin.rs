@@ -37,3 +37,7 @@ pub const FIG5A: &str = include_str!("../examples/specs/fig5a.json");
 pub const FIG7A: &str = include_str!("../examples/specs/fig7a.json");
 /// Section VI-B, eq (33)-(37), Fig 8: four- and three-sided patches forming a five-sided one.
 pub const FIG8: &str = include_str!("../examples/specs/fig8.json");
+/// Section VI-C, Fig 9: the aircraft (`examples/pde/aircraft.json` at the workspace root):
+/// six tube patches carrying fuselage, wings and tail, closed by two five-sided caps of
+/// three-sided patches, G1 across every shared boundary; t raises the wing tips.
+pub const AIRCRAFT: &str = include_str!("../../../examples/pde/aircraft.json");

@@ -48,6 +48,57 @@ pub fn point(patch: &PdePatch, sol: &PatchSolution, u: f64, v: f64) -> Vec3 {
     Vec3::new(x[0], x[1], x[2])
 }
 
+/// Point and first partial derivatives `(x, x_u, x_v)` of a solved patch at (u, v), for normals
+/// and continuity checks. Collocation patches are differentiated exactly (`W_ij'(u)` from the
+/// polynomial coefficients, `g_v` symbolic, eq 5); local deformations and the spectral
+/// solutions by central differences of step `1e-6` (one-sided at the domain's ends).
+pub fn derivatives(patch: &PdePatch, sol: &PatchSolution, u: f64, v: f64) -> [Vec3; 3] {
+    let p = point(patch, sol, u, v);
+    let fd = |f: &dyn Fn(f64, f64) -> Vec3, lo: f64, hi: f64, x: f64, along_u: bool| {
+        let h = 1e-6 * (hi - lo);
+        let (a, b) = ((x - h).max(lo), (x + h).min(hi));
+        let at = |y: f64| if along_u { f(y, v) } else { f(u, y) };
+        (at(b) - at(a)) / (b - a)
+    };
+    if sol.spectral.is_some() {
+        let f = |a: f64, b: f64| point(patch, sol, a, b);
+        let (v0, v1) = patch.v_range;
+        return [p, fd(&f, 0.0, 1.0, u, true), fd(&f, v0, v1, v, false)];
+    }
+    let n1 = patch.trial.n_max + 1;
+    let t = sol.t;
+    let (mut du, mut dv) = ([0.0; 3], [0.0; 3]);
+    for i in 0..3 {
+        for (j, b) in patch.components[i].basics.iter().enumerate() {
+            let w = &sol.weights[i][j * n1..(j + 1) * n1];
+            let wd = w
+                .iter()
+                .enumerate()
+                .skip(1)
+                .rev()
+                .fold(0.0, |acc, (n, c)| acc * u + n as f64 * c);
+            du[i] += wd * b.g.eval(0.0, v, t);
+            dv[i] += horner(w, u) * b.g_v.eval(0.0, v, t);
+        }
+    }
+    let (mut xu, mut xv) = (
+        Vec3::new(du[0], du[1], du[2]),
+        Vec3::new(dv[0], dv[1], dv[2]),
+    );
+    if !patch.local.is_empty() {
+        let off = |a: f64, b: f64| {
+            patch.local.iter().fold(Vec3::zeros(), |acc, l| {
+                let d = l.offset(a, b, t);
+                acc + Vec3::new(d[0], d[1], d[2])
+            })
+        };
+        let (v0, v1) = patch.v_range;
+        xu += fd(&off, 0.0, 1.0, u, true);
+        xv += fd(&off, v0, v1, v, false);
+    }
+    [p, xu, xv]
+}
+
 /// Evaluates the patch on the grid `us x vs` (row-major: `out[r * vs.len() + c]` is at
 /// `(us[r], vs[c])`), local deformations included. `out` is resized.
 pub fn eval_grid(
