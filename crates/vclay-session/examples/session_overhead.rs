@@ -16,8 +16,8 @@
 use vclay_core::Parallelism;
 use vclay_dynamics::Integrator;
 use vclay_dynamics::dnurbs::benchmarks as dn;
-use vclay_session::models::dnurbs::DnurbsModel;
 use vclay_session::Session;
+use vclay_session::models::dnurbs::DnurbsModel;
 use vclay_session::models::solid::SolidModel;
 use vclay_solids::{SolidParams, benchmarks as so};
 

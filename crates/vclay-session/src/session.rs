@@ -16,6 +16,14 @@
 //! applies the undone command again to that state, which reproduces the state just after it.
 //! A new command, or a step, clears the redo list. Scheduled commands that have fired are
 //! ordinary log entries: undoing one does not schedule it again.
+//!
+//! # Undo groups
+//! [`Session::begin_group`] and [`Session::end_group`] bracket the commands of one user action
+//! (a rope drag: attach, many cursor moves, release); undo and redo treat them as one. Within a
+//! group, a command whose undo record is a plain state snapshot adds no record of its own: the
+//! group's earlier record, which puts the model back as it was before the group began, undoes
+//! it too. So a drag of a thousand cursor moves keeps one snapshot, not a thousand. Redo of a
+//! group applies its commands again one after the other (at the time undo went back to).
 
 use serde::{Deserialize, Serialize};
 
@@ -55,6 +63,11 @@ pub(crate) type SessionParts<'a> = (Vec<(&'a str, &'a dyn Model)>, &'a [Timed], 
 struct UndoEntry {
     model: usize,
     undo: Undo,
+    /// Log entries this record undoes (more than one when state-only commands of a group were
+    /// merged into it).
+    commands: usize,
+    /// The undo group it belongs to.
+    group: Option<u64>,
 }
 
 #[derive(Debug)]
@@ -70,8 +83,12 @@ pub struct Session {
     schedule: Vec<Timed>,
     log: Vec<LogEntry>,
     undo: Vec<UndoEntry>,
-    redo: Vec<LogEntry>,
+    /// Undone commands, one list per undo step (a group, or one command), in applied order.
+    redo: Vec<Vec<LogEntry>>,
     revision: u64,
+    /// The open undo group and its nesting depth.
+    group: Option<(u64, usize)>,
+    next_group: u64,
 }
 
 impl Session {
@@ -217,10 +234,23 @@ impl Session {
             }
             other => SessionError::command(edit.action(), &name, other),
         })?;
-        self.undo.push(UndoEntry {
-            model: i,
-            undo: applied.undo,
-        });
+        let group = self.group.map(|g| g.0);
+        let merge = group.is_some()
+            && matches!(applied.undo, Undo::State(_))
+            && self
+                .undo
+                .last()
+                .is_some_and(|u| u.group == group && u.model == i);
+        if merge {
+            self.undo.last_mut().expect("checked").commands += 1;
+        } else {
+            self.undo.push(UndoEntry {
+                model: i,
+                undo: applied.undo,
+                commands: 1,
+                group,
+            });
+        }
         self.log.push(LogEntry {
             step,
             time,
@@ -232,32 +262,102 @@ impl Session {
         Ok(applied.message)
     }
 
-    /// Undoes the last command; returns its log entry.
-    pub fn undo(&mut self) -> Result<LogEntry, SessionError> {
-        let entry = self.undo.pop().ok_or(SessionError::History("undo"))?;
-        let log = self.log.pop().ok_or(SessionError::History("undo"))?;
-        let e = &mut self.models[entry.model];
-        let r = match entry.undo {
-            Undo::Model(m) => {
-                e.model = m;
-                Ok(())
+    /// Opens an undo group (see the [module docs](self)); groups nest, the outermost counts.
+    pub fn begin_group(&mut self) {
+        match &mut self.group {
+            Some((_, depth)) => *depth += 1,
+            None => {
+                self.next_group += 1;
+                self.group = Some((self.next_group, 1));
             }
-            u => e.model.undo(u),
-        };
-        r.map_err(|err| err.in_model(&log.model))?;
-        self.redo.push(log.clone());
-        self.revision += 1;
-        Ok(log)
+        }
     }
 
-    /// Applies the last undone command again.
+    /// Closes the innermost open undo group.
+    pub fn end_group(&mut self) {
+        if let Some((_, depth)) = &mut self.group {
+            *depth -= 1;
+            if *depth == 0 {
+                self.group = None;
+            }
+        }
+    }
+
+    /// Undoes the last command, or the last undo group whole; returns the log entry of the
+    /// first command undone (the one that began the group).
+    pub fn undo(&mut self) -> Result<LogEntry, SessionError> {
+        let last = self.undo.last().ok_or(SessionError::History("undo"))?;
+        let group = last.group;
+        let mut undone: Vec<LogEntry> = Vec::new();
+        loop {
+            let Some(entry) = self.undo.pop() else { break };
+            let k = self.log.len().saturating_sub(entry.commands);
+            let logs: Vec<LogEntry> = self.log.drain(k..).collect();
+            let name = logs.first().map_or(String::new(), |l| l.model.clone());
+            let e = &mut self.models[entry.model];
+            let r = match entry.undo {
+                Undo::Model(m) => {
+                    e.model = m;
+                    Ok(())
+                }
+                u => e.model.undo(u),
+            };
+            self.revision += 1;
+            undone.splice(0..0, logs);
+            if let Err(err) = r {
+                // What was undone so far stays undone (and redoable).
+                if !undone.is_empty() {
+                    self.redo.push(undone);
+                }
+                return Err(err.in_model(&name));
+            }
+            let more = group.is_some() && self.undo.last().is_some_and(|u| u.group == group);
+            if !more {
+                break;
+            }
+        }
+        let first = undone
+            .first()
+            .cloned()
+            .ok_or(SessionError::History("undo"))?;
+        self.redo.push(undone);
+        Ok(first)
+    }
+
+    /// Applies the last undone command (or group) again; returns its message (one line per
+    /// command).
     pub fn redo(&mut self) -> Result<String, SessionError> {
-        let log = self.redo.pop().ok_or(SessionError::History("redo"))?;
-        let i = self.resolve(Some(&log.model))?;
-        match self.apply_to(i, log.command.clone()) {
-            Ok(m) => Ok(m),
-            Err(e) => {
-                self.redo.push(log);
+        let logs = self.redo.pop().ok_or(SessionError::History("redo"))?;
+        let grouped = logs.len() > 1;
+        if grouped {
+            self.begin_group();
+        }
+        let mut messages = Vec::with_capacity(logs.len());
+        let mut result = Ok(());
+        for (k, log) in logs.iter().enumerate() {
+            let i = match self.resolve(Some(&log.model)) {
+                Ok(i) => i,
+                Err(e) => {
+                    result = Err((k, e));
+                    break;
+                }
+            };
+            match self.apply_to(i, log.command.clone()) {
+                Ok(m) => messages.push(m),
+                Err(e) => {
+                    result = Err((k, e));
+                    break;
+                }
+            }
+        }
+        if grouped {
+            self.end_group();
+        }
+        match result {
+            Ok(()) => Ok(messages.join("\n")),
+            Err((k, e)) => {
+                // The commands not applied stay redoable.
+                self.redo.push(logs[k..].to_vec());
                 Err(e)
             }
         }

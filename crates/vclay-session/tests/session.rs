@@ -187,3 +187,92 @@ fn bad_session_files_are_located_errors() {
     w["models"][0]["state"]["state"]["velocities"] = serde_json::json!([[0.0, 0.0, 0.0]]);
     check(&w.to_string(), "models[0] (cube)", &["velocities"]);
 }
+
+#[test]
+fn an_undo_group_is_undone_whole_and_keeps_one_snapshot_for_a_drag() {
+    let mut sc = Scenario::parse(TWO, "two.toml", "two", Path::new(".")).unwrap();
+    let s = &mut sc.session;
+    s.run(3).unwrap();
+    s.apply(Command::to("cube", Edit::Stop)).unwrap();
+    let before = saved_all(s);
+    let log_before = s.log().len();
+    // A drag: attach, cursor moves with steps in between, release.
+    s.begin_group();
+    s.apply(Command::to(
+        "cube",
+        Edit::Rope {
+            name: Some("drag".into()),
+            from: [1.0, 1.0, 1.0],
+            param: None,
+            to: None,
+            until: None,
+            velocity: None,
+            release: None,
+            stiffness: None,
+            length: None,
+            kernel: None,
+            start: None,
+        },
+    ))
+    .unwrap();
+    for k in 0..20 {
+        s.apply(Command::to(
+            "cube",
+            Edit::MoveRope {
+                name: "drag".into(),
+                to: [1.0 + 0.01 * k as f64, 1.0, 1.0],
+            },
+        ))
+        .unwrap();
+        s.step().unwrap();
+    }
+    s.apply(Command::to(
+        "cube",
+        Edit::Release {
+            name: "drag".into(),
+        },
+    ))
+    .unwrap();
+    s.end_group();
+    // Every command is logged, the scheduled ones that fired during the drag too (the cube's
+    // release of `rope0` at 0.04 s and the sheet's gravity at 0.1 s).
+    let n = s.log().len() - log_before;
+    assert_eq!(n, 22 + 2, "{:?}", &s.log()[log_before..]);
+    let after = saved_all(s);
+    // One undo takes the whole drag back, the cube's clock included; the command before it
+    // stays. (The sheet goes back to just before its own command in the group, the gravity
+    // that fired at its step 10: each command is undone to the state just before it.)
+    let first = s.undo().unwrap();
+    assert!(matches!(first.command.edit, Edit::Rope { .. }), "{first:?}");
+    assert_same(
+        &saved_all(s)["models"][0],
+        &before["models"][0],
+        "undo of the group",
+    );
+    assert_eq!(saved_all(s)["models"][1]["state"]["state"]["steps"], 10);
+    assert_eq!(s.log().len(), log_before);
+    assert!(s.can_undo(), "the stop before the group is its own step");
+    // Redo applies the group's commands again (without the steps between them).
+    let m = s.redo().unwrap();
+    assert_eq!(m.lines().count(), n, "{m}");
+    assert_eq!(s.log().len(), log_before + n);
+    assert!(
+        saved_all(s)["models"][0] != after["models"][0],
+        "the steps are not replayed"
+    );
+    s.undo().unwrap();
+    assert_same(
+        &saved_all(s)["models"][0],
+        &before["models"][0],
+        "undo of the redone group",
+    );
+    // Nested groups count as the outermost.
+    s.begin_group();
+    s.begin_group();
+    s.apply(Command::to("cube", Edit::Stop)).unwrap();
+    s.end_group();
+    s.apply(Command::to("cube", Edit::Stop)).unwrap();
+    s.end_group();
+    s.undo().unwrap();
+    assert_eq!(s.log().len(), log_before);
+}

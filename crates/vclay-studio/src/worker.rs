@@ -10,9 +10,10 @@
 //!
 //! # Undo groups
 //! One user action may produce several commands (a rope drag: attach, cursor moves, release).
-//! The worker records the log range of each such action and undoes or redoes it as one.
-//! Cursor moves are coalesced: at most one `move-rope` (or FFD move) per
-//! [`DRAG_INTERVAL`], because the session layer keeps a state snapshot per command.
+//! The worker brackets them with the session layer's `begin_group` / `end_group`, so undo and
+//! redo treat the action as one, and the cursor moves of a drag keep no snapshot of their own.
+//! Cursor moves are coalesced: at most one `move-rope` (or FFD move) per [`DRAG_INTERVAL`],
+//! which bounds the command log's growth.
 //!
 //! # Divergence
 //! A step that fails pauses the simulation and sends [`Notice::Error`] with the kernel's
@@ -332,7 +333,6 @@ enum Active {
 struct Drag {
     model: String,
     active: Active,
-    group_start: usize,
     pending: Option<Vec3>,
     last_applied: Instant,
 }
@@ -342,8 +342,6 @@ struct State {
     running: bool,
     shared: Arc<Shared>,
     notices: Sender<Notice>,
-    groups: Vec<(usize, usize)>,
-    redo_groups: Vec<usize>,
     drag: Option<Drag>,
     speed: f64,
     clock: (Instant, f64),
@@ -364,8 +362,6 @@ impl State {
             running,
             shared,
             notices,
-            groups: Vec::new(),
-            redo_groups: Vec::new(),
             drag: None,
             speed: 1.0,
             clock: (Instant::now(), t),
@@ -436,7 +432,6 @@ impl State {
         match self.session.step() {
             Ok((reports, lines)) => {
                 let dt = t0.elapsed().as_secs_f64();
-                self.redo_groups.clear();
                 let now = Instant::now();
                 self.step_times.push_back((now, dt));
                 while self
@@ -473,10 +468,6 @@ impl State {
         }
     }
 
-    fn log_len(&self) -> usize {
-        self.session.log().len()
-    }
-
     fn apply(&mut self, c: Command) -> bool {
         match self.session.apply(c) {
             Ok(m) => {
@@ -493,20 +484,10 @@ impl State {
         }
     }
 
-    fn close_group(&mut self, start: usize) {
-        let end = self.log_len();
-        if end > start {
-            self.groups.push((start, end));
-            self.redo_groups.clear();
-        }
-    }
-
     fn handle(&mut self, r: Request) {
         match r {
             Request::Apply(c) => {
-                let start = self.log_len();
                 self.apply(c);
-                self.close_group(start);
             }
             Request::Undo => self.undo(),
             Request::Redo => self.redo(),
@@ -537,8 +518,6 @@ impl State {
             Request::Replace(s) => {
                 self.drop_grab();
                 self.session = *s;
-                self.groups.clear();
-                self.redo_groups.clear();
                 self.samples.clear();
                 self.shown_revision = None;
                 self.saved_revision = self.session.revision();
@@ -585,54 +564,25 @@ impl State {
 
     fn undo(&mut self) {
         self.drop_grab();
-        let n = self.log_len();
-        let count = match self.groups.last() {
-            Some(&(s, e)) if e == n => {
-                self.groups.pop();
-                e - s
-            }
-            _ => 1,
-        };
-        let mut done = 0;
-        for _ in 0..count {
-            match self.session.undo() {
-                Ok(_) => done += 1,
-                Err(e) => {
-                    self.notify(Notice::Error {
-                        message: e.to_string(),
-                        paused: false,
-                    });
-                    break;
-                }
-            }
-        }
-        if done > 0 {
-            self.redo_groups.push(done);
-            self.notify(Notice::Log(format!("undone ({done} command(s))")));
+        match self.session.undo() {
+            Ok(first) => self.notify(Notice::Log(format!("undone: {}", first.message))),
+            Err(e) => self.notify(Notice::Error {
+                message: e.to_string(),
+                paused: false,
+            }),
         }
     }
 
     fn redo(&mut self) {
-        let count = self.redo_groups.pop().unwrap_or(1);
-        let start = self.log_len();
-        let mut done = 0;
-        for _ in 0..count {
-            match self.session.redo() {
-                Ok(_) => done += 1,
-                Err(e) => {
-                    self.notify(Notice::Error {
-                        message: e.to_string(),
-                        paused: false,
-                    });
-                    break;
-                }
+        match self.session.redo() {
+            Ok(m) => {
+                let n = m.lines().count();
+                self.notify(Notice::Log(format!("redone ({n} command(s))")));
             }
-        }
-        if done > 1 {
-            self.groups.push((start, self.log_len()));
-        }
-        if done > 0 {
-            self.notify(Notice::Log(format!("redone ({done} command(s))")));
+            Err(e) => self.notify(Notice::Error {
+                message: e.to_string(),
+                paused: false,
+            }),
         }
     }
 
@@ -646,7 +596,7 @@ impl State {
             Ok(m) => m.kind(),
             Err(_) => return,
         };
-        let start = self.log_len();
+        self.session.begin_group();
         let time = self.session.model(Some(&model)).map_or(0.0, |m| m.time());
         let p = [hit.point.x, hit.point.y, hit.point.z];
         let param = match hit.element {
@@ -840,12 +790,11 @@ impl State {
                 self.drag = Some(Drag {
                     model,
                     active,
-                    group_start: start,
                     pending: None,
                     last_applied: Instant::now() - DRAG_INTERVAL,
                 });
             }
-            None => self.close_group(start),
+            None => self.session.end_group(),
         }
     }
 
@@ -907,7 +856,7 @@ impl State {
                 },
             ));
         }
-        self.close_group(d.group_start);
+        self.session.end_group();
     }
 
     fn publish(&mut self) {
