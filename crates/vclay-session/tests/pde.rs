@@ -284,3 +284,27 @@ fn exports_the_surface_and_the_spec() {
     vclay_pde::PdeModel::read(dir.path().join("g.json")).unwrap();
     assert!(m.export(&dir.path().join("g.vtu")).is_err());
 }
+
+#[test]
+fn every_builtin_opens() {
+    for name in vclay_session::models::pde::BUILTINS {
+        let m: toml::Table = toml::from_str(&format!(
+            "kind = \"pde-surface\"\nbuiltin = \"{name}\"\ngrid = [8, 8]"
+        ))
+        .unwrap();
+        let model = vclay_session::models::build(
+            vclay_session::ModelKind::PdeSurface,
+            &vclay_session::models::Spec {
+                model: &m,
+                material: None,
+                simulation: None,
+                base: std::path::Path::new("."),
+            },
+        )
+        .unwrap_or_else(|e| panic!("{name}: {e:?}"));
+        assert!(
+            !model.display_mesh().unwrap().triangles.is_empty(),
+            "{name}"
+        );
+    }
+}

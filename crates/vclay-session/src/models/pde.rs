@@ -46,8 +46,8 @@ pub const DEFAULT_GRID: [usize; 2] = [64, 64];
 /// Most tessellation samples along one direction of a patch.
 pub const MAX_GRID: usize = 1024;
 /// The built-in specs of `[model] builtin` (`vclay_pde::builtin`).
-pub const BUILTINS: [&str; 7] = [
-    "section3", "glass", "vase", "fig4a", "fig5a", "fig7a", "fig8",
+pub const BUILTINS: [&str; 8] = [
+    "section3", "glass", "vase", "fig4a", "fig5a", "fig7a", "fig8", "aircraft",
 ];
 
 fn builtin_text(name: &str) -> Option<&'static str> {
@@ -59,6 +59,7 @@ fn builtin_text(name: &str) -> Option<&'static str> {
         "fig5a" => builtin::FIG5A,
         "fig7a" => builtin::FIG7A,
         "fig8" => builtin::FIG8,
+        "aircraft" => builtin::AIRCRAFT,
         _ => return None,
     })
 }
