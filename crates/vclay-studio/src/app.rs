@@ -106,6 +106,9 @@ pub struct ToolOptions {
     pub pull: bool,
     /// Material painting: density, damping, edge stiffness.
     pub paint: [f64; 3],
+    /// Brush half-size of fix, free and material painting, relative to the model size (0: one
+    /// point or cell per click).
+    pub brush: f64,
     /// Gravity on, and its strength.
     pub gravity: (bool, f64),
     /// Inflation on, and its pressure.
@@ -121,6 +124,7 @@ impl Default for ToolOptions {
             duration: 0.1,
             pull: false,
             paint: [1.0, 2.0, 400.0],
+            brush: 0.0,
             gravity: (false, 9.81),
             inflate: (false, 5.0),
         }
@@ -674,7 +678,12 @@ impl Studio {
                 ui.add(egui::Slider::new(&mut o.duration, 0.01..=2.0).text("duration (s)"));
                 ui.checkbox(&mut o.pull, "pull (towards the viewer)");
             }
+            Tool::Fix | Tool::Free => {
+                ui.add(egui::Slider::new(&mut o.brush, 0.0..=0.5).text("brush (x size; 0: click)"));
+                ui.small("With a brush, drag to fix or free every control point it passes.");
+            }
             Tool::Paint => {
+                ui.add(egui::Slider::new(&mut o.brush, 0.0..=0.5).text("brush (x size; 0: click)"));
                 ui.add(egui::Slider::new(&mut o.paint[0], 0.01..=100.0).text("density"));
                 ui.add(egui::Slider::new(&mut o.paint[1], 0.0..=100.0).text("damping"));
                 ui.add(
@@ -988,11 +997,16 @@ impl Studio {
                     duration: o.duration,
                 }
             }
-            Tool::Fix => Grab::Fix,
-            Tool::Free => Grab::Free,
+            Tool::Fix => Grab::Fix {
+                brush: o.brush * self.model_size(),
+            },
+            Tool::Free => Grab::Free {
+                brush: o.brush * self.model_size(),
+            },
             Tool::Extrude => Grab::Extrude,
             Tool::DeleteCell => Grab::DeleteCell,
             Tool::Paint => Grab::PaintMaterial {
+                brush: o.brush * self.model_size(),
                 density: o.paint[0],
                 damping: o.paint[1],
                 edge_stiffness: o.paint[2],

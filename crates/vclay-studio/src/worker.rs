@@ -63,16 +63,28 @@ pub enum Grab {
         /// Seconds of simulated time it acts.
         duration: f64,
     },
-    /// Fix the control point nearest the hit.
-    Fix,
-    /// Free the control point nearest the hit.
-    Free,
+    /// Fix the control point nearest the hit; with `brush > 0`, every control point whose rest
+    /// position is within a box of half-size `brush` around the hit, and around every cursor
+    /// position of the drag that follows.
+    Fix {
+        /// Brush half-size (0: the one point nearest the click).
+        brush: f64,
+    },
+    /// Free control points (as [`Grab::Fix`]).
+    Free {
+        /// Brush half-size (0: the one point nearest the click).
+        brush: f64,
+    },
     /// Extrude the control face under the hit (subdivision solids).
     Extrude,
     /// Delete the control cell under the hit (subdivision solids).
     DeleteCell,
-    /// Paint a material on the control cell under the hit (solids).
+    /// Paint a material on the control cell under the hit (solids); with `brush > 0`, on every
+    /// control cell whose centroid is within a box of half-size `brush` around the hit and
+    /// around every cursor position of the drag that follows.
     PaintMaterial {
+        /// Brush half-size (0: the cell under the click).
+        brush: f64,
         /// Density.
         density: f64,
         /// Damping.
@@ -326,8 +338,19 @@ impl Drop for Worker {
 
 enum Active {
     Rope,
-    ControlPoint { model: String, index: usize },
-    Ffd { model: String, last: Vec3 },
+    /// A brush: the edit made at each cursor position, a box of half-size `radius` around it.
+    Brush {
+        edit: Box<Edit>,
+        radius: f64,
+    },
+    ControlPoint {
+        model: String,
+        index: usize,
+    },
+    Ffd {
+        model: String,
+        last: Vec3,
+    },
 }
 
 struct Drag {
@@ -586,6 +609,39 @@ impl State {
         }
     }
 
+    /// The edit of a brush stroke at `at`: `template` with its box around `at`.
+    fn brush_edit(template: &Edit, at: Vec3, radius: f64) -> Edit {
+        let min = Some([at.x - radius, at.y - radius, at.z - radius]);
+        let max = Some([at.x + radius, at.y + radius, at.z + radius]);
+        let mut e = template.clone();
+        match &mut e {
+            Edit::Fix {
+                points,
+                min: a,
+                max: b,
+                near,
+            }
+            | Edit::Free {
+                points,
+                min: a,
+                max: b,
+                near,
+            } => {
+                (*points, *a, *b, *near) = (None, min, max, None);
+            }
+            Edit::Material {
+                cells,
+                min: a,
+                max: b,
+                ..
+            } => {
+                (*cells, *a, *b) = (None, min, max);
+            }
+            _ => {}
+        }
+        e
+    }
+
     fn grab(&mut self, ray: Ray, tolerance: f64, grab: Grab) {
         self.drop_grab();
         let Some((model, hit)) = self.session.pick(&ray, tolerance) else {
@@ -687,10 +743,34 @@ impl State {
                 };
                 self.apply(one(edit));
             }
-            Grab::Fix | Grab::Free => {
+            Grab::Fix { brush } | Grab::Free { brush } if brush > 0.0 => {
+                let fix = matches!(grab, Grab::Fix { .. });
+                let template = if fix {
+                    Edit::Fix {
+                        points: None,
+                        min: None,
+                        max: None,
+                        near: None,
+                    }
+                } else {
+                    Edit::Free {
+                        points: None,
+                        min: None,
+                        max: None,
+                        near: None,
+                    }
+                };
+                self.apply(one(Self::brush_edit(&template, hit.point, brush)));
+                active = Some(Active::Brush {
+                    edit: Box::new(template),
+                    radius: brush,
+                });
+            }
+            Grab::Fix { .. } | Grab::Free { .. } => {
+                let fix = matches!(grab, Grab::Fix { .. });
                 let near = match hit.element {
                     Element::ControlPoint { index } => {
-                        let edit = if grab == Grab::Fix {
+                        let edit = if fix {
                             Edit::Fix {
                                 points: Some(vec![index]),
                                 min: None,
@@ -711,7 +791,7 @@ impl State {
                     _ => Some(p),
                 };
                 if let Some(near) = near {
-                    let edit = if grab == Grab::Fix {
+                    let edit = if fix {
                         Edit::Fix {
                             points: None,
                             min: None,
@@ -750,33 +830,43 @@ impl State {
                 self.apply(one(edit));
             }
             Grab::PaintMaterial {
+                brush,
                 density,
                 damping,
                 edge_stiffness,
             } => {
-                let cells = cell(&hit).map(|c| vec![c]);
-                if cells.is_none() {
+                let template = Edit::Material {
+                    cells: None,
+                    min: None,
+                    max: None,
+                    density: Some(density),
+                    damping: Some(damping),
+                    edge_stiffness: Some(edge_stiffness),
+                    virtual_stiffness: None,
+                    anisotropy: None,
+                    mu: None,
+                    gamma: None,
+                    alpha: None,
+                    beta: None,
+                };
+                if brush > 0.0 {
+                    self.apply(one(Self::brush_edit(&template, hit.point, brush)));
+                    active = Some(Active::Brush {
+                        edit: Box::new(template),
+                        radius: brush,
+                    });
+                } else if let Some(c) = cell(&hit) {
+                    let mut edit = template;
+                    if let Edit::Material { cells, .. } = &mut edit {
+                        *cells = Some(vec![c]);
+                    }
+                    self.apply(one(edit));
+                } else {
                     self.notify(Notice::Error {
                         message: "material painting needs a solid's control cell under the mouse"
                             .into(),
                         paused: false,
                     });
-                } else {
-                    let edit = Edit::Material {
-                        cells,
-                        min: None,
-                        max: None,
-                        density: Some(density),
-                        damping: Some(damping),
-                        edge_stiffness: Some(edge_stiffness),
-                        virtual_stiffness: None,
-                        anisotropy: None,
-                        mu: None,
-                        gamma: None,
-                        alpha: None,
-                        beta: None,
-                    };
-                    self.apply(one(edit));
                 }
             }
         }
@@ -814,6 +904,9 @@ impl State {
         d.last_applied = Instant::now();
         let t = [to.x, to.y, to.z];
         let cmd = match &mut d.active {
+            Active::Brush { edit, radius } => {
+                Command::to(&d.model, Self::brush_edit(edit, to, *radius))
+            }
             Active::Rope => Command::to(
                 &d.model,
                 Edit::MoveRope {

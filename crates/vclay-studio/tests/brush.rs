@@ -1,0 +1,90 @@
+//! Brushes on the simulation thread: a fix brush dragged across the cube fixes every control
+//! point it passes and undoes as one action; a material brush paints the cells it passes.
+
+use vclay_core::Vec3;
+use vclay_session::{LineRole, Ray};
+use vclay_studio::load::{builtin, builtin_named};
+use vclay_studio::worker::{Grab, Request, Worker};
+
+fn fixed_count(w: &Worker) -> usize {
+    w.query(|s| {
+        s.model(None)
+            .unwrap()
+            .display_lines()
+            .into_iter()
+            .find(|l| l.role == Some(LineRole::Fixed))
+            .map_or(0, |l| l.points.len())
+    })
+    .unwrap()
+}
+
+fn down_at(x: f64, y: f64) -> Ray {
+    Ray {
+        origin: Vec3::new(x, y, 3.0),
+        direction: Vec3::new(0.0, 0.0, -1.0),
+    }
+}
+
+fn stroke(w: &Worker, grab: Grab, path: impl Iterator<Item = Vec3>) {
+    w.send(Request::Grab {
+        ray: down_at(0.01, 0.01),
+        tolerance: 0.0,
+        grab,
+    });
+    for to in path {
+        w.send(Request::Drag { to });
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    w.send(Request::Drop);
+}
+
+#[test]
+fn a_fix_brush_fixes_what_it_passes_and_undoes_as_one() {
+    let session = builtin(builtin_named("cube").unwrap()).unwrap();
+    let w = Worker::start(session, false);
+    assert_eq!(fixed_count(&w), 0);
+    // A brush of half-size 0.25 along the top edge y = 0, z = 1 of the unit cube whose control
+    // points sit at thirds: it fixes (x, 0, 1) for x in {0, 1/3, 2/3, 1} and nothing else (the
+    // next rows are 1/3 away).
+    let path = (1..=10).map(|k| Vec3::new(0.1 * k as f64, 0.0, 1.0));
+    stroke(&w, Grab::Fix { brush: 0.25 }, path);
+    assert_eq!(fixed_count(&w), 4, "the top edge's points");
+    let log_len = w.query(|s| s.log().len()).unwrap();
+    assert!(log_len >= 2, "one command per stroke position: {log_len}");
+    w.send(Request::Undo);
+    assert_eq!(fixed_count(&w), 0, "one undo takes the whole stroke back");
+    assert_eq!(w.query(|s| s.log().len()).unwrap(), 0);
+}
+
+#[test]
+fn a_material_brush_paints_the_cells_it_passes() {
+    let session = builtin(builtin_named("cube").unwrap()).unwrap();
+    let w = Worker::start(session, false);
+    let density = |w: &Worker| -> Vec<f64> {
+        w.query(|s| {
+            let v = s.model(None).unwrap().save().unwrap();
+            v["material"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|m| m["density"].as_f64().unwrap())
+                .collect()
+        })
+        .unwrap()
+    };
+    assert!(density(&w).iter().all(|&d| d == 1.0));
+    // Along the top front edge: the cells whose centroids (at 1/6, 1/2, 5/6) lie within 0.2 of
+    // y = 0.1, z = 0.9: the three cells of the top front row.
+    let path = (0..=10).map(|k| Vec3::new(0.1 * k as f64, 0.1, 0.9));
+    let grab = Grab::PaintMaterial {
+        brush: 0.2,
+        density: 5.0,
+        damping: 2.0,
+        edge_stiffness: 100.0,
+    };
+    stroke(&w, grab, path);
+    let d = density(&w);
+    assert_eq!(d.iter().filter(|&&x| x == 5.0).count(), 3, "{d:?}");
+    w.send(Request::Undo);
+    assert!(density(&w).iter().all(|&x| x == 1.0), "undo of the stroke");
+}
