@@ -109,6 +109,8 @@ pub struct ToolOptions {
     /// Brush half-size of fix, free and material painting, relative to the model size (0: one
     /// point or cell per click).
     pub brush: f64,
+    /// Weight that Ctrl+click sets on a control point (control point tool).
+    pub weight: f64,
     /// Gravity on, and its strength.
     pub gravity: (bool, f64),
     /// Inflation on, and its pressure.
@@ -125,6 +127,7 @@ impl Default for ToolOptions {
             pull: false,
             paint: [1.0, 2.0, 400.0],
             brush: 0.0,
+            weight: 1.0,
             gravity: (false, 9.81),
             inflate: (false, 5.0),
         }
@@ -193,6 +196,10 @@ pub struct Studio {
     kind: Option<ModelKind>,
     pde_t: f64,
     viewport: Rect,
+    /// FFD points held in place while another is dragged (multi-point moves, eq 12).
+    ffd_pins: Vec<Vec3>,
+    /// A pin pick is on its way to the worker.
+    pin_pending: bool,
 }
 
 impl std::fmt::Debug for Studio {
@@ -243,6 +250,8 @@ impl Studio {
             log: VecDeque::new(),
             energy: Vec::new(),
             press: None,
+            ffd_pins: Vec::new(),
+            pin_pending: false,
             fitted: false,
             edits: BTreeMap::new(),
             frame_times: VecDeque::new(),
@@ -374,6 +383,11 @@ impl Studio {
                 Notice::Error { message, .. } => {
                     self.push_log(format!("error: {message}"));
                     self.dialog = Some(Dialog::Error(message));
+                    self.press = None;
+                }
+                Notice::Grabbed { point, .. } if self.pin_pending => {
+                    self.pin_pending = false;
+                    self.ffd_pins.push(point);
                     self.press = None;
                 }
                 Notice::Grabbed { point, .. } => {
@@ -678,6 +692,23 @@ impl Studio {
                 ui.add(egui::Slider::new(&mut o.duration, 0.01..=2.0).text("duration (s)"));
                 ui.checkbox(&mut o.pull, "pull (towards the viewer)");
             }
+            Tool::FfdPoint => {
+                ui.small("Drag a point of the object: it goes exactly where the mouse is (eq 7). Ctrl+click pins points that stay in place while you drag another (eq 12).");
+                ui.horizontal(|ui| {
+                    ui.label(format!("{} pinned", self.ffd_pins.len()));
+                    if ui.button("Clear pins").clicked() {
+                        self.ffd_pins.clear();
+                    }
+                });
+            }
+            Tool::ControlPoint => {
+                ui.add(
+                    egui::Slider::new(&mut o.weight, 0.05..=20.0)
+                        .logarithmic(true)
+                        .text("weight"),
+                );
+                ui.small("Drag a control point to move it; Ctrl+click one to give it this weight.");
+            }
             Tool::Fix | Tool::Free => {
                 ui.add(egui::Slider::new(&mut o.brush, 0.0..=0.5).text("brush (x size; 0: click)"));
                 ui.small("With a brush, drag to fix or free every control point it passes.");
@@ -914,7 +945,12 @@ impl Studio {
         {
             if self.tool == Tool::Orbit || mods.shift {
                 self.press = Some(Press::Orbit);
-            } else if let Some(grab) = self.grab_for_tool() {
+            } else if let Some(grab) = if mods.command || mods.ctrl {
+                self.ctrl_grab_for_tool()
+            } else {
+                self.grab_for_tool()
+            } {
+                self.pin_pending = grab == Grab::FfdPin;
                 let (x, y) = local(p);
                 let ray = self.camera.ray(x, y, w, h);
                 let per_point =
@@ -1012,8 +1048,22 @@ impl Studio {
                 edge_stiffness: o.paint[2],
             },
             Tool::ControlPoint => Grab::ControlPoint,
-            Tool::FfdPoint => Grab::FfdPoint,
+            Tool::FfdPoint => Grab::FfdPoint {
+                pins: self.ffd_pins.clone(),
+            },
         })
+    }
+
+    /// What Ctrl+click does with the active tool: pin an FFD point, set a control point's
+    /// weight; else the same as a plain click.
+    fn ctrl_grab_for_tool(&self) -> Option<Grab> {
+        match self.tool {
+            Tool::FfdPoint => Some(Grab::FfdPin),
+            Tool::ControlPoint => Some(Grab::Weight {
+                weight: self.options.weight,
+            }),
+            _ => self.grab_for_tool(),
+        }
     }
 
     fn paint_3d(&self, ui: &mut Ui, rect: Rect) {

@@ -49,8 +49,20 @@ pub enum Grab {
     },
     /// Drag the control point hit (or nearest the hit).
     ControlPoint,
-    /// FFD direct manipulation: drag the embedded point hit (eq 7).
-    FfdPoint,
+    /// FFD direct manipulation: drag the embedded point hit (eq 7); the `pins` (points of the
+    /// object) stay where they are, so each move is a multi-point manipulation (eq 12).
+    FfdPoint {
+        /// Points held in place while the dragged one moves.
+        pins: Vec<Vec3>,
+    },
+    /// Pick a point of an FFD object to hold in place in later FFD drags (the UI keeps it;
+    /// the pick comes back as [`Notice::Grabbed`]).
+    FfdPin,
+    /// Set the weight of the control point hit (NURBS models and FFD lattices).
+    Weight {
+        /// The new weight (> 0).
+        weight: f64,
+    },
     /// A force at the hit, along `direction` scaled by `strength`, for `duration` seconds;
     /// solids spread it over `radius`.
     Force {
@@ -350,6 +362,7 @@ enum Active {
     Ffd {
         model: String,
         last: Vec3,
+        pins: Vec<Vec3>,
     },
 }
 
@@ -706,12 +719,23 @@ impl State {
                     });
                 }
             }
-            Grab::FfdPoint => {
+            Grab::FfdPoint { pins } => {
                 active = Some(Active::Ffd {
                     model: model.clone(),
                     last: hit.point,
+                    pins,
                 });
             }
+            Grab::FfdPin => {}
+            Grab::Weight { weight } => match hit.element {
+                Element::ControlPoint { index } => {
+                    self.apply(one(Edit::SetWeight { index, weight }));
+                }
+                _ => self.notify(Notice::Error {
+                    message: "click a control point to set its weight".into(),
+                    paused: false,
+                }),
+            },
             Grab::Force {
                 direction,
                 strength,
@@ -921,15 +945,15 @@ impl State {
                     to: t,
                 },
             ),
-            Active::Ffd { model, last } => {
+            Active::Ffd { model, last, pins } => {
                 let from = [last.x, last.y, last.z];
                 *last = to;
-                Command::to(
-                    model,
-                    Edit::FfdMove {
-                        moves: vec![PointMove { from, to: t }],
-                    },
-                )
+                let mut moves = vec![PointMove { from, to: t }];
+                moves.extend(pins.iter().map(|p| PointMove {
+                    from: [p.x, p.y, p.z],
+                    to: [p.x, p.y, p.z],
+                }));
+                Command::to(model, Edit::FfdMove { moves })
             }
         };
         self.apply(cmd);

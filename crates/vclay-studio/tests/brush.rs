@@ -88,3 +88,100 @@ fn a_material_brush_paints_the_cells_it_passes() {
     w.send(Request::Undo);
     assert!(density(&w).iter().all(|&x| x == 1.0), "undo of the stroke");
 }
+
+/// The embedded mesh's vertex nearest `x`.
+fn nearest_vertex(w: &Worker, x: Vec3) -> Vec3 {
+    w.query(move |s| {
+        let p = s.model(None).unwrap().data_points();
+        *p.iter()
+            .min_by(|a, b| (*a - x).norm().total_cmp(&(*b - x).norm()))
+            .unwrap()
+    })
+    .unwrap()
+}
+
+#[test]
+fn an_ffd_drag_with_a_pin_is_a_multi_point_move_that_keeps_the_pin() {
+    let session = builtin(builtin_named("bottle").unwrap()).unwrap();
+    let w = Worker::start(session, false);
+    let pts = w.query(|s| s.model(None).unwrap().data_points()).unwrap();
+    // A vertex of the bottle to drag (through a ray from outside towards the axis) and the
+    // vertex farthest from it to pin.
+    let a = pts[pts.len() / 3];
+    let b = *pts
+        .iter()
+        .max_by(|p, q| (*p - a).norm().total_cmp(&(*q - a).norm()))
+        .unwrap();
+    let ray = Ray {
+        origin: Vec3::new(a.x * 3.0, a.y * 3.0, a.z),
+        direction: Vec3::new(-a.x, -a.y, 0.0),
+    };
+    let hit = w
+        .query(move |s| s.pick(&ray, 0.0).map(|h| h.1.point))
+        .unwrap()
+        .expect("the ray hits the bottle");
+    w.send(Request::Grab {
+        ray,
+        tolerance: 0.0,
+        grab: Grab::FfdPoint { pins: vec![b] },
+    });
+    w.send(Request::Drag {
+        to: hit + Vec3::new(0.0, 0.0, 0.2),
+    });
+    w.send(Request::Drop);
+    let log = w
+        .query(|s| {
+            s.log()
+                .iter()
+                .map(|l| l.command.edit.clone())
+                .collect::<Vec<_>>()
+        })
+        .unwrap();
+    let moves = log
+        .iter()
+        .find_map(|e| match e {
+            vclay_session::Edit::FfdMove { moves } => Some(moves.clone()),
+            _ => None,
+        })
+        .unwrap_or_else(|| panic!("no ffd-move applied: {log:?}"));
+    assert_eq!(moves.len(), 2, "the dragged point and the pin");
+    assert_eq!(moves[1].from, moves[1].to, "the pin stays");
+    // The pinned vertex did not move (eq 12 holds it exactly).
+    let b_now = nearest_vertex(&w, b);
+    assert!((b_now - b).norm() < 1e-9, "pin moved: {b:?} -> {b_now:?}");
+    // Something did move.
+    let moved = w.query(|s| s.model(None).unwrap().data_points()).unwrap();
+    assert!(moved.iter().zip(&pts).any(|(p, q)| (p - q).norm() > 0.05));
+}
+
+#[test]
+fn ctrl_click_sets_a_control_point_weight() {
+    let session = builtin(builtin_named("bottle").unwrap()).unwrap();
+    let w = Worker::start(session, false);
+    let cp = w
+        .query(|s| s.model(None).unwrap().control_points()[0])
+        .unwrap();
+    w.send(Request::Grab {
+        ray: Ray {
+            origin: cp + Vec3::new(0.0, 0.0, -5.0),
+            direction: Vec3::new(0.0, 0.0, 1.0),
+        },
+        tolerance: 1e-3,
+        grab: Grab::Weight { weight: 3.0 },
+    });
+    let log = w
+        .query(|s| {
+            s.log()
+                .iter()
+                .map(|l| l.command.edit.clone())
+                .collect::<Vec<_>>()
+        })
+        .unwrap();
+    assert!(
+        matches!(
+            log.as_slice(),
+            [vclay_session::Edit::SetWeight { weight, .. }] if *weight == 3.0
+        ),
+        "{log:?}"
+    );
+}
