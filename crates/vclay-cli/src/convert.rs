@@ -1,7 +1,9 @@
 //! `vclay convert IN OUT [--samples N]`: between file formats, chosen by extension.
 //!
 //! Read: vclay model JSON and geomdl JSON (`.json`, told apart by content: geomdl has a
-//! top-level `"shape"`), meshes (`.obj`, `.stl`, `.ply`, `.glb`).
+//! top-level `"shape"`), STEP (`.step`, `.stp`, `.p21`) and IGES (`.igs`, `.iges`) B-spline
+//! curves and surfaces (what is not read is printed as a warning unless `--quiet`), meshes
+//! (`.obj`, `.stl`, `.ply`, `.glb`).
 //! Write: vclay model (`.json`), geomdl (`.geomdl.json`), STEP (`.step`, `.stp`: exact NURBS),
 //! IGES (`.igs`, `.iges`: entities 126/128),
 //! meshes (`.obj`, `.stl`, `.ply`, `.glb`: models are tessellated, curves are left out).
@@ -15,14 +17,14 @@ use vclay::io::geomdl::{is_geomdl, parse_geomdl, write_geomdl};
 use vclay::io::gltf::{GlbMesh, read_glb, write_glb};
 use vclay::io::iges::write_iges;
 use vclay::io::mesh::{read_mesh, write_mesh};
-use vclay::io::model::{Entity, NamedEntity, parse_named_model, write_named_model};
+use vclay::io::model::{Entity, NamedEntity, import_model, parse_named_model, write_named_model};
 use vclay::io::step::write_step;
 use vclay::spline::{tessellate_surface, tessellate_volume_boundary};
 
 /// Arguments of `vclay convert`.
 #[derive(Debug, Args)]
 pub struct ConvertArgs {
-    /// Input file (.json model or geomdl, .obj, .stl, .ply, .glb).
+    /// Input file (.json model or geomdl, .step/.stp, .igs/.iges, .obj, .stl, .ply, .glb).
     pub input: PathBuf,
     /// Output file (.json, .geomdl.json, .step/.stp, .igs/.iges, .obj, .stl, .ply, .glb).
     pub output: PathBuf,
@@ -66,10 +68,19 @@ pub fn read_any(path: &Path) -> Result<Loaded> {
             .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
             Ok(Loaded::Entities(ents))
         }
+        "step" | "stp" | "p21" | "igs" | "iges" => {
+            let imported = import_model(path)?;
+            if !crate::quiet() {
+                for w in &imported.warnings {
+                    eprintln!("vclay: warning: {}: {w}", path.display());
+                }
+            }
+            Ok(Loaded::Entities(imported.entities))
+        }
         "glb" => Ok(Loaded::Meshes(read_glb(path)?)),
         "obj" | "stl" | "ply" => Ok(Loaded::Meshes(vec![read_mesh(path)?])),
         other => bail!(
-            "{}: unknown input format {}; expected .json (vclay or geomdl model), .obj, .stl, .ply or .glb",
+            "{}: unknown input format {}; expected .json (vclay or geomdl model), .step, .stp, .igs, .iges, .obj, .stl, .ply or .glb",
             path.display(),
             if other.is_empty() {
                 "(no extension)".to_string()

@@ -142,6 +142,19 @@ pub enum IoError {
         /// What cannot be stored.
         message: String,
     },
+    /// A malformed STEP or IGES file, with its place: `STEP line 41, entity #17: ...`,
+    /// `IGES line 9, entity DE 3: ...`.
+    #[error("{format} line {line}{}: {message}", match entity { Some(e) => format!(", entity {e}"), None => String::new() })]
+    Cad {
+        /// `STEP` or `IGES`.
+        format: &'static str,
+        /// 1-based line of the file.
+        line: usize,
+        /// The entity: `#17` (STEP instance) or `DE 3` (IGES directory entry), if known.
+        entity: Option<String>,
+        /// What is wrong.
+        message: String,
+    },
     /// The file extension does not name a supported mesh format.
     #[error("{}: unknown mesh format {}; expected .obj, .stl or .ply", path.display(), match ext { Some(e) => format!("\".{e}\""), None => "(no extension)".to_string() })]
     UnknownExtension {

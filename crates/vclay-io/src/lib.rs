@@ -2,7 +2,8 @@
 //!
 //! vclay's files: the JSON model format ([`model`]), parameter lists for `vclay eval`
 //! ([`params`]) and triangle meshes in OBJ, STL and PLY ([`mesh`]); exchange formats: glTF binary
-//! ([`gltf`]), STEP ([`step`]) and IGES ([`iges`]) export, NURBS-Python JSON ([`geomdl`]). The
+//! ([`gltf`]), STEP ([`step`], [`step_read`]) and IGES ([`iges`], [`iges_read`]) export and
+//! import of B-spline curves and surfaces, NURBS-Python JSON ([`geomdl`]). The
 //! formats are specified in `docs/formats.md`.
 //!
 //! Every reader validates everything and names the place of an error: the file, then a line and
@@ -29,11 +30,13 @@ pub mod error;
 pub mod geomdl;
 pub mod gltf;
 pub mod iges;
+pub mod iges_read;
 mod json;
 pub mod mesh;
 pub mod model;
 pub mod params;
 pub mod step;
+pub mod step_read;
 mod util;
 
 pub use error::{IoError, MeshLocation};
@@ -42,8 +45,9 @@ pub use mesh::{
     write_mesh_with,
 };
 pub use model::{
-    ENTITY_TYPES, Entity, NamedEntity, parse_model, parse_named_model, read_model,
+    ENTITY_TYPES, Entity, NamedEntity, import_model, parse_model, parse_named_model, read_model,
     read_named_model, stage_model, to_json, write_model, write_named_model,
 };
 pub use params::{parse_params, read_params};
+pub use step_read::CadImport;
 pub use util::{STALE_TEMP_AGE, Staged, TEMP_PREFIX, stage, write_atomic};

@@ -149,6 +149,9 @@ pub fn parse_named_model(text: &str) -> Result<Vec<NamedEntity>, IoError> {
 }
 
 /// Reads a model file (names dropped; see [`read_named_model`]). Errors name the file.
+///
+/// Like [`read_named_model`], this reads STEP and IGES files too, chosen by extension, and
+/// drops their import warnings: use [`import_model`] to show them.
 pub fn read_model(path: impl AsRef<Path>) -> Result<Vec<Entity>, IoError> {
     Ok(read_named_model(path)?
         .into_iter()
@@ -157,10 +160,41 @@ pub fn read_model(path: impl AsRef<Path>) -> Result<Vec<Entity>, IoError> {
 }
 
 /// Reads a model file keeping entity names. Errors name the file.
+///
+/// The extension chooses the format: `.step`, `.stp` and `.p21` are STEP
+/// ([`crate::step_read`]), `.igs` and `.iges` are IGES ([`crate::iges_read`]), anything else
+/// is the JSON model format. The import warnings of STEP and IGES are dropped here; use
+/// [`import_model`] to show them.
 pub fn read_named_model(path: impl AsRef<Path>) -> Result<Vec<NamedEntity>, IoError> {
+    Ok(import_model(path)?.entities)
+}
+
+/// The model formats [`import_model`] reads, by lower-case extension: STEP, IGES, else JSON.
+fn cad_format(path: &Path) -> Option<&'static str> {
+    let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+    match ext.as_str() {
+        "step" | "stp" | "p21" => Some("step"),
+        "igs" | "iges" => Some("iges"),
+        _ => None,
+    }
+}
+
+/// Reads a model file of any format vclay imports (JSON model, STEP, IGES; chosen by extension
+/// as in [`read_named_model`]) with the warnings of the import: what a STEP or IGES file holds
+/// that was not read. A JSON model has no warnings. Errors name the file.
+pub fn import_model(path: impl AsRef<Path>) -> Result<crate::CadImport, IoError> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|e| IoError::file(path, e))?;
-    parse_named_model(&text).map_err(|e| e.in_file(path))
+    match cad_format(path) {
+        Some("step") => crate::step_read::read_step(path),
+        Some(_) => crate::iges_read::read_iges(path),
+        None => {
+            let text = std::fs::read_to_string(path).map_err(|e| IoError::file(path, e))?;
+            Ok(crate::CadImport {
+                entities: parse_named_model(&text).map_err(|e| e.in_file(path))?,
+                warnings: Vec::new(),
+            })
+        }
+    }
 }
 
 /// The model as JSON: `{"entities": [...]}`. Weights are omitted when all are 1.

@@ -1,0 +1,994 @@
+//! STEP (ISO 10303-21) import of B-spline curves and surfaces, polynomial and rational, from
+//! AP203, AP214 and AP242 files.
+//!
+//! **What.** Read: `B_SPLINE_CURVE_WITH_KNOTS`, `B_SPLINE_SURFACE_WITH_KNOTS` and the rational
+//! complex entities `(BOUNDED_CURVE() B_SPLINE_CURVE(..) B_SPLINE_CURVE_WITH_KNOTS(..) ..
+//! RATIONAL_B_SPLINE_CURVE(..) ..)` and `(.. B_SPLINE_SURFACE(..) B_SPLINE_SURFACE_WITH_KNOTS(..)
+//! .. RATIONAL_B_SPLINE_SURFACE(..) ..)` (ISO 10303-42 section 4.4), with their
+//! `CARTESIAN_POINT`s. Every B-spline surface of the file is imported: those of a
+//! `GEOMETRIC_SET`, the basis of a trimmed or offset surface, and the `FACE_SURFACE` geometry of
+//! the `ADVANCED_FACE`s of a B-rep (untrimmed: the faces' bounds, edges and vertices are dropped,
+//! and a warning says so). A B-spline curve is imported unless it is part of a B-rep's topology
+//! or of a surface definition (referenced by `EDGE_CURVE`, `PCURVE`, `SURFACE_CURVE`,
+//! `SEAM_CURVE`, `DEFINITIONAL_REPRESENTATION` or a swept surface) or lies in a 2D parameter
+//! space; a `TRIMMED_CURVE`'s basis is imported whole. Names become entity names when not empty.
+//!
+//! **How.** A Part 21 tokenizer (comments, strings with `''`, enumerations `.T.`, `$`, `*`,
+//! `#id` references, typed parameters `LENGTH_MEASURE(1.)`, binary `"..."`) feeds a parser
+//! that keeps each instance's type(s), parameters and line; the data section is then read
+//! entity by entity. Knots are expanded from distinct values and multiplicities; surface nets
+//! are lists of rows along u, as vclay stores them, so nothing is reordered.
+//!
+//! **Warnings.** [`CadImport::warnings`] lists, per type with counts, every entity instance that
+//! was not read (elementary surfaces such as `PLANE`, `CYLINDRICAL_SURFACE` or `TOROIDAL_SURFACE`
+//! are not converted yet; topology, placements, units and product data are not needed), and says
+//! when faces lost their trimming loops. Nothing is dropped silently.
+//!
+//! **Errors.** A malformed file is an [`IoError::Cad`] naming the line and the entity:
+//! `STEP line 41, entity #17: B_SPLINE_CURVE_WITH_KNOTS: knot multiplicities and knots differ
+//! in length (4 and 3)`.
+//!
+//! **Limitations.** No trimming loops, topology or solids; no elementary surfaces or curves
+//! (lines, circles, conics, planes, quadrics): they are listed as not read. `UNIFORM_*`,
+//! `QUASI_UNIFORM_*` and `BEZIER_*` subtypes (knots implied rather than given) are listed as
+//! not read. Placements (`MAPPED_ITEM`, assemblies) and units are not applied: coordinates are
+//! taken as written.
+
+use crate::error::IoError;
+use crate::model::{Entity, NamedEntity};
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::path::Path;
+use vclay_core::Vec3;
+use vclay_spline::{NurbsCurve, NurbsSurface};
+
+/// The result of importing a CAD file: the geometry read and what was not.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CadImport {
+    /// The curves and surfaces read, in the order of their entity numbers (STEP `#id`, IGES
+    /// directory entry).
+    pub entities: Vec<NamedEntity>,
+    /// What was not read or was simplified, one sentence each (empty when everything was read).
+    pub warnings: Vec<String>,
+}
+
+/// A parameter of a Part 21 instance.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum Param {
+    Int(i64),
+    Real(f64),
+    Str(String),
+    Enum(String),
+    Ref(usize),
+    List(Vec<Param>),
+    Typed(String, Vec<Param>),
+    /// `$`
+    Unset,
+    /// `*`
+    Derived,
+    /// `"0123"`
+    Binary,
+}
+
+/// One partial entity: `NAME(params)`.
+#[derive(Clone, Debug)]
+pub(crate) struct Part {
+    name: String,
+    params: Vec<Param>,
+}
+
+/// An instance `#id = ...;` with the 1-based line it starts on.
+#[derive(Clone, Debug)]
+pub(crate) struct Instance {
+    id: usize,
+    line: usize,
+    /// One part for a simple instance, several for a complex one.
+    parts: Vec<Part>,
+}
+
+impl Instance {
+    fn type_name(&self) -> String {
+        if self.parts.len() == 1 {
+            self.parts[0].name.clone()
+        } else {
+            let names: Vec<&str> = self.parts.iter().map(|p| p.name.as_str()).collect();
+            format!("({})", names.join(" "))
+        }
+    }
+
+    fn part(&self, name: &str) -> Option<&Part> {
+        self.parts.iter().find(|p| p.name == name)
+    }
+
+    fn is(&self, name: &str) -> bool {
+        self.part(name).is_some()
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tokenizer
+
+#[derive(Clone, Debug, PartialEq)]
+enum Tok {
+    Keyword(String),
+    Ref(usize),
+    Int(i64),
+    Real(f64),
+    Str(String),
+    Enum(String),
+    Binary,
+    Dollar,
+    Star,
+    LParen,
+    RParen,
+    Comma,
+    Semi,
+    Eq,
+}
+
+fn err(line: usize, entity: Option<usize>, message: impl Into<String>) -> IoError {
+    IoError::Cad {
+        format: "STEP",
+        line,
+        entity: entity.map(|e| format!("#{e}")),
+        message: message.into(),
+    }
+}
+
+/// Splits the text into tokens with their 1-based lines.
+fn tokenize(text: &str) -> Result<Vec<(Tok, usize)>, IoError> {
+    let b = text.as_bytes();
+    let mut out = Vec::new();
+    let (mut i, mut line) = (0, 1);
+    while i < b.len() {
+        let c = b[i];
+        let start_line = line;
+        match c {
+            b'\n' => {
+                line += 1;
+                i += 1;
+            }
+            b' ' | b'\t' | b'\r' => i += 1,
+            b'/' if b.get(i + 1) == Some(&b'*') => {
+                i += 2;
+                loop {
+                    if i + 1 >= b.len() {
+                        return Err(err(start_line, None, "unterminated comment"));
+                    }
+                    if b[i] == b'*' && b[i + 1] == b'/' {
+                        i += 2;
+                        break;
+                    }
+                    if b[i] == b'\n' {
+                        line += 1;
+                    }
+                    i += 1;
+                }
+            }
+            b'\'' => {
+                let mut s = Vec::new();
+                i += 1;
+                loop {
+                    match b.get(i) {
+                        None => return Err(err(start_line, None, "unterminated string")),
+                        Some(b'\'') if b.get(i + 1) == Some(&b'\'') => {
+                            s.push(b'\'');
+                            i += 2;
+                        }
+                        Some(b'\'') => {
+                            i += 1;
+                            break;
+                        }
+                        Some(&ch) => {
+                            if ch == b'\n' {
+                                line += 1;
+                            } else if ch != b'\r' {
+                                s.push(ch);
+                            }
+                            i += 1;
+                        }
+                    }
+                }
+                out.push((
+                    Tok::Str(String::from_utf8_lossy(&s).into_owned()),
+                    start_line,
+                ));
+            }
+            b'"' => {
+                let end = b[i + 1..].iter().position(|&x| x == b'"');
+                let Some(end) = end else {
+                    return Err(err(start_line, None, "unterminated binary value"));
+                };
+                i += end + 2;
+                out.push((Tok::Binary, start_line));
+            }
+            b'#' => {
+                let s = i + 1;
+                let mut e = s;
+                while e < b.len() && b[e].is_ascii_digit() {
+                    e += 1;
+                }
+                let id = text[s..e]
+                    .parse()
+                    .map_err(|_| err(line, None, "'#' not followed by an entity number"))?;
+                out.push((Tok::Ref(id), line));
+                i = e;
+            }
+            b'.' if b
+                .get(i + 1)
+                .is_some_and(|x| x.is_ascii_alphabetic() || *x == b'_') =>
+            {
+                let s = i + 1;
+                let mut e = s;
+                while e < b.len() && (b[e].is_ascii_alphanumeric() || b[e] == b'_') {
+                    e += 1;
+                }
+                if b.get(e) != Some(&b'.') {
+                    return Err(err(line, None, "unterminated enumeration (expected '.')"));
+                }
+                out.push((Tok::Enum(text[s..e].to_ascii_uppercase()), line));
+                i = e + 1;
+            }
+            b'0'..=b'9' | b'-' | b'+' | b'.' => {
+                let s = i;
+                let mut e = i + 1;
+                let mut real = c == b'.';
+                while e < b.len() {
+                    match b[e] {
+                        b'0'..=b'9' => {}
+                        b'.' | b'E' | b'e' => real = true,
+                        b'-' | b'+' if matches!(b[e - 1], b'E' | b'e') => {}
+                        _ => break,
+                    }
+                    e += 1;
+                }
+                let t = &text[s..e];
+                let tok = if real {
+                    Tok::Real(
+                        t.parse()
+                            .map_err(|_| err(line, None, format!("invalid real \"{t}\"")))?,
+                    )
+                } else {
+                    Tok::Int(
+                        t.parse()
+                            .map_err(|_| err(line, None, format!("invalid integer \"{t}\"")))?,
+                    )
+                };
+                out.push((tok, line));
+                i = e;
+            }
+            b'A'..=b'Z' | b'a'..=b'z' | b'_' | b'!' => {
+                let s = i;
+                let mut e = i + 1;
+                while e < b.len() && (b[e].is_ascii_alphanumeric() || b[e] == b'_' || b[e] == b'-')
+                {
+                    e += 1;
+                }
+                out.push((Tok::Keyword(text[s..e].to_ascii_uppercase()), line));
+                i = e;
+            }
+            b'$' | b'*' | b'(' | b')' | b',' | b';' | b'=' => {
+                out.push((
+                    match c {
+                        b'$' => Tok::Dollar,
+                        b'*' => Tok::Star,
+                        b'(' => Tok::LParen,
+                        b')' => Tok::RParen,
+                        b',' => Tok::Comma,
+                        b';' => Tok::Semi,
+                        _ => Tok::Eq,
+                    },
+                    line,
+                ));
+                i += 1;
+            }
+            _ => {
+                let ch = text[i..].chars().next().unwrap_or('?');
+                return Err(err(line, None, format!("unexpected character '{ch}'")));
+            }
+        }
+    }
+    Ok(out)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Parser
+
+struct Parser {
+    toks: Vec<(Tok, usize)>,
+    pos: usize,
+    /// The instance being parsed, for error messages.
+    entity: Option<usize>,
+}
+
+impl Parser {
+    fn line(&self) -> usize {
+        self.toks
+            .get(self.pos)
+            .or(self.toks.last())
+            .map_or(1, |t| t.1)
+    }
+
+    fn peek(&self) -> Option<&Tok> {
+        self.toks.get(self.pos).map(|t| &t.0)
+    }
+
+    fn next(&mut self) -> Result<Tok, IoError> {
+        let t = self
+            .toks
+            .get(self.pos)
+            .map(|t| t.0.clone())
+            .ok_or_else(|| err(self.line(), self.entity, "unexpected end of file"))?;
+        self.pos += 1;
+        Ok(t)
+    }
+
+    fn expect(&mut self, want: &Tok, what: &str) -> Result<(), IoError> {
+        let line = self.line();
+        let t = self.next()?;
+        if &t == want {
+            Ok(())
+        } else {
+            Err(err(
+                line,
+                self.entity,
+                format!("expected {what}, found {t:?}"),
+            ))
+        }
+    }
+
+    fn keyword(&mut self) -> Result<String, IoError> {
+        let line = self.line();
+        match self.next()? {
+            Tok::Keyword(k) => Ok(k),
+            t => Err(err(
+                line,
+                self.entity,
+                format!("expected an entity name, found {t:?}"),
+            )),
+        }
+    }
+
+    /// `( p, p, ... )` after the opening parenthesis was consumed.
+    fn params(&mut self) -> Result<Vec<Param>, IoError> {
+        let mut out = Vec::new();
+        if self.peek() == Some(&Tok::RParen) {
+            self.pos += 1;
+            return Ok(out);
+        }
+        loop {
+            out.push(self.param()?);
+            let line = self.line();
+            match self.next()? {
+                Tok::Comma => {}
+                Tok::RParen => return Ok(out),
+                t => {
+                    return Err(err(
+                        line,
+                        self.entity,
+                        format!("expected ',' or ')', found {t:?}"),
+                    ));
+                }
+            }
+        }
+    }
+
+    fn param(&mut self) -> Result<Param, IoError> {
+        let line = self.line();
+        Ok(match self.next()? {
+            Tok::Int(i) => Param::Int(i),
+            Tok::Real(x) => Param::Real(x),
+            Tok::Str(s) => Param::Str(s),
+            Tok::Enum(e) => Param::Enum(e),
+            Tok::Ref(r) => Param::Ref(r),
+            Tok::Binary => Param::Binary,
+            Tok::Dollar => Param::Unset,
+            Tok::Star => Param::Derived,
+            Tok::LParen => Param::List(self.params()?),
+            Tok::Keyword(k) => {
+                self.expect(&Tok::LParen, "'(' after a type name")?;
+                Param::Typed(k, self.params()?)
+            }
+            t => {
+                return Err(err(
+                    line,
+                    self.entity,
+                    format!("expected a parameter, found {t:?}"),
+                ));
+            }
+        })
+    }
+}
+
+/// Parses the exchange structure into its data-section instances, by id.
+pub(crate) fn parse_instances(text: &str) -> Result<BTreeMap<usize, Instance>, IoError> {
+    let toks = tokenize(text)?;
+    let mut p = Parser {
+        toks,
+        pos: 0,
+        entity: None,
+    };
+    let first = p.keyword().ok();
+    if first.as_deref() != Some("ISO-10303-21") {
+        return Err(err(
+            1,
+            None,
+            "not a STEP file: it must begin with ISO-10303-21;",
+        ));
+    }
+    p.expect(&Tok::Semi, "';'")?;
+    let mut out = BTreeMap::new();
+    loop {
+        let line = p.line();
+        let Some(t) = p.peek().cloned() else {
+            return Err(err(line, None, "missing END-ISO-10303-21;"));
+        };
+        match t {
+            Tok::Keyword(k) if k == "END-ISO-10303-21" => break,
+            Tok::Keyword(k) if k == "HEADER" => {
+                p.pos += 1;
+                p.expect(&Tok::Semi, "';'")?;
+                // Header entities: NAME(params); until ENDSEC.
+                loop {
+                    let k = p.keyword()?;
+                    if k == "ENDSEC" {
+                        p.expect(&Tok::Semi, "';'")?;
+                        break;
+                    }
+                    p.expect(&Tok::LParen, "'('")?;
+                    p.params()?;
+                    p.expect(&Tok::Semi, "';'")?;
+                }
+            }
+            Tok::Keyword(k) if k == "DATA" => {
+                p.pos += 1;
+                if p.peek() == Some(&Tok::LParen) {
+                    p.pos += 1;
+                    p.params()?;
+                }
+                p.expect(&Tok::Semi, "';' after DATA")?;
+                loop {
+                    let line = p.line();
+                    match p.next()? {
+                        Tok::Keyword(k) if k == "ENDSEC" => {
+                            p.expect(&Tok::Semi, "';'")?;
+                            break;
+                        }
+                        Tok::Ref(id) => {
+                            p.entity = Some(id);
+                            p.expect(&Tok::Eq, "'='")?;
+                            let parts = if p.peek() == Some(&Tok::LParen) {
+                                p.pos += 1;
+                                let mut parts = Vec::new();
+                                while p.peek() != Some(&Tok::RParen) {
+                                    let name = p.keyword()?;
+                                    p.expect(&Tok::LParen, "'('")?;
+                                    parts.push(Part {
+                                        name,
+                                        params: p.params()?,
+                                    });
+                                }
+                                p.pos += 1;
+                                if parts.is_empty() {
+                                    return Err(err(line, Some(id), "empty complex entity"));
+                                }
+                                parts
+                            } else {
+                                let name = p.keyword()?;
+                                p.expect(&Tok::LParen, "'('")?;
+                                vec![Part {
+                                    name,
+                                    params: p.params()?,
+                                }]
+                            };
+                            p.expect(&Tok::Semi, "';' at the end of the entity")?;
+                            if out.insert(id, Instance { id, line, parts }).is_some() {
+                                return Err(err(line, Some(id), "entity number defined twice"));
+                            }
+                            p.entity = None;
+                        }
+                        t => {
+                            return Err(err(
+                                line,
+                                None,
+                                format!("expected '#id = ...' or ENDSEC, found {t:?}"),
+                            ));
+                        }
+                    }
+                }
+            }
+            Tok::Keyword(k) => {
+                return Err(err(
+                    line,
+                    None,
+                    format!("unexpected {k}: expected HEADER, DATA or END-ISO-10303-21"),
+                ));
+            }
+            t => return Err(err(line, None, format!("unexpected {t:?}"))),
+        }
+    }
+    Ok(out)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Entities
+
+/// Reads typed values out of instances, naming the instance in errors.
+struct Reader<'a> {
+    all: &'a BTreeMap<usize, Instance>,
+    /// Instances consumed as parts of what was read (points, the splines themselves).
+    used: HashSet<usize>,
+}
+
+struct Ctx<'a> {
+    inst: &'a Instance,
+    part: &'a str,
+}
+
+impl Ctx<'_> {
+    fn err(&self, message: impl std::fmt::Display) -> IoError {
+        err(
+            self.inst.line,
+            Some(self.inst.id),
+            format!("{}: {message}", self.part),
+        )
+    }
+
+    fn int(&self, p: &Param, what: &str) -> Result<usize, IoError> {
+        match p {
+            Param::Int(i) if *i >= 0 => Ok(*i as usize),
+            _ => Err(self.err(format!("{what}: expected a non-negative integer"))),
+        }
+    }
+
+    fn real(&self, p: &Param, what: &str) -> Result<f64, IoError> {
+        match p {
+            Param::Real(x) => Ok(*x),
+            Param::Int(i) => Ok(*i as f64),
+            Param::Typed(_, v) if v.len() == 1 => self.real(&v[0], what),
+            _ => Err(self.err(format!("{what}: expected a number"))),
+        }
+    }
+
+    fn list<'p>(&self, p: &'p Param, what: &str) -> Result<&'p [Param], IoError> {
+        match p {
+            Param::List(v) => Ok(v),
+            _ => Err(self.err(format!("{what}: expected a list"))),
+        }
+    }
+
+    fn reals(&self, p: &Param, what: &str) -> Result<Vec<f64>, IoError> {
+        self.list(p, what)?
+            .iter()
+            .map(|x| self.real(x, what))
+            .collect()
+    }
+
+    fn ints(&self, p: &Param, what: &str) -> Result<Vec<usize>, IoError> {
+        self.list(p, what)?
+            .iter()
+            .map(|x| self.int(x, what))
+            .collect()
+    }
+
+    fn params(&self, n: usize) -> Result<&[Param], IoError> {
+        let part = self
+            .inst
+            .part(self.part)
+            .ok_or_else(|| self.err("missing"))?;
+        if part.params.len() != n {
+            return Err(self.err(format!(
+                "expected {n} parameters, found {}",
+                part.params.len()
+            )));
+        }
+        Ok(&part.params)
+    }
+
+    /// Expands `(knots, multiplicities)`.
+    fn knots(&self, mults: &Param, knots: &Param, axis: &str) -> Result<Vec<f64>, IoError> {
+        let m = self.ints(mults, &format!("{axis}knot multiplicities"))?;
+        let k = self.reals(knots, &format!("{axis}knots"))?;
+        if m.len() != k.len() {
+            return Err(self.err(format!(
+                "{axis}knot multiplicities and knots differ in length ({} and {})",
+                m.len(),
+                k.len()
+            )));
+        }
+        if m.iter().sum::<usize>() > 1_000_000 {
+            return Err(self.err(format!("{axis}knot multiplicities too large")));
+        }
+        Ok(m.iter()
+            .zip(&k)
+            .flat_map(|(&m, &k)| std::iter::repeat_n(k, m))
+            .collect())
+    }
+}
+
+/// Why a curve or surface was not imported, for the warnings.
+enum Skip {
+    /// Not a B-spline with knots (e.g. `PLANE`, `UNIFORM_CURVE`): listed by type.
+    Unsupported,
+    /// A 2D curve (parameter space of a face).
+    TwoD,
+}
+
+impl<'a> Reader<'a> {
+    fn get(&self, id: usize, from: &Ctx<'_>) -> Result<&'a Instance, IoError> {
+        self.all
+            .get(&id)
+            .ok_or_else(|| from.err(format!("reference to #{id}, which is not defined")))
+    }
+
+    /// A `CARTESIAN_POINT` of 2 or 3 coordinates (2D points get z = 0, flagged by `false`).
+    fn point(&mut self, p: &Param, from: &Ctx<'_>) -> Result<(Vec3, bool), IoError> {
+        let Param::Ref(id) = p else {
+            return Err(from.err("expected a reference to a CARTESIAN_POINT"));
+        };
+        let inst = self.get(*id, from)?;
+        let c = Ctx {
+            inst,
+            part: "CARTESIAN_POINT",
+        };
+        if !inst.is("CARTESIAN_POINT") {
+            return Err(from.err(format!(
+                "#{id} is a {}, expected a CARTESIAN_POINT",
+                inst.type_name()
+            )));
+        }
+        let ps = c.params(2)?;
+        let xs = c.reals(&ps[1], "coordinates")?;
+        self.used.insert(*id);
+        match xs[..] {
+            [x, y, z] => Ok((Vec3::new(x, y, z), true)),
+            [x, y] => Ok((Vec3::new(x, y, 0.0), false)),
+            _ => Err(c.err(format!("expected 2 or 3 coordinates, found {}", xs.len()))),
+        }
+    }
+
+    fn name(p: &Param) -> Option<String> {
+        match p {
+            Param::Str(s) if !s.is_empty() => Some(s.clone()),
+            _ => None,
+        }
+    }
+
+    /// A B-spline curve instance, or why it is skipped.
+    fn curve(&mut self, inst: &Instance) -> Result<Result<NamedEntity, Skip>, IoError> {
+        // Simple form: all attributes in one part; complex form: spread over parts.
+        let (name, degree, cps, mults, knots, weights);
+        if inst.parts.len() == 1 && inst.is("B_SPLINE_CURVE_WITH_KNOTS") {
+            let c = Ctx {
+                inst,
+                part: "B_SPLINE_CURVE_WITH_KNOTS",
+            };
+            let ps = c.params(9)?;
+            name = Self::name(&ps[0]);
+            degree = c.int(&ps[1], "degree")?;
+            cps = c.list(&ps[2], "control points")?.to_vec();
+            mults = ps[6].clone();
+            knots = ps[7].clone();
+            weights = None;
+        } else if inst.is("B_SPLINE_CURVE") && inst.is("B_SPLINE_CURVE_WITH_KNOTS") {
+            let c = Ctx {
+                inst,
+                part: "B_SPLINE_CURVE",
+            };
+            let ps = c.params(5)?;
+            degree = c.int(&ps[0], "degree")?;
+            cps = c.list(&ps[1], "control points")?.to_vec();
+            let ck = Ctx {
+                inst,
+                part: "B_SPLINE_CURVE_WITH_KNOTS",
+            };
+            let ks = ck.params(3)?;
+            mults = ks[0].clone();
+            knots = ks[1].clone();
+            name = inst
+                .part("REPRESENTATION_ITEM")
+                .and_then(|p| p.params.first())
+                .and_then(Self::name);
+            weights = match inst.part("RATIONAL_B_SPLINE_CURVE") {
+                Some(_) => {
+                    let cr = Ctx {
+                        inst,
+                        part: "RATIONAL_B_SPLINE_CURVE",
+                    };
+                    let ws = cr.params(1)?;
+                    Some(cr.reals(&ws[0], "weights")?)
+                }
+                None => None,
+            };
+        } else {
+            return Ok(Err(Skip::Unsupported));
+        }
+        let c = Ctx {
+            inst,
+            part: "B_SPLINE_CURVE_WITH_KNOTS",
+        };
+        let knots = c.knots(&mults, &knots, "")?;
+        let mut pts = Vec::with_capacity(cps.len());
+        let mut planar2d = false;
+        for p in &cps {
+            let (q, three) = self.point(p, &c)?;
+            planar2d |= !three;
+            pts.push(q);
+        }
+        if planar2d {
+            return Ok(Err(Skip::TwoD));
+        }
+        let curve = NurbsCurve::new(degree, knots, pts, weights).map_err(|e| c.err(e))?;
+        Ok(Ok(NamedEntity {
+            name,
+            entity: Entity::Curve(curve),
+        }))
+    }
+
+    /// A B-spline surface instance, or why it is skipped.
+    fn surface(&mut self, inst: &Instance) -> Result<Result<NamedEntity, Skip>, IoError> {
+        let (name, du, dv, net, mu, mv, ku, kv, weights);
+        if inst.parts.len() == 1 && inst.is("B_SPLINE_SURFACE_WITH_KNOTS") {
+            let c = Ctx {
+                inst,
+                part: "B_SPLINE_SURFACE_WITH_KNOTS",
+            };
+            let ps = c.params(13)?;
+            name = Self::name(&ps[0]);
+            du = c.int(&ps[1], "u degree")?;
+            dv = c.int(&ps[2], "v degree")?;
+            net = ps[3].clone();
+            (mu, mv, ku, kv) = (ps[8].clone(), ps[9].clone(), ps[10].clone(), ps[11].clone());
+            weights = None;
+        } else if inst.is("B_SPLINE_SURFACE") && inst.is("B_SPLINE_SURFACE_WITH_KNOTS") {
+            let c = Ctx {
+                inst,
+                part: "B_SPLINE_SURFACE",
+            };
+            let ps = c.params(7)?;
+            du = c.int(&ps[0], "u degree")?;
+            dv = c.int(&ps[1], "v degree")?;
+            net = ps[2].clone();
+            let ck = Ctx {
+                inst,
+                part: "B_SPLINE_SURFACE_WITH_KNOTS",
+            };
+            let ks = ck.params(5)?;
+            (mu, mv, ku, kv) = (ks[0].clone(), ks[1].clone(), ks[2].clone(), ks[3].clone());
+            name = inst
+                .part("REPRESENTATION_ITEM")
+                .and_then(|p| p.params.first())
+                .and_then(Self::name);
+            weights = match inst.part("RATIONAL_B_SPLINE_SURFACE") {
+                Some(_) => {
+                    let cr = Ctx {
+                        inst,
+                        part: "RATIONAL_B_SPLINE_SURFACE",
+                    };
+                    let ws = cr.params(1)?;
+                    let rows = cr.list(&ws[0], "weights")?;
+                    let mut flat = Vec::new();
+                    for r in rows {
+                        flat.push(cr.reals(r, "weights")?);
+                    }
+                    Some(flat)
+                }
+                None => None,
+            };
+        } else {
+            return Ok(Err(Skip::Unsupported));
+        }
+        let c = Ctx {
+            inst,
+            part: "B_SPLINE_SURFACE_WITH_KNOTS",
+        };
+        let ku = c.knots(&mu, &ku, "u ")?;
+        let kv = c.knots(&mv, &kv, "v ")?;
+        let rows = c.list(&net, "control points")?;
+        let mut pts = Vec::with_capacity(rows.len());
+        for r in rows {
+            let row = c.list(r, "control point row")?;
+            let mut out = Vec::with_capacity(row.len());
+            for p in row {
+                let (q, three) = self.point(p, &c)?;
+                if !three {
+                    return Ok(Err(Skip::TwoD));
+                }
+                out.push(q);
+            }
+            pts.push(out);
+        }
+        let s = NurbsSurface::new([du, dv], [ku, kv], pts, weights).map_err(|e| c.err(e))?;
+        Ok(Ok(NamedEntity {
+            name,
+            entity: Entity::Surface(s),
+        }))
+    }
+}
+
+/// Entity types whose curve references are topology or surface definitions, not free curves.
+const CURVE_USERS: [&str; 8] = [
+    "EDGE_CURVE",
+    "PCURVE",
+    "SURFACE_CURVE",
+    "SEAM_CURVE",
+    "INTERSECTION_CURVE",
+    "DEFINITIONAL_REPRESENTATION",
+    "SURFACE_OF_REVOLUTION",
+    "SURFACE_OF_LINEAR_EXTRUSION",
+];
+
+/// All references in a parameter list.
+fn refs(params: &[Param], out: &mut Vec<usize>) {
+    for p in params {
+        match p {
+            Param::Ref(r) => out.push(*r),
+            Param::List(v) | Param::Typed(_, v) => refs(v, out),
+            _ => {}
+        }
+    }
+}
+
+fn is_curve_type(inst: &Instance) -> bool {
+    inst.parts.iter().any(|p| {
+        matches!(
+            p.name.as_str(),
+            "B_SPLINE_CURVE" | "B_SPLINE_CURVE_WITH_KNOTS"
+        )
+    })
+}
+
+fn is_surface_type(inst: &Instance) -> bool {
+    inst.parts.iter().any(|p| {
+        matches!(
+            p.name.as_str(),
+            "B_SPLINE_SURFACE" | "B_SPLINE_SURFACE_WITH_KNOTS"
+        )
+    })
+}
+
+/// Imports a STEP file's text. See the module documentation for what is read.
+pub fn parse_step(text: &str) -> Result<CadImport, IoError> {
+    let all = parse_instances(text)?;
+    // Which instances reference each curve through topology or surface definitions.
+    let mut bound_curves: HashSet<usize> = HashSet::new();
+    let mut faces = 0usize;
+    for inst in all.values() {
+        if inst.is("ADVANCED_FACE") || inst.is("FACE_SURFACE") {
+            faces += 1;
+        }
+        if inst
+            .parts
+            .iter()
+            .any(|p| CURVE_USERS.contains(&p.name.as_str()))
+        {
+            let mut r = Vec::new();
+            for p in &inst.parts {
+                refs(&p.params, &mut r);
+            }
+            bound_curves.extend(r);
+        }
+    }
+    let mut rd = Reader {
+        all: &all,
+        used: HashSet::new(),
+    };
+    let mut entities = Vec::new();
+    let (mut edge_curves, mut curves_2d) = (0usize, 0usize);
+    for inst in all.values() {
+        let got = if is_surface_type(inst) {
+            rd.surface(inst)?
+        } else if is_curve_type(inst) {
+            if bound_curves.contains(&inst.id) {
+                // Read it all the same so that a malformed one is reported, then drop it.
+                let r = rd.curve(inst)?;
+                rd.used.insert(inst.id);
+                match r {
+                    Ok(_) => edge_curves += 1,
+                    Err(Skip::TwoD) => curves_2d += 1,
+                    Err(Skip::Unsupported) => {
+                        rd.used.remove(&inst.id);
+                    }
+                }
+                continue;
+            }
+            rd.curve(inst)?
+        } else {
+            continue;
+        };
+        match got {
+            Ok(e) => {
+                rd.used.insert(inst.id);
+                entities.push(e);
+            }
+            Err(Skip::TwoD) => {
+                rd.used.insert(inst.id);
+                curves_2d += 1;
+            }
+            Err(Skip::Unsupported) => {}
+        }
+    }
+    // Points used only by skipped curves are not "read" in any useful sense, but they were
+    // parsed and checked; count them with their curves rather than listing them.
+    let mut warnings = Vec::new();
+    if faces > 0 {
+        warnings.push(format!(
+            "{faces} face(s) of a B-rep: their underlying surfaces are imported untrimmed \
+             (trimming loops, edges and vertices are dropped)"
+        ));
+    }
+    if edge_curves + curves_2d > 0 {
+        warnings.push(format!(
+            "{edge_curves} B-spline edge or surface-definition curve(s) and {curves_2d} \
+             parameter-space (2D) curve(s) not imported: they belong to the dropped topology"
+        ));
+    }
+    let mut not_read: HashMap<String, usize> = HashMap::new();
+    for inst in all.values() {
+        if !rd.used.contains(&inst.id) {
+            *not_read.entry(inst.type_name()).or_default() += 1;
+        }
+    }
+    if !not_read.is_empty() {
+        let mut v: Vec<(String, usize)> = not_read.into_iter().collect();
+        v.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+        let list: Vec<String> = v.iter().map(|(t, n)| format!("{n} {t}")).collect();
+        warnings.push(format!(
+            "entities not read (count per type): {}",
+            list.join(", ")
+        ));
+    }
+    if entities.is_empty() {
+        return Err(err(
+            1,
+            None,
+            format!(
+                "no B-spline curve or surface to import ({})",
+                warnings.join("; ")
+            ),
+        ));
+    }
+    Ok(CadImport { entities, warnings })
+}
+
+/// Reads a STEP file (`.step`, `.stp`). Errors name the file.
+pub fn read_step(path: impl AsRef<Path>) -> Result<CadImport, IoError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|e| IoError::file(path, e))?;
+    parse_step(&String::from_utf8_lossy(&bytes)).map_err(|e| e.in_file(path))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tokens_strings_enums_typed_and_complex() {
+        let text = "ISO-10303-21;\nHEADER;\nFILE_NAME('a''b',$);\nENDSEC;\nDATA;\n\
+                    /* c */ #1=FOO('it''s',.T.,$,*,(1,-2.5E-1,#2),LENGTH_MEASURE(1.),\"0F\");\n\
+                    #2=( A() B(3) );\nENDSEC;\nEND-ISO-10303-21;\n";
+        let all = parse_instances(text).unwrap();
+        let p = &all[&1].parts[0].params;
+        assert_eq!(p[0], Param::Str("it's".into()));
+        assert_eq!(p[1], Param::Enum("T".into()));
+        assert_eq!(p[2], Param::Unset);
+        assert_eq!(p[3], Param::Derived);
+        assert_eq!(
+            p[4],
+            Param::List(vec![Param::Int(1), Param::Real(-0.25), Param::Ref(2)])
+        );
+        assert_eq!(
+            p[5],
+            Param::Typed("LENGTH_MEASURE".into(), vec![Param::Real(1.0)])
+        );
+        assert_eq!(p[6], Param::Binary);
+        assert_eq!(all[&1].line, 6);
+        assert_eq!(all[&2].type_name(), "(A B)");
+    }
+
+    #[test]
+    fn syntax_errors_are_located() {
+        let text = "ISO-10303-21;\nDATA;\n#1=FOO(1,\n2;\nENDSEC;\nEND-ISO-10303-21;\n";
+        let e = parse_instances(text).unwrap_err().to_string();
+        assert!(e.contains("line 4") && e.contains("#1"), "{e}");
+    }
+}
