@@ -18,6 +18,7 @@ mod lattice;
 mod pde;
 mod solids;
 mod spline;
+mod studio;
 
 /// What a demo step returns: a sentence describing the result, and the files it wrote.
 pub type StepOutput = (String, Vec<String>);
@@ -89,6 +90,11 @@ fn steps() -> Vec<Step> {
             name: "rope on a dynamic cube",
             reproduces: "subdivision-solids-journal.txt Fig 7, Fig 12",
             run: solids::rope_cube,
+        },
+        Step {
+            name: "studio",
+            reproduces: "",
+            run: studio::screenshot,
         },
     ]
 }
