@@ -16,6 +16,7 @@ mod demo;
 mod eval;
 mod ffd;
 mod limits;
+mod manual;
 mod pde;
 mod render;
 mod run;
@@ -127,6 +128,18 @@ enum Command {
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
         args: Vec<String>,
     },
+    /// Print a shell completion script to stdout, e.g. `vclay completions bash >
+    /// ~/.local/share/bash-completion/completions/vclay`.
+    Completions {
+        /// The shell.
+        shell: clap_complete::Shell,
+    },
+    /// Print the man page (roff) to stdout, e.g. `vclay man > vclay.1`; `vclay man COMMAND`
+    /// prints the page of one subcommand (`vclay-COMMAND.1`).
+    Man {
+        /// A subcommand (default: the page of `vclay` itself).
+        command: Option<String>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -175,6 +188,8 @@ fn main() -> ExitCode {
             quiet,
         }),
         Command::Studio { args } => studio::run(&args),
+        Command::Completions { shell } => manual::completions(shell),
+        Command::Man { command } => manual::man(command.as_deref()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

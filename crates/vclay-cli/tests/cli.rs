@@ -12,6 +12,15 @@ fn vclay(args: &[&str]) -> Output {
         .expect("vclay runs")
 }
 
+/// Runs `vclay` in the folder `dir`.
+fn vclay_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vclay"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("vclay runs")
+}
+
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, text).unwrap();
@@ -191,9 +200,10 @@ fn bad_inputs_exit_2_and_name_the_place() {
 
 #[test]
 fn demo_writes_its_files() {
+    // Run as the README says: `demo` in the current folder writes ./vclay-demo.
     let dir = tempfile::tempdir().unwrap();
-    let out_dir = dir.path().join("demo");
-    let out = vclay(&["demo", "--out", out_dir.to_str().unwrap()]);
+    let out_dir = dir.path().join("vclay-demo");
+    let out = vclay_in(dir.path(), &["demo"]);
     assert!(
         out.status.success(),
         "{}",
@@ -218,4 +228,24 @@ fn demo_writes_its_files() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+
+    // Issue 17: the README's `eval` example works as written (it named a params.json that
+    // nothing wrote). The command is taken from the README itself.
+    let readme = include_str!("../../../README.md");
+    let line = readme
+        .lines()
+        .find(|l| l.starts_with("cargo run --release -- eval "))
+        .expect("the README shows an eval example");
+    let args: Vec<&str> = line["cargo run --release -- ".len()..]
+        .split_whitespace()
+        .collect();
+    let out = vclay_in(dir.path(), &args);
+    assert!(
+        out.status.success(),
+        "{line}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["points"].as_array().unwrap().len(), 1, "{v}");
+    assert!(v["derivatives"].is_array(), "{v}");
 }

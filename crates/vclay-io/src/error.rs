@@ -71,6 +71,22 @@ pub enum IoError {
         /// What the JSON parser expected.
         message: String,
     },
+    /// A key written twice in one JSON object (`"degree": 2, "degree": 3`); JSON parsers
+    /// disagree on which one counts, so neither does.
+    #[error(
+        "line {line}, column {column}: duplicate key {} in the object at {path}",
+        quote(key)
+    )]
+    DuplicateKey {
+        /// 1-based line of the second occurrence.
+        line: usize,
+        /// 1-based column just after the second occurrence.
+        column: usize,
+        /// JSON path of the object, e.g. `entities[0]` (`top level` for the outermost one).
+        path: String,
+        /// The key.
+        key: String,
+    },
     /// Valid JSON of the wrong shape: a missing or unknown field, a wrong type, a wrong count.
     #[error("{path}: {message}")]
     Structure {
@@ -81,7 +97,8 @@ pub enum IoError {
     },
     /// The `"type"` of an entity is not one of the known types.
     #[error(
-        "{path}: unknown entity type \"{found}\", expected one of {}",
+        "{path}: unknown entity type {}, expected one of {}",
+        quote(found),
         quoted_list(allowed)
     )]
     UnknownType {
@@ -163,6 +180,23 @@ pub enum IoError {
         /// Its extension, if any.
         ext: Option<String>,
     },
+}
+
+/// Most characters of a token from a file that a message quotes ([`quote`]).
+pub const MAX_QUOTED_CHARS: usize = 80;
+
+/// `token` in double quotes for a message, cut to its first [`MAX_QUOTED_CHARS`] characters
+/// (with `...` and its full length) when longer, so that a megabyte-long key or word in a file
+/// does not become a megabyte-long message. Control characters are escaped.
+pub(crate) fn quote(token: &str) -> String {
+    let n = token.chars().count();
+    let shown: String = token.chars().take(MAX_QUOTED_CHARS).collect();
+    let escaped = shown.escape_debug().to_string();
+    if n > MAX_QUOTED_CHARS {
+        format!("\"{escaped}...\" ({n} characters)")
+    } else {
+        format!("\"{escaped}\"")
+    }
 }
 
 fn quoted_list(items: &[&str]) -> String {

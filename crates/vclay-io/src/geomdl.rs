@@ -22,7 +22,7 @@
 //! rejected with an error rather than silently dropped. The Jinja2 template feature of geomdl is
 //! not supported.
 
-use crate::error::IoError;
+use crate::error::{IoError, quote};
 use crate::json::{self, JsonPath};
 use crate::model::{Entity, NamedEntity};
 use serde_json::{Map, Value, json};
@@ -52,7 +52,8 @@ pub fn parse_geomdl(text: &str) -> Result<Vec<NamedEntity>, IoError> {
     let kind = match shape.get("type") {
         Some(Value::String(s)) => SHAPE_TYPES.iter().position(|t| t == s).ok_or_else(|| {
             tpath.error(format!(
-                "unknown shape type \"{s}\", expected \"curve\", \"surface\" or \"volume\""
+                "unknown shape type {}, expected \"curve\", \"surface\" or \"volume\"",
+                quote(s)
             ))
         })?,
         Some(other) => return Err(tpath.expected("a string", other)),

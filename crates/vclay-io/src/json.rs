@@ -1,14 +1,33 @@
 //! JSON helpers shared by the model and parameter readers: syntax errors with line and column,
 //! a JSON path tracker, value descriptions for messages, and a compact pretty printer.
 
-use crate::error::IoError;
-use serde_json::Value;
+use crate::error::{IoError, MAX_QUOTED_CHARS, quote};
+use serde_json::{Map, Value};
+use std::cell::RefCell;
 use std::fmt::Write as _;
 
 /// Parses JSON text, turning syntax errors into [`IoError::JsonSyntax`] with line and column.
+///
+/// Unlike `serde_json::from_str::<Value>`, which keeps the last of two equal keys, a key that
+/// appears twice in one object is an error ([`IoError::DuplicateKey`]): `"degree": 2, "degree":
+/// 3` is far more likely a mistake than an intended override.
 pub(crate) fn parse(text: &str) -> Result<Value, IoError> {
-    serde_json::from_str(text).map_err(|e| {
+    let state = Strict::default();
+    let mut de = serde_json::Deserializer::from_str(text);
+    let parsed = serde::de::DeserializeSeed::deserialize(&state, &mut de).and_then(|v| {
+        de.end()?;
+        Ok(v)
+    });
+    parsed.map_err(|e| {
         let (line, column) = (e.line(), e.column());
+        if let Some((path, key)) = state.duplicate.take() {
+            return IoError::DuplicateKey {
+                line,
+                column,
+                path,
+                key,
+            };
+        }
         let full = e.to_string();
         let suffix = format!(" at line {line} column {column}");
         let message = full.strip_suffix(&suffix).unwrap_or(&full).to_string();
@@ -18,6 +37,83 @@ pub(crate) fn parse(text: &str) -> Result<Value, IoError> {
             message,
         }
     })
+}
+
+/// The state of one strict parse: the path of the value being read (for the message of a
+/// duplicate key) and the duplicate found, if any.
+#[derive(Default)]
+struct Strict {
+    path: RefCell<Vec<Step>>,
+    duplicate: RefCell<Option<(String, String)>>,
+}
+
+impl Strict {
+    fn enter<T>(&self, step: Step, f: impl FnOnce() -> T) -> T {
+        self.path.borrow_mut().push(step);
+        let out = f();
+        self.path.borrow_mut().pop();
+        out
+    }
+}
+
+impl<'de> serde::de::DeserializeSeed<'de> for &Strict {
+    type Value = Value;
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<Value, D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for &Strict {
+    type Value = Value;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_bool<E>(self, b: bool) -> Result<Value, E> {
+        Ok(Value::Bool(b))
+    }
+    fn visit_i64<E>(self, n: i64) -> Result<Value, E> {
+        Ok(Value::Number(n.into()))
+    }
+    fn visit_u64<E>(self, n: u64) -> Result<Value, E> {
+        Ok(Value::Number(n.into()))
+    }
+    fn visit_f64<E>(self, x: f64) -> Result<Value, E> {
+        Ok(serde_json::Number::from_f64(x).map_or(Value::Null, Value::Number))
+    }
+    fn visit_str<E>(self, s: &str) -> Result<Value, E> {
+        Ok(Value::String(s.to_owned()))
+    }
+    fn visit_string<E>(self, s: String) -> Result<Value, E> {
+        Ok(Value::String(s))
+    }
+    fn visit_unit<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+    fn visit_none<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Value, A::Error> {
+        let mut out = Vec::new();
+        while let Some(v) = self.enter(Step::Index(out.len()), || seq.next_element_seed(self))? {
+            out.push(v);
+        }
+        Ok(Value::Array(out))
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Value, A::Error> {
+        let mut out = Map::new();
+        while let Some(key) = map.next_key::<String>()? {
+            if out.contains_key(&key) {
+                let path = JsonPath(self.path.borrow().clone()).to_string();
+                let message = format!("duplicate key {}", quote(&key));
+                *self.duplicate.borrow_mut() = Some((path, key));
+                return Err(serde::de::Error::custom(message));
+            }
+            let v = self.enter(Step::Key(key.clone()), || map.next_value_seed(self))?;
+            out.insert(key, v);
+        }
+        Ok(Value::Object(out))
+    }
 }
 
 /// One step of a JSON path.
@@ -68,12 +164,23 @@ impl std::fmt::Display for JsonPath {
         }
         for (n, s) in self.0.iter().enumerate() {
             match s {
-                Step::Key(k) if n == 0 => write!(f, "{k}")?,
-                Step::Key(k) => write!(f, ".{k}")?,
+                Step::Key(k) if n == 0 => write!(f, "{}", short(k))?,
+                Step::Key(k) => write!(f, ".{}", short(k))?,
                 Step::Index(i) => write!(f, "[{i}]")?,
             }
         }
         Ok(())
+    }
+}
+
+/// A key of a JSON path as written, or quoted and cut ([`quote`]) when it is long or holds
+/// characters that would make the path ambiguous.
+fn short(k: &str) -> std::borrow::Cow<'_, str> {
+    let plain = |c: char| c.is_alphanumeric() || c == '_' || c == '-';
+    if k.chars().count() <= MAX_QUOTED_CHARS && !k.is_empty() && k.chars().all(plain) {
+        k.into()
+    } else {
+        quote(k).into()
     }
 }
 

@@ -25,7 +25,7 @@
 //! uses. Unknown fields are errors (a misspelt `"weight"` would otherwise be silently ignored). A
 //! model must hold at least one entity. Names are kept by the `*_named_*` functions only.
 
-use crate::error::IoError;
+use crate::error::{IoError, quote};
 use crate::json::{self, JsonPath};
 use serde_json::{Map, Value};
 use std::path::Path;
@@ -122,7 +122,8 @@ pub fn parse_named_model(text: &str) -> Result<Vec<NamedEntity>, IoError> {
         Value::Object(o) if o.contains_key("entities") => {
             if let Some(k) = o.keys().find(|k| *k != "entities") {
                 return Err(top.error(format!(
-                    "unknown field \"{k}\" next to \"entities\" (only \"entities\" is allowed)"
+                    "unknown field {} next to \"entities\" (only \"entities\" is allowed)",
+                    quote(k)
                 )));
             }
             let path = top.key("entities");
@@ -257,7 +258,8 @@ fn parse_entity(v: &Value, index: usize) -> Result<NamedEntity, IoError> {
     for k in obj.keys() {
         if !ENTITY_FIELDS.contains(&k.as_str()) {
             return Err(path.error(format!(
-                "unknown field \"{k}\" (allowed: {})",
+                "unknown field {} (allowed: {})",
+                quote(k),
                 ENTITY_FIELDS.join(", ")
             )));
         }

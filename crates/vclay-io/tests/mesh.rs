@@ -705,3 +705,32 @@ fn readers_never_panic_on_garbage() {
         }
     }
 }
+
+/// Issue 17: a long token of a mesh file is quoted cut to 80 characters, not whole.
+#[test]
+fn long_tokens_are_quoted_cut() {
+    let long = "z".repeat(50_000);
+    for (text, format, name) in [
+        (format!("v 0 0 {long}\n"), MeshFormat::Obj, "a.obj"),
+        (
+            format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 {long}\n"),
+            MeshFormat::Obj,
+            "a.obj",
+        ),
+        (format!("solid x\n{long}\n"), MeshFormat::Stl, "a.stl"),
+        (
+            format!("ply\nformat {long} 1.0\nend_header\n"),
+            MeshFormat::Ply,
+            "a.ply",
+        ),
+        (
+            format!("ply\nformat ascii 1.0\n{long}\nend_header\n"),
+            MeshFormat::Ply,
+            "a.ply",
+        ),
+    ] {
+        let msg = decode(&text, format, name).unwrap_err();
+        assert!(msg.len() < 300, "{} characters: {}", msg.len(), &msg[..300]);
+        assert!(msg.contains("...\" (50000 characters)"), "{msg}");
+    }
+}

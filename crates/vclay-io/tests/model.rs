@@ -351,10 +351,13 @@ fn file_errors_name_the_file() {
     let msg = read_model(&shape).unwrap_err().to_string();
     assert!(msg.contains("shape.json: entities[0].name"), "{msg}");
 
+    // A missing folder is created (issue 17); a folder that is a file is an error naming it.
+    let model = parse_model(CURVE).unwrap();
     let target = dir.path().join("no_such_dir").join("out.json");
-    let msg = write_model(&target, &parse_model(CURVE).unwrap())
-        .unwrap_err()
-        .to_string();
+    write_model(&target, &model).unwrap();
+    assert_eq!(read_model(&target).unwrap(), model);
+    let target = bad.join("out.json");
+    let msg = write_model(&target, &model).unwrap_err().to_string();
     assert!(msg.contains("out.json"), "{msg}");
 }
 
@@ -372,5 +375,131 @@ fn no_panic_on_odd_but_valid_json() {
         r#"{"type": "nurbs-curve", "degree": 1, "knots": [0, 0, 1, 1], "control_points": [[0,0,0],[1,1,1e999]]}"#,
     ] {
         assert!(parse_model(text).is_err(), "{text}");
+    }
+}
+
+/// Issue 17: `"degree": 2, "degree": 3` read as degree 3 (serde_json keeps the last key).
+#[test]
+fn duplicate_keys_are_errors_naming_key_and_place() {
+    let dup = CURVE.replace("\"degree\": 2,", "\"degree\": 2, \"degree\": 3,");
+    let e = parse_model(&dup).unwrap_err();
+    assert!(
+        matches!(&e, IoError::DuplicateKey { key, path, line: 2, .. } if key == "degree" && path == "top level"),
+        "{e:?}"
+    );
+    assert_err(
+        &dup,
+        &[
+            "line 2, column",
+            "duplicate key \"degree\" in the object at top level",
+        ],
+    );
+    // Deeper: the path of the object that holds the key twice.
+    let text = format!(
+        "{{\"entities\": [{CURVE}, {}]}}",
+        SURFACE.replace("\"type\"", "\"knots\": [], \"type\"")
+    );
+    assert_err(
+        &text,
+        &["duplicate key \"knots\" in the object at entities[1]"],
+    );
+    // In every reader that goes through the JSON parser: geomdl and parameter lists too.
+    let geomdl = r#"{"shape": {"type": "curve", "type": "surface", "data": []}}"#;
+    let msg = vclay_io::geomdl::parse_geomdl(geomdl)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("duplicate key \"type\" in the object at shape"),
+        "{msg}"
+    );
+    // Equal keys in different objects are fine.
+    assert!(parse_model(&all_three()).is_ok());
+}
+
+/// Issue 17: a megabyte-long key or type was quoted whole in the message.
+#[test]
+fn long_tokens_are_quoted_cut() {
+    let long = "x".repeat(100_000);
+    for text in [
+        CURVE.replace("\"name\"", &format!("\"{long}\"")),
+        CURVE.replace("\"nurbs-curve\"", &format!("\"{long}\"")),
+        format!("{{\"entities\": [{CURVE}], \"{long}\": 1}}"),
+        CURVE.replace(
+            "\"degree\": 2,",
+            &format!("\"{long}\": 1, \"{long}\": 2, \"degree\": 2,"),
+        ),
+    ] {
+        let msg = err(&text);
+        assert!(msg.len() < 400, "{} characters: {}", msg.len(), &msg[..400]);
+        assert!(msg.contains("...\" (100000 characters)"), "{msg}");
+    }
+    // Short tokens are quoted whole, with control characters escaped.
+    let msg = err(&CURVE.replace("\"name\"", "\"na\\nme\""));
+    assert!(msg.contains("unknown field \"na\\nme\""), "{msg}");
+}
+
+/// Issue 17: `m.json: entity 0 (nurbs-curve): weight [1] is 0 ...` was printed three times by
+/// callers that print an error's causes after it. Each message holds its causes' text once, and
+/// the text of no clause repeats.
+#[test]
+fn errors_say_their_message_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        CURVE.replace("0.7071067811865476", "0"),
+        CURVE.replace("[0, 0, 0, 1, 1, 1]", "[0, 0, 1, 1]"),
+        CURVE.replace("\"degree\": 2,", "\"degree\": 2, \"degree\": 2,"),
+        CURVE.replace("2,", "{},"),
+        "[1, 2".to_string(),
+    ];
+    for (n, text) in cases.iter().enumerate() {
+        let path = dir.path().join(format!("m{n}.json"));
+        std::fs::write(&path, text).unwrap();
+        let e = read_model(&path).unwrap_err();
+        let msg = e.to_string();
+        assert_eq!(msg.matches(&format!("m{n}.json")).count(), 1, "{msg}");
+        let mut source = std::error::Error::source(&e);
+        while let Some(s) = source {
+            let inner = s.to_string();
+            assert!(
+                msg.matches(&inner).count() <= 1,
+                "{inner:?} repeats in {msg:?}"
+            );
+            source = s.source();
+        }
+        let clauses: Vec<&str> = msg.split(": ").collect();
+        for (i, c) in clauses.iter().enumerate() {
+            assert!(
+                !clauses[i + 1..].contains(c),
+                "clause {c:?} repeats in {msg:?}"
+            );
+        }
+    }
+}
+
+/// Issue 17: a value of the wrong type names its key (the reader never shows serde's bare
+/// `invalid type: map, expected f64`).
+#[test]
+fn wrong_types_name_the_key() {
+    for (text, piece) in [
+        (
+            CURVE.replace("\"degree\": 2", "\"degree\": {}"),
+            "entities[0].degree: expected a non-negative integer, found an object",
+        ),
+        (
+            CURVE.replace("[1, 0, 0]", "[1, {}, 0]"),
+            "entities[0].control_points[0][1]: expected a number, found an object",
+        ),
+        (
+            CURVE.replace("[1, 0.7071067811865476, 1]", "{}"),
+            "entities[0].weights: expected an array of numbers, found an object",
+        ),
+        (
+            CURVE.replace("\"arc\"", "{}"),
+            "entities[0].name: expected a string, found an object",
+        ),
+    ] {
+        let msg = err(&text);
+        assert!(msg.contains(piece), "{msg}");
+        assert!(!msg.contains("invalid type"), "{msg}");
     }
 }

@@ -56,12 +56,22 @@ pub const MAX_COLLOCATION_POINTS: usize = 1_000_000;
 /// 2 x 10^7, 160 MB of `f64` (the QR works on a copy).
 pub const MAX_COLLOCATION_ENTRIES: usize = 20_000_000;
 
+/// `message` prefixed with the key it is about (`params.lambda: invalid type: ...`), so that
+/// serde's messages never come bare (issue 17); `.` (the document) and `""` add nothing.
+fn keyed(key: &str, message: &str) -> String {
+    if key.is_empty() || key == "." {
+        message.to_string()
+    } else {
+        format!("{key}: {message}")
+    }
+}
+
 /// The names the `solver` key accepts.
 pub const SOLVERS: [&str; 3] = ["collocation", "fourier", "pseudospectral"];
 
 /// A number or an expression text.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "a number or an expression string")]
 pub enum Value {
     /// A number.
     Num(f64),
@@ -83,7 +93,10 @@ impl From<&str> for Value {
 
 /// One value for all three components, or one per component.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "a number, an expression string or an array of 3 of them [x, y, z]"
+)]
 pub enum PerComponent {
     /// The same for x, y, z.
     One(Value),
@@ -93,7 +106,7 @@ pub enum PerComponent {
 
 /// Collocation points: a count M (arranged as square as possible) or a grid `[nu, nv]`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "a point count or a grid [nu, nv]")]
 pub enum CollocationSpec {
     /// M points.
     Count(usize),
@@ -304,28 +317,35 @@ impl PdeModel {
     /// Parses and compiles a spec from TOML text (the same fields as JSON); `source` names it
     /// in errors.
     pub fn from_toml(text: &str, source: &str) -> Result<Self, PdeError> {
-        let spec: SpecFile = toml::from_str(text).map_err(|e| {
+        let toml_err = |e: &toml::de::Error, key: &str| {
             let (line, col) = e
                 .span()
                 .map_or((1, 1), |s| vclay_core::text::line_column(text, s.start));
             PdeError::Spec {
                 place: format!("{source}:{line}:{col}"),
-                message: e.message().trim().to_string(),
+                message: keyed(key, e.message().trim()),
             }
-        })?;
+        };
+        let de = toml::Deserializer::parse(text).map_err(|e| toml_err(&e, ""))?;
+        let spec: SpecFile = serde_path_to_error::deserialize(de)
+            .map_err(|e| toml_err(e.inner(), &e.path().to_string()))?;
         Self::from_spec(&spec)
     }
 
     /// Parses and compiles a spec from JSON text; `source` names it in errors.
     pub fn from_json(text: &str, source: &str) -> Result<Self, PdeError> {
-        let spec: SpecFile = serde_json::from_str(text).map_err(|e| {
+        let json_err = |e: &serde_json::Error, key: &str| {
             let msg = e.to_string();
             let suffix = format!(" at line {} column {}", e.line(), e.column());
             PdeError::Spec {
                 place: format!("{source}:{}:{}", e.line(), e.column()),
-                message: msg.strip_suffix(&suffix).unwrap_or(&msg).to_string(),
+                message: keyed(key, msg.strip_suffix(&suffix).unwrap_or(&msg)),
             }
-        })?;
+        };
+        let mut de = serde_json::Deserializer::from_str(text);
+        let spec: SpecFile = serde_path_to_error::deserialize(&mut de)
+            .map_err(|e| json_err(e.inner(), &e.path().to_string()))?;
+        de.end().map_err(|e| json_err(&e, ""))?;
         Self::from_spec(&spec)
     }
 

@@ -189,3 +189,61 @@ fn nan_shape_function_is_reported() {
         "{e}"
     );
 }
+
+/// Issue 17: a value of the wrong type gave serde's bare `invalid type: map, expected f64` or
+/// `data did not match any variant of untagged enum Value`, without the key.
+#[test]
+fn wrong_types_name_the_key() {
+    for (from, to, key, what) in [
+        (
+            "\"a\": 4.763",
+            "\"a\": {}",
+            "params.a: ",
+            "invalid type: map, expected f64",
+        ),
+        (
+            "\"rho\": 0",
+            "\"rho\": {}",
+            "rho: ",
+            "a number or an expression string",
+        ),
+        (
+            "\"trial_terms\": 7",
+            "\"trial_terms\": {}",
+            "trial_terms: ",
+            "invalid type: map",
+        ),
+        (
+            "\"collocation\": [6, 6]",
+            "\"collocation\": {}",
+            "collocation: ",
+            "a point count or a grid",
+        ),
+        (
+            "\"u1\": 0,",
+            "\"u1\": {},",
+            "patches[0].z.u1: ",
+            "a number or an expression string",
+        ),
+    ] {
+        match with(from, to).unwrap_err() {
+            PdeError::Spec { place, message } => {
+                assert!(place.starts_with("s3.json:"), "{place}");
+                assert!(message.starts_with(key), "{message}");
+                assert!(message.contains(what), "{message}");
+                assert!(!message.contains("untagged enum"), "{message}");
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+    // TOML names the key as well.
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/specs");
+    let text = std::fs::read_to_string(format!("{dir}/vase.toml")).unwrap();
+    let bad = text.replace("trial_terms = 7", "trial_terms = {}");
+    match PdeModel::from_toml(&bad, "vase.toml").unwrap_err() {
+        PdeError::Spec { message, .. } => {
+            assert!(message.starts_with("trial_terms: "), "{message}")
+        }
+        other => panic!("{other:?}"),
+    }
+}

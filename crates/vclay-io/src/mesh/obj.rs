@@ -1,7 +1,7 @@
 //! Wavefront OBJ reading and writing (see the parent module for what is supported).
 
 use super::{Ctx, fmt_f64};
-use crate::error::IoError;
+use crate::error::{IoError, quote};
 use std::collections::HashMap;
 use std::io::Write;
 use vclay_core::{TriMesh, Vec3};
@@ -49,9 +49,12 @@ fn coords(ctx: &Ctx, line: usize, what: &str, toks: &[&str]) -> Result<Vec3, IoE
     }
     let mut c = [0.0; 3];
     for (k, t) in toks[..3].iter().enumerate() {
-        let x: f64 = t
-            .parse()
-            .map_err(|_| ctx.line(line, format!("{what} coordinate \"{t}\" is not a number")))?;
+        let x: f64 = t.parse().map_err(|_| {
+            ctx.line(
+                line,
+                format!("{what} coordinate {} is not a number", quote(t)),
+            )
+        })?;
         if !x.is_finite() {
             return Err(ctx.line(line, format!("{what} has a non-finite coordinate ({t})")));
         }
@@ -76,7 +79,7 @@ fn resolve(
     let i: i64 = tok.parse().map_err(|_| {
         ctx.line(
             line,
-            format!("face {what} index \"{tok}\" is not an integer"),
+            format!("face {what} index {} is not an integer", quote(tok)),
         )
     })?;
     if i > 0 {
@@ -135,11 +138,13 @@ pub(super) fn read(bytes: &[u8], ctx: &Ctx) -> Result<TriMesh, IoError> {
                     if parts.next().is_some() {
                         return Err(ctx.line(
                             line,
-                            format!("face corner \"{a}\" has more than 3 parts (v/vt/vn)"),
+                            format!("face corner {} has more than 3 parts (v/vt/vn)", quote(a)),
                         ));
                     }
                     if v.is_empty() {
-                        return Err(ctx.line(line, format!("face corner \"{a}\" has no vertex")));
+                        return Err(
+                            ctx.line(line, format!("face corner {} has no vertex", quote(a)))
+                        );
                     }
                     let v = resolve(ctx, line, v, "vertex", positions.len())?;
                     let vt = vt

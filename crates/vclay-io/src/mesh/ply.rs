@@ -1,7 +1,7 @@
 //! PLY reading (ASCII, binary little- and big-endian) and writing (ASCII, binary little-endian).
 
 use super::{Ctx, Encoding, fmt_f64};
-use crate::error::{IoError, MeshLocation};
+use crate::error::{IoError, MeshLocation, quote};
 use std::io::Write;
 use vclay_core::{TriMesh, Vec3};
 
@@ -177,7 +177,7 @@ fn parse_header(bytes: &[u8], ctx: &Ctx) -> Result<Header, IoError> {
                     other => {
                         return Err(ctx.line(
                             line,
-                            format!("unknown PLY format \"{other}\"; expected ascii, binary_little_endian or binary_big_endian"),
+                            format!("unknown PLY format {}; expected ascii, binary_little_endian or binary_big_endian", quote(other)),
                         ));
                     }
                 })
@@ -186,7 +186,10 @@ fn parse_header(bytes: &[u8], ctx: &Ctx) -> Result<Header, IoError> {
                 let count = count.parse().map_err(|_| {
                     ctx.line(
                         line,
-                        format!("element count \"{count}\" is not a non-negative integer"),
+                        format!(
+                            "element count {} is not a non-negative integer",
+                            quote(count)
+                        ),
                     )
                 })?;
                 elements.push(Element {
@@ -204,7 +207,7 @@ fn parse_header(bytes: &[u8], ctx: &Ctx) -> Result<Header, IoError> {
                     Scalar::parse(t).ok_or_else(|| {
                         ctx.line(
                             line,
-                            format!("unknown property type \"{t}\"; expected {TYPES}"),
+                            format!("unknown property type {}; expected {TYPES}", quote(t)),
                         )
                     })
                 };
@@ -214,7 +217,7 @@ fn parse_header(bytes: &[u8], ctx: &Ctx) -> Result<Header, IoError> {
                         if !count.is_integer() {
                             return Err(ctx.line(
                                 line,
-                                format!("list count type \"{c}\" is not an integer type"),
+                                format!("list count type {} is not an integer type", quote(c)),
                             ));
                         }
                         (
@@ -239,7 +242,12 @@ fn parse_header(bytes: &[u8], ctx: &Ctx) -> Result<Header, IoError> {
                 });
             }
             ["end_header"] => break,
-            _ => return Err(ctx.line(line, format!("unrecognized header line \"{}\"", raw.trim()))),
+            _ => {
+                return Err(ctx.line(
+                    line,
+                    format!("unrecognized header line {}", quote(raw.trim())),
+                ));
+            }
         }
     }
     let Some(format) = format else {
@@ -446,7 +454,7 @@ pub(super) fn read(bytes: &[u8], ctx: &Ctx) -> Result<TriMesh, IoError> {
                     ctx,
                     &el.name,
                     r,
-                    &format!("\"{tok}\" is not a valid value for its property type"),
+                    &format!("{} is not a valid value for its property type", quote(&tok)),
                 )
             };
             for (k, p) in el.props.iter().enumerate() {

@@ -1,7 +1,7 @@
 //! STL reading (ASCII and binary, detected by content) and writing.
 
 use super::{Ctx, Welder, facet_normal, fmt_f64};
-use crate::error::{IoError, MeshLocation};
+use crate::error::{IoError, MeshLocation, quote};
 use std::io::Write;
 use vclay_core::{TriMesh, Vec3};
 
@@ -160,7 +160,7 @@ fn read_ascii(bytes: &[u8], ctx: &Ctx) -> Result<TriMesh, IoError> {
         };
         last_line = line;
         let unexpected =
-            |expected: &str| ctx.line(line, format!("expected {expected}, found \"{kw}\""));
+            |expected: &str| ctx.line(line, format!("expected {expected}, found {}", quote(kw)));
         state = match (state, kw) {
             (State::Outside, "solid") => State::Solid,
             (State::Outside, _) => return Err(unexpected("\"solid\"")),
@@ -215,9 +215,12 @@ fn vertex(ctx: &Ctx, line: usize, args: &[&str]) -> Result<Vec3, IoError> {
     }
     let mut c = [0.0; 3];
     for (k, t) in args.iter().enumerate() {
-        let x: f64 = t
-            .parse()
-            .map_err(|_| ctx.line(line, format!("vertex coordinate \"{t}\" is not a number")))?;
+        let x: f64 = t.parse().map_err(|_| {
+            ctx.line(
+                line,
+                format!("vertex coordinate {} is not a number", quote(t)),
+            )
+        })?;
         if !x.is_finite() {
             return Err(ctx.line(line, format!("vertex has a non-finite coordinate ({t})")));
         }
