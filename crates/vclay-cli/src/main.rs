@@ -18,6 +18,7 @@ mod ffd;
 mod limits;
 mod manual;
 mod pde;
+mod progress;
 mod render;
 mod run;
 mod studio;

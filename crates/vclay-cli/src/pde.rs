@@ -205,6 +205,7 @@ pub fn run(args: &PdeArgs) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let mut entries = Vec::with_capacity(count);
     let mut total_solve = 0.0;
+    let bar = crate::progress::bar(count as u64, "vclay pde: frames");
     for (k, t) in frame_times(t0, t1, count).into_iter().enumerate() {
         let (sol, secs, _) = timed_solve(&mut anim, t)?;
         total_solve += secs;
@@ -221,7 +222,9 @@ pub fn run(args: &PdeArgs) -> Result<()> {
             "vertices": m.positions.len(),
             "out": path.display().to_string(),
         }));
+        bar.inc(1);
     }
+    bar.finish_and_clear();
     let v = json!({
         "spec": args.spec.display().to_string(),
         "model": model.name,

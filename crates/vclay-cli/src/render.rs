@@ -230,16 +230,21 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             .iter()
             .map(|f| scene_from_file(f, args.wireframe))
             .collect::<Result<Vec<_>>>()?;
-        let written = write_animation(&args.out, &scenes, &opts, 80).with_context(file)?;
-        eprintln!(
-            "vclay render: {} frames of {} -> {} file(s), first {}",
-            scenes.len(),
-            args.input.display(),
-            written.len(),
-            written
-                .first()
-                .map_or(String::new(), |p| p.display().to_string())
-        );
+        let drawing = crate::progress::spinner(&format!("vclay render: {} frames", scenes.len()));
+        let written = write_animation(&args.out, &scenes, &opts, 80).with_context(file);
+        drawing.finish_and_clear();
+        let written = written?;
+        if !crate::quiet() {
+            eprintln!(
+                "vclay render: {} frames of {} -> {} file(s), first {}",
+                scenes.len(),
+                args.input.display(),
+                written.len(),
+                written
+                    .first()
+                    .map_or(String::new(), |p| p.display().to_string())
+            );
+        }
         return Ok(());
     }
     let scene = scene_from_file(&args.input, args.wireframe)?;

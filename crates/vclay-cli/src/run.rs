@@ -206,8 +206,9 @@ fn print_summary(s: &RunSummary) {
     }
 }
 
-/// Runs a scenario or session quietly into `dir`, writing about `frames` OBJ frames, and
-/// returns the frame files in order (used by `vclay render SCENARIO.toml`).
+/// Runs a scenario or session quietly into `dir` (a progress bar over the steps on a terminal),
+/// writing about `frames` OBJ frames, and returns the frame files in order (used by `vclay
+/// render SCENARIO.toml`).
 pub fn run_for_frames(path: &Path, dir: &Path, frames: usize) -> Result<Vec<PathBuf>> {
     let Opened { mut session, info } = open(path)?;
     let steps = info.end_step.saturating_sub(session.model(None)?.steps());
@@ -217,7 +218,12 @@ pub fn run_for_frames(path: &Path, dir: &Path, frames: usize) -> Result<Vec<Path
         final_files: Vec::new(),
         csv: None,
     };
-    let s = vclay::session::run::run(&mut session, steps, dir, &output, &mut |_| {})?;
+    let bar = crate::progress::bar(steps, &format!("{}: steps", path.display()));
+    let s = vclay::session::run::run(&mut session, steps, dir, &output, &mut |p| {
+        bar.set_position(p.step)
+    });
+    bar.finish_and_clear();
+    let s = s?;
     if s.frames.is_empty() {
         bail!("{}: the scenario wrote no frames to render", path.display());
     }

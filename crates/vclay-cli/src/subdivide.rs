@@ -58,6 +58,10 @@ impl From<BoundaryArg> for BoundaryRule {
     }
 }
 
+/// Levels from which `vclay subdivide` shows a spinner (with the elapsed time) on a terminal:
+/// level 3 of a box takes about a second in a debug build, level 5 several in a release build.
+const SPINNER_LEVELS: usize = 3;
+
 /// Runs `vclay subdivide`.
 pub fn run(args: &SubdivideArgs) -> Result<()> {
     let source = match (&args.input, &args.primitive) {
@@ -73,7 +77,13 @@ pub fn run(args: &SubdivideArgs) -> Result<()> {
         max_memory: crate::limits::max_memory(),
     };
     // The errors name the file, line and element (or the primitive); add the command.
-    let outcome = subdivide_command(&options).map_err(|e| match e {
+    let spinner = (args.levels >= SPINNER_LEVELS)
+        .then(|| crate::progress::spinner(&format!("vclay subdivide: {} levels", args.levels)));
+    let outcome = subdivide_command(&options);
+    if let Some(s) = spinner {
+        s.finish_and_clear();
+    }
+    let outcome = outcome.map_err(|e| match e {
         CommandError::TooMuchMemory { .. } => {
             anyhow::anyhow!("--levels {}: {e} (or raise --max-memory)", args.levels)
         }

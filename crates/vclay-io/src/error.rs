@@ -187,11 +187,22 @@ pub const MAX_QUOTED_CHARS: usize = 80;
 
 /// `token` in double quotes for a message, cut to its first [`MAX_QUOTED_CHARS`] characters
 /// (with `...` and its full length) when longer, so that a megabyte-long key or word in a file
-/// does not become a megabyte-long message. Control characters are escaped.
+/// does not become a megabyte-long message. Quotes, backslashes and control characters are
+/// escaped as in Rust and JSON strings (`\"`, `\\`, `\n`).
 pub(crate) fn quote(token: &str) -> String {
     let n = token.chars().count();
     let shown: String = token.chars().take(MAX_QUOTED_CHARS).collect();
-    let escaped = shown.escape_debug().to_string();
+    let mut escaped = String::with_capacity(shown.len());
+    for c in shown.chars() {
+        match c {
+            '"' | '\\' => {
+                escaped.push('\\');
+                escaped.push(c);
+            }
+            c if c.is_control() => escaped.extend(c.escape_default()),
+            c => escaped.push(c),
+        }
+    }
     if n > MAX_QUOTED_CHARS {
         format!("\"{escaped}...\" ({n} characters)")
     } else {

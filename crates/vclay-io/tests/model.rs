@@ -436,6 +436,8 @@ fn long_tokens_are_quoted_cut() {
     // Short tokens are quoted whole, with control characters escaped.
     let msg = err(&CURVE.replace("\"name\"", "\"na\\nme\""));
     assert!(msg.contains("unknown field \"na\\nme\""), "{msg}");
+    let msg = err(&CURVE.replace("\"name\"", "\"it's \\\"x\\\"\""));
+    assert!(msg.contains(r#"unknown field "it's \"x\"""#), "{msg}");
 }
 
 /// Issue 17: `m.json: entity 0 (nurbs-curve): weight [1] is 0 ...` was printed three times by
