@@ -296,6 +296,26 @@ pub enum Edit {
         /// Its new value.
         value: f64,
     },
+    /// Add (or, with the name of one added before, replace) a local deformation of a PDE
+    /// surface (`dynamic-pde-surfaces.txt` section VI-A, eqs 30-32): over `u` x `v` of patch
+    /// `patch` the surface moves by `w(u, v) p`, with `w` the G0 bump of eq 31 (peak 1/16 at
+    /// the centre) or its square for G1 (eq 32, peak 1/256). Removed by [`Edit::Release`].
+    PdeLocal {
+        /// Name of the deformation.
+        name: String,
+        /// Patch index.
+        #[serde(default)]
+        patch: usize,
+        /// `[u1, u2]` inside `[0, 1]`.
+        u: [f64; 2],
+        /// `[v1, v2]`, clipped to the patch's v range.
+        v: [f64; 2],
+        /// `"G0"` or `"G1"` (default G1).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        continuity: Option<String>,
+        /// The amplitude `p = (p1, p2, p3)`.
+        p: V3,
+    },
     /// Set a named model or simulation parameter (see `Model::params`).
     Set {
         /// Parameter name.
@@ -366,6 +386,7 @@ impl Edit {
             Edit::SetWeight { .. } => "set-weight",
             Edit::FfdMove { .. } => "ffd-move",
             Edit::PdeSet { .. } => "pde-set",
+            Edit::PdeLocal { .. } => "pde-local",
             Edit::Set { .. } => "set",
             Edit::Integrator { .. } => "integrator",
             Edit::Constraint { .. } => "constraint",
@@ -593,6 +614,32 @@ impl Edit {
                 }
             }
             Edit::PdeSet { value, .. } | Edit::Set { value, .. } => fin("value", &[*value])?,
+            Edit::PdeLocal {
+                name,
+                u,
+                v,
+                continuity,
+                p,
+                ..
+            } => {
+                if name.is_empty() {
+                    return Err("`name`: must not be empty".into());
+                }
+                fin("u", u)?;
+                fin("v", v)?;
+                fin("p", p)?;
+                if !(0.0 <= u[0] && u[0] < u[1] && u[1] <= 1.0) {
+                    return Err(format!("`u`: {u:?} must be an interval inside [0, 1]"));
+                }
+                if v[0] >= v[1] {
+                    return Err(format!("`v`: {v:?} must be an increasing interval"));
+                }
+                if let Some(c) = continuity
+                    && !matches!(c.as_str(), "G0" | "G1" | "g0" | "g1")
+                {
+                    return Err(format!("`continuity`: \"{c}\" is not \"G0\" or \"G1\""));
+                }
+            }
             Edit::Integrator { integrator, dt } => {
                 if integrator.is_none() && dt.is_none() {
                     return Err("give `integrator` and/or `dt`".into());

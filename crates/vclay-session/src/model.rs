@@ -207,6 +207,11 @@ pub enum Element {
         /// Cell id of the control lattice.
         index: usize,
     },
+    /// A patch of a multi-patch surface (PDE surfaces: the patch a surface point lies on).
+    Patch {
+        /// Patch index.
+        index: usize,
+    },
     /// A vertex of an embedded mesh (FFD).
     MeshVertex {
         /// Its index.

@@ -308,3 +308,95 @@ fn every_builtin_opens() {
         );
     }
 }
+
+#[test]
+fn a_local_deformation_moves_its_region_only_and_undoes_saves_and_releases() {
+    let mut s = session();
+    let before = positions(&s);
+    // A G0 bump over the middle of the glass's first patch, pushed out along x by
+    // p = (1.6, 0, 0): at the region's centre the surface moves by p / 16 = 0.1.
+    let bump = |patch: usize, u: [f64; 2], p: [f64; 3]| Edit::PdeLocal {
+        name: "bump".into(),
+        patch,
+        u,
+        v: [1.0, 2.0],
+        continuity: Some("G0".into()),
+        p,
+    };
+    let local = bump(0, [0.25, 0.75], [1.6, 0.0, 0.0]);
+    round_trip(&mut s, local.clone());
+    // The region is sampled more finely (its borders become grid lines), and the surface
+    // moved there: the deformed mesh is not the undeformed one.
+    let after = positions(&s);
+    assert!(
+        after.len() > before.len(),
+        "{} -> {}",
+        before.len(),
+        after.len()
+    );
+    // Every vertex lies within the bump's peak (p / 16 = 0.1) of the undeformed surface's
+    // sample nearest to it, up to the grid's spacing (the new samples fall between old ones).
+    let spacing = 0.5;
+    for q in &after {
+        let d = before
+            .iter()
+            .map(|b| (b - q).norm())
+            .fold(f64::INFINITY, f64::min);
+        assert!(d <= 0.1 + spacing, "a vertex moved {d}");
+    }
+    // The same name replaces it; release removes it; unknown names are errors.
+    s.apply(Command::new(bump(0, [0.25, 0.75], [0.0, 0.0, 1.6])))
+        .unwrap();
+    let log_saved = saved(&s);
+    assert!(log_saved.contains("\"locals\""), "saved with the model");
+    let v: serde_json::Value = serde_json::from_str(&log_saved).unwrap();
+    let mut loaded = Session::with_model(
+        "g",
+        vclay_session::models::load(ModelKind::PdeSurface, &v).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(
+        positions(&loaded),
+        positions(&s),
+        "reloaded with its deformation"
+    );
+    loaded
+        .apply(Command::new(Edit::Release {
+            name: "bump".into(),
+        }))
+        .unwrap();
+    assert_eq!(positions(&loaded), before, "released");
+    let e = loaded
+        .apply(Command::new(Edit::Release {
+            name: "bump".into(),
+        }))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no local deformation named `bump`"), "{e}");
+    // A patch that does not exist, a u range outside [0, 1].
+    let e = s
+        .apply(Command::new(bump(9, [0.25, 0.75], [1.6, 0.0, 0.0])))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("patch 9 does not exist"), "{e}");
+    assert!(
+        s.apply(Command::new(bump(0, [0.5, 1.5], [1.6, 0.0, 0.0])))
+            .is_err()
+    );
+    // A pick on the glass names its patch.
+    let m = s.model(None).unwrap();
+    let c = m.display_mesh().unwrap().positions[0];
+    let ray = vclay_session::Ray {
+        origin: c * 3.0 + Vec3::new(0.0, 0.0, 0.01),
+        direction: -c * 2.0,
+    };
+    if let Some(hit) = m.pick(&ray, 0.0) {
+        assert!(
+            matches!(
+                hit.extra[0],
+                Some(vclay_session::Element::Patch { index: 0 })
+            ),
+            "{hit:?}"
+        );
+    }
+}

@@ -47,6 +47,8 @@ pub enum Tool {
     ControlPoint,
     /// FFD direct manipulation of a mesh point.
     FfdPoint,
+    /// PDE local deformation (eqs 30-32) by drag.
+    PdeLocal,
 }
 
 impl Tool {
@@ -63,6 +65,7 @@ impl Tool {
             Tool::Paint => "Paint material",
             Tool::ControlPoint => "Control point",
             Tool::FfdPoint => "FFD point",
+            Tool::PdeLocal => "Local deformation",
         }
     }
 
@@ -86,7 +89,7 @@ impl Tool {
                 vec![Rope, Force, Fix, Free, ControlPoint, Orbit]
             }
             ModelKind::Ffd => vec![FfdPoint, ControlPoint, Orbit],
-            ModelKind::PdeSurface => vec![Orbit],
+            ModelKind::PdeSurface => vec![PdeLocal, Orbit],
         }
     }
 }
@@ -111,6 +114,8 @@ pub struct ToolOptions {
     pub brush: f64,
     /// Weight that Ctrl+click sets on a control point (control point tool).
     pub weight: f64,
+    /// PDE local deformation: half-widths of the region along u (of [0, 1]) and v.
+    pub local: [f64; 2],
     /// Gravity on, and its strength.
     pub gravity: (bool, f64),
     /// Inflation on, and its pressure.
@@ -128,6 +133,7 @@ impl Default for ToolOptions {
             paint: [1.0, 2.0, 400.0],
             brush: 0.0,
             weight: 1.0,
+            local: [0.15, 0.5],
             gravity: (false, 9.81),
             inflate: (false, 5.0),
         }
@@ -701,6 +707,11 @@ impl Studio {
                     }
                 });
             }
+            Tool::PdeLocal => {
+                ui.add(egui::Slider::new(&mut o.local[0], 0.02..=0.5).text("half-width along u"));
+                ui.add(egui::Slider::new(&mut o.local[1], 0.02..=3.0).text("half-width along v"));
+                ui.small("Drag a point of the surface: a G1 local deformation (eq 32) around it follows the mouse; each drag adds one (undo removes it).");
+            }
             Tool::ControlPoint => {
                 ui.add(
                     egui::Slider::new(&mut o.weight, 0.05..=20.0)
@@ -1051,6 +1062,7 @@ impl Studio {
             Tool::FfdPoint => Grab::FfdPoint {
                 pins: self.ffd_pins.clone(),
             },
+            Tool::PdeLocal => Grab::PdeLocal { half: o.local },
         })
     }
 

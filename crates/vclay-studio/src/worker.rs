@@ -58,6 +58,13 @@ pub enum Grab {
     /// Pick a point of an FFD object to hold in place in later FFD drags (the UI keeps it;
     /// the pick comes back as [`Notice::Grabbed`]).
     FfdPin,
+    /// Drag a local deformation of a PDE surface (eqs 30-32) out of the point hit: a G1 bump
+    /// over `[u - half[0], u + half[0]] x [v - half[1], v + half[1]]` whose peak follows the
+    /// cursor.
+    PdeLocal {
+        /// Half-widths along u and v.
+        half: [f64; 2],
+    },
     /// Set the weight of the control point hit (NURBS models and FFD lattices).
     Weight {
         /// The new weight (> 0).
@@ -364,6 +371,13 @@ enum Active {
         last: Vec3,
         pins: Vec<Vec3>,
     },
+    PdeLocal {
+        name: String,
+        patch: usize,
+        uv: [f64; 2],
+        start: Vec3,
+        half: [f64; 2],
+    },
 }
 
 struct Drag {
@@ -375,6 +389,8 @@ struct Drag {
 
 struct State {
     session: Session,
+    /// Local deformations made so far (for their names).
+    locals: usize,
     running: bool,
     shared: Arc<Shared>,
     notices: Sender<Notice>,
@@ -395,6 +411,7 @@ impl State {
         let t = session.time();
         Self {
             session,
+            locals: 0,
             running,
             shared,
             notices,
@@ -727,6 +744,25 @@ impl State {
                 });
             }
             Grab::FfdPin => {}
+            Grab::PdeLocal { half } => match (hit.element, hit.extra[0]) {
+                (Element::SurfacePoint { param }, patch) => {
+                    self.locals += 1;
+                    active = Some(Active::PdeLocal {
+                        name: format!("studio-local-{}", self.locals),
+                        patch: match patch {
+                            Some(Element::Patch { index }) => index,
+                            _ => 0,
+                        },
+                        uv: param,
+                        start: hit.point,
+                        half,
+                    });
+                }
+                _ => self.notify(Notice::Error {
+                    message: "a local deformation starts on a PDE surface's point".into(),
+                    paused: false,
+                }),
+            },
             Grab::Weight { weight } => match hit.element {
                 Element::ControlPoint { index } => {
                     self.apply(one(Edit::SetWeight { index, weight }));
@@ -945,6 +981,27 @@ impl State {
                     to: t,
                 },
             ),
+            Active::PdeLocal {
+                name,
+                patch,
+                uv,
+                start,
+                half,
+            } => {
+                // The G1 bump's peak is p / 256 (eq 32 at the region's centre).
+                let p = (to - *start) * 256.0;
+                Command::to(
+                    &d.model,
+                    Edit::PdeLocal {
+                        name: name.clone(),
+                        patch: *patch,
+                        u: [(uv[0] - half[0]).max(0.0), (uv[0] + half[0]).min(1.0)],
+                        v: [uv[1] - half[1], uv[1] + half[1]],
+                        continuity: Some("G1".into()),
+                        p: [p.x, p.y, p.z],
+                    },
+                )
+            }
             Active::Ffd { model, last, pins } => {
                 let from = [last.x, last.y, last.z];
                 *last = to;

@@ -185,3 +185,64 @@ fn ctrl_click_sets_a_control_point_weight() {
         "{log:?}"
     );
 }
+
+#[test]
+fn a_drag_on_a_pde_surface_adds_a_local_deformation_that_undo_removes() {
+    let session = builtin(builtin_named("glass").unwrap()).unwrap();
+    let w = Worker::start(session, false);
+    let mesh = |w: &Worker| {
+        w.query(|s| s.model(None).unwrap().display_mesh().unwrap().positions)
+            .unwrap()
+    };
+    let before = mesh(&w);
+    // A ray at a vertex of the glass along its normal, from outside.
+    let (q, n) = w
+        .query(|s| {
+            let m = s.model(None).unwrap().display_mesh().unwrap();
+            let k = m.positions.len() / 2 + 3;
+            (m.positions[k], m.normals[k])
+        })
+        .unwrap();
+    let ray = Ray {
+        origin: q + n * 5.0,
+        direction: -n,
+    };
+    let hit = w
+        .query(move |s| s.pick(&ray, 0.0).map(|h| h.1.point))
+        .unwrap()
+        .expect("the ray hits the glass");
+    w.send(Request::Grab {
+        ray,
+        tolerance: 0.0,
+        grab: Grab::PdeLocal { half: [0.2, 0.6] },
+    });
+    w.send(Request::Drag { to: hit + n * 0.3 });
+    w.send(Request::Drop);
+    let log = w
+        .query(|s| {
+            s.log()
+                .iter()
+                .map(|l| l.command.edit.action())
+                .collect::<Vec<_>>()
+        })
+        .unwrap();
+    assert_eq!(log, ["pde-local"], "{:?}", w.notices());
+    let after = mesh(&w);
+    assert_ne!(after, before, "the surface moved");
+    // The surface near the grabbed point moved along the drag (G1 bump peak = p / 256 at the
+    // region's centre, the point grabbed).
+    let target = hit + n * 0.3;
+    let gap = |m: &[Vec3]| {
+        m.iter()
+            .map(|p| (p - target).norm())
+            .fold(f64::INFINITY, f64::min)
+    };
+    assert!(
+        gap(&after) < gap(&before) - 0.15,
+        "the surface reached towards the cursor: {} -> {}",
+        gap(&before),
+        gap(&after)
+    );
+    w.send(Request::Undo);
+    assert_eq!(mesh(&w), before, "undo removes it exactly");
+}

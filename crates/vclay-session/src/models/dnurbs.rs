@@ -1484,7 +1484,8 @@ impl DnurbsModel {
             | Edit::Extrude { .. }
             | Edit::DeleteCell { .. }
             | Edit::FfdMove { .. }
-            | Edit::PdeSet { .. } => return Err(self.unsupported(edit)),
+            | Edit::PdeSet { .. }
+            | Edit::PdeLocal { .. } => return Err(self.unsupported(edit)),
         };
         self.revision += 1;
         Ok(Applied {

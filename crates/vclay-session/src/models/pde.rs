@@ -108,6 +108,8 @@ pub struct PdeSurfaceModel {
     spec: SpecFile,
     /// Current values of the named constants.
     constants: BTreeMap<String, f64>,
+    /// Local deformations added by `pde-local` commands (on top of the spec's own).
+    locals: Vec<UserLocal>,
     model: PdeModel,
     grid: [usize; 2],
     dt: f64,
@@ -123,6 +125,7 @@ pub struct PdeSurfaceModel {
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct PdeSnap {
     constants: BTreeMap<String, f64>,
+    locals: Vec<UserLocal>,
     dt: f64,
     time: f64,
     steps: u64,
@@ -132,10 +135,49 @@ fn cmd(reason: impl std::fmt::Display) -> SessionError {
     SessionError::command("", "", reason)
 }
 
-/// Compiles `spec` with its `params` replaced by `constants`.
-fn compile(spec: &SpecFile, constants: &BTreeMap<String, f64>) -> Result<PdeModel, PdeError> {
+/// A local deformation added by a `pde-local` command (`dynamic-pde-surfaces.txt` eqs 30-32).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UserLocal {
+    /// Its name.
+    pub name: String,
+    /// Patch index.
+    pub patch: usize,
+    /// `[u1, u2]`.
+    pub u: [f64; 2],
+    /// `[v1, v2]`.
+    pub v: [f64; 2],
+    /// `G0` or `G1`.
+    pub continuity: String,
+    /// The amplitude `p`.
+    pub p: [f64; 3],
+}
+
+/// Compiles `spec` with its `params` replaced by `constants` and the `locals` added to their
+/// patches.
+fn compile(
+    spec: &SpecFile,
+    constants: &BTreeMap<String, f64>,
+    locals: &[UserLocal],
+) -> Result<PdeModel, PdeError> {
     let mut s = spec.clone();
     s.params = constants.clone();
+    for l in locals {
+        let n = s.patches.len();
+        let patch = s
+            .patches
+            .get_mut(l.patch)
+            .ok_or_else(|| PdeError::InvalidValue {
+                place: format!("local deformation `{}`", l.name),
+                message: format!("patch {} does not exist (the spec has {n})", l.patch),
+            })?;
+        patch.local.push(vclay_pde::spec::LocalSpec {
+            u: l.u.map(vclay_pde::spec::Value::Num),
+            v: l.v.map(vclay_pde::spec::Value::Num),
+            continuity: l.continuity.clone(),
+            p: l.p.map(vclay_pde::spec::Value::Num),
+        });
+    }
     PdeModel::from_spec(&s)
 }
 
@@ -155,11 +197,12 @@ impl PdeSurfaceModel {
         time: f64,
         source: &str,
     ) -> Result<Self, PdeError> {
-        let model = compile(&spec, &constants)?;
+        let model = compile(&spec, &constants, &[])?;
         let surface = Surface::solve(&model, time, grid)?;
         Ok(Self {
             spec,
             constants,
+            locals: Vec::new(),
             model,
             grid,
             dt,
@@ -186,12 +229,28 @@ impl PdeSurfaceModel {
     pub fn current_spec(&self) -> SpecFile {
         let mut s = self.spec.clone();
         s.params = self.constants.clone();
+        for l in &self.locals {
+            if let Some(patch) = s.patches.get_mut(l.patch) {
+                patch.local.push(vclay_pde::spec::LocalSpec {
+                    u: l.u.map(vclay_pde::spec::Value::Num),
+                    v: l.v.map(vclay_pde::spec::Value::Num),
+                    continuity: l.continuity.clone(),
+                    p: l.p.map(vclay_pde::spec::Value::Num),
+                });
+            }
+        }
         s
+    }
+
+    /// The local deformations added by commands.
+    pub fn locals(&self) -> &[UserLocal] {
+        &self.locals
     }
 
     fn snap(&self) -> PdeSnap {
         PdeSnap {
             constants: self.constants.clone(),
+            locals: self.locals.clone(),
             dt: self.dt,
             time: self.time,
             steps: self.steps,
@@ -199,12 +258,14 @@ impl PdeSurfaceModel {
     }
 
     fn put(&mut self, s: &PdeSnap) -> Result<(), SessionError> {
-        if s.constants != self.constants {
-            let model = compile(&self.spec, &s.constants).map_err(SessionError::model)?;
+        if s.constants != self.constants || s.locals != self.locals {
+            let model =
+                compile(&self.spec, &s.constants, &s.locals).map_err(SessionError::model)?;
             let surface = Surface::solve(&model, s.time, self.grid).map_err(SessionError::model)?;
             self.model = model;
             self.surface = surface;
             self.constants = s.constants.clone();
+            self.locals = s.locals.clone();
         } else if s.time != self.time {
             self.surface =
                 Surface::solve(&self.model, s.time, self.grid).map_err(SessionError::model)?;
@@ -240,12 +301,23 @@ impl PdeSurfaceModel {
         };
         let mut constants = self.constants.clone();
         constants.insert(name.to_string(), value);
-        let model = compile(&self.spec, &constants).map_err(cmd)?;
+        let model = compile(&self.spec, &constants, &self.locals).map_err(cmd)?;
         let surface = Surface::solve(&model, self.time, self.grid).map_err(cmd)?;
         self.model = model;
         self.surface = surface;
         self.constants = constants;
         Ok(old)
+    }
+
+    /// Replaces the added local deformations (recompiling and solving at the current time);
+    /// fails leaving the model unchanged.
+    fn set_locals(&mut self, locals: Vec<UserLocal>) -> Result<(), SessionError> {
+        let model = compile(&self.spec, &self.constants, &locals).map_err(cmd)?;
+        let surface = Surface::solve(&model, self.time, self.grid).map_err(cmd)?;
+        self.model = model;
+        self.surface = surface;
+        self.locals = locals;
+        Ok(())
     }
 
     fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
@@ -288,9 +360,77 @@ impl PdeSurfaceModel {
                     },
                 )
             }
+            Edit::PdeLocal {
+                name,
+                patch,
+                u,
+                v,
+                continuity,
+                p,
+            } => {
+                let mut locals = self.locals.clone();
+                // `v` is clipped to the patch's v range (a region dragged across the seam of a
+                // closed surface stops at it).
+                let n = self.model.patches.len();
+                let (v0, v1) = self
+                    .model
+                    .patches
+                    .get(*patch)
+                    .map(|p| p.v_range)
+                    .ok_or_else(|| {
+                        cmd(format!("patch {patch} does not exist (the spec has {n})"))
+                    })?;
+                let v = [v[0].max(v0), v[1].min(v1)];
+                if v[0] >= v[1] {
+                    return Err(cmd(format!(
+                        "`v` does not meet patch {patch}'s v range [{v0}, {v1}]"
+                    )));
+                }
+                let local = UserLocal {
+                    name: name.clone(),
+                    patch: *patch,
+                    u: *u,
+                    v,
+                    continuity: continuity.clone().unwrap_or_else(|| "G1".into()),
+                    p: *p,
+                };
+                let replaced = match locals.iter_mut().find(|l| l.name == *name) {
+                    Some(l) => {
+                        *l = local;
+                        true
+                    }
+                    None => {
+                        locals.push(local);
+                        false
+                    }
+                };
+                self.set_locals(locals)?;
+                self.revision += 1;
+                return Ok(Applied {
+                    message: format!(
+                        "local deformation `{name}` {} on patch {patch}",
+                        if replaced { "changed" } else { "added" }
+                    ),
+                    undo: Undo::State(Snapshot::new(before)),
+                });
+            }
+            Edit::Release { name } => {
+                let mut locals = self.locals.clone();
+                let n = locals.len();
+                locals.retain(|l| l.name != *name);
+                if locals.len() == n {
+                    return Err(cmd(format!("no local deformation named `{name}`")));
+                }
+                self.set_locals(locals)?;
+                self.revision += 1;
+                return Ok(Applied {
+                    message: format!("local deformation `{name}` removed"),
+                    undo: Undo::State(Snapshot::new(before)),
+                });
+            }
             _ => {
                 return Err(cmd(format!(
-                    "`{}` does not apply to a {} model (it takes pde-set, set)",
+                    "`{}` does not apply to a {} model (it takes pde-set, pde-local, release, set)",
                     edit.action(),
                     ModelKind::PdeSurface
                 )));
@@ -442,6 +582,9 @@ impl PdeSurfaceModel {
         }
         let mut model = Self::assemble(spec, s.constants, s.grid, s.dt, s.time, &s.source)
             .map_err(SessionError::model)?;
+        if !s.locals.is_empty() {
+            model.set_locals(s.locals).map_err(|e| e.in_model(""))?;
+        }
         model.steps = s.steps;
         model.size = s.size;
         Ok(model)
@@ -547,11 +690,19 @@ impl Model for PdeSurfaceModel {
                 param[0] += b * uv[0];
                 param[1] += b * uv[1];
             }
+            // The patch whose vertex range holds the triangle's first corner.
+            let first = tri[0] as usize;
+            let patch = self
+                .surface
+                .patches
+                .iter()
+                .rposition(|&(start, _, _)| start <= first)
+                .unwrap_or(0);
             Hit {
                 distance: s,
                 point: ray.origin + ray.direction * s,
                 element: Element::SurfacePoint { param },
-                extra: [None, None],
+                extra: [Some(Element::Patch { index: patch }), None],
             }
         })
     }
@@ -636,6 +787,7 @@ impl Model for PdeSurfaceModel {
             source: self.source.clone(),
             spec: serde_json::to_value(&self.spec).map_err(SessionError::model)?,
             constants: self.constants.clone(),
+            locals: self.locals.clone(),
             grid: self.grid,
             dt: self.dt,
             time: self.time,
@@ -688,6 +840,8 @@ struct Saved {
     source: String,
     spec: serde_json::Value,
     constants: BTreeMap<String, f64>,
+    #[serde(default)]
+    locals: Vec<UserLocal>,
     grid: [usize; 2],
     dt: f64,
     time: f64,

@@ -547,7 +547,8 @@ impl SolidModel {
             Edit::Data { .. }
             | Edit::Constraint { .. }
             | Edit::FfdMove { .. }
-            | Edit::PdeSet { .. } => {
+            | Edit::PdeSet { .. }
+            | Edit::PdeLocal { .. } => {
                 return Err(cmd(format!(
                     "`{}` does not apply to a {} model",
                     edit.action(),
