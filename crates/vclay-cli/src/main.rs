@@ -11,6 +11,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 mod args;
 mod bench;
+mod clay;
 mod convert;
 mod demo;
 mod eval;
@@ -100,6 +101,9 @@ enum Command {
     },
     /// Subdivide a lattice (MacCracken-Joy); print element counts (--stats) and/or write --out.
     Subdivide(subdivide::SubdivideArgs),
+    /// Build a subdivision-solid control lattice of about N cells from a closed triangle mesh,
+    /// its level-L boundary fitted to the mesh; write it to --out.
+    Clay(clay::ClayArgs),
     /// Move points of a mesh to targets by direct manipulation of an FFD lattice.
     Ffd(ffd::FfdArgs),
     /// Solve a dynamic PDE surface spec at --t or over --frames; write meshes, print residuals.
@@ -172,6 +176,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Convert(args) => convert::run(&args),
         Command::Subdivide(args) => subdivide::run(&args),
+        Command::Clay(args) => clay::run(&args),
         Command::Ffd(args) => ffd::run(&args),
         Command::Pde(args) => pde::run(&args),
         Command::Run {

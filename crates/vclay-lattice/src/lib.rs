@@ -23,6 +23,9 @@
 //! * [`formats`]: OpenVolumeMesh `.ovm` (read/write), VTK `.vtu` (write), boundary surface as
 //!   OBJ/STL/PLY (write); atomic writes, errors with file, line and element.
 //! * [`command`]: the logic of the `vclay subdivide` command line.
+//! * [`from_mesh`]: [`lattice_from_mesh`] builds a hexahedral control lattice inside a closed
+//!   triangle mesh and fits its level-`L` boundary to the mesh (`vclay clay`); open,
+//!   non-manifold or misoriented input is a [`ClayError`] naming edges and triangles.
 //!
 //! ```
 //! use vclay_lattice::{primitives, Features, SubdivisionRules, BoundaryRule, SubdivisionSolid};
@@ -48,6 +51,7 @@ mod csr;
 pub mod edit;
 pub mod error;
 pub mod formats;
+pub mod from_mesh;
 pub mod hierarchy;
 pub mod ids;
 pub mod lattice;
@@ -60,6 +64,7 @@ pub use boundary::{boundary_mesh, write_boundary};
 pub use edit::{Edit, ExtrudeParams, delete_cell, extrude_face};
 pub use error::LatticeError;
 pub use formats::FormatError;
+pub use from_mesh::{Clay, ClayError, ClayParams, ClayReport, lattice_from_mesh};
 pub use hierarchy::SubdivisionSolid;
 pub use ids::{CellId, EdgeId, FaceId, VertexId};
 pub use lattice::{ElementCounts, Lattice};
