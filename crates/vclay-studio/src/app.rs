@@ -94,6 +94,9 @@ impl Tool {
     }
 }
 
+/// The solids' integrators by their command names (`symplectic` is the default).
+pub const INTEGRATORS: [&str; 3] = ["symplectic", "explicit", "implicit"];
+
 /// Options of the tools.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ToolOptions {
@@ -116,6 +119,8 @@ pub struct ToolOptions {
     pub weight: f64,
     /// PDE local deformation: half-widths of the region along u (of [0, 1]) and v.
     pub local: [f64; 2],
+    /// Solids: index into [`INTEGRATORS`] (as last chosen here).
+    pub integrator: usize,
     /// Gravity on, and its strength.
     pub gravity: (bool, f64),
     /// Inflation on, and its pressure.
@@ -134,6 +139,7 @@ impl Default for ToolOptions {
             brush: 0.0,
             weight: 1.0,
             local: [0.15, 0.5],
+            integrator: 0,
             gravity: (false, 9.81),
             inflate: (false, 5.0),
         }
@@ -760,6 +766,28 @@ impl Studio {
                     | ModelKind::DnurbsSwung
             )
         );
+        if matches!(
+            self.kind,
+            Some(ModelKind::SubdivisionSolid | ModelKind::BsplineSolid)
+        ) {
+            // The integrator of journal section 4.4 (explicit), symplectic Euler, or the
+            // implicit Euler with conjugate gradient; the time step is a parameter below.
+            let mut chosen = self.options.integrator;
+            egui::ComboBox::from_label("integrator")
+                .selected_text(INTEGRATORS[chosen])
+                .show_ui(ui, |ui| {
+                    for (k, name) in INTEGRATORS.iter().enumerate() {
+                        ui.selectable_value(&mut chosen, k, *name);
+                    }
+                });
+            if chosen != self.options.integrator {
+                self.options.integrator = chosen;
+                self.apply(Edit::Integrator {
+                    integrator: Some(INTEGRATORS[chosen].to_string()),
+                    dt: None,
+                });
+            }
+        }
         if solid_or_dnurbs {
             if ui.button("Plastic reset").clicked() {
                 self.apply(Edit::PlasticReset);

@@ -205,3 +205,38 @@ fn bad_file_shows_the_located_error() {
     h.get_by_label(err.as_str());
     let _ = Pos2::ZERO;
 }
+
+#[test]
+fn the_integrator_box_switches_the_solid_integrator() {
+    let mut h = harness(quiet());
+    open_cube(&mut h);
+    h.get_by_label("integrator").click();
+    for _ in 0..20 {
+        h.step();
+        if h.query_by_label("implicit").is_some() {
+            break;
+        }
+    }
+    h.get_by_label("implicit").click();
+    h.step();
+    let mut integrator = String::new();
+    for _ in 0..200 {
+        integrator = h
+            .state()
+            .worker()
+            .unwrap()
+            .query(|s| {
+                s.model(None).unwrap().save().unwrap()["params"]["integrator"]
+                    .as_str()
+                    .unwrap_or("")
+                    .to_string()
+            })
+            .unwrap();
+        if integrator == "implicit" {
+            break;
+        }
+        h.step();
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert_eq!(integrator, "implicit");
+}
