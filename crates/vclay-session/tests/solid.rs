@@ -507,3 +507,97 @@ fn a_model_at_rest_and_one_with_a_moving_rope_continue_exactly() {
     s.run(3).unwrap();
     check_continue(&mut s, 1, "rope");
 }
+
+/// Any closed mesh opens as clay (issue 19): a `subdivision-solid` whose `file` is a mesh gets
+/// a hexahedral lattice of about `cells` cells fitted to it, and sculpts like any solid.
+#[test]
+fn a_closed_mesh_opens_as_a_sculptable_solid() {
+    let dir = tempfile::tempdir().unwrap();
+    // A closed sphere mesh (a surface of revolution with its poles on the axis).
+    let profile: Vec<(f64, f64)> = (0..=24)
+        .map(|k| {
+            let a = std::f64::consts::PI * k as f64 / 24.0;
+            // Exact zeros at the poles, so the revolution closes them.
+            (if k % 24 == 0 { 0.0 } else { a.sin() }, -a.cos())
+        })
+        .collect();
+    let mesh = vclay_core::TriMesh::revolution(&profile, 32);
+    let path = dir.path().join("ball.obj");
+    vclay_io::mesh::write_mesh(&path, &mesh).unwrap();
+    let m: toml::Table =
+        toml::from_str("kind = \"subdivision-solid\"\nfile = \"ball.obj\"\ncells = 300\nlevel = 1")
+            .unwrap();
+    let model = models::build(
+        ModelKind::SubdivisionSolid,
+        &Spec {
+            model: &m,
+            material: None,
+            simulation: None,
+            base: dir.path(),
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e:?}"));
+    let cells = model.save().unwrap()["material"].as_array().unwrap().len();
+    // Coarse voxel grids lose cells to the one-voxel-thick cleanup: between a third and all.
+    assert!((100..=450).contains(&cells), "about 300 cells: {cells}");
+    let mut s = Session::with_model("ball", model).unwrap();
+    s.apply(Command::new(Edit::Rope {
+        name: None,
+        from: [0.0, 0.0, 1.0],
+        param: None,
+        to: Some([0.0, 0.0, 1.5]),
+        until: Some(0.05),
+        velocity: None,
+        release: None,
+        stiffness: None,
+        length: None,
+        kernel: None,
+        start: None,
+    }))
+    .unwrap();
+    let top = |s: &Session| {
+        s.model(None)
+            .unwrap()
+            .data_points()
+            .iter()
+            .map(|p| p.z)
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    let z0 = top(&s);
+    s.run(60).unwrap();
+    assert!(
+        top(&s) > z0 + 0.01,
+        "the rope pulled the top up: {z0} -> {}",
+        top(&s)
+    );
+    // `cells` belongs to meshes only; an open mesh is a located error.
+    let m: toml::Table = toml::from_str("kind = \"subdivision-solid\"\ncells = 60").unwrap();
+    let e = models::build(
+        ModelKind::SubdivisionSolid,
+        &Spec {
+            model: &m,
+            material: None,
+            simulation: None,
+            base: dir.path(),
+        },
+    )
+    .unwrap_err();
+    assert_eq!(e.key, "cells");
+    let mut open = mesh.clone();
+    open.triangles.truncate(open.triangles.len() - 3);
+    vclay_io::mesh::write_mesh(&path, &open).unwrap();
+    let m: toml::Table =
+        toml::from_str("kind = \"subdivision-solid\"\nfile = \"ball.obj\"").unwrap();
+    let e = models::build(
+        ModelKind::SubdivisionSolid,
+        &Spec {
+            model: &m,
+            material: None,
+            simulation: None,
+            base: dir.path(),
+        },
+    )
+    .unwrap_err();
+    assert_eq!(e.key, "file");
+    assert!(e.what.contains("open"), "{}", e.what);
+}

@@ -869,7 +869,7 @@ pub fn load(saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
 /// The built-in meshes of `[model] primitive`.
 pub const PRIMITIVES: [&str; 3] = ["bottle", "sphere", "box"];
 
-fn read_any_mesh(path: &Path) -> Result<TriMesh, String> {
+pub(crate) fn read_any_mesh(path: &Path) -> Result<TriMesh, String> {
     let mesh = if extension(path) == "glb" {
         let mut all = TriMesh::new();
         for m in vclay_io::gltf::read_glb(path).map_err(|e| e.to_string())? {

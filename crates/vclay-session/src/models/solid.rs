@@ -1405,6 +1405,8 @@ struct ModelKeys {
     control: Option<[usize; 3]>,
     degree: Option<[usize; 3]>,
     samples: Option<[usize; 3]>,
+    /// Cells of the lattice built from a mesh `file`.
+    cells: Option<usize>,
 }
 
 #[derive(Debug, Default)]
@@ -1527,6 +1529,10 @@ fn build_source(
             forbid("degree", m.degree.is_some())?;
             forbid("samples", m.samples.is_some())?;
             forbid("entity", m.entity.is_some())?;
+            forbid(
+                "cells",
+                m.cells.is_some() && !m.file.as_deref().is_some_and(is_mesh),
+            )?;
             if m.file.is_some() {
                 from_file_only(&[
                     ("points", m.points.is_some()),
@@ -1542,6 +1548,32 @@ fn build_source(
                         "file",
                         "give either `primitive` or `file`, not both".into(),
                     ));
+                }
+                (None, Some(f)) if is_mesh(f) => {
+                    // Any closed mesh becomes clay: a hexahedral lattice of about `cells`
+                    // cells whose level-`level` boundary is fitted to it
+                    // (`vclay_lattice::lattice_from_mesh`, issue 19).
+                    let mesh =
+                        super::ffd::read_any_mesh(&resolve(f)).map_err(|e| err("file", e))?;
+                    let params = vclay_lattice::ClayParams {
+                        cells: m.cells.unwrap_or(DEFAULT_MESH_CELLS),
+                        levels: m
+                            .level
+                            .unwrap_or(2)
+                            .min(vclay_lattice::from_mesh::MAX_LEVELS),
+                        boundary: parse_boundary(m.boundary.as_deref().unwrap_or("smooth"))
+                            .filter(|b| *b != BoundaryRule::Interior)
+                            .unwrap_or(BoundaryRule::Smooth),
+                        ..Default::default()
+                    };
+                    let clay = vclay_lattice::lattice_from_mesh(&mesh, &params).map_err(|e| {
+                        let key = match &e {
+                            vclay_lattice::ClayError::Parameter { .. } => "cells",
+                            _ => "file",
+                        };
+                        err(key, format!("{}: {e}", f.display()))
+                    })?;
+                    clay.solid.control().clone()
                 }
                 (None, Some(f)) => {
                     formats::ovm::read(&resolve(f)).map_err(|e| err("file", e.to_string()))?
@@ -1589,6 +1621,7 @@ fn build_source(
         }
         ModelKind::BsplineSolid => {
             for (k, present) in [
+                ("cells", m.cells.is_some()),
                 ("primitive", m.primitive.is_some()),
                 ("level", m.level.is_some()),
                 ("boundary", m.boundary.is_some()),
@@ -1709,6 +1742,15 @@ fn build_source(
         }
         _ => Err(err("kind", format!("{kind} is not a solid"))),
     }
+}
+
+/// Default `cells` of a subdivision solid built from a mesh `file` (500 cells at level 2 are
+/// 32,000 data cells: interactive on two cores).
+pub const DEFAULT_MESH_CELLS: usize = 500;
+
+/// Whether `f` names a mesh file (built into a lattice) rather than a lattice `.ovm`.
+fn is_mesh(f: &Path) -> bool {
+    matches!(extension(f).as_str(), "obj" | "stl" | "ply" | "glb")
 }
 
 /// Estimated bytes a dynamic subdivision solid holds per finest-level cell (about 850 bytes per
