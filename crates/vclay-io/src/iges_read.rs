@@ -344,8 +344,10 @@ pub fn parse_iges(text: &str) -> Result<CadImport, IoError> {
             *not_read.entry(dir.kind).or_default() += 1;
             continue;
         }
-        let sub = &dir.status[2..4];
-        let use_flag = &dir.status[4..6];
+        // `get`: a status field with a multi-byte character is not sliced mid-character (a
+        // fuzzer's input panicked here, issue 17).
+        let sub = dir.status.get(2..4).unwrap_or("");
+        let use_flag = dir.status.get(4..6).unwrap_or("");
         if dir.kind == 126 && (matches!(sub, "01" | "03") || use_flag == "05") {
             dependent += 1;
             continue;

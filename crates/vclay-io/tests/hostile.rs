@@ -201,3 +201,13 @@ fn step_and_iges() {
         |b| vclay_io::iges_read::parse_iges(&text(b)).is_ok(),
     );
 }
+
+/// Inputs that made a reader panic under `fuzz/run.sh`, kept as regression tests (issue 17).
+#[test]
+fn fuzz_findings() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/fuzz");
+    // An IGES directory entry whose status field holds a multi-byte character: the reader
+    // sliced it at a byte that is not a character boundary.
+    let iges = std::fs::read(format!("{dir}/iges_status_multibyte.igs")).unwrap();
+    let _ = vclay_io::iges_read::parse_iges(&text(&iges));
+}

@@ -1,0 +1,13 @@
+#![no_main]
+//! Fuzz target `scenario` (issue 17): any input gives `Ok` or `Err`, never a panic, abort or hang.
+
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let _ = vclay_session::scenario::Scenario::parse(
+        &String::from_utf8_lossy(data),
+        "fuzz.toml",
+        "fuzz",
+        std::path::Path::new("."),
+    );
+});

@@ -1,0 +1,8 @@
+#![no_main]
+//! Fuzz target `step` (issue 17): any input gives `Ok` or `Err`, never a panic, abort or hang.
+
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let _ = vclay_io::step_read::parse_step(&String::from_utf8_lossy(data));
+});
