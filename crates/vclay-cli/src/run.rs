@@ -130,7 +130,8 @@ pub fn run(args: &RunArgs) -> Result<()> {
         first.time(),
         dir.display()
     );
-    let quiet = args.quiet;
+    // The bar is for a person at a terminal: off with --quiet and when stderr is a file or pipe.
+    let quiet = args.quiet || !std::io::IsTerminal::is_terminal(&std::io::stderr());
     let mut last = Instant::now() - Duration::from_secs(1);
     let mut bar = |p: Progress| {
         if quiet || (last.elapsed() < Duration::from_millis(100) && p.step != p.steps) {
