@@ -138,8 +138,15 @@ pub fn parse(text: &str, file: &str) -> Result<(Session, Option<RunInfo>), Sessi
             ));
         }
     }
-    let saved: SavedSession =
-        serde_json::from_value(v).map_err(|e| err(0, "session", e.to_string()))?;
+    // Deserialized with the path of a bad value (`models[0].state: missing field ...`).
+    let saved: SavedSession = serde_path_to_error::deserialize(v).map_err(|e| {
+        let path = e.path().to_string();
+        err(
+            0,
+            if path == "." { "session" } else { &path },
+            e.into_inner().to_string(),
+        )
+    })?;
     let mut session = Session::new();
     for (i, m) in saved.models.iter().enumerate() {
         let kind = ModelKind::from_name(&m.kind).ok_or_else(|| {

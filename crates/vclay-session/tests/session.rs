@@ -276,3 +276,18 @@ fn an_undo_group_is_undone_whole_and_keeps_one_snapshot_for_a_drag() {
     s.undo().unwrap();
     assert_eq!(s.log().len(), log_before);
 }
+
+#[test]
+fn a_bad_value_in_a_session_file_names_its_path() {
+    let a = Scenario::parse(TWO, "two.toml", "two", Path::new("."))
+        .unwrap()
+        .session;
+    let mut v = file::to_value(&a, None).unwrap();
+    v["log"] = serde_json::json!([{"step": "three"}]);
+    match file::parse(&v.to_string(), "x.session") {
+        Err(SessionError::File { key, what, .. }) => {
+            assert!(key.starts_with("log[0]"), "{key}: {what}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
