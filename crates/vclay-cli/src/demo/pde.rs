@@ -1,6 +1,7 @@
 //! Demo step of the PDE layer (issue 7): the glass animation of `dynamic-pde-surfaces.txt`
 //! Fig 2 (eq 24-26), five frames from a round opening (t = 0) to a petal-shaped one (t = 1),
-//! and the aircraft of Fig 9 (issue 22) in three frames as its wing tips rise.
+//! and the aircraft of Fig 9 (issue 22) in three frames as its wing tips rise, plus an animated
+//! GIF of 16 frames over t = 0 .. 1.
 
 use anyhow::{Context, Result};
 use std::path::Path;
@@ -10,6 +11,10 @@ use vclay::io::mesh::write_mesh;
 use vclay::pde::builtin::{AIRCRAFT, GLASS};
 use vclay::pde::surface::point;
 use vclay::pde::{Animator, ModelSolution, PdeModel, frame_times};
+use vclay::render::{RenderOptions, Scene, write_animation};
+
+/// Frames of the aircraft animation (GIF).
+const AIRCRAFT_GIF_FRAMES: usize = 16;
 
 /// Solves the glass at five instants t = 0 .. 1 and writes one OBJ per frame.
 pub fn glass(out: &Path) -> Result<(String, Vec<String>)> {
@@ -79,10 +84,28 @@ fn aircraft(out: &Path, files: &mut Vec<String>) -> Result<String> {
         write_mesh(out.join(&name), &mesh).with_context(|| format!("cannot write {name}"))?;
         files.push(name);
     }
+    // The animation: every frame solved and tessellated, drawn with one camera (the flight's
+    // whole motion framed), 16 frames over t = 0 .. 1 and back.
+    let mut scenes = Vec::with_capacity(AIRCRAFT_GIF_FRAMES);
+    let times = frame_times(0.0, 1.0, AIRCRAFT_GIF_FRAMES / 2 + 1);
+    for &t in times
+        .iter()
+        .chain(times.iter().rev().skip(1).take(AIRCRAFT_GIF_FRAMES / 2 - 1))
+    {
+        anim.solve_into(t, &mut sol)?;
+        let mut mesh = TriMesh::new();
+        model.tessellate(&sol, 16, 64, &mut mesh);
+        scenes.push(Scene::new().with_mesh(mesh));
+    }
+    let gif = "pde/aircraft.gif";
+    write_animation(out.join(gif), &scenes, &RenderOptions::sized(360, 240), 120)
+        .with_context(|| format!("cannot write {gif}"))?;
+    files.push(gif.into());
     Ok(format!(
         "aircraft of Fig 9 ({} patches: six tubes and two five-sided caps of three-sided \
          patches, G1 across shared boundaries) at t = 0, 0.5, 1 as the wing tips rise, each \
-         frame solved in at most {solve_us:.0} us",
-        model.patches.len()
+         frame solved in at most {solve_us:.0} us; animated in {} frames",
+        model.patches.len(),
+        scenes.len()
     ))
 }
