@@ -3,7 +3,8 @@
 - batched evaluation of 1M scattered points of the benchmark surface (16 x 16 rational
   bicubic, the definition of `vclay bench` / `bench/compare.py`) from Python, on one thread
   and on all, beside `vclay bench`'s Rust figures from the same minutes;
-- grid evaluation 1000 x 1000 from Python beside Rust's;
+- grid evaluation 1000 x 1000 from Python beside Rust's, into a new array and into an
+  existing one (`out=`, as Rust's benchmark reuses its buffer);
 - per-call cost of `Surface.point(u, v)` (one point, Python tuple out) minus the Rust point
   time: the call overhead;
 - the Dask material sweep (python/examples/dask_sweep.py) on a LocalCluster with 1 and 2
@@ -55,6 +56,8 @@ def python_eval():
     batch = best(lambda: s.evaluate(uv))
     u = np.linspace(0, 1, 1000)
     grid = best(lambda: s.evaluate_grid(u, u))
+    buf = np.empty((1000, 1000, 3))
+    grid_out = best(lambda: s.evaluate_grid(u, u, out=buf))
     few = uv[:100_000].tolist()
     point = s.point
 
@@ -72,6 +75,7 @@ def python_eval():
     return {
         "batched_points_per_second": 1e6 / batch,
         "grid_points_per_second": 1e6 / grid,
+        "grid_out_points_per_second": 1e6 / grid_out,
         "point_call_ns": per_call * 1e9,
         "python_loop_ns": loop_only * 1e9,
     }
@@ -124,6 +128,12 @@ def main():
             "rust_grid_all_over_python_grid_all":
                 r["surface_grid_points_per_second_all_threads"]
                 / out["python_all_threads"]["grid_points_per_second"],
+            "rust_grid_1_thread_over_python_grid_out_1_thread":
+                r["surface_grid_points_per_second_1_thread"]
+                / out["python_1_thread"]["grid_out_points_per_second"],
+            "rust_grid_all_over_python_grid_out_all":
+                r["surface_grid_points_per_second_all_threads"]
+                / out["python_all_threads"]["grid_out_points_per_second"],
             "point_call_overhead_ns":
                 out["python_1_thread"]["point_call_ns"] - r["surface_point_ns"],
         }

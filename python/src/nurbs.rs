@@ -494,13 +494,20 @@ impl Entity {
     }
 
     /// Surfaces: points on the tensor grid `u x v` (1-D arrays): a `(len(u), len(v), 3)` array
-    /// (basis values once per axis; rows in parallel).
+    /// (basis values once per axis; rows in parallel; the GIL released).
+    ///
+    /// `out`: an existing C-contiguous, writeable float64 array of shape `(len(u), len(v), 3)`
+    /// to write the points into (as numpy's ufuncs do); it is returned. Without it a new array
+    /// is returned. Reusing `out` saves the allocation of a fresh array per call.
+    #[pyo3(signature = (u, v, out = None))]
     fn evaluate_grid<'py>(
         &self,
         py: Python<'py>,
         u: &Bound<'py, PyAny>,
         v: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, numpy::PyArrayDyn<f64>>> {
+        out: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        use numpy::{PyArrayMethods, PyUntypedArrayMethods};
         let IoEntity::Surface(s) = &self.entity else {
             return Err(PyValueError::new_err(
                 "evaluate_grid: only surfaces have a grid evaluation (use evaluate)",
@@ -508,11 +515,39 @@ impl Entity {
         };
         let (us, nu) = util::rows(u, 1, "u")?;
         let (vs, nv) = util::rows(v, 1, "v")?;
-        let mut out = vec![Vec3::zeros(); nu * nv];
-        py.detach(|| s.eval_grid_into(&us, &vs, &mut out, vclay_core::Parallelism::Auto))
+        let par = vclay_core::Parallelism::Auto;
+        let Some(out) = out else {
+            let mut flat = vec![0.0; 3 * nu * nv];
+            py.detach(|| s.eval_grid_into_flat(&us, &vs, &mut flat, par))
+                .py()?;
+            return Ok(util::array_dyn(py, flat, &[nu, nv, 3]).into_any());
+        };
+        let arr = out.cast::<numpy::PyArrayDyn<f64>>().map_err(|_| {
+            PyValueError::new_err("evaluate_grid: out must be a numpy float64 array")
+        })?;
+        if arr.shape() != [nu, nv, 3] {
+            return Err(PyValueError::new_err(format!(
+                "evaluate_grid: out has shape {:?}, expected ({nu}, {nv}, 3)",
+                arr.shape()
+            )));
+        }
+        if !arr.is_c_contiguous() {
+            return Err(PyValueError::new_err(
+                "evaluate_grid: out must be C-contiguous",
+            ));
+        }
+        let mut rw = arr.try_readwrite().map_err(|e| {
+            PyValueError::new_err(format!(
+                "evaluate_grid: out is not writeable or is borrowed: {e}"
+            ))
+        })?;
+        let slice = rw.as_slice_mut().map_err(|e| {
+            PyValueError::new_err(format!("evaluate_grid: out must be C-contiguous: {e}"))
+        })?;
+        py.detach(|| s.eval_grid_into_flat(&us, &vs, slice, par))
             .py()?;
-        let flat: Vec<f64> = out.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
-        Ok(util::array_dyn(py, flat, &[nu, nv, 3]))
+        drop(rw);
+        Ok(out.clone())
     }
 
     /// A new entity with `value` inserted `times` times into the knot vector of `axis`

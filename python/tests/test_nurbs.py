@@ -101,6 +101,32 @@ def test_point_equals_evaluate_and_parallel_path(rng):
     np.testing.assert_array_equal(s.evaluate(np.asfortranarray(uv[:10])), pts[:10])
 
 
+def test_evaluate_grid_with_and_without_out(rng):
+    s = vclay.Surface((3, 2), (clamped_knots(rng, 8, 3), clamped_knots(rng, 7, 2)),
+                      rng.normal(size=(8, 7, 3)), rng.uniform(0.5, 2, (8, 7)))
+    u, v = np.linspace(0, 1, 90), rng.uniform(0, 1, 70)  # above the parallel threshold
+    g = s.evaluate_grid(u, v)
+    assert g.shape == (90, 70, 3) and g.dtype == np.float64
+    uv = np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1).reshape(-1, 2)
+    np.testing.assert_allclose(g.reshape(-1, 3), s.evaluate(uv), atol=1e-12, rtol=0)
+    out = np.full((90, 70, 3), np.nan)
+    r = s.evaluate_grid(u, v, out=out)
+    assert r is out
+    np.testing.assert_array_equal(out, g)
+    with pytest.raises(ValueError, match="shape"):
+        s.evaluate_grid(u, v, out=np.empty((70, 90, 3)))
+    with pytest.raises(ValueError, match="C-contiguous"):
+        s.evaluate_grid(u, v, out=np.empty((90, 70, 3), order="F"))
+    with pytest.raises(ValueError, match="float64"):
+        s.evaluate_grid(u, v, out=np.empty((90, 70, 3), dtype=np.float32))
+    ro = np.empty((90, 70, 3))
+    ro.flags.writeable = False
+    with pytest.raises(ValueError, match="writeable"):
+        s.evaluate_grid(u, v, out=ro)
+    with pytest.raises(vclay.GeometryError):
+        s.evaluate_grid([0.5, 1.5], v, out=np.empty((2, 70, 3)))
+
+
 def test_derivatives_match_finite_differences(rng):
     c = vclay.Curve(3, clamped_knots(rng, 9, 3), rng.normal(size=(9, 3)), rng.uniform(0.5, 2, 9))
     u = np.array([0.21, 0.5, 0.77])

@@ -121,6 +121,48 @@ impl NurbsSurface {
             us.len() * vs.len(),
             "output length must be us.len() * vs.len()"
         );
+        self.grid_rows::<Vec3, 1>(us, vs, out, par, |o, x, y, z| {
+            o[0] = Vec3::new(x, y, z);
+        })
+    }
+
+    /// Points on the grid `us x vs` written to `out` as flat `x, y, z` triples (length
+    /// `3 * us.len() * vs.len()`, point `i * vs.len() + j` at `3 * (i * vs.len() + j)`): the
+    /// layout of a C-contiguous `(nu, nv, 3)` float64 array. Same algorithm and results, bit for
+    /// bit, as [`NurbsSurface::eval_grid_into`].
+    ///
+    /// # Panics
+    /// If `out` has the wrong length (programmer error).
+    #[track_caller]
+    pub fn eval_grid_into_flat(
+        &self,
+        us: &[f64],
+        vs: &[f64],
+        out: &mut [f64],
+        par: Parallelism,
+    ) -> Result<(), SplineError> {
+        assert_eq!(
+            out.len(),
+            3 * us.len() * vs.len(),
+            "output length must be 3 * us.len() * vs.len()"
+        );
+        self.grid_rows::<f64, 3>(us, vs, out, par, |o, x, y, z| {
+            o[0] = x;
+            o[1] = y;
+            o[2] = z;
+        })
+    }
+
+    /// The row loop shared by the grid evaluators: `K` elements of `T` per point, written by
+    /// `put(point_slot, x, y, z)`; `out.len()` must be `K * us.len() * vs.len()`.
+    fn grid_rows<T: Send, const K: usize>(
+        &self,
+        us: &[f64],
+        vs: &[f64],
+        out: &mut [T],
+        par: Parallelism,
+        put: impl Fn(&mut [T], f64, f64, f64) + Sync,
+    ) -> Result<(), SplineError> {
         if out.is_empty() {
             return Ok(());
         }
@@ -129,7 +171,7 @@ impl NurbsSurface {
         let pw = self.homogeneous_points();
         let [p, q] = self.degree();
         let nv = self.dims()[1];
-        let row = |i: usize, q_row: &mut Vec<Vec4>, out_row: &mut [Vec3]| {
+        let row = |i: usize, q_row: &mut Vec<Vec4>, out_row: &mut [T]| {
             let su = bu.spans[i];
             let nu = bu.value(i);
             for (j, qj) in q_row.iter_mut().enumerate() {
@@ -139,7 +181,7 @@ impl NurbsSurface {
                 }
                 *qj = acc;
             }
-            for (j, o) in out_row.iter_mut().enumerate() {
+            for (j, o) in out_row.chunks_exact_mut(K).enumerate() {
                 let sv = bv.spans[j];
                 let b = bv.value(j);
                 let base = &q_row[sv - q..=sv];
@@ -148,17 +190,17 @@ impl NurbsSurface {
                     acc += base[s] * b[s];
                 }
                 let inv = 1.0 / acc.w;
-                *o = Vec3::new(acc.x * inv, acc.y * inv, acc.z * inv);
+                put(o, acc.x * inv, acc.y * inv, acc.z * inv);
             }
         };
-        let nvp = vs.len();
-        if par.is_parallel(out.len()) {
-            out.par_chunks_mut(nvp)
+        let row_len = vs.len() * K;
+        if par.is_parallel(out.len() / K) {
+            out.par_chunks_mut(row_len)
                 .enumerate()
                 .for_each_init(|| vec![Vec4::zeros(); nv], |qr, (i, o)| row(i, qr, o));
         } else {
             let mut qr = vec![Vec4::zeros(); nv];
-            for (i, o) in out.chunks_mut(nvp).enumerate() {
+            for (i, o) in out.chunks_mut(row_len).enumerate() {
                 row(i, &mut qr, o);
             }
         }

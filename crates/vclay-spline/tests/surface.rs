@@ -210,6 +210,34 @@ fn grids_agree_with_pointwise_evaluation_sequential_and_parallel() {
 }
 
 #[test]
+fn flat_grid_agrees_bit_for_bit() {
+    let mut rng = Rng(21);
+    let s = random_surface(&mut rng, [3, 2], [9, 7]);
+    let us: Vec<f64> = samples(150);
+    let vs: Vec<f64> = samples(130);
+    for par in [
+        Parallelism::Sequential,
+        Parallelism::Rayon,
+        Parallelism::Auto,
+    ] {
+        let pts = s.eval_grid(&us, &vs, par).unwrap();
+        let mut flat = vec![f64::NAN; 3 * us.len() * vs.len()];
+        s.eval_grid_into_flat(&us, &vs, &mut flat, par).unwrap();
+        for (p, f) in pts.iter().zip(flat.chunks_exact(3)) {
+            let f: Vec<u64> = f.iter().map(|x| x.to_bits()).collect();
+            assert_eq!([p.x.to_bits(), p.y.to_bits(), p.z.to_bits()], f[..]);
+        }
+    }
+    let mut flat = vec![0.0; 6];
+    assert!(matches!(
+        s.eval_grid_into_flat(&[0.5, 1.2], &[0.1], &mut flat, Parallelism::Auto),
+        Err(SplineError::ParameterOutOfDomain { axis: 0, .. })
+    ));
+    s.eval_grid_into_flat(&[], &[0.1], &mut [], Parallelism::Auto)
+        .unwrap();
+}
+
+#[test]
 fn ragged_and_bad_nets_are_named() {
     let p = Vec3::zeros();
     let k = vec![0., 0., 1., 1.];
