@@ -115,6 +115,9 @@ class PdeSurface:
 class Session:
     def __init__(self) -> None: ...
     @staticmethod
+    def from_toml(text: str, base: Path = ".") -> "Session":
+        """A scenario given as a string; relative files resolve against `base`."""
+    @staticmethod
     def load(path: Path) -> "Session":
         """A scenario (.toml) or a saved session (.json)."""
     def save(self, path: Path) -> None: ...
@@ -148,3 +151,8 @@ class Session:
     def data_points(self, model: Optional[str] = None) -> F64: ...
     def mesh(self, model: Optional[str] = None) -> Mesh: ...
     def export(self, path: Path, model: Optional[str] = None) -> None: ...
+
+def dnurbs_surface(points: Union[ArrayLike, Surface], degree: Tuple[int, int] = (3, 3), weights: Optional[ArrayLike] = None, knots: Optional[Sequence[ArrayLike]] = None, *, material: Optional[dict[str, Union[float, str]]] = None, dt: Optional[float] = None, engine: Optional[str] = None, dynamic_weights: Optional[bool] = None, reference: Optional[str] = None, fix: Optional[Sequence[int]] = None, name: Optional[str] = None) -> Session:
+    """A D-NURBS surface session from a control net (nu, nv, 3) or a Surface. material: preset,
+    mu, gamma, alpha, beta; dt (or the preset's); engine "generalized" | "frozen"; reference
+    "rest" | "absolute". Fit points with session.apply({"action": "data", "points": ...})."""

@@ -16,8 +16,9 @@
 //!
 //! Errors: every vclay error becomes an exception of the `VclayError` hierarchy carrying the
 //! kernel's located message ([`errors`]); wrong array shapes are `ValueError` (a programmer
-//! error, as the Rust API asserts). Limitations: no D-NURBS constructors outside sessions
-//! (build them through a scenario); arrays are copied once on the way in and once out.
+//! error, as the Rust API asserts). D-NURBS surfaces from arrays: `dnurbs_surface` (a session
+//! of one model); `Session.from_toml` takes a scenario as a string. Limitations: arrays are
+//! copied once on the way in and once out (`evaluate_grid(out=...)` writes in place).
 
 use pyo3::prelude::*;
 
@@ -40,8 +41,9 @@ pub const PAR_MIN: usize = 2048;
 /// (vclay or geomdl JSON); `entity.evaluate(params)` maps an (n, d) parameter array to an
 /// (n, 3) array of points. FFD lattices (`Ffd`), subdivision lattices (`Lattice`), PDE
 /// surfaces (`PdeSurface`), pictures (`render`), file conversion (`convert`) and sessions
-/// (`Session.load(scenario_or_session)`, `apply`, `step`, `save`) over the same kernel as the
-/// `vclay` command line. Errors are `VclayError` subclasses with located messages.
+/// (`Session.load(scenario_or_session)`, `Session.from_toml(text)`, `dnurbs_surface(net)`,
+/// `apply`, `step`, `save`) over the same kernel as the `vclay` command line. Errors are
+/// `VclayError` subclasses with located messages.
 #[pymodule]
 #[pyo3(name = "vclay")]
 fn vclay_module(m: &Bound<'_, PyModule>) -> PyResult<()> {

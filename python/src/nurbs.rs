@@ -187,6 +187,50 @@ fn build(
     })
 }
 
+/// A surface for `dnurbs_surface`: a `Surface` entity as it is, or a control net `(nu, nv, 3)`
+/// with `degree`, optional `weights (nu, nv)` and optional knots (default: uniform, clamped).
+pub(crate) fn surface_of(
+    net_or_surface: &Bound<'_, PyAny>,
+    degree: (usize, usize),
+    weights: Option<&Bound<'_, PyAny>>,
+    knots: Option<&Bound<'_, PyAny>>,
+) -> PyResult<NurbsSurface> {
+    if let Ok(e) = net_or_surface.cast::<Entity>() {
+        return match &e.get().entity {
+            IoEntity::Surface(s) => Ok(s.clone()),
+            other => Err(PyValueError::new_err(format!(
+                "expected a Surface or a control net (nu, nv, 3), got a {}",
+                other.type_name()
+            ))),
+        };
+    }
+    let (pts, w, shape) = net(net_or_surface, weights, 2)?;
+    let deg = [degree.0, degree.1];
+    let kvs = match knots {
+        Some(k) if !k.is_none() => {
+            let kl = knot_list(k, 2)?;
+            [
+                knot_vector(&kl[0], deg[0], shape[0], 0)?,
+                knot_vector(&kl[1], deg[1], shape[1], 1)?,
+            ]
+        }
+        _ => {
+            let uniform = |axis: usize| {
+                let (n, p) = (shape[axis], deg[axis]);
+                let mut k = vec![0.0; p + 1];
+                let spans = n.saturating_sub(p).max(1);
+                k.extend((1..spans).map(|i| i as f64 / spans as f64));
+                k.extend(std::iter::repeat_n(1.0, p + 1));
+                KnotVector::new(k, p, n)
+                    .map_err(|source| SplineError::Knots { axis, source })
+                    .py()
+            };
+            [uniform(0)?, uniform(1)?]
+        }
+    };
+    NurbsSurface::from_flat(kvs, pts, w).py()
+}
+
 #[pymethods]
 impl Curve {
     /// `Curve(degree, knots, control_points, weights=None)`: knots `(n + degree + 1,)`,

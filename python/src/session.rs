@@ -20,7 +20,145 @@ use crate::errors::{PyResultExt, SessionError};
 use crate::util;
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_class::<Session>()
+    m.add_class::<Session>()?;
+    m.add_function(wrap_pyfunction!(dnurbs_surface, m)?)?;
+    Ok(())
+}
+
+/// `text` as a TOML basic string.
+fn toml_str(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 2);
+    out.push('"');
+    for c in text.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if (c as u32) < 0x20 || c == '\u{7f}' => {
+                out.push_str(&format!("\\u{:04x}", c as u32))
+            }
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+/// A number as a TOML float.
+fn toml_f64(x: f64) -> String {
+    if x.is_nan() {
+        "nan".into()
+    } else if x.is_infinite() {
+        if x > 0.0 { "inf".into() } else { "-inf".into() }
+    } else {
+        format!("{x:?}")
+    }
+}
+
+impl Session {
+    fn from_scenario(sc: Scenario) -> Self {
+        Self {
+            session: sc.session,
+            run: Some(RunInfo {
+                name: sc.name,
+                end_step: sc.steps,
+                output: sc.output,
+            }),
+        }
+    }
+}
+
+/// A D-NURBS surface session built from arrays (no scenario file): `points` is a control net
+/// `(nu, nv, 3)` (or a `Surface`), with `degree`, `weights (nu, nv)` (default 1) and `knots`
+/// (default uniform, clamped). `material`: a dict of `preset` (a Table 1 name), `mu`, `gamma`,
+/// `alpha`, `beta` (defaults: the scenario defaults); `dt`: the time step (or the preset's);
+/// `engine`: "generalized" (default) or "frozen"; `dynamic_weights`: weights as generalized
+/// coordinates (default: True with the generalized engine); `reference`: "rest" (default) or
+/// "absolute" elastic reference; `fix`: control point ids held fixed; `name`: the model name.
+///
+/// It is the scenario keys of `docs/formats.md` (`[model] file = ...`, `[material]`,
+/// `[simulation]`) with the net written to a temporary model file, read and removed. Forces,
+/// data points to fit, material changes: `session.apply({"action": "data", "points": ...})`,
+/// `{"action": "material", "mu": ...}`; then `session.step(n)`.
+#[pyfunction]
+#[pyo3(signature = (points, degree = (3, 3), weights = None, knots = None, *, material = None,
+    dt = None, engine = None, dynamic_weights = None, reference = None, fix = None, name = None),
+    text_signature = "(points, degree=(3, 3), weights=None, knots=None, *, material=None, dt=None, \
+    engine=None, dynamic_weights=None, reference=None, fix=None, name=None)")]
+#[allow(clippy::too_many_arguments)]
+fn dnurbs_surface(
+    py: Python<'_>,
+    points: &Bound<'_, PyAny>,
+    degree: (usize, usize),
+    weights: Option<&Bound<'_, PyAny>>,
+    knots: Option<&Bound<'_, PyAny>>,
+    material: Option<&Bound<'_, PyDict>>,
+    dt: Option<f64>,
+    engine: Option<String>,
+    dynamic_weights: Option<bool>,
+    reference: Option<String>,
+    fix: Option<Vec<usize>>,
+    name: Option<String>,
+) -> PyResult<Session> {
+    use std::fmt::Write as _;
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let surface = crate::nurbs::surface_of(points, degree, weights, knots)?;
+    let mut m = String::from("[model]\nkind = \"dnurbs-surface\"\n");
+    if let Some(n) = &name {
+        let _ = writeln!(m, "name = {}", toml_str(n));
+    }
+    if let Some(e) = &engine {
+        let _ = writeln!(m, "engine = {}", toml_str(e));
+    }
+    if let Some(d) = dynamic_weights {
+        let _ = writeln!(m, "weights = \"{}\"", if d { "dynamic" } else { "frozen" });
+    }
+    if let Some(f) = &fix {
+        let ids: Vec<String> = f.iter().map(|i| i.to_string()).collect();
+        let _ = writeln!(m, "fix = [{}]", ids.join(", "));
+    }
+    let mut rest = String::from("[material]\n");
+    if let Some(d) = material {
+        for (k, v) in d.iter() {
+            let k: String = k.extract()?;
+            if k.is_empty() || !k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+                return Err(PyValueError::new_err(format!("material: bad key {k:?}")));
+            }
+            let value = if let Ok(s) = v.extract::<String>() {
+                toml_str(&s)
+            } else {
+                let x: f64 = v.extract().map_err(|_| {
+                    PyValueError::new_err(format!("material: {k} must be a number or a name"))
+                })?;
+                toml_f64(x)
+            };
+            let _ = writeln!(rest, "{k} = {value}");
+        }
+    }
+    rest.push_str("[simulation]\n");
+    if let Some(dt) = dt {
+        let _ = writeln!(rest, "dt = {}", toml_f64(dt));
+    }
+    if let Some(r) = &reference {
+        let _ = writeln!(rest, "reference = {}", toml_str(r));
+    }
+    let path = std::env::temp_dir().join(format!(
+        "vclay-dnurbs-{}-{}.json",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let _ = writeln!(m, "file = {}", toml_str(&path.to_string_lossy()));
+    let text = format!("{m}{rest}");
+    let sc = py.detach(|| {
+        vclay_io::model::write_model(&path, &[vclay_io::model::Entity::Surface(surface)])
+            .map_err(|e| vclay_session::SessionError::io(&path, e))?;
+        let r = Scenario::parse(&text, "<dnurbs_surface>", "dnurbs", Path::new("."));
+        let _ = std::fs::remove_file(&path);
+        r
+    });
+    let mut s = Session::from_scenario(sc.py()?);
+    s.run = None;
+    Ok(s)
 }
 
 /// A session: named models of any kind (D-NURBS, subdivision and B-spline solids, FFD, PDE
@@ -61,20 +199,24 @@ impl Session {
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         py.detach(|| {
             if is_toml(&path) {
-                let sc = Scenario::from_file(&path).py()?;
-                Ok(Self {
-                    session: sc.session,
-                    run: Some(RunInfo {
-                        name: sc.name,
-                        end_step: sc.steps,
-                        output: sc.output,
-                    }),
-                })
+                Ok(Self::from_scenario(Scenario::from_file(&path).py()?))
             } else {
                 let (session, run) = file::load(&path).py()?;
                 Ok(Self { session, run })
             }
         })
+    }
+
+    /// `Session.from_toml(text, base=".")`: a scenario given as a string (the keys of a
+    /// scenario file, `docs/formats.md`); relative file names (`[model] file = ...`) are
+    /// resolved against `base`. Errors name `<string>`, the line and the key (`FileError`).
+    #[staticmethod]
+    #[pyo3(signature = (text, base = PathBuf::from(".")), text_signature = "(text, base='.')")]
+    fn from_toml(py: Python<'_>, text: &str, base: PathBuf) -> PyResult<Self> {
+        let sc = py
+            .detach(|| Scenario::parse(text, "<string>", "scenario", &base))
+            .py()?;
+        Ok(Self::from_scenario(sc))
     }
 
     /// Writes the session (every model's full state, the schedule, the command log) to a
