@@ -545,3 +545,30 @@ fn spec_errors() {
     .unwrap_err();
     assert_eq!(e.key, "engine");
 }
+
+/// The model counts steps of `dt`, whatever adaptive sub-steps the engine takes inside them
+/// (so frames every k steps and `--until` are right): a fit with dynamic weights, whose engine
+/// may halve steps, still counts exactly the steps asked for.
+#[test]
+fn steps_count_steps_of_dt_not_engine_substeps() {
+    let m = build(
+        ModelKind::DnurbsSurface,
+        "kind = \"dnurbs-surface\"\nprimitive = \"sheet\"\nsize = [7, 7]\ndegree = [2, 2]\nextent = 2.4",
+        "preset = \"Hemisphere fitting\"",
+        "reference = \"absolute\"",
+    );
+    let mut s = Session::with_model("m", m).unwrap();
+    s.apply(Command::new(Edit::Data {
+        name: None,
+        points: vclay_dynamics::dnurbs::figures::hemisphere_points()
+            .iter()
+            .map(|p| [p.x, p.y, p.z])
+            .collect(),
+        stiffness: None,
+    }))
+    .unwrap();
+    s.run(40).unwrap();
+    let m = s.model(None).unwrap();
+    assert_eq!(m.steps(), 40);
+    assert!((m.time() - 40.0 * m.dt()).abs() < 1e-9 * m.time().max(1.0));
+}

@@ -131,9 +131,6 @@ impl Engine {
     fn time(&self) -> f64 {
         each!(self, gen d => d.time(), frozen d => d.time())
     }
-    fn steps(&self) -> u64 {
-        each!(self, gen d => d.steps() as u64, frozen d => d.steps() as u64)
-    }
     fn step(&mut self, dt: f64) -> Result<vclay_dynamics::StepReport, DynamicsError> {
         let i = Integrator::Implicit { dt };
         each!(self, gen d => d.step(i), frozen d => d.step(i))
@@ -626,6 +623,8 @@ pub struct DnurbsModel {
     constraints: Vec<NamedConstraint>,
     tools: ToolTable,
     kinetic: f64,
+    /// Steps of `dt` taken (the engines count their adaptive sub-steps too).
+    steps: u64,
     revision: u64,
     /// Forces of a wrapped engine that have no description (closures): they come first in the
     /// engine's force list, and a model holding them cannot be saved.
@@ -642,6 +641,7 @@ pub(crate) struct Snap {
     constraints: Vec<NamedConstraint>,
     tools: ToolTable,
     kinetic: f64,
+    steps: u64,
 }
 
 fn bbox_diagonal(pts: &[Vec3]) -> f64 {
@@ -685,6 +685,7 @@ impl DnurbsModel {
             constraints: Vec::new(),
             tools: ToolTable::default(),
             kinetic: 0.0,
+            steps: 0,
             revision: 1,
             external: Vec::new(),
         })
@@ -900,6 +901,7 @@ impl DnurbsModel {
             constraints: self.constraints.clone(),
             tools: self.tools.clone(),
             kinetic: self.kinetic,
+            steps: self.steps,
         }
     }
 
@@ -919,6 +921,7 @@ impl DnurbsModel {
         self.next_handle = s.next_handle;
         self.tools = s.tools.clone();
         self.kinetic = s.kinetic;
+        self.steps = s.steps;
         self.revision += 1;
         Ok(())
     }
@@ -1828,6 +1831,7 @@ impl DnurbsModel {
             constraints: s.constraints,
             tools: s.tools,
             kinetic: s.kinetic,
+            steps: s.steps,
         };
         m.put(&snap)?;
         m.revision = 1;
@@ -2074,7 +2078,7 @@ impl Model for DnurbsModel {
         self.dt
     }
     fn steps(&self) -> u64 {
-        self.engine.steps()
+        self.steps
     }
 
     fn step(&mut self) -> Result<StepReport, SessionError> {
@@ -2101,6 +2105,7 @@ impl Model for DnurbsModel {
         let t0 = std::time::Instant::now();
         let r = self.engine.step(self.dt).map_err(dyn_err)?;
         self.kinetic = r.kinetic_energy;
+        self.steps += 1;
         Ok(StepReport {
             time: r.time,
             energy: Energy {
@@ -2425,6 +2430,7 @@ impl Model for DnurbsModel {
             constraints: self.constraints.clone(),
             tools: self.tools.clone(),
             kinetic: self.kinetic,
+            steps: self.steps,
         };
         serde_json::to_value(saved).map_err(SessionError::model)
     }
@@ -2507,6 +2513,8 @@ struct Saved {
     constraints: Vec<NamedConstraint>,
     tools: ToolTable,
     kinetic: f64,
+    /// Steps of `dt` taken.
+    steps: u64,
 }
 
 #[derive(Debug, Serialize, Deserialize)]
