@@ -61,7 +61,7 @@ def test_material_and_step(tmp_path):
     assert (params["mu"], params["gamma"]) == (3.0, 0.5)
     s.apply({"action": "gravity", "g": [0.0, 0.0, -9.8]})
     s.step(20)
-    assert s.steps() >= 20
+    assert s.steps() == 20  # steps of dt (the engine may halve some inside)
     assert s.energy()["kinetic"] > 0.0
     assert s.control_points()[:, 2].mean() < 0.0
     path = tmp_path / "sheet.json"
@@ -75,7 +75,7 @@ def test_from_toml_and_its_errors(root, tmp_path):
     s = vclay.Session.from_toml(text)
     assert s.kind() == "dnurbs-surface" and s.scenario_steps == 300
     s.step(5)
-    assert s.steps() >= 5
+    assert s.steps() == 5
     with pytest.raises(vclay.FileError, match=r"<string>:3: kind: unknown model kind"):
         vclay.Session.from_toml("[model]\n\nkind = 'no-such-kind'\n")
     # Relative model files resolve against `base`.
