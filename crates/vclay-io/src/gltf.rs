@@ -364,7 +364,11 @@ pub fn decode_glb(b: &[u8]) -> Result<Vec<TriMesh>, IoError> {
     let jtext = b
         .get(20..20 + jlen)
         .ok_or_else(|| hdr("JSON chunk truncated"))?;
-    let doc: Value = serde_json::from_slice(jtext)
+    // The strict reader of the model files: a key written twice in one object is an error
+    // (issue 17), like any other invalid JSON.
+    let jtext =
+        std::str::from_utf8(jtext).map_err(|e| err("glb JSON chunk", format!("not UTF-8: {e}")))?;
+    let doc: Value = crate::json::parse(jtext)
         .map_err(|e| err("glb JSON chunk", format!("invalid JSON: {e}")))?;
     let bin: &[u8] = match u32_at(b, 20 + jlen) {
         Some(blen) => {
@@ -593,6 +597,36 @@ mod tests {
             e.contains("meshes[0] (grow)") && e.contains("3 frames and 2 times"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn a_key_written_twice_in_the_json_chunk_is_an_error() {
+        let bytes = to_glb(&[GlbMesh::new("t", tetra())]).unwrap();
+        let jlen = u32_at(&bytes, 12).unwrap() as usize;
+        let json = std::str::from_utf8(&bytes[20..20 + jlen])
+            .unwrap()
+            .trim_end();
+        assert!(json.starts_with('{'));
+        // The same document with `"scene": 0` written twice at the top, re-packed (the JSON
+        // chunk padded with spaces to 4 bytes, the BIN chunk as it was).
+        let twice = format!("{{\"scene\":0,\"scene\":0,{}", &json[1..]);
+        let mut j = twice.into_bytes();
+        while j.len() % 4 != 0 {
+            j.push(b' ');
+        }
+        let bin = &bytes[20 + jlen..];
+        let total = 12 + 8 + j.len() + bin.len();
+        let mut glb = Vec::with_capacity(total);
+        glb.extend_from_slice(&bytes[..8]);
+        glb.extend_from_slice(&(total as u32).to_le_bytes());
+        glb.extend_from_slice(&(j.len() as u32).to_le_bytes());
+        glb.extend_from_slice(&bytes[16..20]);
+        glb.extend_from_slice(&j);
+        glb.extend_from_slice(bin);
+        let e = decode_glb(&glb).unwrap_err().to_string();
+        assert!(e.contains("duplicate key") && e.contains("scene"), "{e}");
+        // The original reads.
+        assert!(decode_glb(&bytes).is_ok());
     }
 
     #[test]
