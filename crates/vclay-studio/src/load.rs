@@ -135,11 +135,18 @@ pub fn open(path: &Path) -> Result<Session, String> {
             ),
             path,
         ),
-        "obj" | "stl" | "ply" => parse_text(&file_scenario("ffd", "mesh", &abs, ""), path),
-        "json" => {
+        "obj" | "stl" | "ply" | "glb" => parse_text(&file_scenario("ffd", "mesh", &abs, ""), path),
+        // Model files, CAD exchange files included (their first entity that is a surface,
+        // curve or volume becomes the model).
+        "json" | "step" | "stp" | "igs" | "iges" => {
             let mut first = None;
-            for kind in ["dnurbs-surface", "dnurbs-curve", "bspline-solid"] {
-                match parse_text(&file_scenario(kind, "file", &abs, ""), path) {
+            // D-NURBS need a time step (no preset names one); solids have a default.
+            for (kind, extra) in [
+                ("dnurbs-surface", "\n[simulation]\ndt = 0.01\n"),
+                ("dnurbs-curve", "\n[simulation]\ndt = 0.01\n"),
+                ("bspline-solid", ""),
+            ] {
+                match parse_text(&file_scenario(kind, "file", &abs, extra), path) {
                     Ok(s) => return Ok(s),
                     Err(e) => {
                         first.get_or_insert(e);
@@ -150,7 +157,8 @@ pub fn open(path: &Path) -> Result<Session, String> {
         }
         other => Err(format!(
             "{}: cannot open .{other} files; the studio opens scenarios (.toml), sessions \
-             (.session), lattices (.ovm), model JSON (.json) and meshes (.obj, .stl, .ply)",
+             (.session), lattices (.ovm), model files (.json, .step, .stp, .igs, .iges) and \
+             meshes (.obj, .stl, .ply, .glb)",
             path.display()
         )),
     }
@@ -184,5 +192,34 @@ mod tests {
         std::fs::write(&ovm, "not a lattice").unwrap();
         let e = open(&ovm).unwrap_err();
         assert!(e.contains("bad.ovm"), "{e}");
+    }
+
+    #[test]
+    fn model_files_open_as_dnurbs_models() {
+        // A model JSON written by vclay (a sheet), then the CAD files of vclay-io's tests.
+        let dir = std::env::temp_dir().join(format!("vclay-studio-json-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let json = dir.join("sheet.json");
+        std::fs::write(
+            &json,
+            r#"{"entities": [{"type": "nurbs-surface", "degree": [1, 2],
+                "knots": [[0, 0, 1, 1], [0, 0, 0, 1, 1, 1]],
+                "control_points": [[[0, 0, 0], [0, 1, 0.5], [0, 2, 0]],
+                                   [[1, 0, 0], [1, 1, 0.5], [1, 2, 0]]],
+                "weights": [[1, 2, 1], [1, 2, 1]]}]}"#,
+        )
+        .unwrap();
+        let s = open(&json).unwrap_or_else(|e| panic!("sheet.json: {e}"));
+        assert_eq!(
+            s.model(None).unwrap().kind(),
+            vclay_session::ModelKind::DnurbsSurface
+        );
+        let cad = Path::new(env!("CARGO_MANIFEST_DIR")).join("../vclay-io/tests/data/cad");
+        for f in ["rational_surface.step", "rational_surface.igs"] {
+            let s = open(&cad.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
+            let m = s.model(None).unwrap();
+            assert_eq!(m.kind(), vclay_session::ModelKind::DnurbsSurface, "{f}");
+            assert!(!m.display_mesh().unwrap().triangles.is_empty(), "{f}");
+        }
     }
 }
