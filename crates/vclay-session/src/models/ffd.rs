@@ -400,27 +400,7 @@ impl FfdModel {
     pub fn from_spec(spec: &Spec<'_>) -> Result<Self, SpecError> {
         let m: ModelKeys = typed("model", spec.model)?;
         let err = |key: &str, what: String| SpecError::new("model", key, what);
-        if let Some(t) = spec.material
-            && !t.is_empty()
-        {
-            return Err(SpecError::new(
-                "material",
-                t.keys().next().map_or("material", |k| k.as_str()),
-                "an ffd model has no material",
-            ));
-        }
-        let sim: SimKeys = match spec.simulation {
-            Some(t) => typed("simulation", t)?,
-            None => SimKeys::default(),
-        };
-        let dt = sim.dt.unwrap_or(DEFAULT_DT);
-        if !(dt > 0.0 && dt.is_finite()) {
-            return Err(SpecError::new(
-                "simulation",
-                "dt",
-                format!("{dt} must be positive and finite"),
-            ));
-        }
+        let dt = super::clock_only(spec, "an ffd model", DEFAULT_DT)?;
         let degree = m.degree.map_or([DEFAULT_DEGREE; 3], OneOrThree::axes);
         let control = m
             .control
@@ -994,12 +974,6 @@ struct ModelKeys {
     min: Option<V3>,
     max: Option<V3>,
     mode: Option<String>,
-}
-
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct SimKeys {
-    dt: Option<f64>,
 }
 
 #[derive(Debug, Serialize, Deserialize)]

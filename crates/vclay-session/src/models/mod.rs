@@ -83,6 +83,39 @@ pub fn typed<T: DeserializeOwned>(table: &str, t: &toml::Table) -> Result<T, Spe
     })
 }
 
+/// For kinds without physics (FFD, PDE surfaces): refuses a non-empty `[material]` (naming
+/// `what`, e.g. "an ffd model") and reads `[simulation] dt` (the clock's step; `default` when
+/// absent), the only simulation key.
+pub(crate) fn clock_only(spec: &Spec<'_>, what: &str, default: f64) -> Result<f64, SpecError> {
+    #[derive(Debug, Default, serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct SimKeys {
+        dt: Option<f64>,
+    }
+    if let Some(t) = spec.material
+        && !t.is_empty()
+    {
+        return Err(SpecError::new(
+            "material",
+            t.keys().next().map_or("material", |k| k.as_str()),
+            format!("{what} has no material"),
+        ));
+    }
+    let sim: SimKeys = match spec.simulation {
+        Some(t) => typed("simulation", t)?,
+        None => SimKeys::default(),
+    };
+    let dt = sim.dt.unwrap_or(default);
+    if !(dt > 0.0 && dt.is_finite()) {
+        return Err(SpecError::new(
+            "simulation",
+            "dt",
+            format!("{dt} must be positive and finite"),
+        ));
+    }
+    Ok(dt)
+}
+
 /// Builds a model of `kind` from its scenario tables.
 pub fn build(kind: ModelKind, spec: &Spec<'_>) -> Result<Box<dyn Model>, SpecError> {
     Ok(match kind {

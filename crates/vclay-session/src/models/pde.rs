@@ -451,27 +451,7 @@ impl PdeSurfaceModel {
     pub fn from_spec(spec: &Spec<'_>) -> Result<Self, SpecError> {
         let m: ModelKeys = typed("model", spec.model)?;
         let err = |key: &str, what: String| SpecError::new("model", key, what);
-        if let Some(t) = spec.material
-            && !t.is_empty()
-        {
-            return Err(SpecError::new(
-                "material",
-                t.keys().next().map_or("material", |k| k.as_str()),
-                "a pde-surface model has no material",
-            ));
-        }
-        let sim: SimKeys = match spec.simulation {
-            Some(t) => typed("simulation", t)?,
-            None => SimKeys::default(),
-        };
-        let dt = sim.dt.unwrap_or(DEFAULT_DT);
-        if !(dt > 0.0 && dt.is_finite()) {
-            return Err(SpecError::new(
-                "simulation",
-                "dt",
-                format!("{dt} must be positive and finite"),
-            ));
-        }
+        let dt = super::clock_only(spec, "a pde-surface model", DEFAULT_DT)?;
         let grid = m.grid.unwrap_or(DEFAULT_GRID);
         if let Some(n) = grid.iter().find(|&&n| !(2..=MAX_GRID).contains(&n)) {
             return Err(err(
@@ -826,12 +806,6 @@ struct ModelKeys {
     grid: Option<[usize; 2]>,
     #[serde(default)]
     params: BTreeMap<String, f64>,
-}
-
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct SimKeys {
-    dt: Option<f64>,
 }
 
 #[derive(Debug, Serialize, Deserialize)]
