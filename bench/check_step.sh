@@ -1,13 +1,18 @@
 #!/usr/bin/env bash
 # External check of vclay's STEP and IGES export: loads the files in OpenCASCADE (cadquery-ocp from PyPI)
-# and compares points with `vclay eval` to 1e-9 (bench/check_step.py).
+# and compares points with `vclay eval` to 1e-9 (bench/check_step.py); then checks the B-rep
+# export (bench/check_brep.py): closed models (sphere, torus, a periodic closed surface, the
+# D-NURBS swung sphere, B-spline volumes) come back as one valid closed solid whose volume matches
+# vclay's to 1e-6, open ones as open shells.
 # Uses target/venv-ocp; creates it and installs cadquery-ocp-novtk when pip can (set
 # VCLAY_NO_INSTALL=1 to forbid installing). Says SKIPPED and exits 0 when OpenCASCADE is absent.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
 venv=$root/target/venv-ocp
-if ! "$venv/bin/python" -c "import OCP" 2>/dev/null; then
+# VCLAY_OCP_PYTHON: a Python that already imports OCP (skips the venv).
+py=${VCLAY_OCP_PYTHON:-$venv/bin/python}
+if ! "$py" -c "import OCP" 2>/dev/null; then
   if [ -n "${VCLAY_NO_INSTALL:-}" ]; then
     echo "check_step: SKIPPED: cadquery-ocp not installed in $venv (VCLAY_NO_INSTALL set)"; exit 0
   fi
@@ -23,7 +28,25 @@ work=$root/target/check-step
 rm -rf "$work"; mkdir -p "$work"
 "$vclay" demo --out "$work/demo" > /dev/null 2>&1
 for fmt in step iges; do
-  "$venv/bin/python" bench/check_step.py "$vclay" "$work" "$fmt" \
+  "$py" bench/check_step.py "$vclay" "$work" "$fmt" \
     "$work/demo/torus.json" "$work/demo/sheet.json" "$work/demo/twisted_volume.json" \
     bench/models/curves.json
+done
+# B-rep export: models from bench/make_brep_models.py, the demo, and the D-NURBS swung sphere
+# of examples/scenarios/fig9a_swung_egg.toml after one step (closed) and after 400 (the sculpted
+# egg, whose seam and north pole have opened: an open shell).
+models=$work/brep-models
+python3 bench/make_brep_models.py "$models"
+sed 's/^steps = 400/steps = 1/' examples/scenarios/fig9a_swung_egg.toml > "$work/swung1.toml"
+"$vclay" run "$work/swung1.toml" --out "$work/swung1" > /dev/null 2>&1
+"$vclay" run examples/scenarios/fig9a_swung_egg.toml --out "$work/egg" > /dev/null 2>&1
+cp "$work/swung1/final.json" "$models/swung_sphere.json"
+cp "$work/egg/final.json" "$models/sculpted_egg.json"
+for fmt in step; do
+  "$py" bench/check_brep.py "$vclay" "$work/brep" "$fmt" \
+    "$models/sphere.json:solid" "$models/inward_sphere.json:solid" "$models/torus.json:solid" \
+    "$models/closed_tube.json:solid" "$models/swung_sphere.json:solid" \
+    "$models/bent_volume.json:solid" "$models/mirrored_volume.json:solid" \
+    "$work/demo/torus.json:solid" "$work/demo/twisted_volume.json:solid" \
+    "$models/sheet.json:open" "$work/demo/sheet.json:open" "$models/sculpted_egg.json:open"
 done

@@ -26,6 +26,7 @@
 //! Limitations: see each module.
 #![warn(missing_docs)]
 
+pub mod brep;
 pub mod error;
 pub mod geomdl;
 pub mod gltf;

@@ -22,6 +22,7 @@
 //! **Limitations.** Export only (no STEP reader). No trimming, topology or B-rep: the geometry
 //! arrives in CAD tools as untrimmed curves and surfaces. Names are reduced to printable ASCII.
 
+use crate::brep::{LoopItem, Shell};
 use crate::error::IoError;
 use crate::model::{Entity, NamedEntity};
 use std::fmt::Write as _;
@@ -208,11 +209,136 @@ pub fn volume_boundary_surfaces(v: &NurbsVolume) -> Option<Vec<NurbsSurface>> {
     Some(out)
 }
 
-/// Formats entities as a STEP AP214 file. `file_name` goes into the header.
+/// How [`to_step_string_as`] lays out the geometry.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StepLayout {
+    /// Topology: each closed surface and each volume's boundary as a `MANIFOLD_SOLID_BREP`
+    /// (a `CLOSED_SHELL` of `ADVANCED_FACE`s sharing `EDGE_CURVE`s and `VERTEX_POINT`s) of an
+    /// `ADVANCED_BREP_SHAPE_REPRESENTATION`, each open surface as the face of an `OPEN_SHELL`
+    /// in a `SHELL_BASED_SURFACE_MODEL` of a `MANIFOLD_SURFACE_SHAPE_REPRESENTATION`; curves in
+    /// a `GEOMETRIC_CURVE_SET` (see [`crate::brep`] for the topology and its tolerance).
+    #[default]
+    Brep,
+    /// Loose geometry: every surface (and each volume's six boundary surfaces) in one
+    /// `GEOMETRIC_SET`, no topology (the layout of vclay before B-rep export).
+    GeometricSet,
+}
+
+/// Formats entities as a STEP AP214 file with loose geometry ([`StepLayout::GeometricSet`]):
+/// the same as `to_step_string_as(entities, file_name, StepLayout::GeometricSet)`.
+/// `file_name` goes into the header.
 pub fn to_step_string(entities: &[NamedEntity], file_name: &str) -> Result<String, IoError> {
+    to_step_string_as(entities, file_name, StepLayout::GeometricSet)
+}
+
+/// The shells of a surface or volume entity (`None` for a curve).
+fn entity_shell(e: &Entity, i: usize) -> Result<Option<Shell>, IoError> {
+    let in_entity = |err: IoError| IoError::Structure {
+        path: format!("entities[{i}]"),
+        message: format!("STEP B-rep export: {err}"),
+    };
+    match e {
+        Entity::Curve(_) => Ok(None),
+        Entity::Surface(s) => Shell::of_surface(s).map(Some).map_err(in_entity),
+        Entity::Volume(v) => Shell::of_volume(v).map(Some).map_err(in_entity),
+    }
+}
+
+/// Writes a shell's vertices, edges and faces; returns the `MANIFOLD_SOLID_BREP` (closed) or
+/// `SHELL_BASED_SURFACE_MODEL` (open).
+fn write_shell(d: &mut Data, name: &str, shell: &Shell) -> usize {
+    let vids: Vec<usize> = shell
+        .vertices
+        .iter()
+        .map(|v| {
+            let p = d.point(&v.point);
+            d.add(&format!("VERTEX_POINT('',#{p})"))
+        })
+        .collect();
+    let eids: Vec<usize> = shell
+        .edges
+        .iter()
+        .enumerate()
+        .map(|(k, e)| {
+            let c = &e.curve;
+            let cid = write_curve(
+                d,
+                &format!("{name} edge {k}"),
+                c.degree(),
+                c.knots(),
+                c.control_points(),
+                c.weights(),
+            );
+            d.add(&format!(
+                "EDGE_CURVE('',#{},#{},#{cid},.T.)",
+                vids[e.start], vids[e.end]
+            ))
+        })
+        .collect();
+    let mut faces = Vec::with_capacity(shell.faces.len());
+    for (k, f) in shell.faces.iter().enumerate() {
+        let sid = write_surface(d, &format!("{name} face {k}"), &f.surface);
+        let oes: Vec<usize> = f
+            .bound
+            .iter()
+            .filter_map(|item| match *item {
+                LoopItem::Edge { edge, forward } => Some(d.add(&format!(
+                    "ORIENTED_EDGE('',*,*,#{},{})",
+                    eids[edge],
+                    logical(forward)
+                ))),
+                // A pole is no edge: the loop passes through its vertex, which the
+                // neighbouring edges share (OpenCASCADE adds its degenerated edge on reading).
+                LoopItem::Pole { .. } => None,
+            })
+            .collect();
+        let lp = d.add(&format!("EDGE_LOOP('',({}))", refs(&oes)));
+        let fb = d.add(&format!("FACE_OUTER_BOUND('',#{lp},.T.)"));
+        faces.push(d.add(&format!(
+            "ADVANCED_FACE({},(#{fb}),#{sid},{})",
+            step_string(&format!("{name} face {k}")),
+            logical(f.same_sense)
+        )));
+    }
+    if shell.closed {
+        let sh = d.add(&format!("CLOSED_SHELL('',({}))", refs(&faces)));
+        d.add(&format!("MANIFOLD_SOLID_BREP({},#{sh})", step_string(name)))
+    } else {
+        let sh = d.add(&format!("OPEN_SHELL('',({}))", refs(&faces)));
+        d.add(&format!(
+            "SHELL_BASED_SURFACE_MODEL({},(#{sh}))",
+            step_string(name)
+        ))
+    }
+}
+
+fn logical(b: bool) -> &'static str {
+    if b { ".T." } else { ".F." }
+}
+
+/// Formats entities as a STEP AP214 file in the given layout. `file_name` goes into the header.
+pub fn to_step_string_as(
+    entities: &[NamedEntity],
+    file_name: &str,
+    layout: StepLayout,
+) -> Result<String, IoError> {
     if entities.is_empty() {
         return Err(IoError::EmptyModel);
     }
+    let shells: Vec<Option<Shell>> = match layout {
+        StepLayout::Brep => entities
+            .iter()
+            .enumerate()
+            .map(|(i, e)| entity_shell(&e.entity, i))
+            .collect::<Result<_, _>>()?,
+        StepLayout::GeometricSet => vec![None; entities.len()],
+    };
+    // CAD's merge tolerance: 1e-7 mm, or ten times the largest closure tolerance used.
+    let uncertainty = shells
+        .iter()
+        .flatten()
+        .map(|s| 10.0 * s.tolerance)
+        .fold(1e-7, f64::max);
     let mut d = Data {
         next: 1,
         text: String::new(),
@@ -235,19 +361,28 @@ pub fn to_step_string(entities: &[NamedEntity], file_name: &str) -> Result<Strin
     let ang = d.add("( NAMED_UNIT(*) PLANE_ANGLE_UNIT() SI_UNIT($,.RADIAN.) )");
     let sol = d.add("( NAMED_UNIT(*) SI_UNIT($,.STERADIAN.) SOLID_ANGLE_UNIT() )");
     let unc = d.add(&format!(
-        "UNCERTAINTY_MEASURE_WITH_UNIT(LENGTH_MEASURE(1.E-07),#{len},'distance_accuracy_value','confusion accuracy')"
+        "UNCERTAINTY_MEASURE_WITH_UNIT(LENGTH_MEASURE({}),#{len},'distance_accuracy_value','confusion accuracy')",
+        step_real(uncertainty)
     ));
     let rctx = d.add(&format!(
         "( GEOMETRIC_REPRESENTATION_CONTEXT(3) GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT((#{unc})) \
          GLOBAL_UNIT_ASSIGNED_CONTEXT((#{len},#{ang},#{sol})) \
          REPRESENTATION_CONTEXT('Context #1','3D Context with UNIT and UNCERTAINTY') )"
     ));
-    let mut items = Vec::new();
-    let mut only_curves = true;
-    for (i, e) in entities.iter().enumerate() {
+    // Representation items by kind: loose curves, loose surfaces, solids, open shells.
+    let (mut curves, mut surfaces, mut solids, mut open) = (vec![], vec![], vec![], vec![]);
+    for (i, (e, shell)) in entities.iter().zip(&shells).enumerate() {
         let name = e.name.clone().unwrap_or_else(|| format!("entity {i}"));
-        match &e.entity {
-            Entity::Curve(c) => items.push(write_curve(
+        match (&e.entity, shell) {
+            (_, Some(sh)) => {
+                let item = write_shell(&mut d, &name, sh);
+                if sh.closed {
+                    solids.push(item);
+                } else {
+                    open.push(item);
+                }
+            }
+            (Entity::Curve(c), None) => curves.push(write_curve(
                 &mut d,
                 &name,
                 c.degree(),
@@ -255,12 +390,8 @@ pub fn to_step_string(entities: &[NamedEntity], file_name: &str) -> Result<Strin
                 c.control_points(),
                 c.weights(),
             )),
-            Entity::Surface(s) => {
-                only_curves = false;
-                items.push(write_surface(&mut d, &name, s));
-            }
-            Entity::Volume(v) => {
-                only_curves = false;
+            (Entity::Surface(s), None) => surfaces.push(write_surface(&mut d, &name, s)),
+            (Entity::Volume(v), None) => {
                 let faces = volume_boundary_surfaces(v).ok_or_else(|| IoError::Structure {
                     path: format!("entities[{i}]"),
                     message: "STEP export of a volume needs clamped knot vectors (its boundary \
@@ -268,25 +399,58 @@ pub fn to_step_string(entities: &[NamedEntity], file_name: &str) -> Result<Strin
                         .into(),
                 })?;
                 for (f, s) in faces.iter().enumerate() {
-                    items.push(write_surface(&mut d, &format!("{name} face {f}"), s));
+                    surfaces.push(write_surface(&mut d, &format!("{name} face {f}"), s));
                 }
             }
         }
     }
-    let (set, rep) = if only_curves {
-        (
-            "GEOMETRIC_CURVE_SET",
-            "GEOMETRICALLY_BOUNDED_WIREFRAME_SHAPE_REPRESENTATION",
-        )
+    let mut reps = Vec::new();
+    if !surfaces.is_empty() {
+        // Loose curves share the surfaces' GEOMETRIC_SET, as before B-rep export.
+        let mut items = curves.clone();
+        items.extend(&surfaces);
+        items.sort_unstable();
+        curves.clear();
+        let gset = d.add(&format!("GEOMETRIC_SET('',({}))", refs(&items)));
+        reps.push(d.add(&format!(
+            "GEOMETRICALLY_BOUNDED_SURFACE_SHAPE_REPRESENTATION('vclay',(#{gset}),#{rctx})"
+        )));
+    }
+    if !curves.is_empty() {
+        let gset = d.add(&format!("GEOMETRIC_CURVE_SET('',({}))", refs(&curves)));
+        reps.push(d.add(&format!(
+            "GEOMETRICALLY_BOUNDED_WIREFRAME_SHAPE_REPRESENTATION('vclay',(#{gset}),#{rctx})"
+        )));
+    }
+    if !solids.is_empty() {
+        reps.push(d.add(&format!(
+            "ADVANCED_BREP_SHAPE_REPRESENTATION('vclay',({}),#{rctx})",
+            refs(&solids)
+        )));
+    }
+    if !open.is_empty() {
+        reps.push(d.add(&format!(
+            "MANIFOLD_SURFACE_SHAPE_REPRESENTATION('vclay',({}),#{rctx})",
+            refs(&open)
+        )));
+    }
+    if let [rep] = reps[..] {
+        d.add(&format!("SHAPE_DEFINITION_REPRESENTATION(#{pds},#{rep})"));
     } else {
-        (
-            "GEOMETRIC_SET",
-            "GEOMETRICALLY_BOUNDED_SURFACE_SHAPE_REPRESENTATION",
-        )
-    };
-    let gset = d.add(&format!("{set}('',({}))", refs(&items)));
-    let srep = d.add(&format!("{rep}('vclay',(#{gset}),#{rctx})"));
-    d.add(&format!("SHAPE_DEFINITION_REPRESENTATION(#{pds},#{srep})"));
+        // Several kinds of representation: one shape representation of the product, related to
+        // each of them (ISO 10303-41 shape_representation_relationship).
+        let o = d.point(&Vec3::zeros());
+        let z = d.add("DIRECTION('',(0.,0.,1.))");
+        let x = d.add("DIRECTION('',(1.,0.,0.))");
+        let ax = d.add(&format!("AXIS2_PLACEMENT_3D('',#{o},#{z},#{x})"));
+        let main = d.add(&format!("SHAPE_REPRESENTATION('vclay',(#{ax}),#{rctx})"));
+        d.add(&format!("SHAPE_DEFINITION_REPRESENTATION(#{pds},#{main})"));
+        for rep in reps {
+            d.add(&format!(
+                "SHAPE_REPRESENTATION_RELATIONSHIP('','',#{main},#{rep})"
+            ));
+        }
+    }
     let mut out = String::new();
     out.push_str("ISO-10303-21;\nHEADER;\n");
     out.push_str("FILE_DESCRIPTION(('vclay NURBS export'),'2;1');\n");
@@ -302,9 +466,21 @@ pub fn to_step_string(entities: &[NamedEntity], file_name: &str) -> Result<Strin
     Ok(out)
 }
 
-/// Writes entities as a STEP AP214 file, atomically.
+/// Writes entities as a STEP AP214 file, atomically, with topology ([`StepLayout::Brep`]):
+/// closed surfaces and volumes as solids, open surfaces as open shells.
 pub fn write_step(path: impl AsRef<Path>, entities: &[NamedEntity]) -> Result<(), IoError> {
-    crate::util::write_named_text(path.as_ref(), |name| to_step_string(entities, name))
+    write_step_as(path, entities, StepLayout::Brep)
+}
+
+/// Writes entities as a STEP AP214 file in the given layout, atomically.
+pub fn write_step_as(
+    path: impl AsRef<Path>,
+    entities: &[NamedEntity],
+    layout: StepLayout,
+) -> Result<(), IoError> {
+    crate::util::write_named_text(path.as_ref(), |name| {
+        to_step_string_as(entities, name, layout)
+    })
 }
 
 /// The current UTC time as `YYYY-MM-DDThh:mm:ss`.
@@ -389,6 +565,142 @@ mod tests {
             }
         }
         assert_eq!(ParametricSurface::domain(&torus)[0].max, 1.0);
+    }
+
+    /// `#id -> body` of every entity of a STEP text.
+    fn entities_of(s: &str) -> std::collections::HashMap<usize, String> {
+        s.lines()
+            .filter_map(|l| {
+                let (id, body) = l.strip_prefix('#')?.split_once('=')?;
+                Some((id.parse().ok()?, body.trim_end_matches(';').to_string()))
+            })
+            .collect()
+    }
+
+    /// The `#n` references of an entity body, in order.
+    fn refs_of(body: &str) -> Vec<usize> {
+        body.split('#')
+            .skip(1)
+            .filter_map(|t| {
+                let n: String = t.chars().take_while(char::is_ascii_digit).collect();
+                n.parse().ok()
+            })
+            .collect()
+    }
+
+    /// Checks the topology of a B-rep STEP text: every edge of a closed shell used twice with
+    /// opposite senses, every loop a closed chain of vertices. Returns the counts of
+    /// (solids, open shells, faces, edges, vertices).
+    fn check_brep_text(s: &str) -> (usize, usize, usize, usize, usize) {
+        let ents = entities_of(s);
+        let kind = |id: usize| ents[&id].split('(').next().unwrap().to_string();
+        let count = |k: &str| {
+            ents.values()
+                .filter(|b| b.starts_with(&format!("{k}(")))
+                .count()
+        };
+        let mut uses: std::collections::HashMap<usize, (usize, usize)> = Default::default();
+        for body in ents.values().filter(|b| b.starts_with("CLOSED_SHELL(")) {
+            for face in refs_of(body) {
+                assert_eq!(kind(face), "ADVANCED_FACE");
+                let fb = refs_of(&ents[&face])[0];
+                assert_eq!(kind(fb), "FACE_OUTER_BOUND");
+                let lp = refs_of(&ents[&fb])[0];
+                assert_eq!(kind(lp), "EDGE_LOOP");
+                // Consecutive oriented edges meet at a vertex; the chain closes.
+                let mut chain = Vec::new();
+                for oe in refs_of(&ents[&lp]) {
+                    let body = &ents[&oe];
+                    assert!(body.starts_with("ORIENTED_EDGE('',*,*,#"), "{body}");
+                    let edge = refs_of(body)[0];
+                    let fwd = body.ends_with(".T.)");
+                    let e = refs_of(&ents[&edge]);
+                    assert_eq!(kind(edge), "EDGE_CURVE");
+                    assert_eq!(kind(e[0]), "VERTEX_POINT");
+                    let u = uses.entry(edge).or_default();
+                    if fwd {
+                        u.0 += 1
+                    } else {
+                        u.1 += 1
+                    }
+                    chain.push(if fwd { (e[0], e[1]) } else { (e[1], e[0]) });
+                }
+                for k in 0..chain.len() {
+                    assert_eq!(
+                        chain[k].1,
+                        chain[(k + 1) % chain.len()].0,
+                        "loop #{lp} breaks"
+                    );
+                }
+            }
+        }
+        assert!(uses.values().all(|&u| u == (1, 1)), "{uses:?}");
+        (
+            count("MANIFOLD_SOLID_BREP"),
+            count("OPEN_SHELL"),
+            count("ADVANCED_FACE"),
+            count("EDGE_CURVE"),
+            count("VERTEX_POINT"),
+        )
+    }
+
+    #[test]
+    fn closed_models_are_solids_with_shared_edges() {
+        let torus = NurbsSurface::torus(2.0, 0.5).unwrap();
+        let sphere = NurbsSurface::sphere(1.0).unwrap();
+        let vol = NurbsVolume::box_lattice(
+            [1, 2, 2],
+            [2, 3, 4],
+            Vec3::zeros(),
+            Vec3::new(1.0, 2.0, 3.0),
+        )
+        .unwrap();
+        let brep = |e: Entity| to_step_string_as(&[e.into()], "b.step", StepLayout::Brep).unwrap();
+        let t = brep(Entity::Surface(torus));
+        // One vertex, two seams each used twice: the torus is one face of a closed shell.
+        assert_eq!(check_brep_text(&t), (1, 0, 1, 2, 1));
+        assert!(t.contains("ADVANCED_BREP_SHAPE_REPRESENTATION('vclay',(#"));
+        assert!(!t.contains("GEOMETRIC_SET"));
+        // Two poles (no edge) and one seam.
+        assert_eq!(
+            check_brep_text(&brep(Entity::Surface(sphere))),
+            (1, 0, 1, 1, 2)
+        );
+        // A box: 6 faces, 12 edges, 8 vertices, three faces reversed (inward surface normals).
+        let b = brep(Entity::Volume(vol));
+        assert_eq!(check_brep_text(&b), (1, 0, 6, 12, 8));
+        let reversed = entities_of(&b)
+            .values()
+            .filter(|e| e.starts_with("ADVANCED_FACE(") && e.ends_with(",.F.)"))
+            .count();
+        assert_eq!(reversed, 3);
+        // An open sheet goes as an open shell in a surface model; with a curve and a solid,
+        // three representations hang off one shape representation.
+        let pts = (0..9)
+            .map(|k| Vec3::new((k / 3) as f64, (k % 3) as f64, 0.0))
+            .collect();
+        let sheet = NurbsSurface::clamped_uniform([2, 2], [3, 3], pts).unwrap();
+        let line = NurbsCurve::new(
+            1,
+            vec![0., 0., 1., 1.],
+            vec![Vec3::zeros(), Vec3::x()],
+            None,
+        )
+        .unwrap();
+        let m = to_step_string_as(
+            &[
+                Entity::Surface(sheet).into(),
+                Entity::Curve(line).into(),
+                Entity::Surface(NurbsSurface::torus(3.0, 1.0).unwrap()).into(),
+            ],
+            "m.step",
+            StepLayout::Brep,
+        )
+        .unwrap();
+        assert_eq!(check_brep_text(&m), (1, 1, 2, 6, 5));
+        assert!(m.contains("SHELL_BASED_SURFACE_MODEL("));
+        assert!(m.contains("MANIFOLD_SURFACE_SHAPE_REPRESENTATION("));
+        assert_eq!(m.matches("SHAPE_REPRESENTATION_RELATIONSHIP(").count(), 3);
     }
 
     #[test]

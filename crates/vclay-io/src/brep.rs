@@ -1,0 +1,601 @@
+//! Boundary representation (B-rep) of vclay's surfaces and volumes for CAD export: faces,
+//! edges and vertices shared between faces, closed shells oriented outward.
+//!
+//! **What.** [`Shell::of_surface`] and [`Shell::of_volume`] turn one NURBS surface, or the six
+//! boundary surfaces of a trivariate volume, into a [`Shell`]: one [`Face`] per surface bounded
+//! by the loop of its four boundary iso-curves (`v = v0` along `+u`, `u = u1` along `+v`,
+//! `v = v1` along `-u`, `u = u0` along `-v`: counter-clockwise in the parameter square, so
+//! that the interior lies to the left about the normal `S_u x S_v`), with
+//!
+//! - the corners merged into [`Vertex`]es when they lie within the closure tolerance;
+//! - boundary curves that coincide (same degree, same knots up to reversal, control points
+//!   within the tolerance, proportional weights) merged into one [`Edge`], used twice: the seam
+//!   of a torus, a sphere or a closed D-NURBS surface, and the twelve edges of a volume;
+//! - boundary curves whose control points all lie within the tolerance of one point recorded as
+//!   a [`LoopItem::Pole`] (the poles of a sphere or a swung egg): no edge, the loop passes the
+//!   pole's vertex;
+//! - face orientations made consistent through the shared edges (each edge traversed once in
+//!   each direction) and then outward: the signed volume
+//!   `V = 1/3 sum_f s_f int int S . (S_u x S_v) du dv` (the divergence theorem with `div x = 3`,
+//!   `s_f = +-1` the face's sense) is made positive.
+//!
+//! The shell is closed when every edge is used exactly twice with opposite senses; anything
+//! else (a free boundary, an edge shared by three faces, a non-orientable surface) makes an open
+//! shell, which the writers export as such. The geometry is exact: surfaces are only clamped
+//! (knot insertion, Piegl & Tiller algorithm A5.1) when their knot vectors are not, and edges
+//! are boundary rows of the (clamped) control nets.
+//!
+//! **Tolerance.** Corners, curves and poles are compared with
+//! `tol = CLOSURE_RTOL x size`, `size` the diagonal of the bounding box of the entity's control
+//! points ([`closure_tolerance`]). With `CLOSURE_RTOL = 1e-9` this absorbs the rounding of knot
+//! insertion and of simulations that keep seams shared (about `1e-15 x size`) with a wide margin,
+//! and stays far below CAD's own merge tolerance (`1e-7` mm for a part of a few millimetres up
+//! to metres), so two boundaries vclay merges are the same curve for any CAD system.
+//!
+//! **Limitations.** Boundary curves are merged only when they have the same parametrization
+//! (knots equal, or equal after reversal): a closed surface whose seams are parametrized
+//! differently on the two sides is exported as an open shell. A face whose whole boundary
+//! degenerates (a surface collapsed to a point) is not supported and leaves the shell open.
+
+use crate::error::IoError;
+use vclay_core::Vec3;
+use vclay_core::quadrature::GaussLegendre;
+use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface, NurbsVolume, ParametricSurface};
+
+/// Relative closure tolerance: boundaries closer than `CLOSURE_RTOL x size` are merged.
+pub const CLOSURE_RTOL: f64 = 1e-9;
+
+/// The closure tolerance of a set of control points: [`CLOSURE_RTOL`] times the diagonal of
+/// their bounding box (`f64::MIN_POSITIVE` for a single point).
+pub fn closure_tolerance(points: &[Vec3]) -> f64 {
+    let mut lo = Vec3::repeat(f64::INFINITY);
+    let mut hi = Vec3::repeat(f64::NEG_INFINITY);
+    for p in points {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    let d = (hi - lo).norm();
+    if d.is_finite() && d > 0.0 {
+        CLOSURE_RTOL * d
+    } else {
+        f64::MIN_POSITIVE
+    }
+}
+
+/// A vertex of a shell: a point where face corners meet.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Vertex {
+    /// Its position (the first corner merged into it).
+    pub point: Vec3,
+}
+
+/// An edge of a shell: an exact NURBS curve from vertex `start` (at the curve's first
+/// parameter) to vertex `end` (at its last; equal to `start` for a closed curve).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Edge {
+    /// The edge's geometry, a boundary curve of the first face that uses it.
+    pub curve: NurbsCurve,
+    /// Index of the start vertex.
+    pub start: usize,
+    /// Index of the end vertex.
+    pub end: usize,
+}
+
+/// One element of a face's boundary loop.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LoopItem {
+    /// Edge `edge`, traversed from its start to its end when `forward`.
+    Edge {
+        /// Index of the edge.
+        edge: usize,
+        /// Whether the loop runs along the edge's curve direction.
+        forward: bool,
+    },
+    /// A boundary side of the parameter square that collapses to vertex `vertex` (a pole).
+    Pole {
+        /// Index of the vertex.
+        vertex: usize,
+    },
+}
+
+/// A face: a whole (untrimmed) NURBS surface bounded by its loop.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Face {
+    /// The face's surface, with clamped knot vectors.
+    pub surface: NurbsSurface,
+    /// Whether the face's outward normal is the surface normal `S_u x S_v` (`false`: reversed).
+    pub same_sense: bool,
+    /// The loop, oriented counter-clockwise about the face's normal (the surface's parameter
+    /// square run counter-clockwise when `same_sense`, clockwise otherwise).
+    pub bound: Vec<LoopItem>,
+}
+
+/// A connected set of faces sharing edges and vertices.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Shell {
+    /// The vertices.
+    pub vertices: Vec<Vertex>,
+    /// The edges.
+    pub edges: Vec<Edge>,
+    /// The faces.
+    pub faces: Vec<Face>,
+    /// Whether the shell is closed: every edge used exactly twice, in opposite directions, so
+    /// that the faces bound a solid (and are oriented outward).
+    pub closed: bool,
+    /// The closure tolerance used to merge vertices and edges ([`closure_tolerance`]).
+    pub tolerance: f64,
+}
+
+/// A boundary side of a face before merging.
+struct Side {
+    curve: NurbsCurve,
+    start: usize,
+    end: usize,
+    /// Whether the loop runs along the curve.
+    forward: bool,
+}
+
+fn clamp_surface(s: &NurbsSurface) -> Result<NurbsSurface, IoError> {
+    let mut s = s.clone();
+    for axis in 0..2 {
+        if !s.knots()[axis].is_clamped() {
+            s = s.clamped(axis).map_err(|e| structure(e.to_string()))?;
+        }
+    }
+    Ok(s)
+}
+
+fn structure(message: String) -> IoError {
+    IoError::Structure {
+        path: "B-rep".into(),
+        message,
+    }
+}
+
+/// Boundary row `(index along the other axis fixed)` of a surface net as a curve.
+fn boundary_curve(s: &NurbsSurface, axis: usize, last: bool) -> Result<NurbsCurve, IoError> {
+    // axis 0: the curve runs along u at v = v0 (last = false) or v = v1.
+    let [nu, nv] = s.dims();
+    let (n, idx): (usize, Box<dyn Fn(usize) -> usize>) = if axis == 0 {
+        let j = if last { nv - 1 } else { 0 };
+        (nu, Box::new(move |i| i * nv + j))
+    } else {
+        let i = if last { nu - 1 } else { 0 };
+        (nv, Box::new(move |j| i * nv + j))
+    };
+    let pts = (0..n).map(|k| s.control_points()[idx(k)]).collect();
+    let ws = (0..n).map(|k| s.weights()[idx(k)]).collect();
+    NurbsCurve::from_knot_vector(s.knots()[axis].clone(), pts, ws)
+        .map_err(|e| structure(e.to_string()))
+}
+
+fn is_point(c: &NurbsCurve, tol: f64) -> bool {
+    let p0 = c.control_points()[0];
+    c.control_points().iter().all(|p| (p - p0).norm() <= tol)
+}
+
+/// Whether `b` is the same curve as `a` (`Some(true)`), the same reversed (`Some(false)`), or
+/// neither.
+fn same_curve(a: &NurbsCurve, b: &NurbsCurve, tol: f64) -> Option<bool> {
+    if a.degree() != b.degree() || a.control_points().len() != b.control_points().len() {
+        return None;
+    }
+    let (ka, kb) = (a.knots().as_slice(), b.knots().as_slice());
+    let ptol = a
+        .knots()
+        .parameter_tolerance()
+        .max(b.knots().parameter_tolerance());
+    let n = ka.len();
+    let (a0, a1) = (ka[0], ka[n - 1]);
+    let (b0, b1) = (kb[0], kb[n - 1]);
+    let np = a.control_points().len();
+    let matches = |rev: bool| {
+        let knots_ok = (0..n).all(|i| {
+            // Map b's knots onto a's interval (reversed when `rev`) and compare.
+            let t = if rev { kb[n - 1 - i] } else { kb[i] };
+            let s = (t - b0) / (b1 - b0);
+            let s = if rev { 1.0 - s } else { s };
+            (a0 + s * (a1 - a0) - ka[i]).abs() <= ptol
+        });
+        if !knots_ok {
+            return false;
+        }
+        let k = |i: usize| if rev { np - 1 - i } else { i };
+        let r = b.weights()[k(0)] / a.weights()[0];
+        (0..np).all(|i| {
+            (a.control_points()[i] - b.control_points()[k(i)]).norm() <= tol
+                && (b.weights()[k(i)] - r * a.weights()[i]).abs()
+                    <= 1e-12 * b.weights()[k(i)].abs().max(1.0)
+        })
+    };
+    if matches(false) {
+        Some(true)
+    } else if matches(true) {
+        Some(false)
+    } else {
+        None
+    }
+}
+
+struct Builder {
+    tol: f64,
+    vertices: Vec<Vertex>,
+    edges: Vec<Edge>,
+    faces: Vec<Face>,
+}
+
+impl Builder {
+    fn vertex(&mut self, p: Vec3) -> usize {
+        if let Some(i) = self
+            .vertices
+            .iter()
+            .position(|v| (v.point - p).norm() <= self.tol)
+        {
+            return i;
+        }
+        self.vertices.push(Vertex { point: p });
+        self.vertices.len() - 1
+    }
+
+    fn add_face(&mut self, surface: NurbsSurface) -> Result<(), IoError> {
+        let s = clamp_surface(&surface)?;
+        let [nu, nv] = s.dims();
+        let cp = s.control_points();
+        let c00 = self.vertex(cp[0]);
+        let c10 = self.vertex(cp[(nu - 1) * nv]);
+        let c11 = self.vertex(cp[nu * nv - 1]);
+        let c01 = self.vertex(cp[nv - 1]);
+        let sides = [
+            Side {
+                curve: boundary_curve(&s, 0, false)?,
+                start: c00,
+                end: c10,
+                forward: true,
+            },
+            Side {
+                curve: boundary_curve(&s, 1, true)?,
+                start: c10,
+                end: c11,
+                forward: true,
+            },
+            Side {
+                curve: boundary_curve(&s, 0, true)?,
+                start: c01,
+                end: c11,
+                forward: false,
+            },
+            Side {
+                curve: boundary_curve(&s, 1, false)?,
+                start: c00,
+                end: c01,
+                forward: false,
+            },
+        ];
+        let mut bound = Vec::with_capacity(4);
+        for side in sides {
+            if is_point(&side.curve, self.tol) {
+                bound.push(LoopItem::Pole { vertex: side.start });
+                continue;
+            }
+            let found = self.edges.iter().enumerate().find_map(|(i, e)| {
+                let same = same_curve(&e.curve, &side.curve, self.tol)?;
+                let ends = if same {
+                    (side.start, side.end)
+                } else {
+                    (side.end, side.start)
+                };
+                (ends == (e.start, e.end)).then_some((i, same))
+            });
+            let (edge, same) = found.unwrap_or_else(|| {
+                self.edges.push(Edge {
+                    curve: side.curve.clone(),
+                    start: side.start,
+                    end: side.end,
+                });
+                (self.edges.len() - 1, true)
+            });
+            bound.push(LoopItem::Edge {
+                edge,
+                forward: side.forward == same,
+            });
+        }
+        self.faces.push(Face {
+            surface: s,
+            same_sense: true,
+            bound,
+        });
+        Ok(())
+    }
+
+    fn finish(mut self) -> Shell {
+        // Uses of each edge: (face, forward in the face's natural loop).
+        let mut uses: Vec<Vec<(usize, bool)>> = vec![Vec::new(); self.edges.len()];
+        for (f, face) in self.faces.iter().enumerate() {
+            for item in &face.bound {
+                if let LoopItem::Edge { edge, forward } = *item {
+                    uses[edge].push((f, forward));
+                }
+            }
+        }
+        let manifold = uses.iter().all(|u| u.len() == 2);
+        // Orient faces consistently: an edge's two uses must run in opposite directions once
+        // each face's flip is applied. Breadth-first over the faces.
+        let nf = self.faces.len();
+        let mut flip: Vec<Option<bool>> = vec![None; nf];
+        let mut orientable = true;
+        for seed in 0..nf {
+            if flip[seed].is_some() {
+                continue;
+            }
+            flip[seed] = Some(false);
+            let mut queue = vec![seed];
+            while let Some(f) = queue.pop() {
+                let ff = flip[f].unwrap_or(false);
+                for u in uses.iter().filter(|u| u.len() == 2) {
+                    for (a, b) in [(u[0], u[1]), (u[1], u[0])] {
+                        if a.0 != f {
+                            continue;
+                        }
+                        // Need (a.1 ^ ff) != (b.1 ^ fb).
+                        let want = !(a.1 ^ ff) ^ b.1;
+                        match flip[b.0] {
+                            None => {
+                                flip[b.0] = Some(want);
+                                queue.push(b.0);
+                            }
+                            Some(x) if x != want => orientable = false,
+                            Some(_) => {}
+                        }
+                    }
+                }
+            }
+        }
+        let mut flip: Vec<bool> = flip.into_iter().map(|f| f.unwrap_or(false)).collect();
+        let closed = manifold && orientable && !self.edges.is_empty();
+        if closed {
+            let v: f64 = self
+                .faces
+                .iter()
+                .zip(&flip)
+                .map(|(f, &fl)| {
+                    let vf = surface_volume_integral(&f.surface, 8);
+                    if fl { -vf } else { vf }
+                })
+                .sum();
+            if v < 0.0 {
+                flip.iter_mut().for_each(|f| *f = !*f);
+            }
+        }
+        for (face, fl) in self.faces.iter_mut().zip(flip) {
+            if fl {
+                face.same_sense = false;
+                face.bound.reverse();
+                for item in &mut face.bound {
+                    if let LoopItem::Edge { forward, .. } = item {
+                        *forward = !*forward;
+                    }
+                }
+            }
+        }
+        Shell {
+            vertices: self.vertices,
+            edges: self.edges,
+            faces: self.faces,
+            closed,
+            tolerance: self.tol,
+        }
+    }
+}
+
+/// `1/3 int int S . (S_u x S_v) du dv` over a surface's domain, with `n`-point Gauss-Legendre
+/// quadrature on each knot span (the surface's contribution to the enclosed volume, divergence
+/// theorem).
+pub fn surface_volume_integral(s: &NurbsSurface, n: usize) -> f64 {
+    let Ok(g) = GaussLegendre::new(n) else {
+        return 0.0;
+    };
+    let spans = |k: &KnotVector| -> Vec<(f64, f64)> {
+        let d = k.distinct();
+        let dom = k.domain();
+        d.windows(2)
+            .map(|w| (w[0].0, w[1].0))
+            .filter(|(a, b)| *a >= dom.min && *b <= dom.max && b > a)
+            .collect()
+    };
+    let (su, sv) = (spans(&s.knots()[0]), spans(&s.knots()[1]));
+    let mut total = 0.0;
+    for &(a, b) in &su {
+        for (u, wu) in g.on_interval(a, b).collect::<Vec<_>>() {
+            for &(c, d) in &sv {
+                for (v, wv) in g.on_interval(c, d) {
+                    if let Ok(dd) = s.derivatives(u, v, 1) {
+                        total += wu * wv * dd[0][0].dot(&dd[1][0].cross(&dd[0][1]));
+                    }
+                }
+            }
+        }
+    }
+    total / 3.0
+}
+
+impl Shell {
+    /// The shell of one surface: closed when its boundaries close up (a torus, a sphere, a
+    /// closed D-NURBS surface), open otherwise.
+    pub fn of_surface(s: &NurbsSurface) -> Result<Shell, IoError> {
+        let mut b = Builder {
+            tol: closure_tolerance(s.control_points()),
+            vertices: Vec::new(),
+            edges: Vec::new(),
+            faces: Vec::new(),
+        };
+        b.add_face(s.clone())?;
+        Ok(b.finish())
+    }
+
+    /// The shell of a volume's six boundary surfaces (`u = u0, u1, v = v0, v1, w = w0, w1`, from
+    /// the clamped volume): closed for a non-degenerate volume. Volumes with unclamped knot
+    /// vectors are clamped first (exact).
+    pub fn of_volume(v: &NurbsVolume) -> Result<Shell, IoError> {
+        let mut v = v.clone();
+        for axis in 0..3 {
+            if !v.knots()[axis].is_clamped() {
+                v = v.clamped(axis).map_err(|e| structure(e.to_string()))?;
+            }
+        }
+        let faces = crate::step::volume_boundary_surfaces(&v)
+            .ok_or_else(|| structure("volume knot vectors could not be clamped".into()))?;
+        let mut b = Builder {
+            tol: closure_tolerance(v.control_points()),
+            vertices: Vec::new(),
+            edges: Vec::new(),
+            faces: Vec::new(),
+        };
+        for f in faces {
+            b.add_face(f)?;
+        }
+        Ok(b.finish())
+    }
+
+    /// The enclosed volume `1/3 sum_f s_f int int S . (S_u x S_v) du dv` with `n`-point
+    /// Gauss-Legendre quadrature per knot span (positive for a closed shell, whose faces are
+    /// oriented outward); meaningful only for a closed shell.
+    pub fn volume(&self, n: usize) -> f64 {
+        self.faces
+            .iter()
+            .map(|f| {
+                let v = surface_volume_integral(&f.surface, n);
+                if f.same_sense { v } else { -v }
+            })
+            .sum()
+    }
+
+    /// How many times each edge is used by the loops, and with which directions: for a closed
+    /// shell every entry is one forward and one backward use.
+    pub fn edge_uses(&self) -> Vec<(usize, usize)> {
+        let mut u = vec![(0, 0); self.edges.len()];
+        for f in &self.faces {
+            for item in &f.bound {
+                if let LoopItem::Edge { edge, forward } = *item {
+                    if forward {
+                        u[edge].0 += 1;
+                    } else {
+                        u[edge].1 += 1;
+                    }
+                }
+            }
+        }
+        u
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    #[test]
+    fn torus_has_one_vertex_two_seams_and_is_closed_outward() {
+        let t = NurbsSurface::torus(2.0, 0.5).unwrap();
+        let sh = Shell::of_surface(&t).unwrap();
+        assert!(sh.closed);
+        assert_eq!(
+            (sh.vertices.len(), sh.edges.len(), sh.faces.len()),
+            (1, 2, 1)
+        );
+        assert!(sh.edge_uses().iter().all(|&u| u == (1, 1)));
+        assert!(
+            sh.faces[0].same_sense,
+            "the torus normal already points out"
+        );
+        let exact = 2.0 * PI * PI * 2.0 * 0.25;
+        assert!(
+            (sh.volume(20) - exact).abs() < 1e-12 * exact,
+            "{}",
+            sh.volume(20)
+        );
+    }
+
+    #[test]
+    fn sphere_has_poles_and_a_seam() {
+        let s = NurbsSurface::sphere(1.5).unwrap();
+        let sh = Shell::of_surface(&s).unwrap();
+        assert!(sh.closed);
+        assert_eq!((sh.vertices.len(), sh.edges.len()), (2, 1));
+        let poles = sh.faces[0]
+            .bound
+            .iter()
+            .filter(|i| matches!(i, LoopItem::Pole { .. }))
+            .count();
+        assert_eq!(poles, 2);
+        let exact = 4.0 / 3.0 * PI * 1.5f64.powi(3);
+        assert!((sh.volume(20) - exact).abs() < 1e-12 * exact);
+        // Reversing the parametrization (swapping u and v) flips the face, not the volume.
+        let [nu, nv] = s.dims();
+        let mut pts = Vec::new();
+        let mut ws = Vec::new();
+        for j in 0..nv {
+            for i in 0..nu {
+                pts.push(s.control_points()[i * nv + j]);
+                ws.push(s.weights()[i * nv + j]);
+            }
+        }
+        let k = s.knots();
+        let swapped = NurbsSurface::from_flat([k[1].clone(), k[0].clone()], pts, ws).unwrap();
+        let sh2 = Shell::of_surface(&swapped).unwrap();
+        assert!(sh2.closed && !sh2.faces[0].same_sense);
+        assert!((sh2.volume(20) - exact).abs() < 1e-12 * exact);
+    }
+
+    #[test]
+    fn open_and_periodic_surfaces() {
+        // A flat sheet: open, four edges used once.
+        let pts = (0..9)
+            .map(|k| Vec3::new((k / 3) as f64, (k % 3) as f64, 0.0))
+            .collect();
+        let sheet = NurbsSurface::clamped_uniform([2, 2], [3, 3], pts).unwrap();
+        let sh = Shell::of_surface(&sheet).unwrap();
+        assert!(!sh.closed);
+        assert_eq!((sh.vertices.len(), sh.edges.len()), (4, 4));
+        // A closed D-NURBS-style tube: periodic (unclamped uniform) along v, clamped along u
+        // with flat caps collapsed to poles: clamping makes the seam and poles appear.
+        let (n, p) = (6, 3);
+        let mut pts = Vec::new();
+        let rings = [0.0, 1.0, 1.2, 1.0, 0.0];
+        for (i, r) in rings.iter().enumerate() {
+            for j in 0..n + p {
+                let a = 2.0 * PI * (j % n) as f64 / n as f64;
+                pts.push(Vec3::new(r * a.cos(), r * a.sin(), i as f64 - 2.0));
+            }
+        }
+        let ku = KnotVector::clamped_uniform(2, rings.len()).unwrap();
+        let kv = KnotVector::uniform(p, n + p).unwrap();
+        let w = vec![1.0; pts.len()];
+        let s = NurbsSurface::from_flat([ku, kv], pts, w).unwrap();
+        let sh = Shell::of_surface(&s).unwrap();
+        assert!(sh.closed, "{:?}", sh.edge_uses());
+        assert_eq!(sh.edges.len(), 1);
+        assert!(sh.volume(20) > 0.0);
+    }
+
+    #[test]
+    fn volume_boundary_is_a_closed_outward_shell() {
+        let v = NurbsVolume::box_lattice(
+            [1, 2, 2],
+            [2, 3, 4],
+            Vec3::zeros(),
+            Vec3::new(1.0, 2.0, 3.0),
+        )
+        .unwrap();
+        let sh = Shell::of_volume(&v).unwrap();
+        assert!(sh.closed);
+        assert_eq!(
+            (sh.vertices.len(), sh.edges.len(), sh.faces.len()),
+            (8, 12, 6)
+        );
+        assert!(sh.edge_uses().iter().all(|&u| u == (1, 1)));
+        assert!((sh.volume(6) - 6.0).abs() < 1e-12);
+        // Faces u = u0, v = v1, w = w0 have inward surface normals for a right-handed volume.
+        let senses: Vec<bool> = sh.faces.iter().map(|f| f.same_sense).collect();
+        assert_eq!(senses, [false, true, true, false, false, true]);
+    }
+}
