@@ -27,9 +27,11 @@ pub mod jacobian;
 pub mod knots;
 pub mod primitives;
 pub mod refine;
+pub mod simplex;
 pub mod surface;
 pub mod tessellate;
 pub mod traits;
+pub mod triangular;
 mod util;
 pub mod volume;
 
@@ -38,7 +40,11 @@ pub use error::{KnotError, NetIndex, SplineError};
 pub use grid::{AxisBasis, SurfaceGrid};
 pub use jacobian::{SparseJacobian, generalized_coordinates};
 pub use knots::{BasisWorkspace, KnotVector, MAX_DEGREE, MAX_DERIVATIVE_ORDER};
+pub use simplex::{SimplexError, SimplexSpline};
 pub use surface::NurbsSurface;
 pub use tessellate::{tessellate_surface, tessellate_volume_boundary};
 pub use traits::{ParametricCurve, ParametricSurface, ParametricVolume};
+pub use triangular::{
+    KnotClouds, TriangularBasis, TriangularError, TriangularNurbs, TriangularPoint, Triangulation,
+};
 pub use volume::NurbsVolume;
