@@ -27,6 +27,7 @@
 #![warn(missing_docs)]
 
 pub mod brep;
+pub mod cloud;
 pub mod error;
 pub mod geomdl;
 pub mod gltf;

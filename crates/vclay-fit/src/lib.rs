@@ -1,0 +1,586 @@
+//! # vclay-fit
+//!
+//! Smooth B-spline and NURBS surfaces fitted to scanned point clouds, with D-NURBS's
+//! thin-plate-under-tension energy as fairness: the static case of `d-nurbs.txt` section 7.2
+//! ("optimal fitting"), which couples the surface to the data by springs (eq 19) and minimizes
+//! the deformation energy of eq 17 — here solved directly as one regularized least-squares
+//! problem instead of integrating eq 18 to rest.
+//!
+//! **What.** [`fit_surface`] takes points (`x_k`, any number from 3 to [`MAX_POINTS`]) and
+//! returns a degree-`p` surface with an `n_u x n_v` control net over `[0, 1]^2` (clamped
+//! uniform knots) that minimizes
+//! ```text
+//! F(P) = 1/(2W) sum_k w_k |S(u_k, v_k) - x_k|^2 + 1/2 P^T K P,       W = sum_k w_k,
+//! ```
+//! with `K` the stiffness matrix of `d-nurbs.txt` eq 17 (tension `alpha`, rigidity `beta`,
+//! scaled so that they are dimensionless: [`energy`]).
+//!
+//! **How.**
+//! 1. Parametrize: project onto the cloud's principal plane ([`plane`]).
+//! 2. Solve the normal equations `(A^T D A / W + K) P = A^T D x / W` ([`system`]: assembled
+//!    from the basis values point by point, never forming `A`; sparse Cholesky).
+//! 3. Parameter correction ([`project`]): every point's parameter moves to its closest point
+//!    on the new surface (Newton); repeat 2-3 `corrections` times.
+//! 4. Optionally robust: the weights `w_k` are re-estimated from the distances after each
+//!    round (IRLS with Huber or Tukey weights, [`robust`]), for `robust_rounds` extra rounds.
+//! 5. Optionally rational (`rational = true`, D-NURBS's dynamic weights, `d-nurbs.txt` eqs 3-6):
+//!    a few damped Gauss-Newton iterations on the control points *and* weights ([`rational`]).
+//! 6. Report: closest-point distances (Newton to convergence), RMS and maximum, the fairness
+//!    energy `U = 1/2 P^T K P`, time per phase ([`FitReport`]).
+//!
+//! **Limitations.** The cloud must be a height field over its principal plane, possibly with
+//! folds that parameter correction can untangle (a scanned face, terrain, a car panel, half a
+//! sphere); closed or strongly folded shapes (a whole bunny) need a base surface, which is not
+//! implemented. Knots are uniform, not adapted to the data. Data outside the base rectangle's
+//! corners (round scans) leave corner control points to the fairness energy alone, which is
+//! why some rigidity is on by default.
+#![warn(missing_docs)]
+
+pub mod energy;
+pub mod error;
+pub mod plane;
+pub mod project;
+pub mod rational;
+pub mod robust;
+pub mod system;
+
+pub use error::FitError;
+pub use plane::{BasePlane, base_plane};
+pub use robust::Robust;
+
+use rayon::prelude::*;
+use serde::Serialize;
+use std::time::Instant;
+use vclay_core::{Parallelism, Vec3};
+use vclay_spline::{KnotVector, NurbsSurface};
+
+/// Default control points per direction (`--grid 32x32`).
+pub const DEFAULT_GRID: usize = 32;
+/// Default degree in both directions.
+pub const DEFAULT_DEGREE: usize = 3;
+/// Default tension `alpha` (none: tension shrinks the surface toward its boundary).
+pub const DEFAULT_TENSION: f64 = 0.0;
+/// Default rigidity `beta`: enough to fill holes and empty corners smoothly (the solve stays
+/// well conditioned for nets up to 512 x 512), small enough that its bias stays below scan
+/// noise. The data term against the bending term makes a boundary layer of width
+/// `beta^(1/4)` (in the unit-square parameters: 0.6 % of the width here) in which the surface
+/// leaves the data by about `beta^(1/2) |S_uu|` (3e-5 of the second derivative).
+pub const DEFAULT_RIGIDITY: f64 = 1e-9;
+/// Default number of parameter-correction rounds.
+pub const DEFAULT_CORRECTIONS: usize = 3;
+/// Default number of extra IRLS rounds when robust weights are on.
+pub const DEFAULT_ROBUST_ROUNDS: usize = 3;
+/// Default Gauss-Newton iterations of the rational (dynamic-weight) fit.
+pub const DEFAULT_WEIGHT_ITERATIONS: usize = 4;
+/// Newton steps per point in a parameter-correction round.
+pub const CORRECTION_NEWTON_STEPS: usize = 3;
+/// Newton steps per point (at most) for the reported distances.
+pub const REPORT_NEWTON_STEPS: usize = 30;
+/// Parameter step below which the reported closest-point iteration stops.
+pub const REPORT_PARAM_TOL: f64 = 1e-13;
+/// Largest number of points.
+pub const MAX_POINTS: usize = 100_000_000;
+/// Largest number of control points (a 512 x 512 net).
+pub const MAX_CONTROL_POINTS: usize = 512 * 512;
+/// Largest degree.
+pub const MAX_FIT_DEGREE: usize = 7;
+/// Bytes per data point held during a fit (point, parameter, distance, weight, scratch).
+pub const BYTES_PER_POINT: usize = 72;
+
+/// Options of a fit; each default is the named constant.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FitOptions {
+    /// Control points `[n_u, n_v]` ([`DEFAULT_GRID`]).
+    pub grid: [usize; 2],
+    /// Degree in both directions ([`DEFAULT_DEGREE`]).
+    pub degree: usize,
+    /// Tension `alpha` ([`DEFAULT_TENSION`]; dimensionless, [`energy`]).
+    pub tension: f64,
+    /// Rigidity `beta` ([`DEFAULT_RIGIDITY`]; dimensionless, [`energy`]).
+    pub rigidity: f64,
+    /// Parameter-correction rounds ([`DEFAULT_CORRECTIONS`]).
+    pub corrections: usize,
+    /// Robust loss, or `None` for plain least squares (default).
+    pub robust: Option<Robust>,
+    /// Extra IRLS rounds when `robust` is set ([`DEFAULT_ROBUST_ROUNDS`]).
+    pub robust_rounds: usize,
+    /// Fit the weights too (rational surface, D-NURBS dynamic weights); default false.
+    pub rational: bool,
+    /// Gauss-Newton iterations of the rational fit ([`DEFAULT_WEIGHT_ITERATIONS`]).
+    pub weight_iterations: usize,
+    /// Threads ([`Parallelism::Auto`]).
+    pub parallelism: Parallelism,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        Self {
+            grid: [DEFAULT_GRID; 2],
+            degree: DEFAULT_DEGREE,
+            tension: DEFAULT_TENSION,
+            rigidity: DEFAULT_RIGIDITY,
+            corrections: DEFAULT_CORRECTIONS,
+            robust: None,
+            robust_rounds: DEFAULT_ROBUST_ROUNDS,
+            rational: false,
+            weight_iterations: DEFAULT_WEIGHT_ITERATIONS,
+            parallelism: Parallelism::Auto,
+        }
+    }
+}
+
+impl FitOptions {
+    /// Checks the options on their own (not against a cloud).
+    pub fn validate(&self) -> Result<(), FitError> {
+        let opt = |name, value: String, why: &str| FitError::Option {
+            name,
+            value,
+            why: why.into(),
+        };
+        if !(1..=MAX_FIT_DEGREE).contains(&self.degree) {
+            return Err(opt(
+                "degree",
+                self.degree.to_string(),
+                &format!("must be 1 to {MAX_FIT_DEGREE}"),
+            ));
+        }
+        let [nu, nv] = self.grid;
+        let grid = format!("{nu}x{nv}");
+        if nu <= self.degree || nv <= self.degree {
+            return Err(opt(
+                "grid",
+                grid,
+                &format!(
+                    "needs more than degree = {} control points per direction",
+                    self.degree
+                ),
+            ));
+        }
+        if nu.checked_mul(nv).is_none_or(|n| n > MAX_CONTROL_POINTS) {
+            return Err(opt(
+                "grid",
+                grid,
+                &format!("more than {MAX_CONTROL_POINTS} control points"),
+            ));
+        }
+        for (name, v) in [("tension", self.tension), ("rigidity", self.rigidity)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(opt(name, v.to_string(), "must be finite and non-negative"));
+            }
+        }
+        if self.corrections > 100 || self.robust_rounds > 100 || self.weight_iterations > 100 {
+            return Err(opt(
+                "iterations",
+                format!(
+                    "{}/{}/{}",
+                    self.corrections, self.robust_rounds, self.weight_iterations
+                ),
+                "corrections, robust rounds and weight iterations are at most 100",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Whether some fairness is on.
+    pub fn has_fairness(&self) -> bool {
+        self.tension > 0.0 || self.rigidity > 0.0
+    }
+}
+
+/// Memory a fit of `points` points takes, in bytes (checked by the CLI against `--max-memory`
+/// before the cloud is read into the fit): per point [`BYTES_PER_POINT`], per thread one banded
+/// system, the Cholesky factor (about four times the band), and for rational fits the 4n x 4n
+/// Gauss-Newton system (16 times the band, with fill).
+pub fn memory_estimate(points: usize, opts: &FitOptions, threads: usize) -> u128 {
+    let d = [opts.degree; 2];
+    let band = system::Normal::bytes(opts.grid, d) as u128;
+    let per_point = points as u128 * BYTES_PER_POINT as u128;
+    let rational = if opts.rational { 16 * band * 4 } else { 0 };
+    per_point + band * (threads as u128 + 5) + rational
+}
+
+/// Time per phase, in seconds.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Timings {
+    /// Base plane and first parameters.
+    pub parametrize: f64,
+    /// Normal equations (all rounds).
+    pub assemble: f64,
+    /// Fairness matrix, factorization and solves (all rounds).
+    pub solve: f64,
+    /// Parameter corrections and robust weights (all rounds).
+    pub correct: f64,
+    /// The rational (dynamic-weight) iterations.
+    pub rational: f64,
+    /// Final closest-point distances and statistics.
+    pub distances: f64,
+    /// Everything.
+    pub total: f64,
+}
+
+/// What a fit reports (`--report`, `docs/formats.md`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FitReport {
+    /// Number of points.
+    pub points: usize,
+    /// Control net `[n_u, n_v]`.
+    pub grid: [usize; 2],
+    /// Degree in both directions.
+    pub degree: usize,
+    /// Whether the weights were fitted (rational surface).
+    pub rational: bool,
+    /// Tension `alpha` as given.
+    pub tension: f64,
+    /// Rigidity `beta` as given.
+    pub rigidity: f64,
+    /// Parameter-correction rounds.
+    pub corrections: usize,
+    /// Robust loss, if any.
+    pub robust: Option<Robust>,
+    /// RMS of the closest-point distances of all points.
+    pub rms: f64,
+    /// Largest closest-point distance.
+    pub max: f64,
+    /// Mean closest-point distance.
+    pub mean: f64,
+    /// RMS over the points whose final robust weight is positive (all points without
+    /// `robust`).
+    pub rms_inliers: f64,
+    /// Points farther than Tukey's rejection distance `4.685 sigma` from the surface (0
+    /// without `robust`).
+    pub outliers: usize,
+    /// Robust scale `sigma` of the last round (0 without `robust`).
+    pub sigma: f64,
+    /// Fairness energy `U = 1/2 P^T K P` of the result (`d-nurbs.txt` eq 17, summed over x, y,
+    /// z; squared model units, like the data term).
+    pub fairness_energy: f64,
+    /// Data term `1/(2W) sum w_k d_k^2` of the result.
+    pub data_term: f64,
+    /// RMS distance after each round (round 0 is the base-plane parametrization; the
+    /// distances are each round's parameter-corrected ones).
+    pub history_rms: Vec<f64>,
+    /// Weights range `[min, max]` of the result (`[1, 1]` for polynomial fits).
+    pub weight_range: [f64; 2],
+    /// The base plane.
+    pub base: BasePlane,
+    /// Size of the model (largest principal extent of the cloud, 2 x the rectangle diagonal).
+    pub size: f64,
+    /// Time per phase.
+    pub timings: Timings,
+}
+
+/// A fitted surface with its data.
+#[derive(Clone, Debug)]
+pub struct Fit {
+    /// The surface (domain `[0, 1]^2`).
+    pub surface: NurbsSurface,
+    /// Each point's parameter (its closest point on the surface).
+    pub params: Vec<[f64; 2]>,
+    /// Each point's closest-point distance.
+    pub distances: Vec<f64>,
+    /// Each point's robust weight (all 1 without `robust`).
+    pub weights: Vec<f64>,
+    /// The report.
+    pub report: FitReport,
+}
+
+/// Checks a cloud: count, finiteness.
+pub fn check_points(points: &[Vec3], opts: &FitOptions) -> Result<(), FitError> {
+    let n = points.len();
+    if n > MAX_POINTS {
+        return Err(FitError::TooManyPoints {
+            found: n,
+            limit: MAX_POINTS,
+        });
+    }
+    if let Some(index) = points.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+        let p = points[index];
+        return Err(FitError::NonFinite {
+            index,
+            x: p[0],
+            y: p[1],
+            z: p[2],
+        });
+    }
+    if n < 3 {
+        return Err(FitError::TooFewPoints {
+            found: n,
+            why: "a surface needs at least 3 points".into(),
+        });
+    }
+    let ctrl = opts.grid[0] * opts.grid[1];
+    if !opts.has_fairness() && n < ctrl {
+        return Err(FitError::TooFewPoints {
+            found: n,
+            why: format!(
+                "the grid {}x{} has {ctrl} control points and no fairness term: use a smaller \
+                 grid or some fairness (tension or rigidity > 0)",
+                opts.grid[0], opts.grid[1]
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Fits a surface to `points` (module docs).
+pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> {
+    let t0 = Instant::now();
+    opts.validate()?;
+    check_points(points, opts)?;
+    let par = opts.parallelism;
+    let mut timings = Timings::default();
+
+    let t = Instant::now();
+    let base = base_plane(points, par)?;
+    let extents = base.extents();
+    let size = 2.0 * (extents[0].hypot(extents[1])).max(base.spread[0]);
+    let mut params: Vec<[f64; 2]> = map_points(points, par, |x| base.param(x));
+    timings.parametrize = t.elapsed().as_secs_f64();
+
+    let p = opts.degree;
+    let knots = [
+        KnotVector::clamped_uniform(p, opts.grid[0]),
+        KnotVector::clamped_uniform(p, opts.grid[1]),
+    ];
+    let knots = match knots {
+        [Ok(a), Ok(b)] => [a, b],
+        [Err(e), _] | [_, Err(e)] => {
+            return Err(FitError::Option {
+                name: "grid",
+                value: format!("{}x{}", opts.grid[0], opts.grid[1]),
+                why: e.to_string(),
+            });
+        }
+    };
+    let (alpha, beta) = energy::densities(opts.tension, opts.rigidity, extents);
+    let n = opts.grid[0] * opts.grid[1];
+    let bw = (2 * p + 1) * (2 * p + 1);
+    let mut stiffness = vec![0.0; n * bw];
+    energy::add_separable(&mut stiffness, &knots, alpha, beta)?;
+
+    let mut weights = vec![1.0; points.len()];
+    let mut distances = vec![0.0; points.len()];
+    let mut history = Vec::new();
+    let mut sigma = 0.0;
+    let rounds = 1
+        + opts.corrections
+        + if opts.robust.is_some() {
+            opts.robust_rounds
+        } else {
+            0
+        };
+    let mut ctrl = Vec::new();
+    for round in 0..rounds {
+        let t = Instant::now();
+        let use_w = opts.robust.is_some() && round > 0;
+        let mut normal =
+            system::assemble(&knots, points, &params, use_w.then_some(&weights[..]), par);
+        timings.assemble += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        if normal.weight <= 0.0 {
+            return Err(FitError::Diverged {
+                why: "every point has robust weight 0".into(),
+            });
+        }
+        let inv = 1.0 / normal.weight;
+        for (b, k) in normal.band.iter_mut().zip(&stiffness) {
+            *b = *b * inv + k;
+        }
+        let rhs: Vec<Vec3> = normal.rhs.iter().map(|r| r * inv).collect();
+        ctrl = system::solve(&normal, &rhs)?;
+        timings.solve += t.elapsed().as_secs_f64();
+
+        let t = Instant::now();
+        let surface = polynomial(&knots, ctrl.clone())?;
+        project_all(
+            &surface,
+            points,
+            &mut params,
+            &mut distances,
+            CORRECTION_NEWTON_STEPS,
+            1e-9,
+            par,
+        );
+        history.push(rms(&distances));
+        if let Some(loss) = opts.robust {
+            sigma = robust::scale(&distances, size);
+            robust::weights(loss, &distances, sigma, &mut weights);
+        }
+        timings.correct += t.elapsed().as_secs_f64();
+    }
+    let mut surface = polynomial(&knots, ctrl)?;
+    let mut energy_value =
+        0.5 * system::quadratic_form(&stiffness, opts.grid, [p, p], surface.control_points());
+
+    if opts.rational {
+        let t = Instant::now();
+        let out = rational::refine(
+            surface,
+            points,
+            &mut params,
+            &weights,
+            alpha,
+            beta,
+            opts.weight_iterations,
+            par,
+        )?;
+        surface = out.surface;
+        energy_value = out.energy;
+        timings.rational = t.elapsed().as_secs_f64();
+    }
+
+    let t = Instant::now();
+    project_all(
+        &surface,
+        points,
+        &mut params,
+        &mut distances,
+        REPORT_NEWTON_STEPS,
+        REPORT_PARAM_TOL,
+        par,
+    );
+    let (mut s2, mut max, mut sum) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut wsum, mut wd2, mut in2, mut nin, mut outliers) = (0.0, 0.0, 0.0, 0usize, 0usize);
+    for (d, w) in distances.iter().zip(&weights) {
+        s2 += d * d;
+        sum += d;
+        max = max.max(*d);
+        wsum += w;
+        wd2 += w * d * d;
+        if *w > 0.0 {
+            in2 += d * d;
+            nin += 1;
+        }
+        if *d > robust::TUKEY_C * sigma {
+            outliers += 1;
+        }
+    }
+    let np = points.len() as f64;
+    let wr = surface
+        .weights()
+        .iter()
+        .fold([f64::INFINITY, f64::NEG_INFINITY], |a, &w| {
+            [a[0].min(w), a[1].max(w)]
+        });
+    timings.distances = t.elapsed().as_secs_f64();
+    timings.total = t0.elapsed().as_secs_f64();
+    let report = FitReport {
+        points: points.len(),
+        grid: opts.grid,
+        degree: p,
+        rational: opts.rational,
+        tension: opts.tension,
+        rigidity: opts.rigidity,
+        corrections: opts.corrections,
+        robust: opts.robust,
+        rms: (s2 / np).sqrt(),
+        max,
+        mean: sum / np,
+        rms_inliers: if nin > 0 {
+            (in2 / nin as f64).sqrt()
+        } else {
+            0.0
+        },
+        outliers: if opts.robust.is_some() { outliers } else { 0 },
+        sigma,
+        fairness_energy: energy_value,
+        data_term: if wsum > 0.0 { 0.5 * wd2 / wsum } else { 0.0 },
+        history_rms: history,
+        weight_range: wr,
+        base,
+        size,
+        timings,
+    };
+    Ok(Fit {
+        surface,
+        params,
+        distances,
+        weights,
+        report,
+    })
+}
+
+/// RMS of distances.
+fn rms(d: &[f64]) -> f64 {
+    (d.iter().map(|x| x * x).sum::<f64>() / d.len().max(1) as f64).sqrt()
+}
+
+fn polynomial(knots: &[KnotVector; 2], ctrl: Vec<Vec3>) -> Result<NurbsSurface, FitError> {
+    let w = vec![1.0; ctrl.len()];
+    NurbsSurface::from_flat(knots.clone(), ctrl, w)
+        .map_err(|e| FitError::Diverged { why: e.to_string() })
+}
+
+fn map_points<T: Send>(
+    points: &[Vec3],
+    par: Parallelism,
+    f: impl Fn(&Vec3) -> T + Sync + Send,
+) -> Vec<T> {
+    if par.is_parallel_from(points.len(), system::PARALLEL_POINTS) {
+        points.par_iter().map(f).collect()
+    } else {
+        points.iter().map(f).collect()
+    }
+}
+
+/// Moves every parameter to its point's closest point on `surface` (at most `steps` Newton
+/// steps from the current parameter) and writes the distances.
+pub fn project_all(
+    surface: &NurbsSurface,
+    points: &[Vec3],
+    params: &mut [[f64; 2]],
+    distances: &mut [f64],
+    steps: usize,
+    tol: f64,
+    par: Parallelism,
+) {
+    let ev = project::Evaluator::new(surface);
+    type Chunk<'a> = (&'a [Vec3], (&'a mut [[f64; 2]], &'a mut [f64]));
+    let work = |(chunk_pts, (chunk_prm, chunk_d)): Chunk<'_>| {
+        let mut sc = ev.scratch();
+        for ((x, prm), d) in chunk_pts
+            .iter()
+            .zip(chunk_prm.iter_mut())
+            .zip(chunk_d.iter_mut())
+        {
+            let (uv, dist) = ev.project(x, *prm, steps, tol, &mut sc);
+            *prm = uv;
+            *d = dist;
+        }
+    };
+    const CHUNK: usize = 1024;
+    if par.is_parallel_from(points.len(), system::PARALLEL_POINTS) {
+        points
+            .par_chunks(CHUNK)
+            .zip(
+                params
+                    .par_chunks_mut(CHUNK)
+                    .zip(distances.par_chunks_mut(CHUNK)),
+            )
+            .for_each(work);
+    } else {
+        work((points, (params, distances)));
+    }
+}
+
+/// Closest-point distances from `points` to `surface`, each started from the given parameter
+/// (for example a fit's [`Fit::params`]) and iterated to convergence.
+pub fn closest_distances(
+    surface: &NurbsSurface,
+    points: &[Vec3],
+    start: &[[f64; 2]],
+    par: Parallelism,
+) -> Vec<f64> {
+    let mut params = start.to_vec();
+    let mut d = vec![0.0; points.len()];
+    project_all(
+        surface,
+        points,
+        &mut params,
+        &mut d,
+        REPORT_NEWTON_STEPS,
+        REPORT_PARAM_TOL,
+        par,
+    );
+    d
+}

@@ -1,0 +1,149 @@
+//! The base plane of a cloud (principal component analysis) and the first parametrization.
+//!
+//! The centroid `c` and the covariance `C = (1/N) sum (x_k - c)(x_k - c)^T` give the plane
+//! through `c` spanned by the eigenvectors `e1`, `e2` of the two largest eigenvalues of `C`; the
+//! third, `e3 = e1 x e2`, is its normal. Each point is projected onto the plane,
+//! `(a_k, b_k) = ((x_k - c) . e1, (x_k - c) . e2)`, and the bounding rectangle of the projections
+//! is mapped onto the unit square: `u_k = (a_k - a_min) / (a_max - a_min)`, likewise `v_k`.
+//! This is the classical first guess for height-field-like scans (Hoschek's parameter
+//! correction then improves it, see [`crate::project`]).
+//!
+//! Degenerate clouds are errors: all points within `DEGENERATE_RATIO` of one point, or on a
+//! line (second principal extent below `DEGENERATE_RATIO` times the first).
+
+use crate::FitError;
+use nalgebra::{Matrix3, SymmetricEigen};
+use rayon::prelude::*;
+use serde::Serialize;
+use vclay_core::{Parallelism, Vec3};
+
+/// Smallest ratio of the second to the first principal extent (and of the first extent to the
+/// coordinate magnitude) for a cloud to count as spanning a surface.
+pub const DEGENERATE_RATIO: f64 = 1e-9;
+
+/// The base plane of a cloud and the rectangle its points project into.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BasePlane {
+    /// Centroid `c`.
+    pub origin: [f64; 3],
+    /// In-plane axes `e1`, `e2` (largest spread first) and the normal `e3 = e1 x e2`.
+    pub axes: [[f64; 3]; 3],
+    /// Projections' rectangle: `[a_min, a_max, b_min, b_max]`.
+    pub rect: [f64; 4],
+    /// Square roots of the covariance eigenvalues (principal standard deviations), descending.
+    pub spread: [f64; 3],
+}
+
+impl BasePlane {
+    /// Extents `[L_u, L_v]` of the rectangle (lengths in model units).
+    pub fn extents(&self) -> [f64; 2] {
+        [self.rect[1] - self.rect[0], self.rect[3] - self.rect[2]]
+    }
+
+    /// Unit-square parameters of a point (may fall outside `[0, 1]` for points not used to
+    /// build the plane).
+    pub fn param(&self, x: &Vec3) -> [f64; 2] {
+        let d = [
+            x[0] - self.origin[0],
+            x[1] - self.origin[1],
+            x[2] - self.origin[2],
+        ];
+        let dot = |e: &[f64; 3]| d[0] * e[0] + d[1] * e[1] + d[2] * e[2];
+        let [lu, lv] = self.extents();
+        [
+            (dot(&self.axes[0]) - self.rect[0]) / lu,
+            (dot(&self.axes[1]) - self.rect[2]) / lv,
+        ]
+    }
+}
+
+/// The base plane of `points` (already checked finite and non-empty).
+pub fn base_plane(points: &[Vec3], par: Parallelism) -> Result<BasePlane, FitError> {
+    let n = points.len() as f64;
+    let parallel = par.is_parallel(points.len());
+    let sum = if parallel {
+        points.par_iter().copied().reduce(Vec3::zeros, |a, b| a + b)
+    } else {
+        points.iter().fold(Vec3::zeros(), |a, b| a + b)
+    };
+    let c = sum / n;
+    let outer = |x: &Vec3| {
+        let d = x - c;
+        d * d.transpose()
+    };
+    let cov = if parallel {
+        points
+            .par_iter()
+            .map(outer)
+            .reduce(Matrix3::zeros, |a, b| a + b)
+    } else {
+        points
+            .iter()
+            .map(outer)
+            .fold(Matrix3::zeros(), |a, b| a + b)
+    } / n;
+    let eig = SymmetricEigen::new(cov);
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+    let lam = order.map(|i| eig.eigenvalues[i].max(0.0));
+    let scale = c.amax().max(lam[0].sqrt());
+    if lam[0].sqrt() <= DEGENERATE_RATIO * scale || lam[0] == 0.0 {
+        return Err(FitError::Degenerate {
+            why: format!(
+                "all {} points coincide (spread {:.3e} around ({}, {}, {}))",
+                points.len(),
+                lam[0].sqrt(),
+                c[0],
+                c[1],
+                c[2]
+            ),
+        });
+    }
+    if lam[1].sqrt() <= DEGENERATE_RATIO.sqrt() * lam[0].sqrt() {
+        return Err(FitError::Degenerate {
+            why: format!(
+                "the points lie on a line (principal spreads {:.3e} and {:.3e}): a surface \
+                 needs a two-dimensional cloud",
+                lam[0].sqrt(),
+                lam[1].sqrt()
+            ),
+        });
+    }
+    let e1: Vec3 = eig.eigenvectors.column(order[0]).into();
+    let e2: Vec3 = eig.eigenvectors.column(order[1]).into();
+    let e3 = e1.cross(&e2);
+    let proj = |x: &Vec3| {
+        let d = x - c;
+        [d.dot(&e1), d.dot(&e2)]
+    };
+    let bounds = |a: [f64; 4], b: [f64; 4]| {
+        [
+            a[0].min(b[0]),
+            a[1].max(b[1]),
+            a[2].min(b[2]),
+            a[3].max(b[3]),
+        ]
+    };
+    let one = |x: &Vec3| {
+        let [a, b] = proj(x);
+        [a, a, b, b]
+    };
+    let empty = [
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    let rect = if parallel {
+        points.par_iter().map(one).reduce(|| empty, bounds)
+    } else {
+        points.iter().map(one).fold(empty, bounds)
+    };
+    let arr = |v: Vec3| [v[0], v[1], v[2]];
+    Ok(BasePlane {
+        origin: arr(c),
+        axes: [arr(e1), arr(e2), arr(e3)],
+        rect,
+        spread: lam.map(f64::sqrt),
+    })
+}

@@ -1,0 +1,315 @@
+//! Fits of synthetic scans with known surfaces (issue 20): noise, outliers, holes, parameter
+//! correction, fairness, dynamic weights, and the located errors of bad clouds.
+
+mod common;
+
+use common::*;
+use vclay_core::Vec3;
+use vclay_fit::{FitError, FitOptions, Robust, fit_surface};
+
+fn opts(grid: usize) -> FitOptions {
+    FitOptions {
+        grid: [grid, grid],
+        ..FitOptions::default()
+    }
+}
+
+#[test]
+fn error_follows_the_noise_level() {
+    let mut rms = Vec::new();
+    for (k, sigma) in [0.0, 0.001, 0.01].into_iter().enumerate() {
+        let pts = scan(saddle, 4000, sigma, 7 + k as u64, |_, _| false);
+        let fit = fit_surface(&pts, &opts(10)).unwrap();
+        let r = &fit.report;
+        // Noise along z of a surface with slopes up to 0.6: the normal component is
+        // sigma / sqrt(1 + |grad|^2), between 0.86 sigma and sigma.
+        if sigma > 0.0 {
+            assert!(
+                r.rms > 0.7 * sigma && r.rms < 1.05 * sigma,
+                "sigma {sigma}: {r:?}"
+            );
+        } else {
+            // Exact data: only the default rigidity's boundary layer (about beta^(1/2) |S_uu|).
+            assert!(r.rms < 1e-4, "exact data: rms {}", r.rms);
+            let exact = fit_surface(
+                &pts,
+                &FitOptions {
+                    rigidity: 0.0,
+                    ..opts(10)
+                },
+            )
+            .unwrap();
+            assert!(
+                exact.report.rms < 1e-7,
+                "exact data, no fairness: {}",
+                exact.report.rms
+            );
+        }
+        // The fitted surface is closer to the true one than the data are.
+        let (max_dev, rms_dev) = deviation(&fit.surface, saddle, 40, |_, _| true);
+        assert!(
+            rms_dev < 0.3 * sigma + 2e-5,
+            "sigma {sigma}: deviation {rms_dev} (max {max_dev})"
+        );
+        assert!(r.max >= r.rms && r.mean <= r.rms);
+        rms.push(r.rms);
+    }
+    assert!(rms[2] > 8.0 * rms[1] && rms[2] < 12.0 * rms[1], "{rms:?}");
+}
+
+#[test]
+fn robust_fit_ignores_five_percent_outliers() {
+    let sigma = 0.002;
+    let mut pts = scan(wave, 4000, sigma, 11, |_, _| false);
+    let mut rng = Rng(99);
+    for k in (0..pts.len()).step_by(20) {
+        let sign = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+        pts[k].z += sign * (0.2 + 0.3 * rng.uniform());
+    }
+    let plain = fit_surface(&pts, &opts(12)).unwrap();
+    let robust = fit_surface(
+        &pts,
+        &FitOptions {
+            robust: Some(Robust::Tukey),
+            ..opts(12)
+        },
+    )
+    .unwrap();
+    let (_, dev_plain) = deviation(&plain.surface, wave, 40, |_, _| true);
+    let (max_robust, dev_robust) = deviation(&robust.surface, wave, 40, |_, _| true);
+    assert!(
+        dev_plain > 5.0 * sigma,
+        "outliers should pull the plain fit: {dev_plain}"
+    );
+    assert!(
+        dev_robust < 0.5 * sigma,
+        "robust fit: rms deviation {dev_robust}, max {max_robust}"
+    );
+    assert_eq!(robust.report.outliers, 200, "{:?}", robust.report);
+    assert!(
+        (robust.report.rms_inliers - sigma).abs() < 0.2 * sigma,
+        "{:?}",
+        robust.report
+    );
+    // Huber down-weights instead of rejecting: better than plain, worse than Tukey.
+    let huber = fit_surface(
+        &pts,
+        &FitOptions {
+            robust: Some(Robust::Huber),
+            ..opts(12)
+        },
+    )
+    .unwrap();
+    let (_, dev_huber) = deviation(&huber.surface, wave, 40, |_, _| true);
+    assert!(
+        dev_huber < dev_plain && dev_huber > dev_robust,
+        "{dev_huber}"
+    );
+}
+
+#[test]
+fn parameter_correction_reduces_the_error() {
+    // A steep wave: the base-plane parameters are far from the foot points, and a coarse net
+    // cannot follow it, so the residuals are large enough for their direction to matter.
+    let f = |x: f64, y: f64| 0.5 * (3.0 * x).sin() * (2.0 * y).cos();
+    let pts = scan(f, 3000, 0.0, 5, |_, _| false);
+    let none = fit_surface(
+        &pts,
+        &FitOptions {
+            corrections: 0,
+            ..opts(6)
+        },
+    )
+    .unwrap();
+    let some = fit_surface(&pts, &opts(6)).unwrap();
+    let h = &some.report.history_rms;
+    assert_eq!(h.len(), 1 + vclay_fit::DEFAULT_CORRECTIONS);
+    assert!(h.windows(2).all(|w| w[1] <= w[0] * 1.0001), "history {h:?}");
+    assert!(
+        some.report.rms < 0.8 * none.report.rms,
+        "with {} corrections {} vs none {}",
+        h.len() - 1,
+        some.report.rms,
+        none.report.rms
+    );
+}
+
+#[test]
+fn fairness_keeps_a_hole_smooth() {
+    let hole = |x: f64, y: f64| (x - 0.2).powi(2) + (y + 0.1).powi(2) < 0.35f64.powi(2);
+    let pts = scan(wave, 5000, 0.002, 3, hole);
+    let mut devs = Vec::new();
+    let mut energies = Vec::new();
+    for beta in [1e-14, vclay_fit::DEFAULT_RIGIDITY, 1e-4] {
+        let fit = fit_surface(
+            &pts,
+            &FitOptions {
+                rigidity: beta,
+                ..opts(24)
+            },
+        )
+        .unwrap();
+        let (max_hole, _) = deviation(&fit.surface, wave, 60, hole);
+        devs.push(max_hole);
+        energies.push(fit.report.fairness_energy / beta);
+    }
+    // Almost no rigidity: the hole's control points float (oscillation); the default fills it
+    // smoothly, near the true wave.
+    assert!(devs[0] > 3.0 * devs[1], "hole deviation {devs:?}");
+    assert!(devs[1] < 0.02, "hole deviation {devs:?}");
+    // More rigidity, less bending (U / beta is the bending integral).
+    assert!(
+        energies[0] > energies[1] && energies[1] > energies[2],
+        "{energies:?}"
+    );
+}
+
+#[test]
+fn tension_flattens() {
+    let pts = scan(paraboloid, 2000, 0.0, 9, |_, _| false);
+    let loose = fit_surface(&pts, &opts(8)).unwrap();
+    let tight = fit_surface(
+        &pts,
+        &FitOptions {
+            tension: 1e-2,
+            ..opts(8)
+        },
+    )
+    .unwrap();
+    assert!(
+        tight.report.rms > 10.0 * loose.report.rms,
+        "{} {}",
+        tight.report.rms,
+        loose.report.rms
+    );
+}
+
+#[test]
+fn fit_is_invariant_under_scaling_and_rigid_motion() {
+    let pts = scan(wave, 2000, 0.003, 21, |_, _| false);
+    let o = FitOptions {
+        rigidity: 1e-4,
+        tension: 1e-5,
+        ..opts(10)
+    };
+    let a = fit_surface(&pts, &o).unwrap().report;
+    let rot = nalgebra::Rotation3::from_euler_angles(0.3, -0.7, 1.1);
+    let moved: Vec<Vec3> = pts
+        .iter()
+        .map(|p| rot * (p * 50.0) + Vec3::new(3.0, -7.0, 100.0))
+        .collect();
+    let b = fit_surface(&moved, &o).unwrap().report;
+    assert!(
+        (b.rms / a.rms - 50.0).abs() < 1e-6 * 50.0,
+        "{} {}",
+        a.rms,
+        b.rms
+    );
+    assert!((b.fairness_energy / a.fairness_energy - 2500.0).abs() < 1e-5 * 2500.0);
+}
+
+#[test]
+fn dynamic_weights_lower_the_error_of_a_sphere_cap() {
+    // A sphere cap: rational surfaces represent conics exactly, a coarse polynomial net cannot.
+    let f = |x: f64, y: f64| (4.0 - x * x - y * y).sqrt();
+    let pts = scan(f, 1500, 0.0, 2, |_, _| false);
+    let base = FitOptions {
+        grid: [4, 4],
+        degree: 2,
+        rigidity: 1e-9,
+        ..FitOptions::default()
+    };
+    let poly = fit_surface(&pts, &base).unwrap().report;
+    let rat = fit_surface(
+        &pts,
+        &FitOptions {
+            rational: true,
+            ..base
+        },
+    )
+    .unwrap()
+    .report;
+    assert!(
+        rat.rational && rat.weight_range[0] < rat.weight_range[1],
+        "{rat:?}"
+    );
+    assert!(
+        rat.rms < 0.7 * poly.rms,
+        "rational {} vs polynomial {}",
+        rat.rms,
+        poly.rms
+    );
+}
+
+#[test]
+fn bad_clouds_are_located_errors() {
+    let o = opts(8);
+    let line: Vec<Vec3> = (0..100)
+        .map(|k| Vec3::new(k as f64, 2.0 * k as f64, 1.0))
+        .collect();
+    assert!(matches!(
+        fit_surface(&line, &o),
+        Err(FitError::Degenerate { .. })
+    ));
+    let same = vec![Vec3::new(1.0, 2.0, 3.0); 50];
+    let e = fit_surface(&same, &o).unwrap_err();
+    assert!(e.to_string().contains("coincide"), "{e}");
+    let mut pts = scan(wave, 200, 0.0, 1, |_, _| false);
+    pts[17].y = f64::NAN;
+    let e = fit_surface(&pts, &o).unwrap_err();
+    assert!(
+        e.to_string().starts_with("point 17 has a non-finite"),
+        "{e}"
+    );
+    let e = fit_surface(&pts[..2], &o).unwrap_err();
+    assert!(matches!(e, FitError::TooFewPoints { found: 2, .. }), "{e}");
+    let few = scan(wave, 50, 0.0, 1, |_, _| false);
+    let nofair = FitOptions {
+        rigidity: 0.0,
+        ..opts(8)
+    };
+    let e = fit_surface(&few, &nofair).unwrap_err().to_string();
+    assert!(e.contains("64 control points"), "{e}");
+    // With fairness, few points are fine (the papers fit 19 to 25 points).
+    assert!(fit_surface(&few, &opts(8)).is_ok());
+    for (bad, what) in [
+        (
+            FitOptions {
+                grid: [3, 8],
+                ..opts(8)
+            },
+            "grid = 3x8",
+        ),
+        (
+            FitOptions {
+                grid: [1000, 1000],
+                ..opts(8)
+            },
+            "grid = 1000x1000",
+        ),
+        (
+            FitOptions {
+                degree: 0,
+                ..opts(8)
+            },
+            "degree = 0",
+        ),
+        (
+            FitOptions {
+                rigidity: -1.0,
+                ..opts(8)
+            },
+            "rigidity = -1",
+        ),
+        (
+            FitOptions {
+                tension: f64::NAN,
+                ..opts(8)
+            },
+            "tension = NaN",
+        ),
+    ] {
+        let e = fit_surface(&few, &bad).unwrap_err().to_string();
+        assert!(e.starts_with(what), "{e}");
+    }
+}
