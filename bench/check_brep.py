@@ -8,7 +8,12 @@ loads the file with OpenCASCADE (STEPControl_Reader / IGESControl_Reader) and ch
 - a model whose surfaces close up (EXPECT "solid") is exactly one TopAbs_SOLID whose shell is
   closed (BRep_Tool.IsClosed), and its volume (BRepGProp.VolumeProperties, adaptive, 1e-10)
   matches vclay's volume to 1e-6 relative;
-- an open model (EXPECT "open") has no solid and one open shell per surface.
+- an open model (EXPECT "open") has no solid and one open shell per surface;
+- the face orientations as written in the file (STEP: ADVANCED_FACE same_sense; IGES: the
+  514 shell's orientation flags) point outward: at the middle of each face, a point a little
+  along the written normal is outside the solid and a point a little against it inside
+  (BRepClass3d_SolidClassifier). OpenCASCADE's reader repairs solids that are inside out, so the
+  volume alone would not catch a wrong orientation.
 
 vclay's volume is computed here, independently of vclay and of OpenCASCADE, from the model JSON:
 for a surface, the divergence theorem V = |1/3 int int S . (S_u x S_v) du dv| with 24-point
@@ -28,12 +33,14 @@ from pathlib import Path
 
 from OCP.BRep import BRep_Tool
 from OCP.BRepCheck import BRepCheck_Analyzer
+from OCP.BRepClass3d import BRepClass3d_SolidClassifier
+from OCP.gp import gp_Pnt, gp_Vec
 from OCP.BRepGProp import BRepGProp
 from OCP.GProp import GProp_GProps
 from OCP.IFSelect import IFSelect_RetDone
 from OCP.IGESControl import IGESControl_Reader
 from OCP.STEPControl import STEPControl_Reader
-from OCP.TopAbs import TopAbs_FACE, TopAbs_SHELL, TopAbs_SOLID
+from OCP.TopAbs import TopAbs_FACE, TopAbs_IN, TopAbs_OUT, TopAbs_SHELL, TopAbs_SOLID
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS
 
@@ -203,6 +210,45 @@ def subshapes(shape, kind):
     return out
 
 
+def written_senses(path, fmt):
+    """Face orientations as written: +1 where the outward normal is S_u x S_v, else -1."""
+    text = Path(path).read_text()
+    if fmt == "step":
+        return [1 if line.rstrip().endswith(".T.);") else -1
+                for line in text.splitlines() if "=ADVANCED_FACE(" in line]
+    # IGES: join the parameter lines of the 514 shells.
+    params = {}
+    for line in text.splitlines():
+        if len(line) >= 73 and line[72] == "P":
+            params.setdefault(int(line[64:72]), []).append(line[:64].strip())
+    senses = []
+    for lines in params.values():
+        tokens = "".join(lines).rstrip(";").split(",")
+        if tokens[0] == "514":
+            senses += [1 if t == "1" else -1 for t in tokens[3::2]]
+    return senses
+
+
+def orientation_ok(solid, faces, senses, size):
+    """Whether each face's written normal points out of the solid at the face's middle."""
+    if len(faces) != len(senses):
+        return False
+    eps = 1e-4 * size
+    for face, sense in zip(faces, senses):
+        surf = BRep_Tool.Surface_s(TopoDS.Face(face))
+        u0, u1, v0, v1 = surf.Bounds()
+        p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
+        surf.D1(0.5 * (u0 + u1), 0.5 * (v0 + v1), p, du, dv)
+        n = du.Crossed(dv)
+        n.Normalize()
+        n.Multiply(sense * eps)
+        outside, inside = p.Translated(n), p.Translated(n.Reversed())
+        for q, want in ((outside, TopAbs_OUT), (inside, TopAbs_IN)):
+            if BRepClass3d_SolidClassifier(solid, q, 1e-9 * size).State() != want:
+                return False
+    return True
+
+
 def check(vclay, work, fmt, model, expect):
     ext = ".step" if fmt == "step" else ".igs"
     out = work / (model.stem + ext)
@@ -226,9 +272,13 @@ def check(vclay, work, fmt, model, expect):
         occ = props.Mass()
         ours = model_volume(model)
         rel = abs(occ - ours) / abs(ours)
-        ok = valid and len(solids) == 1 and len(shells) == 1 and all(closed) and rel <= RTOL
-        print(f"{'ok' if ok else 'FAIL'} {head}; volume OpenCASCADE {occ:.12g}, "
-              f"vclay {ours:.12g}, relative difference {rel:.1e} (tolerance {RTOL:.0e})")
+        size = max(1.0, ours ** (1 / 3))
+        outward = len(solids) == 1 and orientation_ok(solids[0], faces, written_senses(out, fmt), size)
+        ok = (valid and len(solids) == 1 and len(shells) == 1 and all(closed) and rel <= RTOL
+              and outward)
+        print(f"{'ok' if ok else 'FAIL'} {head}; faces written outward: {outward}; volume "
+              f"OpenCASCADE {occ:.12g}, vclay {ours:.12g}, relative difference {rel:.1e} "
+              f"(tolerance {RTOL:.0e})")
     else:
         n = len(entities(model))
         ok = valid and not solids and len(shells) == n and not any(closed)

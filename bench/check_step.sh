@@ -42,7 +42,7 @@ sed 's/^steps = 400/steps = 1/' examples/scenarios/fig9a_swung_egg.toml > "$work
 "$vclay" run examples/scenarios/fig9a_swung_egg.toml --out "$work/egg" > /dev/null 2>&1
 cp "$work/swung1/final.json" "$models/swung_sphere.json"
 cp "$work/egg/final.json" "$models/sculpted_egg.json"
-for fmt in step; do
+for fmt in step iges; do
   "$py" bench/check_brep.py "$vclay" "$work/brep" "$fmt" \
     "$models/sphere.json:solid" "$models/inward_sphere.json:solid" "$models/torus.json:solid" \
     "$models/closed_tube.json:solid" "$models/swung_sphere.json:solid" \

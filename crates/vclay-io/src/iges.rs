@@ -3,9 +3,14 @@
 //!
 //! **What.** Each curve becomes a Rational B-Spline Curve (type 126) and each surface a Rational
 //! B-Spline Surface (type 128), with all knots (not distinct values and multiplicities), weights
-//! and control points; `PROP3` says whether the entity is polynomial (all weights 1). Volumes are
-//! written as their six boundary surfaces ([`crate::step::volume_boundary_surfaces`]). Units are
-//! millimetres.
+//! and control points; `PROP3` says whether the entity is polynomial (all weights 1). Units are
+//! millimetres. Two layouts ([`IgesLayout`]): with topology ([`write_iges`]), each closed
+//! surface or volume boundary ([`crate::brep`]) is a Manifold Solid B-Rep Object (186) of a
+//! closed Shell (514 form 1) of Faces (510), each bounded by one Loop (508) of edges from an Edge
+//! List (504; edge geometry as 126 curves) between vertices of a Vertex List (502); the shell's
+//! orientation flags make the faces point outward; an open surface is an open Shell (514 form
+//! 2). Loose ([`to_iges_string`]): independent 126 and 128 entities, a volume as its six
+//! boundary surfaces ([`crate::step::volume_boundary_surfaces`]).
 //!
 //! **How.** Fixed 80-column records: Start (S), Global (G), Directory Entry (D, two lines per
 //! entity), Parameter Data (P, columns 1-64 data and 66-72 the entity's directory pointer) and
@@ -14,7 +19,8 @@
 //! transposed. Reals use the shortest round-trip form (`1.`, `0.25`, `1.5E-7`), so values survive
 //! bit for bit.
 //!
-//! **Limitations.** Export only; untrimmed geometry; no colours, levels or names beyond the
+//! **Limitations.** Untrimmed faces; loops carry no parameter-space curves; poles (collapsed
+//! boundary sides) are left out of the loops as in STEP; no colours, levels or names beyond the
 //! 8-character entity label.
 
 use crate::error::IoError;
@@ -63,6 +69,22 @@ struct Item {
     kind: u32,
     label: String,
     params: Vec<String>,
+    /// Form number (directory entry field 15).
+    form: u32,
+    /// Whether another entity owns this one (status "01": physically dependent).
+    dependent: bool,
+}
+
+impl Item {
+    fn new(kind: u32, label: &str, params: Vec<String>) -> Self {
+        Item {
+            kind,
+            label: label.into(),
+            params,
+            form: 0,
+            dependent: false,
+        }
+    }
 }
 
 fn curve_item(c: &vclay_spline::NurbsCurve, label: &str) -> Item {
@@ -91,11 +113,7 @@ fn curve_item(c: &vclay_spline::NurbsCurve, label: &str) -> Item {
     } else {
         ["0.", "0.", "0."].map(String::from)
     });
-    Item {
-        kind: 126,
-        label: label.into(),
-        params: p,
-    }
+    Item::new(126, label, p)
 }
 
 fn surface_item(s: &NurbsSurface, label: &str) -> Item {
@@ -134,11 +152,7 @@ fn surface_item(s: &NurbsSurface, label: &str) -> Item {
         real(dom[1].min),
         real(dom[1].max),
     ]);
-    Item {
-        kind: 128,
-        label: label.into(),
-        params: p,
-    }
+    Item::new(128, label, p)
 }
 
 /// A numbered 80-column line: 72 columns of data, the section letter, a 7-digit sequence number.
@@ -146,14 +160,149 @@ fn line(out: &mut String, data: &str, section: char, seq: usize) {
     let _ = writeln!(out, "{data:<72}{section}{seq:>7}");
 }
 
-/// Formats entities as an IGES 5.3 file. `file_name` goes into the global section.
+/// How [`to_iges_string_as`] lays out the geometry.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum IgesLayout {
+    /// Topology (IGES 5.3 section 4.148-4.151, entities 502-514 and 186): each closed surface
+    /// and each volume's boundary as a Manifold Solid B-Rep Object (186) over a closed Shell
+    /// (514 form 1) of Faces (510) bounded by Loops (508) of edges from an Edge List (504) with
+    /// their vertices in a Vertex List (502), edge geometry as 126 curves; each open surface as
+    /// an open Shell (514 form 2); curves as independent 126 entities (see [`crate::brep`]).
+    #[default]
+    Brep,
+    /// Loose geometry: independent 126 curves and 128 surfaces (a volume's six boundary
+    /// surfaces), no topology.
+    Loose,
+}
+
+/// The entity at 0-based item index `k` has directory entry (DE) pointer `2k + 1`.
+fn de(k: usize) -> String {
+    (2 * k + 1).to_string()
+}
+
+/// Appends the items of one shell (surfaces, curves, vertex and edge lists, loops, faces, the
+/// shell and, when closed, the solid) and returns nothing: the last item is the top entity.
+fn shell_items(items: &mut Vec<Item>, shell: &crate::brep::Shell, label: &str) {
+    use crate::brep::LoopItem;
+    let dep = |mut it: Item, form: u32| {
+        it.dependent = true;
+        it.form = form;
+        it
+    };
+    // Vertex list (502 form 1): n, then x y z for each vertex.
+    let mut vp = vec![shell.vertices.len().to_string()];
+    for v in &shell.vertices {
+        vp.extend([real(v.point.x), real(v.point.y), real(v.point.z)]);
+    }
+    let vlist = items.len();
+    items.push(dep(Item::new(502, label, vp), 1));
+    // Edge curves, then the edge list (504 form 1): n, then curve, start and end vertices.
+    let first_curve = items.len();
+    for e in &shell.edges {
+        items.push(dep(curve_item(&e.curve, label), 0));
+    }
+    let mut ep = vec![shell.edges.len().to_string()];
+    for (k, e) in shell.edges.iter().enumerate() {
+        ep.extend([
+            de(first_curve + k),
+            de(vlist),
+            (e.start + 1).to_string(),
+            de(vlist),
+            (e.end + 1).to_string(),
+        ]);
+    }
+    let elist = items.len();
+    items.push(dep(Item::new(504, label, ep), 1));
+    // Faces: surface, loop (508 form 1: n, then per edge type 0, edge list, 1-based index,
+    // orientation, no parameter-space curves), face (510 form 1: surface, one outer loop).
+    let mut faces = Vec::with_capacity(shell.faces.len());
+    for f in &shell.faces {
+        let surf = items.len();
+        items.push(dep(surface_item(&f.surface, label), 0));
+        // IGES loops run counter-clockwise about the surface normal whatever the face's
+        // orientation in the shell: undo the reversal of a face with `same_sense == false`.
+        let mut bound = f.bound.clone();
+        if !f.same_sense {
+            bound.reverse();
+        }
+        let edges: Vec<(usize, bool)> = bound
+            .iter()
+            .filter_map(|item| match *item {
+                LoopItem::Edge { edge, forward } => Some((edge, forward == f.same_sense)),
+                LoopItem::Pole { .. } => None,
+            })
+            .collect();
+        let mut lp = vec![edges.len().to_string()];
+        for (edge, forward) in edges {
+            lp.extend([
+                "0".into(),
+                de(elist),
+                (edge + 1).to_string(),
+                u8::from(forward).to_string(),
+                "0".into(),
+            ]);
+        }
+        let lid = items.len();
+        items.push(dep(Item::new(508, label, lp), 1));
+        let fid = items.len();
+        items.push(dep(
+            Item::new(510, label, vec![de(surf), "1".into(), "1".into(), de(lid)]),
+            1,
+        ));
+        faces.push((fid, f.same_sense));
+    }
+    // Shell (514): n, then face and orientation (1: the face normal is the surface normal).
+    let mut sp = vec![faces.len().to_string()];
+    for (fid, same) in faces {
+        sp.extend([de(fid), u8::from(same).to_string()]);
+    }
+    let sid = items.len();
+    let form = if shell.closed { 1 } else { 2 };
+    let mut sh = Item::new(514, label, sp);
+    sh.form = form;
+    sh.dependent = shell.closed;
+    items.push(sh);
+    if shell.closed {
+        // Manifold solid (186): shell, shell orientation, no void shells.
+        items.push(Item::new(186, label, vec![de(sid), "1".into(), "0".into()]));
+    }
+}
+
+/// Formats entities as an IGES 5.3 file with loose geometry ([`IgesLayout::Loose`]): the same
+/// as `to_iges_string_as(entities, file_name, IgesLayout::Loose)`. `file_name` goes into the
+/// global section.
 pub fn to_iges_string(entities: &[NamedEntity], file_name: &str) -> Result<String, IoError> {
+    to_iges_string_as(entities, file_name, IgesLayout::Loose)
+}
+
+/// Formats entities as an IGES 5.3 file in the given layout. `file_name` goes into the global
+/// section.
+pub fn to_iges_string_as(
+    entities: &[NamedEntity],
+    file_name: &str,
+    layout: IgesLayout,
+) -> Result<String, IoError> {
     if entities.is_empty() {
         return Err(IoError::EmptyModel);
     }
     let mut items = Vec::new();
+    let mut tolerance: f64 = 1e-7;
     for (i, e) in entities.iter().enumerate() {
         let label = e.name.clone().unwrap_or_else(|| format!("E{i}"));
+        let shell = match (&e.entity, layout) {
+            (Entity::Curve(_), _) | (_, IgesLayout::Loose) => None,
+            (Entity::Surface(s), IgesLayout::Brep) => Some(crate::brep::Shell::of_surface(s)),
+            (Entity::Volume(v), IgesLayout::Brep) => Some(crate::brep::Shell::of_volume(v)),
+        };
+        if let Some(shell) = shell {
+            let shell = shell.map_err(|err| IoError::Structure {
+                path: format!("entities[{i}]"),
+                message: format!("IGES B-rep export: {err}"),
+            })?;
+            tolerance = tolerance.max(10.0 * shell.tolerance);
+            shell_items(&mut items, &shell, &label);
+            continue;
+        }
         match &e.entity {
             Entity::Curve(c) => items.push(curve_item(c, &label)),
             Entity::Surface(s) => items.push(surface_item(s, &label)),
@@ -199,7 +348,7 @@ pub fn to_iges_string(entities: &[NamedEntity], file_name: &str) -> Result<Strin
         "1".into(),
         "1.".into(),
         hollerith(&stamp),
-        "1.E-7".into(),
+        real(tolerance),
         "0.".into(),
         hollerith("vclay"),
         hollerith("vclay"),
@@ -235,7 +384,14 @@ pub fn to_iges_string(entities: &[NamedEntity], file_name: &str) -> Result<Strin
             &mut dir,
             &format!(
                 "{:>8}{first:>8}{:>8}{:>8}{:>8}{:>8}{:>8}{:>8}{:>8}",
-                it.kind, 0, 0, 0, 0, 0, 0, "00000000"
+                it.kind,
+                0,
+                0,
+                0,
+                0,
+                0,
+                0,
+                if it.dependent { "00010000" } else { "00000000" }
             ),
             'D',
             de,
@@ -248,7 +404,7 @@ pub fn to_iges_string(entities: &[NamedEntity], file_name: &str) -> Result<Strin
                 0,
                 0,
                 plines.len(),
-                0,
+                it.form,
                 "",
                 "",
                 0
@@ -274,9 +430,21 @@ pub fn to_iges_string(entities: &[NamedEntity], file_name: &str) -> Result<Strin
     Ok(out)
 }
 
-/// Writes entities as an IGES file, atomically.
+/// Writes entities as an IGES file, atomically, with topology ([`IgesLayout::Brep`]): closed
+/// surfaces and volumes as solids (186), open surfaces as open shells (514).
 pub fn write_iges(path: impl AsRef<Path>, entities: &[NamedEntity]) -> Result<(), IoError> {
-    crate::util::write_named_text(path.as_ref(), |name| to_iges_string(entities, name))
+    write_iges_as(path, entities, IgesLayout::Brep)
+}
+
+/// Writes entities as an IGES file in the given layout, atomically.
+pub fn write_iges_as(
+    path: impl AsRef<Path>,
+    entities: &[NamedEntity],
+    layout: IgesLayout,
+) -> Result<(), IoError> {
+    crate::util::write_named_text(path.as_ref(), |name| {
+        to_iges_string_as(entities, name, layout)
+    })
 }
 
 #[cfg(test)]
@@ -284,6 +452,89 @@ mod tests {
     use super::*;
     use vclay_core::Vec3;
     use vclay_spline::NurbsCurve;
+
+    /// Parameter tokens of every entity by DE pointer, and the (type, form) of each.
+    fn parse(text: &str) -> std::collections::BTreeMap<usize, (u32, u32, Vec<String>)> {
+        let mut params: std::collections::BTreeMap<usize, String> = Default::default();
+        let mut dir: std::collections::BTreeMap<usize, (u32, u32)> = Default::default();
+        let lines: Vec<&str> = text.lines().collect();
+        for (k, l) in lines.iter().enumerate() {
+            assert_eq!(l.len(), 80, "{l:?}");
+            match &l[72..73] {
+                "P" => params
+                    .entry(l[64..72].trim().parse().unwrap())
+                    .or_default()
+                    .push_str(l[..64].trim_end()),
+                "D" if l[73..].trim().parse::<usize>().unwrap() % 2 == 1 => {
+                    let de = l[73..].trim().parse().unwrap();
+                    let kind = l[..8].trim().parse().unwrap();
+                    let form = lines[k + 1][32..40].trim().parse().unwrap();
+                    dir.insert(de, (kind, form));
+                }
+                _ => {}
+            }
+        }
+        dir.into_iter()
+            .map(|(de, (kind, form))| {
+                let p = params[&de].trim_end_matches(';');
+                let toks: Vec<String> = p.split(',').map(String::from).collect();
+                assert_eq!(toks[0], kind.to_string());
+                (de, (kind, form, toks[1..].to_vec()))
+            })
+            .collect()
+    }
+
+    #[test]
+    fn closed_models_are_manifold_solid_breps() {
+        let vol = vclay_spline::NurbsVolume::box_lattice(
+            [1, 2, 2],
+            [2, 3, 4],
+            Vec3::zeros(),
+            Vec3::new(1.0, 2.0, 3.0),
+        )
+        .unwrap();
+        for (entity, counts) in [
+            (
+                Entity::Surface(NurbsSurface::torus(2.0, 0.5).unwrap()),
+                [1, 2, 1],
+            ),
+            (
+                Entity::Surface(NurbsSurface::sphere(1.0).unwrap()),
+                [1, 1, 2],
+            ),
+            (Entity::Volume(vol), [6, 12, 8]),
+        ] {
+            let text = to_iges_string_as(&[entity.into()], "b.igs", IgesLayout::Brep).unwrap();
+            let ents = parse(&text);
+            let of = |k: u32| ents.iter().filter(|(_, e)| e.0 == k).collect::<Vec<_>>();
+            let num = |s: &String| s.parse::<usize>().unwrap();
+            assert_eq!(of(186).len(), 1);
+            let solid = &of(186)[0].1.2;
+            let shell = &ents[&num(&solid[0])];
+            assert_eq!((shell.0, shell.1), (514, 1), "a closed shell");
+            let nfaces = num(&shell.2[0]);
+            assert_eq!(nfaces, counts[0]);
+            assert_eq!(of(126).len(), counts[1], "one curve per edge");
+            let vlist = &of(502)[0].1.2;
+            assert_eq!(num(&vlist[0]), counts[2]);
+            // Every edge is used twice, once in each direction about the outward normals.
+            let mut uses = vec![(0, 0); counts[1]];
+            for f in 0..nfaces {
+                let face = &ents[&num(&shell.2[1 + 2 * f])];
+                let outward_is_surface_normal = shell.2[2 + 2 * f] == "1";
+                assert_eq!(face.0, 510);
+                let lp = &ents[&num(&face.2[3])];
+                assert_eq!(lp.0, 508);
+                for e in lp.2[1..].chunks(5) {
+                    assert_eq!(e[0], "0");
+                    let forward = (e[3] == "1") == outward_is_surface_normal;
+                    let u = &mut uses[num(&e[2]) - 1];
+                    if forward { u.0 += 1 } else { u.1 += 1 }
+                }
+            }
+            assert!(uses.iter().all(|&u| u == (1, 1)), "{uses:?}");
+        }
+    }
 
     #[test]
     fn records_are_80_columns_and_parameters_complete() {
