@@ -35,6 +35,11 @@ PRIMITIVES = [
     "gear",
     "cube-with-holes",
     "tetrahedron-with-holes",
+    "tetrahedron-with-holes-paper",
+    "soccer-player",
+    "cactus",
+    "spiked-object",
+    "holed-object",
     "l",
     "t",
 ]
@@ -67,7 +72,9 @@ every = 30
 # holes (about half the cells have negative volume; the boundary surface is unaffected). This is
 # the rules' behaviour on this control lattice, the paper's model (same counts), not a writer's
 # error; the check reports the folded cells and still checks the surface.
-FOLDED = {"tetrahedron-with-holes"}
+# The default `tetrahedron-with-holes` is the same solid split into 6 prisms and 4 tetrahedra
+# (issue 19), which does not fold.
+FOLDED = {"tetrahedron-with-holes-paper"}
 
 failures = []
 

@@ -43,7 +43,8 @@ fn boundary_rule(name: &str) -> PyResult<BoundaryRule> {
 impl Lattice {
     /// `Lattice.primitive(spec)`: one of the papers' models by the `vclay subdivide
     /// --primitive` names: `box[:AxBxC]`, `cylinder[:SxLxR]`, `torus`, `torus:SxC`, `gear`,
-    /// `cube-with-holes`, `tetrahedron-with-holes[:HOLE]`, `l[:AxW]`, `t[:AxW]`.
+    /// `cube-with-holes`, `tetrahedron-with-holes[:HOLE]`, `tetrahedron-with-holes-paper[:HOLE]`,
+    /// `soccer-player`, `cactus`, `spiked-object`, `holed-object`, `l[:AxW]`, `t[:AxW]`.
     #[staticmethod]
     fn primitive(spec: &str) -> PyResult<Self> {
         Ok(Self {

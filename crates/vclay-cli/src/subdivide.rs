@@ -16,7 +16,9 @@ pub struct SubdivideArgs {
     pub input: Option<PathBuf>,
     /// Built-in control lattice instead of INPUT: box[:AxBxC] (points per axis, default 4x4x4),
     /// cylinder[:SECTORS[xLAYERS[xRINGS]]] (default 4x2x0), torus (the paper's) or
-    /// torus:SEGMENTSxCROSS, gear, cube-with-holes, tetrahedron-with-holes[:HOLE] (default 0.5),
+    /// torus:SEGMENTSxCROSS, gear, cube-with-holes, tetrahedron-with-holes[:HOLE] (split into
+    /// 10 convex cells, default 0.4), tetrahedron-with-holes-paper[:HOLE] (the paper's single
+    /// cell, which folds; default 0.5), soccer-player, cactus, spiked-object, holed-object,
     /// l[:ARMxWIDTH] (default 2x1),
     /// t[:ARMxWIDTH] (default 1x1).
     #[arg(long, value_name = "NAME[:ARGS]")]
@@ -109,7 +111,7 @@ pub fn run(args: &SubdivideArgs) -> Result<()> {
     if outcome.inverted_cells > 0 {
         eprintln!(
             "warning: {} of {} cells of the subdivided lattice have non-positive volume \
-             (folded; a single non-convex cell such as the tetrahedron with holes does this, \
+             (folded; a single non-convex cell such as tetrahedron-with-holes-paper does this, \
              docs/formats.md)",
             outcome.inverted_cells, outcome.counts.cells
         );

@@ -18,16 +18,39 @@ use crate::formats::{FormatError, ovm, surface, vtu};
 use crate::hierarchy::SubdivisionSolid;
 use crate::ids::CellId;
 use crate::lattice::{ElementCounts, Lattice};
-use crate::primitives;
 use crate::subdivide::{BoundaryRule, Features, SubdivisionRules};
+use crate::{gallery, primitives};
 
 /// Help text of the primitive names accepted by [`primitive`].
 pub const PRIMITIVE_HELP: &str = "box[:AxBxC] (points per axis, default 4x4x4, unit cells), \
 cylinder[:SECTORS[xLAYERS[xRINGS]]] (default 4x2x0, the paper's cylinder; radius 1, height 2), \
 torus (the paper's torus) or torus:SEGMENTSxCROSS (square cross-section of CROSSxCROSS hexahedra), \
 gear (the paper's gear), cube-with-holes (the paper's cube with holes), \
-tetrahedron-with-holes[:HOLE] (the paper's, one cell; HOLE the relative hole size, default 0.5), \
+tetrahedron-with-holes[:HOLE] (the paper's solid split into 6 prisms and 4 tetrahedra so that no cell \
+folds; HOLE the relative hole size, default 0.4), tetrahedron-with-holes-paper[:HOLE] (the paper's single \
+cell, Table 1's counts; it folds when subdivided; default 0.5), soccer-player, cactus (conference Table 1), \
+spiked-object, holed-object (journal Table 2), \
 l[:ARMxWIDTH] (L solid, default 2x1), t[:ARMxWIDTH] (T solid, default 1x1)";
+
+/// The name of every primitive [`primitive`] builds, each with its default arguments (the
+/// tests subdivide each one and check that no cell folds, except
+/// `tetrahedron-with-holes-paper`, the paper's single non-convex cell, which folds by
+/// construction: see [`primitives::tetrahedron_with_holes_split`]).
+pub const PRIMITIVE_NAMES: &[&str] = &[
+    "box",
+    "cylinder",
+    "torus",
+    "gear",
+    "cube-with-holes",
+    "tetrahedron-with-holes",
+    "tetrahedron-with-holes-paper",
+    "soccer-player",
+    "cactus",
+    "spiked-object",
+    "holed-object",
+    "l",
+    "t",
+];
 
 /// Largest predicted cell count (`cells * 8^levels`) [`subdivide_command`] accepts: 50 million.
 pub const MAX_PREDICTED_CELLS: u128 = 50_000_000;
@@ -371,9 +394,14 @@ pub fn primitive(spec: &str) -> Result<Lattice, CommandError> {
             no_args("cube-with-holes")?;
             Ok(primitives::cube_with_holes(1.0))
         }
-        "tetrahedron-with-holes" | "tet-with-holes" => {
+        "tetrahedron-with-holes"
+        | "tet-with-holes"
+        | "tetrahedron-with-holes-paper"
+        | "tet-with-holes-paper" => {
+            let paper = name.to_ascii_lowercase().ends_with("-paper");
             let hole = match args {
-                None => 0.5,
+                None if paper => 0.5,
+                None => primitives::DEFAULT_SPLIT_HOLE,
                 Some(a) => match a.parse::<f64>() {
                     Ok(h) if h > 0.0 && h < 1.0 => h,
                     _ => {
@@ -383,12 +411,31 @@ pub fn primitive(spec: &str) -> Result<Lattice, CommandError> {
                     }
                 },
             };
-            primitives::try_tetrahedron_with_holes(2.0, hole).map_err(|source| {
-                CommandError::DegeneratePrimitive {
-                    spec: spec.to_string(),
-                    source,
-                }
+            let built = if paper {
+                primitives::try_tetrahedron_with_holes(2.0, hole)
+            } else {
+                primitives::try_tetrahedron_with_holes_split(2.0, hole)
+            };
+            built.map_err(|source| CommandError::DegeneratePrimitive {
+                spec: spec.to_string(),
+                source,
             })
+        }
+        "soccer-player" => {
+            no_args("soccer-player")?;
+            Ok(gallery::soccer_player(2.0))
+        }
+        "cactus" => {
+            no_args("cactus")?;
+            Ok(gallery::cactus(4.0))
+        }
+        "spiked-object" => {
+            no_args("spiked-object")?;
+            Ok(gallery::spiked_object(1.0))
+        }
+        "holed-object" => {
+            no_args("holed-object")?;
+            Ok(gallery::holed_object(1.0))
         }
         "l" | "t" => {
             let v = nums(2, 1)?;

@@ -15,7 +15,10 @@
 //!   transpose product by scattering the rows of `A^(j)`, in parallel with per-task partial
 //!   sums, so no transpose is stored).
 //! * [`primitives`]: boxes, cylinders, tori, L and T solids, the paper's torus, gear, cube
-//!   with holes and tetrahedron with holes; [`cells`]: face lists of hexahedra, prisms, tetrahedra, pyramids.
+//!   with holes and tetrahedron with holes (the paper's single cell and a split one that does not
+//!   fold); [`cells`]: face lists of hexahedra, prisms, tetrahedra, pyramids.
+//! * [`gallery`]: the papers' extruded models (soccer player, cactus, spiked and holed objects)
+//!   built by a [`gallery::Sculptor`] from cubes and face extrusions.
 //! * [`write_boundary`]: the outward boundary surface into a [`vclay_core::MeshSink`].
 //! * [`edit`]: [`extrude_face`] and [`delete_cell`] return a new validated lattice with stable
 //!   ids (documented there) or an error saying why the edit is refused; [`Features`] tags are
@@ -52,6 +55,7 @@ pub mod edit;
 pub mod error;
 pub mod formats;
 pub mod from_mesh;
+pub mod gallery;
 pub mod hierarchy;
 pub mod ids;
 pub mod lattice;

@@ -15,7 +15,12 @@
 //! * "Cube w/ holes": [`cube_with_holes`], the 3 x 3 x 3 block of cells less the centre cross (64,
 //!   144, 96, 20);
 //! * "Tetrahedron w/ holes": [`tetrahedron_with_holes`], a single non-convex cell (a thickened
-//!   tetrahedral frame, genus 3; 16 points, 42 edges, 22 faces, 1 cell).
+//!   tetrahedral frame, genus 3; 16 points, 42 edges, 22 faces, 1 cell). Subdivided, that cell
+//!   folds (its cell point lies in the hollow); [`tetrahedron_with_holes_split`] is the same
+//!   solid as 6 prisms and 4 tetrahedra, which does not.
+//!
+//! The extruded models of the papers' galleries (soccer player, cactus, spiked and holed
+//! objects) are in [`crate::gallery`].
 //!
 //! Also: [`cylinder`] with any number of wedge sectors, hexahedral rings and layers, [`torus`]
 //! (a ring of hexahedra), [`l_solid`] and [`t_solid`] (branching solids).
@@ -28,7 +33,7 @@ use std::f64::consts::PI;
 
 use vclay_core::Vec3;
 
-use crate::cells::{hexahedron, prism};
+use crate::cells::{hexahedron, prism, tetrahedron};
 use crate::error::LatticeError;
 use crate::lattice::Lattice;
 
@@ -370,10 +375,11 @@ pub fn t_solid(arm: usize, width: usize, cell: f64) -> Lattice {
 /// X_h` facing the hollow (4). `hole` in `(0, 1)` is the size of the holes relative to the faces.
 ///
 /// Subdivided, the interior folds: the first level's cell point is the centroid of the 16
-/// points, inside the hollow, so about half the cells of every level have negative volume (936
-/// of 1,680 hexahedra at level 3, by VTK's `vtkCellSizeFilter`; `bench/check_vtk.sh`). The
-/// boundary surface is not affected. This is what MacCracken-Joy's rules do with the paper's
-/// single-cell model.
+/// points, inside the hollow, so about half the cells of every level have non-positive volume
+/// (984 of 1,744 at level 3 by [`Lattice::cell_signed_volume`]; 936 of the 1,680 hexahedra by
+/// VTK's `vtkCellSizeFilter`, `bench/check_vtk.sh`). The boundary surface is not affected.
+/// This is what MacCracken-Joy's rules do with the paper's single-cell model, whatever the hole
+/// size (see [`tetrahedron_with_holes_split`] for why, and for the variant that does not fold).
 ///
 /// # Panics
 /// If `edge <= 0` or `hole` is not in `(0, 1)`, or if the lattice is degenerate (a hole so
@@ -399,36 +405,8 @@ pub fn try_tetrahedron_with_holes(edge: f64, hole: f64) -> Result<Lattice, Latti
         edge > 0.0 && hole > 0.0 && hole < 1.0,
         "tetrahedron_with_holes parameters"
     );
-    // Regular tetrahedron with edge length 2 sqrt(2) * (edge / (2 sqrt(2))) = edge.
-    let s = edge / (2.0 * 2f64.sqrt());
-    let corners = [
-        Vec3::new(1.0, 1.0, 1.0) * s,
-        Vec3::new(1.0, -1.0, -1.0) * s,
-        Vec3::new(-1.0, 1.0, -1.0) * s,
-        Vec3::new(-1.0, -1.0, 1.0) * s,
-    ];
-    // Face f is opposite corner f; its loop counter-clockwise seen from outside.
-    let faces: Vec<[usize; 3]> = (0..4)
-        .map(|f| {
-            let mut loop_: Vec<usize> = (0..4).filter(|&v| v != f).collect();
-            let [a, b, c] = [0, 1, 2].map(|i| corners[loop_[i]]);
-            let centroid = (a + b + c) / 3.0;
-            if (b - a).cross(&(c - a)).dot(&(centroid - corners[f])) < 0.0 {
-                loop_.swap(1, 2);
-            }
-            [loop_[0], loop_[1], loop_[2]]
-        })
-        .collect();
-    let mut points = corners.to_vec();
-    // inner[f][v]: the point of face f's hole near corner v.
-    let mut inner = [[u32::MAX; 4]; 4];
-    for (f, loop_) in faces.iter().enumerate() {
-        let c = loop_.iter().map(|&v| corners[v]).sum::<Vec3>() / 3.0;
-        for &v in loop_ {
-            inner[f][v] = points.len() as u32;
-            points.push(c + (corners[v] - c) * hole);
-        }
-    }
+    let (points, faces, inner) = tet_frame_points(edge, hole);
+    let corners: Vec<Vec3> = points[..4].to_vec();
     let mut cell: Vec<Vec<u32>> = Vec::with_capacity(22);
     for (f, loop_) in faces.iter().enumerate() {
         for i in 0..3 {
@@ -467,4 +445,130 @@ pub fn try_tetrahedron_with_holes(edge: f64, hole: f64) -> Result<Lattice, Latti
         cell.push(tri);
     }
     Lattice::from_cells(points, &[cell])
+}
+
+/// The 16 points of the tetrahedron with holes (4 corners, then 3 hole points per face), the
+/// faces' corner loops (face `f` opposite corner `f`, counter-clockwise seen from outside) and
+/// `inner[f][v]`, the point of face `f`'s hole near corner `v`.
+fn tet_frame_points(edge: f64, hole: f64) -> (Vec<Vec3>, Vec<[usize; 3]>, [[u32; 4]; 4]) {
+    // Regular tetrahedron with edge length 2 sqrt(2) * (edge / (2 sqrt(2))) = edge.
+    let s = edge / (2.0 * 2f64.sqrt());
+    let corners = [
+        Vec3::new(1.0, 1.0, 1.0) * s,
+        Vec3::new(1.0, -1.0, -1.0) * s,
+        Vec3::new(-1.0, 1.0, -1.0) * s,
+        Vec3::new(-1.0, -1.0, 1.0) * s,
+    ];
+    // Face f is opposite corner f; its loop counter-clockwise seen from outside.
+    let faces: Vec<[usize; 3]> = (0..4)
+        .map(|f| {
+            let mut loop_: Vec<usize> = (0..4).filter(|&v| v != f).collect();
+            let [a, b, c] = [0, 1, 2].map(|i| corners[loop_[i]]);
+            let centroid = (a + b + c) / 3.0;
+            if (b - a).cross(&(c - a)).dot(&(centroid - corners[f])) < 0.0 {
+                loop_.swap(1, 2);
+            }
+            [loop_[0], loop_[1], loop_[2]]
+        })
+        .collect();
+    let mut points = corners.to_vec();
+    // inner[f][v]: the point of face f's hole near corner v.
+    let mut inner = [[u32::MAX; 4]; 4];
+    for (f, loop_) in faces.iter().enumerate() {
+        let c = loop_.iter().map(|&v| corners[v]).sum::<Vec3>() / 3.0;
+        for &v in loop_ {
+            inner[f][v] = points.len() as u32;
+            points.push(c + (corners[v] - c) * hole);
+        }
+    }
+    (points, faces, inner)
+}
+
+/// Default relative hole size of [`tetrahedron_with_holes_split`] (`vclay subdivide --primitive
+/// tetrahedron-with-holes`): the largest round value at which no cell folds up to level 3.
+/// Larger holes make the bars thin and triangular: at `0.45` 32 of 3,328 level-3 cells fold,
+/// at `0.5` 4 of 416 at level 2 and 128 at level 3.
+pub const DEFAULT_SPLIT_HOLE: f64 = 0.4;
+
+/// The tetrahedron with holes of [`tetrahedron_with_holes`] (the same 16 points, the same
+/// boundary) split into convex cells: a triangular prism along each of the 6 bars (cross-section
+/// `X X_f X_g` at corner `X`, the triangle between the corner and the two hole points beside
+/// it) and a tetrahedron `X X_f X_g X_h` at each of the 4 corners: 10 cells, 16 points, 42
+/// edges, 34 faces (the 22 of the single cell and the 12 triangles where bars meet corners).
+///
+/// Why: the paper's single cell (Table 1) is not convex, and its cell point (the centroid of its
+/// 16 points, the tetrahedron's centre) lies in the hollow where the four holes meet, outside
+/// the material, on the outer side of every face that faces the hollow. Each level-1 cell of a
+/// point on those faces joins that point to the cell point, so it spans the face the wrong way
+/// round: it is inverted, whatever the hole size (984 of 1,744 cells have non-positive volume
+/// at level 3 with `hole = 0.5`). The paper's Fig. 1 shows only the smooth boundary, which the
+/// rules compute from boundary points alone and which is the same for both lattices at level 0.
+/// Split into convex cells, every cell's point lies inside its own cell, and with holes up to
+/// [`DEFAULT_SPLIT_HOLE`] no cell folds (tests check levels 1 to 3; larger holes leave bars so
+/// thin that the smooth boundary rule folds a few cells near the corners). The prisms subdivide into 6 hexahedra and the
+/// tetrahedra into 4, so level 1 has 52 hexahedra (3,328 at level 3).
+///
+/// # Panics
+/// If `edge <= 0` or `hole` is not in `(0, 1)`, or if the lattice is degenerate; use
+/// [`try_tetrahedron_with_holes_split`] for sizes that come from user input.
+#[track_caller]
+pub fn tetrahedron_with_holes_split(edge: f64, hole: f64) -> Lattice {
+    assert!(
+        edge > 0.0 && hole > 0.0 && hole < 1.0,
+        "tetrahedron_with_holes_split parameters"
+    );
+    try_tetrahedron_with_holes_split(edge, hole).expect("the split tetrahedron with holes is valid")
+}
+
+/// [`tetrahedron_with_holes_split`] that returns the lattice's validation error instead of
+/// panicking.
+///
+/// # Panics
+/// If `edge <= 0` or `hole` is not in `(0, 1)` (check these first).
+#[track_caller]
+pub fn try_tetrahedron_with_holes_split(edge: f64, hole: f64) -> Result<Lattice, LatticeError> {
+    assert!(
+        edge > 0.0 && hole > 0.0 && hole < 1.0,
+        "tetrahedron_with_holes_split parameters"
+    );
+    let (points, faces, inner) = tet_frame_points(edge, hole);
+    // Orients a cell's loops outward (its signed volume positive).
+    let outward = |mut cell: Vec<Vec<u32>>| -> Vec<Vec<u32>> {
+        let mut vol = 0.0;
+        for l in &cell {
+            let o = points[l[0] as usize];
+            for i in 1..l.len() - 1 {
+                let a = points[l[i] as usize] - o;
+                let b = points[l[i + 1] as usize] - o;
+                vol += o.dot(&a.cross(&b));
+            }
+        }
+        if vol < 0.0 {
+            for l in &mut cell {
+                l.reverse();
+            }
+        }
+        cell
+    };
+    let mut cells = Vec::with_capacity(10);
+    for x in 0..4usize {
+        for y in x + 1..4 {
+            // The two faces containing edge xy are those opposite the other two corners.
+            let [f, g]: [usize; 2] = {
+                let mut it = (0..4).filter(|&k| k != x && k != y);
+                [it.next().expect("two"), it.next().expect("two")]
+            };
+            debug_assert!(faces[f].contains(&x) && faces[g].contains(&y));
+            let bottom = [x as u32, inner[f][x], inner[g][x]];
+            let top = [y as u32, inner[f][y], inner[g][y]];
+            cells.push(outward(prism(&bottom, &top)));
+        }
+    }
+    for x in 0..4usize {
+        let others: Vec<u32> = (0..4).filter(|&f| f != x).map(|f| inner[f][x]).collect();
+        cells.push(outward(tetrahedron([
+            others[0], others[1], others[2], x as u32,
+        ])));
+    }
+    Lattice::from_cells(points, &cells)
 }

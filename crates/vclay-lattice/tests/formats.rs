@@ -531,15 +531,23 @@ fn command_subdivides_primitives_and_files_and_writes_every_format() {
         r.stats_json(),
         "{\"points\": 2197, \"edges\": 6084, \"faces\": 5616, \"cells\": 1728, \"inverted_cells\": 0}"
     );
-    // The tetrahedron with holes folds when subdivided (docs/formats.md): 12 of its 16
-    // level-1 cells have negative volume (VTK's vtkCellSizeFilter agrees, bench/check_vtk.sh).
+    // The paper's single-cell tetrahedron with holes folds when subdivided (docs/formats.md):
+    // 12 of its 16 level-1 cells have negative volume (VTK's vtkCellSizeFilter agrees,
+    // bench/check_vtk.sh); the default one, split into convex cells (issue 19), does not.
     let t = subdivide_command(&opts(
-        LatticeSource::Primitive("tetrahedron-with-holes".into()),
+        LatticeSource::Primitive("tetrahedron-with-holes-paper".into()),
         1,
         None,
     ))
     .unwrap();
     assert_eq!((t.counts.cells, t.inverted_cells), (16, 12));
+    let t = subdivide_command(&opts(
+        LatticeSource::Primitive("tetrahedron-with-holes".into()),
+        2,
+        None,
+    ))
+    .unwrap();
+    assert_eq!((t.counts.cells, t.inverted_cells), (416, 0));
     assert_eq!(r.control.cells, 27);
     let dir = scratch("command");
     let input = dir.join("gear.ovm");
@@ -620,6 +628,11 @@ fn degenerate_primitive_is_an_error() {
     );
     assert!(err.to_string().contains("degenerate"), "{err}");
     assert!(primitive("tetrahedron-with-holes:0.01").is_ok());
+    let err = primitive("tetrahedron-with-holes-paper:1e-300").unwrap_err();
+    assert!(
+        matches!(err, CommandError::DegeneratePrimitive { .. }),
+        "{err}"
+    );
 }
 
 #[test]
@@ -634,6 +647,12 @@ fn command_primitive_specs() {
     assert_eq!(counts("torus:8x2")[3], 32);
     assert_eq!(counts("gear"), [56, 116, 76, 16]);
     assert_eq!(counts("cube-with-holes"), [64, 144, 96, 20]);
+    assert_eq!(counts("tetrahedron-with-holes"), [16, 42, 34, 10]);
+    assert_eq!(counts("tetrahedron-with-holes-paper"), [16, 42, 22, 1]);
+    assert_eq!(counts("soccer-player"), [104, 200, 122, 24]);
+    assert_eq!(counts("cactus"), [108, 212, 131, 26]);
+    assert_eq!(counts("spiked-object")[3], 75);
+    assert_eq!(counts("holed-object")[3], 135);
     assert_eq!(counts("l")[3], 5);
     assert_eq!(counts("T")[3], 4);
     assert_eq!(counts("t:2x1")[3], 7);
@@ -645,6 +664,8 @@ fn command_primitive_specs() {
         "cylinder:2",
         "torus:2x1",
         "gear:3",
+        "cactus:2",
+        "soccer-player:1",
         "l:0",
         "box:2000",
     ] {
