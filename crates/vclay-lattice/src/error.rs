@@ -236,4 +236,31 @@ pub enum LatticeError {
         /// Why.
         reason: String,
     },
+    /// A limit query addresses a cell that is not a hexahedron (limit parameters `(u, v, w)`
+    /// are defined on hexahedra; every cell from level 1 on is one).
+    #[error(
+        "{cell} is not a hexahedron ({vertices} vertices, {faces} faces): limit parameters (u, v, w) address hexahedral cells; subdivide once and address its children"
+    )]
+    NotHexahedral {
+        /// The cell.
+        cell: CellId,
+        /// Its number of vertices.
+        vertices: usize,
+        /// Its number of faces.
+        faces: usize,
+    },
+    /// A limit query is invalid (cell out of range, parameter outside `[0, 1]` or not finite).
+    #[error("limit query {index}: {message}")]
+    LimitQuery {
+        /// Index of the query in its list.
+        index: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A limit evaluation parameter is invalid.
+    #[error("limit evaluation: {message}")]
+    LimitParameter {
+        /// What is wrong.
+        message: String,
+    },
 }

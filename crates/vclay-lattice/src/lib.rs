@@ -59,6 +59,7 @@ pub mod gallery;
 pub mod hierarchy;
 pub mod ids;
 pub mod lattice;
+pub mod limit;
 pub mod map;
 pub mod primitives;
 pub mod sparse;
@@ -72,6 +73,7 @@ pub use from_mesh::{Clay, ClayError, ClayParams, ClayReport, lattice_from_mesh};
 pub use hierarchy::SubdivisionSolid;
 pub use ids::{CellId, EdgeId, FaceId, VertexId};
 pub use lattice::{ElementCounts, Lattice};
+pub use limit::{LimitEvaluator, LimitParams, LimitPoint, LimitQuery, cell_frame};
 pub use map::{ChainWorkspace, SubdivisionMap};
 pub use sparse::{Coord, SparseMatrix};
 pub use subdivide::{

@@ -218,7 +218,7 @@ impl Features {
         self.corner.iter().filter(|&&c| c).count()
     }
 
-    fn check(&self, lattice: &Lattice) -> Result<(), LatticeError> {
+    pub(crate) fn check(&self, lattice: &Lattice) -> Result<(), LatticeError> {
         if self.crease.len() != lattice.num_edges() || self.corner.len() != lattice.num_points() {
             return Err(LatticeError::BadTag {
                 element: format!(
