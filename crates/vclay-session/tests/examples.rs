@@ -17,6 +17,16 @@ fn examples() -> Vec<std::path::PathBuf> {
     v
 }
 
+/// Examples whose models the readers before the session layer could not build (issue 19's
+/// gallery primitives); they run in `scenario.rs`'s `shipped_scenarios_parse` and here only
+/// need to run.
+const NEW_SINCE: &[&str] = &[
+    "table1_soccer_player",
+    "table1_cactus",
+    "table2_spiked_object",
+    "table2_holed_object",
+];
+
 #[test]
 fn every_example_ends_as_before_the_session_layer() {
     let before = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/before");
@@ -29,6 +39,9 @@ fn every_example_ends_as_before_the_session_layer() {
         let steps = sc.steps;
         vclay_session::run::run(&mut sc.session, steps, &dir, &sc.output, &mut |_| {})
             .unwrap_or_else(|e| panic!("{name}: {e}"));
+        if NEW_SINCE.contains(&name.as_str()) {
+            continue;
+        }
         let Ok(entries) = std::fs::read_dir(before.join(&name)) else {
             panic!(
                 "{name}: no reference in tests/data/before (a new example needs none only if the old format could not express it; then list it here)"

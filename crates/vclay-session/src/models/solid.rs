@@ -12,7 +12,8 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use vclay_core::{TriMesh, Vec3};
 use vclay_lattice::{
-    BoundaryRule, EdgeId, Features, Lattice, SubdivisionRules, VertexId, formats, primitives,
+    BoundaryRule, EdgeId, Features, Lattice, SubdivisionRules, VertexId, formats, gallery,
+    primitives,
 };
 use vclay_solids::{
     DynamicSolid, Integrator, Material, MaterialField, SolidParams, SolidRest, SolidSource,
@@ -1797,11 +1798,20 @@ fn build_primitive(name: &str, m: &ModelKeys, min: Vec3, max: Vec3) -> Result<La
         "cube-with-holes" => primitives::cube_with_holes(size / 3.0),
         "l-solid" => primitives::l_solid(2, 1, size / 3.0),
         "t-solid" => primitives::t_solid(2, 1, size / 3.0),
+        // Issue 19: the papers' galleries and the tetrahedron with holes (split into convex
+        // cells, so that no cell folds), sized by the box.
+        "tetrahedron-with-holes" => {
+            primitives::tetrahedron_with_holes_split(size, primitives::DEFAULT_SPLIT_HOLE)
+        }
+        "soccer-player" => gallery::soccer_player(h),
+        "cactus" => gallery::cactus(h),
+        "spiked-object" => gallery::spiked_object(size / 3.0),
+        "holed-object" => gallery::holed_object(size / 9.0),
         other => {
             return Err(err(
                 "primitive",
                 format!(
-                    "unknown primitive \"{other}\"; expected box, cylinder, torus, paper-torus, gear, cube-with-holes, l-solid or t-solid"
+                    "unknown primitive \"{other}\"; expected box, cylinder, torus, paper-torus, gear, cube-with-holes, l-solid, t-solid, tetrahedron-with-holes, soccer-player, cactus, spiked-object or holed-object"
                 ),
             ));
         }
