@@ -4,8 +4,10 @@
 //! top-level `"shape"`), STEP (`.step`, `.stp`, `.p21`) and IGES (`.igs`, `.iges`) B-spline
 //! curves and surfaces (what is not read is printed as a warning unless `--quiet`), meshes
 //! (`.obj`, `.stl`, `.ply`, `.glb`).
-//! Write: vclay model (`.json`), geomdl (`.geomdl.json`), STEP (`.step`, `.stp`: exact NURBS),
-//! IGES (`.igs`, `.iges`: entities 126/128),
+//! Write: vclay model (`.json`), geomdl (`.geomdl.json`), STEP (`.step`, `.stp`) and IGES
+//! (`.igs`, `.iges`) with exact NURBS geometry as B-reps: a closed surface or a volume's boundary
+//! as a solid, an open surface as an open shell (`--loose`: loose surfaces and curves,
+//! `GEOMETRIC_SET` / entities 126 and 128, no topology),
 //! meshes (`.obj`, `.stl`, `.ply`, `.glb`: models are tessellated, curves are left out).
 //! A mesh cannot become exact geometry: mesh to model, geomdl, STEP or IGES is refused.
 
@@ -13,12 +15,13 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use std::path::{Path, PathBuf};
 use vclay::TriMesh;
+use vclay::io::brep::BrepSummary;
 use vclay::io::geomdl::{is_geomdl, parse_geomdl, write_geomdl};
 use vclay::io::gltf::{GlbMesh, read_glb, write_glb};
-use vclay::io::iges::write_iges;
+use vclay::io::iges::{IgesLayout, write_iges_as};
 use vclay::io::mesh::{read_mesh, write_mesh};
 use vclay::io::model::{Entity, NamedEntity, import_model, parse_named_model, write_named_model};
-use vclay::io::step::write_step;
+use vclay::io::step::{StepLayout, write_step_as};
 use vclay::spline::{tessellate_surface, tessellate_volume_boundary};
 
 /// Arguments of `vclay convert`.
@@ -31,6 +34,10 @@ pub struct ConvertArgs {
     /// Tessellation samples per parametric axis when a model becomes a mesh.
     #[arg(long, default_value_t = 48)]
     pub samples: usize,
+    /// STEP and IGES: write loose surfaces and curves (a GEOMETRIC_SET; IGES 126/128) instead of
+    /// B-rep solids and shells.
+    #[arg(long)]
+    pub loose: bool,
 }
 
 /// What a file held.
@@ -159,8 +166,23 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
     match ext.as_str() {
         "geomdl.json" => write_geomdl(out, &exact(&input)?)?,
         "json" => write_named_model(out, &exact(&input)?)?,
-        "step" | "stp" => write_step(out, &exact(&input)?)?,
-        "igs" | "iges" => write_iges(out, &exact(&input)?)?,
+        "step" | "stp" | "igs" | "iges" => {
+            let entities = exact(&input)?;
+            let iges = matches!(ext.as_str(), "igs" | "iges");
+            match (iges, args.loose) {
+                (false, false) => write_step_as(out, &entities, StepLayout::Brep)?,
+                (false, true) => write_step_as(out, &entities, StepLayout::GeometricSet)?,
+                (true, false) => write_iges_as(out, &entities, IgesLayout::Brep)?,
+                (true, true) => write_iges_as(out, &entities, IgesLayout::Loose)?,
+            }
+            if !args.loose && !crate::quiet() {
+                let b = BrepSummary::of(&entities)?;
+                eprintln!(
+                    "vclay convert: {} solid(s), {} open shell(s), {} curve(s)",
+                    b.solids, b.open_shells, b.curves
+                );
+            }
+        }
         "obj" | "stl" | "ply" => write_mesh(out, &mesh_of(&input)?)?,
         "glb" => {
             let name = args

@@ -488,6 +488,41 @@ impl Shell {
     }
 }
 
+/// What the B-rep layout of a model holds: closed shells (solids), open shells and loose curves.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BrepSummary {
+    /// Surfaces and volumes whose boundary is closed: written as solids.
+    pub solids: usize,
+    /// Surfaces that do not close up: written as open shells.
+    pub open_shells: usize,
+    /// Curves: written as loose curves.
+    pub curves: usize,
+}
+
+impl BrepSummary {
+    /// Builds the shell of every surface and volume of `entities` and counts them.
+    pub fn of(entities: &[crate::model::NamedEntity]) -> Result<Self, IoError> {
+        use crate::model::Entity;
+        let mut out = BrepSummary::default();
+        for e in entities {
+            let shell = match &e.entity {
+                Entity::Curve(_) => {
+                    out.curves += 1;
+                    continue;
+                }
+                Entity::Surface(s) => Shell::of_surface(s)?,
+                Entity::Volume(v) => Shell::of_volume(v)?,
+            };
+            if shell.closed {
+                out.solids += 1;
+            } else {
+                out.open_shells += 1;
+            }
+        }
+        Ok(out)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -180,8 +180,8 @@ fn de(k: usize) -> String {
     (2 * k + 1).to_string()
 }
 
-/// Appends the items of one shell (surfaces, curves, vertex and edge lists, loops, faces, the
-/// shell and, when closed, the solid) and returns nothing: the last item is the top entity.
+/// Appends the items of one shell: surfaces, vertex list, edge curves, edge list, loops and
+/// faces, the shell and, when closed, the solid (the last item is the top entity).
 fn shell_items(items: &mut Vec<Item>, shell: &crate::brep::Shell, label: &str) {
     use crate::brep::LoopItem;
     let dep = |mut it: Item, form: u32| {
@@ -189,6 +189,11 @@ fn shell_items(items: &mut Vec<Item>, shell: &crate::brep::Shell, label: &str) {
         it.form = form;
         it
     };
+    // The faces' surfaces first (a reader meets the geometry before the topology).
+    let first_surface = items.len();
+    for f in &shell.faces {
+        items.push(dep(surface_item(&f.surface, label), 0));
+    }
     // Vertex list (502 form 1): n, then x y z for each vertex.
     let mut vp = vec![shell.vertices.len().to_string()];
     for v in &shell.vertices {
@@ -216,9 +221,8 @@ fn shell_items(items: &mut Vec<Item>, shell: &crate::brep::Shell, label: &str) {
     // Faces: surface, loop (508 form 1: n, then per edge type 0, edge list, 1-based index,
     // orientation, no parameter-space curves), face (510 form 1: surface, one outer loop).
     let mut faces = Vec::with_capacity(shell.faces.len());
-    for f in &shell.faces {
-        let surf = items.len();
-        items.push(dep(surface_item(&f.surface, label), 0));
+    for (k, f) in shell.faces.iter().enumerate() {
+        let surf = first_surface + k;
         // IGES loops run counter-clockwise about the surface normal whatever the face's
         // orientation in the shell: undo the reversal of a face with `same_sense == false`.
         let mut bound = f.bound.clone();
