@@ -2,6 +2,14 @@
 (the PyPI package cadquery-ocp), and OpenCASCADE's own evaluation of what it reads back from
 them at seeded random parameters (occ_points.json), for crates/vclay-io/tests/cad_read.rs.
 
+B-rep solids with elementary surfaces (box, cylinder, cone, sphere, torus, a revolved B-spline
+profile, an extruded B-spline) are written as STEP as OpenCASCADE makes them (not converted to
+NURBS); occ_brep_points.json holds, per file and face, the surface type, points of the surface
+at random parameters in the face's parameter box, and per edge points of the 3D curve and of
+the pcurve on the face at random edge parameters. Parameters are the STEP (ISO 10303-42) ones:
+OpenCASCADE's cone parameter v runs along the generatrix and is converted to the height along
+the axis (v cos a) here.
+
 Run once by hand (not in CI: the wheel is large):
     python3 -m venv /tmp/occ && /tmp/occ/bin/pip install cadquery-ocp
     /tmp/occ/bin/python bench/gen_cad_test_files.py crates/vclay-io/tests/data/cad
@@ -13,7 +21,13 @@ import sys
 from OCP.BRep import BRep_Tool
 from OCP.BRepBuilderAPI import (BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace,
                                 BRepBuilderAPI_NurbsConvert)
-from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder, BRepPrimAPI_MakeTorus
+from OCP.BRepPrimAPI import (BRepPrimAPI_MakeBox, BRepPrimAPI_MakeCone,
+                             BRepPrimAPI_MakeCylinder, BRepPrimAPI_MakePrism,
+                             BRepPrimAPI_MakeRevol, BRepPrimAPI_MakeSphere,
+                             BRepPrimAPI_MakeTorus)
+from OCP.BRepTools import BRepTools
+from OCP.GeomAbs import GeomAbs_Cone
+from OCP.BRepAdaptor import BRepAdaptor_Curve, BRepAdaptor_Curve2d, BRepAdaptor_Surface
 from OCP.Geom import Geom_BSplineCurve, Geom_BSplineSurface
 from OCP.GeomAdaptor import GeomAdaptor_Curve
 from OCP.IFSelect import IFSelect_RetDone
@@ -24,7 +38,7 @@ from OCP.OCP import collections as col
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS
-from OCP.gp import gp_Pnt
+from OCP.gp import gp_Ax1, gp_Ax2, gp_Dir, gp_Pnt, gp_Vec
 
 out = sys.argv[1]
 rng = random.Random(20)
@@ -143,3 +157,91 @@ for name, shape in shapes.items():
         report[name + ext] = recs
 with open(f"{out}/occ_points.json", "w") as f:
     json.dump(report, f, separators=(",", ":"))
+
+
+# --- B-rep solids with elementary and swept surfaces (issue 20, STEP only) -------------------
+
+def profile():
+    """A B-spline profile in the xz-plane, away from the z axis, for revolution."""
+    pts = col.Array1_gp_Pnt(1, 5)
+    for i, (x, z) in enumerate([(1.0, 0.0), (1.6, 0.4), (1.2, 1.0), (1.8, 1.6), (1.1, 2.0)]):
+        pts.SetValue(i + 1, gp_Pnt(x, 0.0, z))
+    return Geom_BSplineCurve(pts, arr1([0.0, 0.5, 1.0]), arr1([4, 1, 4], col.Array1_int), 3)
+
+
+def extrusion_curve():
+    pts = col.Array1_gp_Pnt(1, 4)
+    for i, (x, y) in enumerate([(0.0, 0.0), (1.0, 1.0), (2.0, -1.0), (3.0, 0.5)]):
+        pts.SetValue(i + 1, gp_Pnt(x, y, 0.0))
+    return Geom_BSplineCurve(pts, arr1([0.0, 1.0]), arr1([4, 4], col.Array1_int), 3)
+
+
+frame = gp_Ax2(gp_Pnt(0.5, -0.25, 0.75), gp_Dir(0.3, -0.2, 1.0), gp_Dir(1.0, 0.0, -0.3))
+breps = {
+    "brep_box": BRepPrimAPI_MakeBox(gp_Pnt(-1.0, -0.5, 0.25), 2.0, 1.5, 0.75).Shape(),
+    "brep_cylinder": BRepPrimAPI_MakeCylinder(frame, 0.8, 1.7).Shape(),
+    "brep_cone": BRepPrimAPI_MakeCone(1.0, 0.4, 1.5).Shape(),
+    "brep_sphere": BRepPrimAPI_MakeSphere(gp_Pnt(0.2, 0.1, -0.3), 1.3).Shape(),
+    "brep_torus": BRepPrimAPI_MakeTorus(frame, 2.0, 0.6).Shape(),
+    "brep_revolution": BRepPrimAPI_MakeRevol(
+        BRepBuilderAPI_MakeEdge(profile()).Edge(),
+        gp_Ax1(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1))).Shape(),
+    "brep_extrusion": BRepPrimAPI_MakePrism(
+        BRepBuilderAPI_MakeEdge(extrusion_curve()).Edge(), gp_Vec(0.2, 0.3, 1.5)).Shape(),
+}
+
+
+def iso_v(adaptor):
+    """OpenCASCADE's v to the STEP v (cones: height along the axis)."""
+    if adaptor.GetType() == GeomAbs_Cone:
+        import math
+        c = math.cos(adaptor.Cone().SemiAngle())
+        return lambda v: v * c
+    return lambda v: v
+
+
+brep_report = {}
+for name, shape in breps.items():
+    path = f"{out}/{name}.step"
+    write_step(shape, path)
+    back = read(path)
+    faces = []
+    ex = TopExp_Explorer(back, TopAbs_FACE)
+    while ex.More():
+        face = TopoDS.Face(ex.Current())
+        ad = BRepAdaptor_Surface(face, False)
+        conv = iso_v(ad)
+        surf = BRep_Tool.Surface_s(face)
+        u0, u1, v0, v1 = BRepTools.UVBounds_s(face)
+        params, points = [], []
+        for _ in range(6):
+            u, v = rng.uniform(u0, u1), rng.uniform(v0, v1)
+            p = surf.Value(u, v)
+            params.append([u, conv(v)])
+            points.append([p.X(), p.Y(), p.Z()])
+        edges = []
+        ee = TopExp_Explorer(face, TopAbs_EDGE)
+        while ee.More():
+            edge = TopoDS.Edge(ee.Current())
+            if BRep_Tool.Degenerated_s(edge):
+                ee.Next()
+                continue
+            c3 = BRepAdaptor_Curve(edge)
+            c2 = BRepAdaptor_Curve2d(edge, face)
+            a, b = c3.FirstParameter(), c3.LastParameter()
+            ts, p3, uv = [], [], []
+            for _ in range(4):
+                t = rng.uniform(a, b)
+                p = c3.Value(t)
+                q = c2.Value(t)
+                ts.append(t)
+                p3.append([p.X(), p.Y(), p.Z()])
+                uv.append([q.X(), conv(q.Y())])
+            edges.append({"params": ts, "points": p3, "uv": uv})
+            ee.Next()
+        faces.append({"surface": type(surf).__name__, "params": params, "points": points,
+                      "edges": edges})
+        ex.Next()
+    brep_report[name + ".step"] = faces
+with open(f"{out}/occ_brep_points.json", "w") as f:
+    json.dump(brep_report, f, separators=(",", ":"))

@@ -488,7 +488,11 @@ pub fn parse_iges(text: &str) -> Result<CadImport, IoError> {
             ),
         ));
     }
-    Ok(CadImport { entities, warnings })
+    Ok(CadImport {
+        entities,
+        warnings,
+        faces: Vec::new(),
+    })
 }
 
 /// Reads an IGES file (`.igs`, `.iges`). Errors name the file.

@@ -193,6 +193,7 @@ pub fn import_model(path: impl AsRef<Path>) -> Result<crate::CadImport, IoError>
             Ok(crate::CadImport {
                 entities: parse_named_model(&text).map_err(|e| e.in_file(path))?,
                 warnings: Vec::new(),
+                faces: Vec::new(),
             })
         }
     }

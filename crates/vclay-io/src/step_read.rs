@@ -1,38 +1,53 @@
-//! STEP (ISO 10303-21) import of B-spline curves and surfaces, polynomial and rational, from
-//! AP203, AP214 and AP242 files.
+//! STEP (ISO 10303-21) import of B-spline curves and surfaces, polynomial and rational, and of
+//! the elementary and swept surfaces of B-reps, from AP203, AP214 and AP242 files.
 //!
 //! **What.** Read: `B_SPLINE_CURVE_WITH_KNOTS`, `B_SPLINE_SURFACE_WITH_KNOTS` and the rational
 //! complex entities `(BOUNDED_CURVE() B_SPLINE_CURVE(..) B_SPLINE_CURVE_WITH_KNOTS(..) ..
 //! RATIONAL_B_SPLINE_CURVE(..) ..)` and `(.. B_SPLINE_SURFACE(..) B_SPLINE_SURFACE_WITH_KNOTS(..)
 //! .. RATIONAL_B_SPLINE_SURFACE(..) ..)` (ISO 10303-42 section 4.4), with their
-//! `CARTESIAN_POINT`s. Every B-spline surface of the file is imported: those of a
-//! `GEOMETRIC_SET`, the basis of a trimmed or offset surface, and the `FACE_SURFACE` geometry of
-//! the `ADVANCED_FACE`s of a B-rep (untrimmed: the faces' bounds, edges and vertices are dropped,
-//! and a warning says so). A B-spline curve is imported unless it is part of a B-rep's topology
-//! or of a surface definition (referenced by `EDGE_CURVE`, `PCURVE`, `SURFACE_CURVE`,
-//! `SEAM_CURVE`, `DEFINITIONAL_REPRESENTATION` or a swept surface) or lies in a 2D parameter
-//! space; a `TRIMMED_CURVE`'s basis is imported whole. Names become entity names when not empty.
+//! `CARTESIAN_POINT`s; and `PLANE`, `CYLINDRICAL_SURFACE`, `CONICAL_SURFACE`,
+//! `SPHERICAL_SURFACE`, `TOROIDAL_SURFACE`, `SURFACE_OF_REVOLUTION` and
+//! `SURFACE_OF_LINEAR_EXTRUSION` with their `AXIS2_PLACEMENT_3D`s, converted exactly to NURBS
+//! ([`brep`](self) submodule: rational quadratic arcs; unbounded surfaces cut to the box of their
+//! faces' boundaries, else [`DEFAULT_RANGE`]). Every such surface of the file is imported: those
+//! of a `GEOMETRIC_SET`, the basis of a trimmed or offset surface, and the `FACE_SURFACE`
+//! geometry of the `ADVANCED_FACE`s of a B-rep. The faces' trimming loops (`FACE_BOUND` ->
+//! `EDGE_LOOP` -> `ORIENTED_EDGE` -> `EDGE_CURVE` with its 3D curve and its `PCURVE`s) are kept in
+//! [`CadImport::faces`] ([`TrimmedFace`]) but **not applied**: the surfaces are imported whole
+//! and the JSON model does not store trims; a warning says so. A B-spline curve is imported
+//! unless it is part of a B-rep's topology or of a surface definition (referenced by
+//! `EDGE_CURVE`, `PCURVE`, `SURFACE_CURVE`, `SEAM_CURVE`, `DEFINITIONAL_REPRESENTATION` or a
+//! swept surface) or lies in a 2D parameter space; a `TRIMMED_CURVE`'s basis is imported whole.
+//! Names become entity names when not empty.
 //!
 //! **How.** A Part 21 tokenizer (comments, strings with `''`, enumerations `.T.`, `$`, `*`,
 //! `#id` references, typed parameters `LENGTH_MEASURE(1.)`, binary `"..."`) feeds a parser
 //! that keeps each instance's type(s), parameters and line; the data section is then read
-//! entity by entity. Knots are expanded from distinct values and multiplicities; surface nets
-//! are lists of rows along u, as vclay stores them, so nothing is reordered.
+//! entity by entity: faces first (their loops give the ranges of unbounded surfaces), then
+//! surfaces and curves. Knots are expanded from distinct values and multiplicities; surface
+//! nets are lists of rows along u, as vclay stores them, so nothing is reordered.
 //!
 //! **Warnings.** [`CadImport::warnings`] lists, per type with counts, every entity instance that
-//! was not read (elementary surfaces such as `PLANE`, `CYLINDRICAL_SURFACE` or `TOROIDAL_SURFACE`
-//! are not converted yet; topology, placements, units and product data are not needed), and says
-//! when faces lost their trimming loops. Nothing is dropped silently.
+//! was not read (topology above the faces, units and product data are not needed), says that
+//! faces are imported untrimmed with their loops kept as data, and counts edges whose curves are
+//! of a type not read. Nothing is dropped silently.
 //!
 //! **Errors.** A malformed file is an [`IoError::Cad`] naming the line and the entity:
 //! `STEP line 41, entity #17: B_SPLINE_CURVE_WITH_KNOTS: knot multiplicities and knots differ
 //! in length (4 and 3)`.
 //!
-//! **Limitations.** No trimming loops, topology or solids; no elementary surfaces or curves
-//! (lines, circles, conics, planes, quadrics): they are listed as not read. `UNIFORM_*`,
-//! `QUASI_UNIFORM_*` and `BEZIER_*` subtypes (knots implied rather than given) are listed as
-//! not read. Placements (`MAPPED_ITEM`, assemblies) and units are not applied: coordinates are
-//! taken as written.
+//! **Limitations.** Trimming loops are not applied (no trimmed tessellation); no solids as such
+//! (the faces of a shell come in as separate surfaces); free lines and conics (outside a face's
+//! loop or a swept surface) are listed as not read; `OFFSET_SURFACE`,
+//! `RECTANGULAR_TRIMMED_SURFACE` and `CURVE_BOUNDED_SURFACE` are not read (their B-spline basis
+//! is). `UNIFORM_*`, `QUASI_UNIFORM_*` and `BEZIER_*` subtypes (knots implied rather than given)
+//! are listed as not read. Placements (`MAPPED_ITEM`, assemblies) and length units are not
+//! applied: coordinates are taken as written; a plane-angle unit in degrees is applied to cone
+//! semi-angles and circle trims.
+
+mod brep;
+
+pub use brep::{DEFAULT_RANGE, ParamAxis, TrimEdge, TrimLoop, TrimmedFace};
 
 use crate::error::IoError;
 use crate::model::{Entity, NamedEntity};
@@ -49,6 +64,9 @@ pub struct CadImport {
     pub entities: Vec<NamedEntity>,
     /// What was not read or was simplified, one sentence each (empty when everything was read).
     pub warnings: Vec<String>,
+    /// The faces of a STEP B-rep: the entity each lies on and its trimming loops, kept as data
+    /// (not applied: the surfaces in `entities` are whole). Empty for IGES and JSON.
+    pub faces: Vec<TrimmedFace>,
 }
 
 /// A parameter of a Part 21 instance.
@@ -517,6 +535,8 @@ struct Reader<'a> {
     all: &'a BTreeMap<usize, Instance>,
     /// Instances consumed as parts of what was read (points, the splines themselves).
     used: HashSet<usize>,
+    /// The file's plane-angle unit in radians.
+    angle_unit: f64,
 }
 
 struct Ctx<'a> {
@@ -655,6 +675,25 @@ impl<'a> Reader<'a> {
 
     /// A B-spline curve instance, or why it is skipped.
     fn curve(&mut self, inst: &Instance) -> Result<Result<NamedEntity, Skip>, IoError> {
+        self.curve_in(inst, false)
+    }
+
+    /// A 2D B-spline curve (a pcurve) with z = 0.
+    fn curve_2d(&mut self, inst: &Instance) -> Result<NurbsCurve, IoError> {
+        match self.curve_in(inst, true)? {
+            Ok(NamedEntity {
+                entity: Entity::Curve(c),
+                ..
+            }) => Ok(c),
+            _ => Err(err(inst.line, Some(inst.id), "not a B-spline curve")),
+        }
+    }
+
+    fn curve_in(
+        &mut self,
+        inst: &Instance,
+        allow_2d: bool,
+    ) -> Result<Result<NamedEntity, Skip>, IoError> {
         // Simple form: all attributes in one part; complex form: spread over parts.
         let (name, degree, cps, mults, knots, weights);
         if inst.parts.len() == 1 && inst.is("B_SPLINE_CURVE_WITH_KNOTS") {
@@ -714,7 +753,7 @@ impl<'a> Reader<'a> {
             planar2d |= !three;
             pts.push(q);
         }
-        if planar2d {
+        if planar2d && !allow_2d {
             return Ok(Err(Skip::TwoD));
         }
         let curve = NurbsCurve::new(degree, knots, pts, weights).map_err(|e| c.err(e))?;
@@ -846,16 +885,23 @@ fn is_surface_type(inst: &Instance) -> bool {
     })
 }
 
+/// The elementary and swept surface types converted exactly to NURBS ([`brep`]).
+const ELEMENTARY: [&str; 7] = [
+    "PLANE",
+    "CYLINDRICAL_SURFACE",
+    "CONICAL_SURFACE",
+    "SPHERICAL_SURFACE",
+    "TOROIDAL_SURFACE",
+    "SURFACE_OF_REVOLUTION",
+    "SURFACE_OF_LINEAR_EXTRUSION",
+];
+
 /// Imports a STEP file's text. See the module documentation for what is read.
 pub fn parse_step(text: &str) -> Result<CadImport, IoError> {
     let all = parse_instances(text)?;
     // Which instances reference each curve through topology or surface definitions.
     let mut bound_curves: HashSet<usize> = HashSet::new();
-    let mut faces = 0usize;
     for inst in all.values() {
-        if inst.is("ADVANCED_FACE") || inst.is("FACE_SURFACE") {
-            faces += 1;
-        }
         if inst
             .parts
             .iter()
@@ -871,12 +917,37 @@ pub fn parse_step(text: &str) -> Result<CadImport, IoError> {
     let mut rd = Reader {
         all: &all,
         used: HashSet::new(),
+        angle_unit: brep::angle_unit(&all),
     };
+    // Faces first: their trimming loops, and the boundary points of each surface (for the
+    // ranges of unbounded surfaces).
+    let mut face_data = Vec::new();
+    for inst in all.values() {
+        if inst.is("ADVANCED_FACE") || inst.is("FACE_SURFACE") {
+            face_data.push(rd.face(inst)?);
+        }
+    }
+    let uses = brep::by_surface(&face_data);
+    // Surface id -> (entity index, type, parameter map).
+    let mut on: HashMap<usize, (usize, String, [ParamAxis; 2])> = HashMap::new();
     let mut entities = Vec::new();
     let (mut edge_curves, mut curves_2d) = (0usize, 0usize);
+    let mut elementary = 0usize;
     for inst in all.values() {
         let got = if is_surface_type(inst) {
             rd.surface(inst)?
+        } else if inst.parts.len() == 1 && ELEMENTARY.contains(&inst.parts[0].name.as_str()) {
+            let hull = uses.get(&inst.id).map_or(&[][..], |u| &u.hull[..]);
+            if let Some((s, axes, name)) = rd.elementary(inst, hull)? {
+                rd.used.insert(inst.id);
+                on.insert(inst.id, (entities.len(), inst.parts[0].name.clone(), axes));
+                elementary += 1;
+                entities.push(NamedEntity {
+                    name,
+                    entity: Entity::Surface(s),
+                });
+            }
+            continue;
         } else if is_curve_type(inst) {
             if bound_curves.contains(&inst.id) {
                 // Read it all the same so that a malformed one is reported, then drop it.
@@ -898,6 +969,16 @@ pub fn parse_step(text: &str) -> Result<CadImport, IoError> {
         match got {
             Ok(e) => {
                 rd.used.insert(inst.id);
+                if matches!(e.entity, Entity::Surface(_)) {
+                    on.insert(
+                        inst.id,
+                        (
+                            entities.len(),
+                            inst.type_name(),
+                            [ParamAxis::Linear, ParamAxis::Linear],
+                        ),
+                    );
+                }
                 entities.push(e);
             }
             Err(Skip::TwoD) => {
@@ -907,19 +988,58 @@ pub fn parse_step(text: &str) -> Result<CadImport, IoError> {
             Err(Skip::Unsupported) => {}
         }
     }
-    // Points used only by skipped curves are not "read" in any useful sense, but they were
-    // parsed and checked; count them with their curves rather than listing them.
+    let mut faces = Vec::new();
+    let (mut faces_off, mut skipped_edges) = (0usize, 0usize);
+    for f in face_data {
+        skipped_edges += f.skipped;
+        match on.get(&f.surface) {
+            Some((entity, surface_type, axes)) => faces.push(TrimmedFace {
+                step_id: f.step_id,
+                entity: *entity,
+                surface_type: surface_type.clone(),
+                axes: *axes,
+                same_sense: f.same_sense,
+                loops: f.loops,
+            }),
+            None => faces_off += 1,
+        }
+    }
     let mut warnings = Vec::new();
-    if faces > 0 {
+    if !faces.is_empty() {
+        let edges: usize = faces
+            .iter()
+            .flat_map(|f| &f.loops)
+            .map(|l| l.edges.len())
+            .sum();
         warnings.push(format!(
-            "{faces} face(s) of a B-rep: their underlying surfaces are imported untrimmed \
-             (trimming loops, edges and vertices are dropped)"
+            "{} face(s) of a B-rep: their surfaces are imported whole (untrimmed); the trimming \
+             loops ({edges} edge(s) with their 3D curves and pcurves) are kept in the import's \
+             face data but not applied, and the model file (JSON) does not store them",
+            faces.len()
+        ));
+    }
+    if elementary > 0 {
+        warnings.push(format!(
+            "{elementary} elementary or swept surface(s) converted exactly to NURBS; unbounded \
+             ones (planes, cylinders, cones, extrusions) are cut to their faces' boundary box"
+        ));
+    }
+    if faces_off > 0 {
+        warnings.push(format!(
+            "{faces_off} face(s) lie on surfaces of a type not read: dropped with their loops"
+        ));
+    }
+    if skipped_edges > 0 {
+        warnings.push(format!(
+            "{skipped_edges} edge(s) of trimming loops have curves of a type not read: \
+             missing from their loops"
         ));
     }
     if edge_curves + curves_2d > 0 {
         warnings.push(format!(
             "{edge_curves} B-spline edge or surface-definition curve(s) and {curves_2d} \
-             parameter-space (2D) curve(s) not imported: they belong to the dropped topology"
+             parameter-space (2D) curve(s) not imported as separate curves: edges and pcurves \
+             are kept in the faces' trimming loops"
         ));
     }
     let mut not_read: HashMap<String, usize> = HashMap::new();
@@ -942,12 +1062,16 @@ pub fn parse_step(text: &str) -> Result<CadImport, IoError> {
             1,
             None,
             format!(
-                "no B-spline curve or surface to import ({})",
+                "no B-spline, elementary or swept curve or surface to import ({})",
                 warnings.join("; ")
             ),
         ));
     }
-    Ok(CadImport { entities, warnings })
+    Ok(CadImport {
+        entities,
+        warnings,
+        faces,
+    })
 }
 
 /// Reads a STEP file (`.step`, `.stp`). Errors name the file.

@@ -102,12 +102,18 @@ fn brep_files_warn_about_what_is_dropped() {
             .all(|e| matches!(e.entity, Entity::Surface(_)))
     );
     let w = s.warnings.join("\n");
-    assert!(w.contains("3 face(s) of a B-rep"), "{w}");
     assert!(
-        w.contains("3 ADVANCED_FACE") && w.contains("EDGE_CURVE"),
+        w.contains("3 face(s) of a B-rep") && w.contains("not applied"),
+        "{w}"
+    );
+    // Faces, loops, edges and pcurves are read into the face data, not listed as dropped.
+    assert!(
+        !w.contains("ADVANCED_FACE") && !w.contains("EDGE_CURVE") && !w.contains("PCURVE"),
         "{w}"
     );
     assert!(w.contains("2D) curve"), "{w}");
+    assert_eq!(s.faces.len(), 3);
+    assert!(s.faces.iter().all(|f| !f.loops.is_empty()));
     let c = import_model(data("curve.step")).unwrap();
     assert!(
         c.warnings.join(" ").contains("1 TRIMMED_CURVE"),
@@ -155,7 +161,7 @@ END-ISO-10303-21;
 #[test]
 fn hand_written_step_matches_closed_forms() {
     let r = parse_step(QUARTER).unwrap();
-    assert_eq!(r.entities.len(), 2);
+    assert_eq!(r.entities.len(), 3);
     assert_eq!(r.entities[0].name.as_deref(), Some("quarter"));
     let Entity::Curve(c) = &r.entities[0].entity else {
         panic!()
@@ -185,8 +191,16 @@ fn hand_written_step_matches_closed_forms() {
             + corner[3] * u * v;
         assert!((s.point(u, v).unwrap() - exact).norm() < 1e-15);
     }
+    // The free PLANE (no face bounds it) gets the default range [-1, 1]^2 of its placement
+    // (defaults: z axis, x direction).
+    let Entity::Surface(plane) = &r.entities[2].entity else {
+        panic!()
+    };
+    let d = plane.domain();
+    assert_eq!([d[0].min, d[0].max, d[1].min, d[1].max], [-1., 1., -1., 1.]);
+    assert_eq!(plane.point(0.5, -0.25).unwrap(), Vec3::new(0.5, -0.25, 0.));
     let w = r.warnings.join("\n");
-    assert!(w.contains("1 AXIS2_PLACEMENT_3D, 1 PLANE"), "{w}");
+    assert!(w.contains("1 elementary or swept surface(s)"), "{w}");
 }
 
 #[test]
@@ -213,7 +227,7 @@ fn step_errors_name_the_line_and_entity() {
     let e = parse_step("ISO-10303-21;\nDATA;\nENDSEC;\nEND-ISO-10303-21;\n")
         .unwrap_err()
         .to_string();
-    assert!(e.contains("no B-spline curve or surface"), "{e}");
+    assert!(e.contains("curve or surface to import"), "{e}");
 }
 
 #[test]

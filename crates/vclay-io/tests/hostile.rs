@@ -192,7 +192,12 @@ fn step_and_iges() {
     let read = |f: &str| std::fs::read(format!("{dir}/{f}")).unwrap();
     hostile(
         "STEP",
-        &[read("curve.step"), read("rational_surface.step")],
+        &[
+            read("curve.step"),
+            read("rational_surface.step"),
+            read("brep_cone.step"),
+            read("brep_revolution.step"),
+        ],
         |b| vclay_io::step_read::parse_step(&text(b)).is_ok(),
     );
     hostile(
