@@ -60,6 +60,7 @@ pub mod hierarchy;
 pub mod ids;
 pub mod lattice;
 pub mod limit;
+pub mod limit_surface;
 pub mod map;
 pub mod primitives;
 pub mod sparse;
@@ -74,6 +75,7 @@ pub use hierarchy::SubdivisionSolid;
 pub use ids::{CellId, EdgeId, FaceId, VertexId};
 pub use lattice::{ElementCounts, Lattice};
 pub use limit::{LimitEvaluator, LimitParams, LimitPoint, LimitQuery, cell_frame};
+pub use limit_surface::{LimitPatches, boundary_limits, boundary_patches, write_limit_boundary};
 pub use map::{ChainWorkspace, SubdivisionMap};
 pub use sparse::{Coord, SparseMatrix};
 pub use subdivide::{
