@@ -9,6 +9,15 @@
 //! shape keys (named `frame 0`, `frame 1`, ... through `extras.targetNames`) and the animation as
 //! their keyframes.
 //!
+//! **Axes.** vclay models are z-up; glTF is y-up (glTF 2.0 section 3.4: +y up, +z forward,
+//! right-handed). The writer converts coordinates, not a node transform: every position, normal
+//! and morph-target displacement `(x, y, z)` is written as `(x, z, -y)` (a rotation by -90
+//! degrees about x, [`to_y_up`]), so a torus lying in vclay's xy plane lies flat on Blender's
+//! floor and every viewer shows it upright without having to apply node transforms. The reader
+//! applies the inverse `(x, y, z) -> (x, -z, y)` ([`from_y_up`]) to every file (all glTF is
+//! y-up), so a vclay round trip gives back the coordinates: the permutation and sign change are
+//! exact in floating point, only the f32 rounding remains.
+//!
 //! **How.** The JSON chunk is padded with spaces and the binary chunk with zeros to 4 bytes
 //! (glTF 2.0 section 4.4); every accessor starts at a multiple of 4; `POSITION` accessors carry
 //! `min`/`max` computed from the stored 32-bit values, as the specification requires.
@@ -71,6 +80,22 @@ fn err(path: &str, message: impl Into<String>) -> IoError {
         path: path.into(),
         message: message.into(),
     }
+}
+
+/// vclay's z-up coordinates to glTF's y-up ones: `(x, y, z) -> (x, z, -y)`, the rotation by
+/// -90 degrees about x (exact: a permutation and a sign change).
+pub fn to_y_up(v: Vec3) -> Vec3 {
+    Vec3::new(v.x, v.z, -v.y)
+}
+
+/// glTF's y-up coordinates to vclay's z-up ones, the inverse of [`to_y_up`]:
+/// `(x, y, z) -> (x, -z, y)`.
+pub fn from_y_up(v: Vec3) -> Vec3 {
+    Vec3::new(v.x, -v.z, v.y)
+}
+
+fn y_up(v: &[Vec3]) -> Vec<Vec3> {
+    v.iter().copied().map(to_y_up).collect()
 }
 
 /// Unit normals of `positions` under the triangles of `mesh` (zero normals become +z).
@@ -214,8 +239,8 @@ pub fn to_glb(meshes: &[GlbMesh]) -> Result<Vec<u8>, IoError> {
         } else {
             unit_normals(&m.mesh, base)
         };
-        let pos = bin.vec3(base, true, Some(ARRAY_BUFFER));
-        let nor = bin.vec3(&normals, false, Some(ARRAY_BUFFER));
+        let pos = bin.vec3(&y_up(base), true, Some(ARRAY_BUFFER));
+        let nor = bin.vec3(&y_up(&normals), false, Some(ARRAY_BUFFER));
         let idx = bin.indices(&m.mesh.triangles);
         let mut prim = json!({"attributes": {"POSITION": pos, "NORMAL": nor}, "indices": idx, "material": i, "mode": 4});
         let mut jm = json!({"name": m.name, "primitives": []});
@@ -229,8 +254,8 @@ pub fn to_glb(meshes: &[GlbMesh]) -> Result<Vec<u8>, IoError> {
                     .zip(&normals)
                     .map(|(n, b)| n - b)
                     .collect();
-                let tp = bin.vec3(&dp, true, Some(ARRAY_BUFFER));
-                let tn = bin.vec3(&dn, false, Some(ARRAY_BUFFER));
+                let tp = bin.vec3(&y_up(&dp), true, Some(ARRAY_BUFFER));
+                let tn = bin.vec3(&y_up(&dn), false, Some(ARRAY_BUFFER));
                 targets.push(json!({"POSITION": tp, "NORMAL": tn}));
             }
             let n = a.frames.len();
@@ -468,9 +493,10 @@ pub fn decode_glb(b: &[u8]) -> Result<Vec<TriMesh>, IoError> {
         }
         Ok((out, ncomp))
     };
+    // glTF is y-up: back to vclay's z-up.
     let vecs = |v: Vec<f64>| -> Vec<Vec3> {
         v.chunks_exact(3)
-            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .map(|c| from_y_up(Vec3::new(c[0], c[1], c[2])))
             .collect()
     };
     let mut out = Vec::new();
@@ -549,6 +575,27 @@ mod tests {
         }
         for (a, b) in back[0].normals.iter().zip(&m.normals) {
             assert!((a - b).norm() < 1e-6);
+        }
+    }
+
+    /// The file is y-up: vclay's z axis is glTF's y axis (POSITION max of a tetrahedron with
+    /// its apex at z = 1 is y = 1), its y axis is glTF's -z; reading undoes it exactly.
+    #[test]
+    fn z_up_is_written_y_up_and_read_back() {
+        let m = tetra();
+        let bytes = to_glb(&[GlbMesh::new("tet", m.clone())]).unwrap();
+        let jlen = u32_at(&bytes, 12).unwrap() as usize;
+        let doc: Value = serde_json::from_slice(&bytes[20..20 + jlen]).unwrap();
+        let pos = &doc["accessors"][doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"]
+            .as_u64()
+            .unwrap() as usize];
+        assert_eq!(pos["max"], json!([1.0, 1.0, 0.0]));
+        assert_eq!(pos["min"], json!([0.0, 0.0, -1.0]));
+        let back = decode_glb(&bytes).unwrap();
+        assert_eq!(back[0].positions, m.positions);
+        for v in [Vec3::new(1.5, -2.25, 3.0), Vec3::new(-0.1, 0.2, -0.3)] {
+            assert_eq!(from_y_up(to_y_up(v)), v);
+            assert_eq!(to_y_up(Vec3::z()), Vec3::y());
         }
     }
 
