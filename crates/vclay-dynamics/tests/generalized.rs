@@ -174,6 +174,11 @@ fn with_weights_held_the_model_matches_the_frozen_weight_engine() {
     frozen.solver = LinearSolver::Direct;
     let geo = RationalGeometry::from_surface(&surf);
     let mut general = GeneralizedDnurbs::new(geo, mat).unwrap();
+    // The frozen-weight engine integrates with the paper's fixed Gauss rule; on this rational
+    // surface the weight-aware default differs from it by that rule's error (2.7e-3, issue 18).
+    general
+        .set_quadrature_rule(vclay_dynamics::dnurbs::QuadratureRule::Fixed)
+        .unwrap();
     let n = general.geometry().coordinates().len();
     for i in (3..n).step_by(4) {
         general.set_fixed_coordinate(i, true).unwrap();

@@ -441,6 +441,28 @@ pub trait GeneralizedGeometry: Clone + Send + Sync + std::fmt::Debug {
     fn elements(&self) -> Vec<[(f64, f64); 2]>;
     /// Largest polynomial degree (chooses the quadrature order).
     fn max_degree(&self) -> usize;
+    /// Quadrature points and weights of element `element` (index into [`Self::elements`]) for
+    /// `order` Gauss points per direction, for geometries whose elements are not the parameter
+    /// rectangles of [`Self::elements`] (triangular D-NURBS: domain triangles cut along knot
+    /// lines). `None` (the default): the tensor Gauss-Legendre rule on the rectangle.
+    fn element_quadrature(
+        &self,
+        element: usize,
+        order: [usize; 2],
+    ) -> Option<(Vec<[f64; 2]>, Vec<f64>)> {
+        let _ = (element, order);
+        None
+    }
+    /// The rational denominator `W` of eq (1) on `element`, as univariate slices per parametric
+    /// direction: for direction `d`, a list of slices, each the values of `W` at the points
+    /// `nodes` (in `[-1, 1]`, mapped onto the element's interval in direction `d`) with the other
+    /// parameter held (surfaces: at the same nodes of the other direction). Empty where the
+    /// geometry is polynomial along a direction (the default). [`QuadratureRule::WeightAware`]
+    /// reads the distance of `W`'s complex zeros from the element off these samples.
+    fn element_denominators(&self, element: &[(f64, f64); 2], nodes: &[f64]) -> [Vec<Vec<f64>>; 2] {
+        let _ = (element, nodes);
+        [Vec::new(), Vec::new()]
+    }
     /// Size of the model (for tolerances and divergence detection).
     fn scale(&self) -> f64;
     /// Values and Jacobian columns at a parameter.
@@ -587,6 +609,251 @@ pub const CONSTRAINT_DEPENDENCE_TOLERANCE: f64 = 1e-9;
 struct Quadrature {
     params: Vec<[f64; 2]>,
     weights: Vec<f64>,
+    /// Gauss points per direction `[u, v]` (v is 1 for curves).
+    order: [usize; 2],
+}
+
+impl Quadrature {
+    /// The geometry's own rule for element `index` ([`GeneralizedGeometry::element_quadrature`])
+    /// or the tensor Gauss-Legendre rule on its rectangle.
+    fn for_element<G: GeneralizedGeometry>(
+        g: &G,
+        index: usize,
+        element: &[(f64, f64); 2],
+        order: [usize; 2],
+        dim: usize,
+    ) -> Result<Self, DynamicsError> {
+        match g.element_quadrature(index, order) {
+            Some((params, weights)) => Ok(Self {
+                params,
+                weights,
+                order,
+            }),
+            None => Self::on(element, order, dim),
+        }
+    }
+
+    /// The tensor Gauss-Legendre rule with `order` points per direction on `element`.
+    fn on(element: &[(f64, f64); 2], order: [usize; 2], dim: usize) -> Result<Self, DynamicsError> {
+        let rule = |n: usize| {
+            GaussLegendre::new(n).map_err(|_| DynamicsError::Parameter {
+                name: "quadrature order",
+                value: n as f64,
+                why: "no Gauss-Legendre rule with this many points (1 to 64)",
+            })
+        };
+        let gu = rule(order[0])?;
+        let us: Vec<(f64, f64)> = gu.on_interval(element[0].0, element[0].1).collect();
+        let vs: Vec<(f64, f64)> = if dim == 2 {
+            rule(order[1])?
+                .on_interval(element[1].0, element[1].1)
+                .collect()
+        } else {
+            vec![(element[1].0, 1.0)]
+        };
+        let mut q = Self {
+            params: Vec::with_capacity(us.len() * vs.len()),
+            weights: Vec::with_capacity(us.len() * vs.len()),
+            order: [order[0], if dim == 2 { order[1] } else { 1 }],
+        };
+        for &(u, wu) in &us {
+            for &(v, wv) in &vs {
+                q.params.push([u, v]);
+                q.weights.push(wu * wv);
+            }
+        }
+        Ok(q)
+    }
+}
+
+/// Default relative accuracy of [`QuadratureRule::WeightAware`].
+pub const DEFAULT_QUADRATURE_TOLERANCE: f64 = 1e-8;
+/// Most Gauss points per direction [`QuadratureRule::WeightAware`] chooses.
+pub const MAX_WEIGHT_AWARE_POINTS: usize = 24;
+
+/// How the element integrals of eqs (16)-(17) and the force integrals are computed: tensor
+/// Gauss-Legendre rules per element, with the number of points per direction chosen by the rule.
+///
+/// With uniform weights the integrands are polynomials of degree at most `2p` per direction
+/// and `p + 1` points integrate them exactly. With non-uniform weights they are rational,
+/// `P / W^k` with the denominator `W = sum N_i w_i`, and no Gauss rule is exact: the error
+/// of `n` points decays like `r^(-2(n - p))`, where `r` is the Bernstein-ellipse radius of the
+/// nearest zero of `W` (Trefethen, *Approximation Theory and Approximation Practice*, thm 19.3).
+/// For a denominator that moves monotonically from `1` to the spread `rho = max w / min w` over
+/// the element, that zero lies at `t* = (rho + 1) / (rho - 1)` of the element's half width, so
+/// `r = t* + sqrt(t*^2 - 1)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum QuadratureRule {
+    /// The paper's fixed rule (`d-nurbs.txt` section 5.1 integrates with Gauss points for the
+    /// polynomial degree): `(p + 1).clamp(4, 7)` points per direction for the largest degree
+    /// `p`, whatever the weights. Exact for polynomial (uniform-weight) geometries only; on a
+    /// rational quartic curve with weights 0.6-1.8 the static equilibrium is off by about
+    /// 1e-3 of the model size (see docs/performance.md and `tests/generalized.rs`).
+    Fixed,
+    /// `n` points per direction on every element (a reference rule for measurements).
+    Points(usize),
+    /// Weight-aware (vclay's default): per element and direction, the fixed rule's order or
+    /// `p + ceil(ln(1/tolerance) / (2 ln r))` points, whichever is larger (at most
+    /// [`MAX_WEIGHT_AWARE_POINTS`]), with `r` from the spread of the weights acting on the element
+    /// ([`GeneralizedGeometry::element_weight_spread`]) as in the type docs. The orders are a
+    /// function of the current weights only: they are chosen again before every step (elements
+    /// whose order changes get their rule and rest values rebuilt), so a saved and restored model
+    /// continues bit for bit. Uniform weights keep the fixed rule exactly.
+    WeightAware {
+        /// Relative accuracy aimed at (default [`DEFAULT_QUADRATURE_TOLERANCE`]), in `(0, 1)`.
+        tolerance: f64,
+    },
+}
+
+impl Default for QuadratureRule {
+    fn default() -> Self {
+        Self::WeightAware {
+            tolerance: DEFAULT_QUADRATURE_TOLERANCE,
+        }
+    }
+}
+
+impl QuadratureRule {
+    /// Checks the rule's parameter.
+    pub fn validate(&self) -> Result<(), DynamicsError> {
+        match *self {
+            Self::Fixed => Ok(()),
+            Self::Points(n) if (1..=vclay_core::quadrature::MAX_GAUSS_POINTS).contains(&n) => {
+                Ok(())
+            }
+            Self::Points(n) => Err(DynamicsError::Parameter {
+                name: "quadrature points",
+                value: n as f64,
+                why: "must be 1 to 64",
+            }),
+            Self::WeightAware { tolerance } if tolerance > 0.0 && tolerance < 1.0 => Ok(()),
+            Self::WeightAware { tolerance } => Err(DynamicsError::Parameter {
+                name: "quadrature tolerance",
+                value: tolerance,
+                why: "must be in (0, 1)",
+            }),
+        }
+    }
+
+    /// Points per direction for an element of degree `degree` whose denominator `W` varies by
+    /// the factor `spread` (`max W / min W` on the element, at least 1) and has its nearest
+    /// complex zero on the Bernstein ellipse of radius `radius` (> 1; infinite for a constant
+    /// `W`), see [`denominator_radius`].
+    pub fn order(&self, degree: usize, radius: f64, spread: f64) -> usize {
+        let fixed = (degree + 1).clamp(4, 7);
+        match *self {
+            Self::Fixed => fixed,
+            Self::Points(n) => n,
+            Self::WeightAware { tolerance } => {
+                let eps = spread - 1.0;
+                // Error model `C eps^1.5 r^(-2 (n - p))`, C = QUADRATURE_ERROR_CONSTANT.
+                let amplitude = QUADRATURE_ERROR_CONSTANT * eps.max(0.0).powf(1.5);
+                if radius.is_nan() || radius <= 1.0 || !eps.is_finite() || amplitude <= tolerance {
+                    return fixed;
+                }
+                if !radius.is_finite() {
+                    return fixed;
+                }
+                let extra = ((amplitude / tolerance).ln() / (2.0 * radius.ln())).ceil();
+                let n = degree as f64 + extra.max(0.0);
+                (n.min(MAX_WEIGHT_AWARE_POINTS as f64) as usize).max(fixed)
+            }
+        }
+    }
+}
+
+/// The constant `C` of the weight-aware error model `C (rho - 1)^1.5 r^(-2 (n - p))`
+/// ([`QuadratureRule::WeightAware`]), measured on the rational quartic of
+/// `tests/quadrature.rs` (weights 0.6-1.8 scaled towards 1 by 1e-3 to 1) and rounded up so that
+/// the model over-estimates every measured error.
+pub const QUADRATURE_ERROR_CONSTANT: f64 = 5.0;
+
+/// Bernstein-ellipse radius `r` of the zero of the polynomial sampled by `values` at `nodes`
+/// (in `[-1, 1]`; as many nodes as the degree plus one) nearest to `[-1, 1]`, and the spread
+/// `max |W| / min |W|` of the samples. The polynomial is interpolated in the monomial basis and
+/// its zeros are the eigenvalues of the companion matrix; a zero `z` lies on the ellipse with
+/// foci `-1, 1` and radius `|z + sqrt(z^2 - 1)|` (the branch with modulus at least 1). A
+/// constant has radius infinity. A zero on `[-1, 1]` (a weight sum that vanishes, which
+/// positive weights exclude) has radius 1.
+pub fn denominator_radius(values: &[f64], nodes: &[f64]) -> (f64, f64) {
+    use nalgebra::{Complex, DMatrix, DVector};
+    let n = values.len().min(nodes.len());
+    let (lo, hi) = values[..n]
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), &w| {
+            (lo.min(w.abs()), hi.max(w.abs()))
+        });
+    if n < 2 || lo.is_nan() || lo <= 0.0 || !hi.is_finite() {
+        return (f64::INFINITY, 1.0);
+    }
+    let spread = hi / lo;
+    let v = DMatrix::from_fn(n, n, |i, j| nodes[i].powi(j as i32));
+    let Some(c) = v.lu().solve(&DVector::from_column_slice(&values[..n])) else {
+        return (f64::INFINITY, spread);
+    };
+    let cmax = c.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let mut deg = n - 1;
+    while deg > 0 && c[deg].abs() <= 1e-12 * cmax {
+        deg -= 1;
+    }
+    if deg == 0 {
+        return (f64::INFINITY, spread);
+    }
+    let mut comp = DMatrix::<f64>::zeros(deg, deg);
+    for i in 1..deg {
+        comp[(i, i - 1)] = 1.0;
+    }
+    for i in 0..deg {
+        comp[(i, deg - 1)] = -c[i] / c[deg];
+    }
+    let radius = comp
+        .complex_eigenvalues()
+        .iter()
+        .map(|&z: &Complex<f64>| {
+            let w = (z * z - 1.0).sqrt();
+            (z + w).norm().max((z - w).norm())
+        })
+        .fold(f64::INFINITY, f64::min);
+    (radius.max(1.0), spread)
+}
+
+/// `k` Chebyshev points of the first kind in `[-1, 1]`.
+fn chebyshev_nodes(k: usize) -> Vec<f64> {
+    (0..k)
+        .map(|i| ((2 * i + 1) as f64 * std::f64::consts::PI / (2 * k) as f64).cos())
+        .collect()
+}
+
+/// Gauss points per direction for one element under `rule`.
+fn element_order<G: GeneralizedGeometry>(
+    g: &G,
+    rule: QuadratureRule,
+    element: &[(f64, f64); 2],
+) -> [usize; 2] {
+    let deg = g.max_degree();
+    let fixed = rule.order(deg, f64::INFINITY, 1.0);
+    let mut order = [
+        fixed,
+        if g.parametric_dimension() == 2 {
+            fixed
+        } else {
+            1
+        },
+    ];
+    if let QuadratureRule::WeightAware { .. } = rule {
+        let nodes = chebyshev_nodes(deg + 1);
+        let slices = g.element_denominators(element, &nodes);
+        for (d, list) in slices.iter().enumerate() {
+            if d == 1 && g.parametric_dimension() == 1 {
+                continue;
+            }
+            for slice in list {
+                let (r, spread) = denominator_radius(slice, &nodes);
+                order[d] = order[d].max(rule.order(deg, r, spread));
+            }
+        }
+    }
+    order
 }
 
 /// One element's contribution to a step.
@@ -606,6 +873,9 @@ pub struct GeneralizedDnurbs<G: GeneralizedGeometry> {
     geometry: G,
     material: Material,
     quad: Vec<Quadrature>,
+    /// The elements (parameter rectangles), as [`GeneralizedGeometry::elements`].
+    elements: Vec<[(f64, f64); 2]>,
+    quadrature: QuadratureRule,
     pattern: Option<Arc<CsrPattern>>,
     /// Element work buffers kept between steps (scratch; no state).
     work_pool: Vec<ElementWork>,
@@ -660,35 +930,14 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         let ne = elements.len();
         validate_material(dim, ne, &material)?;
         let n = geometry.coordinates().len();
-        let g = GaussLegendre::new((geometry.max_degree() + 1).clamp(4, 7)).map_err(|_| {
-            DynamicsError::Parameter {
-                name: "quadrature order",
-                value: geometry.max_degree() as f64,
-                why: "no Gauss rule",
-            }
-        })?;
+        let rule = QuadratureRule::default();
         let quad: Vec<Quadrature> = elements
             .iter()
-            .map(|e| {
-                let us: Vec<(f64, f64)> = g.on_interval(e[0].0, e[0].1).collect();
-                let vs: Vec<(f64, f64)> = if dim == 2 {
-                    g.on_interval(e[1].0, e[1].1).collect()
-                } else {
-                    vec![(e[1].0, 1.0)]
-                };
-                let mut q = Quadrature {
-                    params: vec![],
-                    weights: vec![],
-                };
-                for &(u, wu) in &us {
-                    for &(v, wv) in &vs {
-                        q.params.push([u, v]);
-                        q.weights.push(wu * wv);
-                    }
-                }
-                q
+            .enumerate()
+            .map(|(i, e)| {
+                Quadrature::for_element(&geometry, i, e, element_order(&geometry, rule, e), dim)
             })
-            .collect();
+            .collect::<Result<_, _>>()?;
         let mut fixed = vec![false; n];
         for i in geometry.default_fixed_coordinates() {
             fixed[i] = true;
@@ -703,6 +952,8 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             geometry,
             material,
             quad,
+            elements,
+            quadrature: rule,
             pattern: None,
             work_pool: Vec::new(),
             rest: vec![],
@@ -733,6 +984,60 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
     /// The geometry.
     pub fn geometry(&self) -> &G {
         &self.geometry
+    }
+
+    /// The quadrature rule of the element integrals (default
+    /// [`QuadratureRule::WeightAware`]).
+    pub fn quadrature_rule(&self) -> QuadratureRule {
+        self.quadrature
+    }
+
+    /// Replaces the quadrature rule (validated); the element rules and the rest values of
+    /// eq (17) are rebuilt for the current weights at once.
+    pub fn set_quadrature_rule(&mut self, rule: QuadratureRule) -> Result<(), DynamicsError> {
+        rule.validate()?;
+        self.quadrature = rule;
+        self.update_quadrature()
+    }
+
+    /// Quadrature points over all elements (the cost of one assembly, in Jacobian evaluations).
+    pub fn quadrature_points(&self) -> usize {
+        self.quad.iter().map(|q| q.params.len()).sum()
+    }
+
+    /// Chooses every element's Gauss order for the current weights
+    /// ([`QuadratureRule::order`]); elements whose order changes get their rule and their rest
+    /// values (evaluated at the rest coordinates, as the plastic reset does) rebuilt. A function
+    /// of the current coordinates only, so restored states continue bit for bit.
+    fn update_quadrature(&mut self) -> Result<(), DynamicsError> {
+        let dim = self.geometry.parametric_dimension();
+        let rule = self.quadrature;
+        let geometry = &self.geometry;
+        let quad = &self.quad;
+        let changed: Vec<(usize, [usize; 2])> = self
+            .elements
+            .par_iter()
+            .enumerate()
+            .filter_map(|(e, el)| {
+                let order = element_order(geometry, rule, el);
+                (order != quad[e].order).then_some((e, order))
+            })
+            .collect();
+        if changed.is_empty() {
+            return Ok(());
+        }
+        let mut rest_geometry = self.geometry.clone();
+        rest_geometry.set_coordinates(&self.rest_coordinates)?;
+        for &(e, order) in &changed {
+            let q = Quadrature::for_element(&self.geometry, e, &self.elements[e], order, dim)?;
+            let rest = rest_values(&rest_geometry, std::slice::from_ref(&q))?;
+            self.quad[e] = q;
+            if let Some(r) = rest.into_iter().next() {
+                self.rest[e] = r;
+            }
+        }
+        // Point counts changed: the element work buffers are rebuilt by the next assembly.
+        Ok(())
     }
 
     /// Simulated time.
@@ -1131,6 +1436,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
 
     /// One linearized step; `None` when the step is too large to trust (dynamic mode only).
     fn step_once(&mut self, dt: f64, dynamic: bool) -> Result<Option<StepReport>, DynamicsError> {
+        self.update_quadrature()?;
         let q = self.geometry.coordinates().to_vec();
         let n = q.len();
         let v: Vec<f64> = if dynamic {

@@ -46,7 +46,8 @@ pub mod rational;
 mod system;
 
 pub use generalized::{
-    Constraint, GeneralizedDnurbs, GeneralizedGeometry, GeneralizedState, LocalJacobian,
+    Constraint, DEFAULT_QUADRATURE_TOLERANCE, GeneralizedDnurbs, GeneralizedGeometry,
+    GeneralizedState, LocalJacobian, QuadratureRule, denominator_radius,
 };
 pub use geometry::{ClosedCurve, DnurbsGeometry, ElementSamples};
 pub use presets::{Preset, TABLE_1};

@@ -300,6 +300,23 @@ impl RationalGeometry {
         )?)
     }
 
+    /// The denominator `W = sum N_i w_i` at a parameter (1 where it cannot be evaluated:
+    /// the caller only estimates quadrature orders with it).
+    fn denominator(&self, param: [f64; 2]) -> f64 {
+        match self.local(param) {
+            Ok(l) => {
+                let mut w = 0.0;
+                for a in 0..l.ku {
+                    for b in 0..l.kv {
+                        w += l.bu[a] * l.bv[b] * l.w[a * l.kv + b];
+                    }
+                }
+                w
+            }
+            Err(_) => 1.0,
+        }
+    }
+
     /// Local evaluation: spans, basis tables and local control indices.
     fn local(&self, param: [f64; 2]) -> Result<Local, DynamicsError> {
         let mut l = Local::default();
@@ -431,6 +448,29 @@ impl GeneralizedGeometry for RationalGeometry {
         } else {
             self.knots[0].degree()
         }
+    }
+    fn element_denominators(&self, element: &[(f64, f64); 2], nodes: &[f64]) -> [Vec<Vec<f64>>; 2] {
+        let map = |(a, b): (f64, f64), t: f64| 0.5 * (a + b) + 0.5 * (b - a) * t;
+        if !self.surface {
+            let slice = nodes
+                .iter()
+                .map(|&t| self.denominator([map(element[0], t), 0.5]))
+                .collect();
+            return [vec![slice], Vec::new()];
+        }
+        let grid: Vec<Vec<f64>> = nodes
+            .iter()
+            .map(|&t| {
+                nodes
+                    .iter()
+                    .map(|&s| self.denominator([map(element[0], t), map(element[1], s)]))
+                    .collect()
+            })
+            .collect();
+        let along_u = (0..nodes.len())
+            .map(|j| grid.iter().map(|row| row[j]).collect())
+            .collect();
+        [along_u, grid]
     }
     fn scale(&self) -> f64 {
         self.scale
@@ -704,6 +744,17 @@ impl GeneralizedGeometry for SwungGeometry {
     }
     fn max_degree(&self) -> usize {
         self.profile.max_degree().max(self.trajectory.max_degree())
+    }
+    /// The profile's denominator along u, the trajectory's along v (the weights of eq 7 are
+    /// the products `w^a_i w^b_j`, so `W = W_a(u) W_b(v)`).
+    fn element_denominators(&self, element: &[(f64, f64); 2], nodes: &[f64]) -> [Vec<Vec<f64>>; 2] {
+        let [a, _] = self
+            .profile
+            .element_denominators(&[element[0], (0.5, 0.5)], nodes);
+        let [b, _] = self
+            .trajectory
+            .element_denominators(&[element[1], (0.5, 0.5)], nodes);
+        [a, b]
     }
     fn scale(&self) -> f64 {
         self.scale

@@ -39,7 +39,7 @@ use vclay_dynamics::DynamicsError;
 use vclay_dynamics::dnurbs::{
     Constraint, Density, Dnurbs, DnurbsGeometry, DnurbsState, ElasticReference, Force,
     GeneralizedDnurbs, GeneralizedGeometry, GeneralizedState, Integrator, LocalJacobian, Material,
-    Preset, RationalGeometry, SwungGeometry, Target,
+    Preset, QuadratureRule, RationalGeometry, SwungGeometry, Target,
 };
 use vclay_dynamics::{DnurbsCurve, DnurbsSurface};
 use vclay_io::model::Entity;
@@ -1680,6 +1680,36 @@ impl DnurbsModel {
                 ));
             }
         };
+        let quadrature = match (sim.quadrature.as_deref(), sim.quadrature_tolerance) {
+            (Some("fixed"), Some(_)) => {
+                return Err(err(
+                    "simulation",
+                    "quadrature_tolerance",
+                    "only the \"weight-aware\" rule takes a tolerance".into(),
+                ));
+            }
+            (Some("fixed"), None) => Quad::Fixed,
+            (None | Some("weight-aware"), t) => Quad::WeightAware {
+                tolerance: t.unwrap_or(vclay_dynamics::dnurbs::DEFAULT_QUADRATURE_TOLERANCE),
+            },
+            (Some(o), _) => {
+                return Err(err(
+                    "simulation",
+                    "quadrature",
+                    format!("\"{o}\": expected \"weight-aware\" or \"fixed\""),
+                ));
+            }
+        };
+        if let Err(e) = quadrature.rule().validate() {
+            return Err(err("simulation", "quadrature_tolerance", e.to_string()));
+        }
+        if frozen && sim.quadrature.is_some() {
+            return Err(err(
+                "simulation",
+                "quadrature",
+                "the frozen-weight engine always uses the paper's fixed rule; choosing one needs `engine = \"generalized\"`".into(),
+            ));
+        }
         let penalty = sim.weight_penalty.unwrap_or(0.0);
         let dynamic_weights = match m.weights.as_deref() {
             None => !frozen,
@@ -1734,8 +1764,16 @@ impl DnurbsModel {
             model.default_k = p.k;
         }
         match &mut model.engine {
-            Engine::Rational(d) => setup(d, reference, penalty, dynamic_weights, &m.fix)?,
-            Engine::Swung(d) => setup(d, reference, penalty, dynamic_weights, &m.fix)?,
+            Engine::Rational(d) => {
+                setup(d, reference, penalty, dynamic_weights, &m.fix)?;
+                d.set_quadrature_rule(quadrature.rule())
+                    .map_err(|e| err("simulation", "quadrature", e.to_string()))?;
+            }
+            Engine::Swung(d) => {
+                setup(d, reference, penalty, dynamic_weights, &m.fix)?;
+                d.set_quadrature_rule(quadrature.rule())
+                    .map_err(|e| err("simulation", "quadrature", e.to_string()))?;
+            }
             Engine::FrozenSurface(d) => {
                 d.set_elastic_reference(reference);
                 fix_frozen(d, &m.fix)?;
@@ -1758,6 +1796,13 @@ impl DnurbsModel {
         };
         let engine = s.source.engine(frozen, s.material.to_material())?;
         let mut m = Self::new(kind, engine, s.source, s.material, s.dt)?;
+        if let Some(q) = s.quadrature {
+            match &mut m.engine {
+                Engine::Rational(d) => d.set_quadrature_rule(q.rule()).map_err(dyn_err)?,
+                Engine::Swung(d) => d.set_quadrature_rule(q.rule()).map_err(dyn_err)?,
+                _ => {}
+            }
+        }
         if m.engine.is_curve() != (kind == ModelKind::DnurbsCurve) {
             return Err(SessionError::model(format!(
                 "the saved geometry is not a {kind}"
@@ -2431,6 +2476,11 @@ impl Model for DnurbsModel {
             tools: self.tools.clone(),
             kinetic: self.kinetic,
             steps: self.steps,
+            quadrature: match &self.engine {
+                Engine::Rational(d) => Some(Quad::of(d.quadrature_rule())),
+                Engine::Swung(d) => Some(Quad::of(d.quadrature_rule())),
+                _ => None,
+            },
         };
         serde_json::to_value(saved).map_err(SessionError::model)
     }
@@ -2492,6 +2542,37 @@ struct SimKeys {
     dt: Option<f64>,
     reference: Option<String>,
     weight_penalty: Option<f64>,
+    /// `"weight-aware"` (default) or `"fixed"` (the paper's rule), issue 18.
+    quadrature: Option<String>,
+    /// Relative accuracy of the weight-aware rule.
+    quadrature_tolerance: Option<f64>,
+}
+
+/// The quadrature rule of a saved or specified model (see
+/// [`vclay_dynamics::dnurbs::QuadratureRule`]).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "rule", rename_all = "kebab-case", deny_unknown_fields)]
+enum Quad {
+    /// The paper's fixed Gauss rule.
+    Fixed,
+    /// Weight-aware orders to a relative tolerance.
+    WeightAware { tolerance: f64 },
+}
+
+impl Quad {
+    fn rule(self) -> QuadratureRule {
+        match self {
+            Quad::Fixed => QuadratureRule::Fixed,
+            Quad::WeightAware { tolerance } => QuadratureRule::WeightAware { tolerance },
+        }
+    }
+
+    fn of(rule: QuadratureRule) -> Self {
+        match rule {
+            QuadratureRule::WeightAware { tolerance } => Quad::WeightAware { tolerance },
+            _ => Quad::Fixed,
+        }
+    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -2515,6 +2596,10 @@ struct Saved {
     kinetic: f64,
     /// Steps of `dt` taken.
     steps: u64,
+    /// Quadrature rule of the generalized engine (absent in files written before issue 18:
+    /// the weight-aware default).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    quadrature: Option<Quad>,
 }
 
 #[derive(Debug, Serialize, Deserialize)]
