@@ -1,5 +1,5 @@
-//! Demo step of the pictures and exchange formats (issue 8): an exact torus to STEP and geomdl
-//! JSON, a travelling wave on a bicubic sheet as an animated GIF, a glTF file with the motion as
+//! Demo step of the pictures and exchange formats (issue 8): an exact torus to STEP (a B-rep
+//! solid, issue 20) and geomdl JSON, a travelling wave on a bicubic sheet as an animated GIF, a glTF file with the motion as
 //! morph targets, and an SVG plot of the frames' amplitude and render time.
 
 use anyhow::Result;
@@ -31,11 +31,14 @@ fn wave_sheet(phase: f64) -> Result<NurbsSurface> {
     Ok(NurbsSurface::clamped_uniform([3, 3], [n, n], pts)?)
 }
 
-/// Writes torus.step, torus.geomdl.json, wave.gif, wave.glb and wave.svg.
+/// Writes torus.step (a `MANIFOLD_SOLID_BREP`), torus.geomdl.json, wave.gif, wave.glb and
+/// wave.svg.
 pub fn pictures_and_exchange(out: &Path) -> Result<(String, Vec<String>)> {
+    let surface = NurbsSurface::torus(2.0, 0.6)?;
+    let shell = vclay::io::brep::Shell::of_surface(&surface)?;
     let torus: NamedEntity = NamedEntity {
         name: Some("torus".into()),
-        entity: Entity::Surface(NurbsSurface::torus(2.0, 0.6)?),
+        entity: Entity::Surface(surface),
     };
     write_step(out.join("torus.step"), std::slice::from_ref(&torus))?;
     write_geomdl(out.join("torus.geomdl.json"), std::slice::from_ref(&torus))?;
@@ -109,7 +112,15 @@ pub fn pictures_and_exchange(out: &Path) -> Result<(String, Vec<String>)> {
     let mean_ms = frame_ms.iter().sum::<f64>() / FRAMES as f64;
     Ok((
         format!(
-            "torus as exact rational B-spline STEP and geomdl JSON; {FRAMES}-frame wave as GIF and glTF morph targets, {:.1} ms per 320x240 frame ({} triangles)",
+            "torus as exact rational B-spline STEP ({}: {} face, {} seam edges, {} vertex) and geomdl JSON; {FRAMES}-frame wave as GIF and glTF morph targets, {:.1} ms per 320x240 frame ({} triangles)",
+            if shell.closed {
+                "a solid"
+            } else {
+                "an open shell"
+            },
+            shell.faces.len(),
+            shell.edges.len(),
+            shell.vertices.len(),
             mean_ms,
             meshes[0].triangles.len()
         ),
