@@ -16,6 +16,7 @@ mod convert;
 mod demo;
 mod eval;
 mod ffd;
+mod fit;
 mod limits;
 mod manual;
 mod pde;
@@ -79,6 +80,10 @@ enum Command {
         /// Which entity of the file to evaluate (0-based).
         #[arg(long, default_value_t = 0)]
         entity: usize,
+        /// Lattice (.ovm) only: the subdivision solid's boundary rule; --params holds
+        /// [cell, u, v, w] tuples (--at CELL,U,V,W).
+        #[arg(long, value_enum, default_value_t = subdivide::BoundaryArg::Smooth)]
+        boundary: subdivide::BoundaryArg,
     },
     /// Build the built-in models and write results to a folder (default ./vclay-demo).
     Demo {
@@ -106,6 +111,8 @@ enum Command {
     Clay(clay::ClayArgs),
     /// Move points of a mesh to targets by direct manipulation of an FFD lattice.
     Ffd(ffd::FfdArgs),
+    /// Fit a smooth B-spline/NURBS surface to a scanned point cloud (D-NURBS fairness energy).
+    Fit(fit::FitArgs),
     /// Solve a dynamic PDE surface spec at --t or over --frames; write meshes, print residuals.
     Pde(pde::PdeArgs),
     /// Run a scenario (TOML, docs/formats.md section 8) or continue a saved session
@@ -160,12 +167,13 @@ fn main() -> ExitCode {
             at,
             derivatives,
             entity,
+            boundary,
         } => {
             let params = match params {
                 Some(p) => eval::Params::File(p),
                 None => eval::Params::Inline(at),
             };
-            eval::run(&model, &params, derivatives, entity)
+            eval::run(&model, &params, derivatives, entity, boundary.into())
         }
         Command::Demo { out } => demo::run(&out),
         Command::Bench {
@@ -178,6 +186,7 @@ fn main() -> ExitCode {
         Command::Subdivide(args) => subdivide::run(&args),
         Command::Clay(args) => clay::run(&args),
         Command::Ffd(args) => ffd::run(&args),
+        Command::Fit(args) => fit::run(&args),
         Command::Pde(args) => pde::run(&args),
         Command::Run {
             file,

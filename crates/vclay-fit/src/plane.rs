@@ -2,7 +2,11 @@
 //!
 //! The centroid `c` and the covariance `C = (1/N) sum (x_k - c)(x_k - c)^T` give the plane
 //! through `c` spanned by the eigenvectors `e1`, `e2` of the two largest eigenvalues of `C`; the
-//! third, `e3 = e1 x e2`, is its normal. Each point is projected onto the plane,
+//! third, `e3 = e1 x e2`, is its normal. Within the plane, the axes are then turned to the
+//! rectangle of least area around the projections (for a square scan PCA's in-plane axes are
+//! arbitrary, and a rectangle turned 45 degrees leaves half the control net over empty
+//! corners): angles in steps of 1 degree, then 0.02 degree around the best, over at most
+//! [`ROTATION_SAMPLES`] points. Each point is projected onto the plane,
 //! `(a_k, b_k) = ((x_k - c) . e1, (x_k - c) . e2)`, and the bounding rectangle of the projections
 //! is mapped onto the unit square: `u_k = (a_k - a_min) / (a_max - a_min)`, likewise `v_k`.
 //! This is the classical first guess for height-field-like scans (Hoschek's parameter
@@ -20,6 +24,8 @@ use vclay_core::{Parallelism, Vec3};
 /// Smallest ratio of the second to the first principal extent (and of the first extent to the
 /// coordinate magnitude) for a cloud to count as spanning a surface.
 pub const DEGENERATE_RATIO: f64 = 1e-9;
+/// Points (evenly strided) used to choose the rectangle's rotation.
+pub const ROTATION_SAMPLES: usize = 8192;
 
 /// The base plane of a cloud and the rectangle its points project into.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -109,9 +115,13 @@ pub fn base_plane(points: &[Vec3], par: Parallelism) -> Result<BasePlane, FitErr
             ),
         });
     }
-    let e1: Vec3 = eig.eigenvectors.column(order[0]).into();
-    let e2: Vec3 = eig.eigenvectors.column(order[1]).into();
-    let e3 = e1.cross(&e2);
+    let p1: Vec3 = eig.eigenvectors.column(order[0]).into();
+    let p2: Vec3 = eig.eigenvectors.column(order[1]).into();
+    let e3 = p1.cross(&p2);
+    let theta = least_area_angle(points, &c, &p1, &p2);
+    let (sn, cs) = theta.sin_cos();
+    let e1 = p1 * cs + p2 * sn;
+    let e2 = e3.cross(&e1);
     let proj = |x: &Vec3| {
         let d = x - c;
         [d.dot(&e1), d.dot(&e2)]
@@ -146,4 +156,47 @@ pub fn base_plane(points: &[Vec3], par: Parallelism) -> Result<BasePlane, FitErr
         rect,
         spread: lam.map(f64::sqrt),
     })
+}
+
+/// The in-plane rotation (radians, `[0, pi/2)`) of the least-area rectangle around the
+/// projections of (a stride of) the points onto the plane spanned by `p1`, `p2`.
+fn least_area_angle(points: &[Vec3], c: &Vec3, p1: &Vec3, p2: &Vec3) -> f64 {
+    let stride = points.len().div_ceil(ROTATION_SAMPLES).max(1);
+    let ab: Vec<[f64; 2]> = points
+        .iter()
+        .step_by(stride)
+        .map(|x| {
+            let d = x - c;
+            [d.dot(p1), d.dot(p2)]
+        })
+        .collect();
+    let area = |t: f64| {
+        let (s, c) = t.sin_cos();
+        let mut r = [
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for &[a, b] in &ab {
+            let (x, y) = (a * c + b * s, b * c - a * s);
+            r = [r[0].min(x), r[1].max(x), r[2].min(y), r[3].max(y)];
+        }
+        (r[1] - r[0]) * (r[3] - r[2])
+    };
+    let step = std::f64::consts::FRAC_PI_2 / 90.0;
+    let coarse = (0..90).map(|k| k as f64 * step);
+    let best = coarse
+        .map(|t| (area(t), t))
+        .fold((f64::INFINITY, 0.0), |a, b| if b.0 < a.0 { b } else { a });
+    let fine = (-50..=50).map(|k| best.1 + k as f64 * step / 50.0);
+    let best = fine
+        .map(|t| (area(t), t))
+        .fold(best, |a, b| if b.0 < a.0 { b } else { a });
+    // Prefer the angle nearest PCA's axes when the areas tie (within rounding).
+    if area(0.0) <= best.0 * (1.0 + 1e-12) {
+        0.0
+    } else {
+        best.1
+    }
 }

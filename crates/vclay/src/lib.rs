@@ -19,6 +19,7 @@
 pub use vclay_core as core;
 pub use vclay_dynamics as dynamics;
 pub use vclay_ffd as ffd;
+pub use vclay_fit as fit;
 pub use vclay_io as io;
 pub use vclay_lattice as lattice;
 pub use vclay_pde as pde;
