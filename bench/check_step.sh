@@ -34,7 +34,8 @@ for fmt in step iges; do
 done
 # B-rep export: models from bench/make_brep_models.py, the demo, and the D-NURBS swung sphere
 # of examples/scenarios/fig9a_swung_egg.toml after one step (closed) and after 400 (the sculpted
-# egg, whose seam and north pole have opened: an open shell).
+# egg: its seam and north pole have opened by about 1e-2, so vclay writes an open shell; "auto"
+# checks whatever vclay wrote).
 models=$work/brep-models
 python3 bench/make_brep_models.py "$models"
 sed 's/^steps = 400/steps = 1/' examples/scenarios/fig9a_swung_egg.toml > "$work/swung1.toml"
@@ -48,5 +49,5 @@ for fmt in step iges; do
     "$models/closed_tube.json:solid" "$models/swung_sphere.json:solid" \
     "$models/bent_volume.json:solid" "$models/mirrored_volume.json:solid" \
     "$work/demo/torus.json:solid" "$work/demo/twisted_volume.json:solid" \
-    "$models/sheet.json:open" "$work/demo/sheet.json:open" "$models/sculpted_egg.json:open"
+    "$models/sheet.json:open" "$work/demo/sheet.json:open" "$models/sculpted_egg.json:auto"
 done
