@@ -3,7 +3,8 @@
 //! Read: vclay model JSON and geomdl JSON (`.json`, told apart by content: geomdl has a
 //! top-level `"shape"`), STEP (`.step`, `.stp`, `.p21`) and IGES (`.igs`, `.iges`) B-spline
 //! curves and surfaces (what is not read is printed as a warning unless `--quiet`), meshes
-//! (`.obj`, `.stl`, `.ply`, `.glb`).
+//! (`.obj`, `.stl`, `.ply`, `.glb`), and subdivision-solid lattices (`.ovm`) as the bicubic
+//! patches of their boundary limit surface (written as loose surfaces to STEP/IGES).
 //! Write: vclay model (`.json`), geomdl (`.geomdl.json`), STEP (`.step`, `.stp`) and IGES
 //! (`.igs`, `.iges`) with exact NURBS geometry as B-reps: a closed surface or a volume's boundary
 //! as a solid, an open surface as an open shell (`--loose`: loose surfaces and curves,
@@ -27,7 +28,8 @@ use vclay::spline::{tessellate_surface, tessellate_volume_boundary};
 /// Arguments of `vclay convert`.
 #[derive(Debug, Args)]
 pub struct ConvertArgs {
-    /// Input file (.json model or geomdl, .step/.stp, .igs/.iges, .obj, .stl, .ply, .glb).
+    /// Input file (.json model or geomdl, .step/.stp, .igs/.iges, .obj, .stl, .ply, .glb, or a
+    /// lattice .ovm: the limit surface as bicubic patches).
     pub input: PathBuf,
     /// Output file (.json, .geomdl.json, .step/.stp, .igs/.iges, .obj, .stl, .ply, .glb).
     pub output: PathBuf,
@@ -84,10 +86,11 @@ pub fn read_any(path: &Path) -> Result<Loaded> {
             }
             Ok(Loaded::Entities(imported.entities))
         }
+        "ovm" => Ok(Loaded::Entities(lattice_patches(path)?)),
         "glb" => Ok(Loaded::Meshes(read_glb(path)?)),
         "obj" | "stl" | "ply" => Ok(Loaded::Meshes(vec![read_mesh(path)?])),
         other => bail!(
-            "{}: unknown input format {}; expected .json (vclay or geomdl model), .step, .stp, .igs, .iges, .obj, .stl, .ply or .glb",
+            "{}: unknown input format {}; expected .json (vclay or geomdl model), .step, .stp, .igs, .iges, .obj, .stl, .ply, .glb or .ovm",
             path.display(),
             if other.is_empty() {
                 "(no extension)".to_string()
@@ -96,6 +99,56 @@ pub fn read_any(path: &Path) -> Result<Loaded> {
             }
         ),
     }
+}
+
+/// The boundary limit surface of the subdivision solid whose control lattice is `path` (smooth
+/// boundary rule) as bicubic patches (`vclay_lattice::boundary_patches`, issue 20): exact in
+/// regular regions, least-squares fitted near extraordinary points; the fit error is printed.
+pub fn lattice_patches(path: &Path) -> Result<Vec<NamedEntity>> {
+    use vclay::lattice::limit_surface::DEFAULT_PATCH_SAMPLE_LEVELS as LEVELS;
+    use vclay::lattice::{BoundaryRule, Features, SubdivisionRules, boundary_patches};
+    let lattice = vclay::lattice::formats::ovm::read(path)?;
+    // The patches subdivide the whole solid to the sample level (plus one for non-quad faces).
+    let cells = lattice.num_cells() as f64 * 8f64.powi(LEVELS as i32 + 1);
+    crate::limits::check_memory(
+        &format!(
+            "{}: limit patches ({LEVELS} sample levels, up to {cells:.3e} cells)",
+            path.display()
+        ),
+        cells * vclay::lattice::command::BYTES_PER_CELL as f64,
+    )?;
+    let features = Features::none(&lattice);
+    let p = boundary_patches(
+        &lattice,
+        &features,
+        SubdivisionRules::new(BoundaryRule::Smooth),
+        LEVELS,
+    )
+    .with_context(|| format!("{}: boundary limit patches", path.display()))?;
+    if !crate::quiet() {
+        let exact = p.exact.iter().filter(|&&e| e).count();
+        eprintln!(
+            "vclay convert: {}: {} bicubic patches of the limit surface ({exact} exact, {} fitted); fit error at the level-{} limit points: max {:.3e}, mean {:.3e} of the bounding-box diagonal",
+            path.display(),
+            p.patches.len(),
+            p.patches.len() - exact,
+            p.sample_level,
+            p.max_error,
+            p.mean_error
+        );
+    }
+    Ok(p.patches
+        .into_iter()
+        .zip(p.exact)
+        .zip(p.faces)
+        .map(|((s, exact), f)| NamedEntity {
+            name: Some(format!(
+                "limit patch of boundary {f} ({})",
+                if exact { "exact" } else { "fitted" }
+            )),
+            entity: Entity::Surface(s),
+        })
+        .collect())
 }
 
 /// Tessellates the surfaces and volume boundaries of a model into one mesh.
@@ -169,13 +222,16 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
         "step" | "stp" | "igs" | "iges" => {
             let entities = exact(&input)?;
             let iges = matches!(ext.as_str(), "igs" | "iges");
-            match (iges, args.loose) {
+            // Limit patches of a lattice go as loose surfaces (their B-rep assembly is the
+            // STEP writer's part).
+            let loose = args.loose || ext_of(&args.input) == "ovm";
+            match (iges, loose) {
                 (false, false) => write_step_as(out, &entities, StepLayout::Brep)?,
                 (false, true) => write_step_as(out, &entities, StepLayout::GeometricSet)?,
                 (true, false) => write_iges_as(out, &entities, IgesLayout::Brep)?,
                 (true, true) => write_iges_as(out, &entities, IgesLayout::Loose)?,
             }
-            if !args.loose && !crate::quiet() {
+            if !loose && !crate::quiet() {
                 let b = BrepSummary::of(&entities)?;
                 eprintln!(
                     "vclay convert: {} solid(s), {} open shell(s), {} curve(s)",

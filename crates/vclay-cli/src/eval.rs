@@ -1,5 +1,6 @@
 //! `vclay eval MODEL.json (--params PARAMS.json | --at U[,V[,W]]...) [--derivatives K]
-//! [--entity I]`.
+//! [--entity I]`; `vclay eval LATTICE.ovm (--params P.json | --at CELL,U,V,W...)
+//! [--derivatives 1]`: the limit of the subdivision solid (issue 19; smooth boundary rule).
 //!
 //! Limits (issue 17): `K` at most `vclay_spline::MAX_DERIVATIVE_ORDER`; the output's estimated
 //! size checked against `--max-memory`; a non-finite point or derivative (overflow) is an error
@@ -11,6 +12,9 @@ use std::path::{Path, PathBuf};
 use vclay::Vec3;
 use vclay::io::model::{Entity, read_model};
 use vclay::io::params::parse_params;
+use vclay::lattice::{
+    BoundaryRule, Features, LimitEvaluator, LimitParams, LimitQuery, SubdivisionRules,
+};
 use vclay::spline::{MAX_DERIVATIVE_ORDER, ParametricCurve, ParametricSurface, ParametricVolume};
 
 fn point(p: &Vec3) -> Value {
@@ -30,12 +34,17 @@ pub enum Params {
 const BYTES_PER_JSON_POINT: f64 = 200.0;
 
 /// Evaluates the entity and returns the JSON document; all errors carry the file and place.
+/// A lattice (`.ovm`) goes to [`evaluate_lattice`] with boundary rule `rule`.
 pub fn evaluate(
     model: &Path,
     params: &Params,
     order: Option<usize>,
     entity: usize,
+    rule: BoundaryRule,
 ) -> Result<Value> {
+    if is_lattice(model) {
+        return evaluate_lattice(model, params, order, rule);
+    }
     if let Some(k) = order
         && k > MAX_DERIVATIVE_ORDER
     {
@@ -166,9 +175,174 @@ fn inline(items: &[String], dims: usize) -> Result<Vec<Vec<f64>>> {
         .collect()
 }
 
+/// Whether `path` names a subdivision-solid lattice (`.ovm`).
+pub fn is_lattice(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ovm"))
+}
+
+/// Bytes per lattice query: the parsed tuple, the limit point and its JSON text.
+const BYTES_PER_LIMIT_QUERY: f64 = 64.0 + 120.0 + 5.0 * BYTES_PER_JSON_POINT;
+
+/// Parses `[[cell, u, v, w], ...]` (a file) or `CELL,U,V,W` items (`--at`); errors name the
+/// tuple. Range checks (cell, `[0, 1]`) are the evaluator's, also by tuple index.
+fn lattice_queries(params: &Params) -> Result<(Vec<LimitQuery>, String)> {
+    let parse_tuple = |nums: &[Value], place: &dyn Fn() -> String| -> Result<LimitQuery> {
+        if nums.len() != 4 {
+            bail!(
+                "{}: expected 4 numbers [cell, u, v, w], found {}",
+                place(),
+                nums.len()
+            );
+        }
+        let cell = nums[0]
+            .as_u64()
+            .filter(|&c| c <= u32::MAX as u64)
+            .ok_or_else(|| {
+                anyhow::anyhow!(
+                    "{}: the cell index {} is not a non-negative integer",
+                    place(),
+                    nums[0]
+                )
+            })?;
+        let mut uvw = [0.0; 3];
+        for (a, x) in nums[1..].iter().enumerate() {
+            uvw[a] = x.as_f64().filter(|x| x.is_finite()).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "{}: {} = {x} is not a finite number",
+                    place(),
+                    ["u", "v", "w"][a]
+                )
+            })?;
+        }
+        Ok(LimitQuery {
+            cell: cell as usize,
+            uvw,
+        })
+    };
+    match params {
+        Params::File(path) => {
+            let bytes = std::fs::metadata(path)
+                .with_context(|| format!("cannot read parameter file {}", path.display()))?
+                .len();
+            // At least 8 bytes per tuple ("[0,0,0,0]"): the most queries the file can hold.
+            crate::limits::check_memory(
+                &format!("parameter file {}", path.display()),
+                bytes as f64 / 8.0 * BYTES_PER_LIMIT_QUERY,
+            )?;
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read parameter file {}", path.display()))?;
+            let root: Value = serde_json::from_str(&text)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+            let Value::Array(items) = root else {
+                bail!(
+                    "{}: expected an array of [cell, u, v, w] tuples",
+                    path.display()
+                );
+            };
+            let qs = items
+                .iter()
+                .enumerate()
+                .map(|(i, t)| {
+                    let place = || format!("{}: parameter tuple {i}", path.display());
+                    match t {
+                        Value::Array(nums) => parse_tuple(nums, &place),
+                        other => bail!("{}: expected [cell, u, v, w], found {other}", place()),
+                    }
+                })
+                .collect::<Result<Vec<_>>>()?;
+            Ok((qs, path.display().to_string()))
+        }
+        Params::Inline(items) => {
+            let qs = items
+                .iter()
+                .enumerate()
+                .map(|(i, item)| {
+                    let place = || format!("--at '{}' (tuple {i})", crate::limits::quote(item));
+                    let nums: Vec<Value> = item
+                        .split(',')
+                        .map(|x| {
+                            serde_json::from_str::<Value>(x.trim())
+                                .unwrap_or_else(|_| Value::String(x.trim().to_string()))
+                        })
+                        .collect();
+                    parse_tuple(&nums, &place)
+                })
+                .collect::<Result<Vec<_>>>()?;
+            Ok((qs, "--at".to_string()))
+        }
+    }
+}
+
+/// `vclay eval LATTICE.ovm`: the limit of the subdivision solid with control lattice `path` at
+/// `(cell, u, v, w)` tuples (docs/formats.md, "Limit parameters"); `order` at most 1
+/// (first derivatives `[x_u, x_v, x_w]`).
+pub fn evaluate_lattice(
+    path: &Path,
+    params: &Params,
+    order: Option<usize>,
+    rule: BoundaryRule,
+) -> Result<Value> {
+    if let Some(k) = order
+        && k > 1
+    {
+        bail!(
+            "--derivatives {k}: the limit of a subdivision solid gives first derivatives only (--derivatives 1)"
+        );
+    }
+    let (queries, source) = lattice_queries(params)?;
+    crate::limits::check_memory(
+        &format!("{} limit queries", queries.len()),
+        queries.len() as f64 * BYTES_PER_LIMIT_QUERY,
+    )?;
+    let lattice = vclay::lattice::formats::ovm::read(path)?;
+    crate::limits::check_memory(
+        &format!("limit evaluation set-up of {} cells", lattice.num_cells()),
+        lattice.num_cells() as f64 * vclay::lattice::limit::LIMIT_BYTES_PER_CELL as f64,
+    )?;
+    let features = Features::none(&lattice);
+    let ev = LimitEvaluator::new(
+        &lattice,
+        &features,
+        SubdivisionRules::new(rule),
+        LimitParams::default(),
+    )?;
+    let pts = ev
+        .evaluate_many(&queries)
+        .map_err(|e| anyhow::anyhow!("{source}: {e} (lattice {})", path.display()))?;
+    for (i, p) in pts.iter().enumerate() {
+        let all = std::iter::once(&p.position).chain(p.derivatives.iter());
+        if !all.flat_map(|v| v.iter()).all(|x| x.is_finite()) {
+            bail!(
+                "{source}: parameter tuple {i}: the limit is not finite (overflow); nothing written"
+            );
+        }
+    }
+    let mut out = json!({
+        "points": pts.iter().map(|p| point(&p.position)).collect::<Vec<_>>(),
+        "exact": pts.iter().map(|p| p.exact).collect::<Vec<_>>(),
+        "error_estimate": pts.iter().map(|p| p.error).collect::<Vec<_>>(),
+        "tolerance": ev.absolute_tolerance(),
+    });
+    if order == Some(1) {
+        out["derivatives"] = Value::Array(
+            pts.iter()
+                .map(|p| Value::Array(p.derivatives.iter().map(point).collect()))
+                .collect(),
+        );
+    }
+    Ok(out)
+}
+
 /// Runs the subcommand: prints the document only when everything succeeded.
-pub fn run(model: &Path, params: &Params, order: Option<usize>, entity: usize) -> Result<()> {
-    let doc = evaluate(model, params, order, entity)?;
+pub fn run(
+    model: &Path,
+    params: &Params,
+    order: Option<usize>,
+    entity: usize,
+    rule: BoundaryRule,
+) -> Result<()> {
+    let doc = evaluate(model, params, order, entity, rule)?;
     println!("{}", serde_json::to_string(&doc)?);
     Ok(())
 }

@@ -80,6 +80,10 @@ enum Command {
         /// Which entity of the file to evaluate (0-based).
         #[arg(long, default_value_t = 0)]
         entity: usize,
+        /// Lattice (.ovm) only: the subdivision solid's boundary rule; --params holds
+        /// [cell, u, v, w] tuples (--at CELL,U,V,W).
+        #[arg(long, value_enum, default_value_t = subdivide::BoundaryArg::Smooth)]
+        boundary: subdivide::BoundaryArg,
     },
     /// Build the built-in models and write results to a folder (default ./vclay-demo).
     Demo {
@@ -163,12 +167,13 @@ fn main() -> ExitCode {
             at,
             derivatives,
             entity,
+            boundary,
         } => {
             let params = match params {
                 Some(p) => eval::Params::File(p),
                 None => eval::Params::Inline(at),
             };
-            eval::run(&model, &params, derivatives, entity)
+            eval::run(&model, &params, derivatives, entity, boundary.into())
         }
         Command::Demo { out } => demo::run(&out),
         Command::Bench {
