@@ -1,11 +1,11 @@
 //! File formats of lattices: OpenVolumeMesh `.ovm` (read and write), VTK XML unstructured grids
-//! `.vtu` (write) and the boundary surface as OBJ, ASCII STL and ASCII PLY (write).
+//! `.vtu` (write, and read of what it writes) and the boundary surface as OBJ, ASCII STL and ASCII PLY (write).
 //!
 //! # What
 //! * [`ovm`]: the text format of OpenVolumeMesh (vertices, edges as vertex pairs, faces as
 //!   half-edge lists, polyhedra as half-face lists); round trips every lattice exactly (ids,
 //!   loops and orientation).
-//! * [`vtu`]: VTK's XML unstructured grid with ASCII data arrays; hexahedra, wedges, tetrahedra and
+//! * [`vtu`]: VTK's XML unstructured grid with ASCII data arrays (read back by [`vtu::parse`]); hexahedra, wedges, tetrahedra and
 //!   pyramids are recognised by their topology, every other cell is written as a VTK polyhedron.
 //! * [`surface`]: small writers for the outward boundary surface (triangles from
 //!   [`crate::boundary_mesh`]); the `vclay-io` crate will take these over.

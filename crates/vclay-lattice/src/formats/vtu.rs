@@ -1,4 +1,5 @@
-//! VTK XML unstructured grid (`.vtu`), ASCII data arrays, write only.
+//! VTK XML unstructured grid (`.vtu`), ASCII data arrays: [`write`] and, for the subset it
+//! writes, [`read`] / [`parse`] (issue 20: `vclay render` and `vclay convert` take `.vtu` lattices).
 //!
 //! # Cell types
 //! Each cell's type is detected from its topology, and its points are ordered as VTK's
@@ -389,4 +390,474 @@ pub fn write_with_point_data(
     path: &Path,
 ) -> Result<(), FormatError> {
     write_atomic(path, |w| write_with_point_data_to(lattice, data, w))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading
+
+/// Most values of one data array accepted by [`parse`]: 2^28 (2 GiB of `f64`). The file text
+/// bounds the count anyway (every value takes at least two bytes), so this only guards against
+/// declared sizes that do not match the text.
+pub const MAX_ARRAY_VALUES: usize = 1 << 28;
+
+/// Reads a `.vtu` file of the subset [`write`] writes (see [`parse`]).
+pub fn read(path: &Path) -> Result<Lattice, FormatError> {
+    let text = crate::formats::read_text(path)?;
+    parse(&text, &crate::formats::display_name(path))
+}
+
+/// One `<DataArray>` of the file: its attributes, values and the line of its start tag.
+struct Array {
+    name: String,
+    components: usize,
+    values: Vec<f64>,
+    line: usize,
+}
+
+/// The XML subset of VTK files: start tags with attributes and the text between tags.
+struct Xml<'a> {
+    text: &'a str,
+    file: &'a str,
+    /// Byte offsets of line starts.
+    lines: Vec<usize>,
+}
+
+impl<'a> Xml<'a> {
+    fn line_of(&self, at: usize) -> usize {
+        self.lines.partition_point(|&s| s <= at)
+    }
+
+    fn syntax(&self, at: usize, expected: &str, found: &str) -> FormatError {
+        FormatError::Syntax {
+            file: self.file.to_string(),
+            line: self.line_of(at),
+            expected: expected.to_string(),
+            found: format!("\"{}\"", found.chars().take(60).collect::<String>()),
+        }
+    }
+
+    fn bad(
+        &self,
+        line: usize,
+        element: impl Into<String>,
+        message: impl Into<String>,
+    ) -> FormatError {
+        FormatError::BadElement {
+            file: self.file.to_string(),
+            line,
+            element: element.into(),
+            message: message.into(),
+        }
+    }
+
+    /// The next start tag `<name ...>` at or after `from` (not `</...`, `<?...`, `<!...`):
+    /// its name, attributes, whether it is self-closing, its start and the offset after it.
+    #[allow(clippy::type_complexity)]
+    fn next_tag(
+        &self,
+        from: usize,
+    ) -> Result<Option<(&'a str, Vec<(&'a str, &'a str)>, bool, usize, usize)>, FormatError> {
+        let mut i = from;
+        loop {
+            let Some(k) = self.text[i..].find('<') else {
+                return Ok(None);
+            };
+            let start = i + k;
+            let rest = &self.text[start + 1..];
+            if rest.starts_with('/') || rest.starts_with('?') || rest.starts_with('!') {
+                i = start + 1;
+                continue;
+            }
+            let Some(end) = rest.find('>') else {
+                return Err(self.syntax(start, "'>' closing the tag", rest));
+            };
+            let inner = &rest[..end];
+            let (inner, closed) = match inner.strip_suffix('/') {
+                Some(s) => (s, true),
+                None => (inner, false),
+            };
+            let name_end = inner
+                .find(|c: char| c.is_ascii_whitespace())
+                .unwrap_or(inner.len());
+            let name = &inner[..name_end];
+            let mut attrs = Vec::new();
+            let mut a = inner[name_end..].trim_start();
+            while !a.is_empty() {
+                let Some(eq) = a.find('=') else {
+                    return Err(self.syntax(start, "an attribute name=\"value\"", a));
+                };
+                let key = a[..eq].trim();
+                let v = a[eq + 1..].trim_start();
+                let q = v.chars().next().filter(|&c| c == '"' || c == '\'');
+                let Some(q) = q else {
+                    return Err(self.syntax(start, "a quoted attribute value", v));
+                };
+                let Some(close) = v[1..].find(q) else {
+                    return Err(self.syntax(start, "the closing quote of an attribute", v));
+                };
+                attrs.push((key, &v[1..1 + close]));
+                a = v[close + 2..].trim_start();
+            }
+            return Ok(Some((name, attrs, closed, start, start + 1 + end + 1)));
+        }
+    }
+}
+
+fn attr<'a>(attrs: &[(&'a str, &'a str)], key: &str) -> Option<&'a str> {
+    attrs.iter().find(|(k, _)| *k == key).map(|(_, v)| *v)
+}
+
+/// Parses `.vtu` text of the subset [`write`] writes; `name` is used in error messages.
+///
+/// Read: one `<Piece>` of an `UnstructuredGrid` with ASCII `<DataArray>`s: the points
+/// (3 components), `connectivity`, `offsets` (end of each cell's run), `types` (10 tetrahedron,
+/// 12 hexahedron, 13 wedge, 14 pyramid with VTK's point orders, 42 polyhedron with the `faces` /
+/// `faceoffsets` arrays), and any point or cell data, which is skipped. The cells become a
+/// [`Lattice`] through [`Lattice::from_cells`] (faces of the linear types from
+/// [`reference_faces`]), so points and cells keep their order and a file written by [`write`]
+/// gives back the lattice's points exactly and its cells as the same point sets. Binary,
+/// appended or compressed data, several pieces and other cell types are
+/// [`FormatError::Unsupported`] or a located error; every count is checked against the
+/// values present before it is used.
+pub fn parse(text: &str, name: &str) -> Result<Lattice, FormatError> {
+    let mut lines = vec![0];
+    lines.extend(text.match_indices('\n').map(|(i, _)| i + 1));
+    let x = Xml {
+        text,
+        file: name,
+        lines,
+    };
+    let unsupported = |what: &str| FormatError::Unsupported {
+        file: name.to_string(),
+        what: what.to_string(),
+    };
+    // Header and piece.
+    let mut at = 0;
+    let mut piece: Option<(usize, usize, usize)> = None;
+    let mut seen_file = false;
+    let mut arrays: Vec<(String, Array)> = Vec::new();
+    let mut section = String::new();
+    while let Some((tag, attrs, closed, start, end)) = x.next_tag(at)? {
+        at = end;
+        match tag {
+            "VTKFile" => {
+                if attr(&attrs, "type") != Some("UnstructuredGrid") {
+                    return Err(x.syntax(
+                        start,
+                        "a VTKFile of type=\"UnstructuredGrid\"",
+                        attr(&attrs, "type").unwrap_or("(no type)"),
+                    ));
+                }
+                if attr(&attrs, "compressor").is_some() {
+                    return Err(unsupported("compressed VTK data"));
+                }
+                seen_file = true;
+            }
+            "Piece" => {
+                if piece.is_some() {
+                    return Err(unsupported("a file of several pieces"));
+                }
+                let count = |key: &str| -> Result<usize, FormatError> {
+                    let v = attr(&attrs, key).unwrap_or("");
+                    v.trim().parse::<usize>().map_err(|_| {
+                        x.syntax(start, &format!("{key} as a non-negative integer"), v)
+                    })
+                };
+                piece = Some((
+                    count("NumberOfPoints")?,
+                    count("NumberOfCells")?,
+                    x.line_of(start),
+                ));
+            }
+            "Points" | "Cells" | "PointData" | "CellData" => section = tag.to_string(),
+            "AppendedData" => return Err(unsupported("appended (binary) VTK data")),
+            "DataArray" => {
+                let line = x.line_of(start);
+                let aname = attr(&attrs, "Name").unwrap_or("").to_string();
+                let format = attr(&attrs, "format").unwrap_or("ascii");
+                if format != "ascii" {
+                    return Err(unsupported(&format!(
+                        "the {format} format of data array \"{aname}\" (only ascii is read)"
+                    )));
+                }
+                let components = match attr(&attrs, "NumberOfComponents") {
+                    None => 1,
+                    Some(v) => v
+                        .trim()
+                        .parse::<usize>()
+                        .ok()
+                        .filter(|&c| (1..=16).contains(&c))
+                        .ok_or_else(|| x.syntax(start, "NumberOfComponents from 1 to 16", v))?,
+                };
+                let mut values = Vec::new();
+                if !closed {
+                    let Some(k) = text[end..].find('<') else {
+                        return Err(x.syntax(end, "</DataArray>", "end of file"));
+                    };
+                    let body = &text[end..end + k];
+                    if !text[end + k..].starts_with("</DataArray") {
+                        return Err(x.syntax(end + k, "</DataArray>", &text[end + k..]));
+                    }
+                    // Only the arrays that build the lattice are parsed.
+                    let wanted = section == "Points"
+                        || (section == "Cells"
+                            && matches!(
+                                aname.as_str(),
+                                "connectivity" | "offsets" | "types" | "faces" | "faceoffsets"
+                            ));
+                    if wanted {
+                        let mut off = end;
+                        for tok in body.split_ascii_whitespace() {
+                            // Offset of the token, for its line.
+                            let p = text[off..].find(tok).map_or(off, |q| off + q);
+                            off = p + tok.len();
+                            let v: f64 = tok.parse().map_err(|_| {
+                                x.syntax(p, &format!("a number in data array \"{aname}\""), tok)
+                            })?;
+                            if !v.is_finite() {
+                                return Err(x.syntax(
+                                    p,
+                                    &format!("a finite number in data array \"{aname}\""),
+                                    tok,
+                                ));
+                            }
+                            if values.len() >= MAX_ARRAY_VALUES {
+                                return Err(x.bad(
+                                    line,
+                                    format!("data array \"{aname}\""),
+                                    "more than 2^28 values",
+                                ));
+                            }
+                            values.push(v);
+                        }
+                    }
+                    at = end + k + 1;
+                }
+                if section == "Points" || section == "Cells" {
+                    let key = if section == "Points" {
+                        "Points".to_string()
+                    } else {
+                        aname.clone()
+                    };
+                    if arrays.iter().any(|(k, _)| *k == key) {
+                        return Err(x.bad(line, format!("data array \"{aname}\""), "given twice"));
+                    }
+                    arrays.push((
+                        key,
+                        Array {
+                            name: aname,
+                            components,
+                            values,
+                            line,
+                        },
+                    ));
+                }
+            }
+            _ => {}
+        }
+    }
+    if !seen_file {
+        return Err(x.syntax(
+            0,
+            "a <VTKFile type=\"UnstructuredGrid\"> element",
+            text.trim_start(),
+        ));
+    }
+    let Some((np, nc, piece_line)) = piece else {
+        return Err(x.syntax(text.len(), "a <Piece> element", "end of file"));
+    };
+    let get = |key: &str| -> Result<&Array, FormatError> {
+        arrays
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, a)| a)
+            .ok_or_else(|| x.bad(piece_line, "Piece", format!("no \"{key}\" data array")))
+    };
+    let pts = get("Points")?;
+    if pts.components != 3 || pts.values.len() != 3 * np {
+        return Err(x.bad(
+            pts.line,
+            format!("points array \"{}\"", pts.name),
+            format!(
+                "{} values in {} components for NumberOfPoints=\"{np}\" (3 components expected)",
+                pts.values.len(),
+                pts.components
+            ),
+        ));
+    }
+    let points: Vec<Vec3> = pts
+        .values
+        .chunks_exact(3)
+        .map(|c| Vec3::new(c[0], c[1], c[2]))
+        .collect();
+    // Integer arrays: whole numbers in range.
+    let ints = |a: &Array, lo: f64, hi: f64| -> Result<Vec<i64>, FormatError> {
+        a.values
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| {
+                if v.fract() == 0.0 && v >= lo && v <= hi {
+                    Ok(v as i64)
+                } else {
+                    Err(x.bad(
+                        a.line,
+                        format!("data array \"{}\" value {i}", a.name),
+                        format!("{v} is not an integer from {lo} to {hi}"),
+                    ))
+                }
+            })
+            .collect()
+    };
+    let conn_a = get("connectivity")?;
+    let conn = ints(conn_a, 0.0, (np as f64 - 1.0).max(0.0))?;
+    if np == 0 && !conn.is_empty() {
+        return Err(x.bad(
+            conn_a.line,
+            "connectivity",
+            "point references but no points",
+        ));
+    }
+    let offs_a = get("offsets")?;
+    let offsets = ints(offs_a, 0.0, conn.len() as f64)?;
+    let types_a = get("types")?;
+    let types = ints(types_a, 0.0, 255.0)?;
+    if offsets.len() != nc || types.len() != nc {
+        return Err(x.bad(
+            piece_line,
+            "Piece",
+            format!(
+                "NumberOfCells=\"{nc}\" but {} offsets and {} types",
+                offsets.len(),
+                types.len()
+            ),
+        ));
+    }
+    let poly = types.contains(&i64::from(VTK_POLYHEDRON));
+    let (faces, faceoffsets) = if poly {
+        let fa = get("faces")?;
+        let fo = get("faceoffsets")?;
+        let faces = ints(fa, 0.0, u32::MAX as f64)?;
+        let fos = ints(fo, -1.0, faces.len() as f64)?;
+        if fos.len() != nc {
+            return Err(x.bad(
+                fo.line,
+                "faceoffsets",
+                format!("{} values for {nc} cells", fos.len()),
+            ));
+        }
+        (faces, fos)
+    } else {
+        (Vec::new(), Vec::new())
+    };
+    let mut cells: Vec<Vec<Vec<u32>>> = Vec::with_capacity(nc);
+    let (mut prev, mut prev_face) = (0usize, 0usize);
+    for c in 0..nc {
+        let end = offsets[c] as usize;
+        let cell_err = |m: String| x.bad(offs_a.line, format!("cell {c}"), m);
+        if end < prev {
+            return Err(cell_err(format!(
+                "offset {end} is smaller than the previous one {prev}"
+            )));
+        }
+        let ids: Vec<u32> = conn[prev..end].iter().map(|&v| v as u32).collect();
+        prev = end;
+        let t = types[c] as u8;
+        let cell: Vec<Vec<u32>> = match t {
+            VTK_TETRA | VTK_HEXAHEDRON | VTK_WEDGE | VTK_PYRAMID => {
+                let want = match t {
+                    VTK_TETRA => 4,
+                    VTK_HEXAHEDRON => 8,
+                    VTK_WEDGE => 6,
+                    _ => 5,
+                };
+                if ids.len() != want {
+                    return Err(cell_err(format!(
+                        "VTK type {t} has {want} points, found {}",
+                        ids.len()
+                    )));
+                }
+                reference_faces(t)
+                    .iter()
+                    .map(|f| f.iter().map(|&i| ids[i]).collect())
+                    .collect()
+            }
+            VTK_POLYHEDRON => {
+                let fend = faceoffsets[c];
+                if fend < 0 {
+                    return Err(cell_err("a polyhedron with faceoffset -1".into()));
+                }
+                let fend = fend as usize;
+                if fend < prev_face {
+                    return Err(cell_err(format!(
+                        "faceoffset {fend} is smaller than the previous one {prev_face}"
+                    )));
+                }
+                let run = &faces[prev_face..fend];
+                prev_face = fend;
+                let mut loops = Vec::new();
+                let Some((&nf, mut rest)) = run.split_first() else {
+                    return Err(cell_err("an empty run in \"faces\"".into()));
+                };
+                for k in 0..nf {
+                    let Some((&n, r)) = rest.split_first() else {
+                        return Err(cell_err(format!(
+                            "face {k} of {nf} is missing in \"faces\""
+                        )));
+                    };
+                    let n = n as usize;
+                    if n > r.len() {
+                        return Err(cell_err(format!(
+                            "face {k} has {n} points but the run ends"
+                        )));
+                    }
+                    let l: Vec<u32> = r[..n].iter().map(|&v| v as u32).collect();
+                    if let Some(&bad) = l.iter().find(|&&v| v as usize >= np) {
+                        return Err(FormatError::BadReference {
+                            file: name.to_string(),
+                            line: offs_a.line,
+                            element: format!("cell {c} face {k}"),
+                            kind: "point",
+                            index: u64::from(bad),
+                            count: np,
+                            counted: "points",
+                        });
+                    }
+                    loops.push(l);
+                    rest = &r[n..];
+                }
+                if !rest.is_empty() {
+                    return Err(cell_err(format!(
+                        "{} values after its {nf} faces in \"faces\"",
+                        rest.len()
+                    )));
+                }
+                loops
+            }
+            _ => {
+                return Err(cell_err(format!(
+                    "VTK cell type {t} is not read (10, 12, 13, 14 and 42 are)"
+                )));
+            }
+        };
+        if faceoffsets.get(c).is_some_and(|&f| f >= 0) && t != VTK_POLYHEDRON {
+            return Err(cell_err(
+                "a faceoffset for a cell that is not a polyhedron".into(),
+            ));
+        }
+        cells.push(cell);
+    }
+    if prev != conn.len() {
+        return Err(x.bad(
+            offs_a.line,
+            "offsets",
+            format!(
+                "the last offset {prev} leaves {} connectivity values unused",
+                conn.len() - prev
+            ),
+        ));
+    }
+    Lattice::from_cells(points, &cells).map_err(|source| FormatError::Lattice {
+        file: name.to_string(),
+        source,
+    })
 }
