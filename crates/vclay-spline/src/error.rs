@@ -186,4 +186,7 @@ pub enum SplineError {
         /// The parameter.
         value: f64,
     },
+    /// A triangular B-spline or triangular NURBS is invalid or was evaluated outside its domain.
+    #[error(transparent)]
+    Triangular(#[from] crate::triangular::TriangularError),
 }

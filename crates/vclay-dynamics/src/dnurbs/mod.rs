@@ -43,7 +43,9 @@ pub mod generalized;
 mod geometry;
 pub mod presets;
 pub mod rational;
+pub mod rounding;
 mod system;
+pub mod triangular;
 
 pub use generalized::{
     Constraint, DEFAULT_QUADRATURE_TOLERANCE, GeneralizedDnurbs, GeneralizedGeometry,
@@ -52,6 +54,7 @@ pub use generalized::{
 pub use geometry::{ClosedCurve, DnurbsGeometry, ElementSamples};
 pub use presets::{Preset, TABLE_1};
 pub use rational::{RationalGeometry, SwungGeometry};
+pub use triangular::{TriangleQuadrature, TriangularGeometry};
 pub use system::{Element, ElementSystem, SolverStats};
 
 use crate::error::DynamicsError;

@@ -1,0 +1,338 @@
+//! Triangular D-NURBS (`d-nurbs.txt` section 4.4, eqs 10-14; finite elements of section 5):
+//! a [`TriangularNurbs`] whose control points **and weights** are the generalized coordinates
+//! of [`GeneralizedDnurbs`](super::GeneralizedDnurbs).
+//!
+//! ## Coordinates and Jacobian
+//! `p = [p_0, w_0, p_1, w_1, ...]`, four numbers (x, y, z, w) per control point, as the
+//! tensor-product [`RationalGeometry`](super::RationalGeometry). The Jacobian columns of eq 13
+//! and their parametric derivatives (for `J_u ... J_vv` of eq 17) come from
+//! [`TriangularNurbs::eval_in_element`]; `s = J p` (eq 14) is tested in `vclay-spline`.
+//!
+//! ## Elements and quadrature (section 5.1-5.2)
+//! Each domain triangle is a finite element; its degrees of freedom are the control points of
+//! every basis function whose support meets it (Fig 4). The basis is piecewise polynomial on
+//! the triangle: its pieces are separated by the knot segments (edges of the degree-0 simplex
+//! splines of the recurrence). [`TriangleQuadrature::Subdivided`] (the default) cuts the triangle
+//! along every knot segment that crosses it ([`TriangularBasis::polynomial_cells`]) and applies a
+//! collapsed (Duffy) Gauss-Legendre rule with `k x k` points on every cell: exact for
+//! polynomials of total degree `2k - 2` on each cell, so with `k = n + 1` the mass and damping
+//! integrands of a polynomial (uniform-weight) surface (degree `2n`) are integrated exactly and the
+//! stiffness integrands (lower degree) too; rational integrands converge as `k` grows. The
+//! paper's alternative, one Gauss rule per triangle ([`TriangleQuadrature::Whole`], "we can
+//! further subdivide the subdomains", section 5.2), integrates across the kinks of the basis
+//! and converges only algebraically. Measured on the quadratic edge-rounding net (6 triangles,
+//! knot clouds of radius 0.1 of the edge, `tests/triangular.rs`): the total mass
+//! `integral sum N` (= the domain area) is exact to 1e-14 with subdivision at every `k`, and off by
+//! 2e-3 (k = 3) to 1e-4 (k = 12) without; see docs/performance.md for the cost.
+//!
+//! ## Limitations
+//! Point location is a linear scan over the domain triangles; [`GeneralizedGeometry::nearest_param`]
+//! samples each triangle and refines by Gauss-Newton (used by data springs).
+
+use super::generalized::{GeneralizedGeometry, LocalJacobian};
+use crate::error::DynamicsError;
+use vclay_core::{GaussLegendre, Vec3};
+use vclay_spline::simplex::{Point2, det3};
+use vclay_spline::{SplineError, TriangularNurbs, TriangularPoint};
+
+pub use vclay_spline::triangular::TriangularBasis;
+
+/// How element integrals over a domain triangle are computed (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TriangleQuadrature {
+    /// Cut along the knot segments, `k x k` collapsed Gauss points per cell; `k = None` follows
+    /// the engine's Gauss order, raised to at least `n + 1` (the default).
+    Subdivided {
+        /// Points per direction on each cell.
+        points: Option<usize>,
+    },
+    /// One collapsed Gauss rule with `k x k` points on the whole triangle (the paper's rule).
+    Whole {
+        /// Points per direction.
+        points: usize,
+    },
+}
+
+impl Default for TriangleQuadrature {
+    fn default() -> Self {
+        Self::Subdivided { points: None }
+    }
+}
+
+fn spline(e: SplineError) -> DynamicsError {
+    DynamicsError::Spline(e)
+}
+
+/// Collapsed Gauss-Legendre rule (Duffy map `x = a + xi (b - a) + xi eta (c - b)`, area factor
+/// `xi |d(a, b, c)|`) with `k x k` points on the triangle `[a, b, c]`, appended to `params` and
+/// `weights`. Exact for polynomials of total degree `2k - 2`.
+pub fn collapsed_gauss(
+    tri: [Point2; 3],
+    k: usize,
+    params: &mut Vec<[f64; 2]>,
+    weights: &mut Vec<f64>,
+) -> Result<(), DynamicsError> {
+    let g = GaussLegendre::new(k).map_err(|_| DynamicsError::Parameter {
+        name: "triangle quadrature points",
+        value: k as f64,
+        why: "no Gauss-Legendre rule with this many points (1 to 64)",
+    })?;
+    let [a, b, c] = tri;
+    let area2 = det3(a, b, c).abs();
+    let pts: Vec<(f64, f64)> = g.on_interval(0.0, 1.0).collect();
+    for &(xi, wx) in &pts {
+        for &(eta, we) in &pts {
+            params.push([0, 1].map(|d| a[d] + xi * (b[d] - a[d]) + xi * eta * (c[d] - b[d])));
+            weights.push(wx * we * xi * area2);
+        }
+    }
+    Ok(())
+}
+
+thread_local! {
+    /// Evaluation buffers reused by `jacobian_at` (no allocation per quadrature point).
+    static POINT: std::cell::RefCell<TriangularPoint> =
+        std::cell::RefCell::new(TriangularPoint::default());
+}
+
+/// A triangular NURBS with dynamic control points and weights (see the module docs).
+#[derive(Clone, Debug)]
+pub struct TriangularGeometry {
+    surface: TriangularNurbs,
+    coords: Vec<f64>,
+    scale: f64,
+    quadrature: TriangleQuadrature,
+}
+
+impl TriangularGeometry {
+    /// The generalized geometry of `surface`, with the default quadrature.
+    pub fn new(surface: TriangularNurbs) -> Self {
+        let mut coords = Vec::with_capacity(4 * surface.control_points().len());
+        for (p, w) in surface.control_points().iter().zip(surface.weights()) {
+            coords.extend_from_slice(&[p.x, p.y, p.z, *w]);
+        }
+        let (lo, hi) = surface.control_points().iter().fold(
+            (Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY)),
+            |(lo, hi), p| (lo.inf(p), hi.sup(p)),
+        );
+        let scale = (hi - lo).norm();
+        Self {
+            surface,
+            coords,
+            scale: if scale > 0.0 && scale.is_finite() {
+                scale
+            } else {
+                1.0
+            },
+            quadrature: TriangleQuadrature::default(),
+        }
+    }
+
+    /// Chooses the element quadrature (takes effect for models built afterwards).
+    pub fn with_quadrature(mut self, q: TriangleQuadrature) -> Self {
+        self.quadrature = q;
+        self
+    }
+
+    /// The element quadrature.
+    pub fn quadrature(&self) -> TriangleQuadrature {
+        self.quadrature
+    }
+
+    /// The current surface (control points and weights from the coordinates).
+    pub fn surface(&self) -> &TriangularNurbs {
+        &self.surface
+    }
+
+    /// Control points.
+    pub fn control_points(&self) -> &[Vec3] {
+        self.surface.control_points()
+    }
+
+    /// Weights.
+    pub fn weights(&self) -> &[f64] {
+        self.surface.weights()
+    }
+
+    /// Quadrature points and weights of element `t` with `k` points per direction per cell.
+    pub fn element_rule(
+        &self,
+        t: usize,
+        k: usize,
+    ) -> Result<(Vec<[f64; 2]>, Vec<f64>), DynamicsError> {
+        let basis = self.surface.basis();
+        let (mut p, mut w) = (Vec::new(), Vec::new());
+        let cells = match self.quadrature {
+            TriangleQuadrature::Subdivided { .. } => basis.polynomial_cells(t),
+            TriangleQuadrature::Whole { .. } => vec![basis.domain().corners(t)],
+        };
+        for c in cells {
+            collapsed_gauss(c, k, &mut p, &mut w)?;
+        }
+        Ok((p, w))
+    }
+
+    fn points_per_direction(&self, engine_order: usize) -> usize {
+        let n = self.surface.basis().degree();
+        match self.quadrature {
+            TriangleQuadrature::Subdivided { points: Some(k) } => k,
+            TriangleQuadrature::Subdivided { points: None } => (n + 1).max(engine_order.min(n + 1)),
+            TriangleQuadrature::Whole { points } => points,
+        }
+    }
+
+    fn eval(&self, param: [f64; 2], p: &mut TriangularPoint) -> Result<(), DynamicsError> {
+        self.surface
+            .eval(param, p)
+            .map_err(|e| spline(SplineError::from(e)))
+    }
+}
+
+impl GeneralizedGeometry for TriangularGeometry {
+    fn parametric_dimension(&self) -> usize {
+        2
+    }
+    fn coordinates(&self) -> &[f64] {
+        &self.coords
+    }
+    fn set_coordinates(&mut self, q: &[f64]) -> Result<(), DynamicsError> {
+        if q.len() != self.coords.len() {
+            return Err(DynamicsError::NoSuchCoordinate {
+                index: q.len(),
+                count: self.coords.len(),
+            });
+        }
+        let pts: Vec<Vec3> = q.chunks(4).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+        let ws: Vec<f64> = q.chunks(4).map(|c| c[3]).collect();
+        self.surface
+            .set_control(pts, ws)
+            .map_err(|e| spline(SplineError::from(e)))?;
+        self.coords.copy_from_slice(q);
+        Ok(())
+    }
+    fn weight_coordinates(&self) -> Vec<usize> {
+        (0..self.coords.len() / 4).map(|c| 4 * c + 3).collect()
+    }
+    fn coordinate_groups(&self) -> Vec<std::ops::Range<usize>> {
+        (0..self.coords.len() / 4)
+            .map(|c| 4 * c..4 * c + 4)
+            .collect()
+    }
+    fn default_fixed_coordinates(&self) -> Vec<usize> {
+        // Gauge: s is unchanged when every weight is scaled by one factor.
+        vec![3]
+    }
+    fn elements(&self) -> Vec<[(f64, f64); 2]> {
+        // Bounding rectangles of the domain triangles (the count and the order of the
+        // elements; their quadrature comes from `element_quadrature`).
+        let dom = self.surface.basis().domain();
+        (0..dom.triangles().len())
+            .map(|t| {
+                let c = dom.corners(t);
+                let lo = [0, 1].map(|d| c.iter().map(|p| p[d]).fold(f64::INFINITY, f64::min));
+                let hi = [0, 1].map(|d| c.iter().map(|p| p[d]).fold(f64::NEG_INFINITY, f64::max));
+                [(lo[0], hi[0]), (lo[1], hi[1])]
+            })
+            .collect()
+    }
+    fn element_quadrature(
+        &self,
+        element: usize,
+        order: [usize; 2],
+    ) -> Option<(Vec<[f64; 2]>, Vec<f64>)> {
+        let k = self.points_per_direction(order[0].max(order[1]));
+        self.element_rule(element, k).ok()
+    }
+    fn max_degree(&self) -> usize {
+        self.surface.basis().degree()
+    }
+    fn scale(&self) -> f64 {
+        self.scale
+    }
+    fn jacobian_at(&self, param: [f64; 2], out: &mut LocalJacobian) -> Result<(), DynamicsError> {
+        POINT.with(|cell| {
+            let mut guard = cell.try_borrow_mut();
+            let mut fresh = TriangularPoint::default();
+            let p = match guard.as_deref_mut() {
+                Ok(p) => p,
+                Err(_) => &mut fresh,
+            };
+            self.eval(param, p)?;
+            out.s = p.s;
+            out.blocks.clear();
+            out.vectors.clear();
+            for (k, &c) in p.controls.iter().enumerate() {
+                out.blocks.push((4 * c, p.r[k]));
+                out.vectors.push((4 * c + 3, p.g[k]));
+            }
+            Ok(())
+        })
+    }
+    fn velocity_terms(&self, param: [f64; 2], qdot: &[f64]) -> Result<(Vec3, Vec3), DynamicsError> {
+        let mut p = TriangularPoint::default();
+        self.eval(param, &mut p)?;
+        let (mut w0, mut w1) = (0.0, 0.0);
+        let (mut a0, mut a1, mut a2) = (Vec3::zeros(), Vec3::zeros(), Vec3::zeros());
+        for (k, &c) in p.controls.iter().enumerate() {
+            let n = p.basis[k][0];
+            let (w, pc) = (self.weights()[c], self.control_points()[c]);
+            let pd = Vec3::new(qdot[4 * c], qdot[4 * c + 1], qdot[4 * c + 2]);
+            let wd = qdot[4 * c + 3];
+            w0 += n * w;
+            w1 += n * wd;
+            a0 += pc * (n * w);
+            a1 += (pc * wd + pd * w) * n;
+            a2 += pd * (n * wd);
+        }
+        // Directional derivatives along (p', w'), as rational.rs derives them.
+        let s = a0 / w0;
+        let s1 = (a1 - s * w1) / w0;
+        Ok((s1, (a2 - s1 * w1) * (2.0 / w0)))
+    }
+    fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
+        let dom = self.surface.basis().domain();
+        let mut p = TriangularPoint::default();
+        let mut best = ([0.0; 2], f64::INFINITY);
+        const LEVEL: usize = 6;
+        for t in 0..dom.triangles().len() {
+            let [a, b, c] = dom.corners(t);
+            for i in 0..=LEVEL {
+                for j in 0..=LEVEL - i {
+                    let (l1, l2) = (i as f64 / LEVEL as f64, j as f64 / LEVEL as f64);
+                    // Slightly inside so that the point belongs to this triangle.
+                    let (l1, l2) = (0.001 + 0.997 * l1, 0.001 + 0.997 * l2);
+                    let l0 = 1.0 - l1 - l2;
+                    let u = [0, 1].map(|d| l0 * a[d] + l1 * b[d] + l2 * c[d]);
+                    self.surface
+                        .eval_in_element(t, u, &mut p)
+                        .map_err(|e| spline(e.into()))?;
+                    let d = (p.s[0] - x).norm_squared();
+                    if d < best.1 {
+                        best = (u, d);
+                    }
+                }
+            }
+        }
+        // Gauss-Newton on |s(u) - x|^2, staying in the domain.
+        let mut u = best.0;
+        for _ in 0..20 {
+            self.eval(u, &mut p)?;
+            let r = p.s[0] - x;
+            let (su, sv) = (p.s[1], p.s[2]);
+            let m = nalgebra::Matrix2::new(su.dot(&su), su.dot(&sv), su.dot(&sv), sv.dot(&sv));
+            let rhs = nalgebra::Vector2::new(-su.dot(&r), -sv.dot(&r));
+            let Some(step) = m.lu().solve(&rhs) else {
+                break;
+            };
+            let next = [u[0] + step[0], u[1] + step[1]];
+            if dom.locate(next).is_none() {
+                break;
+            }
+            u = next;
+            if step.norm() < 1e-14 * dom.extent() {
+                break;
+            }
+        }
+        Ok(u)
+    }
+}

@@ -1,0 +1,134 @@
+//! Triangular D-NURBS (`d-nurbs.txt` section 4.4 and section 5): element quadrature accuracy
+//! (subdivided along knot lines against the paper's one-rule-per-triangle), and the rounding
+//! models of section 7.3 (Fig 8): constraints hold, the fillet is smooth.
+
+use vclay_dynamics::dnurbs::generalized::GeneralizedGeometry;
+use vclay_dynamics::dnurbs::rounding::{RoundingKind, RoundingModel, normal_jump};
+use vclay_dynamics::dnurbs::{Integrator, TriangleQuadrature, TriangularGeometry};
+
+/// `sum_e integral_e f(N)` over all elements with the geometry's quadrature of `k` points.
+fn integrate(g: &TriangularGeometry, k: usize, f: impl Fn(&[[f64; 6]]) -> f64) -> f64 {
+    let s = g.surface();
+    let mut total = 0.0;
+    let mut p = vclay_spline::TriangularPoint::default();
+    for e in 0..g.elements().len() {
+        let (params, weights) = g.element_rule(e, k).unwrap();
+        for (x, w) in params.iter().zip(weights) {
+            s.eval_in_element(e, *x, &mut p).unwrap();
+            total += w * f(&p.basis);
+        }
+    }
+    total
+}
+
+#[test]
+fn subdivided_quadrature_is_exact_for_the_piecewise_polynomial_basis() {
+    let r = RoundingModel::new(RoundingKind::Edge).unwrap();
+    let sub = TriangularGeometry::new(r.surface.clone());
+    let whole = TriangularGeometry::new(r.surface.clone())
+        .with_quadrature(TriangleQuadrature::Whole { points: 4 });
+    // integral sum N = domain area (3 x 1), by the partition of unity.
+    for k in [2, 3, 5] {
+        let a = integrate(&sub, k, |b| b.iter().map(|v| v[0]).sum());
+        assert!((a - 3.0).abs() < 1e-12, "subdivided k={k}: {a}");
+    }
+    // integral sum N^2 (piecewise of degree 4): the same for every exact rule (k >= 3).
+    let sq =
+        |g: &TriangularGeometry, k: usize| integrate(g, k, |b| b.iter().map(|v| v[0] * v[0]).sum());
+    let exact_sq = sq(&sub, 3);
+    assert!(
+        (sq(&sub, 5) - exact_sq).abs() < 1e-13,
+        "subdivided rules agree"
+    );
+    let errs: Vec<f64> = [3, 6, 12]
+        .iter()
+        .map(|&k| (sq(&whole, k) - exact_sq).abs() / exact_sq)
+        .collect();
+    eprintln!("whole-triangle rule relative error of integral sum N^2, k = 3, 6, 12: {errs:?}");
+    assert!(
+        errs[0] > 1e-8,
+        "the basis is not polynomial on a triangle: {errs:?}"
+    );
+    // Mass-matrix entry of two neighbouring control points: subdivided rules agree to rounding
+    // (exact for degree 2n = 4 from k = 3), the whole-triangle rule converges slowly.
+    let m = |g: &TriangularGeometry, k: usize| integrate(g, k, |b| b[0][0] * b[1][0]);
+    let exact = m(&sub, 3);
+    assert!((m(&sub, 6) - exact).abs() < 1e-14 * (1.0 + exact.abs()) * 10.0);
+    let werr: Vec<f64> = [3, 6, 12]
+        .iter()
+        .map(|&k| (m(&whole, k) - exact).abs())
+        .collect();
+    eprintln!("whole-triangle rule error of a mass entry ({exact:.6}), k = 3, 6, 12: {werr:?}");
+    assert!(werr[2] < werr[0], "whole rule converges: {werr:?}");
+}
+
+/// Runs a rounding model and checks the far-boundary constraints and the fillet; returns the
+/// normal turn over 0.05 across the old edge before and after.
+fn rounding(kind: RoundingKind, quadrature: TriangleQuadrature, steps: usize) -> (f64, f64) {
+    let r = RoundingModel::new(kind).unwrap();
+    let mut m = r.dynamics(quadrature).unwrap();
+    let e0 = m.elastic_energy().unwrap();
+    let before = normal_jump(&r.surface, &r.edges, 0.05, 5).unwrap();
+    m.run(r.dt(), steps).unwrap();
+    let e1 = m.elastic_energy().unwrap();
+    let scale = m.geometry().scale();
+    let worst = m
+        .constraint_violations()
+        .unwrap()
+        .into_iter()
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 1e-8 * scale,
+        "{kind:?}: constraint violation {worst}"
+    );
+    assert!(e1 < e0, "{kind:?}: the energy drops ({e0} -> {e1})");
+    let s = m.geometry().surface();
+    // Normals are continuous across the old edge: the jump shrinks with the distance.
+    let near = normal_jump(s, &r.edges, 1e-6, 7).unwrap();
+    let far = normal_jump(s, &r.edges, 1e-3, 7).unwrap();
+    assert!(
+        near < 1e-4 && near < far,
+        "{kind:?}: normal jump {near} (1e-6) {far} (1e-3)"
+    );
+    // Weights are dynamic and stay positive.
+    assert!(m.geometry().weights().iter().all(|&w| w > 0.0));
+    (before, normal_jump(s, &r.edges, 0.05, 5).unwrap())
+}
+
+#[test]
+fn edge_rounding_keeps_constraints_and_rounds() {
+    let r = RoundingModel::new(RoundingKind::Edge).unwrap();
+    assert_eq!(r.surface.control_points().len(), 21);
+    let (before, after) = rounding(
+        RoundingKind::Edge,
+        TriangleQuadrature::Whole { points: 4 },
+        10,
+    );
+    // The edge gets rounder: the normal turns less over 0.05 across it.
+    assert!(after < 0.5 * before, "edge: {before} -> {after}");
+}
+
+#[test]
+fn edge_rounding_with_subdivided_quadrature() {
+    rounding(RoundingKind::Edge, TriangleQuadrature::default(), 1);
+}
+
+#[test]
+fn corner_and_bevel_rounding_keep_constraints() {
+    let c = RoundingModel::new(RoundingKind::Corner).unwrap();
+    assert_eq!(c.surface.control_points().len(), 78);
+    let b = RoundingModel::new(RoundingKind::Bevel).unwrap();
+    assert_eq!(b.surface.control_points().len(), 108);
+    // A cheap rule for debug-mode tests: one 6 x 6 collapsed Gauss rule per triangle (fewer
+    // points under-integrate the corner: k = 4 wrinkles it, see docs/performance.md).
+    rounding(
+        RoundingKind::Corner,
+        TriangleQuadrature::Whole { points: 6 },
+        1,
+    );
+    rounding(
+        RoundingKind::Bevel,
+        TriangleQuadrature::Whole { points: 6 },
+        1,
+    );
+}
