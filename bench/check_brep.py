@@ -22,7 +22,11 @@ Gauss-Legendre quadrature on every knot span; for a B-spline volume, int int int
 with 10-point Gauss-Legendre per span (NURBS evaluated with the Cox-de Boor recursion and the
 quotient rule for rational derivatives, Piegl & Tiller eqs 2.5, 2.9, 4.8). Both are printed.
 
-Usage: python check_brep.py VCLAY_BINARY WORK_DIR step|iges MODEL.json:solid|open|auto ...
+A MODEL may be a subdivision-solid lattice (.ovm): vclay writes the bicubic patches of its
+boundary limit surface joined into one shell, and the volume is that of the same patches
+(`vclay convert LATTICE.ovm PATCHES.json`; the divergence theorem summed over the patches).
+
+Usage: python check_brep.py VCLAY_BINARY WORK_DIR step|iges MODEL.json|LATTICE.ovm:solid|open|auto ...
 Run through bench/check_step.sh, which finds or installs cadquery-ocp and says when it skips.
 """
 
@@ -159,7 +163,7 @@ def surface_volume(e, n=24):
                     s, (su, sv) = rational(acc)
                     jac = 0.25 * (b - a) * (d - c) * wu * wv
                     total += jac * dot(s, cross(su, sv))
-    return abs(total) / 3.0
+    return total / 3.0
 
 
 def volume_volume(e, n=10):
@@ -194,13 +198,10 @@ def volume_volume(e, n=10):
 
 
 def model_volume(path):
-    total = 0.0
-    for e in entities(path):
-        if e["type"] == "nurbs-surface":
-            total += surface_volume(e)
-        elif e["type"] == "nurbs-volume":
-            total += volume_volume(e)
-    return total
+    """Surfaces: one closed surface, or patches oriented alike (signed sum); volumes: each."""
+    surfaces = sum(surface_volume(e) for e in entities(path) if e["type"] == "nurbs-surface")
+    volumes = sum(volume_volume(e) for e in entities(path) if e["type"] == "nurbs-volume")
+    return abs(surfaces) + volumes
 
 
 def subshapes(shape, kind):
@@ -254,6 +255,13 @@ def check(vclay, work, fmt, model, expect):
     ext = ".step" if fmt == "step" else ".igs"
     out = work / (model.stem + ext)
     subprocess.run([vclay, "convert", str(model), str(out)], check=True, capture_output=True)
+    if model.suffix == ".ovm":
+        # A subdivision-solid lattice: its limit patches, joined into one shell by vclay; the
+        # volume is computed from the same patches as model JSON.
+        patches = work / (model.stem + "_patches.json")
+        subprocess.run([vclay, "convert", str(model), str(patches)], check=True,
+                       capture_output=True)
+        model = patches
     if expect == "auto":
         text = out.read_text()
         solid = ("MANIFOLD_SOLID_BREP(" in text if fmt == "step"
@@ -287,7 +295,7 @@ def check(vclay, work, fmt, model, expect):
               f"OpenCASCADE {occ:.12g}, vclay {ours:.12g}, relative difference {rel:.1e} "
               f"(tolerance {RTOL:.0e})")
     else:
-        n = len(entities(model))
+        n = len(entities(model)) if model.suffix == ".json" else 1
         ok = valid and not solids and len(shells) == n and not any(closed)
         print(f"{'ok' if ok else 'FAIL'} {head}; expected {n} open shell(s), no solid")
     return ok

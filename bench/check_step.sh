@@ -43,11 +43,17 @@ sed 's/^steps = 400/steps = 1/' examples/scenarios/fig9a_swung_egg.toml > "$work
 "$vclay" run examples/scenarios/fig9a_swung_egg.toml --out "$work/egg" > /dev/null 2>&1
 cp "$work/swung1/final.json" "$models/swung_sphere.json"
 cp "$work/egg/final.json" "$models/sculpted_egg.json"
+# Subdivision solids: the bicubic patches of their boundary limit surface, joined into a solid.
+for prim in box cylinder torus gear; do
+  "$vclay" subdivide --primitive "$prim" --levels 0 --out "$models/$prim.ovm" -q
+done
 for fmt in step iges; do
   "$py" bench/check_brep.py "$vclay" "$work/brep" "$fmt" \
     "$models/sphere.json:solid" "$models/inward_sphere.json:solid" "$models/torus.json:solid" \
     "$models/closed_tube.json:solid" "$models/swung_sphere.json:solid" \
     "$models/bent_volume.json:solid" "$models/mirrored_volume.json:solid" \
     "$work/demo/torus.json:solid" "$work/demo/twisted_volume.json:solid" \
-    "$models/sheet.json:open" "$work/demo/sheet.json:open" "$models/sculpted_egg.json:auto"
+    "$models/sheet.json:open" "$work/demo/sheet.json:open" "$models/sculpted_egg.json:auto" \
+    "$models/box.ovm:solid" "$models/cylinder.ovm:solid" "$models/torus.ovm:solid" \
+    "$models/gear.ovm:solid"
 done

@@ -4,7 +4,8 @@
 //! top-level `"shape"`), STEP (`.step`, `.stp`, `.p21`) and IGES (`.igs`, `.iges`) B-spline
 //! curves and surfaces (what is not read is printed as a warning unless `--quiet`), meshes
 //! (`.obj`, `.stl`, `.ply`, `.glb`), and subdivision-solid lattices (`.ovm`) as the bicubic
-//! patches of their boundary limit surface (written as loose surfaces to STEP/IGES).
+//! patches of their boundary limit surface (joined into one B-rep shell in STEP/IGES: a solid
+//! when the patches close up).
 //! Write: vclay model (`.json`), geomdl (`.geomdl.json`), STEP (`.step`, `.stp`) and IGES
 //! (`.igs`, `.iges`) with exact NURBS geometry as B-reps: a closed surface or a volume's boundary
 //! as a solid, an open surface as an open shell (`--loose`: loose surfaces and curves,
@@ -40,6 +41,11 @@ pub struct ConvertArgs {
     /// B-rep solids and shells.
     #[arg(long)]
     pub loose: bool,
+    /// STEP and IGES: join all surfaces (and volume boundary faces) into one shell along their
+    /// coinciding boundaries, a solid when they close up (the default for a lattice .ovm, whose
+    /// limit surface is many patches); without it each surface is its own shell.
+    #[arg(long, conflicts_with = "loose")]
+    pub join: bool,
 }
 
 /// What a file held.
@@ -87,6 +93,7 @@ pub fn read_any(path: &Path) -> Result<Loaded> {
             Ok(Loaded::Entities(imported.entities))
         }
         "ovm" => Ok(Loaded::Entities(lattice_patches(path)?)),
+        "vtu" => Ok(Loaded::Meshes(vec![vtu_boundary(path)?])),
         "glb" => Ok(Loaded::Meshes(read_glb(path)?)),
         "obj" | "stl" | "ply" => Ok(Loaded::Meshes(vec![read_mesh(path)?])),
         other => bail!(
@@ -149,6 +156,19 @@ pub fn lattice_patches(path: &Path) -> Result<Vec<NamedEntity>> {
             entity: Entity::Surface(s),
         })
         .collect())
+}
+
+/// The boundary of a `.vtu` lattice (as `vclay subdivide` and `vclay run` write them; read by
+/// `vclay_lattice::formats::vtu::read`, issue 20) as a triangle mesh: its faces with one cell,
+/// oriented outward, fan-triangulated (`vclay_lattice::boundary_mesh`), with vertex normals.
+pub fn vtu_boundary(path: &Path) -> Result<TriMesh> {
+    let lattice = vclay::lattice::formats::vtu::read(path)?;
+    let mut mesh = vclay::lattice::boundary_mesh(&lattice);
+    if mesh.triangles.is_empty() {
+        bail!("{}: the lattice has no boundary faces", path.display());
+    }
+    mesh.compute_normals();
+    Ok(mesh)
 }
 
 /// Tessellates the surfaces and volume boundaries of a model into one mesh.
@@ -222,17 +242,24 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
         "step" | "stp" | "igs" | "iges" => {
             let entities = exact(&input)?;
             let iges = matches!(ext.as_str(), "igs" | "iges");
-            // Limit patches of a lattice go as loose surfaces (their B-rep assembly is the
-            // STEP writer's part).
-            let loose = args.loose || ext_of(&args.input) == "ovm";
-            match (iges, loose) {
-                (false, false) => write_step_as(out, &entities, StepLayout::Brep)?,
-                (false, true) => write_step_as(out, &entities, StepLayout::GeometricSet)?,
-                (true, false) => write_iges_as(out, &entities, IgesLayout::Brep)?,
-                (true, true) => write_iges_as(out, &entities, IgesLayout::Loose)?,
+            // The limit patches of a lattice form one surface: joined into one shell.
+            let join = !args.loose && (args.join || ext_of(&args.input) == "ovm");
+            let (step, igs) = match (args.loose, join) {
+                (true, _) => (StepLayout::GeometricSet, IgesLayout::Loose),
+                (false, true) => (StepLayout::JoinedBrep, IgesLayout::JoinedBrep),
+                (false, false) => (StepLayout::Brep, IgesLayout::Brep),
+            };
+            if iges {
+                write_iges_as(out, &entities, igs)?;
+            } else {
+                write_step_as(out, &entities, step)?;
             }
-            if !loose && !crate::quiet() {
-                let b = BrepSummary::of(&entities)?;
+            if !args.loose && !crate::quiet() {
+                let b = if join {
+                    BrepSummary::joined(&entities)?
+                } else {
+                    BrepSummary::of(&entities)?
+                };
                 eprintln!(
                     "vclay convert: {} solid(s), {} open shell(s), {} curve(s)",
                     b.solids, b.open_shells, b.curves

@@ -103,3 +103,35 @@ fn closed_surfaces_become_solids_and_open_ones_shells() {
         .collect();
     assert_eq!(types, ["128", "128"]);
 }
+
+#[test]
+fn subdivision_solid_limit_patches_join_into_a_solid() {
+    let dir = tempfile::tempdir().unwrap();
+    let ovm = dir.path().join("box.ovm");
+    let r = vclay(&[
+        "subdivide",
+        "--primitive",
+        "box:3x3x3",
+        "--levels",
+        "0",
+        "--out",
+        ovm.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let step = dir.path().join("box.step");
+    let r = vclay(&["convert", ovm.to_str().unwrap(), step.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{err}");
+    assert!(err.contains("1 solid(s), 0 open shell(s)"), "{err}");
+    let text = std::fs::read_to_string(&step).unwrap();
+    let faces = text.matches("=ADVANCED_FACE(").count();
+    assert!(faces >= 24, "{faces} faces");
+    assert_eq!(text.matches("=MANIFOLD_SOLID_BREP(").count(), 1);
+    // Quad patches on a closed surface: every edge is shared by two faces (E = 2F), and
+    // Euler's formula for a sphere-like surface V - E + F = 2.
+    let e = text.matches("=EDGE_CURVE(").count();
+    let v = text.matches("=VERTEX_POINT(").count();
+    assert_eq!(e, 2 * faces);
+    assert_eq!(v as i64 - e as i64 + faces as i64, 2);
+}

@@ -38,6 +38,7 @@
 //! degenerates (a surface collapsed to a point) is not supported and leaves the shell open.
 
 use crate::error::IoError;
+use std::collections::HashMap;
 use vclay_core::Vec3;
 use vclay_core::quadrature::GaussLegendre;
 use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface, NurbsVolume, ParametricSurface};
@@ -217,24 +218,65 @@ fn same_curve(a: &NurbsCurve, b: &NurbsCurve, tol: f64) -> Option<bool> {
     }
 }
 
+/// Grid cell of a point for the vertex hash: cells of the tolerance's size, so a point within
+/// the tolerance of another lies in the same or a neighbouring cell.
+type Cell = [i64; 3];
+
+/// A use of an edge by a face loop: (face, runs along the edge in the face's natural loop).
+type EdgeUse = (usize, bool);
+
 struct Builder {
     tol: f64,
     vertices: Vec<Vertex>,
     edges: Vec<Edge>,
     faces: Vec<Face>,
+    /// Vertices by grid cell.
+    grid: HashMap<Cell, Vec<usize>>,
+    /// Edges by their (smaller, larger) end vertices.
+    by_ends: HashMap<(usize, usize), Vec<usize>>,
 }
 
 impl Builder {
+    fn new(tol: f64) -> Self {
+        Builder {
+            tol,
+            vertices: Vec::new(),
+            edges: Vec::new(),
+            faces: Vec::new(),
+            grid: HashMap::new(),
+            by_ends: HashMap::new(),
+        }
+    }
+
+    fn cell(&self, p: &Vec3) -> Cell {
+        // Saturating float-to-int casts: a huge coordinate only makes cells coarser.
+        [p.x, p.y, p.z].map(|c| (c / self.tol).floor() as i64)
+    }
+
     fn vertex(&mut self, p: Vec3) -> usize {
-        if let Some(i) = self
-            .vertices
-            .iter()
-            .position(|v| (v.point - p).norm() <= self.tol)
-        {
-            return i;
+        let c = self.cell(&p);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let key = [
+                        c[0].saturating_add(dx),
+                        c[1].saturating_add(dy),
+                        c[2].saturating_add(dz),
+                    ];
+                    if let Some(ids) = self.grid.get(&key)
+                        && let Some(&i) = ids
+                            .iter()
+                            .find(|&&i| (self.vertices[i].point - p).norm() <= self.tol)
+                    {
+                        return i;
+                    }
+                }
+            }
         }
         self.vertices.push(Vertex { point: p });
-        self.vertices.len() - 1
+        let id = self.vertices.len() - 1;
+        self.grid.entry(c).or_default().push(id);
+        id
     }
 
     fn add_face(&mut self, surface: NurbsSurface) -> Result<(), IoError> {
@@ -277,14 +319,18 @@ impl Builder {
                 bound.push(LoopItem::Pole { vertex: side.start });
                 continue;
             }
-            let found = self.edges.iter().enumerate().find_map(|(i, e)| {
-                let same = same_curve(&e.curve, &side.curve, self.tol)?;
-                let ends = if same {
-                    (side.start, side.end)
-                } else {
-                    (side.end, side.start)
-                };
-                (ends == (e.start, e.end)).then_some((i, same))
+            let key = (side.start.min(side.end), side.start.max(side.end));
+            let found = self.by_ends.get(&key).and_then(|ids| {
+                ids.iter().find_map(|&i| {
+                    let e = &self.edges[i];
+                    let same = same_curve(&e.curve, &side.curve, self.tol)?;
+                    let ends = if same {
+                        (side.start, side.end)
+                    } else {
+                        (side.end, side.start)
+                    };
+                    (ends == (e.start, e.end)).then_some((i, same))
+                })
             });
             let (edge, same) = found.unwrap_or_else(|| {
                 self.edges.push(Edge {
@@ -292,7 +338,9 @@ impl Builder {
                     start: side.start,
                     end: side.end,
                 });
-                (self.edges.len() - 1, true)
+                let id = self.edges.len() - 1;
+                self.by_ends.entry(key).or_default().push(id);
+                (id, true)
             });
             bound.push(LoopItem::Edge {
                 edge,
@@ -309,7 +357,7 @@ impl Builder {
 
     fn finish(mut self) -> Shell {
         // Uses of each edge: (face, forward in the face's natural loop).
-        let mut uses: Vec<Vec<(usize, bool)>> = vec![Vec::new(); self.edges.len()];
+        let mut uses: Vec<Vec<EdgeUse>> = vec![Vec::new(); self.edges.len()];
         for (f, face) in self.faces.iter().enumerate() {
             for item in &face.bound {
                 if let LoopItem::Edge { edge, forward } = *item {
@@ -321,6 +369,12 @@ impl Builder {
         // Orient faces consistently: an edge's two uses must run in opposite directions once
         // each face's flip is applied. Breadth-first over the faces.
         let nf = self.faces.len();
+        // Per face: (its use, the other face's use) of every edge it shares.
+        let mut adjacent: Vec<Vec<(EdgeUse, EdgeUse)>> = vec![Vec::new(); nf];
+        for u in uses.iter().filter(|u| u.len() == 2) {
+            adjacent[u[0].0].push((u[0], u[1]));
+            adjacent[u[1].0].push((u[1], u[0]));
+        }
         let mut flip: Vec<Option<bool>> = vec![None; nf];
         let mut orientable = true;
         for seed in 0..nf {
@@ -331,21 +385,16 @@ impl Builder {
             let mut queue = vec![seed];
             while let Some(f) = queue.pop() {
                 let ff = flip[f].unwrap_or(false);
-                for u in uses.iter().filter(|u| u.len() == 2) {
-                    for (a, b) in [(u[0], u[1]), (u[1], u[0])] {
-                        if a.0 != f {
-                            continue;
+                for &(a, b) in &adjacent[f] {
+                    // Need (a.1 ^ ff) != (b.1 ^ fb).
+                    let want = !(a.1 ^ ff) ^ b.1;
+                    match flip[b.0] {
+                        None => {
+                            flip[b.0] = Some(want);
+                            queue.push(b.0);
                         }
-                        // Need (a.1 ^ ff) != (b.1 ^ fb).
-                        let want = !(a.1 ^ ff) ^ b.1;
-                        match flip[b.0] {
-                            None => {
-                                flip[b.0] = Some(want);
-                                queue.push(b.0);
-                            }
-                            Some(x) if x != want => orientable = false,
-                            Some(_) => {}
-                        }
+                        Some(x) if x != want => orientable = false,
+                        Some(_) => {}
                     }
                 }
             }
@@ -422,14 +471,7 @@ impl Shell {
     /// The shell of one surface: closed when its boundaries close up (a torus, a sphere, a
     /// closed D-NURBS surface), open otherwise.
     pub fn of_surface(s: &NurbsSurface) -> Result<Shell, IoError> {
-        let mut b = Builder {
-            tol: closure_tolerance(s.control_points()),
-            vertices: Vec::new(),
-            edges: Vec::new(),
-            faces: Vec::new(),
-        };
-        b.add_face(s.clone())?;
-        Ok(b.finish())
+        Self::of_surfaces(std::slice::from_ref(s))
     }
 
     /// The shell of a volume's six boundary surfaces (`u = u0, u1, v = v0, v1, w = w0, w1`, from
@@ -444,14 +486,24 @@ impl Shell {
         }
         let faces = crate::step::volume_boundary_surfaces(&v)
             .ok_or_else(|| structure("volume knot vectors could not be clamped".into()))?;
-        let mut b = Builder {
-            tol: closure_tolerance(v.control_points()),
-            vertices: Vec::new(),
-            edges: Vec::new(),
-            faces: Vec::new(),
-        };
+        let mut b = Builder::new(closure_tolerance(v.control_points()));
         for f in faces {
             b.add_face(f)?;
+        }
+        Ok(b.finish())
+    }
+
+    /// One shell of several surfaces joined along their coinciding boundaries (patches of one
+    /// surface, such as the bicubic patches of a subdivision solid's limit surface): closed when
+    /// they close up. The tolerance is that of all their control points together.
+    pub fn of_surfaces(surfaces: &[NurbsSurface]) -> Result<Shell, IoError> {
+        let all: Vec<Vec3> = surfaces
+            .iter()
+            .flat_map(|s| s.control_points().iter().copied())
+            .collect();
+        let mut b = Builder::new(closure_tolerance(&all));
+        for s in surfaces {
+            b.add_face(s.clone())?;
         }
         Ok(b.finish())
     }
@@ -488,6 +540,36 @@ impl Shell {
     }
 }
 
+/// One shell of all the surfaces of a model and the boundary faces of its volumes, joined along
+/// coinciding boundaries ([`Shell::of_surfaces`]); `None` when the model has only curves.
+pub fn joined_shell(entities: &[crate::model::NamedEntity]) -> Result<Option<Shell>, IoError> {
+    use crate::model::Entity;
+    let mut surfaces = Vec::new();
+    for e in entities {
+        match &e.entity {
+            Entity::Curve(_) => {}
+            Entity::Surface(s) => surfaces.push(s.clone()),
+            Entity::Volume(v) => {
+                let mut v = v.clone();
+                for axis in 0..3 {
+                    if !v.knots()[axis].is_clamped() {
+                        v = v.clamped(axis).map_err(|e| structure(e.to_string()))?;
+                    }
+                }
+                surfaces.extend(
+                    crate::step::volume_boundary_surfaces(&v).ok_or_else(|| {
+                        structure("volume knot vectors could not be clamped".into())
+                    })?,
+                );
+            }
+        }
+    }
+    if surfaces.is_empty() {
+        return Ok(None);
+    }
+    Shell::of_surfaces(&surfaces).map(Some)
+}
+
 /// What the B-rep layout of a model holds: closed shells (solids), open shells and loose curves.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct BrepSummary {
@@ -500,6 +582,21 @@ pub struct BrepSummary {
 }
 
 impl BrepSummary {
+    /// The summary of the joined layout: every surface and volume face in one shell
+    /// ([`joined_shell`]).
+    pub fn joined(entities: &[crate::model::NamedEntity]) -> Result<Self, IoError> {
+        let shell = joined_shell(entities)?;
+        let closed = shell.as_ref().is_some_and(|s| s.closed);
+        Ok(BrepSummary {
+            solids: usize::from(closed),
+            open_shells: usize::from(shell.is_some() && !closed),
+            curves: entities
+                .iter()
+                .filter(|e| matches!(e.entity, crate::model::Entity::Curve(_)))
+                .count(),
+        })
+    }
+
     /// Builds the shell of every surface and volume of `entities` and counts them.
     pub fn of(entities: &[crate::model::NamedEntity]) -> Result<Self, IoError> {
         use crate::model::Entity;
@@ -565,17 +662,7 @@ mod tests {
         let exact = 4.0 / 3.0 * PI * 1.5f64.powi(3);
         assert!((sh.volume(20) - exact).abs() < 1e-12 * exact);
         // Reversing the parametrization (swapping u and v) flips the face, not the volume.
-        let [nu, nv] = s.dims();
-        let mut pts = Vec::new();
-        let mut ws = Vec::new();
-        for j in 0..nv {
-            for i in 0..nu {
-                pts.push(s.control_points()[i * nv + j]);
-                ws.push(s.weights()[i * nv + j]);
-            }
-        }
-        let k = s.knots();
-        let swapped = NurbsSurface::from_flat([k[1].clone(), k[0].clone()], pts, ws).unwrap();
+        let swapped = transposed(&s);
         let sh2 = Shell::of_surface(&swapped).unwrap();
         assert!(sh2.closed && !sh2.faces[0].same_sense);
         assert!((sh2.volume(20) - exact).abs() < 1e-12 * exact);
@@ -610,6 +697,51 @@ mod tests {
         assert!(sh.closed, "{:?}", sh.edge_uses());
         assert_eq!(sh.edges.len(), 1);
         assert!(sh.volume(20) > 0.0);
+    }
+
+    /// `s` with u and v swapped (its normal reversed).
+    fn transposed(s: &NurbsSurface) -> NurbsSurface {
+        let [nu, nv] = s.dims();
+        let (mut pts, mut ws) = (Vec::new(), Vec::new());
+        for j in 0..nv {
+            for i in 0..nu {
+                pts.push(s.control_points()[i * nv + j]);
+                ws.push(s.weights()[i * nv + j]);
+            }
+        }
+        let k = s.knots();
+        NurbsSurface::from_flat([k[1].clone(), k[0].clone()], pts, ws).unwrap()
+    }
+
+    #[test]
+    fn separate_patches_join_into_one_solid() {
+        let v = NurbsVolume::box_lattice(
+            [2, 1, 2],
+            [3, 2, 4],
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(2.0, 1.0, 2.0),
+        )
+        .unwrap();
+        let mut faces = crate::step::volume_boundary_surfaces(&v).unwrap();
+        // Parametrizations as separate patches may come: some transposed, order shuffled.
+        faces[1] = transposed(&faces[1]);
+        faces[4] = transposed(&faces[4]);
+        faces.swap(0, 5);
+        let sh = Shell::of_surfaces(&faces).unwrap();
+        assert!(sh.closed);
+        assert_eq!(
+            (sh.vertices.len(), sh.edges.len(), sh.faces.len()),
+            (8, 12, 6)
+        );
+        assert!(sh.edge_uses().iter().all(|&u| u == (1, 1)));
+        assert!((sh.volume(6) - 2.0).abs() < 1e-12, "{}", sh.volume(6));
+        // Five of the six: an open shell, the free edges used once.
+        let open = Shell::of_surfaces(&faces[..5]).unwrap();
+        assert!(!open.closed);
+        assert_eq!(
+            open.edge_uses().iter().filter(|u| u.0 + u.1 == 1).count(),
+            4
+        );
     }
 
     #[test]

@@ -170,6 +170,10 @@ pub enum IgesLayout {
     /// an open Shell (514 form 2); curves as independent 126 entities (see [`crate::brep`]).
     #[default]
     Brep,
+    /// Topology as in [`IgesLayout::Brep`], but all surfaces and volume boundary faces of the
+    /// model joined into one shell along their coinciding boundaries (a solid when it closes),
+    /// as [`crate::step::StepLayout::JoinedBrep`]. Curves stay loose.
+    JoinedBrep,
     /// Loose geometry: independent 126 curves and 128 surfaces (a volume's six boundary
     /// surfaces), no topology.
     Loose,
@@ -291,10 +295,19 @@ pub fn to_iges_string_as(
     }
     let mut items = Vec::new();
     let mut tolerance: f64 = 1e-7;
+    let joined = match layout {
+        IgesLayout::JoinedBrep => crate::brep::joined_shell(entities)?,
+        _ => None,
+    };
+    if let Some(shell) = &joined {
+        tolerance = tolerance.max(10.0 * shell.tolerance);
+        shell_items(&mut items, shell, "SHELL");
+    }
     for (i, e) in entities.iter().enumerate() {
         let label = e.name.clone().unwrap_or_else(|| format!("E{i}"));
         let shell = match (&e.entity, layout) {
             (Entity::Curve(_), _) | (_, IgesLayout::Loose) => None,
+            (_, IgesLayout::JoinedBrep) => continue,
             (Entity::Surface(s), IgesLayout::Brep) => Some(crate::brep::Shell::of_surface(s)),
             (Entity::Volume(v), IgesLayout::Brep) => Some(crate::brep::Shell::of_volume(v)),
         };

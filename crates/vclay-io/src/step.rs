@@ -239,6 +239,11 @@ pub enum StepLayout {
     /// a `GEOMETRIC_CURVE_SET` (see [`crate::brep`] for the topology and its tolerance).
     #[default]
     Brep,
+    /// Topology as in [`StepLayout::Brep`], but all surfaces of the model and the boundary faces
+    /// of its volumes joined into one shell along their coinciding boundaries (a solid when it
+    /// closes): for a surface made of patches, such as the bicubic patches of a subdivision
+    /// solid's limit surface. Curves stay loose.
+    JoinedBrep,
     /// Loose geometry: every surface (and each volume's six boundary surfaces) in one
     /// `GEOMETRIC_SET`, no topology (the layout of vclay before B-rep export).
     GeometricSet,
@@ -351,12 +356,17 @@ pub fn to_step_string_as(
             .enumerate()
             .map(|(i, e)| entity_shell(&e.entity, i))
             .collect::<Result<_, _>>()?,
-        StepLayout::GeometricSet => vec![None; entities.len()],
+        StepLayout::GeometricSet | StepLayout::JoinedBrep => vec![None; entities.len()],
+    };
+    let joined = match layout {
+        StepLayout::JoinedBrep => crate::brep::joined_shell(entities)?,
+        _ => None,
     };
     // CAD's merge tolerance: 1e-7 mm, or ten times the largest closure tolerance used.
     let uncertainty = shells
         .iter()
         .flatten()
+        .chain(&joined)
         .map(|s| 10.0 * s.tolerance)
         .fold(1e-7, f64::max);
     let mut d = Data {
@@ -391,8 +401,19 @@ pub fn to_step_string_as(
     ));
     // Representation items by kind: loose curves, loose surfaces, solids, open shells.
     let (mut curves, mut surfaces, mut solids, mut open) = (vec![], vec![], vec![], vec![]);
+    if let Some(sh) = &joined {
+        let item = write_shell(&mut d, "vclay shell", sh);
+        if sh.closed {
+            solids.push(item);
+        } else {
+            open.push(item);
+        }
+    }
     for (i, (e, shell)) in entities.iter().zip(&shells).enumerate() {
         let name = e.name.clone().unwrap_or_else(|| format!("entity {i}"));
+        if joined.is_some() && !matches!(e.entity, Entity::Curve(_)) {
+            continue;
+        }
         match (&e.entity, shell) {
             (_, Some(sh)) => {
                 let item = write_shell(&mut d, &name, sh);
@@ -721,6 +742,21 @@ mod tests {
         assert!(m.contains("SHELL_BASED_SURFACE_MODEL("));
         assert!(m.contains("MANIFOLD_SURFACE_SHAPE_REPRESENTATION("));
         assert_eq!(m.matches("SHAPE_REPRESENTATION_RELATIONSHIP(").count(), 3);
+    }
+
+    #[test]
+    fn joined_layout_makes_one_solid_of_patches() {
+        let v = NurbsVolume::box_lattice([1, 1, 2], [2, 2, 3], Vec3::zeros(), Vec3::repeat(1.0))
+            .unwrap();
+        let patches: Vec<NamedEntity> = volume_boundary_surfaces(&v)
+            .unwrap()
+            .into_iter()
+            .map(|s| Entity::Surface(s).into())
+            .collect();
+        let joined = to_step_string_as(&patches, "j.step", StepLayout::JoinedBrep).unwrap();
+        assert_eq!(check_brep_text(&joined), (1, 0, 6, 12, 8));
+        let separate = to_step_string_as(&patches, "s.step", StepLayout::Brep).unwrap();
+        assert_eq!(check_brep_text(&separate), (0, 6, 6, 24, 24));
     }
 
     #[test]
