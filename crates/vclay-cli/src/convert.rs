@@ -69,12 +69,30 @@ fn ext_of(path: &Path) -> String {
         .unwrap_or_default()
 }
 
+/// Domain-triangle subdivision level of triangular NURBS (`"type": "triangular-nurbs"`) when
+/// they are tessellated for OBJ, glTF or pictures (`level^2` triangles per domain triangle).
+pub const TRIANGULAR_TESSELLATION_LEVEL: usize = 8;
+
+/// A triangular NURBS file tessellated ([`TRIANGULAR_TESSELLATION_LEVEL`]).
+fn triangular_mesh(path: &Path, text: &str) -> Result<TriMesh> {
+    let t = vclay::io::triangular::parse_triangular(text)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let mut mesh = TriMesh::new();
+    t.surface
+        .tessellate(TRIANGULAR_TESSELLATION_LEVEL, &mut mesh)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok(mesh)
+}
+
 /// Reads any supported input, choosing by extension (and, for .json, by content).
 pub fn read_any(path: &Path) -> Result<Loaded> {
     match ext_of(path).as_str() {
         "json" | "geomdl.json" => {
             let text = std::fs::read_to_string(path)
                 .with_context(|| format!("cannot read {}", path.display()))?;
+            if vclay::io::triangular::is_triangular(&text) {
+                return Ok(Loaded::Meshes(vec![triangular_mesh(path, &text)?]));
+            }
             let ents = if is_geomdl(&text) {
                 parse_geomdl(&text)
             } else {

@@ -45,6 +45,9 @@ pub fn evaluate(
     if is_lattice(model) {
         return evaluate_lattice(model, params, order, rule);
     }
+    if let Some(text) = triangular_text(model) {
+        return evaluate_triangular(model, &text, params, order);
+    }
     if let Some(k) = order
         && k > MAX_DERIVATIVE_ORDER
     {
@@ -345,4 +348,88 @@ pub fn run(
     let doc = evaluate(model, params, order, entity, rule)?;
     println!("{}", serde_json::to_string(&doc)?);
     Ok(())
+}
+
+/// The text of `model` when it is a triangular NURBS file (`"type": "triangular-nurbs"`).
+fn triangular_text(model: &Path) -> Option<String> {
+    let ext = model.extension()?.to_string_lossy().to_ascii_lowercase();
+    if ext != "json" {
+        return None;
+    }
+    let text = std::fs::read_to_string(model).ok()?;
+    vclay::io::triangular::is_triangular(&text).then_some(text)
+}
+
+/// `vclay eval` of a triangular NURBS: points at `(u, v)` domain parameters and, with
+/// `--derivatives K` (K <= 2), the table `d[a][b] = d^(a+b) s / du^a dv^b` for `a + b <= K`
+/// (as for tensor-product surfaces).
+fn evaluate_triangular(
+    model: &Path,
+    text: &str,
+    params: &Params,
+    order: Option<usize>,
+) -> Result<Value> {
+    let k = order.unwrap_or(0);
+    if k > 2 {
+        bail!("--derivatives {k}: triangular NURBS are evaluated up to second derivatives");
+    }
+    let t = vclay::io::triangular::parse_triangular(text)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
+    let (tuples, source) = match params {
+        Params::File(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read parameter file {}", path.display()))?;
+            let tuples = parse_params(&text, 2)
+                .map_err(|err| anyhow::anyhow!("{}: {err}", path.display()))?;
+            (tuples, path.display().to_string())
+        }
+        Params::Inline(items) => (inline(items, 2)?, "--at".to_string()),
+    };
+    crate::limits::check_memory(
+        &format!("--derivatives {k} at {} parameter tuples", tuples.len()),
+        tuples.len() as f64 * ((k + 1) * (k + 1)) as f64 * BYTES_PER_JSON_POINT,
+    )?;
+    let mut points = Vec::with_capacity(tuples.len());
+    let mut derivs = Vec::with_capacity(tuples.len());
+    for (n, tu) in tuples.iter().enumerate() {
+        let d = t
+            .surface
+            .derivatives([tu[0], tu[1]])
+            .with_context(|| format!("{source}: parameter {n} {tu:?}"))?;
+        if !d.iter().all(|p| p.iter().all(|x| x.is_finite())) {
+            bail!("{source}: parameter {n} {tu:?}: the point or a derivative is not finite");
+        }
+        points.push(point(&d[0]));
+        // d = (s, s_u, s_v, s_uu, s_uv, s_vv) -> table [a][b].
+        let at = |a: usize, b: usize| match (a, b) {
+            (0, 0) => Some(d[0]),
+            (1, 0) => Some(d[1]),
+            (0, 1) => Some(d[2]),
+            (2, 0) => Some(d[3]),
+            (1, 1) => Some(d[4]),
+            (0, 2) => Some(d[5]),
+            _ => None,
+        };
+        let table: Vec<Value> = (0..=k)
+            .map(|a| {
+                Value::Array(
+                    (0..=k)
+                        .map(|b| {
+                            if a + b <= k {
+                                at(a, b).map_or(Value::Null, |p| point(&p))
+                            } else {
+                                Value::Null
+                            }
+                        })
+                        .collect(),
+                )
+            })
+            .collect();
+        derivs.push(Value::Array(table));
+    }
+    let mut doc = json!({ "points": points });
+    if order.is_some() {
+        doc["derivatives"] = Value::Array(derivs);
+    }
+    Ok(doc)
 }

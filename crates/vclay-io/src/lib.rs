@@ -39,6 +39,7 @@ pub mod model;
 pub mod params;
 pub mod step;
 pub mod step_read;
+pub mod triangular;
 mod util;
 
 pub use error::{IoError, MeshLocation};
