@@ -197,8 +197,8 @@ fn v(x: f64, y: f64, z: f64) -> Vec3 {
 /// ball) and 22 extrusions: abdomen, chest, neck and head up from the pelvis; a shoulder, upper
 /// arm, forearm and hand on each side of the chest; a hip, thigh, knee, shin and foot on each
 /// side of the pelvis. 104 points, 200 edges, 122 faces, 24 hexahedra, two pieces (player and
-/// ball); `height` tall (z up, standing on `z = 0`), facing +y, the ball in front of the right
-/// (kicking) foot.
+/// ball); `height` tall (z up, standing on `z = 0`), facing -y, the ball in front of the right
+/// (kicking) foot at `x > 0`.
 ///
 /// # Panics
 /// If `height` is not positive and finite.
@@ -211,7 +211,9 @@ pub fn soccer_player(height: f64) -> Lattice {
     let mut l = soccer_player_unit().expect("the soccer player recipe is valid");
     let s = height / 2.6;
     for p in l.points_mut() {
-        *p *= s;
+        // Scaled, and turned half a turn about z (a rotation keeps the cells' orientation) so
+        // that the player faces -y, towards the default iso view.
+        *p = Vec3::new(-p.x * s, -p.y * s, p.z * s);
     }
     l
 }

@@ -119,7 +119,7 @@ fn table2_spiked_and_holed_objects() {
 /// Not covered: the sharp rule folds 32 of the level-3 cells of the paper's torus and gear
 /// (their crease curves at the triangular corners), and the interior rule (volumetric rules on
 /// the boundary too) folds the corner cells of every lattice with boundary corners, a box
-/// included (docs/limits.md).
+/// included (docs/formats.md, `vclay subdivide`).
 #[test]
 fn no_primitive_folds() {
     for &name in PRIMITIVE_NAMES {

@@ -68,7 +68,7 @@ fn steps() -> Vec<Step> {
         },
         Step {
             name: "subdivision solids",
-            reproduces: "subdivision-solids-conference.txt Table 1, Fig 1",
+            reproduces: "subdivision-solids-conference.txt Table 1, Fig 1; journal Table 2",
             run: lattice::subdivided_solids,
         },
         Step {
