@@ -3,7 +3,8 @@
 //! Read: vclay model JSON and geomdl JSON (`.json`, told apart by content: geomdl has a
 //! top-level `"shape"`), STEP (`.step`, `.stp`, `.p21`) and IGES (`.igs`, `.iges`) B-spline
 //! curves and surfaces (what is not read is printed as a warning unless `--quiet`), meshes
-//! (`.obj`, `.stl`, `.ply`, `.glb`), and subdivision-solid lattices (`.ovm`) as the bicubic
+//! (`.obj`, `.stl`, `.ply`, `.glb`), `.vtu` lattices as their boundary mesh, and
+//! subdivision-solid lattices (`.ovm`) as the bicubic
 //! patches of their boundary limit surface (joined into one B-rep shell in STEP/IGES: a solid
 //! when the patches close up).
 //! Write: vclay model (`.json`), geomdl (`.geomdl.json`), STEP (`.step`, `.stp`) and IGES
@@ -30,7 +31,7 @@ use vclay::spline::{tessellate_surface, tessellate_volume_boundary};
 #[derive(Debug, Args)]
 pub struct ConvertArgs {
     /// Input file (.json model or geomdl, .step/.stp, .igs/.iges, .obj, .stl, .ply, .glb, or a
-    /// lattice .ovm: the limit surface as bicubic patches).
+    /// lattice .ovm: the limit surface as bicubic patches, or a lattice .vtu: its boundary mesh).
     pub input: PathBuf,
     /// Output file (.json, .geomdl.json, .step/.stp, .igs/.iges, .obj, .stl, .ply, .glb).
     pub output: PathBuf,
@@ -115,7 +116,7 @@ pub fn read_any(path: &Path) -> Result<Loaded> {
         "glb" => Ok(Loaded::Meshes(read_glb(path)?)),
         "obj" | "stl" | "ply" => Ok(Loaded::Meshes(vec![read_mesh(path)?])),
         other => bail!(
-            "{}: unknown input format {}; expected .json (vclay or geomdl model), .step, .stp, .igs, .iges, .obj, .stl, .ply, .glb or .ovm",
+            "{}: unknown input format {}; expected .json (vclay or geomdl model), .step, .stp, .igs, .iges, .obj, .stl, .ply, .glb, .ovm or .vtu",
             path.display(),
             if other.is_empty() {
                 "(no extension)".to_string()
