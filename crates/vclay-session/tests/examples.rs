@@ -27,6 +27,10 @@ const NEW_SINCE: &[&str] = &[
     "table2_holed_object",
 ];
 
+/// Examples added after the session layer (the old readers could not express them, so there is
+/// no run to compare with); each is run by its own test (issue 18: `tests/dnurbs_issue18.rs`).
+const NEW_EXAMPLES: &[&str] = &["fig06_curve_fit"];
+
 #[test]
 fn every_example_ends_as_before_the_session_layer() {
     let before = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/before");
@@ -34,6 +38,9 @@ fn every_example_ends_as_before_the_session_layer() {
     let mut compared = 0;
     for path in examples() {
         let name = path.file_stem().unwrap().to_string_lossy().to_string();
+        if NEW_EXAMPLES.contains(&name.as_str()) {
+            continue;
+        }
         let mut sc = Scenario::from_file(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
         let dir = out.path().join(&name);
         let steps = sc.steps;

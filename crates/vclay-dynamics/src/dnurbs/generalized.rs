@@ -1740,7 +1740,11 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                         }
                         if dynamic {
                             coef[0] = qw * (2.0 * mu + dt * gamma);
-                            lj.accumulate_value_diagonal(qw * mu, &mut w.mass_diag);
+                            // The weights' intrinsic inertia scales with this lumped mass; a
+                            // massless model (mu = 0: the first-order fitting rows of Table 1)
+                            // takes the damping's share of the step matrix, dt gamma / 2.
+                            let lumped = if mu > 0.0 { mu } else { 0.5 * dt * gamma };
+                            lj.accumulate_value_diagonal(qw * lumped, &mut w.mass_diag);
                             // (2M - dt D) v and the inertial force g_p.
                             let jv = lj.apply(0, vl);
                             y[0] += jv * (qw * (2.0 * mu - dt * gamma));

@@ -54,8 +54,8 @@ pub use generalized::{
 pub use geometry::{ClosedCurve, DnurbsGeometry, ElementSamples};
 pub use presets::{Preset, TABLE_1};
 pub use rational::{RationalGeometry, SwungGeometry};
-pub use triangular::{TriangleQuadrature, TriangularGeometry};
 pub use system::{Element, ElementSystem, SolverStats};
+pub use triangular::{TriangleQuadrature, TriangularGeometry};
 
 use crate::error::DynamicsError;
 use std::fmt;
@@ -156,6 +156,71 @@ impl Material {
             gamma: Density::Constant(gamma),
             alpha: vec![Density::Constant(alpha)],
             beta: vec![Density::Constant(beta)],
+        }
+    }
+
+    /// The same material with its densities read **per unit knot span** (issue 18): each
+    /// element `[u0, u1] x [v0, v1]` of widths `h_u`, `h_v` gets the densities that the
+    /// functional of eqs (16)-(17) has when that element is reparametrized onto the unit square
+    /// (`t = u / h_u`, the classic integer knots of the paper's examples):
+    /// `mu, gamma / (h_u h_v)`, `alpha_11 h_u / h_v`, `alpha_22 h_v / h_u`, `beta_11 h_u^3 / h_v`,
+    /// `beta_12 h_u h_v`, `beta_22 h_v^3 / h_u` (curves: `h_v = 1`, so `mu / h`, `alpha h`,
+    /// `beta h^3`). The dynamics then do not depend on the knot spacing or the domain length:
+    /// a curve on `[0, 1]` with `n` spans moves as the same curve on `[0, n]`. `spans` lists the
+    /// non-empty knot spans per direction (`spans[1]` empty for curves); elements are taken
+    /// span by span, v fastest, as [`Density::PerElement`] orders them. Constant and
+    /// per-element densities are scaled; a [`Density::Function`] is kept as it is.
+    pub fn per_unit_knot_span(&self, spans: [&[(f64, f64)]; 2]) -> Self {
+        let curve = spans[1].is_empty();
+        let vs: Vec<(f64, f64)> = if curve {
+            vec![(0.0, 1.0)]
+        } else {
+            spans[1].to_vec()
+        };
+        let widths: Vec<(f64, f64)> = spans[0]
+            .iter()
+            .flat_map(|u| vs.iter().map(move |v| (u.1 - u.0, v.1 - v.0)))
+            .collect();
+        let scale = |d: &Density, f: &dyn Fn(f64, f64) -> f64| match d {
+            Density::Constant(c) => {
+                Density::PerElement(widths.iter().map(|&(hu, hv)| c * f(hu, hv)).collect())
+            }
+            Density::PerElement(v) if v.len() == widths.len() => Density::PerElement(
+                v.iter()
+                    .zip(&widths)
+                    .map(|(c, &(hu, hv))| c * f(hu, hv))
+                    .collect(),
+            ),
+            other => other.clone(),
+        };
+        let inertial = |hu: f64, hv: f64| 1.0 / (hu * hv);
+        let alpha: Vec<Density> = self
+            .alpha
+            .iter()
+            .enumerate()
+            .map(|(k, a)| {
+                if k == 0 {
+                    scale(a, &|hu, hv| hu / hv)
+                } else {
+                    scale(a, &|hu, hv| hv / hu)
+                }
+            })
+            .collect();
+        let beta: Vec<Density> = self
+            .beta
+            .iter()
+            .enumerate()
+            .map(|(k, b)| match k {
+                0 => scale(b, &|hu, hv| hu.powi(3) / hv),
+                1 => scale(b, &|hu, hv| hu * hv),
+                _ => scale(b, &|hu, hv| hv.powi(3) / hu),
+            })
+            .collect();
+        Self {
+            mu: scale(&self.mu, &inertial),
+            gamma: scale(&self.gamma, &inertial),
+            alpha,
+            beta,
         }
     }
 

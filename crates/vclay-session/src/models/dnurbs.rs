@@ -448,15 +448,24 @@ struct Mat {
     gamma: f64,
     alpha: Vec<f64>,
     beta: Vec<f64>,
+    /// The densities are per unit knot span ([`Material::per_unit_knot_span`], issue 18);
+    /// `spans` are then the model's non-empty knot spans per direction (absent: per unit
+    /// parameter, as before issue 18).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    spans: Option<[Vec<(f64, f64)>; 2]>,
 }
 
 impl Mat {
     fn to_material(&self) -> Material {
-        Material {
+        let m = Material {
             mu: Density::Constant(self.mu),
             gamma: Density::Constant(self.gamma),
             alpha: self.alpha.iter().map(|&a| Density::Constant(a)).collect(),
             beta: self.beta.iter().map(|&b| Density::Constant(b)).collect(),
+        };
+        match &self.spans {
+            Some([u, v]) => m.per_unit_knot_span([u, v]),
+            None => m,
         }
     }
     fn from_material(m: &Material) -> Option<Self> {
@@ -469,6 +478,7 @@ impl Mat {
             gamma: c(&m.gamma)?,
             alpha: m.alpha.iter().map(c).collect::<Option<_>>()?,
             beta: m.beta.iter().map(c).collect::<Option<_>>()?,
+            spans: None,
         })
     }
 }
@@ -524,7 +534,36 @@ enum Source {
     },
 }
 
+/// The non-empty spans `[t_i, t_i+1]` of a knot vector's domain.
+fn knot_spans(k: &KnotVector) -> Vec<(f64, f64)> {
+    let t = k.as_slice();
+    (k.degree()..k.control_points())
+        .filter(|&i| t[i] < t[i + 1])
+        .map(|i| (t[i], t[i + 1]))
+        .collect()
+}
+
 impl Source {
+    /// The non-empty knot spans per parametric direction (curves: `[spans, []]`), the elements
+    /// of [`Material::per_unit_knot_span`].
+    fn spans(&self) -> Result<[Vec<(f64, f64)>; 2], SessionError> {
+        Ok(match self {
+            Source::Curve { curve } => [knot_spans(curve.curve()?.knots()), Vec::new()],
+            Source::Surface { .. } => {
+                let s = self.surface()?.expect("surface");
+                [knot_spans(&s.knots()[0]), knot_spans(&s.knots()[1])]
+            }
+            Source::Swung {
+                profile,
+                trajectory,
+                ..
+            } => [
+                knot_spans(profile.curve()?.knots()),
+                knot_spans(trajectory.curve()?.knots()),
+            ],
+        })
+    }
+
     fn of_surface(s: &NurbsSurface) -> Self {
         Source::Surface {
             degree: s.degree(),
@@ -1653,7 +1692,19 @@ impl DnurbsModel {
                 }
             }
         }
-        let consts = Mat::from_material(&mat).expect("constant densities");
+        let mut consts = Mat::from_material(&mat).expect("constant densities");
+        let per_span = match mk.per.as_deref() {
+            None => !surface,
+            Some("knot-span") => true,
+            Some("parameter") => false,
+            Some(o) => {
+                return Err(err(
+                    "material",
+                    "per",
+                    format!("\"{o}\": expected \"knot-span\" or \"parameter\""),
+                ));
+            }
+        };
         // Simulation.
         let sim: SimKeys = match spec.simulation {
             Some(t) => typed("simulation", t)?,
@@ -1753,6 +1804,14 @@ impl DnurbsModel {
                 "swung surfaces need the generalized engine (their coordinates are not control points)".into(),
             ));
         }
+        if per_span {
+            consts.spans = Some(
+                source
+                    .spans()
+                    .map_err(|e| err("model", "material", e.to_string()))?,
+            );
+        }
+        let mat = if per_span { consts.to_material() } else { mat };
         let engine = source
             .engine(frozen, mat)
             .map_err(|e| err("model", "material", e.to_string()))?;
@@ -2106,14 +2165,33 @@ impl Model for DnurbsModel {
     }
 
     fn summary(&self) -> String {
-        format!(
+        let mut s = format!(
             "{} ({} engine): {} control points, {} tools, {} constraints",
             self.kind,
             self.engine_name(),
             self.engine.control_points(false).len(),
             self.tools.tools.len(),
             self.constraints.len()
-        )
+        );
+        // Fitting (d-nurbs.txt section 7.3, Figs 6-7): the distances of the data points to the
+        // nearest points of the model.
+        let d = match &self.engine {
+            Engine::Rational(e) => e.data_distances(),
+            Engine::Swung(e) => e.data_distances(),
+            Engine::FrozenSurface(e) => e.data_distances(),
+            Engine::FrozenCurve(e) => e.data_distances(),
+        };
+        if let Ok(d) = d
+            && !d.is_empty()
+        {
+            let rms = (d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64).sqrt();
+            let max = d.iter().fold(0.0f64, |m, &x| m.max(x));
+            s += &format!(
+                "; data fit: {} points, RMS distance {rms:.3e}, max {max:.3e}",
+                d.len()
+            );
+        }
+        s
     }
 
     fn time(&self) -> f64 {
@@ -2530,6 +2608,8 @@ struct ModelKeys {
 #[serde(deny_unknown_fields)]
 struct MaterialKeys {
     preset: Option<String>,
+    /// `"knot-span"` or `"parameter"` (issue 18).
+    per: Option<String>,
     mu: Option<f64>,
     gamma: Option<f64>,
     alpha: Option<f64>,
