@@ -485,6 +485,31 @@ fn exports_write_every_format_the_kind_names() {
     }
 }
 
+/// STEP and IGES exports of solids are closed B-reps (issue 20): a B-spline solid's boundary,
+/// or a subdivision solid's limit patches joined, as one manifold solid.
+#[test]
+fn solids_export_to_step_and_iges_as_closed_breps() {
+    let dir = tempfile::tempdir().unwrap();
+    for make in [cube as fn() -> Box<dyn Model>, bspline] {
+        let m = make();
+        let p = dir.path().join("m.step");
+        m.export(&p).unwrap();
+        let t = std::fs::read_to_string(&p).unwrap();
+        assert_eq!(t.matches("=MANIFOLD_SOLID_BREP(").count(), 1);
+        assert_eq!(t.matches("=CLOSED_SHELL(").count(), 1);
+        assert!(!t.contains("OPEN_SHELL"));
+        let p = dir.path().join("m.igs");
+        m.export(&p).unwrap();
+        let t = std::fs::read_to_string(&p).unwrap();
+        // Each directory entry takes two lines, both starting with the entity type.
+        let solid_lines = t
+            .lines()
+            .filter(|l| l.len() == 80 && &l[72..73] == "D" && l[..8].trim() == "186")
+            .count();
+        assert_eq!(solid_lines, 2);
+    }
+}
+
 #[test]
 fn a_model_at_rest_and_one_with_a_moving_rope_continue_exactly() {
     let mut s = Session::with_model("m", cube()).unwrap();

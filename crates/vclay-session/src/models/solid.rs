@@ -1245,6 +1245,49 @@ impl Model for SolidModel {
                 .map_err(|e| io(&e))?;
                 vclay_io::write_model(path, &[vclay_io::Entity::Volume(vol)]).map_err(|e| io(&e))
             }
+            ("step" | "stp" | "igs" | "iges", source) => {
+                // A solid B-rep (issue 20): a B-spline solid's six boundary faces, or the
+                // bicubic patches of a subdivision solid's boundary limit surface, joined into
+                // one closed shell.
+                let entities: Vec<vclay_io::NamedEntity> = match source {
+                    SolidSource::BSpline { knots, weights, .. } => {
+                        let vol = NurbsVolume::from_flat(
+                            knots.clone(),
+                            self.solid.control_points().to_vec(),
+                            weights.clone(),
+                        )
+                        .map_err(|e| io(&e))?;
+                        vec![vclay_io::Entity::Volume(vol).into()]
+                    }
+                    SolidSource::Subdivision {
+                        features, rules, ..
+                    } => {
+                        let l = self
+                            .solid
+                            .control_lattice()
+                            .ok_or_else(|| io(&"no control lattice"))?;
+                        vclay_lattice::boundary_patches(
+                            &l,
+                            features,
+                            *rules,
+                            vclay_lattice::limit_surface::DEFAULT_PATCH_SAMPLE_LEVELS,
+                        )
+                        .map_err(|e| io(&e))?
+                        .patches
+                        .into_iter()
+                        .map(|s| vclay_io::Entity::Surface(s).into())
+                        .collect()
+                    }
+                };
+                if matches!(ext.as_str(), "igs" | "iges") {
+                    let layout = vclay_io::iges::IgesLayout::JoinedBrep;
+                    vclay_io::iges::write_iges_as(path, &entities, layout)
+                } else {
+                    let layout = vclay_io::step::StepLayout::JoinedBrep;
+                    vclay_io::step::write_step_as(path, &entities, layout)
+                }
+                .map_err(|e| io(&e))
+            }
             ("obj" | "ply" | "stl", _) => {
                 let mesh = vclay_lattice::boundary_mesh(&self.solid.data_lattice_copy());
                 match ext.as_str() {
@@ -1304,9 +1347,9 @@ impl Model for SolidModel {
 
     fn export_formats(&self) -> Vec<&'static str> {
         if self.is_subdivision() {
-            vec!["ovm", "obj", "ply", "stl", "vtu", "glb"]
+            vec!["ovm", "obj", "ply", "stl", "vtu", "glb", "step", "igs"]
         } else {
-            vec!["json", "obj", "ply", "stl", "vtu", "glb"]
+            vec!["json", "obj", "ply", "stl", "vtu", "glb", "step", "igs"]
         }
     }
 
