@@ -67,14 +67,15 @@ pub const DEFAULT_TENSION: f64 = 0.0;
 /// leaves the data by about `beta^(1/2) |S_uu|` (3e-5 of the second derivative).
 pub const DEFAULT_RIGIDITY: f64 = 1e-9;
 /// Default number of parameter-correction rounds.
-pub const DEFAULT_CORRECTIONS: usize = 3;
+pub const DEFAULT_CORRECTIONS: usize = 2;
 /// Default number of extra IRLS rounds when robust weights are on.
 pub const DEFAULT_ROBUST_ROUNDS: usize = 3;
 /// Default Gauss-Newton iterations of the rational (dynamic-weight) fit.
 pub const DEFAULT_WEIGHT_ITERATIONS: usize = 4;
-/// Newton steps per point in a parameter-correction round.
-pub const CORRECTION_NEWTON_STEPS: usize = 3;
-/// Newton steps per point (at most) for the reported distances.
+/// Gauss-Newton steps per point in a parameter-correction round.
+pub const CORRECTION_NEWTON_STEPS: usize = 2;
+/// Gauss-Newton steps per point (at most) for the reported distances (they converge to the
+/// same foot point as Newton's method; linearly, at a rate of about distance x curvature).
 pub const REPORT_NEWTON_STEPS: usize = 30;
 /// Parameter step below which the reported closest-point iteration stops.
 pub const REPORT_PARAM_TOL: f64 = 1e-13;
@@ -399,6 +400,7 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
             &mut distances,
             CORRECTION_NEWTON_STEPS,
             1e-9,
+            false,
             par,
         );
         history.push(rms(&distances));
@@ -437,6 +439,7 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
         &mut distances,
         REPORT_NEWTON_STEPS,
         REPORT_PARAM_TOL,
+        false,
         par,
     );
     let (mut s2, mut max, mut sum) = (0.0f64, 0.0f64, 0.0f64);
@@ -524,7 +527,8 @@ fn map_points<T: Send>(
 }
 
 /// Moves every parameter to its point's closest point on `surface` (at most `steps` Newton
-/// steps from the current parameter) and writes the distances.
+/// steps, or Gauss-Newton steps when `newton` is false, from the current parameter) and writes
+/// the distances.
 pub fn project_all(
     surface: &NurbsSurface,
     points: &[Vec3],
@@ -532,6 +536,7 @@ pub fn project_all(
     distances: &mut [f64],
     steps: usize,
     tol: f64,
+    newton: bool,
     par: Parallelism,
 ) {
     let ev = project::Evaluator::new(surface);
@@ -543,7 +548,7 @@ pub fn project_all(
             .zip(chunk_prm.iter_mut())
             .zip(chunk_d.iter_mut())
         {
-            let (uv, dist) = ev.project(x, *prm, steps, tol, &mut sc);
+            let (uv, dist) = ev.project(x, *prm, steps, tol, newton, &mut sc);
             *prm = uv;
             *d = dist;
         }
@@ -580,6 +585,7 @@ pub fn closest_distances(
         &mut d,
         REPORT_NEWTON_STEPS,
         REPORT_PARAM_TOL,
+        false,
         par,
     );
     d

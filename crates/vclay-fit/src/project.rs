@@ -88,13 +88,22 @@ impl<'a> Evaluator<'a> {
 
     /// Point and derivatives up to order 2 at `(u, v)` (clamped to the domain).
     pub fn eval(&self, u: f64, v: f64, sc: &mut Scratch) -> Local {
+        self.eval_order(u, v, 2, sc)
+    }
+
+    /// Point and derivatives up to `order` (1 or 2; the second derivatives are zero for 1).
+    pub fn eval_order(&self, u: f64, v: f64, order: usize, sc: &mut Scratch) -> Local {
+        let order = order.clamp(1, 2);
         let (p, q) = (self.ku.degree(), self.kv.degree());
         let u = u.clamp(0.0, 1.0);
         let v = v.clamp(0.0, 1.0);
         let su = self.ku.find_span(u);
         let sv = self.kv.find_span(v);
-        self.ku.basis_derivatives(su, u, 2, &mut sc.du, &mut sc.wu);
-        self.kv.basis_derivatives(sv, v, 2, &mut sc.dv, &mut sc.wv);
+        self.ku
+            .basis_derivatives(su, u, order, &mut sc.du, &mut sc.wu);
+        self.kv
+            .basis_derivatives(sv, v, order, &mut sc.dv, &mut sc.wv);
+        let nk = order + 1;
         // Homogeneous sums a[k][l] = sum N_i^(k) M_j^(l) w P (and w), k + l <= 2.
         let mut a = [[Vec3::zeros(); 3]; 3];
         let mut w = [[0.0f64; 3]; 3];
@@ -105,15 +114,15 @@ impl<'a> Evaluator<'a> {
             for jv in 0..=q {
                 let wt = self.weights[row + jv];
                 let pw = self.points[row + jv] * wt;
-                for l in 0..3 {
+                for l in 0..nk {
                     let m = sc.dv[l * (q + 1) + jv];
                     r[l] += pw * m;
                     rw[l] += wt * m;
                 }
             }
-            for k in 0..3 {
+            for k in 0..nk {
                 let n = sc.du[k * (p + 1) + iu];
-                for l in 0..3 - k {
+                for l in 0..nk - k {
                     a[k][l] += r[l] * n;
                     w[k][l] += rw[l] * n;
                 }
@@ -133,18 +142,22 @@ impl<'a> Evaluator<'a> {
         }
     }
 
-    /// The closest point to `x` near `start` by at most `iterations` Newton steps: returns the
-    /// parameter and the distance. Stops when a step moves the parameter less than `tol`.
+    /// The closest point to `x` near `start` by at most `iterations` Newton steps (`newton`
+    /// true; else Gauss-Newton steps, which need first derivatives only and converge almost as
+    /// fast when the distance is small against the radius of curvature): returns the parameter
+    /// and the distance. Stops when a step moves the parameter less than `tol`.
     pub fn project(
         &self,
         x: &Vec3,
         start: [f64; 2],
         iterations: usize,
         tol: f64,
+        newton: bool,
         sc: &mut Scratch,
     ) -> ([f64; 2], f64) {
+        let order = if newton { 2 } else { 1 };
         let mut uv = [start[0].clamp(0.0, 1.0), start[1].clamp(0.0, 1.0)];
-        let mut e = self.eval(uv[0], uv[1], sc);
+        let mut e = self.eval_order(uv[0], uv[1], order, sc);
         let mut f = (e.s - x).norm_squared();
         for _ in 0..iterations {
             let r = e.s - x;
@@ -172,7 +185,7 @@ impl<'a> Evaluator<'a> {
                     (uv[0] + step[0]).clamp(0.0, 1.0),
                     (uv[1] + step[1]).clamp(0.0, 1.0),
                 ];
-                let ec = self.eval(cand[0], cand[1], sc);
+                let ec = self.eval_order(cand[0], cand[1], order, sc);
                 let fc = (ec.s - x).norm_squared();
                 if fc <= f {
                     let moved = (cand[0] - uv[0]).abs() + (cand[1] - uv[1]).abs();

@@ -195,6 +195,7 @@ pub fn refine(
             &mut distances,
             crate::CORRECTION_NEWTON_STEPS,
             1e-9,
+            false,
             par,
         );
     }

@@ -116,12 +116,14 @@ pub fn assemble(
                     acc.rhs[row] += x * pa;
                     let wpa = w * pa;
                     let r = &mut acc.band[row * bw..(row + 1) * bw];
-                    // Neighbour (c, d): di = c - a, dj = d - b.
-                    for c in 0..=p {
+                    // Neighbours (c, d) at or after (a, b) in the net's order (the upper
+                    // triangle; mirrored after the sum): di = c - a, dj = d - b.
+                    for c in a..=p {
+                        let d0 = if c == a { b } else { 0 };
                         let off = (c + p - a) * bv + q - b;
                         let pc = &prod[c * (q + 1)..(c + 1) * (q + 1)];
-                        for (d, &pd) in pc.iter().enumerate() {
-                            r[off + d] += wpa * pd;
+                        for d in d0..=q {
+                            r[off + d] += wpa * pc[d];
                         }
                     }
                 }
@@ -130,7 +132,7 @@ pub fn assemble(
         acc
     };
     let n = points.len();
-    if par.is_parallel_from(n, PARALLEL_POINTS) {
+    let mut normal = if par.is_parallel_from(n, PARALLEL_POINTS) {
         let tasks = rayon::current_num_threads().max(1);
         let size = n.div_ceil(tasks).max(1);
         (0..tasks)
@@ -139,6 +141,36 @@ pub fn assemble(
             .reduce(|| Normal::zeros(dims, degree), Normal::add)
     } else {
         chunk(0..n)
+    };
+    mirror_upper(&mut normal.band, dims, degree);
+    normal
+}
+
+/// Copies each entry `(I, J)`, `J > I` in the net's order, to `(J, I)`.
+fn mirror_upper(band: &mut [f64], dims: [usize; 2], degree: [usize; 2]) {
+    let [nu, nv] = dims;
+    let [p, q] = degree;
+    let bv = 2 * q + 1;
+    let bw = (2 * p + 1) * bv;
+    for i in 0..nu {
+        for j in 0..nv {
+            let row = i * nv + j;
+            for di in 0..=p {
+                if i + di >= nu {
+                    break;
+                }
+                let dj_lo = if di == 0 { 1 } else { -(q as isize) };
+                for dj in dj_lo..=q as isize {
+                    let jj = j as isize + dj;
+                    if jj < 0 || jj >= nv as isize {
+                        continue;
+                    }
+                    let col = (i + di) * nv + jj as usize;
+                    let v = band[row * bw + (di + p) * bv + (dj + q as isize) as usize];
+                    band[col * bw + (p - di) * bv + (q as isize - dj) as usize] = v;
+                }
+            }
+        }
     }
 }
 
