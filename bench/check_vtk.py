@@ -271,6 +271,10 @@ DEMO_CLOSED = [
     "ffd/fig3b-bottle.obj",
     "subdivision/gear-level2.obj",
     "subdivision/tetrahedron-with-holes-level3.obj",
+    "subdivision/soccer-player-level2.obj",
+    "subdivision/cactus-level2.obj",
+    "subdivision/spiked-object-level1.obj",
+    "subdivision/holed-object-level1.obj",
 ]
 
 
