@@ -28,11 +28,13 @@ pub enum ModelKind {
     Ffd,
     /// Dynamic PDE surface (`dynamic-pde-surfaces.txt`).
     PdeSurface,
+    /// Triangular D-NURBS (`d-nurbs.txt` section 4.4; rounding, section 7.3).
+    DnurbsTriangular,
 }
 
 impl ModelKind {
     /// Every kind, in the order files document them.
-    pub const ALL: [ModelKind; 7] = [
+    pub const ALL: [ModelKind; 8] = [
         ModelKind::DnurbsCurve,
         ModelKind::DnurbsSurface,
         ModelKind::DnurbsSwung,
@@ -40,6 +42,7 @@ impl ModelKind {
         ModelKind::BsplineSolid,
         ModelKind::Ffd,
         ModelKind::PdeSurface,
+        ModelKind::DnurbsTriangular,
     ];
 
     /// The name files use.
@@ -52,6 +55,7 @@ impl ModelKind {
             ModelKind::BsplineSolid => "bspline-solid",
             ModelKind::Ffd => "ffd",
             ModelKind::PdeSurface => "pde-surface",
+            ModelKind::DnurbsTriangular => "dnurbs-triangular",
         }
     }
 

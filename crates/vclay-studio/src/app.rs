@@ -90,6 +90,7 @@ impl Tool {
             }
             ModelKind::Ffd => vec![FfdPoint, ControlPoint, Orbit],
             ModelKind::PdeSurface => vec![PdeLocal, Orbit],
+            ModelKind::DnurbsTriangular => vec![Orbit],
         }
     }
 }

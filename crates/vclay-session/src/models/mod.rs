@@ -2,6 +2,7 @@
 //! rebuilt from a session file.
 
 pub mod dnurbs;
+pub mod dnurbs_tri;
 pub mod ffd;
 pub mod pde;
 pub mod solid;
@@ -127,6 +128,7 @@ pub fn build(kind: ModelKind, spec: &Spec<'_>) -> Result<Box<dyn Model>, SpecErr
         }
         ModelKind::Ffd => ffd::build(spec)?,
         ModelKind::PdeSurface => pde::build(spec)?,
+        ModelKind::DnurbsTriangular => dnurbs_tri::build(spec)?,
     })
 }
 
@@ -141,5 +143,6 @@ pub fn load(kind: ModelKind, saved: &serde_json::Value) -> Result<Box<dyn Model>
         }
         ModelKind::Ffd => ffd::load(saved)?,
         ModelKind::PdeSurface => pde::load(saved)?,
+        ModelKind::DnurbsTriangular => dnurbs_tri::load(saved)?,
     })
 }

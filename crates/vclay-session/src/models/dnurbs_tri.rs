@@ -1,0 +1,662 @@
+//! The `dnurbs-triangular` model kind: a triangular D-NURBS (`d-nurbs.txt` section 4.4) in the
+//! generalized engine (control points and weights dynamic), either one of the Fig 8 rounding
+//! models with their far-boundary constraints (section 7.3) or a triangular NURBS file
+//! (`"type": "triangular-nurbs"`, `docs/formats.md`).
+//!
+//! Scenario keys (`[model]`): `rounding = "edge" | "corner" | "bevel"` or `file = "x.json"`
+//! (one of the two); `quadrature = "subdivided" | "whole"` (default subdivided: cut along knot
+//! lines, exact for the piecewise-polynomial basis) and `quadrature_points` (points per
+//! direction per cell; default: the degree + 1, or 6 for `whole`); `tessellation` (domain
+//! triangle subdivision of the display mesh, default [`DEFAULT_TESSELLATION`]).
+//! `[material]`: `preset` (a Table 1 row; default the rounding's row, or "Corner rounding"
+//! for files), overrides `mu`, `gamma`, `alpha = [a11, a22]`, `beta = [b11, b12, b22]`,
+//! `reference = "absolute" | "rest"` (default absolute for rounding, rest for files) and
+//! `weight_penalty` (default the rounding penalty for rounding, 0 for files).
+//! `[simulation]`: `dt` (default the preset's).
+//!
+//! Edits: `set dt`, `set weight_penalty`; other tools (ropes, forces, fixing) are not offered
+//! for this kind yet and are refused with a message.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use vclay_core::{TriMesh, Vec3};
+use vclay_dynamics::dnurbs::generalized::{GeneralizedGeometry, GeneralizedState};
+use vclay_dynamics::dnurbs::rounding::{ROUNDING_WEIGHT_PENALTY, RoundingKind, RoundingModel};
+use vclay_dynamics::dnurbs::{
+    Constraint, Density, ElasticReference, GeneralizedDnurbs, Integrator, Material, Preset,
+    TriangleQuadrature, TriangularGeometry,
+};
+
+use super::{Spec, SpecError, typed};
+use crate::command::Edit;
+use crate::error::SessionError;
+use crate::model::{
+    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
+    StepReport, Undo, extension, restore_state, snapshot_of, undo_by_state, unsupported_export,
+};
+
+/// Default display tessellation level (`level^2` triangles per domain triangle).
+pub const DEFAULT_TESSELLATION: usize = 6;
+
+/// Where the surface came from (kept in session files).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+enum Source {
+    /// A Fig 8 rounding model.
+    Rounding(String),
+    /// A triangular NURBS file's JSON (embedded, so that the session stands alone).
+    File(serde_json::Value),
+}
+
+/// Settings that rebuild the model (with the source).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Settings {
+    source: Source,
+    subdivided: bool,
+    points: Option<usize>,
+    tessellation: usize,
+    mu: f64,
+    gamma: f64,
+    alpha: [f64; 2],
+    beta: [f64; 3],
+    absolute: bool,
+    weight_penalty: f64,
+    dt: f64,
+}
+
+/// A triangular D-NURBS model (see the [module docs](self)).
+#[derive(Clone, Debug)]
+pub struct TriangularModel {
+    settings: Settings,
+    engine: GeneralizedDnurbs<TriangularGeometry>,
+    size: f64,
+    revision: u64,
+    energy: Energy,
+}
+
+fn model_err(e: impl std::fmt::Display) -> SessionError {
+    SessionError::model(e)
+}
+
+impl TriangularModel {
+    fn build(settings: Settings) -> Result<Self, String> {
+        let quadrature = if settings.subdivided {
+            TriangleQuadrature::Subdivided {
+                points: settings.points,
+            }
+        } else {
+            TriangleQuadrature::Whole {
+                points: settings.points.unwrap_or(6),
+            }
+        };
+        let material = Material {
+            mu: Density::Constant(settings.mu),
+            gamma: Density::Constant(settings.gamma),
+            alpha: settings
+                .alpha
+                .iter()
+                .map(|&a| Density::Constant(a))
+                .collect(),
+            beta: settings
+                .beta
+                .iter()
+                .map(|&b| Density::Constant(b))
+                .collect(),
+        };
+        let (surface, constraints): (_, Vec<Constraint>) = match &settings.source {
+            Source::Rounding(name) => {
+                let kind = RoundingKind::parse(name)
+                    .ok_or_else(|| format!("rounding {name:?}: expected edge, corner or bevel"))?;
+                let r = RoundingModel::new(kind).map_err(|e| e.to_string())?;
+                (r.surface, r.constraints)
+            }
+            Source::File(v) => {
+                let text = serde_json::to_string(v).map_err(|e| e.to_string())?;
+                let t = vclay_io::triangular::parse_triangular(&text).map_err(|e| e.to_string())?;
+                (t.surface, Vec::new())
+            }
+        };
+        let geometry = TriangularGeometry::new(surface).with_quadrature(quadrature);
+        let size = geometry.scale();
+        let mut engine = GeneralizedDnurbs::new(geometry, material).map_err(|e| e.to_string())?;
+        engine.set_elastic_reference(if settings.absolute {
+            ElasticReference::Absolute
+        } else {
+            ElasticReference::RestShape
+        });
+        engine
+            .set_weight_penalty(settings.weight_penalty)
+            .map_err(|e| e.to_string())?;
+        for c in constraints {
+            engine.add_constraint(c).map_err(|e| e.to_string())?;
+        }
+        let elastic = engine.elastic_energy().unwrap_or(0.0);
+        Ok(Self {
+            settings,
+            engine,
+            size,
+            revision: 0,
+            energy: Energy {
+                elastic,
+                ..Energy::default()
+            },
+        })
+    }
+
+    /// The engine (for tests and tools).
+    pub fn engine(&self) -> &GeneralizedDnurbs<TriangularGeometry> {
+        &self.engine
+    }
+
+    /// Builds the model from its scenario tables.
+    pub fn from_spec(spec: &Spec<'_>) -> Result<Self, SpecError> {
+        let m: ModelKeys = typed("model", spec.model)?;
+        let mat: MaterialKeys = match spec.material {
+            Some(t) => typed("material", t)?,
+            None => MaterialKeys::default(),
+        };
+        let sim: SimKeys = match spec.simulation {
+            Some(t) => typed("simulation", t)?,
+            None => SimKeys::default(),
+        };
+        let (source, rounding) = match (&m.rounding, &m.file) {
+            (Some(r), None) => {
+                let kind = RoundingKind::parse(r).ok_or_else(|| {
+                    SpecError::new(
+                        "model",
+                        "rounding",
+                        format!("{r:?}: expected edge, corner or bevel"),
+                    )
+                })?;
+                (Source::Rounding(r.to_ascii_lowercase()), Some(kind))
+            }
+            (None, Some(f)) => {
+                let path = if f.is_absolute() {
+                    f.clone()
+                } else {
+                    spec.base.join(f)
+                };
+                let text = std::fs::read_to_string(&path).map_err(|e| {
+                    SpecError::new(
+                        "model",
+                        "file",
+                        format!("cannot read {}: {e}", path.display()),
+                    )
+                })?;
+                // Validate now so that the error names the file.
+                vclay_io::triangular::parse_triangular(&text).map_err(|e| {
+                    SpecError::new("model", "file", format!("{}: {e}", path.display()))
+                })?;
+                let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+                    SpecError::new("model", "file", format!("{}: {e}", path.display()))
+                })?;
+                (Source::File(v), None)
+            }
+            _ => {
+                return Err(SpecError::new(
+                    "model",
+                    "rounding",
+                    "give exactly one of rounding = \"edge\" | \"corner\" | \"bevel\" and file = \"surface.json\"",
+                ));
+            }
+        };
+        let preset_name = mat.preset.clone().unwrap_or_else(|| {
+            rounding
+                .map(|k| k.preset().name)
+                .unwrap_or("Corner rounding")
+                .to_string()
+        });
+        let preset: &Preset = Preset::by_name(&preset_name).ok_or_else(|| {
+            SpecError::new(
+                "material",
+                "preset",
+                format!("{preset_name:?} is not a Table 1 row"),
+            )
+        })?;
+        let subdivided = match m.quadrature.as_deref() {
+            None | Some("subdivided") => true,
+            Some("whole") => false,
+            Some(other) => {
+                return Err(SpecError::new(
+                    "model",
+                    "quadrature",
+                    format!("{other:?}: expected \"subdivided\" or \"whole\""),
+                ));
+            }
+        };
+        if let Some(k) = m.quadrature_points
+            && !(1..=20).contains(&k)
+        {
+            return Err(SpecError::new(
+                "model",
+                "quadrature_points",
+                format!("{k}: must be 1 to 20"),
+            ));
+        }
+        let tessellation = m.tessellation.unwrap_or(DEFAULT_TESSELLATION);
+        if !(1..=64).contains(&tessellation) {
+            return Err(SpecError::new(
+                "model",
+                "tessellation",
+                format!("{tessellation}: must be 1 to 64"),
+            ));
+        }
+        let absolute = match mat.reference.as_deref() {
+            None => rounding.is_some(),
+            Some("absolute") => true,
+            Some("rest") => false,
+            Some(other) => {
+                return Err(SpecError::new(
+                    "material",
+                    "reference",
+                    format!("{other:?}: expected \"absolute\" or \"rest\""),
+                ));
+            }
+        };
+        let settings = Settings {
+            source,
+            subdivided,
+            points: m.quadrature_points,
+            tessellation,
+            mu: mat.mu.unwrap_or(preset.mu),
+            gamma: mat.gamma.unwrap_or(preset.gamma),
+            alpha: mat.alpha.unwrap_or(preset.alpha),
+            beta: mat.beta.unwrap_or(preset.beta),
+            absolute,
+            weight_penalty: mat.weight_penalty.unwrap_or(if rounding.is_some() {
+                ROUNDING_WEIGHT_PENALTY
+            } else {
+                0.0
+            }),
+            dt: sim.dt.unwrap_or(preset.dt),
+        };
+        for (key, v) in [
+            ("mu", settings.mu),
+            ("gamma", settings.gamma),
+            ("weight_penalty", settings.weight_penalty),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(SpecError::new(
+                    "material",
+                    key,
+                    format!("{v} must be finite and non-negative"),
+                ));
+            }
+        }
+        if !(settings.dt.is_finite() && settings.dt > 0.0) {
+            return Err(SpecError::new(
+                "simulation",
+                "dt",
+                format!("{} must be positive and finite", settings.dt),
+            ));
+        }
+        Self::build(settings).map_err(|e| SpecError::new("model", "kind", e))
+    }
+
+    /// Rebuilds a saved model.
+    pub fn load(v: &serde_json::Value) -> Result<Self, SessionError> {
+        let saved: Saved = serde_json::from_value(v.clone()).map_err(model_err)?;
+        let mut m = Self::build(saved.settings).map_err(model_err)?;
+        m.engine
+            .set_state(&GeneralizedState::from(saved.state))
+            .map_err(model_err)?;
+        Ok(m)
+    }
+
+    fn mesh(&self) -> Result<TriMesh, SessionError> {
+        let mut mesh = TriMesh::new();
+        self.engine
+            .geometry()
+            .surface()
+            .tessellate(self.settings.tessellation, &mut mesh)
+            .map_err(model_err)?;
+        Ok(mesh)
+    }
+}
+
+impl crate::model::Stateful for TriangularModel {
+    type State = (GeneralizedState, f64, f64);
+    fn take_state(&self) -> Self::State {
+        (
+            self.engine.state(),
+            self.settings.dt,
+            self.settings.weight_penalty,
+        )
+    }
+    fn put_state(&mut self, s: &Self::State) -> Result<(), SessionError> {
+        self.engine.set_state(&s.0).map_err(model_err)?;
+        self.settings.dt = s.1;
+        self.settings.weight_penalty = s.2;
+        self.revision += 1;
+        Ok(())
+    }
+    fn apply_inverse(&mut self, _edit: &Edit) -> Result<(), SessionError> {
+        // The snapshot holds everything the edits change.
+        Ok(())
+    }
+}
+
+impl Model for TriangularModel {
+    fn kind(&self) -> ModelKind {
+        ModelKind::DnurbsTriangular
+    }
+    fn summary(&self) -> String {
+        let s = self.engine.geometry().surface();
+        format!(
+            "dnurbs-triangular ({}): degree {}, {} domain triangles, {} control points, {} constraints",
+            match &self.settings.source {
+                Source::Rounding(r) => format!("{r} rounding"),
+                Source::File(_) => "file".to_string(),
+            },
+            s.basis().degree(),
+            s.basis().domain().triangles().len(),
+            s.control_points().len(),
+            self.engine.constraints().len()
+        )
+    }
+    fn time(&self) -> f64 {
+        self.engine.time()
+    }
+    fn dt(&self) -> f64 {
+        self.settings.dt
+    }
+    fn steps(&self) -> u64 {
+        self.engine.steps() as u64
+    }
+    fn step(&mut self) -> Result<StepReport, SessionError> {
+        let t0 = std::time::Instant::now();
+        let r = self
+            .engine
+            .step(Integrator::Implicit {
+                dt: self.settings.dt,
+            })
+            .map_err(model_err)?;
+        self.revision += 1;
+        self.energy = Energy {
+            kinetic: r.kinetic_energy,
+            elastic: r.elastic_energy,
+            tools: 0.0,
+        };
+        Ok(StepReport {
+            time: r.time,
+            energy: self.energy,
+            iterations: r.solver.iterations,
+            seconds: t0.elapsed().as_secs_f64(),
+        })
+    }
+    fn energy(&self) -> Energy {
+        self.energy
+    }
+    fn size(&self) -> f64 {
+        self.size
+    }
+    fn revision(&self) -> u64 {
+        self.revision
+    }
+    fn display_mesh(&self) -> Result<TriMesh, SessionError> {
+        self.mesh()
+    }
+    fn display_lines(&self) -> Vec<LineSet> {
+        // The control net: the points of each domain triangle's functions joined in the
+        // Bezier pattern (markers when the net is shared), and the constraint points.
+        let g = self.engine.geometry();
+        let pts = g.control_points();
+        let mut net = LineSet::new(LineRole::ControlNet);
+        let basis = g.surface().basis();
+        let n = basis.degree();
+        let map = g.surface().control_map();
+        let per = (n + 1) * (n + 2) / 2;
+        let betas = vclay_spline::triangular::multi_indices(n);
+        let idx = |b: [usize; 3]| betas.iter().position(|x| *x == b);
+        for t in 0..basis.domain().triangles().len() {
+            for (k, b) in betas.iter().enumerate() {
+                let here = pts[map[t * per + k]];
+                for next in [
+                    [b[0].wrapping_sub(1), b[1] + 1, b[2]],
+                    [b[0].wrapping_sub(1), b[1], b[2] + 1],
+                    [b[0], b[1].wrapping_sub(1), b[2] + 1],
+                ] {
+                    if let Some(j) = (next.iter().all(|&x| x <= n)).then(|| idx(next)).flatten() {
+                        net.segment(here, pts[map[t * per + j]]);
+                    }
+                }
+            }
+        }
+        let mut cons = LineSet::new(LineRole::Constraints);
+        for c in self.engine.constraints() {
+            if let Constraint::Point { target, .. } = c {
+                cons.points.push(*target);
+            }
+        }
+        vec![net, cons]
+    }
+    fn pick(&self, ray: &Ray, _tolerance: f64) -> Option<Hit> {
+        let mesh = self.mesh().ok()?;
+        crate::pick::ray_mesh(ray, &mesh).map(|(s, _, _)| {
+            let point = ray.origin + ray.direction * s;
+            let param = self
+                .engine
+                .geometry()
+                .nearest_param(&point)
+                .unwrap_or([0.0, 0.0]);
+            Hit {
+                distance: s,
+                point,
+                element: Element::SurfacePoint { param },
+                extra: [None, None],
+            }
+        })
+    }
+    fn params(&self) -> Vec<Param> {
+        vec![
+            Param {
+                name: "dt".into(),
+                value: self.settings.dt,
+                min: 1e-4,
+                max: 0.1,
+                doc: "time step of eq 18".into(),
+            },
+            Param {
+                name: "weight_penalty".into(),
+                value: self.settings.weight_penalty,
+                min: 0.0,
+                max: 1000.0,
+                doc: "penalty c/2 sum (w - w0)^2 holding the weights near their initial values"
+                    .into(),
+            },
+        ]
+    }
+    fn apply(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
+        let before = crate::model::Stateful::take_state(self);
+        let msg = match edit {
+            Edit::Set { name, value } if name == "dt" => {
+                if !(value.is_finite() && *value > 0.0) {
+                    return Err(SessionError::command(
+                        "",
+                        "",
+                        format!("dt = {value}: must be positive"),
+                    ));
+                }
+                self.settings.dt = *value;
+                format!("dt = {value}")
+            }
+            Edit::Set { name, value } if name == "weight_penalty" => {
+                self.engine.set_weight_penalty(*value).map_err(model_err)?;
+                self.settings.weight_penalty = *value;
+                format!("weight_penalty = {value}")
+            }
+            other => {
+                return Err(SessionError::command(
+                    "",
+                    "",
+                    format!(
+                        "a dnurbs-triangular model takes `set dt` and `set weight_penalty` only, not {other:?}"
+                    ),
+                ));
+            }
+        };
+        Ok(Applied {
+            message: msg,
+            undo: Undo::State(Snapshot::new(before)),
+        })
+    }
+    fn undo(&mut self, undo: Undo) -> Result<(), SessionError> {
+        undo_by_state(self, undo)
+    }
+    fn snapshot(&self) -> Snapshot {
+        snapshot_of(self)
+    }
+    fn restore(&mut self, snapshot: &Snapshot) -> Result<(), SessionError> {
+        restore_state(self, snapshot)
+    }
+    fn clone_model(&self) -> Box<dyn Model> {
+        Box::new(self.clone())
+    }
+    fn control_points(&self) -> Vec<Vec3> {
+        self.engine.geometry().control_points().to_vec()
+    }
+    fn export(&self, path: &Path) -> Result<(), SessionError> {
+        let io = |e: &dyn std::fmt::Display| SessionError::io(path, e);
+        match extension(path).as_str() {
+            "json" => {
+                vclay_io::triangular::write_triangular(path, self.engine.geometry().surface(), None)
+                    .map_err(|e| io(&e))
+            }
+            "obj" | "ply" | "stl" => vclay_io::write_mesh(path, &self.mesh()?).map_err(|e| io(&e)),
+            "glb" => vclay_io::gltf::write_glb(
+                path,
+                &[vclay_io::gltf::GlbMesh::new(
+                    "triangular-dnurbs".to_string(),
+                    self.mesh()?,
+                )],
+            )
+            .map_err(|e| io(&e)),
+            _ => Err(unsupported_export(
+                self.kind(),
+                path,
+                &self.export_formats(),
+            )),
+        }
+    }
+    fn export_formats(&self) -> Vec<&'static str> {
+        vec!["json", "obj", "ply", "stl", "glb"]
+    }
+    fn save(&self) -> Result<serde_json::Value, SessionError> {
+        serde_json::to_value(Saved {
+            settings: self.settings.clone(),
+            state: SavedState::from(&self.engine.state()),
+        })
+        .map_err(model_err)
+    }
+}
+
+/// Builds a model from its scenario tables.
+pub fn build(spec: &Spec<'_>) -> Result<Box<dyn Model>, SpecError> {
+    Ok(Box::new(TriangularModel::from_spec(spec)?))
+}
+
+/// Rebuilds a saved model.
+pub fn load(saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
+    Ok(Box::new(TriangularModel::load(saved)?))
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ModelKeys {
+    #[allow(dead_code)]
+    #[serde(default)]
+    kind: Option<String>,
+    #[allow(dead_code)]
+    #[serde(default)]
+    name: Option<String>,
+    rounding: Option<String>,
+    file: Option<PathBuf>,
+    quadrature: Option<String>,
+    quadrature_points: Option<usize>,
+    tessellation: Option<usize>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MaterialKeys {
+    preset: Option<String>,
+    mu: Option<f64>,
+    gamma: Option<f64>,
+    alpha: Option<[f64; 2]>,
+    beta: Option<[f64; 3]>,
+    reference: Option<String>,
+    weight_penalty: Option<f64>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SimKeys {
+    dt: Option<f64>,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Saved {
+    settings: Settings,
+    state: SavedState,
+}
+
+/// [`GeneralizedState`] as saved (every number in shortest exact form: a restored session
+/// continues bit for bit).
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SavedState {
+    coordinates: Vec<f64>,
+    velocity: Vec<f64>,
+    rest_coordinates: Vec<f64>,
+    fixed: Vec<bool>,
+    weight_targets: Vec<f64>,
+    weight_penalty: f64,
+    absolute: bool,
+    time: f64,
+    steps: usize,
+    substeps: usize,
+    weight_projections: usize,
+}
+
+impl From<&GeneralizedState> for SavedState {
+    fn from(s: &GeneralizedState) -> Self {
+        Self {
+            coordinates: s.coordinates.clone(),
+            velocity: s.velocity.clone(),
+            rest_coordinates: s.rest_coordinates.clone(),
+            fixed: s.fixed.clone(),
+            weight_targets: s.weight_targets.clone(),
+            weight_penalty: s.weight_penalty,
+            absolute: s.reference == ElasticReference::Absolute,
+            time: s.time,
+            steps: s.steps,
+            substeps: s.substeps,
+            weight_projections: s.weight_projections,
+        }
+    }
+}
+
+impl From<SavedState> for GeneralizedState {
+    fn from(s: SavedState) -> Self {
+        Self {
+            coordinates: s.coordinates,
+            velocity: s.velocity,
+            rest_coordinates: s.rest_coordinates,
+            fixed: s.fixed,
+            weight_targets: s.weight_targets,
+            weight_penalty: s.weight_penalty,
+            reference: if s.absolute {
+                ElasticReference::Absolute
+            } else {
+                ElasticReference::RestShape
+            },
+            time: s.time,
+            steps: s.steps,
+            substeps: s.substeps,
+            weight_projections: s.weight_projections,
+        }
+    }
+}
