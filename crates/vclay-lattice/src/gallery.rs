@@ -75,8 +75,21 @@ impl Sculptor {
         Self { lattice: start }
     }
 
-    /// Starts from the hexahedra spanning each `(min, max)` box (disjoint pieces).
+    /// Starts from the hexahedra spanning each `(min, max)` box (disjoint pieces). Errors: the
+    /// lattice's construction errors (boxes sharing corner points).
+    ///
+    /// # Panics
+    /// If a corner is not finite or `min >= max` along some axis (a programmer error in a
+    /// fixed recipe).
+    #[track_caller]
     pub fn from_boxes(boxes: &[(Vec3, Vec3)]) -> Result<Self, LatticeError> {
+        assert!(
+            boxes
+                .iter()
+                .all(|(lo, hi)| (0..3)
+                    .all(|a| lo[a].is_finite() && hi[a].is_finite() && lo[a] < hi[a])),
+            "Sculptor::from_boxes: every box needs finite corners with min < max"
+        );
         let mut points = Vec::with_capacity(8 * boxes.len());
         let mut cells = Vec::with_capacity(boxes.len());
         for (b, &(lo, hi)) in boxes.iter().enumerate() {
@@ -129,6 +142,11 @@ impl Sculptor {
     /// Extrudes boundary face `face` into a new cell and places the new (far) face: the base
     /// face's loop turned so that its normal becomes `normal`, scaled by `scale` about its
     /// centroid, and moved so that its centroid is `to`. Returns the new cell and its far face.
+    ///
+    /// Errors ([`LatticeError::CannotExtrude`] saying why, or the extrusion's own): `face` is
+    /// interior or missing, `to` or `normal` is not finite, `normal` is zero, `scale` is not
+    /// positive and finite, or the placed cell has a non-positive volume (a far face behind the
+    /// base face). The sculptor is unchanged after an error.
     pub fn grow(
         &mut self,
         face: FaceId,
@@ -136,6 +154,9 @@ impl Sculptor {
         normal: Vec3,
         scale: f64,
     ) -> Result<(CellId, FaceId), LatticeError> {
+        if face.index() >= self.lattice.num_faces() {
+            return Err(LatticeError::NoSuchFace { face });
+        }
         let loop_: Vec<_> = self.lattice.face_vertices(face).to_vec();
         let base: Vec<Vec3> = loop_.iter().map(|&v| self.lattice.point(v)).collect();
         let n0 = newell_normal(self.lattice.points(), &loop_).ok_or_else(|| {
@@ -144,12 +165,18 @@ impl Sculptor {
                 reason: "it has zero area".into(),
             }
         })?;
+        let fail = |reason: String| LatticeError::CannotExtrude { face, reason };
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(fail(format!(
+                "the scale {scale} is not positive and finite"
+            )));
+        }
+        if !(to.iter().all(|x| x.is_finite()) && normal.iter().all(|x| x.is_finite())) {
+            return Err(fail("the target or the normal is not finite".into()));
+        }
         let n1 = normal
             .try_normalize(0.0)
-            .ok_or_else(|| LatticeError::CannotExtrude {
-                face,
-                reason: "the new face's normal is zero".into(),
-            })?;
+            .ok_or_else(|| fail("the new face's normal is zero".into()))?;
         let centroid = base.iter().sum::<Vec3>() / base.len() as f64;
         let np = self.lattice.num_points();
         let edit = extrude_face(&self.lattice, face, &ExtrudeParams::default())?;
@@ -167,6 +194,12 @@ impl Sculptor {
             .copied()
             .find(|&f| lattice.face_vertices(f).iter().all(|v| v.index() >= np))
             .expect("an extruded cell has a far face");
+        let volume = lattice.cell_signed_volume(cell);
+        if volume.is_nan() || volume <= 0.0 {
+            return Err(fail(format!(
+                "the placed cell would have volume {volume:.3e} (its far face lies behind the base face)"
+            )));
+        }
         self.lattice = lattice;
         Ok((cell, far))
     }
@@ -342,7 +375,7 @@ fn cactus_unit() -> Result<Lattice, LatticeError> {
     ];
     for (cell, dir, rise) in arms {
         let f = s.face(cell, dir);
-        let c = face_centroid(s.lattice(), f);
+        let c = s.lattice().face_centroid(f);
         let out = c + dir * 0.36;
         let mut steps = vec![(out, dir, 0.85), (out + dir * 0.26 + z * 0.3, z, 1.0)];
         let mut at = out + dir * 0.26 + z * 0.3;
@@ -354,10 +387,6 @@ fn cactus_unit() -> Result<Lattice, LatticeError> {
         s.chain(f, &steps)?;
     }
     Ok(s.finish())
-}
-
-fn face_centroid(l: &Lattice, f: FaceId) -> Vec3 {
-    l.face_centroid(f)
 }
 
 /// The spiked object of `subdivision-solids-journal.txt` Table 2 (75 cells, 600 at level 1),

@@ -182,4 +182,26 @@ fn sculptor_grows_faces_where_asked() {
     let n = (vs[1] - vs[0]).cross(&(vs[2] - vs[0]));
     assert!((n.norm() - 0.25).abs() < 1e-12);
     assert!((n.normalize() - Vec3::new(0.0, 1.0, 1.0).normalize()).norm() < 1e-12);
+    // Refused, with the sculptor unchanged: a far face behind the base, a bad scale, an
+    // interior face, a missing face.
+    let before = s.lattice().counts();
+    let top2 = s.face(cell, Vec3::new(0.0, 1.0, 1.0));
+    let behind = l_centroid(&s, top2) - Vec3::new(0.0, 1.0, 1.0);
+    let err = s
+        .grow(top2, behind, Vec3::new(0.0, 1.0, 1.0), 1.0)
+        .unwrap_err();
+    assert!(err.to_string().contains("volume"), "{err}");
+    let err = s.grow(top2, to, Vec3::z(), f64::NAN).unwrap_err();
+    assert!(err.to_string().contains("scale"), "{err}");
+    let err = s.grow(top, to, Vec3::z(), 1.0).unwrap_err();
+    assert!(err.to_string().contains("interior"), "{err}");
+    assert!(
+        s.grow(vclay_lattice::FaceId(999), to, Vec3::z(), 1.0)
+            .is_err()
+    );
+    assert_eq!(s.lattice().counts(), before);
+}
+
+fn l_centroid(s: &Sculptor, f: vclay_lattice::FaceId) -> Vec3 {
+    s.lattice().face_centroid(f)
 }
