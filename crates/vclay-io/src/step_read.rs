@@ -47,7 +47,9 @@
 
 mod brep;
 
-pub use brep::{DEFAULT_RANGE, ParamAxis, TrimEdge, TrimLoop, TrimmedFace};
+pub use brep::{
+    DEFAULT_RANGE, MAX_TRIM_SAMPLES, ParamAxis, TrimEdge, TrimLoop, TrimmedFace, tessellate_trimmed,
+};
 
 use crate::error::IoError;
 use crate::model::{Entity, NamedEntity};

@@ -327,3 +327,60 @@ fn malformed_elementary_surfaces_are_located_errors() {
         assert!(e.contains(want), "{e}");
     }
 }
+
+fn area(m: &vclay_core::TriMesh) -> f64 {
+    m.triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            (b - a).cross(&(c - a)).norm() / 2.0
+        })
+        .sum()
+}
+
+/// Trimming applied by `tessellate_trimmed`: a cylinder's caps (planes cut to the box of their
+/// circles) become discs, its side and a box's faces stay whole; areas match the closed forms up
+/// to the grid spacing.
+#[test]
+fn trimmed_tessellation_cuts_faces_to_their_loops() {
+    use vclay_io::step_read::tessellate_trimmed;
+    let (r, h) = (0.8, 1.7);
+    let imp = import_model(data("brep_cylinder.step")).unwrap();
+    let mut caps = 0;
+    for f in &imp.faces {
+        let s = surface(&imp, f);
+        let m = tessellate_trimmed(f, &s, [96, 96]).unwrap();
+        let a = area(&m);
+        match f.surface_type.as_str() {
+            "PLANE" => {
+                caps += 1;
+                let disc = std::f64::consts::PI * r * r;
+                assert!((a - disc).abs() < 0.03 * disc, "cap area {a} vs {disc}");
+                // The untrimmed square is 4 r^2.
+                assert!(a < 0.85 * 4.0 * r * r);
+            }
+            "CYLINDRICAL_SURFACE" => {
+                let side = TAU * r * h;
+                assert!((a - side).abs() < 2e-3 * side, "side area {a} vs {side}");
+            }
+            t => panic!("{t}"),
+        }
+    }
+    assert_eq!(caps, 2);
+    let bx = import_model(data("brep_box.step")).unwrap();
+    let total: f64 = bx
+        .faces
+        .iter()
+        .map(|f| area(&tessellate_trimmed(f, &surface(&bx, f), [8, 8]).unwrap()))
+        .sum();
+    let want = 2.0 * (2.0 * 1.5 + 2.0 * 0.75 + 1.5 * 0.75);
+    assert!((total - want).abs() < 1e-12 * want, "{total} vs {want}");
+    let f = &bx.faces[0];
+    assert!(tessellate_trimmed(f, &surface(&bx, f), [1, 8]).is_err());
+    // The parameter maps invert each other.
+    for a in &imp.faces[0].axes {
+        for x in [0.1, 1.0, 2.5, 4.0, 6.0] {
+            assert!((a.from_nurbs(a.to_nurbs(x)) - x).abs() < 1e-12);
+        }
+    }
+}

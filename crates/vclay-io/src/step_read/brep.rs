@@ -114,6 +114,28 @@ impl ParamAxis {
     }
 }
 
+impl ParamAxis {
+    /// The file's parameter of the NURBS parameter `t`, the inverse of [`ParamAxis::to_nurbs`]:
+    /// `phi = d/2 + 2 atan(tan(d/4)(2s - 1))` inside the arc of the knot span.
+    pub fn from_nurbs(&self, t: f64) -> f64 {
+        match *self {
+            ParamAxis::Linear => t,
+            ParamAxis::Angle {
+                start,
+                end,
+                segment,
+                ..
+            } => {
+                let n = ((end - start) / segment).round().max(1.0);
+                let k = ((t - start) / segment).floor().clamp(0.0, n - 1.0);
+                let s = (t - start) / segment - k;
+                let phi = segment / 2.0 + 2.0 * ((segment / 4.0).tan() * (2.0 * s - 1.0)).atan();
+                start + k * segment + phi
+            }
+        }
+    }
+}
+
 /// One edge of a trimming loop.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TrimEdge {
@@ -136,6 +158,9 @@ pub struct TrimEdge {
     pub pcurve_range: [f64; 2],
     /// How the file's parameter of the pcurve maps to the parameter of `pcurve`.
     pub pcurve_axis: ParamAxis,
+    /// A seam's second pcurve on the same surface (`SEAM_CURVE`: the two sides of a closed
+    /// surface), with its range and parameter map.
+    pub seam_pcurve: Option<(NurbsCurve, [f64; 2], ParamAxis)>,
     /// Whether going round the loop follows the curve's direction (the `ORIENTED_EDGE`'s
     /// orientation combined with the `EDGE_CURVE`'s same_sense).
     pub forward: bool,
@@ -176,6 +201,168 @@ impl TrimmedFace {
     pub fn to_nurbs_params(&self, u: f64, v: f64) -> [f64; 2] {
         [self.axes[0].to_nurbs(u), self.axes[1].to_nurbs(v)]
     }
+}
+
+/// Most samples per direction of [`tessellate_trimmed`].
+pub const MAX_TRIM_SAMPLES: usize = 4096;
+
+impl TrimmedFace {
+    /// The trimming loops as closed polygons in the surface's file parameters: each edge's
+    /// pcurve sampled at `per_edge` points (at least 2, at most 1000) over the edge, in loop
+    /// direction; of a seam's two pcurves the one that continues the polygon is taken. `None`
+    /// when an edge has no pcurve (the face is then treated as untrimmed).
+    pub fn loop_polygons(&self, per_edge: usize) -> Option<Vec<Vec<[f64; 2]>>> {
+        let n = per_edge.clamp(2, 1000);
+        let sample = |c: &NurbsCurve, r: [f64; 2], forward: bool| -> Option<Vec<[f64; 2]>> {
+            let mut pts = (0..n)
+                .map(|k| {
+                    let t = r[0] + (r[1] - r[0]) * k as f64 / (n - 1) as f64;
+                    c.point(t).ok().map(|p| [p.x, p.y])
+                })
+                .collect::<Option<Vec<_>>>()?;
+            if !forward {
+                pts.reverse();
+            }
+            Some(pts)
+        };
+        let mut out = Vec::new();
+        for l in &self.loops {
+            let mut poly: Vec<[f64; 2]> = Vec::new();
+            for e in &l.edges {
+                let pc = e.pcurve.as_ref()?;
+                let mut cands = vec![sample(pc, e.pcurve_range, e.forward)?];
+                if let Some((c2, r2, _)) = &e.seam_pcurve {
+                    cands.push(sample(c2, *r2, e.forward)?);
+                }
+                let pick = match poly.last() {
+                    Some(q) => cands
+                        .into_iter()
+                        .min_by(|a, b| {
+                            let d = |p: &[f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
+                            d(&a[0]).total_cmp(&d(&b[0]))
+                        })
+                        .unwrap_or_default(),
+                    None => cands.swap_remove(0),
+                };
+                poly.extend(pick);
+            }
+            if poly.len() >= 3 {
+                out.push(poly);
+            }
+        }
+        Some(out)
+    }
+
+    /// Whether the point `(u, v)` of the surface's file parameters lies inside the face: inside
+    /// an odd number of `polygons` (even-odd rule over all loops, so holes are holes whatever
+    /// their orientation), trying whole turns along periodic angle directions.
+    pub fn contains(&self, polygons: &[Vec<[f64; 2]>], u: f64, v: f64) -> bool {
+        let turns = |a: &ParamAxis| match a {
+            ParamAxis::Angle { periodic: true, .. } => &[0.0, -1.0, 1.0, -2.0, 2.0][..],
+            _ => &[0.0][..],
+        };
+        for &ku in turns(&self.axes[0]) {
+            for &kv in turns(&self.axes[1]) {
+                let (x, y) = (u + ku * TAU, v + kv * TAU);
+                let mut inside = false;
+                for poly in polygons {
+                    let m = poly.len();
+                    for i in 0..m {
+                        let (a, b) = (poly[i], poly[(i + 1) % m]);
+                        if (a[1] > y) != (b[1] > y) {
+                            let xc = a[0] + (y - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+                            if x < xc {
+                                inside = !inside;
+                            }
+                        }
+                    }
+                }
+                if inside {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+/// Tessellates the face's `surface` (its entity in the import) on a `samples` grid of its NURBS
+/// parameters and keeps the triangles whose parameter centroid lies inside the face's trimming
+/// loops ([`TrimmedFace::contains`], pcurves sampled at 32 points per edge), so trimmed faces
+/// (a cylinder's disc caps, a box's faces) are cut to their boundary up to the grid spacing.
+/// Faces without loops (a sphere's) or with an edge lacking a pcurve are tessellated whole.
+/// Normals are computed from the kept triangles. `samples` must be 2 to [`MAX_TRIM_SAMPLES`].
+pub fn tessellate_trimmed(
+    face: &TrimmedFace,
+    surface: &NurbsSurface,
+    samples: [usize; 2],
+) -> Result<vclay_core::TriMesh, String> {
+    use vclay_spline::ParametricSurface;
+    if samples
+        .iter()
+        .any(|&n| !(2..=MAX_TRIM_SAMPLES).contains(&n))
+    {
+        return Err(format!(
+            "samples {samples:?}: each must be from 2 to {MAX_TRIM_SAMPLES}"
+        ));
+    }
+    let polys = if face.loops.is_empty() {
+        None
+    } else {
+        face.loop_polygons(32)
+    };
+    let d = surface.domain();
+    let [nu, nv] = samples;
+    let at =
+        |i: usize, n: usize, k: usize| d[k].min + (d[k].max - d[k].min) * i as f64 / (n - 1) as f64;
+    let mut mesh = vclay_core::TriMesh::new();
+    for i in 0..nu {
+        for j in 0..nv {
+            let p = surface
+                .point(at(i, nu, 0), at(j, nv, 1))
+                .map_err(|e| e.to_string())?;
+            mesh.positions.push(p);
+        }
+    }
+    let id = |i: usize, j: usize| (i * nv + j) as u32;
+    for i in 0..nu - 1 {
+        for j in 0..nv - 1 {
+            let (u0, u1, v0, v1) = (
+                at(i, nu, 0),
+                at(i + 1, nu, 0),
+                at(j, nv, 1),
+                at(j + 1, nv, 1),
+            );
+            for (tri, cu, cv) in [
+                (
+                    [id(i, j), id(i + 1, j), id(i + 1, j + 1)],
+                    (u0 + 2.0 * u1) / 3.0,
+                    (2.0 * v0 + v1) / 3.0,
+                ),
+                (
+                    [id(i, j), id(i + 1, j + 1), id(i, j + 1)],
+                    (2.0 * u0 + u1) / 3.0,
+                    (v0 + 2.0 * v1) / 3.0,
+                ),
+            ] {
+                let keep = match &polys {
+                    Some(p) => {
+                        face.contains(p, face.axes[0].from_nurbs(cu), face.axes[1].from_nurbs(cv))
+                    }
+                    None => true,
+                };
+                if keep {
+                    mesh.triangles.push(if face.same_sense {
+                        tri
+                    } else {
+                        [tri[0], tri[2], tri[1]]
+                    });
+                }
+            }
+        }
+    }
+    mesh.compute_normals();
+    Ok(mesh)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -339,17 +526,18 @@ impl Geom {
     /// The parameter of the point of a 2D curve (a pcurve) nearest to `uv`, trying whole turns
     /// along the periodic directions.
     fn param_of_uv(&self, uv: [f64; 2], periodic: [bool; 2]) -> f64 {
-        let ks = |p: bool| if p { -2..=2 } else { 0..=0 };
+        // Whole turns tried from the nearest: 0, -1, 1, -2, 2 (ties keep the first).
+        let ks = |p: bool| if p { &[0, -1, 1, -2, 2][..] } else { &[0][..] };
         let mut best = (f64::INFINITY, 0.0);
-        for ku in ks(periodic[0]) {
-            for kv in ks(periodic[1]) {
+        for &ku in ks(periodic[0]) {
+            for &kv in ks(periodic[1]) {
                 let q = Vec3::new(uv[0] + TAU * ku as f64, uv[1] + TAU * kv as f64, 0.0);
                 let t = self.param_of(q);
                 let d = match self.point_at(t) {
                     Some(p) => (p - q).norm(),
                     None => continue,
                 };
-                if d < best.0 - 1e-12 {
+                if d < best.0 - 1e-12 * (1.0 + uv[0].abs() + uv[1].abs()) {
                     best = (d, t);
                 }
             }
@@ -823,6 +1011,8 @@ impl<'a> Reader<'a> {
         let mut pcurve = None;
         let mut pcurve_range = [0.0, 0.0];
         let mut pcurve_axis = ParamAxis::Linear;
+        let mut seam_pcurve = None;
+        let mut first = (pcurve_range, pcurve_axis);
         for r in &pcurve_refs {
             let Param::Ref(pid) = r else { continue };
             let pi = self.get(*pid, &ce)?;
@@ -890,7 +1080,14 @@ impl<'a> Reader<'a> {
                             [d.min, d.max]
                         }
                     };
-                    pcurve = Some(pc);
+                    if pcurve.is_none() {
+                        pcurve = Some(pc);
+                    } else if seam_pcurve.is_none() {
+                        // A seam's second pcurve: keep both.
+                        seam_pcurve = Some((pc, pcurve_range, pcurve_axis));
+                        (pcurve_range, pcurve_axis) = first;
+                    }
+                    first = (pcurve_range, pcurve_axis);
                 }
             }
         }
@@ -904,6 +1101,7 @@ impl<'a> Reader<'a> {
             pcurve,
             pcurve_range,
             pcurve_axis,
+            seam_pcurve,
             forward: orientation == same_sense,
         }))
     }
