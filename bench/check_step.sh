@@ -52,6 +52,7 @@ for fmt in step iges; do
     "$models/sphere.json:solid" "$models/inward_sphere.json:solid" "$models/torus.json:solid" \
     "$models/closed_tube.json:solid" "$models/swung_sphere.json:solid" \
     "$models/bent_volume.json:solid" "$models/mirrored_volume.json:solid" \
+    "$models/solid_cylinder.json:solid" "$models/solid_ball.json:solid" \
     "$work/demo/torus.json:solid" "$work/demo/twisted_volume.json:solid" \
     "$models/sheet.json:open" "$work/demo/sheet.json:open" "$models/sculpted_egg.json:auto" \
     "$models/box.ovm:solid" "$models/cylinder.ovm:solid" "$models/torus.ovm:solid" \

@@ -9,7 +9,9 @@
 - bent_volume.json: a rational trivariate block (a quarter annulus extruded), 6 faces;
 - mirrored_volume.json: the same mirrored (left-handed parametrization, det J < 0);
 - sheet.json: an open bicubic sheet (an open shell);
-- mixed.json: a curve, the torus and the sheet in one model.
+- mixed.json: a curve, the torus and the sheet in one model;
+- solid_cylinder.json, solid_ball.json: volumes parametrized by (radius, angles), whose faces
+  collapse (the axis, the centre, the poles) or coincide (the angle seam).
 
 Usage: python make_brep_models.py OUT_DIR
 """
@@ -78,3 +80,23 @@ json.dump(mv, open(f"{out}/mirrored_volume.json","w"))
 # mixed: a curve, the torus, the open sheet
 line = {"type":"nurbs-curve","degree":1,"knots":[0,0,1,1],"control_points":[[0,0,5],[1,1,5]]}
 json.dump({"entities":[line, torus, json.load(open(f"{out}/sheet.json"))]}, open(f"{out}/mixed.json","w"))
+# Volumes with collapsed and coinciding faces, parametrized by (radius, angle, ...): a solid
+# cylinder (its r = 0 face is the axis, its two angle faces coincide) and a solid ball (r = 0 is
+# the centre, the pole faces are axis segments, the angle faces coincide). vclay drops those
+# faces; the rest closes up.
+cyl_pts, cyl_w = [], []
+for rad in (0.0, 0.5):
+    cyl_pts.append([[[rad * a, rad * b, z] for z in (0.0, 2.0)] for (a, b) in circ])
+    cyl_w.append([[c, c] for c in cw])
+json.dump({"type": "nurbs-volume", "name": "solid cylinder", "degree": [1, 2, 1],
+           "knots": [[0, 0, 1, 1], CK, [0, 0, 1, 1]], "control_points": cyl_pts,
+           "weights": cyl_w}, open(f"{out}/solid_cylinder.json", "w"))
+half = [(0, 1), (1, 1), (1, 0), (1, -1), (0, -1)]  # (distance from axis, z) of a half circle
+hw = [1, h, 1, h, 1]
+ball_pts, ball_w = [], []
+for rad in (0.0, 1.2):
+    ball_pts.append([[[rad * x * a, rad * x * b, rad * z] for (a, b) in circ] for (x, z) in half])
+    ball_w.append([[wp * c for c in cw] for wp in hw])
+json.dump({"type": "nurbs-volume", "name": "solid ball", "degree": [1, 2, 2],
+           "knots": [[0, 0, 1, 1], [0, 0, 0, .5, .5, 1, 1, 1], CK], "control_points": ball_pts,
+           "weights": ball_w}, open(f"{out}/solid_ball.json", "w"))

@@ -19,6 +19,12 @@
 //!   `V = 1/3 sum_f s_f int int S . (S_u x S_v) du dv` (the divergence theorem with `div x = 3`,
 //!   `s_f = +-1` the face's sense) is made positive.
 //!
+//! Before that, faces without area (every control row along one direction collapsed to a point:
+//! the axis face `r = 0` of a solid cylinder parametrized by radius and angle, the centre and
+//! pole faces of a solid ball) and pairs of coinciding faces (the two angle faces of such a
+//! volume, an inner seam) are dropped ([`Shell::of_volume`], [`Shell::of_surfaces`]): the faces
+//! left bound the same region.
+//!
 //! The shell is closed when every edge is used exactly twice with opposite senses; anything
 //! else (a free boundary, an edge shared by three faces, a non-orientable surface) makes an open
 //! shell, which the writers export as such. The geometry is exact: surfaces are only clamped
@@ -224,6 +230,86 @@ type Cell = [i64; 3];
 
 /// A use of an edge by a face loop: (face, runs along the edge in the face's natural loop).
 type EdgeUse = (usize, bool);
+
+/// Whether a surface has no area: every control row along u, or every one along v, collapses
+/// to a point (the axis face `r = 0` of a solid cylinder, the pole faces of a solid ball).
+fn is_degenerate_face(s: &NurbsSurface, tol: f64) -> bool {
+    let [nu, nv] = s.dims();
+    let p = s.control_points();
+    let rows_u = (0..nv).all(|j| (0..nu).all(|i| (p[i * nv + j] - p[j]).norm() <= tol));
+    let rows_v = (0..nu).all(|i| (0..nv).all(|j| (p[i * nv + j] - p[i * nv]).norm() <= tol));
+    rows_u || rows_v
+}
+
+/// Whether two surfaces are the same within `tol`: same degrees and knots, control points
+/// within `tol` and proportional weights, possibly with u and/or v reversed.
+fn same_face(a: &NurbsSurface, b: &NurbsSurface, tol: f64) -> bool {
+    if a.dims() != b.dims() || a.degree() != b.degree() {
+        return false;
+    }
+    let [nu, nv] = a.dims();
+    let knots_match = |axis: usize, rev: bool| {
+        let (ka, kb) = (a.knots()[axis].as_slice(), b.knots()[axis].as_slice());
+        let n = ka.len();
+        let ptol = a.knots()[axis].parameter_tolerance();
+        (0..n).all(|i| {
+            let t = if rev {
+                ka[0] + ka[n - 1] - kb[n - 1 - i]
+            } else {
+                kb[i]
+            };
+            (t - ka[i]).abs() <= ptol
+        })
+    };
+    [(false, false), (true, false), (false, true), (true, true)]
+        .into_iter()
+        .any(|(ru, rv)| {
+            if !knots_match(0, ru) || !knots_match(1, rv) {
+                return false;
+            }
+            let idx = |i: usize, j: usize| {
+                let i = if ru { nu - 1 - i } else { i };
+                let j = if rv { nv - 1 - j } else { j };
+                i * nv + j
+            };
+            let r = b.weights()[idx(0, 0)] / a.weights()[0];
+            (0..nu).all(|i| {
+                (0..nv).all(|j| {
+                    let (k, l) = (i * nv + j, idx(i, j));
+                    (a.control_points()[k] - b.control_points()[l]).norm() <= tol
+                        && (b.weights()[l] - r * a.weights()[k]).abs()
+                            <= 1e-12 * b.weights()[l].abs().max(1.0)
+                })
+            })
+        })
+}
+
+/// Drops faces without area and pairs of coinciding faces (an inner seam, such as the two
+/// `theta` faces of a solid cylinder or ball parametrized by angle): what is left bounds the
+/// same region.
+fn prune_faces(faces: Vec<NurbsSurface>, tol: f64) -> Vec<NurbsSurface> {
+    let faces: Vec<NurbsSurface> = faces
+        .into_iter()
+        .filter(|f| !is_degenerate_face(f, tol))
+        .collect();
+    let mut keep = vec![true; faces.len()];
+    for i in 0..faces.len() {
+        if !keep[i] {
+            continue;
+        }
+        if let Some(j) =
+            (i + 1..faces.len()).find(|&j| keep[j] && same_face(&faces[i], &faces[j], tol))
+        {
+            keep[i] = false;
+            keep[j] = false;
+        }
+    }
+    faces
+        .into_iter()
+        .zip(keep)
+        .filter_map(|(f, k)| k.then_some(f))
+        .collect()
+}
 
 struct Builder {
     tol: f64,
@@ -475,8 +561,9 @@ impl Shell {
     }
 
     /// The shell of a volume's six boundary surfaces (`u = u0, u1, v = v0, v1, w = w0, w1`, from
-    /// the clamped volume): closed for a non-degenerate volume. Volumes with unclamped knot
-    /// vectors are clamped first (exact).
+    /// the clamped volume), less those without area and pairs that coincide: closed for a
+    /// volume whose boundary closes up. Volumes with unclamped knot vectors are clamped first
+    /// (exact).
     pub fn of_volume(v: &NurbsVolume) -> Result<Shell, IoError> {
         let mut v = v.clone();
         for axis in 0..3 {
@@ -486,8 +573,9 @@ impl Shell {
         }
         let faces = crate::step::volume_boundary_surfaces(&v)
             .ok_or_else(|| structure("volume knot vectors could not be clamped".into()))?;
-        let mut b = Builder::new(closure_tolerance(v.control_points()));
-        for f in faces {
+        let tol = closure_tolerance(v.control_points());
+        let mut b = Builder::new(tol);
+        for f in prune_faces(faces, tol) {
             b.add_face(f)?;
         }
         Ok(b.finish())
@@ -501,9 +589,10 @@ impl Shell {
             .iter()
             .flat_map(|s| s.control_points().iter().copied())
             .collect();
-        let mut b = Builder::new(closure_tolerance(&all));
-        for s in surfaces {
-            b.add_face(s.clone())?;
+        let tol = closure_tolerance(&all);
+        let mut b = Builder::new(tol);
+        for s in prune_faces(surfaces.to_vec(), tol) {
+            b.add_face(s)?;
         }
         Ok(b.finish())
     }
@@ -741,6 +830,39 @@ mod tests {
         assert_eq!(
             open.edge_uses().iter().filter(|u| u.0 + u.1 == 1).count(),
             4
+        );
+    }
+
+    /// A solid cylinder of radius `r` and height `h` parametrized by (radius, angle, height):
+    /// its `r = 0` face is the axis, its two angle faces coincide.
+    fn solid_cylinder(r: f64, h: f64) -> NurbsVolume {
+        let c = NurbsCurve::circle(Vec3::zeros(), Vec3::x(), Vec3::y(), 1.0).unwrap();
+        let (mut pts, mut ws) = (Vec::new(), Vec::new());
+        for rad in [0.0, r] {
+            for (p, &w) in c.control_points().iter().zip(c.weights()) {
+                for z in [0.0, h] {
+                    pts.push(Vec3::new(rad * p.x, rad * p.y, z));
+                    ws.push(w);
+                }
+            }
+        }
+        let lin = KnotVector::clamped_uniform(1, 2).unwrap();
+        NurbsVolume::from_flat([lin.clone(), c.knots().clone(), lin], pts, ws).unwrap()
+    }
+
+    #[test]
+    fn collapsed_and_coinciding_volume_faces_are_dropped() {
+        let v = solid_cylinder(0.5, 2.0);
+        let sh = Shell::of_volume(&v).unwrap();
+        // Side (with a seam) and two disks (each a pole and a radial seam): three faces.
+        assert!(sh.closed, "{:?}", sh.edge_uses());
+        assert_eq!(sh.faces.len(), 3);
+        assert!(sh.edge_uses().iter().all(|&u| u == (1, 1)));
+        let exact = PI * 0.25 * 2.0;
+        assert!(
+            (sh.volume(20) - exact).abs() < 1e-12 * exact,
+            "{}",
+            sh.volume(20)
         );
     }
 
