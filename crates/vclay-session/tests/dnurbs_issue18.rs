@@ -92,3 +92,49 @@ points = [[-2.0, 0.0, 0.0], [-1.2, 0.8, 0.0], [-0.4, 1.1, 0.0], [0.4, 1.1, 0.0],
         );
     }
 }
+
+/// Seam gap `max_u |s(u, v0) - s(u, v1)|` and pole spread `max_v |s(u_end, v) - s(u_end, v0)|`
+/// (both ends) of a surface, on 41 samples.
+fn closure(s: &vclay_spline::NurbsSurface) -> (f64, f64) {
+    use vclay_spline::ParametricSurface;
+    let [du, dv] = s.domain();
+    let mut seam = 0.0f64;
+    let mut pole = 0.0f64;
+    for k in 0..=40 {
+        let t = k as f64 / 40.0;
+        let u = du.min + t * (du.max - du.min);
+        let v = dv.min + t * (dv.max - dv.min);
+        let a = s.point(u, dv.min).unwrap();
+        let b = s.point(u, dv.max).unwrap();
+        seam = seam.max((a - b).norm());
+        for ue in [du.min, du.max] {
+            let p0 = s.point(ue, dv.min).unwrap();
+            pole = pole.max((s.point(ue, v).unwrap() - p0).norm());
+        }
+    }
+    (seam, pole)
+}
+
+/// Runs a scenario file's text for `steps` steps and returns its final surface.
+fn final_surface(text: &str, steps: u64) -> vclay_spline::NurbsSurface {
+    let mut sc = Scenario::parse(text, "s.toml", "s", Path::new(".")).unwrap();
+    let out = tempfile::tempdir().unwrap();
+    let mut output = sc.output.clone();
+    output.final_files = vec!["final.json".into()];
+    vclay_session::run::run(&mut sc.session, steps, out.path(), &output, &mut |_| {})
+        .unwrap_or_else(|e| panic!("{e}"));
+    let model = vclay_io::model::read_model(out.path().join("final.json")).unwrap();
+    match model.into_iter().next() {
+        Some(vclay_io::model::Entity::Surface(s)) => s,
+        _ => panic!("no surface"),
+    }
+}
+
+#[test]
+fn sculpted_swung_egg_stays_closed() {
+    // Fig 9a: before issue 18 the seam opened to 1.3e-2 and the top pole spread.
+    let s = final_surface(&example("fig9a_swung_egg.toml"), 120);
+    let (seam, pole) = closure(&s);
+    assert!(seam < 1e-9, "seam gap {seam:e}");
+    assert!(pole < 1e-9, "pole spread {pole:e}");
+}

@@ -463,6 +463,13 @@ pub trait GeneralizedGeometry: Clone + Send + Sync + std::fmt::Debug {
         let _ = (element, nodes);
         [Vec::new(), Vec::new()]
     }
+    /// Linear ties between coordinates that the geometry needs to stay what it is (issue 18: a
+    /// closed swung surface's seam), each `sum_i c_i q_i = value` as `(terms, value)`.
+    /// [`GeneralizedDnurbs::new`] enforces them like the constraints of section 6.2 (Lagrange
+    /// rows, Newton projection), for the life of the model. Default: none.
+    fn default_ties(&self) -> Vec<LinearTie> {
+        Vec::new()
+    }
     /// Size of the model (for tolerances and divergence detection).
     fn scale(&self) -> f64;
     /// Values and Jacobian columns at a parameter.
@@ -570,6 +577,16 @@ pub enum Constraint {
         /// Required normal direction (any length but zero).
         normal: Vec3,
     },
+}
+
+/// A linear tie `sum_i c_i q_i = value` between generalized coordinates (terms `(i, c_i)`), see
+/// [`GeneralizedGeometry::default_ties`] and [`GeneralizedDnurbs::add_tie`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinearTie {
+    /// `(coordinate, coefficient)` pairs.
+    pub terms: Vec<(usize, f64)>,
+    /// Right-hand side.
+    pub value: f64,
 }
 
 /// One scalar constraint row: its value `C(p)` and its non-zero derivatives
@@ -886,6 +903,8 @@ pub struct GeneralizedDnurbs<G: GeneralizedGeometry> {
     fixed: Vec<bool>,
     forces: Vec<Force>,
     constraints: Vec<Constraint>,
+    /// Linear ties (kept by [`GeneralizedDnurbs::clear_constraints`]).
+    ties: Vec<LinearTie>,
     reference: ElasticReference,
     weight_targets: Vec<f64>,
     weight_penalty: f64,
@@ -961,6 +980,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             fixed,
             forces: vec![],
             constraints: vec![],
+            ties: vec![],
             reference: ElasticReference::RestShape,
             weight_targets: weights,
             weight_penalty: 0.0,
@@ -978,6 +998,9 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             weight_inertia: DEFAULT_WEIGHT_INERTIA,
         };
         m.set_rest_shape_to_current()?;
+        for t in m.geometry.default_ties() {
+            m.add_tie(t)?;
+        }
         Ok(m)
     }
 
@@ -1084,7 +1107,52 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         Ok(index)
     }
 
-    /// Removes every constraint.
+    /// Adds a linear tie between coordinates (validated: coordinates exist, finite
+    /// coefficients); returns its index among the ties. Ties are enforced with the constraints
+    /// and are not removed by [`Self::clear_constraints`].
+    pub fn add_tie(&mut self, tie: LinearTie) -> Result<usize, DynamicsError> {
+        let n = self.geometry.coordinates().len();
+        let index = self.constraints.len() + self.ties.len();
+        for &(i, c) in &tie.terms {
+            if i >= n {
+                return Err(DynamicsError::NoSuchCoordinate { index: i, count: n });
+            }
+            if !c.is_finite() {
+                return Err(DynamicsError::Constraint {
+                    index,
+                    what: format!("tie coefficient {c} is not finite"),
+                });
+            }
+        }
+        if !tie.value.is_finite() {
+            return Err(DynamicsError::Constraint {
+                index,
+                what: "tie value is not finite".into(),
+            });
+        }
+        self.ties.push(tie);
+        Ok(self.ties.len() - 1)
+    }
+
+    /// The linear ties (see [`Self::add_tie`]).
+    pub fn ties(&self) -> &[LinearTie] {
+        &self.ties
+    }
+
+    /// The violation `|sum c_i q_i - value|` of every tie.
+    pub fn tie_violations(&self) -> Vec<f64> {
+        let q = self.geometry.coordinates();
+        self.ties
+            .iter()
+            .map(|t| (t.terms.iter().map(|&(i, c)| c * q[i]).sum::<f64>() - t.value).abs())
+            .collect()
+    }
+
+    fn has_constraints(&self) -> bool {
+        !self.constraints.is_empty() || !self.ties.is_empty()
+    }
+
+    /// Removes every constraint (the ties stay).
     pub fn clear_constraints(&mut self) {
         self.constraints.clear();
     }
@@ -1540,7 +1608,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             None => Solve::Pcg(Precond::new(&op, &self.geometry.coordinate_groups())),
         };
         let mut stats = pre.solve(&op, &b, &mut x, self.max_iterations, self.tolerance);
-        if !self.constraints.is_empty() {
+        if self.has_constraints() {
             stats = self.apply_constraints(&op, &pre, &b, &mut x, self.baumgarte, stats)?;
         }
         let scale = self.geometry.scale();
@@ -1597,12 +1665,13 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         self.geometry.set_coordinates(&qn)?;
         // Newton projection onto the constraints in the metric of A (removes the second-order
         // residual of the linearized constraint rows).
-        if !self.constraints.is_empty() && self.baumgarte >= 1.0 {
+        if self.has_constraints() && self.baumgarte >= 1.0 {
             let tol = CONSTRAINT_TOLERANCE * scale;
             for _ in 0..MAX_CONSTRAINT_PROJECTIONS {
                 let worst = self
                     .constraint_violations()?
                     .into_iter()
+                    .chain(self.tie_violations())
                     .fold(0.0, f64::max);
                 if worst <= tol {
                     break;
@@ -1889,6 +1958,18 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                 }
                 rows.push((ci, value, r));
             }
+        }
+        let q = self.geometry.coordinates();
+        for (t, tie) in self.ties.iter().enumerate() {
+            let mut r = vec![0.0; n];
+            let mut value = -tie.value;
+            for &(i, c) in &tie.terms {
+                value += c * q[i];
+                if !self.fixed[i] {
+                    r[i] += c;
+                }
+            }
+            rows.push((self.constraints.len() + t, value, r));
         }
         // Dependence check (modified Gram-Schmidt in order, carrying the constraint values
         // along). A row that depends on earlier rows is redundant when its value is what those

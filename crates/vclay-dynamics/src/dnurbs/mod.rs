@@ -49,7 +49,7 @@ pub mod triangular;
 
 pub use generalized::{
     Constraint, DEFAULT_QUADRATURE_TOLERANCE, GeneralizedDnurbs, GeneralizedGeometry,
-    GeneralizedState, LocalJacobian, QuadratureRule, denominator_radius,
+    GeneralizedState, LinearTie, LocalJacobian, QuadratureRule, denominator_radius,
 };
 pub use geometry::{ClosedCurve, DnurbsGeometry, ElementSamples};
 pub use presets::{Preset, TABLE_1};

@@ -54,7 +54,7 @@
 //! they are inactive coordinates (held fixed). So is `alpha` by default: `alpha` and a common
 //! scale of `c1x` against `c2` are redundant (`alpha c1x c2 = (k alpha) c1x (c2 / k)`).
 
-use super::generalized::{GeneralizedGeometry, LocalJacobian};
+use super::generalized::{GeneralizedGeometry, LinearTie, LocalJacobian};
 use crate::error::DynamicsError;
 use vclay_core::Vec3;
 use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
@@ -515,6 +515,10 @@ impl GeneralizedGeometry for RationalGeometry {
     }
 }
 
+/// Relative distance (to the model size) under which a swung surface's trajectory counts as
+/// closed and a profile end as lying on the axis ([`SwungGeometry`]'s seam ties and held poles).
+pub const CLOSURE_TOLERANCE: f64 = 1e-9;
+
 /// A swung NURBS surface (`d-nurbs.txt` eq 7) with generalized coordinates
 /// `p = [alpha, a, b]`: the scale `alpha`, then the profile curve `c1(u)` (x-z plane) and the
 /// trajectory curve `c2(v)` (x-y plane), four numbers (x, y, z, w) per control point. The
@@ -729,7 +733,46 @@ impl GeneralizedGeometry for SwungGeometry {
         let mut f = vec![0, oa + 3, ob + 3];
         f.extend((0..self.profile.coords.len() / 4).map(|c| oa + 4 * c + 1));
         f.extend((0..self.trajectory.coords.len() / 4).map(|c| ob + 4 * c + 2));
+        // Poles (issue 18): a profile end on the axis (x = 0) maps the whole trajectory to one
+        // point, the pole; its x is held so the pole stays a point through any sculpting (the
+        // end of a clamped profile is its end control point).
+        let np = self.profile.coords.len() / 4;
+        let tol = CLOSURE_TOLERANCE * self.scale;
+        for c in [0, np - 1] {
+            if self.profile.coords[4 * c].abs() <= tol {
+                f.push(oa + 4 * c);
+            }
+        }
         f
+    }
+    /// The seam (issue 18): when the trajectory is closed (its clamped ends, the first and last
+    /// control points, coincide), their x and y are tied equal, so the surface stays closed
+    /// through sculpting (the seam of eq 7 is `s(u, v0) = s(u, v1)` for every `u` exactly when
+    /// `b(v0) = b(v1)`).
+    /// A closed profile (the torus) is tied the same way in its x and z.
+    fn default_ties(&self) -> Vec<LinearTie> {
+        let (oa, ob) = self.offsets();
+        let tol = CLOSURE_TOLERANCE * self.scale;
+        let mut ties = Vec::new();
+        for (coords, off, comps) in [
+            (&self.trajectory.coords, ob, [0, 1]),
+            (&self.profile.coords, oa, [0, 2]),
+        ] {
+            let n = coords.len() / 4;
+            let last = 4 * (n - 1);
+            let gap = comps
+                .iter()
+                .map(|&k| (coords[k] - coords[last + k]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            if n >= 3 && gap <= tol {
+                ties.extend(comps.iter().map(|&k| LinearTie {
+                    terms: vec![(off + k, 1.0), (off + last + k, -1.0)],
+                    value: 0.0,
+                }));
+            }
+        }
+        ties
     }
     fn elements(&self) -> Vec<[(f64, f64); 2]> {
         let us = non_empty_spans(&self.profile.knots[0]);
