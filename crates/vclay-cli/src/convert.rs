@@ -25,6 +25,7 @@ use vclay::io::iges::{IgesLayout, write_iges_as};
 use vclay::io::mesh::{read_mesh, write_mesh};
 use vclay::io::model::{Entity, NamedEntity, import_model, parse_named_model, write_named_model};
 use vclay::io::step::{StepLayout, write_step_as};
+use vclay::io::step_read::{TrimmedFace, tessellate_trimmed};
 use vclay::spline::{tessellate_surface, tessellate_volume_boundary};
 
 /// Arguments of `vclay convert`.
@@ -55,6 +56,9 @@ pub enum Loaded {
     Entities(Vec<NamedEntity>),
     /// Triangle meshes.
     Meshes(Vec<TriMesh>),
+    /// A STEP B-rep: its surfaces (exact, whole) and its faces' trimming loops, applied when it
+    /// is tessellated ([`trimmed_mesh`], issue 20).
+    Trimmed(Vec<NamedEntity>, Vec<TrimmedFace>),
 }
 
 fn ext_of(path: &Path) -> String {
@@ -109,7 +113,11 @@ pub fn read_any(path: &Path) -> Result<Loaded> {
                     eprintln!("vclay: warning: {}: {w}", path.display());
                 }
             }
-            Ok(Loaded::Entities(imported.entities))
+            if imported.faces.is_empty() {
+                Ok(Loaded::Entities(imported.entities))
+            } else {
+                Ok(Loaded::Trimmed(imported.entities, imported.faces))
+            }
         }
         "ovm" => Ok(Loaded::Entities(lattice_patches(path)?)),
         "vtu" => Ok(Loaded::Meshes(vec![vtu_boundary(path)?])),
@@ -190,6 +198,49 @@ pub fn vtu_boundary(path: &Path) -> Result<TriMesh> {
     Ok(mesh)
 }
 
+/// Tessellates a STEP B-rep with its trimming applied (issue 20): each face's surface on
+/// `samples x samples` through `step_read::tessellate_trimmed` (triangles outside the face's
+/// loops dropped), the other entities as [`tessellate_entities`] does. The mesh's size is
+/// checked against `--max-memory` first.
+pub fn trimmed_mesh(
+    entities: &[NamedEntity],
+    faces: &[TrimmedFace],
+    samples: usize,
+) -> Result<TriMesh> {
+    let on_face: std::collections::HashSet<usize> = faces.iter().map(|f| f.entity).collect();
+    let vertices = (samples as f64).powi(2) * faces.len() as f64;
+    crate::limits::check_memory(
+        &format!(
+            "--samples {samples} ({} trimmed faces, about {vertices:.3e} vertices)",
+            faces.len()
+        ),
+        vertices * crate::limits::BYTES_PER_MESH_VERTEX,
+    )?;
+    let rest: Vec<NamedEntity> = entities
+        .iter()
+        .enumerate()
+        .filter(|(i, e)| !on_face.contains(i) && !matches!(e.entity, Entity::Curve(_)))
+        .map(|(_, e)| e.clone())
+        .collect();
+    let mut mesh = if rest.is_empty() {
+        TriMesh::new()
+    } else {
+        tessellate_entities(&rest, samples)?
+    };
+    for f in faces {
+        let Some(Entity::Surface(s)) = entities.get(f.entity).map(|e| &e.entity) else {
+            continue;
+        };
+        let m = tessellate_trimmed(f, s, [samples; 2])
+            .map_err(|e| anyhow::anyhow!("face #{}: {e}", f.step_id))?;
+        mesh.append(&m);
+    }
+    if mesh.triangles.is_empty() {
+        bail!("no face has triangles inside its trimming loops");
+    }
+    Ok(mesh)
+}
+
 /// Tessellates the surfaces and volume boundaries of a model into one mesh.
 ///
 /// The mesh's size (`samples^2` vertices per surface, `6 samples^2` per volume) is checked
@@ -236,6 +287,7 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
     let mesh_of = |input: &Loaded| -> Result<TriMesh> {
         match input {
             Loaded::Entities(e) => tessellate_entities(e, args.samples),
+            Loaded::Trimmed(e, f) => trimmed_mesh(e, f, args.samples),
             Loaded::Meshes(ms) => {
                 let mut all = TriMesh::new();
                 for m in ms {
@@ -247,7 +299,7 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
     };
     let exact = |input: &Loaded| -> Result<Vec<NamedEntity>> {
         match input {
-            Loaded::Entities(e) => Ok(e.clone()),
+            Loaded::Entities(e) | Loaded::Trimmed(e, _) => Ok(e.clone()),
             Loaded::Meshes(_) => bail!(
                 "{} is a mesh; it cannot be converted to exact NURBS geometry ({})",
                 args.input.display(),

@@ -128,6 +128,22 @@ pub fn scene_from_file(path: &Path, wireframe: bool) -> Result<Scene> {
             let ents: Vec<Entity> = e.into_iter().map(|n| n.entity).collect();
             scene_from_entities(&ents, wireframe)
         }
+        crate::convert::Loaded::Trimmed(e, faces) => {
+            // Faces cut to their trimming loops (issue 20), 96 samples a side; curves as lines.
+            let mesh = crate::convert::trimmed_mesh(&e, &faces, 96)?;
+            let mut scene = scene_from_mesh(mesh, wireframe);
+            let curves: Vec<Entity> = e
+                .into_iter()
+                .map(|n| n.entity)
+                .filter(|x| matches!(x, Entity::Curve(_)))
+                .collect();
+            if !curves.is_empty() {
+                scene
+                    .lines
+                    .extend(scene_from_entities(&curves, wireframe)?.lines);
+            }
+            Ok(scene)
+        }
         crate::convert::Loaded::Meshes(ms) => {
             let mut all = TriMesh::new();
             for m in &ms {
