@@ -97,6 +97,41 @@ fn stats_equal_table1_for_the_other_models() {
     );
 }
 
+/// Issue 19: the galleries' soccer player and cactus have Table 1's counts, and `--stats` reports
+/// no folded cell for them or for the default (split) tetrahedron with holes; the paper's
+/// single cell folds and the command warns.
+#[test]
+fn gallery_stats_equal_table1_and_nothing_folds() {
+    assert_eq!(
+        stats(&["--primitive", "soccer-player", "--levels", "2"]),
+        [2450, 6320, 5408, 1536]
+    );
+    assert_eq!(
+        stats(&["--primitive", "cactus", "--levels", "2"]),
+        [2625, 6800, 5840, 1664]
+    );
+    for name in ["soccer-player", "tetrahedron-with-holes", "spiked-object"] {
+        let out = vclay(&["subdivide", "--primitive", name, "--levels", "2", "--stats"]);
+        let v: Value = serde_json::from_slice(&out.stdout).expect("stats are JSON");
+        assert_eq!(v["inverted_cells"], 0, "{name}");
+        assert!(
+            !String::from_utf8_lossy(&out.stderr).contains("warning"),
+            "{name}"
+        );
+    }
+    let out = vclay(&[
+        "subdivide",
+        "--primitive",
+        "tetrahedron-with-holes-paper",
+        "--levels",
+        "1",
+        "--stats",
+    ]);
+    let v: Value = serde_json::from_slice(&out.stdout).expect("stats are JSON");
+    assert_eq!(v["inverted_cells"], 12);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("non-positive volume"));
+}
+
 #[test]
 fn every_output_format_is_written_and_ovm_reads_back() {
     let dir = tempfile::tempdir().unwrap();
