@@ -13,8 +13,10 @@
 //! of a `GEOMETRIC_SET`, the basis of a trimmed or offset surface, and the `FACE_SURFACE`
 //! geometry of the `ADVANCED_FACE`s of a B-rep. The faces' trimming loops (`FACE_BOUND` ->
 //! `EDGE_LOOP` -> `ORIENTED_EDGE` -> `EDGE_CURVE` with its 3D curve and its `PCURVE`s) are kept in
-//! [`CadImport::faces`] ([`TrimmedFace`]) but **not applied**: the surfaces are imported whole
-//! and the JSON model does not store trims; a warning says so. A B-spline curve is imported
+//! [`CadImport::faces`] ([`TrimmedFace`]); the surfaces are imported **whole** (the JSON model
+//! does not store trims, sessions sculpt whole surfaces) and the loops are applied only by
+//! [`tessellate_trimmed`] (used by `vclay convert` to meshes and `vclay render`); a warning says
+//! so. A B-spline curve is imported
 //! unless it is part of a B-rep's topology or of a surface definition (referenced by
 //! `EDGE_CURVE`, `PCURVE`, `SURFACE_CURVE`, `SEAM_CURVE`, `DEFINITIONAL_REPRESENTATION` or a
 //! swept surface) or lies in a 2D parameter space; a `TRIMMED_CURVE`'s basis is imported whole.
@@ -36,7 +38,8 @@
 //! `STEP line 41, entity #17: B_SPLINE_CURVE_WITH_KNOTS: knot multiplicities and knots differ
 //! in length (4 and 3)`.
 //!
-//! **Limitations.** Trimming loops are not applied (no trimmed tessellation); no solids as such
+//! **Limitations.** Trimming loops are applied only when meshing, up to the grid spacing
+//! (triangles kept by their parameter centroid; no exact trimmed boundary); no solids as such
 //! (the faces of a shell come in as separate surfaces); free lines and conics (outside a face's
 //! loop or a swept surface) are listed as not read; `OFFSET_SURFACE`,
 //! `RECTANGULAR_TRIMMED_SURFACE` and `CURVE_BOUNDED_SURFACE` are not read (their B-spline basis
@@ -67,7 +70,8 @@ pub struct CadImport {
     /// What was not read or was simplified, one sentence each (empty when everything was read).
     pub warnings: Vec<String>,
     /// The faces of a STEP B-rep: the entity each lies on and its trimming loops, kept as data
-    /// (not applied: the surfaces in `entities` are whole). Empty for IGES and JSON.
+    /// (the surfaces in `entities` are whole; [`tessellate_trimmed`] applies the loops when
+    /// meshing). Empty for IGES and JSON.
     pub faces: Vec<TrimmedFace>,
 }
 
@@ -1016,7 +1020,8 @@ pub fn parse_step(text: &str) -> Result<CadImport, IoError> {
         warnings.push(format!(
             "{} face(s) of a B-rep: their surfaces are imported whole (untrimmed); the trimming \
              loops ({edges} edge(s) with their 3D curves and pcurves) are kept in the import's \
-             face data but not applied, and the model file (JSON) does not store them",
+             face data and applied only when meshing (vclay convert to a mesh, vclay render); \
+             the model file (JSON), STEP/IGES output and sessions get the untrimmed surfaces",
             faces.len()
         ));
     }

@@ -103,7 +103,7 @@ fn brep_files_warn_about_what_is_dropped() {
     );
     let w = s.warnings.join("\n");
     assert!(
-        w.contains("3 face(s) of a B-rep") && w.contains("not applied"),
+        w.contains("3 face(s) of a B-rep") && w.contains("applied only when meshing"),
         "{w}"
     );
     // Faces, loops, edges and pcurves are read into the face data, not listed as dropped.

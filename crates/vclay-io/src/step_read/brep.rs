@@ -35,11 +35,13 @@
 //! `EDGE_LOOP`, each `ORIENTED_EDGE` with its `EDGE_CURVE`'s 3D curve (through `SURFACE_CURVE` and
 //! `SEAM_CURVE`) as an exact NURBS from its start to its end vertex, and the `PCURVE` on this face's
 //! surface when the file gives one (2D `LINE`, `CIRCLE`, `ELLIPSE` or B-spline in the surface's
-//! file parameters, over the same parameter range as the 3D curve: STEP writers such as
-//! OpenCASCADE keep curve and pcurve on a common parameter). `VERTEX_LOOP`s (the poles of a
-//! sphere) carry no curve and are skipped; `POLY_LOOP`s are listed as not read. The loops are
-//! kept as data and not applied: surfaces are imported whole, and the JSON model has no
-//! trimming, so `vclay convert` writes the untrimmed surfaces.
+//! file parameters, over the part between the vertices' surface parameters, or on swept surfaces
+//! over the 3D curve's range). `VERTEX_LOOP`s (the poles of a sphere) carry no curve and are
+//! skipped; `POLY_LOOP`s are listed as not read. Surfaces are imported whole (the JSON model has
+//! no trimming, so `vclay convert in.step out.json` writes the untrimmed surfaces); the loops are
+//! applied when meshing by [`tessellate_trimmed`]: grid triangles whose parameter centroid lies
+//! inside the loops' pcurve polygons (even-odd rule, whole turns tried on periodic directions)
+//! are kept, so trimmed edges are exact only up to the grid spacing.
 
 use super::{Ctx, Instance, Param, Reader};
 use crate::error::IoError;
@@ -178,7 +180,8 @@ pub struct TrimLoop {
     pub edges: Vec<TrimEdge>,
 }
 
-/// A face of a B-rep: which imported surface it lies on and its trimming loops (kept, not applied).
+/// A face of a B-rep: which imported surface it lies on and its trimming loops (applied only by
+/// [`tessellate_trimmed`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TrimmedFace {
     /// The face's STEP id (`ADVANCED_FACE` or `FACE_SURFACE`).
