@@ -444,6 +444,19 @@ fn swung_sphere_sculpted_by_a_spring_into_an_egg() {
         top.z - bottom.z,
         2.0 * hi
     );
+    // Closed (issue 18): the seam v = 0 / v = 1 and both poles (the seam ties hold).
+    let g = d.geometry();
+    let (mut seam, mut pole) = (0.0f64, 0.0f64);
+    for i in 0..=20 {
+        let t = i as f64 / 20.0;
+        seam = seam.max((g.point([t, 0.0]).unwrap() - g.point([t, 1.0]).unwrap()).norm());
+        for u in [0.0, 1.0] {
+            pole = pole.max((g.point([u, t]).unwrap() - g.point([u, 0.0]).unwrap()).norm());
+        }
+    }
+    assert!(seam < 1e-9 && pole < 1e-9, "seam {seam:e}, pole {pole:e}");
+    assert_eq!(d.ties().len(), 2);
+    assert!(d.tie_violations().iter().all(|&v| v < 1e-9));
 }
 
 #[test]

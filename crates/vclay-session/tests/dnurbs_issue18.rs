@@ -138,3 +138,28 @@ fn sculpted_swung_egg_stays_closed() {
     assert!(seam < 1e-9, "seam gap {seam:e}");
     assert!(pole < 1e-9, "pole spread {pole:e}");
 }
+
+#[test]
+fn fig2_cube_is_a_cube_and_stays_closed_when_sculpted() {
+    use vclay_spline::ParametricSurface;
+    let text = example("fig02_swung_cube.toml");
+    let s0 = final_surface(&text, 0);
+    // The cube [-1, 1]^3: every sample lies on its boundary (largest |coordinate| is 1).
+    let [du, dv] = s0.domain();
+    for i in 0..=12 {
+        for j in 0..=12 {
+            let u = du.min + (du.max - du.min) * i as f64 / 12.0;
+            let v = dv.min + (dv.max - dv.min) * j as f64 / 12.0;
+            let p = s0.point(u, v).unwrap();
+            let m = p.x.abs().max(p.y.abs()).max(p.z.abs());
+            assert!((m - 1.0).abs() < 1e-12, "({u}, {v}) -> {p:?}");
+        }
+    }
+    let s = final_surface(&text, 100);
+    let (seam, pole) = closure(&s);
+    assert!(seam < 1e-9, "seam gap {seam:e}");
+    assert!(pole < 1e-9, "pole spread {pole:e}");
+    // The top face's centre moved up.
+    let top = s.point(du.max, dv.min).unwrap();
+    assert!(top.z > 1.05, "top {top:?}");
+}

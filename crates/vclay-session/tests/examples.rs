@@ -30,6 +30,7 @@ const NEW_SINCE: &[&str] = &[
 /// Examples added after the session layer (the old readers could not express them, so there is
 /// no run to compare with); each is run by its own test (issue 18: `tests/dnurbs_issue18.rs`).
 const NEW_EXAMPLES: &[&str] = &[
+    "fig02_swung_cube",
     "fig06_curve_fit",
     "fig08a_edge_rounding",
     "fig08b_corner_rounding",

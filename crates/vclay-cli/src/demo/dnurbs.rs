@@ -98,6 +98,20 @@ pub fn swung_egg(out: &Path) -> Result<(String, Vec<String>)> {
         })
         .fold(0.0, f64::max);
     ensure!(height > 2.3, "the sphere did not stretch (height {height})");
+    // Closed (issue 18): the seam v = 0 / v = 1 and both poles, so the egg exports as a solid.
+    let mut seam = 0.0f64;
+    let mut pole = 0.0f64;
+    for i in 0..=40 {
+        let t = i as f64 / 40.0;
+        seam = seam.max((g.point([t, 0.0])? - g.point([t, 1.0])?).norm());
+        for u in [0.0, 1.0] {
+            pole = pole.max((g.point([u, t])? - g.point([u, 0.0])?).norm());
+        }
+    }
+    ensure!(
+        seam < 1e-9 && pole < 1e-9,
+        "the egg opened: seam gap {seam:.1e}, pole spread {pole:.1e}"
+    );
     let surface = g.to_surface()?;
     let mut mesh = TriMesh::new();
     tessellate_surface(&surface, [48, 64], &mut mesh)?;
@@ -108,7 +122,7 @@ pub fn swung_egg(out: &Path) -> Result<(String, Vec<String>)> {
     )?;
     Ok((
         format!(
-            "swung D-NURBS sphere sculpted into an egg by a moving spring (Table 1 'Egg sculpting'): height 2.00 -> {height:.2}, width 2.00 -> {width:.2}, south pole held to {:.1e}",
+            "swung D-NURBS sphere sculpted into an egg by a moving spring (Table 1 'Egg sculpting'): height 2.00 -> {height:.2}, width 2.00 -> {width:.2}, south pole held to {:.1e}, seam gap {seam:.1e}, pole spread {pole:.1e}",
             d.constraint_violations()?.into_iter().fold(0.0, f64::max)
         ),
         vec![

@@ -965,6 +965,57 @@ pub mod profiles {
         ])
     }
 
+    /// The profile of the cubical swung surface (`d-nurbs.txt` Fig 2): quadratic, 7 control
+    /// points in the x-z plane, the bottom, side and top of a square as three straight Bezier
+    /// segments joined at double knots (sharp corners): `(0, -h) (1/2, -h) (1, -h) (1, 0)
+    /// (1, h) (1/2, h) (0, h)`. Its x is the unit the trajectory scales.
+    pub fn cube_profile(h: f64) -> Result<NurbsCurve, SplineError> {
+        let xz = [
+            (0.0, -h),
+            (0.5, -h),
+            (1.0, -h),
+            (1.0, 0.0),
+            (1.0, h),
+            (0.5, h),
+            (0.0, h),
+        ];
+        NurbsCurve::new(
+            2,
+            [0.0, 0.0, 0.0, 1.0, 1.0, 2.0, 2.0, 3.0, 3.0, 3.0]
+                .iter()
+                .map(|k| k / 3.0)
+                .collect(),
+            xz.iter().map(|&(x, z)| Vec3::new(x, 0.0, z)).collect(),
+            None,
+        )
+    }
+
+    /// The trajectory of the cubical swung surface (Fig 2): the square of half side `h` in the
+    /// x-y plane, quadratic, 9 control points (four straight Bezier segments joined at double
+    /// knots, closed at the corner `(h, -h)`).
+    pub fn square(h: f64) -> Result<NurbsCurve, SplineError> {
+        let xy = [
+            (h, -h),
+            (h, 0.0),
+            (h, h),
+            (0.0, h),
+            (-h, h),
+            (-h, 0.0),
+            (-h, -h),
+            (0.0, -h),
+            (h, -h),
+        ];
+        NurbsCurve::new(
+            2,
+            [0.0, 0.0, 0.0, 1.0, 1.0, 2.0, 2.0, 3.0, 3.0, 4.0, 4.0, 4.0]
+                .iter()
+                .map(|k| k / 4.0)
+                .collect(),
+            xy.iter().map(|&(x, y)| Vec3::new(x, y, 0.0)).collect(),
+            None,
+        )
+    }
+
     /// A non-rational quadratic profile in the x-z plane through the given `(x, z)` control
     /// points on clamped uniform knots (hats, glasses, vases).
     pub fn polyline_profile(xz: &[(f64, f64)]) -> Result<NurbsCurve, SplineError> {
@@ -993,6 +1044,14 @@ impl SwungGeometry {
     /// 7-point circular trajectory).
     pub fn wine_glass() -> Result<Self, DynamicsError> {
         Self::new(&profiles::wine_glass()?, &profiles::circle7(1.0)?, 1.0)
+    }
+
+    /// The cubical swung surface of `d-nurbs.txt` Fig 2: the cube `[-h, h]^3` as the swung
+    /// product (eq 7) of two NURBS profile curves, [`profiles::cube_profile`] (7 control points)
+    /// and [`profiles::square`] (9). Its poles are the centres of the top and bottom faces; the
+    /// seam runs down the edge at `(h, -h)`.
+    pub fn cube(h: f64) -> Result<Self, DynamicsError> {
+        Self::new(&profiles::cube_profile(h)?, &profiles::square(h)?, 1.0)
     }
 
     /// The torus of Fig 9b: quadratic profile and trajectory with 7 control points each.

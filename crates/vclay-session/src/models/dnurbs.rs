@@ -2019,18 +2019,19 @@ fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, S
             Some("torus") => SwungGeometry::torus(2.0 * ext, 0.5 * ext),
             Some("hat") => SwungGeometry::hat(),
             Some("wine-glass") => SwungGeometry::wine_glass(),
+            Some("cube" | "cubical") => SwungGeometry::cube(ext),
             Some(o) => {
                 return Err(err(
                     "primitive",
                     format!(
-                        "unknown swung primitive \"{o}\"; expected sphere, torus, hat or wine-glass"
+                        "unknown swung primitive \"{o}\"; expected sphere, torus, hat, wine-glass or cube"
                     ),
                 ));
             }
             None => {
                 return Err(err(
                     "primitive",
-                    "missing (sphere, torus, hat or wine-glass)".into(),
+                    "missing (sphere, torus, hat, wine-glass or cube)".into(),
                 ));
             }
         }
