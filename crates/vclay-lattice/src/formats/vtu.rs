@@ -1,4 +1,4 @@
-//! VTK XML unstructured grid (`.vtu`), ASCII data arrays: [`write`] and, for the subset it
+//! VTK XML unstructured grid (`.vtu`), ASCII data arrays: [`write()`] and, for the subset it
 //! writes, [`read`] / [`parse`] (issue 20: `vclay render` and `vclay convert` take `.vtu` lattices).
 //!
 //! # Cell types
@@ -400,7 +400,7 @@ pub fn write_with_point_data(
 /// declared sizes that do not match the text.
 pub const MAX_ARRAY_VALUES: usize = 1 << 28;
 
-/// Reads a `.vtu` file of the subset [`write`] writes (see [`parse`]).
+/// Reads a `.vtu` file of the subset [`write()`] writes (see [`parse`]).
 pub fn read(path: &Path) -> Result<Lattice, FormatError> {
     let text = crate::formats::read_text(path)?;
     parse(&text, &crate::formats::display_name(path))
@@ -507,14 +507,14 @@ fn attr<'a>(attrs: &[(&'a str, &'a str)], key: &str) -> Option<&'a str> {
     attrs.iter().find(|(k, _)| *k == key).map(|(_, v)| *v)
 }
 
-/// Parses `.vtu` text of the subset [`write`] writes; `name` is used in error messages.
+/// Parses `.vtu` text of the subset [`write()`] writes; `name` is used in error messages.
 ///
 /// Read: one `<Piece>` of an `UnstructuredGrid` with ASCII `<DataArray>`s: the points
 /// (3 components), `connectivity`, `offsets` (end of each cell's run), `types` (10 tetrahedron,
 /// 12 hexahedron, 13 wedge, 14 pyramid with VTK's point orders, 42 polyhedron with the `faces` /
 /// `faceoffsets` arrays), and any point or cell data, which is skipped. The cells become a
 /// [`Lattice`] through [`Lattice::from_cells`] (faces of the linear types from
-/// [`reference_faces`]), so points and cells keep their order and a file written by [`write`]
+/// [`reference_faces`]), so points and cells keep their order and a file written by [`write()`]
 /// gives back the lattice's points exactly and its cells as the same point sets. Binary,
 /// appended or compressed data, several pieces and other cell types are
 /// [`FormatError::Unsupported`] or a located error; every count is checked against the
