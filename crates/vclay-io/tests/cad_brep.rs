@@ -338,6 +338,28 @@ fn area(m: &vclay_core::TriMesh) -> f64 {
         .sum()
 }
 
+/// The area of the face `bench/gen_cad_test_files.py` extrudes: the cubic Bezier `c(u)` swept
+/// by `V`, `int_0^1 |c'(u) x V| du` (midpoint rule, 20,000 points).
+fn extruded_area() -> f64 {
+    let p = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(2.0, -1.0, 0.0),
+        Vec3::new(3.0, 0.5, 0.0),
+    ];
+    let v = Vec3::new(0.2, 0.3, 1.5);
+    let n = 20_000;
+    (0..n)
+        .map(|k| {
+            let u = (k as f64 + 0.5) / n as f64;
+            let d = (p[1] - p[0]) * (3.0 * (1.0 - u) * (1.0 - u))
+                + (p[2] - p[1]) * (6.0 * (1.0 - u) * u)
+                + (p[3] - p[2]) * (3.0 * u * u);
+            d.cross(&v).norm() / n as f64
+        })
+        .sum()
+}
+
 /// Trimming applied by `tessellate_trimmed`: a cylinder's caps (planes cut to the box of their
 /// circles) become discs, its side and a box's faces stay whole; areas match the closed forms up
 /// to the grid spacing.
@@ -377,6 +399,43 @@ fn trimmed_tessellation_cuts_faces_to_their_loops() {
     assert!((total - want).abs() < 1e-12 * want, "{total} vs {want}");
     let f = &bx.faces[0];
     assert!(tessellate_trimmed(f, &surface(&bx, f), [1, 8]).is_err());
+    // Faces bounded through seams (two pcurves of one edge) stay whole: the cone's side and
+    // caps, the torus (tilted frame), the revolved and extruded B-splines.
+    let pi = std::f64::consts::PI;
+    let (r0, r1, hc) = (1.0f64, 0.4f64, 1.5f64);
+    let cases: [(&str, f64, f64); 4] = [
+        (
+            "brep_cone.step",
+            pi * (r0 + r1) * hc.hypot(r0 - r1) + pi * (r0 * r0 + r1 * r1),
+            0.01,
+        ),
+        ("brep_torus.step", 4.0 * pi * pi * 2.0 * 0.6, 0.01),
+        ("brep_revolution.step", f64::NAN, 0.0),
+        ("brep_extrusion.step", extruded_area(), 0.02),
+    ];
+    for (file, want, tol) in cases {
+        let imp = import_model(data(file)).unwrap();
+        let (mut trimmed, mut whole) = (0.0, 0.0);
+        for f in &imp.faces {
+            let s = surface(&imp, f);
+            trimmed += area(&tessellate_trimmed(f, &s, [64, 64]).unwrap());
+            let mut untrimmed = f.clone();
+            untrimmed.loops.clear();
+            whole += area(&tessellate_trimmed(&untrimmed, &s, [64, 64]).unwrap());
+        }
+        if want.is_nan() {
+            // One face covering its whole surface.
+            assert!(
+                (trimmed - whole).abs() < 1e-12 * whole,
+                "{file}: {trimmed} vs {whole}"
+            );
+        } else {
+            assert!(
+                (trimmed - want).abs() < tol * want,
+                "{file}: {trimmed} vs {want}"
+            );
+        }
+    }
     // The parameter maps invert each other.
     for a in &imp.faces[0].axes {
         for x in [0.1, 1.0, 2.5, 4.0, 6.0] {
