@@ -227,9 +227,9 @@ fn v(x: f64, y: f64, z: f64) -> Vec3 {
 
 /// The soccer player of `subdivision-solids-conference.txt` Table 1 and Fig. 1 (and the
 /// journal's Table 2): a player running at a ball, built from two cubes (the pelvis and the
-/// ball) and 22 extrusions: abdomen, chest, neck and head up from the pelvis; a shoulder, upper
-/// arm, forearm and hand on each side of the chest; a hip, thigh, knee, shin and foot on each
-/// side of the pelvis. 104 points, 200 edges, 122 faces, 24 hexahedra, two pieces (player and
+/// lower half of the ball) and 22 extrusions: the upper half of the ball; chest, neck and
+/// head up from the pelvis; a shoulder, upper arm, forearm and hand on each side of the chest;
+/// a hip, thigh, knee, shin and foot on each side of the pelvis. 104 points, 200 edges, 122 faces, 24 hexahedra, two pieces (player and
 /// ball); `height` tall (z up, standing on `z = 0`), facing -y, the ball in front of the right
 /// (kicking) foot at `x > 0`.
 ///
@@ -256,22 +256,27 @@ fn soccer_player_unit() -> Result<Lattice, LatticeError> {
     let mut s = Sculptor::from_boxes(&[
         // Pelvis.
         (v(-0.34, -0.19, 1.18), v(0.34, 0.19, 1.46)),
-        // Ball, in front of the right (kicking) foot.
-        (v(-0.6, 0.62, 0.0), v(-0.12, 1.1, 0.48)),
+        // Lower half of the ball, in front of the right (kicking) foot.
+        (v(-0.6, 0.62, 0.0), v(-0.12, 1.1, 0.24)),
     ])?;
     let pelvis = CellId::new(0);
-    // Trunk, neck and head.
+    // Upper half of the ball. A lone cube would not do: under the smooth boundary rule every
+    // corner of a cube has valence 3 and loses its own weight, so the alternating (+1, -1)
+    // pattern of its 8 points subdivides to zero and `A^T M A` is singular; two cells are
+    // enough to break the pattern.
+    let ball_top = s.face(CellId::new(1), z);
+    s.grow(ball_top, v(-0.36, 0.86, 0.48), z, 1.0)?;
+    // Chest, neck and head.
     let top = s.face(pelvis, z);
     let (trunk, _) = s.chain(
         top,
         &[
-            (v(0.0, 0.0, 1.74), z, 0.95),
-            (v(0.0, 0.02, 2.08), z, 1.2),
+            (v(0.0, 0.02, 2.08), z, 1.15),
             (v(0.0, 0.03, 2.16), z, 0.38),
             (v(0.0, 0.05, 2.62), v(0.0, 0.1, 1.0), 2.3),
         ],
     )?;
-    let chest = trunk[1];
+    let chest = trunk[0];
     // Arms: shoulder out along x, then down; the left arm (x > 0) swings forward, the right
     // back.
     for side in [1.0, -1.0] {
