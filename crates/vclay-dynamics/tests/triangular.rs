@@ -11,7 +11,7 @@ fn integrate(g: &TriangularGeometry, k: usize, f: impl Fn(&[[f64; 6]]) -> f64) -
     let s = g.surface();
     let mut total = 0.0;
     let mut p = vclay_spline::TriangularPoint::default();
-    for e in 0..g.elements().len() {
+    for e in 0..s.basis().domain().triangles().len() {
         let (params, weights) = g.element_rule(e, k).unwrap();
         for (x, w) in params.iter().zip(weights) {
             s.eval_in_element(e, *x, &mut p).unwrap();
@@ -131,4 +131,40 @@ fn corner_and_bevel_rounding_keep_constraints() {
         TriangleQuadrature::Whole { points: 6 },
         1,
     );
+}
+
+/// Timing probe (run with `--release --ignored`): where a corner-rounding step spends its time.
+#[test]
+#[ignore]
+fn probe_corner_step_cost() {
+    use vclay_dynamics::dnurbs::GeneralizedGeometry as _;
+    for (frozen, constrained, q) in [
+        (false, true, TriangleQuadrature::Whole { points: 6 }),
+        (true, true, TriangleQuadrature::Whole { points: 6 }),
+        (false, false, TriangleQuadrature::Whole { points: 6 }),
+        (false, true, TriangleQuadrature::default()),
+    ] {
+        let r = RoundingModel::new(RoundingKind::Corner).unwrap();
+        let mut m = r.dynamics(q).unwrap();
+        if frozen {
+            for i in m.geometry().weight_coordinates() {
+                m.set_fixed_coordinate(i, true).unwrap();
+            }
+        }
+        if !constrained {
+            m.clear_constraints();
+        }
+        m.step(Integrator::Implicit { dt: r.dt() }).unwrap();
+        let t = std::time::Instant::now();
+        let n = 10;
+        for _ in 0..n {
+            m.step(Integrator::Implicit { dt: r.dt() }).unwrap();
+        }
+        let per = t.elapsed().as_secs_f64() / n as f64;
+        eprintln!(
+            "frozen {frozen} constrained {constrained} {q:?}: {:.2} ms/step, substeps {}",
+            per * 1e3,
+            m.state().substeps
+        );
+    }
 }

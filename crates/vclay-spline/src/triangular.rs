@@ -887,6 +887,16 @@ impl TriangularBasis {
     /// triangle (for exact element quadrature). Cells thinner than the domain tolerance are
     /// dropped.
     pub fn polynomial_cells(&self, t: usize) -> Vec<[Point2; 3]> {
+        self.polynomial_cell_polygons(t)
+            .iter()
+            .flat_map(|p| fan(p, self.area_tolerance()))
+            .collect()
+    }
+
+    /// Domain triangle `t` cut along every knot segment that crosses it: convex polygons (CCW)
+    /// on each of which every basis function is a polynomial. Cells thinner than the domain
+    /// tolerance are dropped.
+    pub fn polynomial_cell_polygons(&self, t: usize) -> Vec<Vec<Point2>> {
         let tol = DOMAIN_TOLERANCE * self.domain.extent();
         let mut polys: Vec<Vec<Point2>> = vec![self.domain.corners(t).to_vec()];
         for seg in self.knot_segments(t) {
@@ -902,18 +912,27 @@ impl TriangularBasis {
             }
             polys = next;
         }
-        let area_tol = tol * tol;
-        let mut out = Vec::new();
-        for p in polys {
-            for i in 1..p.len() - 1 {
-                let tri = [p[0], p[i], p[i + 1]];
-                if det3(tri[0], tri[1], tri[2]).abs() > area_tol {
-                    out.push(tri);
-                }
-            }
-        }
-        out
+        let area_tol = self.area_tolerance();
+        polys.retain(|p| !fan(p, area_tol).is_empty());
+        polys
     }
+
+    fn area_tolerance(&self) -> f64 {
+        let tol = DOMAIN_TOLERANCE * self.domain.extent();
+        tol * tol
+    }
+}
+
+/// Fan triangulation of a convex polygon, dropping triangles of `|d| <= area_tol`.
+pub fn fan(p: &[Point2], area_tol: f64) -> Vec<[Point2; 3]> {
+    let mut out = Vec::new();
+    for i in 1..p.len().saturating_sub(1) {
+        let tri = [p[0], p[i], p[i + 1]];
+        if det3(tri[0], tri[1], tri[2]).abs() > area_tol {
+            out.push(tri);
+        }
+    }
+    out
 }
 
 /// Splits the convex polygon `poly` (CCW) by the line of `seg` when the segment crosses its

@@ -474,6 +474,20 @@ pub trait GeneralizedGeometry: Clone + Send + Sync + std::fmt::Debug {
     fn scale(&self) -> f64;
     /// Values and Jacobian columns at a parameter.
     fn jacobian_at(&self, param: [f64; 2], out: &mut LocalJacobian) -> Result<(), DynamicsError>;
+    /// [`Self::jacobian_at`] for a quadrature point of element `element`: the columns must be
+    /// the same coordinates in the same order at every quadrature point of the element (the
+    /// element's degrees of freedom). Default: [`Self::jacobian_at`]. Geometries whose elements
+    /// share a domain region (triangular D-NURBS: the polynomial cells of a domain triangle,
+    /// each with only the functions that are non-zero on it) say which element is meant.
+    fn element_jacobian_at(
+        &self,
+        element: usize,
+        param: [f64; 2],
+        out: &mut LocalJacobian,
+    ) -> Result<(), DynamicsError> {
+        let _ = element;
+        self.jacobian_at(param, out)
+    }
     /// `(J p', J' p')`: the first and second directional derivatives of `s` along the
     /// coordinate velocity `qdot` (global coordinates).
     fn velocity_terms(&self, param: [f64; 2], qdot: &[f64]) -> Result<(Vec3, Vec3), DynamicsError>;
@@ -1774,7 +1788,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                 // Per-thread scratch that outlives the step (rayon would re-create per-job
                 // state for every split, and freeing those buffers each step churns the heap).
                 with_scratch(|ElementScratch { lj, gram, vl }| {
-                    g.jacobian_at(q.params[0], lj)?;
+                    g.element_jacobian_at(e, q.params[0], lj)?;
                     lj.dofs_into(&mut w.dofs);
                     let nd = w.dofs.len();
                     w.a.resize(nd * nd, 0.0);
@@ -1789,7 +1803,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                     gram.reset(lj);
                     for (k, (&p, &qw)) in q.params.iter().zip(&q.weights).enumerate() {
                         if k > 0 {
-                            g.jacobian_at(p, lj)?;
+                            g.element_jacobian_at(e, p, lj)?;
                         }
                         let c = coef_fn(e, p);
                         let mu = mat.mu.eval(e, p);
