@@ -292,14 +292,39 @@ fn prune_faces(faces: Vec<NurbsSurface>, tol: f64) -> Vec<NurbsSurface> {
         .into_iter()
         .filter(|f| !is_degenerate_face(f, tol))
         .collect();
+    // Candidates share the grid cell (of the tolerance's size) of their control-point centroid,
+    // which reversing u or v does not move, or a neighbouring one.
+    let cell = |f: &NurbsSurface| -> Cell {
+        let p = f.control_points();
+        let c = p.iter().sum::<Vec3>() / p.len() as f64;
+        [c.x, c.y, c.z].map(|x| (x / tol).floor() as i64)
+    };
+    let cells: Vec<Cell> = faces.iter().map(cell).collect();
+    let mut grid: HashMap<Cell, Vec<usize>> = HashMap::new();
+    for (i, c) in cells.iter().enumerate() {
+        grid.entry(*c).or_default().push(i);
+    }
     let mut keep = vec![true; faces.len()];
     for i in 0..faces.len() {
         if !keep[i] {
             continue;
         }
-        if let Some(j) =
-            (i + 1..faces.len()).find(|&j| keep[j] && same_face(&faces[i], &faces[j], tol))
-        {
+        let c = cells[i];
+        let mut partner = None;
+        'search: for d in 0..27i64 {
+            let key = [
+                c[0].saturating_add(d % 3 - 1),
+                c[1].saturating_add(d / 3 % 3 - 1),
+                c[2].saturating_add(d / 9 - 1),
+            ];
+            for &j in grid.get(&key).map_or(&[][..], Vec::as_slice) {
+                if j != i && keep[j] && same_face(&faces[i], &faces[j], tol) {
+                    partner = Some(j);
+                    break 'search;
+                }
+            }
+        }
+        if let Some(j) = partner {
             keep[i] = false;
             keep[j] = false;
         }
@@ -864,6 +889,35 @@ mod tests {
             "{}",
             sh.volume(20)
         );
+    }
+
+    #[test]
+    fn many_patches_share_vertices_and_edges() {
+        // A 50 x 50 grid of bilinear patches on a wavy sheet: (n+1)^2 vertices, 2 n (n+1)
+        // edges, inner edges used twice in opposite directions (hash lookups, not pairwise).
+        let n = 50;
+        let at = |i: usize, j: usize| {
+            let (x, y) = (i as f64 / n as f64, j as f64 / n as f64);
+            Vec3::new(x, y, 0.1 * (7.0 * x).sin() * (5.0 * y).cos())
+        };
+        let lin = KnotVector::clamped_uniform(1, 2).unwrap();
+        let patches: Vec<NurbsSurface> = (0..n * n)
+            .map(|k| {
+                let (i, j) = (k / n, k % n);
+                let pts = vec![at(i, j), at(i, j + 1), at(i + 1, j), at(i + 1, j + 1)];
+                NurbsSurface::from_flat([lin.clone(), lin.clone()], pts, vec![1.0; 4]).unwrap()
+            })
+            .collect();
+        let sh = Shell::of_surfaces(&patches).unwrap();
+        assert!(!sh.closed);
+        assert_eq!(sh.vertices.len(), (n + 1) * (n + 1));
+        assert_eq!(sh.edges.len(), 2 * n * (n + 1));
+        let uses = sh.edge_uses();
+        assert_eq!(
+            uses.iter().filter(|&&u| u == (1, 1)).count(),
+            2 * n * (n - 1)
+        );
+        assert!(sh.faces.iter().all(|f| f.same_sense));
     }
 
     #[test]
