@@ -351,7 +351,28 @@ pub enum Edit {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         normal: Option<V3>,
     },
+    /// Repulsion from a point in space (D-NURBS curves and surfaces, `d-nurbs.txt` section 6):
+    /// force density `strength d / (|d|^2 + core^2)^(3/2)` per unit length or area, `d` the
+    /// model point minus `center`. Giving an existing name changes the tool.
+    Repel {
+        /// Tool name (default `repel<N>`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        name: Option<String>,
+        /// The repelling point.
+        center: V3,
+        /// Strength (negative attracts).
+        strength: f64,
+        /// Core radius that softens the force near `center` (> 0; default 0.1).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        core: Option<f64>,
+        /// Time it is removed.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        until: Option<f64>,
+    },
 }
+
+/// Default core radius of [`Edit::Repel`].
+pub const DEFAULT_REPULSION_CORE: f64 = 0.1;
 
 /// One point move of [`Edit::FfdMove`].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -390,6 +411,7 @@ impl Edit {
             Edit::Set { .. } => "set",
             Edit::Integrator { .. } => "integrator",
             Edit::Constraint { .. } => "constraint",
+            Edit::Repel { .. } => "repel",
         }
     }
 
@@ -671,6 +693,18 @@ impl Edit {
                         ));
                     }
                 }
+            }
+            Edit::Repel {
+                center,
+                strength,
+                core,
+                until,
+                ..
+            } => {
+                fin("center", center)?;
+                fin("strength", &[*strength])?;
+                pos("core", *core, false)?;
+                after("until", *until, at)?;
             }
         }
         Ok(())

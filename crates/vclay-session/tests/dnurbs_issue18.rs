@@ -163,3 +163,65 @@ fn fig2_cube_is_a_cube_and_stays_closed_when_sculpted() {
     let top = s.point(du.max, dv.min).unwrap();
     assert!(top.z > 1.05, "top {top:?}");
 }
+
+/// A sheet or a line with its ends held, repelled from a point below its centre.
+fn repel_text(kind: &str, extra: &str) -> String {
+    let (shape, fix) = if kind == "dnurbs-surface" {
+        ("size = [5, 5]\ndegree = [2, 2]", "fix = [0, 4, 20, 24]")
+    } else {
+        ("size = [7]\ndegree = [3]", "fix = [0, 6]")
+    };
+    format!(
+        r#"
+[model]
+kind = "{kind}"
+{shape}
+{fix}
+{extra}
+[simulation]
+dt = 0.03
+steps = 1
+[[timeline]]
+at = 0.0
+action = "repel"
+name = "push"
+center = [0.0, 0.0, -0.3]
+strength = 0.5
+core = 0.1
+"#
+    )
+}
+
+#[test]
+fn repulsion_pushes_curves_and_surfaces_away_from_its_centre() {
+    for (kind, extra) in [
+        ("dnurbs-surface", ""),
+        ("dnurbs-surface", "engine = \"frozen\""),
+        ("dnurbs-curve", ""),
+    ] {
+        let text = repel_text(kind, extra);
+        let mut sc = Scenario::parse(&text, "r.toml", "r", Path::new(".")).unwrap();
+        for _ in 0..60 {
+            sc.session
+                .step()
+                .unwrap_or_else(|e| panic!("{kind} {extra}: {e}"));
+        }
+        let pts = sc.session.model(None).unwrap().control_points();
+        // The middle of the model moved up (away from the centre below), nothing moved down.
+        let zmax = pts.iter().map(|p| p.z).fold(f64::MIN, f64::max);
+        let zmin = pts.iter().map(|p| p.z).fold(f64::MAX, f64::min);
+        assert!(zmax > 0.02, "{kind} {extra}: top {zmax}");
+        assert!(zmin > -1e-12, "{kind} {extra}: bottom {zmin}");
+    }
+    // Bad input is named.
+    let bad = repel_text("dnurbs-curve", "").replace("core = 0.1", "core = 0.0");
+    let e = match Scenario::parse(&bad, "r.toml", "r", Path::new(".")) {
+        Ok(_) => panic!("core 0 is refused"),
+        Err(e) => e.to_string(),
+    };
+    assert!(e.contains("core"), "{e}");
+    // The frozen engine refuses curves.
+    let frozen_curve = repel_text("dnurbs-curve", "engine = \"frozen\"");
+    let mut sc = Scenario::parse(&frozen_curve, "r.toml", "r", Path::new(".")).unwrap();
+    assert!(sc.session.step().is_err());
+}

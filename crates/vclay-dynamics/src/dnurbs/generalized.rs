@@ -1846,6 +1846,20 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                                 Force::Inflation(pr) if surface => {
                                     f += lj.s[1].cross(&lj.s[2]) * *pr
                                 }
+                                Force::Repulsion {
+                                    center,
+                                    strength,
+                                    core,
+                                } => {
+                                    let da = if surface {
+                                        lj.s[1].cross(&lj.s[2]).norm()
+                                    } else {
+                                        lj.s[1].norm()
+                                    };
+                                    f += super::repulsion_density(
+                                        lj.s[0], *center, *strength, *core,
+                                    ) * da;
+                                }
                                 Force::Spring {
                                     param, stiffness, ..
                                 } => {

@@ -289,6 +289,21 @@ pub enum Force {
     Gravity(Vec3),
     /// Inflation: pressure along the surface normal, `f = P s_u x s_v` (surfaces only).
     Inflation(f64),
+    /// Repulsion from a point (`d-nurbs.txt` section 6 names repulsion forces beside springs,
+    /// gravity and inflation; the form of its ref. [34]): the force density per unit length
+    /// (curves) or area (surfaces) `f = k d / (|d|^2 + c^2)^(3/2)` with `d = s - center`, an
+    /// inverse-square push away from `center` softened within the core radius `c`. Evaluated at
+    /// the start of each step (explicit), integrated over the elements with `|s_u|` or
+    /// `|s_u x s_v|` as the length or area element. The frozen-weight engine applies it to
+    /// surfaces only.
+    Repulsion {
+        /// The repelling point.
+        center: Vec3,
+        /// Strength `k` (negative attracts).
+        strength: f64,
+        /// Core radius `c` (> 0).
+        core: f64,
+    },
     /// A data point pulling the nearest point of the geometry with a spring of `stiffness`
     /// (`d-nurbs.txt` section 7.3: "spring forces ... are always applied to the nearest points";
     /// the attachment is searched again at every step).
@@ -298,6 +313,18 @@ pub enum Force {
         /// Spring stiffness.
         stiffness: f64,
     },
+}
+
+/// The repulsion density `k d / (|d|^2 + c^2)^(3/2)`, `d = x - center`, of
+/// [`Force::Repulsion`] (per unit length or area).
+pub fn repulsion_density(x: Vec3, center: Vec3, strength: f64, core: f64) -> Vec3 {
+    let d = x - center;
+    let r2 = d.norm_squared() + core * core;
+    if r2 > 0.0 {
+        d * (strength / (r2 * r2.sqrt()))
+    } else {
+        Vec3::zeros()
+    }
 }
 
 /// The unit Gaussian that replaces the delta of eq (19) for a [`Force::Spring`] with
@@ -818,6 +845,22 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
                     if G::DIM == 2 {
                         self.integrate_force(&mut fp, |_, _, n| n * *pressure);
                     }
+                }
+                Force::Repulsion {
+                    center,
+                    strength,
+                    core,
+                } => {
+                    if G::DIM != 2 {
+                        return Err(DynamicsError::Parameter {
+                            name: "repulsion",
+                            value: *strength,
+                            why: "the frozen-weight engine applies repulsion to surfaces only (use the generalized engine for curves)",
+                        });
+                    }
+                    self.integrate_force(&mut fp, |_, x, n| {
+                        repulsion_density(x, *center, *strength, *core) * n.norm()
+                    });
                 }
             }
         }

@@ -359,6 +359,15 @@ pub enum ForceDesc {
         /// Stiffness.
         stiffness: f64,
     },
+    /// Repulsion from a point (section 6, issue 18).
+    Repulsion {
+        /// The repelling point.
+        center: V3,
+        /// Strength.
+        strength: f64,
+        /// Core radius.
+        core: f64,
+    },
 }
 
 impl ForceDesc {
@@ -397,6 +406,15 @@ impl ForceDesc {
             ForceDesc::DataPoint { point, stiffness } => Force::DataPoint {
                 point: v3(*point),
                 stiffness: *stiffness,
+            },
+            ForceDesc::Repulsion {
+                center,
+                strength,
+                core,
+            } => Force::Repulsion {
+                center: v3(*center),
+                strength: *strength,
+                core: *core,
             },
         }
     }
@@ -891,6 +909,15 @@ impl DnurbsModel {
                     point: a3(point),
                     stiffness: *stiffness,
                 },
+                Force::Repulsion {
+                    center,
+                    strength,
+                    core,
+                } => ForceDesc::Repulsion {
+                    center: a3(center),
+                    strength: *strength,
+                    core: *core,
+                },
             });
         }
         let h = self.add_slot(descs);
@@ -1293,6 +1320,30 @@ impl DnurbsModel {
                     "inflate",
                     ForceDesc::Inflation {
                         pressure: *pressure,
+                    },
+                    *until,
+                )?
+            }
+            Edit::Repel {
+                name,
+                center,
+                strength,
+                core,
+                until,
+            } => {
+                let core = core.unwrap_or(crate::command::DEFAULT_REPULSION_CORE);
+                if self.engine_name() == "frozen" && !surface {
+                    return Err(cmd(
+                        "the frozen-weight engine repels surfaces only (use engine = \"generalized\")",
+                    ));
+                }
+                self.field_tool(
+                    name,
+                    "repel",
+                    ForceDesc::Repulsion {
+                        center: *center,
+                        strength: *strength,
+                        core,
                     },
                     *until,
                 )?
@@ -2313,6 +2364,7 @@ impl Model for DnurbsModel {
                     }
                     ForceDesc::Gravity { g } => arrow(&mut forces, centre, v3(*g)),
                     ForceDesc::Inflation { .. } => {}
+                    ForceDesc::Repulsion { center, .. } => data.points.push(v3(*center)),
                     ForceDesc::DataPoint { point, .. } => data.points.push(v3(*point)),
                 }
             }

@@ -547,6 +547,7 @@ impl SolidModel {
             }
             Edit::Data { .. }
             | Edit::Constraint { .. }
+            | Edit::Repel { .. }
             | Edit::FfdMove { .. }
             | Edit::PdeSet { .. }
             | Edit::PdeLocal { .. } => {
