@@ -77,8 +77,10 @@ pub const CORRECTION_NEWTON_STEPS: usize = 2;
 /// Gauss-Newton steps per point (at most) for the reported distances (they converge to the
 /// same foot point as Newton's method; linearly, at a rate of about distance x curvature).
 pub const REPORT_NEWTON_STEPS: usize = 30;
-/// Parameter step below which the reported closest-point iteration stops.
-pub const REPORT_PARAM_TOL: f64 = 1e-13;
+/// Parameter step below which the reported closest-point iteration stops (the distance is
+/// stationary at the foot point, so its error is of the order of the square of this times the
+/// model size).
+pub const REPORT_PARAM_TOL: f64 = 1e-9;
 /// Largest number of points.
 pub const MAX_POINTS: usize = 100_000_000;
 /// Largest number of control points (a 512 x 512 net).

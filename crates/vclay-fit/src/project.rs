@@ -99,10 +99,13 @@ impl<'a> Evaluator<'a> {
         let v = v.clamp(0.0, 1.0);
         let su = self.ku.find_span(u);
         let sv = self.kv.find_span(v);
-        self.ku
-            .basis_derivatives(su, u, order, &mut sc.du, &mut sc.wu);
-        self.kv
-            .basis_derivatives(sv, v, order, &mut sc.dv, &mut sc.wv);
+        if order == 1 {
+            basis_first(self.ku, su, u, &mut sc.du);
+            basis_first(self.kv, sv, v, &mut sc.dv);
+        } else {
+            self.ku.basis_derivatives(su, u, 2, &mut sc.du, &mut sc.wu);
+            self.kv.basis_derivatives(sv, v, 2, &mut sc.dv, &mut sc.wv);
+        }
         let nk = order + 1;
         // Homogeneous sums a[k][l] = sum N_i^(k) M_j^(l) w P (and w), k + l <= 2.
         let mut a = [[Vec3::zeros(); 3]; 3];
@@ -202,5 +205,86 @@ impl<'a> Evaluator<'a> {
             }
         }
         (uv, f.sqrt())
+    }
+}
+
+/// The `p + 1` non-zero basis functions at `u` in `out[0..=p]` and their first derivatives in
+/// `out[p+1..=2p+1]`: the triangular table of Piegl & Tiller A2.2 up to degree `p - 1`, the
+/// derivative formula `N'_{i,p} = p (N_{i,p-1} / (t_{i+p} - t_i) - N_{i+1,p-1} / (t_{i+p+1} -
+/// t_{i+1}))` (eq 2.7), then the last row of the table. Cheaper than the general A2.3 for first
+/// derivatives; the hot path of parameter correction.
+fn basis_first(kv: &KnotVector, span: usize, u: f64, out: &mut [f64]) {
+    let p = kv.degree();
+    let k = kv.as_slice();
+    let (n, d) = out.split_at_mut(p + 1);
+    n[0] = 1.0;
+    let step = |n: &mut [f64], j: usize| {
+        let mut saved = 0.0;
+        for r in 0..j {
+            let right = k[span + r + 1] - u;
+            let left = u - k[span + 1 + r - j];
+            let temp = n[r] / (right + left);
+            n[r] = saved + right * temp;
+            saved = left * temp;
+        }
+        n[j] = saved;
+    };
+    for j in 1..p {
+        step(n, j);
+    }
+    // n[0..p] = N_{span-p+1+r, p-1}.
+    let pf = p as f64;
+    for r in 0..=p {
+        let i = span - p + r;
+        let mut v = 0.0;
+        if r >= 1 {
+            let den = k[i + p] - k[i];
+            if den > 0.0 {
+                v += n[r - 1] / den;
+            }
+        }
+        if r < p {
+            let den = k[i + p + 1] - k[i + 1];
+            if den > 0.0 {
+                v -= n[r] / den;
+            }
+        }
+        d[r] = pf * v;
+    }
+    if p >= 1 {
+        step(n, p);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn first_derivatives_match_a2_3() {
+        for p in 1..=4 {
+            let kv = KnotVector::new(
+                [vec![0.0; p + 1], vec![0.2, 0.5, 0.5, 0.9], vec![1.0; p + 1]].concat(),
+                p,
+                p + 5,
+            )
+            .unwrap();
+            let mut ws = BasisWorkspace::new(p);
+            for &u in &[0.0, 0.1, 0.2, 0.35, 0.5, 0.77, 0.999, 1.0] {
+                let span = kv.find_span(u);
+                let mut a = vec![0.0; 2 * (p + 1)];
+                let mut b = vec![0.0; 3 * (p + 1)];
+                basis_first(&kv, span, u, &mut a);
+                kv.basis_derivatives(span, u, 2, &mut b, &mut ws);
+                for r in 0..2 * (p + 1) {
+                    assert!(
+                        (a[r] - b[r]).abs() < 1e-12,
+                        "p {p} u {u} r {r}: {} vs {}",
+                        a[r],
+                        b[r]
+                    );
+                }
+            }
+        }
     }
 }

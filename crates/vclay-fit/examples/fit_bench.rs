@@ -1,0 +1,84 @@
+//! The scan-fitting speed goals of issue 20, timed in process:
+//! 100,000 points to a 32 x 32 bicubic in under 1 s, 1,000,000 points in under 10 s (2 cores).
+//!
+//! The clouds are the seeded wave scans of `bench/get_scan.py` made here the same way in
+//! spirit (z = 0.15 sin(2x) cos(1.5y) on [-1, 1]^2, normal noise 0.002, a round hole), so the
+//! figures need no file. Prints one JSON line per size: the best of `RUNS` fits, the phase
+//! times of that fit and its RMS and maximum closest-point distances.
+//!
+//! `cargo run --release -p vclay-fit --example fit_bench [POINTS...]`
+
+use std::time::Instant;
+use vclay_core::Vec3;
+use vclay_fit::{FitOptions, fit_surface};
+
+const RUNS: usize = 3;
+
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn normal(&mut self) -> f64 {
+        let (a, b) = (self.next().max(1e-300), self.next());
+        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+    }
+}
+
+fn cloud(n: usize, seed: u64) -> Vec<Vec3> {
+    let mut rng = Rng(seed);
+    let mut out = Vec::with_capacity(n);
+    while out.len() < n {
+        let x = 2.0 * rng.next() - 1.0;
+        let y = 2.0 * rng.next() - 1.0;
+        if (x - 0.2f64).powi(2) + (y + 0.1f64).powi(2) < 0.0625 {
+            continue;
+        }
+        let z = 0.15 * (2.0 * x).sin() * (1.5 * y).cos() + 0.002 * rng.normal();
+        out.push(Vec3::new(x, y, z));
+    }
+    out
+}
+
+fn main() {
+    let sizes: Vec<usize> = std::env::args()
+        .skip(1)
+        .filter_map(|a| a.parse().ok())
+        .collect();
+    let sizes = if sizes.is_empty() {
+        vec![100_000, 1_000_000]
+    } else {
+        sizes
+    };
+    for n in sizes {
+        let pts = cloud(n, 1);
+        let opts = FitOptions::default();
+        let mut best: Option<(f64, vclay_fit::FitReport)> = None;
+        for _ in 0..RUNS {
+            let t = Instant::now();
+            let fit = fit_surface(&pts, &opts).expect("fit");
+            let s = t.elapsed().as_secs_f64();
+            if best.as_ref().is_none_or(|(b, _)| s < *b) {
+                best = Some((s, fit.report));
+            }
+        }
+        let (s, r) = best.expect("runs");
+        let goal = if n <= 100_000 {
+            1.0
+        } else {
+            10.0 * n as f64 / 1e6
+        };
+        println!(
+            "{{\"points\": {n}, \"grid\": [32, 32], \"seconds\": {s:.4}, \"goal\": {goal}, \"met\": {}, \"rms\": {:.6e}, \"max\": {:.6e}, \"threads\": {}, \"timings\": {}}}",
+            s < goal,
+            r.rms,
+            r.max,
+            rayon::current_num_threads(),
+            serde_json::to_string(&r.timings).expect("json")
+        );
+    }
+}
