@@ -41,6 +41,7 @@ pub mod benchmarks;
 pub mod figures;
 pub mod generalized;
 mod geometry;
+pub mod patches;
 pub mod presets;
 pub mod rational;
 pub mod rounding;
@@ -52,6 +53,7 @@ pub use generalized::{
     GeneralizedState, LinearTie, LocalJacobian, QuadratureRule, denominator_radius,
 };
 pub use geometry::{ClosedCurve, DnurbsGeometry, ElementSamples};
+pub use patches::{Continuity, PatchesGeometry};
 pub use presets::{Preset, TABLE_1};
 pub use rational::{RationalGeometry, SwungGeometry};
 pub use system::{Element, ElementSystem, SolverStats};
