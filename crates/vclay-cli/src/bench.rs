@@ -92,8 +92,11 @@ pub fn run(seconds: f64, physics: bool, large: bool) -> Result<()> {
         }
     });
     let curve_ns = t / cu.len() as f64 * 1e9;
+    let (limit_seq, limit_par) = limit_rates(seconds)?;
     let mut doc = json!({
         "threads": rayon_threads(),
+        "subdivision_limit_points_per_second_1_thread": limit_seq,
+        "subdivision_limit": at_least((limit_par, limit_par), "points/s (1M regular-cell points, first derivatives, all threads)", LIMIT_GOAL),
         "surface_grid_points_per_second_1_thread": grid_seq,
         "surface_grid_points_per_second_all_threads": grid_par,
         "surface_point_ns": point_ns,
@@ -104,6 +107,67 @@ pub fn run(seconds: f64, physics: bool, large: bool) -> Result<()> {
     }
     println!("{}", serde_json::to_string_pretty(&doc)?);
     Ok(())
+}
+
+/// Goal of issue 19: limit evaluation in regular regions, points per second on 2 cores.
+const LIMIT_GOAL: f64 = 20e6;
+
+/// Limit evaluation of 1M points (position and first derivatives) in the regular cells of a
+/// perturbed 14^3-point box lattice, cells and parameters pseudo-random: `(1 thread, all
+/// threads)` points per second, best of repeated runs.
+fn limit_rates(seconds: f64) -> Result<(f64, f64)> {
+    use vclay::lattice::{
+        CellId, Features, LimitEvaluator, LimitParams, LimitPoint, LimitQuery, SubdivisionRules,
+        primitives,
+    };
+    let n = 14;
+    let mut l = primitives::box_lattice([n; 3], Vec3::zeros(), Vec3::repeat((n - 1) as f64));
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    let mut next = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for p in l.points_mut() {
+        *p += Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.2;
+    }
+    let f = Features::none(&l);
+    let mk = |par| {
+        LimitEvaluator::new(
+            &l,
+            &f,
+            SubdivisionRules::default(),
+            LimitParams {
+                parallelism: par,
+                ..LimitParams::default()
+            },
+        )
+    };
+    let (seq, par) = (mk(Parallelism::Sequential)?, mk(Parallelism::Rayon)?);
+    let regular: Vec<usize> = (0..l.num_cells())
+        .filter(|&c| seq.is_regular(CellId(c as u32)))
+        .collect();
+    let queries: Vec<LimitQuery> = (0..1_000_000)
+        .map(|_| LimitQuery {
+            cell: regular[(next() * regular.len() as f64) as usize % regular.len()],
+            uvw: [next(), next(), next()],
+        })
+        .collect();
+    let mut out = vec![LimitPoint::default(); queries.len()];
+    let mut rate = |ev: &LimitEvaluator<'_>| -> Result<f64> {
+        let mut err = None;
+        let t = time_best(seconds, || {
+            if let Err(e) = ev.evaluate_into(&queries, &mut out) {
+                err = Some(e);
+            }
+        });
+        match err {
+            Some(e) => Err(e.into()),
+            None => Ok(queries.len() as f64 / t),
+        }
+    };
+    Ok((rate(&seq)?, rate(&par)?))
 }
 
 /// Steps per second of `step` run for about `seconds`, after one untimed step (the D-NURBS
