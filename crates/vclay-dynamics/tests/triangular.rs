@@ -90,6 +90,11 @@ fn rounding(kind: RoundingKind, quadrature: TriangleQuadrature, steps: usize) ->
         near < 1e-4 && near < far,
         "{kind:?}: normal jump {near} (1e-6) {far} (1e-3)"
     );
+    // The far boundary is held: its control points did not move.
+    for &c in &r.fixed_controls {
+        assert_eq!(s.control_points()[c], r.surface.control_points()[c]);
+    }
+    assert!(!r.fixed_controls.is_empty() && r.fixed_controls.len() < s.control_points().len());
     // Weights are dynamic and stay positive.
     assert!(m.geometry().weights().iter().all(|&w| w > 0.0));
     (before, normal_jump(s, &r.edges, 0.05, 5).unwrap())
@@ -143,6 +148,8 @@ fn probe_corner_step_cost() {
         (true, true, TriangleQuadrature::Whole { points: 6 }),
         (false, false, TriangleQuadrature::Whole { points: 6 }),
         (false, true, TriangleQuadrature::default()),
+        (false, false, TriangleQuadrature::default()),
+        (true, false, TriangleQuadrature::default()),
     ] {
         let r = RoundingModel::new(RoundingKind::Corner).unwrap();
         let mut m = r.dynamics(q).unwrap();

@@ -30,8 +30,20 @@
 //! crease needs coincident knots, which simplex splines exclude).
 //!
 //! ## Constraints
-//! [`ROUNDING_BOUNDARY_SAMPLES`] points per far boundary edge: each a [`Constraint::Point`]
-//! at its initial position and a [`Constraint::Normal`] with its face's normal.
+//! Far boundaries: the edge's two sides parallel to the old edge; the whole outer boundary of
+//! the corner and of the bevel (with the Bevel row's tension in both directions, `a22 = 100`,
+//! a strip with free sides contracts to a line). Positions and normals along them are held
+//! by the paper's linear constraints, the freezing of control points (section 6.2): every
+//! control point (and weight) whose basis function is positive somewhere on a far boundary is
+//! fixed. Because the quadratic DMS basis is `C^1` and non-negative, a function that vanishes
+//! at a boundary point has a zero gradient there, so the boundary curve **and** the surface
+//! tangents along it depend on the fixed coordinates only: position and normal hold exactly
+//! along the whole boundary, not just at samples. [`ROUNDING_BOUNDARY_SAMPLES`] normal
+//! constraints ([`Constraint::Normal`]) per far edge are registered as well and checked every
+//! step (their rows act only on fixed coordinates, so the engine finds them satisfied and
+//! drops them without cost). Constraining the boundary by point constraints instead (5 rows
+//! per sample) costs 90 constraint rows on the corner, whose dense Schur complement and
+//! Newton projection made a step 5x slower.
 
 use super::generalized::{Constraint, GeneralizedDnurbs};
 use super::presets::Preset;
@@ -54,6 +66,10 @@ pub const ROUNDING_BOUNDARY_SAMPLES: usize = 3;
 /// `c = 100` the weights stay within 0.93-1.11 and the energy reaches that of frozen weights
 /// (786 against 794).
 pub const ROUNDING_WEIGHT_PENALTY: f64 = 100.0;
+
+/// Boundary samples per far edge at which the acting control points are found (the basis is
+/// evaluated at `FIXING_SAMPLES + 1` equally spaced points).
+const FIXING_SAMPLES: usize = 32;
 
 /// Which Fig 8 model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -95,8 +111,12 @@ pub struct RoundingModel {
     pub kind: RoundingKind,
     /// The initial surface.
     pub surface: TriangularNurbs,
-    /// The far-boundary constraints (points and normals).
+    /// The far-boundary normal constraints.
     pub constraints: Vec<Constraint>,
+    /// Control points held fixed (with their weights): those whose basis functions are
+    /// non-zero on the far boundary, so the boundary curve keeps its position exactly (the
+    /// paper's linear constraints, "the freezing of control points", section 6.2).
+    pub fixed_controls: Vec<usize>,
     /// The old sharp edges in the parameter domain, as segments.
     pub edges: Vec<[Point2; 2]>,
 }
@@ -231,11 +251,8 @@ impl RoundingModel {
         let dom = surface.basis().domain().clone();
         let ext = dom.extent();
         let far: Vec<[Point2; 2]> = match kind {
-            RoundingKind::Edge | RoundingKind::Bevel => {
-                let rows = if kind == RoundingKind::Edge { 1.0 } else { 3.0 };
-                vec![[[0.0, 0.0], [0.0, rows]], [[3.0, 0.0], [3.0, rows]]]
-            }
-            RoundingKind::Corner => boundary_edges(&dom),
+            RoundingKind::Edge => vec![[[0.0, 0.0], [0.0, 1.0]], [[3.0, 0.0], [3.0, 1.0]]],
+            RoundingKind::Corner | RoundingKind::Bevel => boundary_edges(&dom),
         };
         let edges: Vec<[Point2; 2]> = match kind {
             RoundingKind::Edge => vec![[[1.5, 0.0], [1.5, 1.0]]],
@@ -251,7 +268,26 @@ impl RoundingModel {
         };
         let mut constraints = Vec::new();
         let mut seen: Vec<Point2> = Vec::new();
+        let mut fixed = vec![false; surface.control_points().len()];
+        let mut p = vclay_spline::TriangularPoint::default();
         for seg in &far {
+            // Position: every control point acting on the boundary is held.
+            for k in 0..=FIXING_SAMPLES {
+                let f = k as f64 / FIXING_SAMPLES as f64;
+                let q = [
+                    seg[0][0] + f * (seg[1][0] - seg[0][0]),
+                    seg[0][1] + f * (seg[1][1] - seg[0][1]),
+                ];
+                surface
+                    .eval(q, &mut p)
+                    .map_err(|e| DynamicsError::Spline(e.into()))?;
+                for (k, &c) in p.controls.iter().enumerate() {
+                    if p.basis[k][0] > 0.0 {
+                        fixed[c] = true;
+                    }
+                }
+            }
+            // Normal: constraints at samples.
             for k in 0..ROUNDING_BOUNDARY_SAMPLES {
                 let f = k as f64 / (ROUNDING_BOUNDARY_SAMPLES - 1) as f64;
                 let q = [
@@ -269,17 +305,15 @@ impl RoundingModel {
                     .derivatives(q)
                     .map_err(|e| DynamicsError::Spline(e.into()))?;
                 let normal = d[1].cross(&d[2]);
-                constraints.push(Constraint::Point {
-                    param: q,
-                    target: d[0],
-                });
                 constraints.push(Constraint::Normal { param: q, normal });
             }
         }
+        let fixed_controls = (0..fixed.len()).filter(|&c| fixed[c]).collect();
         Ok(Self {
             kind,
             surface,
             constraints,
+            fixed_controls,
             edges,
         })
     }
@@ -295,6 +329,11 @@ impl RoundingModel {
         let mut m = GeneralizedDnurbs::new(geometry, material)?;
         m.set_elastic_reference(ElasticReference::Absolute);
         m.set_weight_penalty(ROUNDING_WEIGHT_PENALTY)?;
+        for &c in &self.fixed_controls {
+            for k in 0..4 {
+                m.set_fixed_coordinate(4 * c + k, true)?;
+            }
+        }
         for c in &self.constraints {
             m.add_constraint(c.clone())?;
         }
