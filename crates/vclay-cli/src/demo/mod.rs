@@ -16,6 +16,7 @@ mod ffd;
 mod index;
 mod lattice;
 mod pde;
+mod rounding;
 mod solids;
 mod spline;
 mod studio;
@@ -65,6 +66,11 @@ fn steps() -> Vec<Step> {
             name: "d-nurbs swung egg",
             reproduces: "d-nurbs.txt Fig 9a",
             run: dnurbs::swung_egg,
+        },
+        Step {
+            name: "d-nurbs rounding",
+            reproduces: "d-nurbs.txt Fig 8",
+            run: rounding::rounding,
         },
         Step {
             name: "subdivision solids",
