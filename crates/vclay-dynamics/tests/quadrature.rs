@@ -162,3 +162,34 @@ fn measure_quadrature_error_table() {
         }
     }
 }
+
+#[test]
+fn frozen_engine_takes_the_weight_aware_order_for_its_weights() {
+    // The frozen-weight engine with the quartic of the issue: the default (weight-aware) static
+    // equilibrium agrees with the generalized engine's 40-point reference, the fixed rule not.
+    use vclay_dynamics::DnurbsCurve;
+    let (exact, _) = equilibrium(QuadratureRule::Points(40));
+    let run = |rule: QuadratureRule| {
+        let c = quartic();
+        let n = c.control_points().len();
+        let mut d =
+            DnurbsCurve::with_quadrature(c, Material::curve(1.0, 0.0, 2.0, 0.05), rule).unwrap();
+        d.set_elastic_reference(ElasticReference::Absolute);
+        d.set_fixed(0, true).unwrap();
+        d.set_fixed(n - 1, true).unwrap();
+        d.forces_mut()
+            .push(Force::Gravity(Vec3::new(0.0, -1.0, 0.0)));
+        d.forces_mut().push(Force::Spring {
+            param: [0.37, 0.0],
+            target: Target::Fixed(Vec3::new(0.4, 0.5, 0.2)),
+            stiffness: 5.0,
+            kernel: None,
+        });
+        d.step(Integrator::Static).unwrap();
+        d.geometry().control_points().to_vec()
+    };
+    let e_fixed = max_diff(&run(QuadratureRule::Fixed), &exact);
+    let e_aware = max_diff(&run(QuadratureRule::default()), &exact);
+    assert!(e_fixed > 1e-5, "{e_fixed:e}");
+    assert!(e_aware < 3e-8, "{e_aware:e}");
+}

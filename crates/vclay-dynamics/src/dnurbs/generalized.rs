@@ -855,6 +855,23 @@ fn chebyshev_nodes(k: usize) -> Vec<f64> {
         .collect()
 }
 
+/// The largest Gauss order per direction that `rule` picks over all elements of `g` (the frozen
+/// engine's single rule, [`super::Dnurbs::with_quadrature`]).
+pub(crate) fn largest_order<G: GeneralizedGeometry>(g: &G, rule: QuadratureRule) -> usize {
+    g.elements()
+        .iter()
+        .map(|e| {
+            let o = element_order(g, rule, e);
+            if g.parametric_dimension() == 2 {
+                o[0].max(o[1])
+            } else {
+                o[0]
+            }
+        })
+        .max()
+        .unwrap_or_else(|| rule.order(g.max_degree(), f64::INFINITY, 1.0))
+}
+
 /// Gauss points per direction for one element under `rule`.
 fn element_order<G: GeneralizedGeometry>(
     g: &G,

@@ -55,6 +55,12 @@ pub trait DnurbsGeometry: Clone + Send + Sync {
     fn max_degree(&self) -> usize;
     /// Parameter of the point of the geometry closest to `x` (`[u, 0]` for curves).
     fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError>;
+    /// The same NURBS as a [`super::RationalGeometry`] (its rational denominators choose the
+    /// weight-aware quadrature order of [`super::Dnurbs::with_quadrature`]); `None` (the
+    /// default) keeps the fixed rule.
+    fn rational(&self) -> Option<super::RationalGeometry> {
+        None
+    }
 }
 
 /// Non-empty spans of a knot vector as `(span index, start, end)`.
@@ -73,6 +79,9 @@ fn axis_basis(kv: &vclay_spline::KnotVector, span: usize, u: f64) -> Vec<f64> {
 }
 
 impl DnurbsGeometry for NurbsCurve {
+    fn rational(&self) -> Option<super::RationalGeometry> {
+        Some(super::RationalGeometry::from_curve(self))
+    }
     const DIM: usize = 1;
     const PAIRS: usize = 1;
 
@@ -150,6 +159,9 @@ impl DnurbsGeometry for NurbsCurve {
 }
 
 impl DnurbsGeometry for NurbsSurface {
+    fn rational(&self) -> Option<super::RationalGeometry> {
+        Some(super::RationalGeometry::from_surface(self))
+    }
     const DIM: usize = 2;
     const PAIRS: usize = 3;
 
@@ -315,6 +327,9 @@ impl ClosedCurve {
 }
 
 impl DnurbsGeometry for ClosedCurve {
+    fn rational(&self) -> Option<super::RationalGeometry> {
+        Some(super::RationalGeometry::from_curve(&self.curve))
+    }
     const DIM: usize = 1;
     const PAIRS: usize = 1;
 

@@ -500,7 +500,26 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
 impl<G: DnurbsGeometry> Dnurbs<G> {
     /// Builds the model: element samples and matrices are computed once (frozen weights).
     pub fn new(geometry: G, material: Material) -> Result<Self, DynamicsError> {
-        let ng = geometry.max_degree().max(3) + 1;
+        Self::with_quadrature(geometry, material, QuadratureRule::default())
+    }
+
+    /// [`Dnurbs::new`] with a chosen quadrature rule (issue 18). The weights are frozen, so
+    /// one Gauss order serves the whole model: [`QuadratureRule::Fixed`] takes the paper's
+    /// `max(p, 3) + 1` points per direction; [`QuadratureRule::WeightAware`] (the default of
+    /// `new`) the largest order it picks over the elements for the model's weights (the fixed
+    /// order when the weights are uniform, so polynomial models are unchanged).
+    pub fn with_quadrature(
+        geometry: G,
+        material: Material,
+        rule: QuadratureRule,
+    ) -> Result<Self, DynamicsError> {
+        rule.validate()?;
+        let fixed = geometry.max_degree().max(3) + 1;
+        let ng = match (rule, geometry.rational()) {
+            (QuadratureRule::Fixed, _) | (_, None) => fixed,
+            (QuadratureRule::Points(n), _) => n,
+            (r, Some(g)) => generalized::largest_order(&g, r).max(fixed),
+        };
         let gauss = GaussLegendre::new(ng).map_err(|_| DynamicsError::Parameter {
             name: "degree",
             value: geometry.max_degree() as f64,

@@ -1809,7 +1809,7 @@ impl DnurbsModel {
             return Err(err(
                 "simulation",
                 "quadrature",
-                "the frozen-weight engine always uses the paper's fixed rule; choosing one needs `engine = \"generalized\"`".into(),
+                "the frozen-weight engine picks its rule at construction (weight-aware, one order for the model); choosing one needs `engine = \"generalized\"`".into(),
             ));
         }
         let penalty = sim.weight_penalty.unwrap_or(0.0);
