@@ -152,6 +152,35 @@ mod tests {
     }
 
     #[test]
+    fn hostile_bytes_give_ok_or_err_never_a_panic() {
+        // Seeded byte mutations of a valid file (issue 17's policy for every reader).
+        let seed = b"# scan\n0 0 0\n1.5, -2e3, 3\n4 5 6 7 8\n\n-0.25\t1e-7 9\n";
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let alphabet = b"0123456789.eE+-, \t\n#/naifNI\xff\x00";
+        for _ in 0..4000 {
+            let mut bytes = seed.to_vec();
+            for _ in 0..1 + next() % 4 {
+                let at = (next() as usize) % (bytes.len() + 1);
+                let c = alphabet[(next() as usize) % alphabet.len()];
+                match next() % 3 {
+                    0 if at < bytes.len() => bytes[at] = c,
+                    1 => bytes.insert(at, c),
+                    _ => bytes.truncate(at.max(1)),
+                }
+            }
+            if let Ok(p) = parse_xyz(&bytes, "h.xyz") {
+                assert!(!p.is_empty() && p.iter().all(|v| v.iter().all(|c| c.is_finite())));
+            }
+        }
+    }
+
+    #[test]
     fn reads_mesh_vertices() {
         let dir = std::env::temp_dir().join(format!("vclay-cloud-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
