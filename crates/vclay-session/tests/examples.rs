@@ -32,6 +32,7 @@ const NEW_SINCE: &[&str] = &[
 const NEW_EXAMPLES: &[&str] = &[
     "fig02_swung_cube",
     "fig06_curve_fit",
+    "fig7b_saddle_fit",
     "fig08a_edge_rounding",
     "fig08b_corner_rounding",
     "fig08c_bevel_rounding",
