@@ -6,7 +6,9 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use vclay::lattice::BoundaryRule;
-use vclay::lattice::command::{CommandError, LatticeSource, SubdivideOptions, subdivide_command};
+use vclay::lattice::command::{
+    CommandError, LatticeSource, SubdivideOptions, subdivide_command, subdivide_limit_command,
+};
 
 /// Subdivide a lattice N times (MacCracken-Joy); print counts (--stats) and/or write --out.
 #[derive(Debug, clap::Args)]
@@ -37,6 +39,10 @@ pub struct SubdivideArgs {
     /// Output file: .ovm or .vtu (the lattice), .obj, .ply or .stl (its boundary surface).
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
+    /// Write the boundary's limit surface instead (--out .obj, .ply or .stl): every boundary
+    /// point of the last level moved to its Catmull-Clark limit position.
+    #[arg(long)]
+    pub limit: bool,
 }
 
 /// The `--boundary` values.
@@ -81,7 +87,11 @@ pub fn run(args: &SubdivideArgs) -> Result<()> {
     // The errors name the file, line and element (or the primitive); add the command.
     let spinner = (args.levels >= SPINNER_LEVELS)
         .then(|| crate::progress::spinner(&format!("vclay subdivide: {} levels", args.levels)));
-    let outcome = subdivide_command(&options);
+    let outcome = if args.limit {
+        subdivide_limit_command(&options)
+    } else {
+        subdivide_command(&options)
+    };
     if let Some(s) = spinner {
         s.finish_and_clear();
     }

@@ -206,3 +206,67 @@ fn convert_lattice_writes_limit_patches_to_step() {
         .map_or_else(|| v.as_array().map_or(1, Vec::len), Vec::len);
     assert_eq!(n, 54, "{v}");
 }
+
+#[test]
+fn subdivide_limit_writes_the_limit_surface() {
+    let obj = tmp("limit.obj");
+    let o = obj.to_str().unwrap();
+    let out = vclay(&[
+        "subdivide",
+        "--primitive",
+        "box",
+        "--levels",
+        "1",
+        "--limit",
+        "--out",
+        o,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&obj).unwrap();
+    let verts: Vec<Vec<f64>> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| l.split_whitespace().map(|x| x.parse().unwrap()).collect())
+        .collect();
+    // Level 1 of the 4^3-point box: 6 sides of 6 x 6 quads, 7^2 x 6 - 12 x 7 + 8 points.
+    assert_eq!(verts.len(), 6 * 49 - 12 * 7 + 8);
+    // The limit surface lies strictly inside the control box [0, 3]^3 at its corners.
+    assert!(
+        verts
+            .iter()
+            .all(|v| v.iter().all(|&c| (0.0..=3.0).contains(&c)))
+    );
+    assert!(!verts.iter().any(|v| v.iter().all(|&c| c == 0.0)));
+    assert_error(
+        &vclay(&[
+            "subdivide",
+            "--primitive",
+            "box",
+            "--levels",
+            "1",
+            "--limit",
+            "--out",
+            "x.ovm",
+        ]),
+        &["x.ovm: the limit surface is written to .obj, .ply or .stl only"],
+    );
+    assert_error(
+        &vclay(&[
+            "subdivide",
+            "--primitive",
+            "box",
+            "--levels",
+            "1",
+            "--limit",
+            "--boundary",
+            "interior",
+            "--out",
+            o,
+        ]),
+        &["needs the Smooth or Sharp boundary rule"],
+    );
+}

@@ -93,6 +93,12 @@ pub enum CommandError {
         /// The output path.
         path: PathBuf,
     },
+    /// `--limit` was asked with an output that is not a surface (`.obj`, `.ply`, `.stl`).
+    #[error("{}: the limit surface is written to .obj, .ply or .stl only", path.display())]
+    LimitOutputFormat {
+        /// The output path (empty when none was given).
+        path: PathBuf,
+    },
     /// The input file's extension is not `.ovm`.
     #[error("{}: unknown input format (only .ovm lattices can be read)", path.display())]
     UnknownInputFormat {
@@ -262,14 +268,10 @@ impl SubdivideOutcome {
     }
 }
 
-/// Loads the control lattice, subdivides it `levels` times and writes the result if asked.
-/// The output format is checked before any work is done.
-pub fn subdivide_command(options: &SubdivideOptions) -> Result<SubdivideOutcome, CommandError> {
-    let format = options
-        .out
-        .as_deref()
-        .map(OutputFormat::from_path)
-        .transpose()?;
+/// Loads the control lattice, checks the predicted size and subdivides it `levels` times.
+fn checked_solid(
+    options: &SubdivideOptions,
+) -> Result<(SubdivisionSolid, ElementCounts), CommandError> {
     let control = options.source.load()?;
     let predicted = (control.num_cells() as u128)
         .saturating_mul(8u128.saturating_pow(options.levels.min(64) as u32));
@@ -300,6 +302,18 @@ pub fn subdivide_command(options: &SubdivideOptions) -> Result<SubdivideOutcome,
         source_name: options.source.name(),
         source,
     })?;
+    Ok((solid, control_counts))
+}
+
+/// Loads the control lattice, subdivides it `levels` times and writes the result if asked.
+/// The output format is checked before any work is done.
+pub fn subdivide_command(options: &SubdivideOptions) -> Result<SubdivideOutcome, CommandError> {
+    let format = options
+        .out
+        .as_deref()
+        .map(OutputFormat::from_path)
+        .transpose()?;
+    let (solid, control_counts) = checked_solid(options)?;
     let finest = solid.finest();
     let written = match (&options.out, format) {
         (Some(path), Some(format)) => {
@@ -457,4 +471,52 @@ pub fn primitive(spec: &str) -> Result<Lattice, CommandError> {
         }
         _ => Err(bad(format!("unknown name '{name}'"))),
     }
+}
+
+/// As [`subdivide_command`], but writes the boundary **limit** surface (issue 19): every
+/// boundary vertex of the finest level at its Catmull-Clark limit position with its limit normal
+/// ([`crate::limit_surface::write_limit_boundary`]), to `options.out`, which must be `.obj`,
+/// `.ply` or `.stl` (these writers keep positions only; the limit normals reach
+/// [`vclay_core::MeshSink`] users such as the renderer). Needs the smooth or sharp boundary
+/// rule.
+pub fn subdivide_limit_command(
+    options: &SubdivideOptions,
+) -> Result<SubdivideOutcome, CommandError> {
+    let (path, format) = match options.out.as_deref().map(OutputFormat::from_path) {
+        Some(Ok(f @ (OutputFormat::Obj | OutputFormat::Ply | OutputFormat::Stl))) => {
+            (options.out.clone().unwrap_or_default(), f)
+        }
+        _ => {
+            return Err(CommandError::LimitOutputFormat {
+                path: options.out.clone().unwrap_or_default(),
+            });
+        }
+    };
+    let (solid, control_counts) = checked_solid(options)?;
+    let finest = solid.finest();
+    let mut mesh = vclay_core::TriMesh::new();
+    crate::limit_surface::write_limit_boundary(
+        finest,
+        solid.features(solid.levels()),
+        options.boundary,
+        &mut mesh,
+    )
+    .map_err(|source| CommandError::Subdivision {
+        source_name: options.source.name(),
+        source,
+    })?;
+    match format {
+        OutputFormat::Obj => surface::write_obj(&mesh, &path)?,
+        OutputFormat::Ply => surface::write_ply(&mesh, &path)?,
+        _ => surface::write_stl(&mesh, &path)?,
+    }
+    let inverted_cells = (0..finest.num_cells())
+        .filter(|&c| finest.cell_signed_volume(CellId::new(c)) <= 0.0)
+        .count();
+    Ok(SubdivideOutcome {
+        control: control_counts,
+        counts: finest.counts(),
+        written: Some((path, format)),
+        inverted_cells,
+    })
 }
