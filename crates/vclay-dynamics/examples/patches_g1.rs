@@ -46,9 +46,13 @@ fn main() {
     });
     for block in 1..=5 {
         for _ in 0..10 {
-            d.step(Integrator::Implicit { dt: preset.dt }).expect("stable");
+            d.step(Integrator::Implicit { dt: preset.dt })
+                .expect("stable");
         }
-        let (a, b) = (d.geometry().patch(0).expect("0"), d.geometry().patch(1).expect("1"));
+        let (a, b) = (
+            d.geometry().patch(0).expect("0"),
+            d.geometry().patch(1).expect("1"),
+        );
         let (mut gap, mut angle) = (0.0f64, 0.0f64);
         for k in 0..=20 {
             let v = k as f64 / 20.0;
