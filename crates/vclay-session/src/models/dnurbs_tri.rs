@@ -105,17 +105,18 @@ impl TriangularModel {
                 .map(|&b| Density::Constant(b))
                 .collect(),
         };
-        let (surface, constraints): (_, Vec<Constraint>) = match &settings.source {
+        let (surface, constraints, fixed): (_, Vec<Constraint>, Vec<usize>) = match &settings.source
+        {
             Source::Rounding(name) => {
                 let kind = RoundingKind::parse(name)
                     .ok_or_else(|| format!("rounding {name:?}: expected edge, corner or bevel"))?;
                 let r = RoundingModel::new(kind).map_err(|e| e.to_string())?;
-                (r.surface, r.constraints)
+                (r.surface, r.constraints, r.fixed_controls)
             }
             Source::File(v) => {
                 let text = serde_json::to_string(v).map_err(|e| e.to_string())?;
                 let t = vclay_io::triangular::parse_triangular(&text).map_err(|e| e.to_string())?;
-                (t.surface, Vec::new())
+                (t.surface, Vec::new(), Vec::new())
             }
         };
         let geometry = TriangularGeometry::new(surface).with_quadrature(quadrature);
@@ -129,6 +130,14 @@ impl TriangularModel {
         engine
             .set_weight_penalty(settings.weight_penalty)
             .map_err(|e| e.to_string())?;
+        // The rounding's far boundary: its control points (and weights) are frozen.
+        for c in fixed {
+            for k in 0..4 {
+                engine
+                    .set_fixed_coordinate(4 * c + k, true)
+                    .map_err(|e| e.to_string())?;
+            }
+        }
         for c in constraints {
             engine.add_constraint(c).map_err(|e| e.to_string())?;
         }
