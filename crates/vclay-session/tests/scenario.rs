@@ -190,7 +190,8 @@ fn errors_name_line_and_key() {
     let t = small_with(frames, "frames = [\"ply\", \"ply\"]");
     let (_, _, msg) = error_of(&t);
     assert!(msg.contains("twice"), "{msg}");
-    let t = small_with("final = \"final.ovm\"", "final = \"final.step\"");
+    // (STEP and IGES became final formats of solids with the B-rep export, issue 20.)
+    let t = small_with("final = \"final.ovm\"", "final = \"final.dxf\"");
     let (_, _, msg) = error_of(&t);
     assert!(msg.contains("subdivision-solid model writes"), "{msg}");
     // Final model extension the kind does not write.
