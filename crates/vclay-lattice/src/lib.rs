@@ -20,6 +20,11 @@
 //! * [`gallery`]: the papers' extruded models (soccer player, cactus, spiked and holed objects)
 //!   built by a [`gallery::Sculptor`] from cubes and face extrusions.
 //! * [`write_boundary`]: the outward boundary surface into a [`vclay_core::MeshSink`].
+//! * [`limit`]: the limit position and first derivatives at any `(cell, u, v, w)`
+//!   ([`LimitEvaluator`]): the tricubic B-spline on regular cells, local subdivision with a stated
+//!   tolerance elsewhere; [`limit_surface`]: the boundary limit surface (limit masks, positions
+//!   and normals into a sink) and its bicubic patches ([`boundary_patches`], exact in regular
+//!   regions, fitted elsewhere with the error).
 //! * [`edit`]: [`extrude_face`] and [`delete_cell`] return a new validated lattice with stable
 //!   ids (documented there) or an error saying why the edit is refused; [`Features`] tags are
 //!   edited in place and carried across edits.

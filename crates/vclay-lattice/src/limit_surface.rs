@@ -4,7 +4,7 @@
 //! # What
 //! With [`BoundaryRule::Smooth`] or [`BoundaryRule::Sharp`] the boundary points of every level
 //! depend only on boundary points, through the Catmull-Clark surface rules with simple creases
-//! (module docs of [`crate::subdivide`]). The boundary limit surface is therefore the
+//! (module docs of [`mod@crate::subdivide`]). The boundary limit surface is therefore the
 //! Catmull-Clark limit surface of the boundary net, and its points at the vertices of any level
 //! are given by the limit masks (Halstead, Kass, DeRose 1993, "Efficient, fair interpolation
 //! using Catmull-Clark surfaces", eq 5 and the tangent masks of their appendix):
@@ -109,7 +109,7 @@ fn ring(l: &Lattice, v: VertexId) -> Option<(Vec<VertexId>, Vec<VertexId>, Vec<F
 }
 
 /// Which boundary edges act as creases under `rule` (the classification of
-/// [`crate::subdivide`]).
+/// [`mod@crate::subdivide`]).
 fn crease_edges(l: &Lattice, features: &Features, rule: BoundaryRule) -> Vec<bool> {
     (0..l.num_edges())
         .map(|e| {
