@@ -30,11 +30,13 @@ pub enum ModelKind {
     PdeSurface,
     /// Triangular D-NURBS (`d-nurbs.txt` section 4.4; rounding, section 7.3).
     DnurbsTriangular,
+    /// Several tensor-product D-NURBS patches with G0/G1 joins (`d-nurbs.txt` section 6).
+    DnurbsPatches,
 }
 
 impl ModelKind {
     /// Every kind, in the order files document them.
-    pub const ALL: [ModelKind; 8] = [
+    pub const ALL: [ModelKind; 9] = [
         ModelKind::DnurbsCurve,
         ModelKind::DnurbsSurface,
         ModelKind::DnurbsSwung,
@@ -43,6 +45,7 @@ impl ModelKind {
         ModelKind::Ffd,
         ModelKind::PdeSurface,
         ModelKind::DnurbsTriangular,
+        ModelKind::DnurbsPatches,
     ];
 
     /// The name files use.
@@ -56,6 +59,7 @@ impl ModelKind {
             ModelKind::Ffd => "ffd",
             ModelKind::PdeSurface => "pde-surface",
             ModelKind::DnurbsTriangular => "dnurbs-triangular",
+            ModelKind::DnurbsPatches => "dnurbs-patches",
         }
     }
 

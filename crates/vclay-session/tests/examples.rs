@@ -36,6 +36,7 @@ const NEW_EXAMPLES: &[&str] = &[
     "fig08a_edge_rounding",
     "fig08b_corner_rounding",
     "fig08c_bevel_rounding",
+    "fig_patches_g1",
 ];
 
 #[test]

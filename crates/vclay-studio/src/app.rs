@@ -91,6 +91,7 @@ impl Tool {
             ModelKind::Ffd => vec![FfdPoint, ControlPoint, Orbit],
             ModelKind::PdeSurface => vec![PdeLocal, Orbit],
             ModelKind::DnurbsTriangular => vec![Orbit],
+            ModelKind::DnurbsPatches => vec![Orbit],
         }
     }
 }

@@ -2,6 +2,7 @@
 //! rebuilt from a session file.
 
 pub mod dnurbs;
+pub mod dnurbs_patches;
 pub mod dnurbs_tri;
 pub mod ffd;
 pub mod pde;
@@ -129,6 +130,7 @@ pub fn build(kind: ModelKind, spec: &Spec<'_>) -> Result<Box<dyn Model>, SpecErr
         ModelKind::Ffd => ffd::build(spec)?,
         ModelKind::PdeSurface => pde::build(spec)?,
         ModelKind::DnurbsTriangular => dnurbs_tri::build(spec)?,
+        ModelKind::DnurbsPatches => dnurbs_patches::build(spec)?,
     })
 }
 
@@ -144,5 +146,6 @@ pub fn load(kind: ModelKind, saved: &serde_json::Value) -> Result<Box<dyn Model>
         ModelKind::Ffd => ffd::load(saved)?,
         ModelKind::PdeSurface => pde::load(saved)?,
         ModelKind::DnurbsTriangular => dnurbs_tri::load(saved)?,
+        ModelKind::DnurbsPatches => dnurbs_patches::load(saved)?,
     })
 }
