@@ -130,3 +130,39 @@ fn bad_keys_are_located() {
     let e = bad(&base.replace("b = 1", "b = 7"));
     assert!(e.contains("join"), "{e}");
 }
+
+#[test]
+fn refused_tools_are_errors_and_file_patches_load() {
+    // Gravity is not offered for this kind: an error that names it (at parse or at the step).
+    let text = example("fig_patches_g1.toml").replace(
+        "[output]",
+        "[[timeline]]\nat = 0.0\naction = \"gravity\"\ng = [0.0, 0.0, -1.0]\n\n[output]",
+    );
+    let err = match Scenario::parse(&text, "g.toml", "g", Path::new(".")) {
+        Err(e) => e.to_string(),
+        Ok(mut sc) => sc.session.step().unwrap_err().to_string(),
+    };
+    eprintln!("refused: {err}");
+    assert!(err.contains("gravity") || err.contains("Gravity"), "{err}");
+    // A patch from a model JSON file: the left sheet exported, then read as patch 0.
+    let sc = run(&example("fig_patches_g1.toml"), 0);
+    let dir = tempfile::tempdir().unwrap();
+    let p = PatchesModel::load(&sc.session.model(None).unwrap().save().unwrap()).unwrap();
+    let left = dir.path().join("left.json");
+    vclay_io::model::write_model(
+        &left,
+        &[vclay_io::model::Entity::Surface(p.patch(0).unwrap())],
+    )
+    .unwrap();
+    let text = example("fig_patches_g1.toml").replacen(
+        "origin = [-1.0, 0.0, 0.0]\nsize = [1.0, 1.0]\ncontrols = [5, 4]\ndegree = [2, 2]",
+        "file = \"left.json\"",
+        1,
+    );
+    assert!(text.contains("left.json"));
+    let mut sc = Scenario::parse(&text, "f.toml", "f", dir.path()).unwrap();
+    sc.session.step().unwrap();
+    let m = sc.session.model(None).unwrap();
+    assert!(m.summary().contains("2 patches"), "{}", m.summary());
+    assert_eq!(m.control_points().len(), 40);
+}
