@@ -166,3 +166,42 @@ fn refused_tools_are_errors_and_file_patches_load() {
     assert!(m.summary().contains("2 patches"), "{}", m.summary());
     assert_eq!(m.control_points().len(), 40);
 }
+
+#[test]
+fn tool_edits_undo_exactly() {
+    use vclay_session::command::Edit;
+    let sc = run(&example("fig_patches_g1.toml"), 2);
+    let mut m = sc.session.model(None).unwrap().clone_model();
+    let mut reference = m.clone_model();
+    let applied = m
+        .apply(&Edit::Force {
+            name: Some("push".into()),
+            near: Some([0.5, 0.5, 0.0]),
+            param: None,
+            force: [0.0, 0.0, 5.0],
+            until: None,
+        })
+        .unwrap();
+    assert!(m.summary().contains("1 forces"), "{}", m.summary());
+    // Releasing a missing tool and fixing a missing control point (40 of 0..40) are refused.
+    assert!(
+        m.apply(&Edit::Release {
+            name: "nothing".into()
+        })
+        .is_err()
+    );
+    assert!(
+        m.apply(&Edit::Fix {
+            points: Some(vec![40]),
+            min: None,
+            max: None,
+            near: None
+        })
+        .is_err()
+    );
+    m.undo(applied.undo).unwrap();
+    assert!(m.summary().contains("0 forces"), "{}", m.summary());
+    m.step().unwrap();
+    reference.step().unwrap();
+    assert_eq!(m.control_points(), reference.control_points());
+}
