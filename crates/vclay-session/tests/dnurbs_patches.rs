@@ -205,3 +205,21 @@ fn tool_edits_undo_exactly() {
     reference.step().unwrap();
     assert_eq!(m.control_points(), reference.control_points());
 }
+
+#[test]
+fn shipped_scenario_writes_its_outputs() {
+    let text = example("fig_patches_g1.toml").replace("steps = 40", "steps = 3");
+    let mut sc = Scenario::parse(&text, "fig_patches_g1.toml", "patches", Path::new(".")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let steps = sc.steps;
+    vclay_session::run::run(&mut sc.session, steps, dir.path(), &sc.output, &mut |_| {}).unwrap();
+    let back = vclay_io::model::read_model(dir.path().join("final.json")).unwrap();
+    assert_eq!(back.len(), 2);
+    let obj = std::fs::read_to_string(dir.path().join("final.obj")).unwrap();
+    // Two patches of 24 x 24 samples each.
+    assert_eq!(
+        obj.lines().filter(|l| l.starts_with("v ")).count(),
+        2 * 24 * 24
+    );
+    assert!(dir.path().join("energy.csv").exists());
+}
