@@ -223,3 +223,19 @@ fn shipped_scenario_writes_its_outputs() {
     );
     assert!(dir.path().join("energy.csv").exists());
 }
+
+#[test]
+fn too_many_control_points_are_refused_before_building() {
+    // 6 sheets of 64 x 64 = 24,576 control points: over MAX_TOTAL_CONTROL_POINTS.
+    let mut text = String::from("[model]\nkind = \"dnurbs-patches\"\n");
+    for k in 0..6 {
+        text += &format!(
+            "[[model.patch]]\norigin = [{k}.0, 0.0, 0.0]\nsize = [1.0, 1.0]\ncontrols = [64, 64]\n"
+        );
+    }
+    text += "[simulation]\nsteps = 1\n";
+    let e = Scenario::parse(&text, "big.toml", "big", Path::new("."))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("24576 control points"), "{e}");
+}

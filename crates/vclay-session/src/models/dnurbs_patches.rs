@@ -46,6 +46,9 @@ pub const DEFAULT_TESSELLATION: usize = 24;
 pub const MAX_PATCHES: usize = 64;
 /// Most control points per patch direction of a sheet.
 pub const MAX_SHEET_CONTROLS: usize = 64;
+/// Most control points of all patches together (checked before the engine is built: its
+/// sparse system grows with them, and every step refactors it).
+pub const MAX_TOTAL_CONTROL_POINTS: usize = 20_000;
 
 /// A join between two patches (kept in session files).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -161,6 +164,12 @@ impl PatchesModel {
             return Err(format!(
                 "{} patches: give 1 to {MAX_PATCHES}",
                 surfaces.len()
+            ));
+        }
+        let total: usize = surfaces.iter().map(|s| s.control_points().len()).sum();
+        if total > MAX_TOTAL_CONTROL_POINTS {
+            return Err(format!(
+                "{total} control points in all patches: at most {MAX_TOTAL_CONTROL_POINTS}"
             ));
         }
         let geometry = PatchesGeometry::new(&surfaces).map_err(|e| e.to_string())?;
