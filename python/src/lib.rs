@@ -9,6 +9,7 @@
 //! | --- | --- |
 //! | `load`, `save`, `convert`, `Curve`, `Surface`, `Volume` | `vclay_io`, `vclay_spline` |
 //! | `Ffd` | `vclay_ffd` (`ffd-direct-manipulation.txt` eqs 7, 12) |
+//! | `fit_surface` | `vclay_fit` (scan fitting, `d-nurbs.txt` eq 17 fairness) |
 //! | `Lattice` | `vclay_lattice` (MacCracken-Joy subdivision, `.ovm`) |
 //! | `PdeSurface` | `vclay_pde` (`dynamic-pde-surfaces.txt`) |
 //! | `render` | `vclay_render` |
@@ -24,6 +25,7 @@ use pyo3::prelude::*;
 
 mod errors;
 mod ffd;
+mod fit;
 mod lattice;
 mod nurbs;
 mod pde;
@@ -51,6 +53,7 @@ fn vclay_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     nurbs::register(m)?;
     ffd::register(m)?;
+    fit::register(m)?;
     lattice::register(m)?;
     pde::register(m)?;
     render::register(m)?;

@@ -1,0 +1,57 @@
+//! `fit_surface`: a smooth surface fitted to a point cloud (`vclay_fit`, issue 20).
+
+use pyo3::prelude::*;
+use vclay_fit::{FitOptions, Robust};
+use vclay_io::model::Entity as IoEntity;
+
+use crate::errors::GeometryError;
+use crate::{nurbs, util};
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(fit_surface, m)?)?;
+    Ok(())
+}
+
+/// `fit_surface(points, grid=(32, 32), degree=3, fairness=(0.0, 1e-9), robust=None,
+/// weights=False, corrections=2)`: a B-spline (NURBS with `weights=True`) surface fitted to an
+/// `(n, 3)` array of points with the D-NURBS thin-plate-under-tension fairness
+/// (`fairness = (alpha, beta)`, dimensionless; `robust`: `None`, `"tukey"` or `"huber"`).
+/// Returns `(surface, report)`: a `Surface` and the report as a dict (docs/formats.md
+/// section 11: `rms`, `max` closest-point distances, `fairness_energy`, `timings`, ...).
+/// Bad clouds and options raise `GeometryError` with the located message.
+#[pyfunction]
+#[pyo3(signature = (points, grid=(32, 32), degree=3, fairness=(0.0, 1e-9), robust=None, weights=false, corrections=2))]
+#[allow(clippy::type_complexity)]
+fn fit_surface<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    grid: (usize, usize),
+    degree: usize,
+    fairness: (f64, f64),
+    robust: Option<String>,
+    weights: bool,
+    corrections: usize,
+) -> PyResult<(Py<PyAny>, Bound<'py, PyAny>)> {
+    let pts = util::points(points, "points")?;
+    let robust = robust
+        .map(|s| s.parse::<Robust>())
+        .transpose()
+        .map_err(GeometryError::new_err)?;
+    let opts = FitOptions {
+        grid: [grid.0, grid.1],
+        degree,
+        tension: fairness.0,
+        rigidity: fairness.1,
+        corrections,
+        robust,
+        rational: weights,
+        ..FitOptions::default()
+    };
+    let fit = py
+        .detach(|| vclay_fit::fit_surface(&pts, &opts))
+        .map_err(|e| GeometryError::new_err(e.to_string()))?;
+    let report =
+        serde_json::to_value(&fit.report).map_err(|e| GeometryError::new_err(e.to_string()))?;
+    let surface = nurbs::wrap(py, IoEntity::Surface(fit.surface), None)?;
+    Ok((surface, util::json_to_py(py, &report)?))
+}
