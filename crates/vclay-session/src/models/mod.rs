@@ -6,6 +6,7 @@ pub mod dnurbs_patches;
 pub mod dnurbs_tri;
 pub mod ffd;
 pub mod pde;
+mod saved;
 pub mod solid;
 
 use std::path::Path;
