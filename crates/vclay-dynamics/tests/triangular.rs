@@ -162,6 +162,10 @@ fn probe_corner_step_cost() {
             m.clear_constraints();
         }
         m.step(Integrator::Implicit { dt: r.dt() }).unwrap();
+        eprintln!(
+            "{q:?}: cached basis {} bytes",
+            m.geometry().cached_basis_bytes()
+        );
         let t = std::time::Instant::now();
         let n = 10;
         for _ in 0..n {
@@ -173,5 +177,50 @@ fn probe_corner_step_cost() {
             per * 1e3,
             m.state().substeps
         );
+    }
+}
+
+/// The cached basis values (filled by `element_quadrature`) give the Jacobian of a direct
+/// evaluation bit for bit, after the control points and weights have moved (issue 18).
+#[test]
+fn cached_basis_jacobian_matches_direct_evaluation() {
+    use vclay_dynamics::dnurbs::generalized::LocalJacobian;
+    let r = RoundingModel::new(RoundingKind::Edge).unwrap();
+    for q in [
+        TriangleQuadrature::default(),
+        TriangleQuadrature::Whole { points: 4 },
+    ] {
+        let mut cached = TriangularGeometry::new(r.surface.clone()).with_quadrature(q);
+        let rules: Vec<_> = (0..cached.element_count())
+            .map(|e| cached.element_quadrature(e, [3, 3]).unwrap())
+            .collect();
+        let bytes = cached.cached_basis_bytes();
+        let points: usize = rules.iter().map(|r| r.0.len()).sum();
+        assert!(bytes >= 64 * points, "{bytes} bytes for {points} points");
+        // Move points and weights (deterministic, weights stay positive).
+        let mut c = cached.coordinates().to_vec();
+        for (i, x) in c.iter_mut().enumerate() {
+            let t = (i as f64 * 0.7).sin();
+            *x = if i % 4 == 3 {
+                *x * (1.0 + 0.4 * t)
+            } else {
+                *x + 0.05 * t
+            };
+        }
+        cached.set_coordinates(&c).unwrap();
+        // A fresh geometry has no cache: every point is evaluated directly.
+        let mut direct = TriangularGeometry::new(r.surface.clone()).with_quadrature(q);
+        direct.set_coordinates(&c).unwrap();
+        assert_eq!(direct.cached_basis_bytes(), 0);
+        let (mut a, mut b) = (LocalJacobian::default(), LocalJacobian::default());
+        for (e, (params, _)) in rules.iter().enumerate() {
+            for &p in params {
+                cached.element_jacobian_at(e, p, &mut a).unwrap();
+                direct.element_jacobian_at(e, p, &mut b).unwrap();
+                assert_eq!(a.s, b.s, "element {e} at {p:?}");
+                assert_eq!(a.blocks, b.blocks, "element {e} at {p:?}");
+                assert_eq!(a.vectors, b.vectors, "element {e} at {p:?}");
+            }
+        }
     }
 }

@@ -35,13 +35,24 @@
 //! stiffness: on the corner rounding a 4 x 4 rule wrinkles the fillet (energy 1.60e4 against
 //! 1.87e4 with 6 x 6 after 20 steps).
 //!
+//! ## Cached basis values (issue 18)
+//! The summed basis functions and their parameter derivatives to second order at an element's
+//! quadrature points depend only on the knots, so [`GeneralizedGeometry::element_quadrature`]
+//! stores them per cell (`CellBasis`) and [`GeneralizedGeometry::element_jacobian_at`] forms
+//! the rational columns of eq 13 from them each step, with the arithmetic of
+//! [`TriangularNurbs::eval_in_element`] (results bit for bit those of a direct evaluation,
+//! `tests/triangular.rs`). Memory: 48 bytes per kept control point per quadrature point, 3.9 MB
+//! on the corner rounding with the exact cells (6,948 points), 1.1 MB with one 6 x 6 rule per
+//! triangle ([`TriangularGeometry::cached_basis_bytes`]). Points other than the cached rule's
+//! are evaluated directly.
+//!
 //! ## Limitations
 //! Point location is a linear scan over the domain triangles; [`GeneralizedGeometry::nearest_param`]
 //! samples each triangle and refines by Gauss-Newton (used by data springs).
 
 use super::generalized::{GeneralizedGeometry, LocalJacobian};
 use crate::error::DynamicsError;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 use vclay_core::{GaussLegendre, Vec3};
 use vclay_spline::simplex::{Point2, det3};
 use vclay_spline::triangular::fan;
@@ -115,6 +126,27 @@ pub struct TriangularGeometry {
     scale: f64,
     quadrature: TriangleQuadrature,
     cells: Arc<Vec<Cell>>,
+    /// Per cell: the basis values at its quadrature points, filled by `element_quadrature`
+    /// (see [`CellBasis`]); shared by clones (the basis never changes, only the control).
+    bases: Arc<Vec<OnceLock<Option<CellBasis>>>>,
+}
+
+/// The summed basis functions `(N, N_u, N_v, N_uu, N_uv, N_vv)` of a cell's kept control
+/// points at the cell's quadrature points. They depend only on the knots and the parameter,
+/// not on the control points or weights, so they are computed once and every step forms the
+/// rational columns of eq 13 from them ([`rational_columns`]) instead of re-evaluating the
+/// simplex-spline recurrence (about 6 us a point on the corner rounding).
+/// Memory: `48 * keep` bytes a point ([`TriangularGeometry::cached_basis_bytes`]).
+#[derive(Debug)]
+struct CellBasis {
+    /// The quadrature points, bit for bit as `element_quadrature` returned them.
+    params: Vec<[f64; 2]>,
+    /// `values[i * keep.len() + j]`: point `i`, kept control `j`.
+    values: Vec<[f64; 6]>,
+}
+
+fn empty_bases(n: usize) -> Arc<Vec<OnceLock<Option<CellBasis>>>> {
+    Arc::new((0..n).map(|_| OnceLock::new()).collect())
 }
 
 /// A finite element: a polynomial cell of a domain triangle (or the whole triangle) and the
@@ -177,6 +209,7 @@ impl TriangularGeometry {
         let scale = (hi - lo).norm();
         let quadrature = TriangleQuadrature::default();
         let cells = Arc::new(build_cells(&surface, quadrature));
+        let bases = empty_bases(cells.len());
         Self {
             surface,
             coords,
@@ -187,6 +220,7 @@ impl TriangularGeometry {
             },
             quadrature,
             cells,
+            bases,
         }
     }
 
@@ -195,6 +229,7 @@ impl TriangularGeometry {
         if q != self.quadrature {
             self.quadrature = q;
             self.cells = Arc::new(build_cells(&self.surface, q));
+            self.bases = empty_bases(self.cells.len());
         }
         self
     }
@@ -202,6 +237,19 @@ impl TriangularGeometry {
     /// Number of finite elements (polynomial cells, or triangles for the whole-triangle rule).
     pub fn element_count(&self) -> usize {
         self.cells.len()
+    }
+
+    /// Bytes held by the cached basis values of the elements whose quadrature has been built
+    /// (48 bytes per kept control point per quadrature point, plus 16 per point).
+    pub fn cached_basis_bytes(&self) -> usize {
+        self.bases
+            .iter()
+            .filter_map(|b| b.get().and_then(Option::as_ref))
+            .map(|b| {
+                b.values.len() * std::mem::size_of::<[f64; 6]>()
+                    + b.params.len() * std::mem::size_of::<[f64; 2]>()
+            })
+            .sum()
     }
 
     /// The element quadrature.
@@ -256,6 +304,72 @@ impl TriangularGeometry {
             .eval(param, p)
             .map_err(|e| spline(SplineError::from(e)))
     }
+}
+
+/// The rational columns of eq 13 and the surface derivatives from the summed basis values
+/// `basis[j]` of the control points `controls` (the arithmetic of
+/// [`TriangularNurbs::eval_in_element`], operation for operation, so that the results are bit
+/// for bit those of a direct evaluation when `controls` holds every function non-zero at the
+/// point, in the element's order).
+fn rational_columns(
+    surface: &TriangularNurbs,
+    controls: impl Iterator<Item = usize> + Clone,
+    basis: &[[f64; 6]],
+    param: [f64; 2],
+    out: &mut LocalJacobian,
+) -> Result<(), DynamicsError> {
+    let (weights, points) = (surface.weights(), surface.control_points());
+    let mut wa = [0.0; 6];
+    let mut aa = [Vec3::zeros(); 6];
+    for (b, c) in basis.iter().zip(controls.clone()) {
+        let (w, p) = (weights[c], points[c]);
+        for m in 0..6 {
+            let v = b[m] * w;
+            wa[m] += v;
+            aa[m] += p * v;
+        }
+    }
+    if wa[0].is_nan() || wa[0] <= 0.0 {
+        return Err(spline(SplineError::from(
+            vclay_spline::triangular::TriangularError::ZeroDenominator {
+                u: param[0],
+                v: param[1],
+            },
+        )));
+    }
+    let iw = 1.0 / wa[0];
+    let s0 = aa[0] * iw;
+    let s1 = (aa[1] - s0 * wa[1]) * iw;
+    let s2 = (aa[2] - s0 * wa[2]) * iw;
+    let s3 = (aa[3] - s0 * wa[3] - s1 * (2.0 * wa[1])) * iw;
+    let s4 = (aa[4] - s0 * wa[4] - s1 * wa[2] - s2 * wa[1]) * iw;
+    let s5 = (aa[5] - s0 * wa[5] - s2 * (2.0 * wa[2])) * iw;
+    let s = [s0, s1, s2, s3, s4, s5];
+    out.s = s;
+    out.blocks.clear();
+    out.vectors.clear();
+    let [w1, w2, w3, w4, w5] = [wa[1], wa[2], wa[3], wa[4], wa[5]];
+    for (b, c) in basis.iter().zip(controls) {
+        let [n0, n1, n2, n3, n4, n5] = *b;
+        let (wc, pc) = (weights[c], points[c]);
+        let r0 = n0 * wc * iw;
+        let r1 = (n1 * wc - w1 * r0) * iw;
+        let r2 = (n2 * wc - w2 * r0) * iw;
+        let r3 = (n3 * wc - w3 * r0 - 2.0 * w1 * r1) * iw;
+        let r4 = (n4 * wc - w4 * r0 - w2 * r1 - w1 * r2) * iw;
+        let r5 = (n5 * wc - w5 * r0 - 2.0 * w2 * r2) * iw;
+        out.blocks.push((4 * c, [r0, r1, r2, r3, r4, r5]));
+        let g0 = (pc - s[0]) * (n0 * iw);
+        let g1 = (pc * n1 - s[1] * n0 - s[0] * n1 - g0 * w1) * iw;
+        let g2 = (pc * n2 - s[2] * n0 - s[0] * n2 - g0 * w2) * iw;
+        let g3 = (pc * n3 - s[3] * n0 - s[0] * n3 - g0 * w3 - (s[1] * n1 + g1 * w1) * 2.0) * iw;
+        let g4 =
+            (pc * n4 - s[4] * n0 - s[0] * n4 - g0 * w4 - s[1] * n2 - g1 * w2 - s[2] * n1 - g2 * w1)
+                * iw;
+        let g5 = (pc * n5 - s[5] * n0 - s[0] * n5 - g0 * w5 - (s[2] * n2 + g2 * w2) * 2.0) * iw;
+        out.vectors.push((4 * c + 3, [g0, g1, g2, g3, g4, g5]));
+    }
+    Ok(())
 }
 
 impl GeneralizedGeometry for TriangularGeometry {
@@ -321,6 +435,26 @@ impl GeneralizedGeometry for TriangularGeometry {
         for tri in fan(&cell.polygon, 0.0) {
             collapsed_gauss(tri, k, &mut p, &mut w).ok()?;
         }
+        if let Some(slot) = self.bases.get(element) {
+            // The first rule asked for is cached; points of another rule miss the cache and
+            // are evaluated directly in `element_jacobian_at`.
+            slot.get_or_init(|| {
+                let mut tp = TriangularPoint::default();
+                let mut values = Vec::with_capacity(p.len() * cell.keep.len());
+                for &x in &p {
+                    // A zero denominator (weights) leaves the point to the direct path, which
+                    // reports it.
+                    self.surface
+                        .eval_in_element(cell.triangle, x, &mut tp)
+                        .ok()?;
+                    values.extend(cell.keep.iter().map(|&k| tp.basis[k]));
+                }
+                Some(CellBasis {
+                    params: p.clone(),
+                    values,
+                })
+            });
+        }
         Some((p, w))
     }
     fn element_jacobian_at(
@@ -332,6 +466,19 @@ impl GeneralizedGeometry for TriangularGeometry {
         let Some(cell) = self.cells.get(element) else {
             return self.jacobian_at(param, out);
         };
+        if let Some(Some(b)) = self.bases.get(element).and_then(OnceLock::get)
+            && let Some(i) = b.params.iter().position(|x| *x == param)
+        {
+            let nk = cell.keep.len();
+            let ctl = self.surface.element_controls(cell.triangle);
+            return rational_columns(
+                &self.surface,
+                cell.keep.iter().map(|&k| ctl[k]),
+                &b.values[i * nk..(i + 1) * nk],
+                param,
+                out,
+            );
+        }
         POINT.with(|cell_buf| {
             let mut guard = cell_buf.try_borrow_mut();
             let mut fresh = TriangularPoint::default();
