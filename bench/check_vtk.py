@@ -44,6 +44,9 @@ PRIMITIVES = [
     "t",
 ]
 
+# Primitives whose control lattice already has non-planar faces.
+WARPED_AT_LEVEL_0 = {"soccer-player"}
+
 SCENARIO = """
 [model]
 kind = "subdivision-solid"
@@ -202,8 +205,10 @@ def check_lattices(vclay, work):
             # The primitives' faces are planar at level 0, so the surface encloses exactly
             # the cells' volume; at level 1 faces warp, and VTK's hexahedron volume (its own
             # split into tetrahedra) and the surface's split of each quad into two triangles
-            # agree only to about the warp (under 1 % at levels 1 and 2).
-            rel = 1e-9 if level == 0 else 1e-2
+            # agree only to about the warp (under 1 % at levels 1 and 2). The soccer player's
+            # limbs are placed turned, so its level-0 faces warp too (0.35 %).
+            planar = level == 0 and prim not in WARPED_AT_LEVEL_0
+            rel = 1e-9 if planar else 1e-2
             tris, vol = surface_checks(Path(f"{stem}.obj"), read_surface(Path(f"{stem}.obj")),
                                        vols.sum(), "VTU cells'", rel)
             print(f"ok {stem.name}: {grid.GetNumberOfCells()} cells (VTK types {types}), "
