@@ -222,6 +222,13 @@ fn physics_figures(seconds: f64, large: bool) -> Result<serde_json::Value> {
     let frozen_rate = steps_per_second(seconds, || Ok(frozen.step(implicit).map(drop)?))?;
     let mut dynamic = dn::dynamic_sheet(16)?;
     let dynamic_rate = steps_per_second(seconds, || Ok(dynamic.step(implicit).map(drop)?))?;
+    // The same sheet under the paper's fixed Gauss rule (issue 18 made the weight-aware rule
+    // the default: more points where the weights vary, accurate rational integrals).
+    let mut dynamic_fixed = dn::dynamic_sheet(16)?;
+    dynamic_fixed
+        .set_quadrature_rule(vclay::dynamics::dnurbs::generalized::QuadratureRule::Fixed)?;
+    let dynamic_fixed_rate =
+        steps_per_second(seconds, || Ok(dynamic_fixed.step(implicit).map(drop)?))?;
     let mut cube = so::cube(2, SolidParams::default())?;
     so::pull(&mut cube)?;
     let (cube_rate, cube_mean) = steps_per_second(seconds, || Ok(cube.step().map(drop)?))?;
@@ -229,6 +236,7 @@ fn physics_figures(seconds: f64, large: bool) -> Result<serde_json::Value> {
     let mut out = json!({
         "dnurbs_64x64_frozen_weights": at_least(frozen_rate, "steps/s", 500.0),
         "dnurbs_16x16_dynamic_weights": at_least(dynamic_rate, "steps/s", 60.0),
+        "dnurbs_16x16_dynamic_weights_fixed_rule": at_least(dynamic_fixed_rate, "steps/s", 60.0),
         "solid_cube_level2": {
             "value": cube_ms,
             "mean": 1e3 / cube_mean,
