@@ -26,13 +26,13 @@ use serde::{Deserialize, Serialize};
 use vclay_core::{TriMesh, Vec3};
 use vclay_dynamics::dnurbs::generalized::{GeneralizedGeometry, GeneralizedState};
 use vclay_dynamics::dnurbs::{
-    Continuity, Density, ElasticReference, Force, GeneralizedDnurbs, Integrator, Material,
-    PatchesGeometry, Preset, Target,
+    Continuity, Density, ElasticReference, Force, GeneralizedDnurbs, Material, PatchesGeometry,
+    Preset, Target,
 };
 use vclay_io::model::Entity;
 use vclay_spline::{NurbsSurface, ParametricSurface};
 
-use super::saved::SavedState;
+use super::saved::{SavedState, step_implicit};
 use super::{Spec, SpecError, typed};
 use crate::command::Edit;
 use crate::error::SessionError;
@@ -520,26 +520,10 @@ impl Model for PatchesModel {
         self.engine.steps() as u64
     }
     fn step(&mut self) -> Result<StepReport, SessionError> {
-        let t0 = std::time::Instant::now();
         self.load_forces(self.engine.time());
-        let r = self
-            .engine
-            .step(Integrator::Implicit {
-                dt: self.settings.dt,
-            })
-            .map_err(model_err)?;
+        let report = step_implicit(&mut self.engine, self.settings.dt, &mut self.energy)?;
         self.revision += 1;
-        self.energy = Energy {
-            kinetic: r.kinetic_energy,
-            elastic: r.elastic_energy,
-            tools: 0.0,
-        };
-        Ok(StepReport {
-            time: r.time,
-            energy: self.energy,
-            iterations: r.solver.iterations,
-            seconds: t0.elapsed().as_secs_f64(),
-        })
+        Ok(report)
     }
     fn energy(&self) -> Energy {
         self.energy

@@ -24,11 +24,11 @@ use vclay_core::{TriMesh, Vec3};
 use vclay_dynamics::dnurbs::generalized::{GeneralizedGeometry, GeneralizedState};
 use vclay_dynamics::dnurbs::rounding::{ROUNDING_WEIGHT_PENALTY, RoundingKind, RoundingModel};
 use vclay_dynamics::dnurbs::{
-    Constraint, Density, ElasticReference, GeneralizedDnurbs, Integrator, Material, Preset,
-    TriangleQuadrature, TriangularGeometry,
+    Constraint, Density, ElasticReference, GeneralizedDnurbs, Material, Preset, TriangleQuadrature,
+    TriangularGeometry,
 };
 
-use super::saved::SavedState;
+use super::saved::{SavedState, step_implicit};
 use super::{Spec, SpecError, typed};
 use crate::command::Edit;
 use crate::error::SessionError;
@@ -376,25 +376,9 @@ impl Model for TriangularModel {
         self.engine.steps() as u64
     }
     fn step(&mut self) -> Result<StepReport, SessionError> {
-        let t0 = std::time::Instant::now();
-        let r = self
-            .engine
-            .step(Integrator::Implicit {
-                dt: self.settings.dt,
-            })
-            .map_err(model_err)?;
+        let report = step_implicit(&mut self.engine, self.settings.dt, &mut self.energy)?;
         self.revision += 1;
-        self.energy = Energy {
-            kinetic: r.kinetic_energy,
-            elastic: r.elastic_energy,
-            tools: 0.0,
-        };
-        Ok(StepReport {
-            time: r.time,
-            energy: self.energy,
-            iterations: r.solver.iterations,
-            seconds: t0.elapsed().as_secs_f64(),
-        })
+        Ok(report)
     }
     fn energy(&self) -> Energy {
         self.energy

@@ -1,10 +1,39 @@
-//! The generalized D-NURBS engine's state as session files save it, shared by the kinds that
-//! wrap [`GeneralizedDnurbs`](vclay_dynamics::dnurbs::generalized::GeneralizedDnurbs) directly
-//! (`dnurbs-triangular`, `dnurbs-patches`).
+//! What the kinds that wrap [`GeneralizedDnurbs`] directly (`dnurbs-triangular`,
+//! `dnurbs-patches`) share: one implicit step as the session reports it, and the engine's state
+//! as session files save it.
 
 use serde::{Deserialize, Serialize};
-use vclay_dynamics::dnurbs::ElasticReference;
-use vclay_dynamics::dnurbs::generalized::GeneralizedState;
+use vclay_dynamics::dnurbs::generalized::{
+    GeneralizedDnurbs, GeneralizedGeometry, GeneralizedState,
+};
+use vclay_dynamics::dnurbs::{ElasticReference, Integrator};
+
+use crate::error::SessionError;
+use crate::model::{Energy, StepReport};
+
+/// One implicit step of size `dt` (`d-nurbs.txt` eq 18); `energy` becomes the step's kinetic and
+/// elastic energy (tools: 0, these kinds report no tool energy).
+pub(crate) fn step_implicit<G: GeneralizedGeometry>(
+    engine: &mut GeneralizedDnurbs<G>,
+    dt: f64,
+    energy: &mut Energy,
+) -> Result<StepReport, SessionError> {
+    let t0 = std::time::Instant::now();
+    let r = engine
+        .step(Integrator::Implicit { dt })
+        .map_err(SessionError::model)?;
+    *energy = Energy {
+        kinetic: r.kinetic_energy,
+        elastic: r.elastic_energy,
+        tools: 0.0,
+    };
+    Ok(StepReport {
+        time: r.time,
+        energy: *energy,
+        iterations: r.solver.iterations,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
 
 /// [`GeneralizedState`] as saved (every number in shortest exact form: a restored session
 /// continues bit for bit).
