@@ -418,6 +418,18 @@ fn with_scratch<R>(f: impl FnOnce(&mut ElementScratch) -> R) -> R {
     }
 }
 
+/// [`GeneralizedGeometry::weight_coordinates`] of the homogeneous layout `p = (x, y, z, w)` per
+/// control point (`d-nurbs.txt` eq 3) with `len` coordinates: every fourth, from index 3.
+pub fn homogeneous_weight_coordinates(len: usize) -> Vec<usize> {
+    (0..len / 4).map(|c| 4 * c + 3).collect()
+}
+
+/// [`GeneralizedGeometry::coordinate_groups`] of the homogeneous layout (one group of four
+/// per control point).
+pub fn homogeneous_coordinate_groups(len: usize) -> Vec<std::ops::Range<usize>> {
+    (0..len / 4).map(|c| 4 * c..4 * c + 4).collect()
+}
+
 /// A geometry whose generalized coordinates (control points, weights and any other shape
 /// parameters) are simulated by [`GeneralizedDnurbs`].
 pub trait GeneralizedGeometry: Clone + Send + Sync + std::fmt::Debug {

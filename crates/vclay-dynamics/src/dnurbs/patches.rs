@@ -25,7 +25,10 @@
 //! ## Limitations
 //! Joins pair a `u = max` edge with a `u = min` edge (orient the patches accordingly). The
 //! collinearity ties make the join C1, a stronger condition than G1 (fewer shapes reachable).
-use super::generalized::{GeneralizedGeometry, LinearTie, LocalJacobian};
+use super::generalized::{
+    GeneralizedGeometry, LinearTie, LocalJacobian, homogeneous_coordinate_groups,
+    homogeneous_weight_coordinates,
+};
 use super::rational::RationalGeometry;
 use crate::error::DynamicsError;
 use vclay_core::Vec3;
@@ -242,12 +245,10 @@ impl GeneralizedGeometry for PatchesGeometry {
         Ok(())
     }
     fn weight_coordinates(&self) -> Vec<usize> {
-        (0..self.coords.len() / 4).map(|c| 4 * c + 3).collect()
+        homogeneous_weight_coordinates(self.coords.len())
     }
     fn coordinate_groups(&self) -> Vec<std::ops::Range<usize>> {
-        (0..self.coords.len() / 4)
-            .map(|c| 4 * c..4 * c + 4)
-            .collect()
+        homogeneous_coordinate_groups(self.coords.len())
     }
     /// One weight per patch (the gauge of each rational patch).
     fn default_fixed_coordinates(&self) -> Vec<usize> {

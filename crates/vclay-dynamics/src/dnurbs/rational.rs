@@ -54,7 +54,10 @@
 //! they are inactive coordinates (held fixed). So is `alpha` by default: `alpha` and a common
 //! scale of `c1x` against `c2` are redundant (`alpha c1x c2 = (k alpha) c1x (c2 / k)`).
 
-use super::generalized::{GeneralizedGeometry, LinearTie, LocalJacobian};
+use super::generalized::{
+    GeneralizedGeometry, LinearTie, LocalJacobian, homogeneous_coordinate_groups,
+    homogeneous_weight_coordinates,
+};
 use crate::error::DynamicsError;
 use vclay_core::Vec3;
 use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
@@ -416,12 +419,10 @@ impl GeneralizedGeometry for RationalGeometry {
         Ok(())
     }
     fn weight_coordinates(&self) -> Vec<usize> {
-        (0..self.coords.len() / 4).map(|c| 4 * c + 3).collect()
+        homogeneous_weight_coordinates(self.coords.len())
     }
     fn coordinate_groups(&self) -> Vec<std::ops::Range<usize>> {
-        (0..self.coords.len() / 4)
-            .map(|c| 4 * c..4 * c + 4)
-            .collect()
+        homogeneous_coordinate_groups(self.coords.len())
     }
     fn default_fixed_coordinates(&self) -> Vec<usize> {
         // Gauge: s is unchanged when all weights are scaled together, so one weight is held.

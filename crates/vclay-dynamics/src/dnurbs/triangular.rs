@@ -50,7 +50,10 @@
 //! Point location is a linear scan over the domain triangles; [`GeneralizedGeometry::nearest_param`]
 //! samples each triangle and refines by Gauss-Newton (used by data springs).
 
-use super::generalized::{GeneralizedGeometry, LocalJacobian};
+use super::generalized::{
+    GeneralizedGeometry, LocalJacobian, homogeneous_coordinate_groups,
+    homogeneous_weight_coordinates,
+};
 use crate::error::DynamicsError;
 use std::sync::{Arc, OnceLock};
 use vclay_core::{GaussLegendre, Vec3};
@@ -395,12 +398,10 @@ impl GeneralizedGeometry for TriangularGeometry {
         Ok(())
     }
     fn weight_coordinates(&self) -> Vec<usize> {
-        (0..self.coords.len() / 4).map(|c| 4 * c + 3).collect()
+        homogeneous_weight_coordinates(self.coords.len())
     }
     fn coordinate_groups(&self) -> Vec<std::ops::Range<usize>> {
-        (0..self.coords.len() / 4)
-            .map(|c| 4 * c..4 * c + 4)
-            .collect()
+        homogeneous_coordinate_groups(self.coords.len())
     }
     fn default_fixed_coordinates(&self) -> Vec<usize> {
         // Gauge: s is unchanged when every weight is scaled by one factor.
