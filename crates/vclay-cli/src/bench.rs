@@ -117,21 +117,9 @@ const LIMIT_GOAL: f64 = 20e6;
 /// threads)` points per second, best of repeated runs.
 fn limit_rates(seconds: f64) -> Result<(f64, f64)> {
     use vclay::lattice::{
-        CellId, Features, LimitEvaluator, LimitParams, LimitPoint, LimitQuery, SubdivisionRules,
-        primitives,
+        Features, LimitEvaluator, LimitParams, LimitPoint, SubdivisionRules, limit,
     };
-    let n = 14;
-    let mut l = primitives::box_lattice([n; 3], Vec3::zeros(), Vec3::repeat((n - 1) as f64));
-    let mut seed = 0x2545_f491_4f6c_dd1du64;
-    let mut next = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
-    for p in l.points_mut() {
-        *p += Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.2;
-    }
+    let l = limit::benchmark_lattice();
     let f = Features::none(&l);
     let mk = |par| {
         LimitEvaluator::new(
@@ -145,15 +133,7 @@ fn limit_rates(seconds: f64) -> Result<(f64, f64)> {
         )
     };
     let (seq, par) = (mk(Parallelism::Sequential)?, mk(Parallelism::Rayon)?);
-    let regular: Vec<usize> = (0..l.num_cells())
-        .filter(|&c| seq.is_regular(CellId(c as u32)))
-        .collect();
-    let queries: Vec<LimitQuery> = (0..1_000_000)
-        .map(|_| LimitQuery {
-            cell: regular[(next() * regular.len() as f64) as usize % regular.len()],
-            uvw: [next(), next(), next()],
-        })
-        .collect();
+    let queries = limit::benchmark_queries(&seq, l.num_cells(), 1_000_000);
     let mut out = vec![LimitPoint::default(); queries.len()];
     let mut rate = |ev: &LimitEvaluator<'_>| -> Result<f64> {
         let mut err = None;

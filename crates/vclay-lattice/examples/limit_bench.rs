@@ -7,10 +7,9 @@
 //! `vclay bench` reports the same figure as `subdivision_limit`.
 
 use std::time::Instant;
-use vclay_core::{Parallelism, Vec3};
+use vclay_core::Parallelism;
 use vclay_lattice::{
-    CellId, Features, LimitEvaluator, LimitParams, LimitPoint, LimitQuery, SubdivisionRules,
-    primitives,
+    CellId, Features, LimitEvaluator, LimitParams, LimitPoint, LimitQuery, SubdivisionRules, limit,
 };
 
 fn best(seconds: f64, mut f: impl FnMut()) -> f64 {
@@ -41,18 +40,7 @@ fn main() {
         .nth(1)
         .and_then(|s| s.parse().ok())
         .unwrap_or(2.0);
-    let n = 14;
-    let mut l = primitives::box_lattice([n; 3], Vec3::zeros(), Vec3::repeat((n - 1) as f64));
-    let mut seed = 0x2545_f491_4f6c_dd1du64;
-    let mut next = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
-    for p in l.points_mut() {
-        *p += Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.2;
-    }
+    let l = limit::benchmark_lattice();
     let f = Features::none(&l);
     let mk = |par| {
         LimitEvaluator::new(
@@ -69,15 +57,7 @@ fn main() {
     let t = Instant::now();
     let (seq, par) = (mk(Parallelism::Sequential), mk(Parallelism::Rayon));
     let setup = t.elapsed().as_secs_f64() / 2.0;
-    let regular: Vec<usize> = (0..l.num_cells())
-        .filter(|&c| seq.is_regular(CellId(c as u32)))
-        .collect();
-    let queries: Vec<LimitQuery> = (0..1_000_000)
-        .map(|_| LimitQuery {
-            cell: regular[(next() * regular.len() as f64) as usize % regular.len()],
-            uvw: [next(), next(), next()],
-        })
-        .collect();
+    let queries = limit::benchmark_queries(&seq, l.num_cells(), 1_000_000);
     let mut out = vec![LimitPoint::default(); queries.len()];
     let t1 = best(seconds, || seq.evaluate_into(&queries, &mut out).unwrap());
     let t2 = best(seconds, || par.evaluate_into(&queries, &mut out).unwrap());
@@ -91,13 +71,22 @@ fn main() {
         thread_cpu_seconds().unwrap_or(c0) - c0
     });
     // The irregular path: points on the boundary (stop at the tolerance).
-    let boundary: Vec<LimitQuery> = (0..200)
-        .map(|_| LimitQuery {
-            cell: (next() * l.num_cells() as f64) as usize % l.num_cells(),
-            uvw: [next(), next(), 0.0],
+    let boundary: Vec<LimitQuery> = (0..l.num_cells())
+        .filter(|&c| !seq.is_regular(CellId(c as u32)))
+        .take(200)
+        .enumerate()
+        .map(|(i, cell)| LimitQuery {
+            cell,
+            uvw: [
+                (i * 37 % 100) as f64 / 100.0,
+                (i * 61 % 100) as f64 / 100.0,
+                0.0,
+            ],
         })
-        .filter(|q| !seq.is_regular(CellId(q.cell as u32)))
         .collect();
+    let regular = (0..l.num_cells())
+        .filter(|&c| seq.is_regular(CellId(c as u32)))
+        .count();
     let mut bout = vec![LimitPoint::default(); boundary.len()];
     let tb = best(seconds.min(1.0), || {
         seq.evaluate_into(&boundary, &mut bout).unwrap()
@@ -106,7 +95,7 @@ fn main() {
     println!(
         "cells {} (regular {}), set-up {:.1} ms; regular: 1 thread {:.2}M points/s, {} threads {:.2}M points/s (goal >= 20M), CPU time on one thread {}; boundary (w = 0, tolerance {:.1e} of the diagonal): {:.0} us/point, {:.1} levels on average",
         l.num_cells(),
-        regular.len(),
+        regular,
         setup * 1e3,
         queries.len() as f64 / t1 / 1e6,
         rayon::current_num_threads(),

@@ -1071,6 +1071,51 @@ pub fn child_cell(
     Some((c, f, out))
 }
 
+/// The limit-evaluation benchmark (issue 19's speed goal; `vclay bench` and
+/// `examples/limit_bench.rs`): a `14^3`-point box lattice whose points are moved by up to 0.1 of
+/// the cell size (seeded), so its 1,331 interior-regular cells are tricubic but not uniform.
+pub fn benchmark_lattice() -> Lattice {
+    let n = 14;
+    let mut l = crate::primitives::box_lattice([n; 3], Vec3::zeros(), Vec3::repeat((n - 1) as f64));
+    let mut next = benchmark_random(0x2545_f491_4f6c_dd1d);
+    for p in l.points_mut() {
+        *p += Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.2;
+    }
+    l
+}
+
+/// `count` seeded queries at uniform random parameters in uniformly chosen regular cells of the
+/// evaluator's lattice (the benchmark's points); empty when no cell is regular.
+pub fn benchmark_queries(
+    evaluator: &LimitEvaluator<'_>,
+    cells: usize,
+    count: usize,
+) -> Vec<LimitQuery> {
+    let regular: Vec<usize> = (0..cells)
+        .filter(|&c| u32::try_from(c).is_ok_and(|c| evaluator.is_regular(CellId(c))))
+        .collect();
+    if regular.is_empty() {
+        return Vec::new();
+    }
+    let mut next = benchmark_random(0x9e37_79b9_7f4a_7c15);
+    (0..count)
+        .map(|_| LimitQuery {
+            cell: regular[(next() * regular.len() as f64) as usize % regular.len()],
+            uvw: [next(), next(), next()],
+        })
+        .collect()
+}
+
+/// Xorshift64 uniform numbers in `[0, 1)` (seeded; the benchmark's figures are reproducible).
+fn benchmark_random(mut seed: u64) -> impl FnMut() -> f64 {
+    move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
