@@ -14,9 +14,11 @@ pub mod quadrature;
 pub mod team;
 pub mod text;
 pub mod tolerance;
+pub mod triangle_rule;
 
 pub use math::{Interval, Vec3, Vec4};
 pub use mesh::{MeshError, MeshSink, TriMesh};
 pub use par::Parallelism;
 pub use quadrature::GaussLegendre;
 pub use tolerance::Tolerance;
+pub use triangle_rule::TriangleRule;

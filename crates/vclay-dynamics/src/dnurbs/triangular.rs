@@ -16,14 +16,21 @@
 //! along the knot segments that cross it ([`TriangularBasis::polynomial_cell_polygons`]) and
 //! **each cell is a finite element** whose degrees of freedom are only the control points whose
 //! functions are non-zero on it (positive at its centroid: B-splines are positive inside their
-//! support), integrated by a collapsed (Duffy) Gauss-Legendre rule with `k x k` points on each
-//! triangle of the cell's fan: exact for polynomials of total degree `2k - 2` on each cell, so
-//! with `k = n + 1` (the default) the mass and damping integrands of a polynomial
-//! (uniform-weight) surface (degree `2n`) and the stiffness integrands are integrated exactly;
-//! rational integrands converge as `k` grows. The engine is told which cell a quadrature point
-//! belongs to ([`GeneralizedGeometry::element_jacobian_at`]), so neighbouring cells may have
-//! different degrees of freedom. Per-cell lists cut the cost of the corner rounding 5-fold
-//! (on the corner a triangle touches about 40 control points, a cell about 10).
+//! support). Each triangle of a cell's fan gets the symmetric rule exact for total degree
+//! `2n` ([`vclay_core::TriangleRule`]: Dunavant's 6 points for `n = 2`, 12 for `n = 3`), the
+//! degree of the integrands of the control-point terms of a polynomial (uniform-weight)
+//! surface, so those are integrated exactly (`tests/triangular.rs`: with the weights frozen
+//! the corner rounding follows the collapsed `3 x 3` rule, exact for the same degree, to
+//! 1e-16). The weight columns `N_j (p_j - s) / W` make the weight terms of degree `4n` at
+//! uniform weights and rational afterwards: no rule of the cells is exact for them, and a
+//! `7 x 7` reference puts the symmetric rule and the collapsed `3 x 3` rule equally close
+//! (3.8e-4 and 4.5e-4 after 8 corner steps in which the weights move by 25 %, model size
+//! 5.5); [`TriangleQuadrature::Subdivided`] with `points: Some(k)` takes the collapsed rule
+//! with `k x k` points (exact for degree `2k - 2`) for a tighter rational integral (`k = 5`:
+//! 7e-7 after the same steps). The engine is told which cell a quadrature point belongs to
+//! ([`GeneralizedGeometry::element_jacobian_at`]), so neighbouring cells may have different
+//! degrees of freedom. Per-cell lists cut the cost of the corner rounding 5-fold (on the
+//! corner a triangle touches about 40 control points, a cell about 10).
 //!
 //! The paper's rule, one Gauss rule per triangle ([`TriangleQuadrature::Whole`], "we can
 //! further subdivide the subdomains", section 5.2), integrates across the kinks of the basis and
@@ -41,10 +48,12 @@
 //! stores them per cell (`CellBasis`) and [`GeneralizedGeometry::element_jacobian_at`] forms
 //! the rational columns of eq 13 from them each step, with the arithmetic of
 //! [`TriangularNurbs::eval_in_element`] (results bit for bit those of a direct evaluation,
-//! `tests/triangular.rs`). Memory: 48 bytes per kept control point per quadrature point, 3.9 MB
-//! on the corner rounding with the exact cells (6,948 points), 1.1 MB with one 6 x 6 rule per
+//! `tests/triangular.rs`). Memory: 48 bytes per kept control point per quadrature point, 2.6 MB
+//! on the corner rounding with the exact cells (4,632 points), 1.1 MB with one 6 x 6 rule per
 //! triangle ([`TriangularGeometry::cached_basis_bytes`]). Points other than the cached rule's
-//! are evaluated directly.
+//! are evaluated directly. Fixed control points (the held far boundary of the rounding
+//! models) get only their order-0 columns, the ones the engine still reads of them
+//! (`ColumnHint` in `generalized.rs`).
 //!
 //! ## Limitations
 //! Point location is a linear scan over the domain triangles; [`GeneralizedGeometry::nearest_param`]
@@ -56,8 +65,8 @@ use super::generalized::{
 };
 use crate::error::DynamicsError;
 use std::sync::{Arc, OnceLock};
-use vclay_core::{GaussLegendre, Vec3};
-use vclay_spline::simplex::{Point2, det3};
+use vclay_core::{TriangleRule, Vec3};
+use vclay_spline::simplex::Point2;
 use vclay_spline::triangular::fan;
 use vclay_spline::{SplineError, TriangularNurbs, TriangularPoint};
 
@@ -66,10 +75,13 @@ pub use vclay_spline::triangular::TriangularBasis;
 /// How element integrals over a domain triangle are computed (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TriangleQuadrature {
-    /// Cut along the knot segments, `k x k` collapsed Gauss points per cell; `k = None` follows
-    /// the engine's Gauss order, raised to at least `n + 1` (the default).
+    /// Cut along the knot segments into polynomial cells. `points: None` (the default): on
+    /// each triangle of a cell's fan, the symmetric rule exact for total degree `2n`
+    /// ([`TriangleRule::exact_for_degree`]; 6 points for `n = 2`, 12 for `n = 3`), the degree
+    /// of the integrands of the control-point terms. `points: Some(k)`: the collapsed Gauss
+    /// rule with `k x k` points (exact for degree `2k - 2`).
     Subdivided {
-        /// Points per direction on each cell.
+        /// Collapsed Gauss points per direction on each cell (`None`: the symmetric rule).
         points: Option<usize>,
     },
     /// One collapsed Gauss rule with `k x k` points on the whole triangle (the paper's rule).
@@ -98,21 +110,20 @@ pub fn collapsed_gauss(
     params: &mut Vec<[f64; 2]>,
     weights: &mut Vec<f64>,
 ) -> Result<(), DynamicsError> {
-    let g = GaussLegendre::new(k).map_err(|_| DynamicsError::Parameter {
+    let rule = TriangleRule::collapsed(k).map_err(|_| points_error(k))?;
+    for (x, w) in rule.on_triangle(tri) {
+        params.push(x);
+        weights.push(w);
+    }
+    Ok(())
+}
+
+fn points_error(k: usize) -> DynamicsError {
+    DynamicsError::Parameter {
         name: "triangle quadrature points",
         value: k as f64,
         why: "no Gauss-Legendre rule with this many points (1 to 64)",
-    })?;
-    let [a, b, c] = tri;
-    let area2 = det3(a, b, c).abs();
-    let pts: Vec<(f64, f64)> = g.on_interval(0.0, 1.0).collect();
-    for &(xi, wx) in &pts {
-        for &(eta, we) in &pts {
-            params.push([0, 1].map(|d| a[d] + xi * (b[d] - a[d]) + xi * eta * (c[d] - b[d])));
-            weights.push(wx * we * xi * area2);
-        }
     }
-    Ok(())
 }
 
 thread_local! {
@@ -293,13 +304,34 @@ impl TriangularGeometry {
         Ok((p, w))
     }
 
-    fn points_per_direction(&self, engine_order: usize) -> usize {
-        let n = self.surface.basis().degree();
-        match self.quadrature {
+    /// The quadrature points and weights on `polygon` (module docs).
+    fn polygon_rule(&self, polygon: &[Point2]) -> Result<(Vec<[f64; 2]>, Vec<f64>), DynamicsError> {
+        let (mut params, mut weights) = (Vec::new(), Vec::new());
+        let k = match self.quadrature {
             TriangleQuadrature::Subdivided { points: Some(k) } => k,
-            TriangleQuadrature::Subdivided { points: None } => (n + 1).max(engine_order.min(n + 1)),
             TriangleQuadrature::Whole { points } => points,
+            TriangleQuadrature::Subdivided { points: None } => {
+                let n = self.surface.basis().degree();
+                let rule = TriangleRule::exact_for_degree(2 * n).map_err(|_| {
+                    DynamicsError::Parameter {
+                        name: "triangular degree",
+                        value: n as f64,
+                        why: "no triangle quadrature rule of twice this degree",
+                    }
+                })?;
+                for tri in fan(polygon, 0.0) {
+                    for (x, w) in rule.on_triangle(tri) {
+                        params.push(x);
+                        weights.push(w);
+                    }
+                }
+                return Ok((params, weights));
+            }
+        };
+        for tri in fan(polygon, 0.0) {
+            collapsed_gauss(tri, k, &mut params, &mut weights)?;
         }
+        Ok((params, weights))
     }
 
     fn eval(&self, param: [f64; 2], p: &mut TriangularPoint) -> Result<(), DynamicsError> {
@@ -352,19 +384,27 @@ fn rational_columns(
     out.blocks.clear();
     out.vectors.clear();
     let [w1, w2, w3, w4, w5] = [wa[1], wa[2], wa[3], wa[4], wa[5]];
+    let zero = Vec3::zeros();
     for (b, c) in basis.iter().zip(controls) {
         let [n0, n1, n2, n3, n4, n5] = *b;
         let (wc, pc) = (weights[c], points[c]);
         let r0 = n0 * wc * iw;
+        let g0 = (pc - s[0]) * (n0 * iw);
+        // A fixed control point: only its order-0 columns are read (`ColumnHint`).
+        if out.hint.values_only(c) {
+            out.blocks.push((4 * c, [r0, 0.0, 0.0, 0.0, 0.0, 0.0]));
+            out.vectors
+                .push((4 * c + 3, [g0, zero, zero, zero, zero, zero]));
+            continue;
+        }
         let r1 = (n1 * wc - w1 * r0) * iw;
         let r2 = (n2 * wc - w2 * r0) * iw;
+        let g1 = (pc * n1 - s[1] * n0 - s[0] * n1 - g0 * w1) * iw;
+        let g2 = (pc * n2 - s[2] * n0 - s[0] * n2 - g0 * w2) * iw;
         let r3 = (n3 * wc - w3 * r0 - 2.0 * w1 * r1) * iw;
         let r4 = (n4 * wc - w4 * r0 - w2 * r1 - w1 * r2) * iw;
         let r5 = (n5 * wc - w5 * r0 - 2.0 * w2 * r2) * iw;
         out.blocks.push((4 * c, [r0, r1, r2, r3, r4, r5]));
-        let g0 = (pc - s[0]) * (n0 * iw);
-        let g1 = (pc * n1 - s[1] * n0 - s[0] * n1 - g0 * w1) * iw;
-        let g2 = (pc * n2 - s[2] * n0 - s[0] * n2 - g0 * w2) * iw;
         let g3 = (pc * n3 - s[3] * n0 - s[0] * n3 - g0 * w3 - (s[1] * n1 + g1 * w1) * 2.0) * iw;
         let g4 =
             (pc * n4 - s[4] * n0 - s[0] * n4 - g0 * w4 - s[1] * n2 - g1 * w2 - s[2] * n1 - g2 * w1)
@@ -428,14 +468,10 @@ impl GeneralizedGeometry for TriangularGeometry {
     fn element_quadrature(
         &self,
         element: usize,
-        order: [usize; 2],
+        _order: [usize; 2],
     ) -> Option<(Vec<[f64; 2]>, Vec<f64>)> {
-        let k = self.points_per_direction(order[0].max(order[1]));
         let cell = self.cells.get(element)?;
-        let (mut p, mut w) = (Vec::new(), Vec::new());
-        for tri in fan(&cell.polygon, 0.0) {
-            collapsed_gauss(tri, k, &mut p, &mut w).ok()?;
-        }
+        let (p, w) = self.polygon_rule(&cell.polygon).ok()?;
         if let Some(slot) = self.bases.get(element) {
             // The first rule asked for is cached; points of another rule miss the cache and
             // are evaluated directly in `element_jacobian_at`.
