@@ -1,13 +1,30 @@
-//! IGES (5.3 and earlier, fixed 80-column ASCII) import of Rational B-Spline Curves (entity 126)
-//! and Rational B-Spline Surfaces (entity 128).
+//! IGES (5.3 and earlier, fixed 80-column ASCII) import of curves (126 rational B-spline, 110
+//! line, 100 circular arc) and surfaces (128 rational B-spline, 120 surface of revolution, 122
+//! tabulated cylinder, 108 plane).
 //!
-//! **What.** Every entity 128 is imported, including the basis surfaces of trimmed surfaces
-//! (144) and faces (510), untrimmed, with a warning. An entity 126 is imported when it is
-//! independent: curves that are physically dependent (subordinate switch 01 or 03: trimming
-//! curves, parts of composite curves) or 2D parametric (use flag 05) belong to a dropped
-//! topology and are counted in a warning. Knots, weights and control points are taken as
+//! **What.** Every surface is imported, including the basis surfaces of trimmed surfaces (144)
+//! and faces (510), untrimmed, with a warning. A curve is imported when it is independent:
+//! curves that are physically dependent (subordinate switch 01 or 03: trimming curves, parts of
+//! composite curves, generatrices) or 2D parametric (use flag 05) belong to a dropped topology
+//! or to a surface and are counted in a warning. Knots, weights and control points are taken as
 //! written; IGES surface nets run with the u index fastest and are transposed to vclay's order.
 //! Labels (directory entry field 18) become entity names.
+//!
+//! **Exact conversions** (Piegl & Tiller, *The NURBS Book*, sections 7.3 and 8.3-8.5): a line is
+//! a degree-1 NURBS on `[0, 1]`; a circular arc (in the plane `z = ZT`, counter-clockwise from
+//! its start to its end point; a full circle when they coincide) a rational quadratic with
+//! knots at its quarter joints, parametrized by the angle at the joints; a surface of
+//! revolution turns its generatrix about the axis line from the start to the terminate angle
+//! (u the angle, v the generatrix's parameter); a tabulated cylinder sweeps its directrix by
+//! the generatrix vector (`S(u, v) = C(u) + v (L - C(u0))`, v in `[0, 1]`); a plane
+//! `A x + B y + C z = D` is the rectangle, in an orthonormal frame of the plane, holding the
+//! control points of its bounding curve (form 1) or, for an unbounded plane (form 0), of the
+//! outer boundaries of the trimmed surfaces on it (the model-space curve of 144's outer 142).
+//!
+//! **Transformation matrices** (entity 124, `x -> R x + T`) are applied: an entity's own, a
+//! matrix's own matrix (chained, at most 16 deep), and those of referenced curves, which map
+//! into the referencing entity's space (IGES section 3.2.3). NURBS are affinely invariant, so
+//! this is exact. Points a matrix sends past the range of numbers are an error.
 //!
 //! **How.** The Global section gives the parameter and record delimiters (default `,` and `;`);
 //! the Directory Entry section (two lines per entity) gives each entity's type, parameter data
@@ -17,20 +34,27 @@
 //!
 //! **Warnings.** [`CadImport::warnings`] lists every entity not read with counts per type
 //! number (and its name for common types), trimming dropped, parameter ranges narrower than the
-//! knot domain (the whole spline is imported), and transformation matrices (entity 124), which
-//! are not applied.
+//! knot domain (the whole spline is imported), surfaces whose generatrix, directrix or
+//! boundary is of a type not read, and unbounded planes with no boundary to size them.
 //!
 //! **Errors.** A malformed file is an [`IoError::Cad`] naming the line and the directory entry:
-//! `IGES line 9, entity DE 3: entity 128: expected 362 parameters, found 300`.
+//! `IGES line 9, entity DE 3: entity 128: expected 362 parameters, found 300`; pointers to
+//! entries that do not exist, an axis that is not a line, angles out of order, zero-length
+//! lines and zero-radius arcs are named the same way.
 //!
-//! **Limitations.** No compressed ASCII or binary IGES; no other curve or surface types
-//! (lines, arcs, planes, surfaces of revolution: listed as not read); trimming and B-rep
-//! topology dropped; transformation matrices and units not applied.
+//! **Limitations.** No compressed ASCII or binary IGES; conics (104), parametric splines (112,
+//! 114), ruled and offset surfaces (118, 140) and the unbounded analytic surfaces of IGES
+//! B-rep files (190-198) are listed as not read; trimming and B-rep topology dropped; units not
+//! applied; a plane sized by a trimmed surface's boundary ignores a matrix on the 144 itself.
 
 use crate::error::IoError;
 use crate::model::{Entity, NamedEntity};
 use crate::step_read::CadImport;
+use crate::step_read::{arc, extrude, revolve_between};
+use nalgebra::Matrix3;
+use std::cell::RefCell;
 use std::collections::BTreeMap;
+use std::f64::consts::TAU;
 use std::path::Path;
 use vclay_core::Vec3;
 use vclay_spline::{NurbsCurve, NurbsSurface};
@@ -239,6 +263,482 @@ impl Params<'_> {
     }
 }
 
+/// Most nested references followed (transformation chains, curves inside curves): deeper is a
+/// cycle or a hostile file.
+const MAX_DEPTH: usize = 16;
+
+/// An affine map `x -> m x + t` (entity 124).
+type Affine = (Matrix3<f64>, Vec3);
+
+/// The directory and parameter sections, for reading entities that reference others.
+struct Reader<'a> {
+    dirs: &'a [Dir],
+    p: &'a [(usize, String)],
+    pd: char,
+    rd: char,
+    /// Warnings met while reading referenced entities.
+    warnings: RefCell<Vec<String>>,
+}
+
+impl Reader<'_> {
+    /// The directory entry `de`, referenced by `from`.
+    fn dir(&self, de: usize, from: &Dir) -> Result<&Dir, IoError> {
+        if de % 2 == 1 && (de - 1) / 2 < self.dirs.len() {
+            Ok(&self.dirs[(de - 1) / 2])
+        } else {
+            Err(err(
+                from.line,
+                Some(from.de),
+                format!(
+                    "entity {}: pointer {de} is not a directory entry (odd, 1 to {})",
+                    from.kind,
+                    2 * self.dirs.len() - 1
+                ),
+            ))
+        }
+    }
+
+    /// The parameter tokens of `dir` (its type number first, checked).
+    fn params(&self, dir: &Dir) -> Result<Vec<Tok>, IoError> {
+        let p = self.p;
+        if dir.pointer == 0 || dir.pointer + dir.count - 1 > p.len() || dir.count == 0 {
+            return Err(err(
+                dir.line,
+                Some(dir.de),
+                format!(
+                    "parameter data lines {}..{} are outside the P section ({} lines)",
+                    dir.pointer,
+                    dir.pointer + dir.count.max(1) - 1,
+                    p.len()
+                ),
+            ));
+        }
+        let mut data = Vec::new();
+        for (line, s) in &p[dir.pointer - 1..dir.pointer - 1 + dir.count] {
+            data.extend(s.chars().take(64).map(|c| (c, *line)));
+            data.push((' ', *line));
+        }
+        let toks = split(&data, self.pd, self.rd, dir.de)?;
+        let ps = Params {
+            toks: &toks,
+            de: dir.de,
+            kind: dir.kind,
+        };
+        if ps.int(0, "entity type")? != dir.kind as usize {
+            return Err(ps.err(0, "the parameter data starts with another entity type"));
+        }
+        Ok(toks)
+    }
+
+    /// The map of `dir`'s transformation matrix (entity 124), composed with the 124's own
+    /// (`x -> M2 (M x + T) + T2`); `None` when it has none.
+    fn transform(&self, dir: &Dir, depth: usize) -> Result<Option<Affine>, IoError> {
+        if dir.transform == 0 {
+            return Ok(None);
+        }
+        if depth >= MAX_DEPTH {
+            return Err(err(
+                dir.line,
+                Some(dir.de),
+                format!("transformation matrices chained deeper than {MAX_DEPTH} (a cycle?)"),
+            ));
+        }
+        let t = self.dir(dir.transform, dir)?;
+        if t.kind != 124 {
+            return Err(err(
+                dir.line,
+                Some(dir.de),
+                format!(
+                    "transformation matrix pointer {} is an entity of type {}, not 124",
+                    dir.transform, t.kind
+                ),
+            ));
+        }
+        let toks = self.params(t)?;
+        let ps = Params {
+            toks: &toks,
+            de: t.de,
+            kind: 124,
+        };
+        ps.need(13)?;
+        let v = ps.reals(1, 12, "matrix entry")?;
+        let m = Matrix3::new(v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10]);
+        let tr = Vec3::new(v[3], v[7], v[11]);
+        Ok(Some(match self.transform(t, depth + 1)? {
+            None => (m, tr),
+            Some((m2, t2)) => (m2 * m, m2 * tr + t2),
+        }))
+    }
+
+    /// Curve entity `de` (referenced by `from`) as a NURBS curve in the referencing entity's
+    /// space (its own transformation applied): 126, 110 (line), 100 (circular arc). `Ok(Err(t))`
+    /// for another type `t`.
+    fn curve(
+        &self,
+        de: usize,
+        from: &Dir,
+        depth: usize,
+    ) -> Result<Result<NurbsCurve, u32>, IoError> {
+        let dir = self.dir(de, from)?;
+        if depth >= MAX_DEPTH {
+            return Err(err(
+                dir.line,
+                Some(dir.de),
+                format!("curves nested deeper than {MAX_DEPTH} (a cycle?)"),
+            ));
+        }
+        if !matches!(dir.kind, 100 | 110 | 126) {
+            return Ok(Err(dir.kind));
+        }
+        let toks = self.params(dir)?;
+        let ps = Params {
+            toks: &toks,
+            de: dir.de,
+            kind: dir.kind,
+        };
+        let mut c = match dir.kind {
+            126 => self.bspline_curve(&ps)?,
+            110 => {
+                ps.need(7)?;
+                let p = ps.points(1, 2)?;
+                if p[0] == p[1] {
+                    return Err(ps.err(1, "line of zero length"));
+                }
+                NurbsCurve::new(1, vec![0.0, 0.0, 1.0, 1.0], p, None).map_err(|e| ps.err(0, e))?
+            }
+            _ => {
+                // 100: in the plane z = ZT, centre, start and end, counter-clockwise.
+                ps.need(8)?;
+                let v = ps.reals(1, 7, "arc coordinate")?;
+                let (zt, c, s, e) = (v[0], [v[1], v[2]], [v[3], v[4]], [v[5], v[6]]);
+                let r = (s[0] - c[0]).hypot(s[1] - c[1]);
+                let re = (e[0] - c[0]).hypot(e[1] - c[1]);
+                if r <= 0.0 {
+                    return Err(ps.err(1, "arc of zero radius"));
+                }
+                if (r - re).abs() > 1e-6 * r.max(1.0) {
+                    self.warnings.borrow_mut().push(format!(
+                        "entity DE {} (type 100): end point is {:.3e} off the circle; the arc \
+                         ends at its angle",
+                        dir.de,
+                        (r - re).abs()
+                    ));
+                }
+                let a0 = (s[1] - c[1]).atan2(s[0] - c[0]);
+                let mut a1 = (e[1] - c[1]).atan2(e[0] - c[0]);
+                // Equal start and end: a full circle.
+                while a1 <= a0 + 1e-12 {
+                    a1 += TAU;
+                }
+                let (knots, pts, w) = arc(
+                    Vec3::new(c[0], c[1], zt),
+                    Vec3::x(),
+                    Vec3::y(),
+                    r,
+                    r,
+                    a0,
+                    a1,
+                );
+                NurbsCurve::new(2, knots, pts, Some(w)).map_err(|e| ps.err(0, e))?
+            }
+        };
+        if let Some((m, t)) = self.transform(dir, 0)? {
+            c.transform(&m, &t);
+            finite(c.control_points(), dir)?;
+        }
+        Ok(Ok(c))
+    }
+
+    /// The control points of curve `de` or of the members of a composite curve (102), in the
+    /// referencing entity's space: a hull of the curve, for the extent of planes.
+    fn curve_points(
+        &self,
+        de: usize,
+        from: &Dir,
+        depth: usize,
+    ) -> Result<Result<Vec<Vec3>, u32>, IoError> {
+        let dir = self.dir(de, from)?;
+        if dir.kind != 102 {
+            return Ok(self
+                .curve(de, from, depth)?
+                .map(|c| c.control_points().to_vec()));
+        }
+        if depth >= MAX_DEPTH {
+            return Err(err(
+                dir.line,
+                Some(dir.de),
+                format!("curves nested deeper than {MAX_DEPTH} (a cycle?)"),
+            ));
+        }
+        let toks = self.params(dir)?;
+        let ps = Params {
+            toks: &toks,
+            de: dir.de,
+            kind: 102,
+        };
+        let n = ps.int(1, "member count")?;
+        ps.need(2 + n)?;
+        let mut out = Vec::new();
+        for k in 0..n {
+            match self.curve_points(ps.int(2 + k, "member pointer")?, dir, depth + 1)? {
+                Ok(p) => out.extend(p),
+                Err(t) => return Ok(Err(t)),
+            }
+        }
+        if let Some((m, t)) = self.transform(dir, 0)? {
+            for p in &mut out {
+                *p = m * *p + t;
+            }
+            finite(&out, dir)?;
+        }
+        Ok(Ok(out))
+    }
+
+    /// Entity 126 (the parameter range is checked against the knot domain).
+    fn bspline_curve(&self, ps: &Params<'_>) -> Result<NurbsCurve, IoError> {
+        let k = ps.int(1, "upper index K")?;
+        let m = ps.int(2, "degree M")?;
+        let n = k + 1;
+        let nk = k + m + 2;
+        ps.need(7 + nk + n + 3 * n + 2)?;
+        let knots = ps.reals(7, nk, "knot")?;
+        let w = ps.reals(7 + nk, n, "weight")?;
+        let pts = ps.points(7 + nk + n, n)?;
+        let r = ps.reals(7 + nk + 4 * n, 2, "parameter range")?;
+        let c = NurbsCurve::new(m, knots, pts, Some(w)).map_err(|e| ps.err(0, e))?;
+        let dom = vclay_spline::ParametricCurve::domain(&c);
+        self.check_range(ps, &r, &[dom.min, dom.max]);
+        Ok(c)
+    }
+
+    /// Entity 128 (IGES nets run with the u index fastest: transposed to vclay's order).
+    fn bspline_surface(&self, ps: &Params<'_>) -> Result<NurbsSurface, IoError> {
+        let (k1, k2) = (ps.int(1, "upper index K1")?, ps.int(2, "upper index K2")?);
+        let (m1, m2) = (ps.int(3, "degree M1")?, ps.int(4, "degree M2")?);
+        let (nu, nv) = (k1 + 1, k2 + 1);
+        let (a, b) = (k1 + m1 + 2, k2 + m2 + 2);
+        let nn = nu.saturating_mul(nv);
+        ps.need(10 + a + b + 4 * nn + 4)?;
+        let ku = ps.reals(10, a, "u knot")?;
+        let kv = ps.reals(10 + a, b, "v knot")?;
+        let wi = ps.reals(10 + a + b, nn, "weight")?;
+        let pi = ps.points(10 + a + b + nn, nn)?;
+        let r = ps.reals(10 + a + b + 4 * nn, 4, "parameter range")?;
+        let mut pts = Vec::with_capacity(nn);
+        let mut w = Vec::with_capacity(nn);
+        for i in 0..nu {
+            for j in 0..nv {
+                pts.push(pi[j * nu + i]);
+                w.push(wi[j * nu + i]);
+            }
+        }
+        let s = NurbsSurface::from_flat(
+            [
+                vclay_spline::KnotVector::new(ku, m1, nu)
+                    .map_err(|e| ps.err(0, format!("u knots: {e}")))?,
+                vclay_spline::KnotVector::new(kv, m2, nv)
+                    .map_err(|e| ps.err(0, format!("v knots: {e}")))?,
+            ],
+            pts,
+            w,
+        )
+        .map_err(|e| ps.err(0, e))?;
+        let dom = vclay_spline::ParametricSurface::domain(&s);
+        self.check_range(ps, &r, &[dom[0].min, dom[0].max, dom[1].min, dom[1].max]);
+        Ok(s)
+    }
+
+    /// Warns when a B-spline's parameter range is narrower than its knot domain.
+    fn check_range(&self, ps: &Params<'_>, range: &[f64], domain: &[f64]) {
+        let tol = 1e-9 * domain.iter().fold(1.0f64, |a, &x| a.max(x.abs()));
+        if range.iter().zip(domain).any(|(r, d)| (r - d).abs() > tol) {
+            self.warnings.borrow_mut().push(format!(
+                "entity DE {} (type {}): parameter range {range:?} differs from the knot domain \
+                 {domain:?}; the whole spline is imported",
+                ps.de, ps.kind
+            ));
+        }
+    }
+
+    /// Surface entity `dir` as a NURBS surface in model space: 128, 120 (surface of
+    /// revolution), 122 (tabulated cylinder), 108 (plane: bounded by its own curve, or by the
+    /// outer boundaries in `bounds`). `None` (with a warning) when it cannot be built.
+    fn surface(
+        &self,
+        dir: &Dir,
+        bounds: &BTreeMap<usize, Vec<Vec3>>,
+        warnings: &mut Vec<String>,
+    ) -> Result<Option<NurbsSurface>, IoError> {
+        let toks = self.params(dir)?;
+        let ps = Params {
+            toks: &toks,
+            de: dir.de,
+            kind: dir.kind,
+        };
+        let unsupported = |what: &str, t: u32, warnings: &mut Vec<String>| {
+            warnings.push(format!(
+                "entity DE {} (type {}): its {what} is an entity of type {t}, not read; the \
+                 surface is not imported",
+                dir.de, dir.kind
+            ));
+        };
+        let mut s = match dir.kind {
+            128 => self.bspline_surface(&ps)?,
+            120 => {
+                ps.need(5)?;
+                let axis = self.dir(ps.int(1, "axis pointer")?, dir)?;
+                if axis.kind != 110 {
+                    return Err(ps.err(
+                        1,
+                        format!("the axis is of type {}, not a line (110)", axis.kind),
+                    ));
+                }
+                let line = match self.curve(axis.de, dir, 1)? {
+                    Ok(line) => line,
+                    Err(t) => {
+                        unsupported("axis", t, warnings);
+                        return Ok(None);
+                    }
+                };
+                let (a0, a1) = (line.control_points()[0], line.control_points()[1]);
+                let generatrix = match self.curve(ps.int(2, "generatrix pointer")?, dir, 1)? {
+                    Ok(c) => c,
+                    Err(t) => {
+                        unsupported("generatrix", t, warnings);
+                        return Ok(None);
+                    }
+                };
+                let (sa, ta) = (ps.real(3, "start angle")?, ps.real(4, "terminate angle")?);
+                if !(ta > sa && ta - sa <= TAU * (1.0 + 1e-12)) {
+                    return Err(ps.err(
+                        3,
+                        format!("angles {sa} to {ta}: need start < terminate <= start + 2 pi"),
+                    ));
+                }
+                revolve_between(a0, (a1 - a0).normalize(), &generatrix, sa, ta.min(sa + TAU))
+                    .map_err(|e| ps.err(0, e))?
+            }
+            122 => {
+                ps.need(5)?;
+                let directrix = match self.curve(ps.int(1, "directrix pointer")?, dir, 1)? {
+                    Ok(c) => c,
+                    Err(t) => {
+                        unsupported("directrix", t, warnings);
+                        return Ok(None);
+                    }
+                };
+                let end = ps.points(2, 1)?[0];
+                let dom = vclay_spline::ParametricCurve::domain(&directrix);
+                let start = vclay_spline::ParametricCurve::point(&directrix, dom.min)
+                    .map_err(|e| ps.err(1, e))?;
+                if end == start {
+                    return Err(ps.err(2, "generatrix of zero length"));
+                }
+                extrude(&directrix, end - start, 0.0, 1.0).map_err(|e| ps.err(0, e))?
+            }
+            _ => {
+                // 108: A x + B y + C z = D; form 1/-1 bounded by the curve at PTR.
+                ps.need(6)?;
+                let v = ps.reals(1, 4, "plane coefficient")?;
+                let n = Vec3::new(v[0], v[1], v[2]);
+                if n.norm() == 0.0 {
+                    return Err(ps.err(1, "plane normal (A, B, C) is zero"));
+                }
+                let ptr = ps.int(5, "bounding curve pointer")?;
+                let hull = if ptr != 0 {
+                    match self.curve_points(ptr, dir, 1)? {
+                        Ok(p) => p,
+                        Err(t) => {
+                            unsupported("bounding curve", t, warnings);
+                            return Ok(None);
+                        }
+                    }
+                } else if let Some(p) = bounds.get(&dir.de) {
+                    p.clone()
+                } else {
+                    warnings.push(format!(
+                        "entity DE {} (type 108): unbounded plane without a trimmed surface's \
+                         boundary to give its extent; not imported",
+                        dir.de
+                    ));
+                    return Ok(None);
+                };
+                match plane_patch(n, v[3], &hull) {
+                    Some(s) => s.map_err(|e| ps.err(0, e))?,
+                    None => {
+                        warnings.push(format!(
+                            "entity DE {} (type 108): its bounding curve spans no area; not \
+                             imported",
+                            dir.de
+                        ));
+                        return Ok(None);
+                    }
+                }
+            }
+        };
+        if let Some((m, t)) = self.transform(dir, 0)? {
+            s.transform(&m, &t);
+            finite(s.control_points(), dir)?;
+        }
+        Ok(Some(s))
+    }
+}
+
+/// An error unless every point is finite (a transformation matrix can overflow them).
+fn finite(points: &[Vec3], dir: &Dir) -> Result<(), IoError> {
+    if points.iter().all(|p| p.iter().all(|x| x.is_finite())) {
+        Ok(())
+    } else {
+        Err(err(
+            dir.line,
+            Some(dir.de),
+            format!(
+                "entity {}: its transformation matrix (DE {}) maps control points past the                  range of numbers",
+                dir.kind, dir.transform
+            ),
+        ))
+    }
+}
+
+/// The rectangle of the plane `n . x = d` that holds the projections of `hull` (bilinear,
+/// u and v along an orthonormal frame of the plane); `None` when they span no area.
+fn plane_patch(
+    n: Vec3,
+    d: f64,
+    hull: &[Vec3],
+) -> Option<Result<NurbsSurface, vclay_spline::SplineError>> {
+    let nn = n.norm_squared();
+    let origin = n * (d / nn);
+    let z = n / nn.sqrt();
+    let x = if z.x.abs() < 0.9 {
+        Vec3::x()
+    } else {
+        Vec3::y()
+    };
+    let x = (x - z * z.dot(&x)).normalize();
+    let y = z.cross(&x);
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in hull {
+        let q = [(p - origin).dot(&x), (p - origin).dot(&y)];
+        for k in 0..2 {
+            lo[k] = lo[k].min(q[k]);
+            hi[k] = hi[k].max(q[k]);
+        }
+    }
+    let size = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    if !(size.is_finite() && (0..2).all(|k| hi[k] - lo[k] > 1e-12 * size)) {
+        return None;
+    }
+    let at = |u: f64, v: f64| origin + x * u + y * v;
+    let pts = vec![
+        at(lo[0], lo[1]),
+        at(lo[0], hi[1]),
+        at(hi[0], lo[1]),
+        at(hi[0], hi[1]),
+    ];
+    Some(NurbsSurface::clamped_uniform([1, 1], [2, 2], pts))
+}
+
 /// Imports an IGES file's text. See the module documentation for what is read.
 pub fn parse_iges(text: &str) -> Result<CadImport, IoError> {
     let mut sections: BTreeMap<char, Vec<(usize, String)>> = BTreeMap::new();
@@ -332,15 +832,67 @@ pub fn parse_iges(text: &str) -> Result<CadImport, IoError> {
         });
     }
     let p = sections.get(&'P').unwrap_or(&empty);
+    let r = Reader {
+        dirs: &dirs,
+        p,
+        pd,
+        rd,
+        warnings: RefCell::new(Vec::new()),
+    };
     let mut entities = Vec::new();
     let mut not_read: BTreeMap<u32, usize> = BTreeMap::new();
     let mut warnings = Vec::new();
     let (mut dependent, mut trimmed) = (0usize, 0usize);
+    // Unbounded planes (108 form 0) take their extent from the outer boundaries of the trimmed
+    // surfaces (144) on them: model-space curves (142's CPTR, its fourth parameter).
+    let mut plane_bounds: BTreeMap<usize, Vec<Vec3>> = BTreeMap::new();
+    for dir in dirs.iter().filter(|d| d.kind == 144) {
+        let ps_toks = r.params(dir)?;
+        let ps = Params {
+            toks: &ps_toks,
+            de: dir.de,
+            kind: 144,
+        };
+        ps.need(5)?;
+        let (base, n1, outer) = (
+            ps.int(1, "surface pointer")?,
+            ps.int(2, "outer boundary flag")?,
+            ps.int(4, "outer boundary pointer")?,
+        );
+        if r.dir(base, dir)?.kind != 108 || n1 == 0 || outer == 0 {
+            continue;
+        }
+        let on = r.dir(outer, dir)?;
+        if on.kind != 142 {
+            continue;
+        }
+        let cos_toks = r.params(on)?;
+        let cos = Params {
+            toks: &cos_toks,
+            de: on.de,
+            kind: 142,
+        };
+        cos.need(6)?;
+        let model_curve = cos.int(4, "model space curve pointer")?;
+        if model_curve == 0 {
+            continue;
+        }
+        match r.curve_points(model_curve, on, 0)? {
+            Ok(points) => plane_bounds.entry(base).or_default().extend(points),
+            Err(kind) => warnings.push(format!(
+                "entity DE {} (type 144): its outer boundary has a curve of type {kind}, not read; \
+                 it does not bound plane DE {base}",
+                dir.de
+            )),
+        }
+    }
     for dir in &dirs {
         if matches!(dir.kind, 143 | 144 | 510) {
             trimmed += 1;
         }
-        if !matches!(dir.kind, 126 | 128) {
+        let curve = matches!(dir.kind, 100 | 110 | 126);
+        let surface = matches!(dir.kind, 108 | 120 | 122 | 128);
+        if !curve && !surface {
             *not_read.entry(dir.kind).or_default() += 1;
             continue;
         }
@@ -348,105 +900,28 @@ pub fn parse_iges(text: &str) -> Result<CadImport, IoError> {
         // fuzzer's input panicked here, issue 17).
         let sub = dir.status.get(2..4).unwrap_or("");
         let use_flag = dir.status.get(4..6).unwrap_or("");
-        if dir.kind == 126 && (matches!(sub, "01" | "03") || use_flag == "05") {
+        if curve && (matches!(sub, "01" | "03") || use_flag == "05") {
             dependent += 1;
             continue;
         }
-        if dir.pointer == 0 || dir.pointer + dir.count - 1 > p.len() || dir.count == 0 {
-            return Err(err(
-                dir.line,
-                Some(dir.de),
-                format!(
-                    "parameter data lines {}..{} are outside the P section ({} lines)",
-                    dir.pointer,
-                    dir.pointer + dir.count.max(1) - 1,
-                    p.len()
-                ),
-            ));
-        }
-        let mut data = Vec::new();
-        for (line, s) in &p[dir.pointer - 1..dir.pointer - 1 + dir.count] {
-            data.extend(s.chars().take(64).map(|c| (c, *line)));
-            data.push((' ', *line));
-        }
-        let toks = split(&data, pd, rd, dir.de)?;
-        let ps = Params {
-            toks: &toks,
-            de: dir.de,
-            kind: dir.kind,
-        };
-        if ps.int(0, "entity type")? != dir.kind as usize {
-            return Err(ps.err(0, "the parameter data starts with another entity type"));
-        }
         let name = (!dir.label.is_empty()).then(|| dir.label.clone());
-        let (entity, range, domain) = if dir.kind == 126 {
-            let k = ps.int(1, "upper index K")?;
-            let m = ps.int(2, "degree M")?;
-            let n = k + 1;
-            let nk = k + m + 2;
-            ps.need(7 + nk + n + 3 * n + 2)?;
-            let knots = ps.reals(7, nk, "knot")?;
-            let w = ps.reals(7 + nk, n, "weight")?;
-            let pts = ps.points(7 + nk + n, n)?;
-            let r = ps.reals(7 + nk + 4 * n, 2, "parameter range")?;
-            let c = NurbsCurve::new(m, knots, pts, Some(w)).map_err(|e| ps.err(0, e))?;
-            let dom = vclay_spline::ParametricCurve::domain(&c);
-            (Entity::Curve(c), r, vec![dom.min, dom.max])
-        } else {
-            let (k1, k2) = (ps.int(1, "upper index K1")?, ps.int(2, "upper index K2")?);
-            let (m1, m2) = (ps.int(3, "degree M1")?, ps.int(4, "degree M2")?);
-            let (nu, nv) = (k1 + 1, k2 + 1);
-            let (a, b) = (k1 + m1 + 2, k2 + m2 + 2);
-            let nn = nu.saturating_mul(nv);
-            ps.need(10 + a + b + 4 * nn + 4)?;
-            let ku = ps.reals(10, a, "u knot")?;
-            let kv = ps.reals(10 + a, b, "v knot")?;
-            let wi = ps.reals(10 + a + b, nn, "weight")?;
-            let pi = ps.points(10 + a + b + nn, nn)?;
-            let r = ps.reals(10 + a + b + 4 * nn, 4, "parameter range")?;
-            // IGES: u index fastest; vclay: v fastest.
-            let mut pts = Vec::with_capacity(nn);
-            let mut w = Vec::with_capacity(nn);
-            for i in 0..nu {
-                for j in 0..nv {
-                    pts.push(pi[j * nu + i]);
-                    w.push(wi[j * nu + i]);
+        let entity = if curve {
+            match r.curve(dir.de, dir, 0)? {
+                Ok(c) => Entity::Curve(c),
+                Err(kind) => {
+                    *not_read.entry(kind).or_default() += 1;
+                    continue;
                 }
             }
-            let s = NurbsSurface::from_flat(
-                [
-                    vclay_spline::KnotVector::new(ku, m1, nu)
-                        .map_err(|e| ps.err(0, format!("u knots: {e}")))?,
-                    vclay_spline::KnotVector::new(kv, m2, nv)
-                        .map_err(|e| ps.err(0, format!("v knots: {e}")))?,
-                ],
-                pts,
-                w,
-            )
-            .map_err(|e| ps.err(0, e))?;
-            let dom = vclay_spline::ParametricSurface::domain(&s);
-            (
-                Entity::Surface(s),
-                r,
-                vec![dom[0].min, dom[0].max, dom[1].min, dom[1].max],
-            )
+        } else {
+            match r.surface(dir, &plane_bounds, &mut warnings)? {
+                Some(s) => Entity::Surface(s),
+                None => continue,
+            }
         };
-        let tol = 1e-9 * domain.iter().fold(1.0f64, |a, &x| a.max(x.abs()));
-        if range.iter().zip(&domain).any(|(r, d)| (r - d).abs() > tol) {
-            warnings.push(format!(
-                "entity DE {} (type {}): parameter range {range:?} differs from the knot domain \
-                 {domain:?}; the whole spline is imported",
-                dir.de, dir.kind
-            ));
-        }
-        if dir.transform != 0 {
-            warnings.push(format!(
-                "entity DE {} (type {}): transformation matrix DE {} not applied",
-                dir.de, dir.kind, dir.transform
-            ));
-        }
         entities.push(NamedEntity { name, entity });
     }
+    warnings.append(&mut r.warnings.borrow_mut());
     if trimmed > 0 {
         warnings.push(format!(
             "{trimmed} trimmed surface(s) or face(s): their B-spline surfaces are imported \

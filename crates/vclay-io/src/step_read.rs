@@ -49,6 +49,7 @@
 //! semi-angles and circle trims.
 
 mod brep;
+pub(crate) use brep::{arc, extrude, revolve_between};
 
 pub use brep::{
     DEFAULT_RANGE, MAX_TRIM_SAMPLES, ParamAxis, TrimEdge, TrimLoop, TrimmedFace, tessellate_trimmed,

@@ -332,3 +332,147 @@ fn own_export_reads_back_exactly() {
         assert_eq!(got, want.iter().collect::<Vec<_>>());
     }
 }
+
+/// Distance from `p` to the surface `s`: the nearest of a 25 x 25 grid, then Gauss-Newton on
+/// the parameters (clamped to the domain).
+fn distance_to(s: &NurbsSurface, p: Vec3) -> f64 {
+    let [du, dv] = s.domain();
+    let at =
+        |i: usize, n: usize, d: vclay_core::Interval| d.min + (d.max - d.min) * i as f64 / n as f64;
+    let (mut u, mut v, mut best) = (du.min, dv.min, f64::INFINITY);
+    for i in 0..=24 {
+        for j in 0..=24 {
+            let (a, b) = (at(i, 24, du), at(j, 24, dv));
+            let d = (s.point(a, b).unwrap() - p).norm();
+            if d < best {
+                (u, v, best) = (a, b, d);
+            }
+        }
+    }
+    for _ in 0..40 {
+        let d = s.derivatives(u, v, 1).unwrap();
+        let r = d[0][0] - p;
+        let (su, sv) = (d[1][0], d[0][1]);
+        let (a, b, c) = (su.dot(&su), su.dot(&sv), sv.dot(&sv));
+        let (gu, gv) = (su.dot(&r), sv.dot(&r));
+        let det = a * c - b * b;
+        if det.abs() < 1e-300 {
+            break;
+        }
+        u = (u - (c * gu - b * gv) / det).clamp(du.min, du.max);
+        v = (v - (a * gv - b * gu) / det).clamp(dv.min, dv.max);
+    }
+    (s.point(u, v).unwrap() - p).norm()
+}
+
+/// IGES files of analytic and swept shapes written by OpenCASCADE
+/// (`bench/gen_iges_analytic.py`): planes (108) bounded by trimmed surfaces' outer
+/// boundaries, surfaces of revolution (120) of lines, circular arcs and B-splines, a
+/// tabulated cylinder (122), transformation matrices (124, chained for the moved cylinder).
+/// Every point OpenCASCADE evaluates on a face's surface lies on one imported surface (to
+/// 1e-9 of the size), one surface per face, and each face's tight box is the box of an
+/// imported surface (a plane's patch may be larger: it is the box of its boundary).
+#[test]
+fn opencascade_iges_analytic_surfaces_lie_where_opencascade_puts_them() {
+    let text = std::fs::read_to_string(data("occ_iges_points.json")).unwrap();
+    let report: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let vec3 = |v: &serde_json::Value| {
+        Vec3::new(
+            v[0].as_f64().unwrap(),
+            v[1].as_f64().unwrap(),
+            v[2].as_f64().unwrap(),
+        )
+    };
+    for (name, file) in report.as_object().unwrap() {
+        let imported = parse_iges(&std::fs::read_to_string(data(&format!("{name}.igs"))).unwrap())
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let surfaces: Vec<&NurbsSurface> = imported
+            .entities
+            .iter()
+            .filter_map(|e| match &e.entity {
+                Entity::Surface(s) => Some(s),
+                _ => None,
+            })
+            .collect();
+        let faces = file["faces"].as_array().unwrap();
+        assert_eq!(
+            surfaces.len(),
+            faces.len(),
+            "{name}: {:?}",
+            imported.warnings
+        );
+        assert!(
+            !imported.warnings.iter().any(|w| w.contains("not applied")),
+            "{name}: {:?}",
+            imported.warnings
+        );
+        // Each surface's box, sampled (rational arcs: 1e-4 of the size at 120 samples).
+        let boxes: Vec<(Vec3, Vec3)> = surfaces
+            .iter()
+            .map(|s| {
+                let [du, dv] = s.domain();
+                let (mut lo, mut hi) =
+                    (Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY));
+                for i in 0..=120 {
+                    for j in 0..=120 {
+                        let u = du.min + (du.max - du.min) * i as f64 / 120.0;
+                        let v = dv.min + (dv.max - dv.min) * j as f64 / 120.0;
+                        let p = s.point(u, v).unwrap();
+                        lo = lo.inf(&p);
+                        hi = hi.sup(&p);
+                    }
+                }
+                (lo, hi)
+            })
+            .collect();
+        for (k, face) in faces.iter().enumerate() {
+            let b = face["box"].as_array().unwrap();
+            let (lo, hi) = (
+                vec3(&serde_json::json!([b[0], b[1], b[2]])),
+                vec3(&serde_json::json!([b[3], b[4], b[5]])),
+            );
+            let size = (hi - lo).norm();
+            let points: Vec<Vec3> = face["points"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(vec3)
+                .collect();
+            let plane = face["type"] == "GeomAbs_Plane";
+            // OpenCASCADE samples a plane face's parameter box in its own axes, which may
+            // reach past the face (and past vclay's patch, the box of the boundary in other
+            // axes): plane points are checked against the patch's plane.
+            let off = |s: &NurbsSurface, p: Vec3| {
+                if plane {
+                    let c = s.control_points();
+                    let n = (c[1] - c[0]).cross(&(c[2] - c[0])).normalize();
+                    n.dot(&(p - c[0])).abs()
+                } else {
+                    distance_to(s, p)
+                }
+            };
+            // The surface holding this face's points.
+            let (s, worst) = surfaces
+                .iter()
+                .enumerate()
+                .map(|(i, s)| (i, points.iter().map(|&p| off(s, p)).fold(0.0, f64::max)))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap();
+            assert!(
+                worst <= 1e-9 * size,
+                "{name} face {k} ({}): OpenCASCADE's points are {worst:.2e} off (size {size:.3})",
+                face["type"]
+            );
+            let (slo, shi) = boxes[s];
+            let tol = 1e-3 * size + 1e-6;
+            let contains = (0..3).all(|d| slo[d] <= lo[d] + tol && shi[d] >= hi[d] - tol);
+            let equal =
+                (0..3).all(|d| (slo[d] - lo[d]).abs() <= tol && (shi[d] - hi[d]).abs() <= tol);
+            assert!(
+                if plane { contains } else { equal },
+                "{name} face {k} ({}): box {slo:?}..{shi:?} against OpenCASCADE's {lo:?}..{hi:?}",
+                face["type"]
+            );
+        }
+    }
+}

@@ -202,7 +202,14 @@ fn step_and_iges() {
     );
     hostile(
         "IGES",
-        &[read("curve.igs"), read("rational_surface.igs")],
+        &[
+            read("curve.igs"),
+            read("rational_surface.igs"),
+            // Planes through trimmed surfaces, revolutions of arcs, chained transformations.
+            read("iges_cylinder_moved.igs"),
+            read("iges_sphere.igs"),
+            read("iges_extruded_bspline.igs"),
+        ],
         |b| vclay_io::iges_read::parse_iges(&text(b)).is_ok(),
     );
 }

@@ -429,7 +429,19 @@ fn segment_curve(p: Vec3, d: Vec3, t0: f64, t1: f64) -> Result<NurbsCurve, Strin
 /// profile point's height `h_j` and radial part `p_j`, weights multiplied (exact, Piegl & Tiller
 /// section 8.5). u is the angle (knots at multiples of pi/2), v the profile's parameter.
 fn revolve(c: Vec3, a: Vec3, profile: &NurbsCurve) -> Result<NurbsSurface, String> {
-    let (ku, circle, cw) = arc(Vec3::zeros(), Vec3::x(), Vec3::y(), 1.0, 1.0, 0.0, TAU);
+    revolve_between(c, a, profile, 0.0, TAU)
+}
+
+/// [`revolve`] from the angle `t0` to `t1` (`t0 < t1 <= t0 + 2 pi`; u runs over `[t0, t1]`
+/// with knots at the arc joints).
+pub(crate) fn revolve_between(
+    c: Vec3,
+    a: Vec3,
+    profile: &NurbsCurve,
+    t0: f64,
+    t1: f64,
+) -> Result<NurbsSurface, String> {
+    let (ku, circle, cw) = arc(Vec3::zeros(), Vec3::x(), Vec3::y(), 1.0, 1.0, t0, t1);
     let np = profile.control_points().len();
     let mut pts = Vec::with_capacity(circle.len() * np);
     let mut ws = Vec::with_capacity(circle.len() * np);
@@ -447,7 +459,12 @@ fn revolve(c: Vec3, a: Vec3, profile: &NurbsCurve) -> Result<NurbsSurface, Strin
 }
 
 /// `S(u,v) = c(u) + v V`, v in `[v0, v1]`.
-fn extrude(curve: &NurbsCurve, dir: Vec3, v0: f64, v1: f64) -> Result<NurbsSurface, String> {
+pub(crate) fn extrude(
+    curve: &NurbsCurve,
+    dir: Vec3,
+    v0: f64,
+    v1: f64,
+) -> Result<NurbsSurface, String> {
     let mut pts = Vec::new();
     let mut ws = Vec::new();
     for (p, &w) in curve.control_points().iter().zip(curve.weights()) {
