@@ -610,3 +610,26 @@ fn kernel_spring_pulls_with_dynamic_weights_and_bad_widths_are_named() {
     let err = d.step(Integrator::Implicit { dt: 0.01 }).unwrap_err();
     assert!(err.to_string().contains("kernel width"), "{err}");
 }
+
+/// Steady-state steps of `vclay bench --physics`'s 16x16 dynamic-weight sheet (default
+/// weight-aware quadrature), for profilers: `VCLAY_PROFILE_STEPS` steps (default 100) after one.
+#[test]
+#[ignore = "profiling aid, run by hand"]
+fn profile_dynamic_sheet_steps() {
+    use vclay_dynamics::dnurbs::benchmarks::{DT, dynamic_sheet};
+    let mut m = dynamic_sheet(16).unwrap();
+    m.step(Integrator::Implicit { dt: DT }).unwrap();
+    let n: usize = std::env::var("VCLAY_PROFILE_STEPS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(100);
+    let t = std::time::Instant::now();
+    for _ in 0..n {
+        m.step(Integrator::Implicit { dt: DT }).unwrap();
+    }
+    eprintln!(
+        "{:.2} ms/step over {n} steps, {} quadrature points",
+        t.elapsed().as_secs_f64() * 1e3 / n as f64,
+        m.quadrature_points()
+    );
+}

@@ -375,6 +375,20 @@ pub(crate) struct Local {
     rp: RationalPoint,
 }
 
+/// Buffers of [`RationalGeometry`]'s `velocity_terms`, one set per thread.
+#[derive(Default)]
+struct VelocityScratch {
+    local: Local,
+    basis: Vec<f64>,
+    pd: Vec<Vec3>,
+    wd: Vec<f64>,
+}
+
+thread_local! {
+    static VELOCITY: std::cell::RefCell<VelocityScratch> =
+        std::cell::RefCell::new(VelocityScratch::default());
+}
+
 fn non_empty_spans(kv: &KnotVector) -> Vec<(f64, f64)> {
     let k = kv.as_slice();
     (kv.degree()..kv.control_points())
@@ -490,19 +504,38 @@ impl GeneralizedGeometry for RationalGeometry {
         Ok(())
     }
     fn velocity_terms(&self, param: [f64; 2], qdot: &[f64]) -> Result<(Vec3, Vec3), DynamicsError> {
-        let l = self.local(param)?;
-        let (w, p) = (&l.w, &l.p);
-        let basis: Vec<f64> = (0..l.ku)
-            .flat_map(|a| (0..l.kv).map(move |b| (a, b)))
-            .map(|(a, b)| l.bu[a] * l.bv[b])
-            .collect();
-        let pd: Vec<Vec3> = l
-            .idx
-            .iter()
-            .map(|&c| Vec3::new(qdot[4 * c], qdot[4 * c + 1], qdot[4 * c + 2]))
-            .collect();
-        let wd: Vec<f64> = l.idx.iter().map(|&c| qdot[4 * c + 3]).collect();
-        Ok(rational_velocity(&basis, w, p, &pd, &wd))
+        // Called at every quadrature point of a moving model: reused per-thread buffers
+        // instead of five allocations a point.
+        VELOCITY.with(|cell| {
+            let mut guard = cell.try_borrow_mut();
+            let mut fresh = VelocityScratch::default();
+            let sc = match guard.as_deref_mut() {
+                Ok(sc) => sc,
+                Err(_) => &mut fresh,
+            };
+            let VelocityScratch {
+                local: l,
+                basis,
+                pd,
+                wd,
+            } = sc;
+            self.local_into(param, l)?;
+            basis.clear();
+            basis.extend(
+                (0..l.ku)
+                    .flat_map(|a| (0..l.kv).map(move |b| (a, b)))
+                    .map(|(a, b)| l.bu[a] * l.bv[b]),
+            );
+            pd.clear();
+            pd.extend(
+                l.idx
+                    .iter()
+                    .map(|&c| Vec3::new(qdot[4 * c], qdot[4 * c + 1], qdot[4 * c + 2])),
+            );
+            wd.clear();
+            wd.extend(l.idx.iter().map(|&c| qdot[4 * c + 3]));
+            Ok(rational_velocity(basis, &l.w, &l.p, pd, wd))
+        })
     }
     fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
         if self.surface {
