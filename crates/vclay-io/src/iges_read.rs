@@ -17,8 +17,8 @@
 //! revolution turns its generatrix about the axis line from the start to the terminate angle
 //! (u the angle, v the generatrix's parameter); a tabulated cylinder sweeps its directrix by
 //! the generatrix vector (`S(u, v) = C(u) + v (L - C(u0))`, v in `[0, 1]`); a plane
-//! `A x + B y + C z = D` is the rectangle, in an orthonormal frame of the plane, holding the
-//! control points of its bounding curve (form 1) or, for an unbounded plane (form 0), of the
+//! `A x + B y + C z = D` is the least-area rectangle of the plane holding the control points
+//! of its bounding curve (form 1) or, for an unbounded plane (form 0), of the
 //! outer boundaries of the trimmed surfaces on it (the model-space curve of 144's outer 142).
 //!
 //! **Transformation matrices** (entity 124, `x -> R x + T`) are applied: an entity's own, a
@@ -700,8 +700,10 @@ fn finite(points: &[Vec3], dir: &Dir) -> Result<(), IoError> {
     }
 }
 
-/// The rectangle of the plane `n . x = d` that holds the projections of `hull` (bilinear,
-/// u and v along an orthonormal frame of the plane); `None` when they span no area.
+/// The least-area rectangle of the plane `n . x = d` holding the projections of `hull` (one of
+/// its sides lies along an edge of their convex hull, Freeman & Shapira 1975, so a polygonal
+/// face gets its own rectangle exactly); bilinear, u and v along the rectangle's sides. `None`
+/// when the points span no area.
 fn plane_patch(
     n: Vec3,
     d: f64,
@@ -717,24 +719,53 @@ fn plane_patch(
     };
     let x = (x - z * z.dot(&x)).normalize();
     let y = z.cross(&x);
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in hull {
-        let q = [(p - origin).dot(&x), (p - origin).dot(&y)];
-        for k in 0..2 {
-            lo[k] = lo[k].min(q[k]);
-            hi[k] = hi[k].max(q[k]);
-        }
-    }
-    let size = (hi[0] - lo[0]).max(hi[1] - lo[1]);
-    if !(size.is_finite() && (0..2).all(|k| hi[k] - lo[k] > 1e-12 * size)) {
+    let flat: Vec<[f64; 2]> = hull
+        .iter()
+        .map(|p| [(p - origin).dot(&x), (p - origin).dot(&y)])
+        .collect();
+    if flat.iter().flatten().any(|c| !c.is_finite()) {
         return None;
     }
-    let at = |u: f64, v: f64| origin + x * u + y * v;
+    let h = vclay_spline::triangular::convex_hull(&flat);
+    if h.len() < 3 {
+        return None;
+    }
+    // (area, side direction, [lo, hi] along it, [lo, hi] across it)
+    let mut best: Option<(f64, [f64; 2], [f64; 2], [f64; 2])> = None;
+    for i in 0..h.len() {
+        let (a, b) = (h[i], h[(i + 1) % h.len()]);
+        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+        if len == 0.0 {
+            continue;
+        }
+        let e = [(b[0] - a[0]) / len, (b[1] - a[1]) / len];
+        let (mut s, mut t) = (
+            [f64::INFINITY, f64::NEG_INFINITY],
+            [f64::INFINITY, f64::NEG_INFINITY],
+        );
+        for q in &h {
+            let (ps, pt) = (q[0] * e[0] + q[1] * e[1], q[1] * e[0] - q[0] * e[1]);
+            s = [s[0].min(ps), s[1].max(ps)];
+            t = [t[0].min(pt), t[1].max(pt)];
+        }
+        let area = (s[1] - s[0]) * (t[1] - t[0]);
+        if best.is_none_or(|b| area < b.0) {
+            best = Some((area, e, s, t));
+        }
+    }
+    let (_, e, s, t) = best?;
+    let size = (s[1] - s[0]).max(t[1] - t[0]);
+    if !(size.is_finite() && s[1] - s[0] > 1e-12 * size && t[1] - t[0] > 1e-12 * size) {
+        return None;
+    }
+    // In-plane direction e and its left normal (-e1, e0), back to 3D.
+    let (du, dv) = (x * e[0] + y * e[1], y * e[0] - x * e[1]);
+    let at = |a: f64, b: f64| origin + du * a + dv * b;
     let pts = vec![
-        at(lo[0], lo[1]),
-        at(lo[0], hi[1]),
-        at(hi[0], lo[1]),
-        at(hi[0], hi[1]),
+        at(s[0], t[0]),
+        at(s[0], t[1]),
+        at(s[1], t[0]),
+        at(s[1], t[1]),
     ];
     Some(NurbsSurface::clamped_uniform([1, 1], [2, 2], pts))
 }
@@ -893,7 +924,10 @@ pub fn parse_iges(text: &str) -> Result<CadImport, IoError> {
         let curve = matches!(dir.kind, 100 | 110 | 126);
         let surface = matches!(dir.kind, 108 | 120 | 122 | 128);
         if !curve && !surface {
-            *not_read.entry(dir.kind).or_default() += 1;
+            // Transformation matrices are applied to the entities that name them.
+            if dir.kind != 124 {
+                *not_read.entry(dir.kind).or_default() += 1;
+            }
             continue;
         }
         // `get`: a status field with a multi-byte character is not sliced mid-character (a
@@ -924,14 +958,14 @@ pub fn parse_iges(text: &str) -> Result<CadImport, IoError> {
     warnings.append(&mut r.warnings.borrow_mut());
     if trimmed > 0 {
         warnings.push(format!(
-            "{trimmed} trimmed surface(s) or face(s): their B-spline surfaces are imported \
+            "{trimmed} trimmed surface(s) or face(s): their base surfaces are imported \
              untrimmed (trimming curves and topology are dropped)"
         ));
     }
     if dependent > 0 {
         warnings.push(format!(
-            "{dependent} dependent or parameter-space curve(s) of type 126 not imported: they \
-             belong to the dropped trimming or topology"
+            "{dependent} dependent or parameter-space curve(s) (types 100, 110, 126) not imported \
+             as curves: they belong to a surface or to the dropped trimming or topology"
         ));
     }
     if !not_read.is_empty() {

@@ -269,8 +269,9 @@ fn convex_overlap(a: &[Point2], b: &[Point2], tol: f64) -> bool {
     true
 }
 
-/// Convex hull (CCW, Andrew's monotone chain).
-fn convex_hull(points: &[Point2]) -> Vec<Point2> {
+/// Convex hull (counter-clockwise, Andrew's monotone chain; collinear points dropped). Fewer
+/// than three distinct points are returned as they are, sorted.
+pub fn convex_hull(points: &[Point2]) -> Vec<Point2> {
     let mut p = points.to_vec();
     p.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
     p.dedup();
