@@ -731,7 +731,8 @@ fn plane_patch(
         return None;
     }
     // (area, side direction, [lo, hi] along it, [lo, hi] across it)
-    let mut best: Option<(f64, [f64; 2], [f64; 2], [f64; 2])> = None;
+    type Candidate = (f64, [f64; 2], [f64; 2], [f64; 2]);
+    let mut best: Option<Candidate> = None;
     for i in 0..h.len() {
         let (a, b) = (h[i], h[(i + 1) % h.len()]);
         let len = (b[0] - a[0]).hypot(b[1] - a[1]);
