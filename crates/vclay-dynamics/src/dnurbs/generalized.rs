@@ -686,6 +686,38 @@ pub struct LinearTie {
 /// `(coordinate, dC/dq)`.
 type ConstraintRow = (f64, Vec<(usize, f64)>);
 
+/// The rows of a constraint whose coordinates are all fixed, with the coordinates' values
+/// (bits) they were computed at.
+#[derive(Clone, Debug)]
+struct CachedRows {
+    constraint: Constraint,
+    coords: Vec<(usize, u64)>,
+    rows: Vec<ConstraintRow>,
+}
+
+/// Per constraint index, the rows of a constraint that acts only on fixed coordinates (the
+/// rounding models' far-boundary normal constraints once their control points are held):
+/// they cannot change while those coordinates stay fixed and unchanged, so each step reuses
+/// them instead of evaluating the geometry at the constraint (a direct triangular evaluation
+/// per constraint, several times a step with the Newton projection). Checked against the
+/// constraint, the fixed set and the coordinate values on every use.
+#[derive(Debug, Default)]
+struct RowCache(std::sync::Mutex<Vec<Option<CachedRows>>>);
+
+impl RowCache {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Vec<Option<CachedRows>>> {
+        self.0
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+}
+
+impl Clone for RowCache {
+    fn clone(&self) -> Self {
+        Self(std::sync::Mutex::new(self.lock().clone()))
+    }
+}
+
 /// Default floor for weights (section 6.2: weights that drift below it are projected back).
 pub const DEFAULT_WEIGHT_FLOOR: f64 = 1e-3;
 /// Default CG iteration cap of the generalized model.
@@ -1054,6 +1086,8 @@ pub struct GeneralizedDnurbs<G: GeneralizedGeometry> {
     /// [`GeneralizedDnurbs::tolerance`], the paper's method).
     pub solver: LinearSolver,
     direct: Option<Arc<DirectPattern>>,
+    /// Rows of constraints that act only on fixed coordinates (see [`RowCache`]).
+    row_cache: RowCache,
 }
 
 impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
@@ -1110,6 +1144,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             inertial_force: true,
             solver: geometry_solver,
             direct: None,
+            row_cache: RowCache::default(),
             substeps: 0,
             keep_fixed_columns: false,
             weight_inertia: DEFAULT_WEIGHT_INERTIA,
@@ -1277,8 +1312,8 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
     /// Constraint violations `|C(p)|` per constraint (largest row magnitude).
     pub fn constraint_violations(&self) -> Result<Vec<f64>, DynamicsError> {
         let mut out = Vec::with_capacity(self.constraints.len());
-        for c in &self.constraints {
-            let rows = self.constraint_rows(c)?;
+        for (ci, c) in self.constraints.iter().enumerate() {
+            let rows = self.cached_constraint_rows(ci, c)?;
             out.push(rows.iter().map(|r| r.0.abs()).fold(0.0, f64::max));
         }
         Ok(out)
@@ -1529,8 +1564,57 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         }
     }
 
+    /// [`Self::constraint_rows`] of constraint `ci`, from the [`RowCache`] when every
+    /// coordinate it acts on is fixed and unchanged since the rows were computed.
+    fn cached_constraint_rows(
+        &self,
+        ci: usize,
+        c: &Constraint,
+    ) -> Result<Vec<ConstraintRow>, DynamicsError> {
+        let q = self.geometry.coordinates();
+        let valid = |e: &CachedRows| {
+            e.constraint == *c
+                && e.coords
+                    .iter()
+                    .all(|&(i, bits)| self.fixed[i] && q[i].to_bits() == bits)
+        };
+        if let Some(Some(e)) = self.row_cache.lock().get(ci)
+            && valid(e)
+        {
+            return Ok(e.rows.clone());
+        }
+        let (rows, support) = self.constraint_rows_and_support(c)?;
+        // The rows are a function of the support's coordinates: while all of them are fixed
+        // (and so unchanged), the rows cannot change.
+        let coords: Vec<(usize, u64)> = support.iter().map(|&i| (i, q[i].to_bits())).collect();
+        let entry = (!coords.is_empty() && coords.iter().all(|&(i, _)| self.fixed[i])).then(|| {
+            CachedRows {
+                constraint: c.clone(),
+                coords,
+                rows: rows.clone(),
+            }
+        });
+        let mut cache = self.row_cache.lock();
+        if cache.len() < self.constraints.len() {
+            cache.resize_with(self.constraints.len(), || None);
+        }
+        cache[ci] = entry;
+        Ok(rows)
+    }
+
     /// Rows `(value, [(coordinate, derivative)])` of a constraint at the current shape.
     fn constraint_rows(&self, c: &Constraint) -> Result<Vec<ConstraintRow>, DynamicsError> {
+        Ok(self.constraint_rows_and_support(c)?.0)
+    }
+
+    /// [`Self::constraint_rows`] and the coordinates the constraint's value depends on: the
+    /// Jacobian columns at its parameter whose orders 0 to 2 are not all zero (a geometry may
+    /// list columns of basis functions that vanish there, as the triangular one lists a
+    /// triangle's controls; those do not count).
+    fn constraint_rows_and_support(
+        &self,
+        c: &Constraint,
+    ) -> Result<(Vec<ConstraintRow>, Vec<usize>), DynamicsError> {
         let mut lj = LocalJacobian::default();
         let (param, dirs): ([f64; 2], Vec<(usize, Vec3, Vec3)>) = match c {
             Constraint::Point { param, target } => (
@@ -1550,7 +1634,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         };
         self.geometry.jacobian_at(param, &mut lj)?;
         let dofs = lj.dofs();
-        Ok(dirs
+        let rows = dirs
             .into_iter()
             .map(|(m, n, target)| {
                 let value = n.dot(&(lj.s[m] - target));
@@ -1558,7 +1642,19 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                 lj.apply_transpose(m, 1.0, &n, &mut local);
                 (value, dofs.iter().copied().zip(local).collect())
             })
-            .collect())
+            .collect();
+        let mut support: Vec<usize> = Vec::new();
+        for (b, r) in &lj.blocks {
+            if r[..3].iter().any(|&x| x != 0.0) {
+                support.extend([*b, b + 1, b + 2]);
+            }
+        }
+        for (i, g) in &lj.vectors {
+            if g[..3].iter().any(|x| *x != Vec3::zeros()) {
+                support.push(*i);
+            }
+        }
+        Ok((rows, support))
     }
 
     /// One step of the integrator. Returns what the step did; detects divergence.
@@ -2102,7 +2198,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         // Rows restricted to the free coordinates, with their owning constraint.
         let mut rows: Vec<(usize, f64, Vec<f64>)> = Vec::new();
         for (ci, c) in self.constraints.iter().enumerate() {
-            for (value, entries) in self.constraint_rows(c)? {
+            for (value, entries) in self.cached_constraint_rows(ci, c)? {
                 let mut r = vec![0.0; n];
                 for (i, d) in entries {
                     if !self.fixed[i] {
@@ -2812,5 +2908,56 @@ mod tests {
             },
         ]);
         compare(m, 0.05, 4);
+    }
+
+    /// The rows of constraints on fixed coordinates are reused only while those coordinates
+    /// stay fixed and unchanged: moving the held control points (a restored state) or freeing
+    /// them gives fresh rows.
+    #[test]
+    fn cached_constraint_rows_follow_the_held_coordinates() {
+        use crate::dnurbs::TriangleQuadrature;
+        use crate::dnurbs::rounding::{RoundingKind, RoundingModel};
+        let r = RoundingModel::new(RoundingKind::Corner).unwrap();
+        let mut m = r.dynamics(TriangleQuadrature::default()).unwrap();
+        let worst = |m: &GeneralizedDnurbs<_>| {
+            m.constraint_violations()
+                .unwrap()
+                .into_iter()
+                .fold(0.0, f64::max)
+        };
+        let scale = m.geometry().scale();
+        assert!(worst(&m) < 1e-9 * scale);
+        // The far-boundary constraints act on held coordinates (17 of the 18 only on them:
+        // those are cached).
+        let cached =
+            |m: &GeneralizedDnurbs<_>| m.row_cache.lock().iter().filter(|e| e.is_some()).count();
+        assert!(
+            cached(&m) >= r.constraints.len() / 2,
+            "{} cached",
+            cached(&m)
+        );
+        // Shear the held points (z += 0.3 x): the normals at the constraints turn.
+        let mut st = m.state();
+        for &c in &r.fixed_controls {
+            st.coordinates[4 * c + 2] += 0.3 * st.coordinates[4 * c];
+        }
+        m.set_state(&st).unwrap();
+        let moved = worst(&m);
+        assert!(
+            moved > 1e-3,
+            "violation after moving the held points: {moved}"
+        );
+        // The same value from a model that never cached anything.
+        let mut fresh = r.dynamics(TriangleQuadrature::default()).unwrap();
+        fresh.set_state(&st).unwrap();
+        assert_eq!(worst(&fresh), moved);
+        // Freed points: nothing is cached for constraints on them.
+        for &c in &r.fixed_controls {
+            for k in 0..4 {
+                m.set_fixed_coordinate(4 * c + k, false).unwrap();
+            }
+        }
+        assert_eq!(worst(&m), moved);
+        assert_eq!(cached(&m), 0);
     }
 }
