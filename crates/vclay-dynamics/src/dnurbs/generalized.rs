@@ -1564,7 +1564,8 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         }
     }
 
-    /// [`Self::constraint_rows`] of constraint `ci`, from the [`RowCache`] when every
+    /// [`Self::constraint_rows_and_support`]'s rows of constraint `ci`, from the [`RowCache`]
+    /// when every
     /// coordinate it acts on is fixed and unchanged since the rows were computed.
     fn cached_constraint_rows(
         &self,
@@ -1602,12 +1603,8 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         Ok(rows)
     }
 
-    /// Rows `(value, [(coordinate, derivative)])` of a constraint at the current shape.
-    fn constraint_rows(&self, c: &Constraint) -> Result<Vec<ConstraintRow>, DynamicsError> {
-        Ok(self.constraint_rows_and_support(c)?.0)
-    }
-
-    /// [`Self::constraint_rows`] and the coordinates the constraint's value depends on: the
+    /// Rows `(value, [(coordinate, derivative)])` of a constraint at the current shape, and
+    /// the coordinates the constraint's value depends on: the
     /// Jacobian columns at its parameter whose orders 0 to 2 are not all zero (a geometry may
     /// list columns of basis functions that vanish there, as the triangular one lists a
     /// triangle's controls; those do not count).
