@@ -1565,8 +1565,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
     }
 
     /// [`Self::constraint_rows_and_support`]'s rows of constraint `ci`, from the [`RowCache`]
-    /// when every
-    /// coordinate it acts on is fixed and unchanged since the rows were computed.
+    /// when every coordinate it acts on is fixed and unchanged since the rows were computed.
     fn cached_constraint_rows(
         &self,
         ci: usize,
