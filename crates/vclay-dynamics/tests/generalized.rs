@@ -2,6 +2,8 @@
 //! Jacobian columns and the inertial term against finite differences, s = J p (eq 4), exact
 //! swung primitives, agreement with the frozen-weight model, energy decay, weight positivity,
 //! constraints.
+mod common;
+
 use vclay_core::Vec3;
 use vclay_dynamics::dnurbs::rational::MULTI_INDICES;
 use vclay_dynamics::dnurbs::{
@@ -618,18 +620,8 @@ fn kernel_spring_pulls_with_dynamic_weights_and_bad_widths_are_named() {
 fn profile_dynamic_sheet_steps() {
     use vclay_dynamics::dnurbs::benchmarks::{DT, dynamic_sheet};
     let mut m = dynamic_sheet(16).unwrap();
-    m.step(Integrator::Implicit { dt: DT }).unwrap();
-    let n: usize = std::env::var("VCLAY_PROFILE_STEPS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(100);
-    let t = std::time::Instant::now();
-    for _ in 0..n {
+    common::profile_steps(|| {
         m.step(Integrator::Implicit { dt: DT }).unwrap();
-    }
-    eprintln!(
-        "{:.2} ms/step over {n} steps, {} quadrature points",
-        t.elapsed().as_secs_f64() * 1e3 / n as f64,
-        m.quadrature_points()
-    );
+    });
+    eprintln!("{} quadrature points", m.quadrature_points());
 }

@@ -2,6 +2,8 @@
 //! (subdivided along knot lines against the paper's one-rule-per-triangle), and the rounding
 //! models of section 7.3 (Fig 8): constraints hold, the fillet is smooth.
 
+mod common;
+
 use vclay_dynamics::dnurbs::generalized::GeneralizedGeometry;
 use vclay_dynamics::dnurbs::rounding::{RoundingKind, RoundingModel, normal_jump};
 use vclay_dynamics::dnurbs::{Integrator, TriangleQuadrature, TriangularGeometry};
@@ -285,17 +287,7 @@ fn profile_corner_steps() {
         .dynamics(TriangleQuadrature::Subdivided { points })
         .unwrap();
     eprintln!("{} quadrature points", m.quadrature_points());
-    m.step(Integrator::Implicit { dt: r.dt() }).unwrap();
-    let n: usize = std::env::var("VCLAY_PROFILE_STEPS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(100);
-    let t = std::time::Instant::now();
-    for _ in 0..n {
+    common::profile_steps(|| {
         m.step(Integrator::Implicit { dt: r.dt() }).unwrap();
-    }
-    eprintln!(
-        "{:.2} ms/step over {n} steps",
-        t.elapsed().as_secs_f64() * 1e3 / n as f64
-    );
+    });
 }

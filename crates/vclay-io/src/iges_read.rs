@@ -180,13 +180,14 @@ fn split(data: &[(char, usize)], pd: char, rd: char, de: usize) -> Result<Vec<To
     ))
 }
 
-struct Params<'a> {
-    toks: &'a [Tok],
+/// An entity's parameter tokens, with its directory entry number and type for messages.
+struct Params {
+    toks: Vec<Tok>,
     de: usize,
     kind: u32,
 }
 
-impl Params<'_> {
+impl Params {
     fn line(&self, i: usize) -> usize {
         self.toks.get(i).or(self.toks.last()).map_or(1, |t| t.line)
     }
@@ -298,8 +299,8 @@ impl Reader<'_> {
         }
     }
 
-    /// The parameter tokens of `dir` (its type number first, checked).
-    fn params(&self, dir: &Dir) -> Result<Vec<Tok>, IoError> {
+    /// The parameters of `dir` (its type number first, checked).
+    fn params(&self, dir: &Dir) -> Result<Params, IoError> {
         let p = self.p;
         if dir.pointer == 0 || dir.pointer + dir.count - 1 > p.len() || dir.count == 0 {
             return Err(err(
@@ -318,16 +319,15 @@ impl Reader<'_> {
             data.extend(s.chars().take(64).map(|c| (c, *line)));
             data.push((' ', *line));
         }
-        let toks = split(&data, self.pd, self.rd, dir.de)?;
         let ps = Params {
-            toks: &toks,
+            toks: split(&data, self.pd, self.rd, dir.de)?,
             de: dir.de,
             kind: dir.kind,
         };
         if ps.int(0, "entity type")? != dir.kind as usize {
             return Err(ps.err(0, "the parameter data starts with another entity type"));
         }
-        Ok(toks)
+        Ok(ps)
     }
 
     /// The map of `dir`'s transformation matrix (entity 124), composed with the 124's own
@@ -354,12 +354,7 @@ impl Reader<'_> {
                 ),
             ));
         }
-        let toks = self.params(t)?;
-        let ps = Params {
-            toks: &toks,
-            de: t.de,
-            kind: 124,
-        };
+        let ps = self.params(t)?;
         ps.need(13)?;
         let v = ps.reals(1, 12, "matrix entry")?;
         let m = Matrix3::new(v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10]);
@@ -390,12 +385,7 @@ impl Reader<'_> {
         if !matches!(dir.kind, 100 | 110 | 126) {
             return Ok(Err(dir.kind));
         }
-        let toks = self.params(dir)?;
-        let ps = Params {
-            toks: &toks,
-            de: dir.de,
-            kind: dir.kind,
-        };
+        let ps = self.params(dir)?;
         let mut c = match dir.kind {
             126 => self.bspline_curve(&ps)?,
             110 => {
@@ -470,12 +460,7 @@ impl Reader<'_> {
                 format!("curves nested deeper than {MAX_DEPTH} (a cycle?)"),
             ));
         }
-        let toks = self.params(dir)?;
-        let ps = Params {
-            toks: &toks,
-            de: dir.de,
-            kind: 102,
-        };
+        let ps = self.params(dir)?;
         let n = ps.int(1, "member count")?;
         ps.need(2 + n)?;
         let mut out = Vec::new();
@@ -495,7 +480,7 @@ impl Reader<'_> {
     }
 
     /// Entity 126 (the parameter range is checked against the knot domain).
-    fn bspline_curve(&self, ps: &Params<'_>) -> Result<NurbsCurve, IoError> {
+    fn bspline_curve(&self, ps: &Params) -> Result<NurbsCurve, IoError> {
         let k = ps.int(1, "upper index K")?;
         let m = ps.int(2, "degree M")?;
         let n = k + 1;
@@ -512,7 +497,7 @@ impl Reader<'_> {
     }
 
     /// Entity 128 (IGES nets run with the u index fastest: transposed to vclay's order).
-    fn bspline_surface(&self, ps: &Params<'_>) -> Result<NurbsSurface, IoError> {
+    fn bspline_surface(&self, ps: &Params) -> Result<NurbsSurface, IoError> {
         let (k1, k2) = (ps.int(1, "upper index K1")?, ps.int(2, "upper index K2")?);
         let (m1, m2) = (ps.int(3, "degree M1")?, ps.int(4, "degree M2")?);
         let (nu, nv) = (k1 + 1, k2 + 1);
@@ -549,7 +534,7 @@ impl Reader<'_> {
     }
 
     /// Warns when a B-spline's parameter range is narrower than its knot domain.
-    fn check_range(&self, ps: &Params<'_>, range: &[f64], domain: &[f64]) {
+    fn check_range(&self, ps: &Params, range: &[f64], domain: &[f64]) {
         let tol = 1e-9 * domain.iter().fold(1.0f64, |a, &x| a.max(x.abs()));
         if range.iter().zip(domain).any(|(r, d)| (r - d).abs() > tol) {
             self.warnings.borrow_mut().push(format!(
@@ -569,12 +554,7 @@ impl Reader<'_> {
         bounds: &BTreeMap<usize, Vec<Vec3>>,
         warnings: &mut Vec<String>,
     ) -> Result<Option<NurbsSurface>, IoError> {
-        let toks = self.params(dir)?;
-        let ps = Params {
-            toks: &toks,
-            de: dir.de,
-            kind: dir.kind,
-        };
+        let ps = self.params(dir)?;
         let unsupported = |what: &str, t: u32, warnings: &mut Vec<String>| {
             warnings.push(format!(
                 "entity DE {} (type {}): its {what} is an entity of type {t}, not read; the \
@@ -879,12 +859,7 @@ pub fn parse_iges(text: &str) -> Result<CadImport, IoError> {
     // surfaces (144) on them: model-space curves (142's CPTR, its fourth parameter).
     let mut plane_bounds: BTreeMap<usize, Vec<Vec3>> = BTreeMap::new();
     for dir in dirs.iter().filter(|d| d.kind == 144) {
-        let ps_toks = r.params(dir)?;
-        let ps = Params {
-            toks: &ps_toks,
-            de: dir.de,
-            kind: 144,
-        };
+        let ps = r.params(dir)?;
         ps.need(5)?;
         let (base, n1, outer) = (
             ps.int(1, "surface pointer")?,
@@ -898,12 +873,7 @@ pub fn parse_iges(text: &str) -> Result<CadImport, IoError> {
         if on.kind != 142 {
             continue;
         }
-        let cos_toks = r.params(on)?;
-        let cos = Params {
-            toks: &cos_toks,
-            de: on.de,
-            kind: 142,
-        };
+        let cos = r.params(on)?;
         cos.need(6)?;
         let model_curve = cos.int(4, "model space curve pointer")?;
         if model_curve == 0 {

@@ -474,15 +474,20 @@ thread_local! {
 
 /// Runs `f` with this thread's element scratch (a fresh one if it is already in use).
 fn with_scratch<R>(f: impl FnOnce(&mut ElementScratch) -> R) -> R {
-    let mut f = Some(f);
-    let out = SCRATCH.with(|cell| match cell.try_borrow_mut() {
-        Ok(mut sc) => Some((f.take().expect("not yet run"))(&mut sc)),
-        Err(_) => None,
-    });
-    match out {
-        Some(r) => r,
-        None => (f.take().expect("not yet run"))(&mut ElementScratch::default()),
-    }
+    with_thread_buffer(&SCRATCH, f)
+}
+
+/// Runs `f` with this thread's value of `key`, buffers reused from call to call instead of
+/// allocated per quadrature point; a fresh default value when it is already borrowed (a
+/// caller up the stack using it).
+pub(crate) fn with_thread_buffer<T: Default + 'static, R>(
+    key: &'static std::thread::LocalKey<std::cell::RefCell<T>>,
+    f: impl FnOnce(&mut T) -> R,
+) -> R {
+    key.with(|cell| match cell.try_borrow_mut() {
+        Ok(mut b) => f(&mut b),
+        Err(_) => f(&mut T::default()),
+    })
 }
 
 /// [`GeneralizedGeometry::weight_coordinates`] of the homogeneous layout `p = (x, y, z, w)` per

@@ -506,13 +506,7 @@ impl GeneralizedGeometry for RationalGeometry {
     fn velocity_terms(&self, param: [f64; 2], qdot: &[f64]) -> Result<(Vec3, Vec3), DynamicsError> {
         // Called at every quadrature point of a moving model: reused per-thread buffers
         // instead of five allocations a point.
-        VELOCITY.with(|cell| {
-            let mut guard = cell.try_borrow_mut();
-            let mut fresh = VelocityScratch::default();
-            let sc = match guard.as_deref_mut() {
-                Ok(sc) => sc,
-                Err(_) => &mut fresh,
-            };
+        super::generalized::with_thread_buffer(&VELOCITY, |sc| {
             let VelocityScratch {
                 local: l,
                 basis,

@@ -61,7 +61,7 @@
 
 use super::generalized::{
     GeneralizedGeometry, LocalJacobian, homogeneous_coordinate_groups,
-    homogeneous_weight_coordinates,
+    homogeneous_weight_coordinates, with_thread_buffer,
 };
 use crate::error::DynamicsError;
 use std::sync::{Arc, OnceLock};
@@ -516,13 +516,7 @@ impl GeneralizedGeometry for TriangularGeometry {
                 out,
             );
         }
-        POINT.with(|cell_buf| {
-            let mut guard = cell_buf.try_borrow_mut();
-            let mut fresh = TriangularPoint::default();
-            let p = match guard.as_deref_mut() {
-                Ok(p) => p,
-                Err(_) => &mut fresh,
-            };
+        with_thread_buffer(&POINT, |p| {
             self.surface
                 .eval_in_element(cell.triangle, param, p)
                 .map_err(|e| spline(SplineError::from(e)))?;
@@ -544,13 +538,7 @@ impl GeneralizedGeometry for TriangularGeometry {
         self.scale
     }
     fn jacobian_at(&self, param: [f64; 2], out: &mut LocalJacobian) -> Result<(), DynamicsError> {
-        POINT.with(|cell| {
-            let mut guard = cell.try_borrow_mut();
-            let mut fresh = TriangularPoint::default();
-            let p = match guard.as_deref_mut() {
-                Ok(p) => p,
-                Err(_) => &mut fresh,
-            };
+        with_thread_buffer(&POINT, |p| {
             self.eval(param, p)?;
             out.s = p.s;
             out.blocks.clear();
