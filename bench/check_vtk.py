@@ -32,6 +32,7 @@ PRIMITIVES = [
     "cylinder",
     "cylinder:6x1x2",
     "torus",
+    "paper-torus",
     "gear",
     "cube-with-holes",
     "tetrahedron-with-holes",

@@ -145,7 +145,7 @@ impl IntoPy for vclay_session::SessionError {
         match self {
             E::Command { .. } => CommandError::new_err(msg),
             E::Diverged { .. } => DivergedError::new_err(msg),
-            E::File { .. } | E::Io { .. } => FileError::new_err(msg),
+            E::File { .. } | E::Io { .. } | E::NotASession { .. } => FileError::new_err(msg),
             _ => SessionError::new_err(msg),
         }
     }

@@ -14,7 +14,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use vclay_session::file::{self, RunInfo};
 use vclay_session::scenario::{OutputSpec, Scenario};
-use vclay_session::{Command, Model, Session as KSession};
+use vclay_session::{Command, Model, ModelSpec, Session as KSession};
 
 use crate::errors::{PyResultExt, SessionError};
 use crate::util;
@@ -22,36 +22,8 @@ use crate::util;
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Session>()?;
     m.add_function(wrap_pyfunction!(dnurbs_surface, m)?)?;
+    m.add_function(wrap_pyfunction!(open, m)?)?;
     Ok(())
-}
-
-/// `text` as a TOML basic string.
-fn toml_str(text: &str) -> String {
-    let mut out = String::with_capacity(text.len() + 2);
-    out.push('"');
-    for c in text.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            c if (c as u32) < 0x20 || c == '\u{7f}' => {
-                out.push_str(&format!("\\u{:04x}", c as u32))
-            }
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
-}
-
-/// A number as a TOML float.
-fn toml_f64(x: f64) -> String {
-    if x.is_nan() {
-        "nan".into()
-    } else if x.is_infinite() {
-        if x > 0.0 { "inf".into() } else { "-inf".into() }
-    } else {
-        format!("{x:?}")
-    }
 }
 
 impl Session {
@@ -69,15 +41,16 @@ impl Session {
 
 /// A D-NURBS surface session built from arrays (no scenario file): `points` is a control net
 /// `(nu, nv, 3)` (or a `Surface`), with `degree`, `weights (nu, nv)` (default 1) and `knots`
-/// (default uniform, clamped). `material`: a dict of `preset` (a Table 1 name), `mu`, `gamma`,
-/// `alpha`, `beta` (defaults: the scenario defaults); `dt`: the time step (or the preset's);
-/// `engine`: "generalized" (default) or "frozen"; `dynamic_weights`: weights as generalized
-/// coordinates (default: True with the generalized engine); `reference`: "rest" (default) or
-/// "absolute" elastic reference; `fix`: control point ids held fixed; `name`: the model name.
+/// (default uniform, clamped). `material`: a dict of `preset` (a Table 1 name), `per`, `mu`,
+/// `gamma`, `alpha`, `beta` (defaults: the scenario defaults); `dt`: the time step (or the
+/// preset's); `engine`: "generalized" (default) or "frozen"; `dynamic_weights`: weights as
+/// generalized coordinates (default: True with the generalized engine); `reference`: "rest"
+/// (default) or "absolute" elastic reference; `fix`: control point ids held fixed; `name`: the
+/// model name.
 ///
-/// It is the scenario keys of `docs/formats.md` (`[model] file = ...`, `[material]`,
-/// `[simulation]`) with the net written to a temporary model file, read and removed. Forces,
-/// data points to fit, material changes: `session.apply({"action": "data", "points": ...})`,
+/// The values are the scenario keys of `docs/formats.md` (`[model]`, `[material]`,
+/// `[simulation]`) as a typed `ModelSpec`, with the surface itself as a value. Forces, data
+/// points to fit, material changes: `session.apply({"action": "data", "points": ...})`,
 /// `{"action": "material", "mu": ...}`; then `session.step(n)`.
 #[pyfunction]
 #[pyo3(signature = (points, degree = (3, 3), weights = None, knots = None, *, material = None,
@@ -99,66 +72,57 @@ fn dnurbs_surface(
     fix: Option<Vec<usize>>,
     name: Option<String>,
 ) -> PyResult<Session> {
-    use std::fmt::Write as _;
-    use std::sync::atomic::{AtomicU64, Ordering};
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    use vclay_session::models::{KindSpec, dnurbs};
     let surface = crate::nurbs::surface_of(points, degree, weights, knots)?;
-    let mut m = String::from("[model]\nkind = \"dnurbs-surface\"\n");
-    if let Some(n) = &name {
-        let _ = writeln!(m, "name = {}", toml_str(n));
-    }
-    if let Some(e) = &engine {
-        let _ = writeln!(m, "engine = {}", toml_str(e));
-    }
-    if let Some(d) = dynamic_weights {
-        let _ = writeln!(m, "weights = \"{}\"", if d { "dynamic" } else { "frozen" });
-    }
-    if let Some(f) = &fix {
-        let ids: Vec<String> = f.iter().map(|i| i.to_string()).collect();
-        let _ = writeln!(m, "fix = [{}]", ids.join(", "));
-    }
-    let mut rest = String::from("[material]\n");
-    if let Some(d) = material {
-        for (k, v) in d.iter() {
-            let k: String = k.extract()?;
-            if k.is_empty() || !k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
-                return Err(PyValueError::new_err(format!("material: bad key {k:?}")));
-            }
-            let value = if let Ok(s) = v.extract::<String>() {
-                toml_str(&s)
-            } else {
-                let x: f64 = v.extract().map_err(|_| {
-                    PyValueError::new_err(format!("material: {k} must be a number or a name"))
-                })?;
-                toml_f64(x)
-            };
-            let _ = writeln!(rest, "{k} = {value}");
-        }
-    }
-    rest.push_str("[simulation]\n");
-    if let Some(dt) = dt {
-        let _ = writeln!(rest, "dt = {}", toml_f64(dt));
-    }
-    if let Some(r) = &reference {
-        let _ = writeln!(rest, "reference = {}", toml_str(r));
-    }
-    let path = std::env::temp_dir().join(format!(
-        "vclay-dnurbs-{}-{}.json",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let _ = writeln!(m, "file = {}", toml_str(&path.to_string_lossy()));
-    let text = format!("{m}{rest}");
-    let sc = py.detach(|| {
-        vclay_io::model::write_model(&path, &[vclay_io::model::Entity::Surface(surface)])
-            .map_err(|e| vclay_session::SessionError::io(&path, e))?;
-        let r = Scenario::parse(&text, "<dnurbs_surface>", "dnurbs", Path::new("."));
-        let _ = std::fs::remove_file(&path);
-        r
+    let material: dnurbs::MaterialKeys = match material {
+        Some(d) => serde_json::from_value(util::py_to_json(d.as_any())?)
+            .map_err(|e| PyValueError::new_err(format!("material: {e}")))?,
+        None => Default::default(),
+    };
+    let spec = ModelSpec::DnurbsSurface(KindSpec {
+        model: dnurbs::ModelKeys {
+            surface: Some(surface),
+            engine,
+            weights: dynamic_weights.map(|d| if d { "dynamic" } else { "frozen" }.to_string()),
+            fix: fix.unwrap_or_default(),
+            ..Default::default()
+        },
+        material,
+        simulation: dnurbs::SimKeys {
+            dt,
+            reference,
+            ..Default::default()
+        },
     });
-    let mut s = Session::from_scenario(sc.py()?);
-    s.run = None;
-    Ok(s)
+    let name = name.unwrap_or_else(|| "dnurbs-surface".into());
+    let session = py.detach(|| {
+        let model = spec
+            .build(Path::new("."))
+            .map_err(|e| vclay_session::SessionError::File {
+                file: "<dnurbs_surface>".into(),
+                line: 0,
+                key: e.key,
+                what: e.what,
+            })?;
+        KSession::with_model(&name, model)
+    });
+    Ok(Session {
+        session: session.py()?,
+        run: None,
+    })
+}
+
+/// `vclay.open(path)`: any file vclay reads, recognized by its content, as a `Session`: a
+/// scenario, a saved session, a model file (JSON, STEP, IGES), a PDE spec, a lattice or a
+/// mesh (`vclay_session::open`). A file that is not a session (a point cloud) raises
+/// `FileError` naming the functions and commands that take it.
+#[pyfunction]
+fn open(py: Python<'_>, path: PathBuf) -> PyResult<Session> {
+    let o = py.detach(|| vclay_session::open(&path)).py()?;
+    Ok(Session {
+        session: o.session,
+        run: o.run,
+    })
 }
 
 /// A session: named models of any kind (D-NURBS, subdivision and B-spline solids, FFD, PDE
@@ -177,11 +141,6 @@ impl Session {
     }
 }
 
-fn is_toml(path: &Path) -> bool {
-    path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
-}
-
 #[pymethods]
 impl Session {
     /// An empty session (models come from `Session.load`).
@@ -193,18 +152,22 @@ impl Session {
         }
     }
 
-    /// `Session.load(path)`: a scenario (`.toml`: models plus a scheduled timeline) or a saved
-    /// session (`.json`). Errors name the file, line and key (`FileError`).
+    /// `Session.load(path)`: the same as `vclay.open(path)`: a scenario (models plus a
+    /// scheduled timeline), a saved session, or any other file vclay opens as a session,
+    /// recognized by content. Errors name the file, line and key (`FileError`).
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
-        py.detach(|| {
-            if is_toml(&path) {
-                Ok(Self::from_scenario(Scenario::from_file(&path).py()?))
-            } else {
-                let (session, run) = file::load(&path).py()?;
-                Ok(Self { session, run })
-            }
-        })
+        open(py, path)
+    }
+
+    /// The tools (edits) model `model` takes, as dicts: `action`, `acts_on`, `keys` (each with
+    /// `name`, `value`, `unit`, `min`, `max`, `required`, `help`) and `help`; an action not
+    /// listed raises `CommandError` when applied.
+    #[pyo3(signature = (model = None))]
+    fn tools<'py>(&self, py: Python<'py>, model: Option<&str>) -> PyResult<Bound<'py, PyAny>> {
+        let v = serde_json::to_value(self.model(model)?.tools())
+            .map_err(|e| SessionError::new_err(e.to_string()))?;
+        util::json_to_py(py, &v)
     }
 
     /// `Session.from_toml(text, base=".")`: a scenario given as a string (the keys of a
@@ -322,6 +285,8 @@ impl Session {
     /// raises `DivergedError`.
     #[pyo3(signature = (n = 1))]
     fn step(&mut self, py: Python<'_>, n: u64) -> PyResult<Vec<String>> {
+        // The same bound as a scenario's `steps` and `vclay run --steps`.
+        vclay_session::scenario::check_steps(n).map_err(PyValueError::new_err)?;
         let s = &mut self.session;
         py.detach(|| s.run(n)).py()
     }

@@ -54,3 +54,34 @@ def test_run_writes_the_scenario_outputs(root, tmp_path):
     assert out["steps"] == 5
     assert any(str(f).endswith("energy.csv") for f in out["files"])
     assert s.control_points().shape == (64, 3)
+
+
+def test_open_recognizes_every_file_kind(root, tmp_path):
+    """`vclay.open` is the one way in (issue 26): the same as the studio's Open and `vclay run`."""
+    assert vclay.open(root / SCENARIO).kind() == "subdivision-solid"
+    assert vclay.open(root / "examples/pde/fig5b.json").kind() == "pde-surface"
+    tri = vclay.open(root / "examples/triangular/saddle_patch.json")
+    assert tri.kind() == "dnurbs-triangular"
+    assert tri.scenario_steps is None
+    cloud = tmp_path / "scan.xyz"
+    cloud.write_text("0 0 0\n1 0 0\n0 1 1\n")
+    try:
+        vclay.open(cloud)
+        raise AssertionError("a point cloud is not a session")
+    except vclay.FileError as e:
+        assert "vclay fit" in str(e)
+
+
+def test_tools_say_what_a_model_takes(root):
+    s = vclay.open(root / SCENARIO)
+    tools = {t["action"]: t for t in s.tools()}
+    assert "extrude" in tools and "pde-set" not in tools
+    rope = {k["name"]: k for k in tools["rope"]["keys"]}
+    assert rope["from"]["required"] and rope["from"]["unit"] == "length"
+    assert "param" not in rope  # a solid's rope has no material point
+    assert tools["material"]["acts_on"] == "cell"
+    try:
+        s.apply({"action": "pde-set", "name": "t", "value": 1.0})
+        raise AssertionError("a solid does not take pde-set")
+    except vclay.CommandError as e:
+        assert "does not take `pde-set`" in str(e)

@@ -53,7 +53,7 @@ pub fn evaluate(
     {
         bail!("--derivatives {k}: more than the supported maximum order {MAX_DERIVATIVE_ORDER}");
     }
-    let entities = read_model(model)?;
+    let entities = read_model(model).map_err(|e| not_a_model(model, e.into()))?;
     let Some(e) = entities.get(entity) else {
         bail!(
             "{}: entity {entity} requested, but the file holds {} entit{}",
@@ -432,4 +432,22 @@ fn evaluate_triangular(
         doc["derivatives"] = Value::Array(derivs);
     }
     Ok(doc)
+}
+
+/// A model file that does not read: where the file is something else vclay reads (a mesh, a
+/// point cloud, a scenario), says what it is and which commands take it (issue 26), else the
+/// reader's own error.
+pub fn not_a_model(path: &Path, err: anyhow::Error) -> anyhow::Error {
+    use vclay::session::FileKind;
+    match vclay::session::open::identify(path) {
+        Ok(k) if !matches!(k, FileKind::ModelJson | FileKind::Step | FileKind::Iges) => {
+            anyhow::anyhow!(
+                "{}: {}, not a model file; use {}",
+                path.display(),
+                k.describe(),
+                k.commands()
+            )
+        }
+        _ => err,
+    }
 }

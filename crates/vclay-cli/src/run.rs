@@ -10,7 +10,9 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use vclay::session::file::{self, RunInfo};
 use vclay::session::run::{Progress, RunSummary};
-use vclay::session::scenario::{OutputSpec, Scenario, default_out_dir};
+use vclay::session::scenario::{
+    DEFAULT_DURATION, OutputSpec, check_steps, default_out_dir, steps_for_duration,
+};
 use vclay::session::{Session, SessionError};
 
 /// The arguments of `vclay run`.
@@ -30,64 +32,23 @@ pub struct RunArgs {
     pub quiet: bool,
 }
 
-/// A scenario or session opened for running.
+/// A file opened for running: the session and its run information.
 struct Opened {
     session: Session,
     info: RunInfo,
+    /// Whether the file gave a run length (a scenario, or a session saved by a run).
+    has_length: bool,
 }
 
-/// Whether `path` holds a session file (JSON whose `format` is `vclay-session`) rather than a
-/// TOML scenario.
-fn is_session(path: &Path, text: &str) -> bool {
-    path.extension()
-        .is_some_and(|e| e == "session" || e == "json")
-        || text.trim_start().starts_with('{')
-}
-
+/// Opens any file vclay reads as a session (`vclay_session::open`: scenarios, sessions, model
+/// files, PDE specs, lattices, meshes, CAD files).
 fn open(path: &Path) -> Result<Opened> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let name = path.display().to_string();
-    if is_session(path, &text) {
-        let (session, info) = file::parse(&text, &name).map_err(|e| {
-            // A JSON file that is not a session: say what it looks like and what reads it.
-            let v: Option<serde_json::Value> = serde_json::from_str(&text).ok();
-            let has = |k: &str| v.as_ref().is_some_and(|v| v.get(k).is_some());
-            let hint = if has("format") {
-                ""
-            } else if has("patches") || has("boundary") || has("u0") {
-                "; this looks like a PDE spec: `vclay pde FILE`, or a scenario with `kind = \"pde-surface\"` and `spec = \"FILE\"`"
-            } else if has("entities") {
-                "; this looks like a model file: `vclay eval`/`vclay convert`, or a scenario whose [model] reads it with `file = \"FILE\"`"
-            } else {
-                ""
-            };
-            anyhow::anyhow!("{e}{hint}")
-        })?;
-        let info = info.unwrap_or_else(|| RunInfo {
-            name: path
-                .file_stem()
-                .map_or("session".into(), |s| s.to_string_lossy().to_string()),
-            end_step: 0,
-            output: OutputSpec {
-                every: vclay::session::scenario::DEFAULT_FRAME_EVERY,
-                ..OutputSpec::default()
-            },
-        });
-        return Ok(Opened { session, info });
-    }
-    let stem = path
-        .file_stem()
-        .map_or("scenario".into(), |s| s.to_string_lossy().to_string());
-    let sc = Scenario::parse(&text, &name, &stem, path.parent().unwrap_or(Path::new(".")))?;
-    let start = sc.session.model(None)?.steps();
+    let o = vclay::session::open(path)?;
+    let info = o.run_info();
     Ok(Opened {
-        info: RunInfo {
-            name: sc.name,
-            end_step: start + sc.steps,
-            output: sc.output,
-        },
-        session: sc.session,
+        has_length: o.run.is_some(),
+        info,
+        session: o.session,
     })
 }
 
@@ -95,26 +56,32 @@ fn open(path: &Path) -> Result<Opened> {
 pub fn run(args: &RunArgs) -> Result<()> {
     let name = args.file.display().to_string();
     let t0 = Instant::now();
-    let Opened { mut session, info } = open(&args.file)?;
+    let Opened {
+        mut session,
+        info,
+        has_length,
+    } = open(&args.file)?;
     let first = session.model(None)?;
     let now = first.steps();
+    // The same bounds as a scenario's `steps` and `duration` (vclay_session::scenario).
     let steps = match (args.steps, args.until) {
-        (Some(n), _) => n,
+        (Some(n), _) => check_steps(n).map_err(|e| anyhow::anyhow!("--steps: {e}"))?,
         (None, Some(t)) => {
             if !(t.is_finite() && t >= 0.0) {
                 bail!("--until {t}: a time in seconds, >= 0");
             }
-            let n = ((t - first.time()) / first.dt()).round().max(0.0);
-            if n > vclay::session::scenario::MAX_STEPS as f64 {
-                bail!(
-                    "--until {t}: {n} steps of {} s; at most {}",
-                    first.dt(),
-                    vclay::session::scenario::MAX_STEPS
-                );
-            }
-            n as u64
+            steps_for_duration((t - first.time()).max(0.0), first.dt())
+                .map_err(|e| anyhow::anyhow!("--until {t}: {e}"))?
         }
-        (None, None) => info.end_step.saturating_sub(now),
+        (None, None) if has_length => info.end_step.saturating_sub(now),
+        (None, None) => {
+            let n = steps_for_duration(DEFAULT_DURATION, first.dt()).map_err(anyhow::Error::msg)?;
+            eprintln!(
+                "{name}: the file gives no run length; running {DEFAULT_DURATION} s ({n} steps; \
+                 --steps or --until for more)"
+            );
+            n
+        }
     };
     let dir = args
         .out
@@ -211,7 +178,9 @@ fn print_summary(s: &RunSummary) {
 /// writing about `frames` OBJ frames, and returns the frame files in order (used by `vclay
 /// render SCENARIO.toml`).
 pub fn run_for_frames(path: &Path, dir: &Path, frames: usize) -> Result<Vec<PathBuf>> {
-    let Opened { mut session, info } = open(path)?;
+    let Opened {
+        mut session, info, ..
+    } = open(path)?;
     let steps = info.end_step.saturating_sub(session.model(None)?.steps());
     let output = OutputSpec {
         frames: vec![vclay::session::scenario::FrameFormat::Obj],

@@ -24,13 +24,67 @@ use crate::{gallery, primitives};
 /// Help text of the primitive names accepted by [`primitive`].
 pub const PRIMITIVE_HELP: &str = "box[:AxBxC] (points per axis, default 4x4x4, unit cells), \
 cylinder[:SECTORS[xLAYERS[xRINGS]]] (default 4x2x0, the paper's cylinder; radius 1, height 2), \
-torus (the paper's torus) or torus:SEGMENTSxCROSS (square cross-section of CROSSxCROSS hexahedra), \
+torus[:SEGMENTSxCROSS] (square cross-section of CROSSxCROSS hexahedra, default 8x4), paper-torus (the \
+paper's torus), \
 gear (the paper's gear), cube-with-holes (the paper's cube with holes), \
 tetrahedron-with-holes[:HOLE] (the paper's solid split into 6 prisms and 4 tetrahedra so that no cell \
 folds; HOLE the relative hole size, default 0.4), tetrahedron-with-holes-paper[:HOLE] (the paper's single \
 cell, Table 1's counts; it folds when subdivided; default 0.5), soccer-player, cactus (conference Table 1), \
 spiked-object, holed-object (journal Table 2), \
-l[:ARMxWIDTH] (L solid, default 2x1), t[:ARMxWIDTH] (T solid, default 1x1)";
+l-solid[:ARMxWIDTH] (L solid, default 2x1; also `l`), t-solid[:ARMxWIDTH] (T solid, default 1x1; also \
+`t`)";
+
+/// One lattice primitive of the registry: its name, the same on the command line
+/// (`vclay subdivide --primitive`) and in scenarios (`[model] primitive`), and the other names it
+/// answers to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PrimitiveName {
+    /// The name.
+    pub name: &'static str,
+    /// Other names (older spellings).
+    pub aliases: &'static [&'static str],
+}
+
+const fn prim(name: &'static str, aliases: &'static [&'static str]) -> PrimitiveName {
+    PrimitiveName { name, aliases }
+}
+
+/// The one registry of lattice primitives (names and aliases) for the command line and
+/// scenarios.
+pub const PRIMITIVES: &[PrimitiveName] = &[
+    prim("box", &["cube"]),
+    prim("cylinder", &[]),
+    prim("torus", &[]),
+    prim("paper-torus", &[]),
+    prim("gear", &[]),
+    prim("cube-with-holes", &[]),
+    prim("tetrahedron-with-holes", &["tet-with-holes"]),
+    prim("tetrahedron-with-holes-paper", &["tet-with-holes-paper"]),
+    prim("soccer-player", &[]),
+    prim("cactus", &[]),
+    prim("spiked-object", &[]),
+    prim("holed-object", &[]),
+    prim("l-solid", &["l"]),
+    prim("t-solid", &["t"]),
+];
+
+/// The registry name of `name` (any case, aliases resolved), if it is a primitive.
+pub fn canonical_primitive(name: &str) -> Option<&'static str> {
+    let n = name.trim().to_ascii_lowercase();
+    PRIMITIVES
+        .iter()
+        .find(|p| p.name == n || p.aliases.contains(&n.as_str()))
+        .map(|p| p.name)
+}
+
+/// Every primitive name, comma separated (for messages).
+pub fn primitive_names() -> String {
+    PRIMITIVES
+        .iter()
+        .map(|p| p.name)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
 
 /// The name of every primitive [`primitive`] builds, each with its default arguments (the
 /// tests subdivide each one and check that no cell folds, except
@@ -40,6 +94,7 @@ pub const PRIMITIVE_NAMES: &[&str] = &[
     "box",
     "cylinder",
     "torus",
+    "paper-torus",
     "gear",
     "cube-with-holes",
     "tetrahedron-with-holes",
@@ -48,8 +103,8 @@ pub const PRIMITIVE_NAMES: &[&str] = &[
     "cactus",
     "spiked-object",
     "holed-object",
-    "l",
-    "t",
+    "l-solid",
+    "t-solid",
 ];
 
 /// Largest predicted cell count (`cells * 8^levels`) [`subdivide_command`] accepts: 50 million.
@@ -339,9 +394,15 @@ pub fn primitive(spec: &str) -> Result<Lattice, CommandError> {
         spec: spec.to_string(),
         message,
     };
-    let (name, args) = match spec.split_once(':') {
+    let (given, args) = match spec.split_once(':') {
         Some((n, a)) => (n.trim(), Some(a.trim())),
         None => (spec.trim(), None),
+    };
+    let Some(name) = canonical_primitive(given) else {
+        return Err(bad(format!(
+            "unknown name '{given}'; the primitives are {}",
+            primitive_names()
+        )));
     };
     // Parses `AxBx..` into at most `max` integers, each at least `min`.
     let nums = |max: usize, min: usize| -> Result<Vec<usize>, CommandError> {
@@ -368,8 +429,8 @@ pub fn primitive(spec: &str) -> Result<Lattice, CommandError> {
             None => Ok(()),
         }
     };
-    match name.to_ascii_lowercase().as_str() {
-        "box" | "cube" => {
+    match name {
+        "box" => {
             let v = nums(3, 2)?;
             let n = match v.len() {
                 0 => [4, 4, 4],
@@ -393,12 +454,16 @@ pub fn primitive(spec: &str) -> Result<Lattice, CommandError> {
         "torus" => {
             let v = nums(2, 1)?;
             match v.len() {
-                0 => Ok(primitives::paper_torus(1.0, 2.0, 1.0)),
+                0 => Ok(primitives::torus(2.0, 0.75, 8, 4)),
                 2 if v[0] >= 3 => Ok(primitives::torus(2.0, 0.75, v[0], v[1])),
                 _ => Err(bad(
                     "expected SEGMENTSxCROSS with at least 3 segments".into()
                 )),
             }
+        }
+        "paper-torus" => {
+            no_args("paper-torus")?;
+            Ok(primitives::paper_torus(1.0, 2.0, 1.0))
         }
         "gear" => {
             no_args("gear")?;
@@ -408,11 +473,8 @@ pub fn primitive(spec: &str) -> Result<Lattice, CommandError> {
             no_args("cube-with-holes")?;
             Ok(primitives::cube_with_holes(1.0))
         }
-        "tetrahedron-with-holes"
-        | "tet-with-holes"
-        | "tetrahedron-with-holes-paper"
-        | "tet-with-holes-paper" => {
-            let paper = name.to_ascii_lowercase().ends_with("-paper");
+        "tetrahedron-with-holes" | "tetrahedron-with-holes-paper" => {
+            let paper = name.ends_with("-paper");
             let hole = match args {
                 None if paper => 0.5,
                 None => primitives::DEFAULT_SPLIT_HOLE,
@@ -451,19 +513,15 @@ pub fn primitive(spec: &str) -> Result<Lattice, CommandError> {
             no_args("holed-object")?;
             Ok(gallery::holed_object(1.0))
         }
-        "l" | "t" => {
+        "l-solid" | "t-solid" => {
             let v = nums(2, 1)?;
-            let default = if name.eq_ignore_ascii_case("l") {
-                [2, 1]
-            } else {
-                [1, 1]
-            };
+            let default = if name == "l-solid" { [2, 1] } else { [1, 1] };
             let (arm, width) = match v.len() {
                 0 => (default[0], default[1]),
                 1 => (v[0], default[1]),
                 _ => (v[0], v[1]),
             };
-            Ok(if name.eq_ignore_ascii_case("l") {
+            Ok(if name == "l-solid" {
                 primitives::l_solid(arm, width, 1.0)
             } else {
                 primitives::t_solid(arm, width, 1.0)

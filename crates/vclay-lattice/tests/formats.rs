@@ -643,7 +643,15 @@ fn command_primitive_specs() {
     assert_eq!(counts("box:2x3x4").last(), Some(&6));
     assert_eq!(counts("cylinder"), [15, 34, 28, 8]);
     assert_eq!(counts("cylinder:8x1x1")[3], 16);
-    assert_eq!(counts("torus"), [24, 52, 36, 8]);
+    assert_eq!(counts("paper-torus"), [24, 52, 36, 8]);
+    // The same torus as a scenario's `primitive = "torus"`: 8 segments of 4 x 4 hexahedra.
+    assert_eq!(counts("torus")[3], 128);
+    // One registry: the scenario names and the short aliases build the same lattices.
+    assert_eq!(counts("l-solid"), counts("l"));
+    assert_eq!(counts("T-solid"), counts("t"));
+    assert_eq!(counts("cube"), counts("box"));
+    let e = primitive("donut").unwrap_err().to_string();
+    assert!(e.contains("paper-torus") && e.contains("l-solid"), "{e}");
     assert_eq!(counts("torus:8x2")[3], 32);
     assert_eq!(counts("gear"), [56, 116, 76, 16]);
     assert_eq!(counts("cube-with-holes"), [64, 144, 96, 20]);

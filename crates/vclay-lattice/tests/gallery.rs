@@ -130,7 +130,7 @@ fn no_primitive_folds() {
         assert_eq!(folded(&l), 0, "{name} level 0");
         let levels = if l.num_cells() <= 30 { 3 } else { 2 };
         for rule in [BoundaryRule::Smooth, BoundaryRule::Sharp] {
-            if rule == BoundaryRule::Sharp && (name == "torus" || name == "gear") {
+            if rule == BoundaryRule::Sharp && (name == "paper-torus" || name == "gear") {
                 continue;
             }
             let s = solid(l.clone(), rule, levels);

@@ -371,6 +371,26 @@ pub enum Edit {
     },
 }
 
+/// Why an [`Edit`] is invalid: the key at fault and the message (which names it).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{what}")]
+pub struct EditError {
+    /// The key at fault (`action` where no one key is).
+    pub key: &'static str,
+    /// What is wrong.
+    pub what: String,
+}
+
+impl EditError {
+    /// An error at `key`.
+    pub fn new(key: &'static str, what: impl Into<String>) -> Self {
+        Self {
+            key,
+            what: what.into(),
+        }
+    }
+}
+
 /// Default core radius of [`Edit::Repel`].
 pub const DEFAULT_REPULSION_CORE: f64 = 0.1;
 
@@ -418,37 +438,41 @@ impl Edit {
     /// Checks what can be checked without a model: finite numbers, positive stiffnesses and
     /// radii, `until`/`release` not before `at`, exclusive keys. `at` is the time the edit is
     /// scheduled for (0 for an immediate edit).
-    pub fn validate(&self, at: f64) -> Result<(), String> {
-        fn fin(key: &str, v: &[f64]) -> Result<(), String> {
+    pub fn validate(&self, at: f64) -> Result<(), EditError> {
+        fn fin(key: &'static str, v: &[f64]) -> Result<(), EditError> {
             match v.iter().find(|x| !x.is_finite()) {
-                Some(x) => Err(format!("`{key}`: {x} is not finite")),
+                Some(x) => Err(EditError::new(key, format!("`{key}`: {x} is not finite"))),
                 None => Ok(()),
             }
         }
-        fn pos(key: &str, v: Option<f64>, allow_zero: bool) -> Result<(), String> {
+        fn pos(key: &'static str, v: Option<f64>, allow_zero: bool) -> Result<(), EditError> {
             match v {
                 Some(x) if !(x.is_finite() && (x > 0.0 || (allow_zero && x == 0.0))) => {
-                    Err(format!(
-                        "`{key}`: {x} must be {} and finite",
-                        if allow_zero {
-                            "non-negative"
-                        } else {
-                            "positive"
-                        }
+                    Err(EditError::new(
+                        key,
+                        format!(
+                            "`{key}`: {x} must be {} and finite",
+                            if allow_zero {
+                                "non-negative"
+                            } else {
+                                "positive"
+                            }
+                        ),
                     ))
                 }
                 _ => Ok(()),
             }
         }
-        fn after(key: &str, v: Option<f64>, at: f64) -> Result<(), String> {
+        fn after(key: &'static str, v: Option<f64>, at: f64) -> Result<(), EditError> {
             match v {
-                Some(x) if !x.is_finite() || x < at => {
-                    Err(format!("`{key}`: {x} is before the edit's time {at}"))
-                }
+                Some(x) if !x.is_finite() || x < at => Err(EditError::new(
+                    key,
+                    format!("`{key}`: {x} is before the edit's time {at}"),
+                )),
                 _ => Ok(()),
             }
         }
-        fn opt3(key: &str, v: &Option<V3>) -> Result<(), String> {
+        fn opt3(key: &'static str, v: &Option<V3>) -> Result<(), EditError> {
             v.as_ref().map_or(Ok(()), |v| fin(key, v))
         }
         fn sel(
@@ -456,7 +480,7 @@ impl Edit {
             min: &Option<V3>,
             max: &Option<V3>,
             near: &Option<V3>,
-        ) -> Result<(), String> {
+        ) -> Result<(), EditError> {
             opt3("min", min)?;
             opt3("max", max)?;
             opt3("near", near)?;
@@ -464,10 +488,13 @@ impl Edit {
                 + (min.is_some() || max.is_some()) as u8
                 + near.is_some() as u8;
             if n != 1 {
-                return Err("give exactly one of `points`, `min` and `max`, or `near`".into());
+                return Err(EditError::new(
+                    "points",
+                    "give exactly one of `points`, `min` and `max`, or `near`",
+                ));
             }
             if min.is_some() != max.is_some() {
-                return Err("`min` and `max` go together".into());
+                return Err(EditError::new("min", "`min` and `max` go together"));
             }
             Ok(())
         }
@@ -491,10 +518,13 @@ impl Edit {
                     fin("param", p)?;
                 }
                 if to.is_some() && velocity.is_some() {
-                    return Err("`to` and `velocity` exclude each other".into());
+                    return Err(EditError::new(
+                        "to",
+                        "`to` and `velocity` exclude each other",
+                    ));
                 }
                 if until.is_some() && to.is_none() {
-                    return Err("`until` needs `to`".into());
+                    return Err(EditError::new("until", "`until` needs `to`"));
                 }
                 after("until", *until, at)?;
                 after("release", *release, at)?;
@@ -513,7 +543,7 @@ impl Edit {
                 fin("force", force)?;
                 opt3("near", near)?;
                 if near.is_some() == param.is_some() {
-                    return Err("give one of `near` and `param`".into());
+                    return Err(EditError::new("near", "give one of `near` and `param`"));
                 }
                 after("until", *until, at)?;
             }
@@ -543,12 +573,15 @@ impl Edit {
                 points, stiffness, ..
             } => {
                 if points.is_empty() {
-                    return Err("`points`: no data points".into());
+                    return Err(EditError::new("points", "`points`: no data points"));
                 }
                 if points.len() > MAX_DATA_POINTS {
-                    return Err(format!(
-                        "`points`: {} data points; at most {MAX_DATA_POINTS} (each is matched to the nearest model point every step)",
-                        points.len()
+                    return Err(EditError::new(
+                        "points",
+                        format!(
+                            "`points`: {} data points; at most {MAX_DATA_POINTS} (each is matched to the nearest model point every step)",
+                            points.len()
+                        ),
                     ));
                 }
                 for p in points {
@@ -586,10 +619,13 @@ impl Edit {
                 opt3("min", min)?;
                 opt3("max", max)?;
                 if min.is_some() != max.is_some() {
-                    return Err("`min` and `max` go together".into());
+                    return Err(EditError::new("min", "`min` and `max` go together"));
                 }
                 if cells.is_some() && min.is_some() {
-                    return Err("give `cells` or `min` and `max`, not both".into());
+                    return Err(EditError::new(
+                        "cells",
+                        "give `cells` or `min` and `max`, not both",
+                    ));
                 }
                 pos("density", *density, false)?;
                 pos("damping", *damping, true)?;
@@ -608,26 +644,29 @@ impl Edit {
             Edit::Extrude { face, near, factor } => {
                 opt3("near", near)?;
                 if face.is_some() == near.is_some() {
-                    return Err("give one of `face` and `near`".into());
+                    return Err(EditError::new("face", "give one of `face` and `near`"));
                 }
                 pos("factor", *factor, false)?;
             }
             Edit::DeleteCell { cell, near } => {
                 opt3("near", near)?;
                 if cell.is_some() == near.is_some() {
-                    return Err("give one of `cell` and `near`".into());
+                    return Err(EditError::new("cell", "give one of `cell` and `near`"));
                 }
             }
             Edit::MovePoint { to, .. } => fin("to", to)?,
             Edit::SetWeight { weight, .. } => pos("weight", Some(*weight), false)?,
             Edit::FfdMove { moves } => {
                 if moves.is_empty() {
-                    return Err("`moves`: no point moves".into());
+                    return Err(EditError::new("moves", "`moves`: no point moves"));
                 }
                 if moves.len() > MAX_FFD_MOVES {
-                    return Err(format!(
-                        "`moves`: {} point moves; at most {MAX_FFD_MOVES}",
-                        moves.len()
+                    return Err(EditError::new(
+                        "moves",
+                        format!(
+                            "`moves`: {} point moves; at most {MAX_FFD_MOVES}",
+                            moves.len()
+                        ),
                     ));
                 }
                 for m in moves {
@@ -645,26 +684,38 @@ impl Edit {
                 ..
             } => {
                 if name.is_empty() {
-                    return Err("`name`: must not be empty".into());
+                    return Err(EditError::new("name", "`name`: must not be empty"));
                 }
                 fin("u", u)?;
                 fin("v", v)?;
                 fin("p", p)?;
                 if !(0.0 <= u[0] && u[0] < u[1] && u[1] <= 1.0) {
-                    return Err(format!("`u`: {u:?} must be an interval inside [0, 1]"));
+                    return Err(EditError::new(
+                        "u",
+                        format!("`u`: {u:?} must be an interval inside [0, 1]"),
+                    ));
                 }
                 if v[0] >= v[1] {
-                    return Err(format!("`v`: {v:?} must be an increasing interval"));
+                    return Err(EditError::new(
+                        "v",
+                        format!("`v`: {v:?} must be an increasing interval"),
+                    ));
                 }
                 if let Some(c) = continuity
                     && !matches!(c.as_str(), "G0" | "G1" | "g0" | "g1")
                 {
-                    return Err(format!("`continuity`: \"{c}\" is not \"G0\" or \"G1\""));
+                    return Err(EditError::new(
+                        "continuity",
+                        format!("`continuity`: \"{c}\" is not \"G0\" or \"G1\""),
+                    ));
                 }
             }
             Edit::Integrator { integrator, dt } => {
                 if integrator.is_none() && dt.is_none() {
-                    return Err("give `integrator` and/or `dt`".into());
+                    return Err(EditError::new(
+                        "integrator",
+                        "give `integrator` and/or `dt`",
+                    ));
                 }
                 pos("dt", *dt, false)?;
             }
@@ -682,14 +733,25 @@ impl Edit {
                     ("point", Some(_), None) => {}
                     ("normal", None, Some(n)) => {
                         if n.iter().all(|x| *x == 0.0) {
-                            return Err("`normal` must not be zero".into());
+                            return Err(EditError::new("normal", "`normal` must not be zero"));
                         }
                     }
-                    ("point", ..) => return Err("a point constraint takes `target`".into()),
-                    ("normal", ..) => return Err("a normal constraint takes `normal`".into()),
+                    ("point", ..) => {
+                        return Err(EditError::new(
+                            "target",
+                            "a point constraint takes `target`",
+                        ));
+                    }
+                    ("normal", ..) => {
+                        return Err(EditError::new(
+                            "normal",
+                            "a normal constraint takes `normal`",
+                        ));
+                    }
                     (o, ..) => {
-                        return Err(format!(
-                            "`type`: \"{o}\" is not a constraint type (point, normal)"
+                        return Err(EditError::new(
+                            "type",
+                            format!("`type`: \"{o}\" is not a constraint type (point, normal)"),
                         ));
                     }
                 }

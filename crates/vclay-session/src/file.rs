@@ -79,7 +79,7 @@ pub fn to_value(
         log: log.to_vec(),
         run: run.cloned(),
     })
-    .map_err(SessionError::model)
+    .map_err(SessionError::kernel)
 }
 
 /// Writes the session to `path` (atomically).
@@ -179,7 +179,7 @@ pub fn parse(text: &str, file: &str) -> Result<(Session, Option<RunInfo>), Sessi
         t.command
             .edit
             .validate(t.at)
-            .map_err(|r| err(0, &format!("schedule[{k}]"), r))?;
+            .map_err(|e| err(0, &format!("schedule[{k}].{}", e.key), e.what))?;
     }
     for (k, l) in saved.log.iter().enumerate() {
         if session.model(Some(&l.model)).is_err() {

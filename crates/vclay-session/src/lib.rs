@@ -18,10 +18,12 @@
 #![warn(missing_docs)]
 
 pub mod command;
+pub mod describe;
 pub mod error;
 pub mod file;
 pub mod model;
 pub mod models;
+pub mod open;
 pub mod pick;
 pub mod run;
 pub mod scenario;
@@ -29,9 +31,12 @@ pub mod session;
 pub mod tools;
 
 pub use command::{Command, Edit, PointMove};
+pub use describe::{KeySpec, Target, ToolSpec};
 pub use error::SessionError;
 pub use model::{
     Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
     StepReport, Undo,
 };
+pub use models::ModelSpec;
+pub use open::{FileKind, Opened, open};
 pub use session::{LogEntry, Session, Timed};

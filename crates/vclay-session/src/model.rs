@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use vclay_core::{TriMesh, Vec3};
 
 use crate::command::Edit;
+use crate::describe::ToolSpec;
 use crate::error::SessionError;
 
 /// The kinds of model a session holds (`[model] kind` in scenarios, `kind` in session files).
@@ -418,6 +419,16 @@ pub trait Model: Send + Sync + std::fmt::Debug {
     /// embedded mesh's vertices; empty where a kind has none).
     fn data_points(&self) -> Vec<Vec3> {
         Vec::new()
+    }
+    /// The tools (edits) this model takes, as data ([`crate::describe`]): what front ends
+    /// build their palettes and help from. Default: the kind's list.
+    fn tools(&self) -> Vec<ToolSpec> {
+        crate::describe::tools_for(self.kind())
+    }
+    /// Whether the model takes `edit` (its action is one of [`Model::tools`]); the session
+    /// refuses other edits before the model sees them.
+    fn accepts(&self, edit: &Edit) -> bool {
+        crate::describe::actions(self.kind()).contains(&edit.action())
     }
     /// The extensions [`Model::export`] writes (checked when a scenario is read, so a run
     /// does not fail at its end). Default: every one of [`EXPORT_EXTENSIONS`].

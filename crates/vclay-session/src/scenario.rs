@@ -28,7 +28,7 @@ use toml::Spanned;
 use crate::command::{Command, Edit};
 use crate::error::SessionError;
 use crate::model::ModelKind;
-use crate::models::{Spec, SpecError};
+use crate::models::{ModelSpec, Spec, SpecError};
 use crate::session::{Session, Timed};
 
 /// Default run length when a scenario gives neither `steps` nor `duration` (s).
@@ -189,28 +189,11 @@ impl Scenario {
     }
 
     /// Parses scenario `text` (`file` names it in errors, `stem` is its default name, `base`
-    /// resolves relative file names).
+    /// resolves relative file names): TOML into the file's tables, each model's tables into a
+    /// typed [`ModelSpec`], one validation pass, then the session.
     pub fn parse(text: &str, file: &str, stem: &str, base: &Path) -> Result<Self, SessionError> {
         let src = Src { file, text };
-        let f: File = toml::from_str(text).map_err(|e| {
-            let span = e.span().unwrap_or(0..0);
-            let msg = e.message().to_string();
-            let field = msg
-                .strip_prefix("unknown field `")
-                .and_then(|r| r.split('`').next())
-                .map(str::to_string);
-            let what = if field.as_deref() == Some("dir") {
-                format!("{msg}; a run writes to `vclay run --out DIR`, else ./vclay-run/<scenario name>/")
-            } else {
-                msg
-            };
-            SessionError::File {
-                file: file.to_string(),
-                line: vclay_core::text::line_at(text, span.start),
-                key: field.unwrap_or_else(|| "syntax".into()),
-                what,
-            }
-        })?;
+        let f = src.read()?;
         let name = f.name.clone().unwrap_or_else(|| stem.to_string());
         if name.is_empty() || name.contains(['/', '\\']) || name == "." || name == ".." {
             return Err(src.err(
@@ -227,140 +210,195 @@ impl Scenario {
         };
         let steps_key = sim.remove("steps");
         let duration_key = sim.remove("duration");
-        // Models.
-        let mspan = f.model.span();
         let mut session = Session::new();
-        let entries: Vec<(toml::Table, bool)> = match f.model.get_ref() {
-            toml::Value::Table(t) => vec![(t.clone(), false)],
+        for (mname, spec, span) in src.model_specs(&f, &sim, sim_span.clone(), base)? {
+            let model = spec
+                .build(base)
+                .map_err(|e| src.err(&span(&e), &e.key, e.what))?;
+            session
+                .add_model(&mname, model)
+                .map_err(|e| src.err(&f.model.span(), "name", e))?;
+        }
+        let first_dt = session.model(None)?.dt();
+        let steps = src.run_length(steps_key, duration_key, first_dt, &sim_span)?;
+        let timed = src.timeline(&f.timeline, &session)?;
+        session.push_schedule(timed);
+        let output = src.output(f.output, &session)?;
+        Ok(Self {
+            session,
+            name,
+            steps,
+            output,
+        })
+    }
+}
+
+/// Where a model's spec error lies in the file: the span of the table the error names.
+type SpanOf = Box<dyn Fn(&SpecError) -> Range<usize>>;
+
+impl Src<'_> {
+    /// The file's tables (TOML syntax and the top-level keys).
+    fn read(&self) -> Result<File, SessionError> {
+        toml::from_str(self.text).map_err(|e| {
+            let span = e.span().unwrap_or(0..0);
+            let msg = e.message().to_string();
+            let field = msg
+                .strip_prefix("unknown field `")
+                .and_then(|r| r.split('`').next())
+                .map(str::to_string);
+            let what = if field.as_deref() == Some("dir") {
+                format!("{msg}; a run writes to `vclay run --out DIR`, else ./vclay-run/<scenario name>/")
+            } else {
+                msg
+            };
+            SessionError::File {
+                file: self.file.to_string(),
+                line: vclay_core::text::line_at(self.text, span.start),
+                key: field.unwrap_or_else(|| "syntax".into()),
+                what,
+            }
+        })
+    }
+
+    /// `[model]` or the `[[model]]` entries as (table, in an array).
+    fn model_tables(&self, f: &File) -> Result<Vec<(toml::Table, bool)>, SessionError> {
+        let mspan = f.model.span();
+        match f.model.get_ref() {
+            toml::Value::Table(t) => Ok(vec![(t.clone(), false)]),
             toml::Value::Array(a) => {
                 if a.is_empty() {
-                    return Err(src.err(&mspan, "model", "no models"));
+                    return Err(self.err(&mspan, "model", "no models"));
                 }
                 if a.len() > MAX_MODELS {
-                    return Err(src.err(
+                    return Err(self.err(
                         &mspan,
                         "model",
                         format!("{} models; at most {MAX_MODELS}", a.len()),
                     ));
                 }
-                let mut v = Vec::new();
-                for m in a {
-                    match m.as_table() {
-                        Some(t) => v.push((t.clone(), true)),
-                        None => {
-                            return Err(src.err(
-                                &mspan,
-                                "model",
-                                "each [[model]] entry is a table",
-                            ));
-                        }
-                    }
-                }
-                v
+                a.iter()
+                    .map(|m| match m.as_table() {
+                        Some(t) => Ok((t.clone(), true)),
+                        None => Err(self.err(&mspan, "model", "each [[model]] entry is a table")),
+                    })
+                    .collect()
             }
-            _ => return Err(src.err(&mspan, "model", "must be a table")),
-        };
+            _ => Err(self.err(&mspan, "model", "must be a table")),
+        }
+    }
+
+    /// Each model's name, typed spec, and where its errors lie.
+    fn model_specs(
+        &self,
+        f: &File,
+        sim: &toml::Table,
+        sim_span: Range<usize>,
+        base: &Path,
+    ) -> Result<Vec<(String, ModelSpec, SpanOf)>, SessionError> {
+        let mspan = f.model.span();
+        let entries = self.model_tables(f)?;
         let multi = entries.len() > 1 || entries.first().is_some_and(|e| e.1);
         if multi && f.material.is_some() {
             let span = f.material.as_ref().map(Spanned::span).unwrap_or(0..0);
-            return Err(src.err(
+            return Err(self.err(
                 &span,
                 "material",
                 "with [[model]] entries, give each its own [model.material]",
             ));
         }
+        let mut out = Vec::with_capacity(entries.len());
         for (k, (mut t, in_array)) in entries.into_iter().enumerate() {
-            let kind_name = match t.get("kind") {
-                Some(toml::Value::String(s)) => s.clone(),
-                Some(_) => return Err(src.err(&mspan, "kind", "must be a string")),
-                None => {
-                    return Err(src.err(
-                        &mspan,
-                        "kind",
-                        format!("missing; one of {}", ModelKind::names()),
-                    ));
-                }
-            };
-            let kind = ModelKind::from_name(&kind_name).ok_or_else(|| {
-                src.err(
-                    &mspan,
-                    "kind",
-                    format!(
-                        "unknown model kind \"{kind_name}\"; known kinds: {}",
-                        ModelKind::names()
-                    ),
-                )
-            })?;
+            let kind = self.kind_of(&t, &mspan)?;
             let mname = match t.get("name") {
                 Some(toml::Value::String(s)) => s.clone(),
-                Some(_) => return Err(src.err(&mspan, "name", "must be a string")),
+                Some(_) => return Err(self.err(&mspan, "name", "must be a string")),
                 None if multi => format!("model{k}"),
                 None => kind.name().to_string(),
             };
             let (mat, msim) = if in_array {
-                let mat = match t.remove("material") {
-                    Some(toml::Value::Table(m)) => Some(m),
-                    Some(_) => return Err(src.err(&mspan, "material", "must be a table")),
-                    None => None,
+                let mut sub = |key: &str| match t.remove(key) {
+                    Some(toml::Value::Table(m)) => Ok(Some(m)),
+                    Some(_) => Err(self.err(&mspan, key, "must be a table")),
+                    None => Ok(None),
                 };
-                let ms = match t.remove("simulation") {
-                    Some(toml::Value::Table(m)) => Some(m),
-                    Some(_) => return Err(src.err(&mspan, "simulation", "must be a table")),
-                    None => None,
-                };
-                (mat, ms)
+                (sub("material")?, sub("simulation")?)
             } else {
                 (
                     f.material.as_ref().map(|m| m.get_ref().clone()),
                     Some(sim.clone()),
                 )
             };
-            let spec = Spec {
+            let tables = Spec {
                 model: &t,
                 material: mat.as_ref(),
                 simulation: msim.as_ref().filter(|s| !s.is_empty() || !in_array),
                 base,
             };
-            let model = crate::models::build(kind, &spec).map_err(|e: SpecError| {
-                let span = match e.table.as_str() {
-                    // `[[material.cells]]` entries follow the [material] table's own span.
-                    "material" if !in_array && e.key == "cells" => f
-                        .material
-                        .as_ref()
-                        .map_or(mspan.clone(), |m| m.span().start..text.len()),
-                    "material" if !in_array => f
-                        .material
-                        .as_ref()
-                        .map(Spanned::span)
-                        .unwrap_or(mspan.clone()),
-                    "simulation" if !in_array => sim_span.clone(),
-                    _ => mspan.clone(),
-                };
-                src.err(&span, &e.key, e.what)
-            })?;
-            session
-                .add_model(&mname, model)
-                .map_err(|e| src.err(&mspan, "name", e))?;
+            // A model error points at the table it names (`[[material.cells]]` entries follow
+            // the [material] table's own span).
+            let (mat_span, end) = (f.material.as_ref().map(Spanned::span), self.text.len());
+            let (mspan2, sspan) = (mspan.clone(), sim_span.clone());
+            let span: SpanOf = Box::new(move |e: &SpecError| match e.table.as_str() {
+                "material" if !in_array && e.key == "cells" => {
+                    mat_span.clone().map_or(mspan2.clone(), |m| m.start..end)
+                }
+                "material" if !in_array => mat_span.clone().unwrap_or(mspan2.clone()),
+                "simulation" if !in_array => sspan.clone(),
+                _ => mspan2.clone(),
+            });
+            let spec = ModelSpec::from_tables(kind, &tables)
+                .map_err(|e| self.err(&span(&e), &e.key, e.what))?;
+            out.push((mname, spec, span));
         }
-        // Run length.
-        let first_dt = session.model(None)?.dt();
-        let steps = match (steps_key, duration_key) {
-            (Some(_), Some(_)) => {
-                return Err(src.err(
-                    &sim_span,
-                    "duration",
-                    "give either `steps` or `duration`, not both",
+        Ok(out)
+    }
+
+    /// The model kind a model table names.
+    fn kind_of(&self, t: &toml::Table, mspan: &Range<usize>) -> Result<ModelKind, SessionError> {
+        let kind_name = match t.get("kind") {
+            Some(toml::Value::String(s)) => s.clone(),
+            Some(_) => return Err(self.err(mspan, "kind", "must be a string")),
+            None => {
+                return Err(self.err(
+                    mspan,
+                    "kind",
+                    format!("missing; one of {}", ModelKind::names()),
                 ));
             }
+        };
+        ModelKind::from_name(&kind_name).ok_or_else(|| {
+            self.err(
+                mspan,
+                "kind",
+                format!(
+                    "unknown model kind \"{kind_name}\"; known kinds: {}",
+                    ModelKind::names()
+                ),
+            )
+        })
+    }
+
+    /// The run length in steps from `steps` or `duration` (default [`DEFAULT_DURATION`]).
+    fn run_length(
+        &self,
+        steps_key: Option<toml::Value>,
+        duration_key: Option<toml::Value>,
+        first_dt: f64,
+        sim_span: &Range<usize>,
+    ) -> Result<u64, SessionError> {
+        match (steps_key, duration_key) {
+            (Some(_), Some(_)) => Err(self.err(
+                sim_span,
+                "duration",
+                "give either `steps` or `duration`, not both",
+            )),
             (Some(n), None) => match n.as_integer() {
-                Some(n) if n >= 0 && (n as u64) <= MAX_STEPS => n as u64,
-                _ => {
-                    return Err(src.err(
-                        &sim_span,
-                        "steps",
-                        format!("{n} must be a whole number from 0 to {MAX_STEPS}"),
-                    ));
-                }
+                Some(n) if n >= 0 && (n as u64) <= MAX_STEPS => Ok(n as u64),
+                _ => Err(self.err(
+                    sim_span,
+                    "steps",
+                    format!("{n} must be a whole number from 0 to {MAX_STEPS}"),
+                )),
             },
             (None, d) => {
                 let d = match d {
@@ -369,37 +407,29 @@ impl Scenario {
                         .as_float()
                         .or_else(|| v.as_integer().map(|i| i as f64))
                         .ok_or_else(|| {
-                            src.err(&sim_span, "duration", "must be a number of seconds")
+                            self.err(sim_span, "duration", "must be a number of seconds")
                         })?,
                 };
-                if !(d.is_finite() && d >= 0.0) {
-                    return Err(src.err(
-                        &sim_span,
-                        "duration",
-                        format!("{d} must be non-negative"),
-                    ));
-                }
-                let n = (d / first_dt).round();
-                if n > MAX_STEPS as f64 {
-                    return Err(src.err(
-                        &sim_span,
-                        "duration",
-                        format!("{d} s at dt = {first_dt} is {n} steps; at most {MAX_STEPS}"),
-                    ));
-                }
-                n as u64
+                steps_for_duration(d, first_dt).map_err(|e| self.err(sim_span, "duration", e))
             }
-        };
-        // Timeline.
-        if f.timeline.len() > MAX_TIMELINE {
-            return Err(src.err(
+        }
+    }
+
+    /// The timeline entries as timed commands, each checked once here.
+    fn timeline(
+        &self,
+        entries: &[Spanned<toml::Table>],
+        session: &Session,
+    ) -> Result<Vec<Timed>, SessionError> {
+        if entries.len() > MAX_TIMELINE {
+            return Err(self.err(
                 &(0..0),
                 "timeline",
-                format!("{} entries; at most {MAX_TIMELINE}", f.timeline.len()),
+                format!("{} entries; at most {MAX_TIMELINE}", entries.len()),
             ));
         }
-        let mut timed = Vec::with_capacity(f.timeline.len());
-        for entry in &f.timeline {
+        let mut timed = Vec::with_capacity(entries.len());
+        for entry in entries {
             let span = entry.span();
             let mut t = entry.get_ref().clone();
             let at = match t.remove("at") {
@@ -407,20 +437,20 @@ impl Scenario {
                 Some(v) => v
                     .as_float()
                     .or_else(|| v.as_integer().map(|i| i as f64))
-                    .ok_or_else(|| src.err(&span, "at", "must be a time in seconds"))?,
+                    .ok_or_else(|| self.err(&span, "at", "must be a time in seconds"))?,
             };
             if !(at.is_finite() && at >= 0.0) {
-                return Err(src.err(&span, "at", format!("{at} must be >= 0 and finite")));
+                return Err(self.err(&span, "at", format!("{at} must be >= 0 and finite")));
             }
             let model = match t.remove("model") {
                 None => None,
                 Some(toml::Value::String(s)) => Some(s),
-                Some(_) => return Err(src.err(&span, "model", "must be a model name")),
+                Some(_) => return Err(self.err(&span, "model", "must be a model name")),
             };
             if let Some(m) = &model
                 && session.model(Some(m)).is_err()
             {
-                return Err(src.err(
+                return Err(self.err(
                     &span,
                     "model",
                     format!(
@@ -430,7 +460,7 @@ impl Scenario {
                 ));
             }
             if !t.contains_key("action") {
-                return Err(src.err(&span, "action", "missing"));
+                return Err(self.err(&span, "action", "missing"));
             }
             let mut edit: Edit = crate::models::typed("timeline", &t).map_err(|e| {
                 let key = if e.key == "timeline" {
@@ -438,7 +468,7 @@ impl Scenario {
                 } else {
                     e.key
                 };
-                src.err(&span, &key, e.what)
+                self.err(&span, &key, e.what)
             })?;
             // A rope's cursor path starts at the entry's time.
             if let Edit::Rope { start, .. } = &mut edit
@@ -446,18 +476,25 @@ impl Scenario {
             {
                 *start = Some(at);
             }
-            edit.validate(at).map_err(|r| {
-                let key = r.split('`').nth(1).unwrap_or("action").to_string();
-                src.err(&span, &key, r)
-            })?;
+            let target = session.model(model.as_deref())?;
+            crate::session::check_edit(target, &edit, at)
+                .map_err(|e| self.err(&span, e.key, e.what))?;
             timed.push(Timed {
                 at,
                 command: Command { model, edit },
             });
         }
-        session.schedule_commands(timed)?;
-        // Output.
-        let (ospan, out) = match f.output {
+        Ok(timed)
+    }
+
+    /// `[output]`, checked against the formats every model writes (so that a run does not
+    /// fail at its end).
+    fn output(
+        &self,
+        o: Option<Spanned<OutputKeys>>,
+        session: &Session,
+    ) -> Result<OutputSpec, SessionError> {
+        let (ospan, out) = match o {
             Some(o) => (o.span(), o.into_inner()),
             None => (0..0, OutputKeys::default()),
         };
@@ -468,11 +505,11 @@ impl Scenario {
             csv: out.csv,
         };
         if output.every == 0 {
-            return Err(src.err(&ospan, "every", "must be at least 1"));
+            return Err(self.err(&ospan, "every", "must be at least 1"));
         }
         for name in &out.frames {
             let Some(format) = FrameFormat::from_name(name) else {
-                return Err(src.err(
+                return Err(self.err(
                     &ospan,
                     "frames",
                     format!(
@@ -484,7 +521,7 @@ impl Scenario {
                 ));
             };
             if output.frames.contains(&format) {
-                return Err(src.err(
+                return Err(self.err(
                     &ospan,
                     "frames",
                     format!("frame format \"{name}\" is listed twice"),
@@ -500,26 +537,65 @@ impl Scenario {
                 .map(|v| {
                     v.as_str()
                         .map(str::to_string)
-                        .ok_or_else(|| src.err(&ospan, "final", "must be file names"))
+                        .ok_or_else(|| self.err(&ospan, "final", "must be file names"))
                 })
                 .collect::<Result<_, _>>()?,
             Some(_) => {
-                return Err(src.err(&ospan, "final", "must be a file name or a list of them"));
+                return Err(self.err(&ospan, "final", "must be a file name or a list of them"));
             }
         };
+        self.check_output_names(&output, &ospan)?;
+        for n in session.model_names() {
+            let m = session.model(Some(n))?;
+            let formats = m.export_formats();
+            let list = |q: &str| {
+                formats
+                    .iter()
+                    .map(|e| format!("{q}{e}{}", if q == "." { "" } else { q }))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            for f in &output.final_files {
+                let ext = crate::model::extension(Path::new(f));
+                if !formats.contains(&ext.as_str()) {
+                    let what = format!("\"{f}\": a {} model writes {}", m.kind(), list("."));
+                    return Err(self.err(&ospan, "final", what));
+                }
+            }
+            for f in &output.frames {
+                if !formats.contains(&f.extension()) {
+                    let what = format!(
+                        "\"{}\": a {} model writes {}",
+                        f.extension(),
+                        m.kind(),
+                        list("\"")
+                    );
+                    return Err(self.err(&ospan, "frames", what));
+                }
+            }
+        }
+        Ok(output)
+    }
+
+    /// Output file names: plain names, none named twice.
+    fn check_output_names(
+        &self,
+        output: &OutputSpec,
+        ospan: &Range<usize>,
+    ) -> Result<(), SessionError> {
         let mut names: Vec<&String> = output.final_files.iter().chain(&output.csv).collect();
         names.sort();
         if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
-            return Err(src.err(
-                &ospan,
+            return Err(self.err(
+                ospan,
                 "final",
                 format!("\"{}\" is named by two outputs", w[0]),
             ));
         }
         for f in output.final_files.iter().chain(&output.csv) {
             if f.is_empty() || f.contains(['/', '\\']) {
-                return Err(src.err(
-                    &ospan,
+                return Err(self.err(
+                    ospan,
                     if output.csv.as_ref() == Some(f) {
                         "csv"
                     } else {
@@ -529,55 +605,34 @@ impl Scenario {
                 ));
             }
         }
-        // Final files and frames must be formats every model writes (checked now, so that a
-        // run does not fail at its end).
-        for n in session.model_names() {
-            let m = session.model(Some(n))?;
-            let formats = m.export_formats();
-            for f in &output.final_files {
-                let ext = crate::model::extension(Path::new(f));
-                if !formats.contains(&ext.as_str()) {
-                    return Err(src.err(
-                        &ospan,
-                        "final",
-                        format!(
-                            "\"{f}\": a {} model writes {}",
-                            m.kind(),
-                            formats
-                                .iter()
-                                .map(|e| format!(".{e}"))
-                                .collect::<Vec<_>>()
-                                .join(", ")
-                        ),
-                    ));
-                }
-            }
-            for f in &output.frames {
-                if !formats.contains(&f.extension()) {
-                    return Err(src.err(
-                        &ospan,
-                        "frames",
-                        format!(
-                            "\"{}\": a {} model writes {}",
-                            f.extension(),
-                            m.kind(),
-                            formats
-                                .iter()
-                                .map(|e| format!("\"{e}\""))
-                                .collect::<Vec<_>>()
-                                .join(", ")
-                        ),
-                    ));
-                }
-            }
-        }
-        Ok(Self {
-            session,
-            name,
-            steps,
-            output,
-        })
+        Ok(())
     }
+}
+
+/// Steps of `dt` that make `duration` seconds (rounded), checked against [`MAX_STEPS`]; the
+/// same rule wherever a duration is given (scenario `duration`, `vclay run --until`, Python).
+pub fn steps_for_duration(duration: f64, dt: f64) -> Result<u64, String> {
+    if !(duration.is_finite() && duration >= 0.0) {
+        return Err(format!("{duration} must be non-negative"));
+    }
+    let n = (duration / dt).round();
+    if n > MAX_STEPS as f64 {
+        return Err(format!(
+            "{duration} s at dt = {dt} is {n} steps; at most {MAX_STEPS}"
+        ));
+    }
+    Ok(n as u64)
+}
+
+/// Checks a step count given anywhere (scenario `steps`, `vclay run --steps`, Python's
+/// `run(n)`) against [`MAX_STEPS`].
+pub fn check_steps(steps: u64) -> Result<u64, String> {
+    if steps > MAX_STEPS {
+        return Err(format!(
+            "{steps} steps; at most {MAX_STEPS} (a run of 10^9 steps of the smallest model takes days)"
+        ));
+    }
+    Ok(steps)
 }
 
 /// The default output folder of a run: `./vclay-run/<name>/`.

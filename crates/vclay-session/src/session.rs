@@ -14,7 +14,8 @@
 //! with a snapshot of the state just before the command, so that undo after simulated time has
 //! passed puts the model back as it was just before the command (its clock included). Redo
 //! applies the undone command again to that state, which reproduces the state just after it.
-//! A new command, or a step, clears the redo list. Scheduled commands that have fired are
+//! A new command clears the redo list; a step does not (redo then applies the command at the
+//! current time, so undo and redo work while a front end keeps the simulation running). Scheduled commands that have fired are
 //! ordinary log entries: undoing one does not schedule it again.
 //!
 //! # Undo groups
@@ -27,7 +28,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::command::Command;
+use crate::command::{Command, Edit, EditError};
 use crate::error::SessionError;
 use crate::model::{Hit, Model, Ray, StepReport, Undo};
 
@@ -114,6 +115,7 @@ impl Session {
                 } else {
                     "a model of this name is already in the session".into()
                 },
+                source: None,
             });
         }
         self.models.push(Entry {
@@ -187,53 +189,67 @@ impl Session {
         &self.schedule
     }
 
-    /// Schedules commands (a scenario's timeline): each is checked now (model name, values);
-    /// they apply in time order (ties in the given order) before the step that reaches `at`.
+    /// Schedules commands (a scenario's timeline): each is checked now (model name, that the
+    /// model takes it, its values) and not again when it fires; they apply in time order (ties
+    /// in the given order) before the step that reaches `at`.
     pub fn schedule_commands(&mut self, timed: Vec<Timed>) -> Result<(), SessionError> {
         for (k, t) in timed.iter().enumerate() {
             let i = self.resolve(t.command.model.as_deref())?;
+            let e = &self.models[i];
             if !(t.at.is_finite() && t.at >= 0.0) {
                 return Err(SessionError::command(
                     t.command.edit.action(),
-                    &self.models[i].name,
+                    &e.name,
                     format!(
                         "scheduled entry {k}: `at` = {} must be >= 0 and finite",
                         t.at
                     ),
                 ));
             }
-            t.command.edit.validate(t.at).map_err(|r| {
-                SessionError::command(t.command.edit.action(), &self.models[i].name, r)
-            })?;
+            check_edit(e.model.as_ref(), &t.command.edit, t.at)
+                .map_err(|r| SessionError::command(t.command.edit.action(), &e.name, r))?;
         }
+        self.push_schedule(timed);
+        Ok(())
+    }
+
+    /// Schedules commands already checked by [`check_edit`] (the scenario reader, which
+    /// locates each error in its file).
+    pub(crate) fn push_schedule(&mut self, timed: Vec<Timed>) {
         self.schedule.extend(timed);
         // Stable: equal times keep their order.
         self.schedule.sort_by(|a, b| a.at.total_cmp(&b.at));
-        Ok(())
     }
 
     /// Applies a command now; on error the session is unchanged.
     pub fn apply(&mut self, command: Command) -> Result<String, SessionError> {
         let i = self.resolve(command.model.as_deref())?;
-        let msg = self.apply_to(i, command)?;
+        let msg = self.apply_to(i, command, false)?;
         self.redo.clear();
         Ok(msg)
     }
 
-    fn apply_to(&mut self, i: usize, mut command: Command) -> Result<String, SessionError> {
+    /// Applies `command` to model `i`; `checked`: the command was checked when it was
+    /// scheduled.
+    fn apply_to(
+        &mut self,
+        i: usize,
+        mut command: Command,
+        checked: bool,
+    ) -> Result<String, SessionError> {
         let e = &mut self.models[i];
         let name = e.name.clone();
         command.model = Some(name.clone());
         let edit = &command.edit;
-        edit.validate(e.model.time())
-            .map_err(|r| SessionError::command(edit.action(), &name, r))?;
+        if !checked {
+            check_edit(e.model.as_ref(), edit, e.model.time())
+                .map_err(|r| SessionError::command(edit.action(), &name, r))?;
+        }
         let (step, time) = (e.model.steps(), e.model.time());
-        let applied = e.model.apply(edit).map_err(|err| match err {
-            SessionError::Command { reason, .. } => {
-                SessionError::command(edit.action(), &name, reason)
-            }
-            other => SessionError::command(edit.action(), &name, other),
-        })?;
+        let applied = e
+            .model
+            .apply(edit)
+            .map_err(|err| err.in_command(edit.action(), &name))?;
         let group = self.group.map(|g| g.0);
         let merge = group.is_some()
             && matches!(applied.undo, Undo::State(_))
@@ -342,7 +358,7 @@ impl Session {
                     break;
                 }
             };
-            match self.apply_to(i, log.command.clone()) {
+            match self.apply_to(i, log.command.clone(), false) {
                 Ok(m) => messages.push(m),
                 Err(e) => {
                     result = Err((k, e));
@@ -383,7 +399,7 @@ impl Session {
             });
             let Some(k) = pos else { break };
             let timed = self.schedule.remove(k);
-            let msg = self.apply_to(i, timed.command)?;
+            let msg = self.apply_to(i, timed.command, true)?;
             lines.push(format!("t = {t:.4}: {msg}"));
         }
         Ok(lines)
@@ -395,7 +411,6 @@ impl Session {
         lines: &mut Vec<String>,
     ) -> Result<StepReport, SessionError> {
         lines.extend(self.apply_due(i)?);
-        self.redo.clear();
         let e = &mut self.models[i];
         e.model.step().map_err(|err| err.in_model(&e.name))
     }
@@ -467,4 +482,23 @@ impl Session {
         self.schedule = schedule;
         self.log = log;
     }
+}
+
+/// Why `model` cannot take `edit` at time `at`: an action its kind does not take
+/// ([`Model::accepts`]), or invalid values ([`Edit::validate`]). The one check every path runs
+/// once (a command applied now, a scheduled one when it is scheduled).
+pub(crate) fn check_edit(model: &dyn Model, edit: &Edit, at: f64) -> Result<(), EditError> {
+    if !model.accepts(edit) {
+        let takes: Vec<&str> = model.tools().iter().map(|t| t.action).collect();
+        return Err(EditError::new(
+            "action",
+            format!(
+                "a {} model does not take `{}`; it takes {}",
+                model.kind(),
+                edit.action(),
+                takes.join(", ")
+            ),
+        ));
+    }
+    edit.validate(at)
 }

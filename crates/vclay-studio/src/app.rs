@@ -12,7 +12,7 @@ use std::time::{Duration, Instant, SystemTime};
 
 use egui::{Color32, Key, Modifiers, PointerButton, Pos2, Rect, Sense, Ui, Vec2};
 use vclay_core::Vec3;
-use vclay_session::{Command, Edit, ModelKind, Session};
+use vclay_session::{Command, Edit, Session, Target, ToolSpec};
 
 use crate::camera::{Camera, View};
 use crate::load;
@@ -69,31 +69,54 @@ impl Tool {
         }
     }
 
-    /// The tools a kind takes, the default first.
-    pub fn for_kind(kind: ModelKind) -> Vec<Tool> {
-        use Tool::*;
-        match kind {
-            ModelKind::SubdivisionSolid => vec![
-                Rope,
-                Force,
-                Fix,
-                Free,
-                Extrude,
-                DeleteCell,
-                Paint,
-                ControlPoint,
-                Orbit,
-            ],
-            ModelKind::BsplineSolid => vec![Rope, Force, Fix, Free, Paint, ControlPoint, Orbit],
-            ModelKind::DnurbsCurve | ModelKind::DnurbsSurface | ModelKind::DnurbsSwung => {
-                vec![Rope, Force, Fix, Free, ControlPoint, Orbit]
-            }
-            ModelKind::Ffd => vec![FfdPoint, ControlPoint, Orbit],
-            ModelKind::PdeSurface => vec![PdeLocal, Orbit],
-            ModelKind::DnurbsTriangular => vec![Orbit],
-            ModelKind::DnurbsPatches => vec![Orbit],
+    /// Every tool in palette order (the default of a model is the first it takes).
+    pub const ALL: [Tool; 11] = [
+        Tool::Rope,
+        Tool::Force,
+        Tool::Fix,
+        Tool::Free,
+        Tool::Extrude,
+        Tool::DeleteCell,
+        Tool::Paint,
+        Tool::FfdPoint,
+        Tool::PdeLocal,
+        Tool::ControlPoint,
+        Tool::Orbit,
+    ];
+
+    /// Whether a model that takes `tools` (`vclay_session::Model::tools`) takes this tool: the
+    /// tool's edit is among them (the force brush: `region-force` or `force`; painting: a
+    /// `material` that acts on control cells).
+    pub fn offered(self, tools: &[ToolSpec]) -> bool {
+        let takes = |a: &str| tools.iter().any(|t| t.action == a);
+        match self {
+            Tool::Orbit => true,
+            Tool::Rope => takes("rope"),
+            Tool::Force => takes("region-force") || takes("force"),
+            Tool::Fix => takes("fix"),
+            Tool::Free => takes("free"),
+            Tool::Extrude => takes("extrude"),
+            Tool::DeleteCell => takes("delete-cell"),
+            Tool::Paint => tools
+                .iter()
+                .any(|t| t.action == "material" && t.acts_on == Target::Cell),
+            Tool::ControlPoint => takes("move-point"),
+            Tool::FfdPoint => takes("ffd-move"),
+            Tool::PdeLocal => takes("pde-local"),
         }
     }
+
+    /// The palette of a model that takes `tools`, the default first.
+    pub fn palette(tools: &[ToolSpec]) -> Vec<Tool> {
+        Tool::ALL.into_iter().filter(|t| t.offered(tools)).collect()
+    }
+}
+
+/// Whether `tools` has `action`, and it takes `key` (`None`: any key).
+pub fn takes(tools: &[ToolSpec], action: &str, key: Option<&str>) -> bool {
+    tools
+        .iter()
+        .any(|t| t.action == action && key.is_none_or(|k| t.keys.iter().any(|x| x.name == k)))
 }
 
 /// The solids' integrators by their command names (`symplectic` is the default).
@@ -207,7 +230,8 @@ pub struct Studio {
     frame_times: VecDeque<Instant>,
     allow_close: bool,
     shots: Arc<Mutex<Vec<Result<PathBuf, String>>>>,
-    kind: Option<ModelKind>,
+    /// What the first model takes (`Model::tools`): the palette and panels follow from it.
+    tools: Vec<ToolSpec>,
     pde_t: f64,
     viewport: Rect,
     /// FFD points held in place while another is dragged (multi-point moves, eq 12).
@@ -271,13 +295,13 @@ impl Studio {
             frame_times: VecDeque::new(),
             allow_close: false,
             shots: Arc::new(Mutex::new(Vec::new())),
-            kind: None,
+            tools: Vec::new(),
             pde_t: 0.0,
             viewport: Rect::NOTHING,
         };
         if let Some(f) = &options.file {
             match load::open(f) {
-                Ok(session) => s.set_session(session, Some(f.clone())),
+                Ok(o) => s.set_session(o.session, Some(f.clone())),
                 Err(e) => s.dialog = Some(Dialog::Error(e)),
             }
         }
@@ -300,14 +324,8 @@ impl Studio {
 
     /// Replaces the session (a new simulation thread if none runs).
     pub fn set_session(&mut self, session: Session, file: Option<PathBuf>) {
-        self.kind = session
-            .model_names()
-            .first()
-            .and_then(|n| session.model(Some(n)).ok().map(|m| m.kind()));
-        self.tool = self
-            .kind
-            .map(|k| Tool::for_kind(k)[0])
-            .unwrap_or(Tool::Orbit);
+        self.tools = session.model(None).map(|m| m.tools()).unwrap_or_default();
+        self.tool = Tool::palette(&self.tools)[0];
         match &self.worker {
             Some(w) => w.send(Request::Replace(Box::new(session))),
             None => self.worker = Some(Worker::start(session, !self.opts.paused)),
@@ -429,7 +447,7 @@ impl Studio {
             }
             self.frame = f;
             if let Some(m) = self.frame.models.first()
-                && m.kind == ModelKind::PdeSurface
+                && takes(&m.tools, "pde-set", None)
             {
                 self.pde_t = m.time;
             }
@@ -685,7 +703,7 @@ impl Studio {
 
     fn tools_panel(&mut self, ui: &mut Ui) {
         ui.heading("Tools");
-        let tools = self.kind.map(Tool::for_kind).unwrap_or_default();
+        let tools = Tool::palette(&self.tools);
         ui.horizontal_wrapped(|ui| {
             for t in tools {
                 ui.selectable_value(&mut self.tool, t, t.label());
@@ -758,20 +776,8 @@ impl Studio {
                 self.apply(Edit::Stop);
             }
         });
-        let solid_or_dnurbs = matches!(
-            self.kind,
-            Some(
-                ModelKind::SubdivisionSolid
-                    | ModelKind::BsplineSolid
-                    | ModelKind::DnurbsCurve
-                    | ModelKind::DnurbsSurface
-                    | ModelKind::DnurbsSwung
-            )
-        );
-        if matches!(
-            self.kind,
-            Some(ModelKind::SubdivisionSolid | ModelKind::BsplineSolid)
-        ) {
+        let physical = takes(&self.tools, "plastic-reset", None);
+        if takes(&self.tools, "integrator", Some("integrator")) {
             // The integrator of journal section 4.4 (explicit), symplectic Euler, or the
             // implicit Euler with conjugate gradient; the time step is a parameter below.
             let mut chosen = self.options.integrator;
@@ -790,7 +796,7 @@ impl Studio {
                 });
             }
         }
-        if solid_or_dnurbs {
+        if physical {
             if ui.button("Plastic reset").clicked() {
                 self.apply(Edit::PlasticReset);
             }
@@ -812,10 +818,7 @@ impl Studio {
                     }
                 });
             }
-            if matches!(
-                self.kind,
-                Some(ModelKind::SubdivisionSolid | ModelKind::BsplineSolid)
-            ) {
+            if takes(&self.tools, "inflate", None) {
                 let (mut on, mut p) = self.options.inflate;
                 let c1 = ui.checkbox(&mut on, "Inflation").changed();
                 let r = ui.add(egui::Slider::new(&mut p, -50.0..=50.0).text("pressure"));
@@ -847,7 +850,7 @@ impl Studio {
             }
         });
         let _ = speed;
-        if self.kind == Some(ModelKind::PdeSurface) {
+        if takes(&self.tools, "pde-set", None) {
             let mut t = self.pde_t;
             let r = ui.add(egui::Slider::new(&mut t, 0.0..=10.0).text("time t"));
             self.pde_t = t;
@@ -887,16 +890,10 @@ impl Studio {
             }
             if r.drag_stopped() || (r.changed() && !r.dragged()) {
                 self.edits.remove(&p.name);
-                let edit = if m.kind == ModelKind::PdeSurface && p.name != "dt" {
-                    Edit::PdeSet {
-                        name: p.name.clone(),
-                        value: v,
-                    }
-                } else {
-                    Edit::Set {
-                        name: p.name.clone(),
-                        value: v,
-                    }
+                // Every listed parameter (PDE boundary constants included) takes `set`.
+                let edit = Edit::Set {
+                    name: p.name.clone(),
+                    value: v,
                 };
                 self.send(Request::Apply(Command::to(&m.name, edit)));
             }
@@ -1186,7 +1183,7 @@ impl Studio {
                         if ui.button("Open").clicked() {
                             keep = false;
                             match load::open(Path::new(&path)) {
-                                Ok(s) => self.set_session(s, Some(PathBuf::from(&path))),
+                                Ok(o) => self.set_session(o.session, Some(PathBuf::from(&path))),
                                 Err(e) => next = Some(Dialog::Error(e)),
                             }
                         }
@@ -1265,9 +1262,9 @@ impl Studio {
                         if ui.button("Recover").clicked() {
                             keep = false;
                             match load::open(&path) {
-                                Ok(s) => {
+                                Ok(o) => {
                                     let f = self.file.clone();
-                                    self.set_session(s, f);
+                                    self.set_session(o.session, f);
                                 }
                                 Err(e) => next = Some(Dialog::Error(e)),
                             }

@@ -27,7 +27,7 @@ use std::time::{Duration, Instant};
 
 use vclay_core::{TriMesh, Vec3};
 use vclay_session::{
-    Command, Edit, Element, Energy, Hit, LineSet, ModelKind, Param, PointMove, Ray, Session,
+    Command, Edit, Element, Energy, Hit, LineSet, Param, PointMove, Ray, Session, ToolSpec,
 };
 
 /// Least time between two applied cursor moves of one drag.
@@ -118,8 +118,8 @@ pub enum Grab {
 pub struct ModelView {
     /// Name in the session.
     pub name: String,
-    /// Kind.
-    pub kind: ModelKind,
+    /// The tools it takes (`Model::tools`).
+    pub tools: Vec<ToolSpec>,
     /// Summary line.
     pub summary: String,
     /// Shaded triangles with normals.
@@ -678,8 +678,8 @@ impl State {
             self.notify(Notice::Missed);
             return;
         };
-        let kind = match self.session.model(Some(&model)) {
-            Ok(m) => m.kind(),
+        let tools = match self.session.model(Some(&model)) {
+            Ok(m) => m.tools(),
             Err(_) => return,
         };
         self.session.begin_group();
@@ -690,10 +690,9 @@ impl State {
             Element::CurvePoint { u } => Some([u, 0.0]),
             _ => None,
         };
-        let is_dnurbs = matches!(
-            kind,
-            ModelKind::DnurbsCurve | ModelKind::DnurbsSurface | ModelKind::DnurbsSwung
-        );
+        // A material point where the model's rope and force take one (D-NURBS).
+        let rope_param = crate::app::takes(&tools, "rope", Some("param"));
+        let force_param = crate::app::takes(&tools, "force", Some("param"));
         let cell = |h: &Hit| {
             h.extra.iter().find_map(|e| match e {
                 Some(Element::Cell { index }) => Some(*index),
@@ -707,7 +706,7 @@ impl State {
                 let edit = Edit::Rope {
                     name: Some(ROPE.into()),
                     from: p,
-                    param: if is_dnurbs { param } else { None },
+                    param: if rope_param { param } else { None },
                     to: None,
                     until: None,
                     velocity: None,
@@ -781,25 +780,27 @@ impl State {
                 let f = direction * strength;
                 let force = [f.x, f.y, f.z];
                 let until = Some(time + duration.max(0.0));
-                let edit = match kind {
-                    ModelKind::SubdivisionSolid | ModelKind::BsplineSolid => Edit::RegionForce {
+                // A brush where the model takes one (solids), else a force at the point.
+                let edit = if crate::app::takes(&tools, "region-force", None) {
+                    Edit::RegionForce {
                         name: None,
                         center: p,
                         radius: radius.max(1e-9),
                         force,
                         until,
-                    },
-                    _ => Edit::Force {
+                    }
+                } else {
+                    Edit::Force {
                         name: None,
-                        near: if is_dnurbs && param.is_some() {
+                        near: if force_param && param.is_some() {
                             None
                         } else {
                             Some(p)
                         },
-                        param: if is_dnurbs { param } else { None },
+                        param: if force_param { param } else { None },
                         force,
                         until,
-                    },
+                    }
                 };
                 self.apply(one(edit));
             }
@@ -1115,7 +1116,7 @@ pub fn model_views(session: &Session) -> (Vec<ModelView>, Energy) {
         energy.tools += e.tools;
         models.push(ModelView {
             name: name.to_string(),
-            kind: m.kind(),
+            tools: m.tools(),
             summary: m.summary(),
             mesh: Arc::new(m.display_mesh().unwrap_or_default()),
             lines: Arc::new(m.display_lines()),

@@ -45,7 +45,7 @@ use vclay_dynamics::{DnurbsCurve, DnurbsSurface};
 use vclay_io::model::Entity;
 use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
 
-use super::{Spec, SpecError, typed};
+use super::SpecError;
 use crate::command::{Edit, V3};
 use crate::error::SessionError;
 use crate::model::{
@@ -98,13 +98,7 @@ enum EngineState {
 }
 
 fn dyn_err(e: DynamicsError) -> SessionError {
-    match e {
-        DynamicsError::Diverged { .. } => SessionError::Diverged {
-            model: String::new(),
-            what: e.to_string(),
-        },
-        e => SessionError::model(e),
-    }
+    SessionError::from(e)
 }
 
 fn cmd(reason: impl std::fmt::Display) -> SessionError {
@@ -522,13 +516,13 @@ impl CurveData {
     }
     fn curve(&self) -> Result<NurbsCurve, SessionError> {
         let kv = KnotVector::new(self.knots.clone(), self.degree, self.points.len())
-            .map_err(SessionError::model)?;
+            .map_err(SessionError::kernel)?;
         NurbsCurve::from_knot_vector(
             kv,
             self.points.iter().map(|p| v3(*p)).collect(),
             self.weights.clone(),
         )
-        .map_err(SessionError::model)
+        .map_err(SessionError::kernel)
     }
 }
 
@@ -608,16 +602,16 @@ impl Source {
                     degree[a]
                 ))
             })?;
-            kv.push(KnotVector::new(knots[a].clone(), degree[a], n).map_err(SessionError::model)?);
+            kv.push(KnotVector::new(knots[a].clone(), degree[a], n).map_err(SessionError::kernel)?);
         }
         let kv: [KnotVector; 2] = kv.try_into().expect("two axes");
         NurbsSurface::from_flat(kv, points.iter().map(|p| v3(*p)).collect(), weights.clone())
             .map(Some)
-            .map_err(SessionError::model)
+            .map_err(SessionError::kernel)
     }
     /// The engine over this geometry.
     fn engine(&self, frozen: bool, material: Material) -> Result<Engine, SessionError> {
-        let e = |e: DynamicsError| SessionError::model(e);
+        let e = |e: DynamicsError| SessionError::kernel(e);
         Ok(match (self, frozen) {
             (Source::Curve { curve }, false) => Engine::Rational(
                 GeneralizedDnurbs::new(RationalGeometry::from_curve(&curve.curve()?), material)
@@ -1089,7 +1083,10 @@ impl DnurbsModel {
     ) -> Result<[f64; 2], SessionError> {
         let p = match (param, near) {
             (Some(p), _) => *p,
-            (None, Some(x)) => self.engine.nearest_param(&v3(*x)).map_err(cmd)?,
+            (None, Some(x)) => self
+                .engine
+                .nearest_param(&v3(*x))
+                .map_err(SessionError::command_from)?,
             (None, None) => return Err(cmd("give `param` or a position")),
         };
         // Checks the parameter (an error names a parameter outside the domain).
@@ -1192,7 +1189,9 @@ impl DnurbsModel {
                 }
             }
         }
-        self.engine.set_material(m.to_material()).map_err(cmd)?;
+        self.engine
+            .set_material(m.to_material())
+            .map_err(SessionError::command_from)?;
         self.material = m;
         Ok(())
     }
@@ -1224,7 +1223,7 @@ impl DnurbsModel {
         }
         self.engine
             .set_state(&EngineState::Generalized(s))
-            .map_err(cmd)
+            .map_err(SessionError::command_from)
     }
 
     fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
@@ -1469,7 +1468,9 @@ impl DnurbsModel {
             }
             Edit::PlasticReset => {
                 let e = self.engine.elastic_energy();
-                self.engine.plastic_reset().map_err(cmd)?;
+                self.engine
+                    .plastic_reset()
+                    .map_err(SessionError::command_from)?;
                 format!("plastic reset (elastic energy {e:.4e} -> 0)")
             }
             Edit::Stop => {
@@ -1479,10 +1480,12 @@ impl DnurbsModel {
             }
             Edit::MovePoint { index, to } => {
                 match &mut self.engine {
-                    Engine::FrozenSurface(d) => {
-                        d.move_control_point(*index, v3(*to)).map_err(cmd)?
-                    }
-                    Engine::FrozenCurve(d) => d.move_control_point(*index, v3(*to)).map_err(cmd)?,
+                    Engine::FrozenSurface(d) => d
+                        .move_control_point(*index, v3(*to))
+                        .map_err(SessionError::command_from)?,
+                    Engine::FrozenCurve(d) => d
+                        .move_control_point(*index, v3(*to))
+                        .map_err(SessionError::command_from)?,
                     _ => self.edit_coords(*index, &[(0, to[0]), (1, to[1]), (2, to[2])])?,
                 }
                 format!("moved control point {index} to {to:?}")
@@ -1600,8 +1603,12 @@ impl DnurbsModel {
                 self.dt = value;
             }
             "weight_penalty" => match &mut self.engine {
-                Engine::Rational(d) => d.set_weight_penalty(value).map_err(cmd)?,
-                Engine::Swung(d) => d.set_weight_penalty(value).map_err(cmd)?,
+                Engine::Rational(d) => d
+                    .set_weight_penalty(value)
+                    .map_err(SessionError::command_from)?,
+                Engine::Swung(d) => d
+                    .set_weight_penalty(value)
+                    .map_err(SessionError::command_from)?,
                 _ => {
                     return Err(cmd(
                         "the frozen-weight engine has no weight penalty (its weights are held)",
@@ -1647,7 +1654,7 @@ impl DnurbsModel {
             return Ok((mesh, Vec::new()));
         };
         vclay_spline::tessellate_surface(&s, DISPLAY_GRID, &mut mesh)
-            .map_err(SessionError::model)?;
+            .map_err(SessionError::kernel)?;
         let [du, dv] = vclay_spline::ParametricSurface::domain(&s);
         let [nu, nv] = DISPLAY_GRID.map(|n| n.max(2));
         let (us, vs) = (du.linspace(nu), dv.linspace(nv));
@@ -1682,9 +1689,8 @@ impl DnurbsModel {
 
     /// Builds a model from a scenario's `[model]`, `[material]` and `[simulation]` tables
     /// (`docs/formats.md`, D-NURBS keys).
-    pub fn from_spec(kind: ModelKind, spec: &Spec<'_>) -> Result<Self, SpecError> {
-        let m: ModelKeys = typed("model", spec.model)?;
-        let _ = (&m.kind, &m.name);
+    pub fn from_keys(kind: ModelKind, spec: &DnurbsSpec, base: &Path) -> Result<Self, SpecError> {
+        let m = &spec.model;
         let err = |table: &str, key: &str, what: String| SpecError::new(table, key, what);
         let surface = kind != ModelKind::DnurbsCurve;
         let frozen = match m.engine.as_deref() {
@@ -1699,10 +1705,7 @@ impl DnurbsModel {
             }
         };
         // Material.
-        let mk: MaterialKeys = match spec.material {
-            Some(t) => typed("material", t)?,
-            None => MaterialKeys::default(),
-        };
+        let mk = &spec.material;
         let preset = match &mk.preset {
             Some(p) => Some(Preset::by_name(p).ok_or_else(|| {
                 err(
@@ -1757,10 +1760,7 @@ impl DnurbsModel {
             }
         };
         // Simulation.
-        let sim: SimKeys = match spec.simulation {
-            Some(t) => typed("simulation", t)?,
-            None => SimKeys::default(),
-        };
+        let sim = &spec.simulation;
         let dt = sim.dt.or(preset.map(|p| p.dt)).ok_or_else(|| {
             err(
                 "simulation",
@@ -1847,7 +1847,7 @@ impl DnurbsModel {
             ));
         }
         // Geometry.
-        let source = build_source(kind, &m, spec.base)?;
+        let source = build_source(kind, m, base)?;
         if frozen && kind == ModelKind::DnurbsSwung {
             return Err(err(
                 "model",
@@ -1898,7 +1898,7 @@ impl DnurbsModel {
 
     /// Rebuilds a model saved by [`Model::save`].
     pub fn load(kind: ModelKind, v: &serde_json::Value) -> Result<Self, SessionError> {
-        let s: Saved = serde_json::from_value(v.clone()).map_err(SessionError::model)?;
+        let s: Saved = serde_json::from_value(v.clone()).map_err(SessionError::kernel)?;
         let frozen = match s.engine.as_str() {
             "generalized" => false,
             "frozen" => true,
@@ -2071,6 +2071,15 @@ fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, S
             ),
             alpha: g.alpha(),
         });
+    }
+    if let Some(s) = &m.surface {
+        if m.file.is_some() || m.primitive.is_some() || m.size.is_some() || !surface {
+            return Err(err(
+                "surface",
+                "a surface given as a value excludes `file`, `primitive` and `size` and needs a dnurbs-surface".into(),
+            ));
+        }
+        return Ok(Source::of_surface(s));
     }
     if let Some(file) = &m.file {
         let path = base.join(file);
@@ -2577,13 +2586,8 @@ impl Model for DnurbsModel {
                 _ => None,
             },
         };
-        serde_json::to_value(saved).map_err(SessionError::model)
+        serde_json::to_value(saved).map_err(SessionError::kernel)
     }
-}
-
-/// Builds a model from its scenario tables.
-pub fn build(kind: ModelKind, spec: &Spec<'_>) -> Result<Box<dyn Model>, SpecError> {
-    Ok(Box::new(DnurbsModel::from_spec(kind, spec)?))
 }
 
 /// Rebuilds a saved model.
@@ -2595,54 +2599,67 @@ pub fn load(kind: ModelKind, saved: &serde_json::Value) -> Result<Box<dyn Model>
 // Scenario keys
 // ---------------------------------------------------------------------------------------
 
-#[derive(Debug, Default, Deserialize)]
+/// The typed spec of a D-NURBS curve, surface or swung surface ([`super::ModelSpec`]).
+pub type DnurbsSpec = super::KindSpec<ModelKeys, MaterialKeys, SimKeys>;
+
+/// The `[model]` keys of a `dnurbs-*` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct ModelKeys {
-    kind: String,
+pub struct ModelKeys {
+    /// The surface itself, given as a value by a front end (the Python module's
+    /// `dnurbs_surface`); not a scenario key.
+    #[serde(skip)]
+    pub surface: Option<vclay_spline::NurbsSurface>,
     #[serde(default)]
-    name: Option<String>,
+    pub engine: Option<String>,
     #[serde(default)]
-    engine: Option<String>,
+    pub primitive: Option<String>,
     #[serde(default)]
-    primitive: Option<String>,
+    pub file: Option<std::path::PathBuf>,
     #[serde(default)]
-    file: Option<std::path::PathBuf>,
+    pub entity: Option<usize>,
     #[serde(default)]
-    entity: Option<usize>,
+    pub size: Option<Vec<usize>>,
     #[serde(default)]
-    size: Option<Vec<usize>>,
+    pub degree: Option<Vec<usize>>,
     #[serde(default)]
-    degree: Option<Vec<usize>>,
+    pub extent: Option<f64>,
     #[serde(default)]
-    extent: Option<f64>,
+    pub weights: Option<String>,
     #[serde(default)]
-    weights: Option<String>,
-    #[serde(default)]
-    fix: Vec<usize>,
+    pub fix: Vec<usize>,
 }
 
-#[derive(Debug, Default, Deserialize)]
+/// The `[material]` keys of a `dnurbs-*` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct MaterialKeys {
-    preset: Option<String>,
+pub struct MaterialKeys {
+    pub preset: Option<String>,
     /// `"knot-span"` or `"parameter"` (issue 18).
-    per: Option<String>,
-    mu: Option<f64>,
-    gamma: Option<f64>,
-    alpha: Option<f64>,
-    beta: Option<f64>,
+    pub per: Option<String>,
+    pub mu: Option<f64>,
+    pub gamma: Option<f64>,
+    pub alpha: Option<f64>,
+    pub beta: Option<f64>,
 }
 
-#[derive(Debug, Default, Deserialize)]
+/// The `[simulation]` keys of a `dnurbs-*` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct SimKeys {
-    dt: Option<f64>,
-    reference: Option<String>,
-    weight_penalty: Option<f64>,
+pub struct SimKeys {
+    pub dt: Option<f64>,
+    pub reference: Option<String>,
+    pub weight_penalty: Option<f64>,
     /// `"weight-aware"` (default) or `"fixed"` (the paper's rule), issue 18.
-    quadrature: Option<String>,
+    pub quadrature: Option<String>,
     /// Relative accuracy of the weight-aware rule.
-    quadrature_tolerance: Option<f64>,
+    pub quadrature_tolerance: Option<f64>,
 }
 
 /// The quadrature rule of a saved or specified model (see

@@ -32,8 +32,8 @@ use vclay_dynamics::dnurbs::{
 use vclay_io::model::Entity;
 use vclay_spline::{NurbsSurface, ParametricSurface};
 
+use super::SpecError;
 use super::saved::{SavedState, step_implicit};
-use super::{Spec, SpecError, typed};
 use crate::command::Edit;
 use crate::error::SessionError;
 use crate::model::{
@@ -230,7 +230,10 @@ impl PatchesModel {
 
     /// Patch `k`'s current surface.
     pub fn patch(&self, k: usize) -> Result<NurbsSurface, SessionError> {
-        self.engine.geometry().patch(k).map_err(model_err)
+        self.engine
+            .geometry()
+            .patch(k)
+            .map_err(SessionError::kernel)
     }
 
     /// Number of patches.
@@ -239,16 +242,8 @@ impl PatchesModel {
     }
 
     /// Builds the model from its scenario tables.
-    pub fn from_spec(spec: &Spec<'_>) -> Result<Self, SpecError> {
-        let m: ModelKeys = typed("model", spec.model)?;
-        let mat: MaterialKeys = match spec.material {
-            Some(t) => typed("material", t)?,
-            None => MaterialKeys::default(),
-        };
-        let sim: SimKeys = match spec.simulation {
-            Some(t) => typed("simulation", t)?,
-            None => SimKeys::default(),
-        };
+    pub fn from_keys(spec: &PatchesSpec, base: &Path) -> Result<Self, SpecError> {
+        let (m, mat, sim) = (&spec.model, &spec.material, &spec.simulation);
         if m.patch.is_empty() || m.patch.len() > MAX_PATCHES {
             return Err(SpecError::new(
                 "model",
@@ -262,7 +257,7 @@ impl PatchesModel {
         let mut surfaces = Vec::with_capacity(m.patch.len());
         for (i, p) in m.patch.iter().enumerate() {
             surfaces.push(
-                p.surface(spec.base)
+                p.surface(base)
                     .map_err(|e| SpecError::new("model", "patch", format!("patch {i}: {e}")))?,
             );
         }
@@ -339,11 +334,11 @@ impl PatchesModel {
 
     /// Rebuilds a saved model.
     pub fn load(v: &serde_json::Value) -> Result<Self, SessionError> {
-        let saved: Saved = serde_json::from_value(v.clone()).map_err(model_err)?;
+        let saved: Saved = serde_json::from_value(v.clone()).map_err(SessionError::kernel)?;
         let mut m = Self::build(saved.settings, saved.tools).map_err(model_err)?;
         m.engine
             .set_state(&GeneralizedState::from(saved.state))
-            .map_err(model_err)?;
+            .map_err(SessionError::kernel)?;
         Ok(m)
     }
 
@@ -353,7 +348,7 @@ impl PatchesModel {
         for k in 0..self.patch_count() {
             let mut part = TriMesh::new();
             vclay_spline::tessellate_surface(&self.patch(k)?, [n, n], &mut part)
-                .map_err(model_err)?;
+                .map_err(SessionError::kernel)?;
             mesh.append(&part);
         }
         Ok(mesh)
@@ -464,7 +459,7 @@ impl PatchesModel {
                 .engine
                 .geometry()
                 .nearest_param(&Vec3::from(near))
-                .map_err(cmd_err),
+                .map_err(SessionError::command_from),
         }
     }
 }
@@ -483,7 +478,7 @@ impl crate::model::Stateful for PatchesModel {
         (self.engine.state(), self.settings.dt, self.tools.clone())
     }
     fn put_state(&mut self, s: &Self::State) -> Result<(), SessionError> {
-        self.engine.set_state(&s.0).map_err(model_err)?;
+        self.engine.set_state(&s.0).map_err(SessionError::kernel)?;
         self.settings.dt = s.1;
         self.tools = s.2.clone();
         self.revision += 1;
@@ -706,7 +701,9 @@ impl Model for PatchesModel {
                 let ids = self.select(points, min, max, near)?;
                 for &c in &ids {
                     for i in Self::xyz(c) {
-                        self.engine.set_fixed_coordinate(i, fix).map_err(cmd_err)?;
+                        self.engine
+                            .set_fixed_coordinate(i, fix)
+                            .map_err(SessionError::command_from)?;
                     }
                 }
                 format!(
@@ -772,13 +769,8 @@ impl Model for PatchesModel {
             tools: self.tools.clone(),
             state: SavedState::from(&self.engine.state()),
         })
-        .map_err(model_err)
+        .map_err(SessionError::kernel)
     }
-}
-
-/// Builds a model from its scenario tables.
-pub fn build(spec: &Spec<'_>) -> Result<Box<dyn Model>, SpecError> {
-    Ok(Box::new(PatchesModel::from_spec(spec)?))
 }
 
 /// Rebuilds a saved model.
@@ -786,30 +778,33 @@ pub fn load(saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
     Ok(Box::new(PatchesModel::load(saved)?))
 }
 
-#[derive(Debug, Default, Deserialize)]
+/// The typed spec of a multi-patch D-NURBS ([`super::ModelSpec`]).
+pub type PatchesSpec = super::KindSpec<ModelKeys, MaterialKeys, SimKeys>;
+
+/// The `[model]` keys of a `dnurbs-patches` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct ModelKeys {
-    #[allow(dead_code)]
+pub struct ModelKeys {
     #[serde(default)]
-    kind: Option<String>,
-    #[allow(dead_code)]
+    pub patch: Vec<PatchKeys>,
     #[serde(default)]
-    name: Option<String>,
-    #[serde(default)]
-    patch: Vec<PatchKeys>,
-    #[serde(default)]
-    join: Vec<JoinKeys>,
-    tessellation: Option<usize>,
+    pub join: Vec<JoinKeys>,
+    pub tessellation: Option<usize>,
 }
 
-#[derive(Debug, Default, Deserialize)]
+/// The entry keys of a `dnurbs-patches` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct PatchKeys {
-    origin: Option<[f64; 3]>,
-    size: Option<[f64; 2]>,
-    controls: Option<[usize; 2]>,
-    degree: Option<[usize; 2]>,
-    file: Option<PathBuf>,
+pub struct PatchKeys {
+    pub origin: Option<[f64; 3]>,
+    pub size: Option<[f64; 2]>,
+    pub controls: Option<[usize; 2]>,
+    pub degree: Option<[usize; 2]>,
+    pub file: Option<PathBuf>,
 }
 
 impl PatchKeys {
@@ -878,28 +873,37 @@ impl PatchKeys {
     }
 }
 
-#[derive(Debug, Deserialize)]
+/// The entry keys of a `dnurbs-patches` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Deserialize, Clone, Default, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct JoinKeys {
-    a: usize,
-    b: usize,
-    continuity: String,
+pub struct JoinKeys {
+    pub a: usize,
+    pub b: usize,
+    pub continuity: String,
 }
 
-#[derive(Debug, Default, Deserialize)]
+/// The `[material]` keys of a `dnurbs-patches` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct MaterialKeys {
-    preset: Option<String>,
-    mu: Option<f64>,
-    gamma: Option<f64>,
-    alpha: Option<[f64; 2]>,
-    beta: Option<[f64; 3]>,
+pub struct MaterialKeys {
+    pub preset: Option<String>,
+    pub mu: Option<f64>,
+    pub gamma: Option<f64>,
+    pub alpha: Option<[f64; 2]>,
+    pub beta: Option<[f64; 3]>,
 }
 
-#[derive(Debug, Default, Deserialize)]
+/// The `[simulation]` keys of a `dnurbs-patches` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct SimKeys {
-    dt: Option<f64>,
+pub struct SimKeys {
+    pub dt: Option<f64>,
 }
 
 #[derive(Debug, Serialize, Deserialize)]

@@ -28,8 +28,8 @@ use vclay_dynamics::dnurbs::{
     TriangularGeometry,
 };
 
+use super::SpecError;
 use super::saved::{SavedState, step_implicit};
-use super::{Spec, SpecError, typed};
 use crate::command::Edit;
 use crate::error::SessionError;
 use crate::model::{
@@ -161,16 +161,8 @@ impl TriangularModel {
     }
 
     /// Builds the model from its scenario tables.
-    pub fn from_spec(spec: &Spec<'_>) -> Result<Self, SpecError> {
-        let m: ModelKeys = typed("model", spec.model)?;
-        let mat: MaterialKeys = match spec.material {
-            Some(t) => typed("material", t)?,
-            None => MaterialKeys::default(),
-        };
-        let sim: SimKeys = match spec.simulation {
-            Some(t) => typed("simulation", t)?,
-            None => SimKeys::default(),
-        };
+    pub fn from_keys(spec: &TriangularSpec, base: &Path) -> Result<Self, SpecError> {
+        let (m, mat, sim) = (&spec.model, &spec.material, &spec.simulation);
         let (source, rounding) = match (&m.rounding, &m.file) {
             (Some(r), None) => {
                 let kind = RoundingKind::parse(r).ok_or_else(|| {
@@ -186,7 +178,7 @@ impl TriangularModel {
                 let path = if f.is_absolute() {
                     f.clone()
                 } else {
-                    spec.base.join(f)
+                    base.join(f)
                 };
                 let text = std::fs::read_to_string(&path).map_err(|e| {
                     SpecError::new(
@@ -307,11 +299,11 @@ impl TriangularModel {
 
     /// Rebuilds a saved model.
     pub fn load(v: &serde_json::Value) -> Result<Self, SessionError> {
-        let saved: Saved = serde_json::from_value(v.clone()).map_err(model_err)?;
+        let saved: Saved = serde_json::from_value(v.clone()).map_err(SessionError::kernel)?;
         let mut m = Self::build(saved.settings).map_err(model_err)?;
         m.engine
             .set_state(&GeneralizedState::from(saved.state))
-            .map_err(model_err)?;
+            .map_err(SessionError::kernel)?;
         Ok(m)
     }
 
@@ -321,7 +313,7 @@ impl TriangularModel {
             .geometry()
             .surface()
             .tessellate(self.settings.tessellation, &mut mesh)
-            .map_err(model_err)?;
+            .map_err(SessionError::kernel)?;
         Ok(mesh)
     }
 }
@@ -336,7 +328,7 @@ impl crate::model::Stateful for TriangularModel {
         )
     }
     fn put_state(&mut self, s: &Self::State) -> Result<(), SessionError> {
-        self.engine.set_state(&s.0).map_err(model_err)?;
+        self.engine.set_state(&s.0).map_err(SessionError::kernel)?;
         self.settings.dt = s.1;
         self.settings.weight_penalty = s.2;
         self.revision += 1;
@@ -477,7 +469,9 @@ impl Model for TriangularModel {
                 format!("dt = {value}")
             }
             Edit::Set { name, value } if name == "weight_penalty" => {
-                self.engine.set_weight_penalty(*value).map_err(model_err)?;
+                self.engine
+                    .set_weight_penalty(*value)
+                    .map_err(SessionError::kernel)?;
                 self.settings.weight_penalty = *value;
                 format!("weight_penalty = {value}")
             }
@@ -542,13 +536,8 @@ impl Model for TriangularModel {
             settings: self.settings.clone(),
             state: SavedState::from(&self.engine.state()),
         })
-        .map_err(model_err)
+        .map_err(SessionError::kernel)
     }
-}
-
-/// Builds a model from its scenario tables.
-pub fn build(spec: &Spec<'_>) -> Result<Box<dyn Model>, SpecError> {
-    Ok(Box::new(TriangularModel::from_spec(spec)?))
 }
 
 /// Rebuilds a saved model.
@@ -556,38 +545,44 @@ pub fn load(saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
     Ok(Box::new(TriangularModel::load(saved)?))
 }
 
-#[derive(Debug, Default, Deserialize)]
+/// The typed spec of a triangular D-NURBS ([`super::ModelSpec`]).
+pub type TriangularSpec = super::KindSpec<ModelKeys, MaterialKeys, SimKeys>;
+
+/// The `[model]` keys of a `dnurbs-triangular` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct ModelKeys {
-    #[allow(dead_code)]
-    #[serde(default)]
-    kind: Option<String>,
-    #[allow(dead_code)]
-    #[serde(default)]
-    name: Option<String>,
-    rounding: Option<String>,
-    file: Option<PathBuf>,
-    quadrature: Option<String>,
-    quadrature_points: Option<usize>,
-    tessellation: Option<usize>,
+pub struct ModelKeys {
+    pub rounding: Option<String>,
+    pub file: Option<PathBuf>,
+    pub quadrature: Option<String>,
+    pub quadrature_points: Option<usize>,
+    pub tessellation: Option<usize>,
 }
 
-#[derive(Debug, Default, Deserialize)]
+/// The `[material]` keys of a `dnurbs-triangular` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct MaterialKeys {
-    preset: Option<String>,
-    mu: Option<f64>,
-    gamma: Option<f64>,
-    alpha: Option<[f64; 2]>,
-    beta: Option<[f64; 3]>,
-    reference: Option<String>,
-    weight_penalty: Option<f64>,
+pub struct MaterialKeys {
+    pub preset: Option<String>,
+    pub mu: Option<f64>,
+    pub gamma: Option<f64>,
+    pub alpha: Option<[f64; 2]>,
+    pub beta: Option<[f64; 3]>,
+    pub reference: Option<String>,
+    pub weight_penalty: Option<f64>,
 }
 
-#[derive(Debug, Default, Deserialize)]
+/// The `[simulation]` keys of a `dnurbs-triangular` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct SimKeys {
-    dt: Option<f64>,
+pub struct SimKeys {
+    pub dt: Option<f64>,
 }
 
 #[derive(Debug, Serialize, Deserialize)]

@@ -36,7 +36,7 @@ use vclay_ffd::{
 };
 use vclay_spline::{MAX_DEGREE, ParametricVolume};
 
-use super::{Spec, SpecError, typed};
+use super::SpecError;
 use crate::command::{Edit, PointMove, V3};
 use crate::error::SessionError;
 use crate::model::{
@@ -163,11 +163,11 @@ impl FfdModel {
         if self.lattice.weights() != weights.as_slice() {
             self.lattice
                 .set_weights(weights)
-                .map_err(SessionError::model)?;
+                .map_err(SessionError::kernel)?;
         }
         self.lattice
             .set_control_points(points)
-            .map_err(SessionError::model)?;
+            .map_err(SessionError::kernel)?;
         self.embedded.deform(&self.lattice, PAR);
         Ok(())
     }
@@ -252,7 +252,9 @@ impl FfdModel {
             )),
             e => cmd(e),
         })?;
-        self.lattice.try_apply(&manipulation).map_err(cmd)?;
+        self.lattice
+            .try_apply(&manipulation)
+            .map_err(SessionError::command_from)?;
         self.embedded.deform(&self.lattice, PAR);
         Ok(format!(
             "{} point{} moved by direct manipulation (eq {}): {} control points moved",
@@ -397,10 +399,10 @@ impl FfdModel {
 
     /// Builds a model from a scenario's `[model]` and `[simulation]` tables (see
     /// `docs/formats.md`, kind `ffd`).
-    pub fn from_spec(spec: &Spec<'_>) -> Result<Self, SpecError> {
-        let m: ModelKeys = typed("model", spec.model)?;
+    pub fn from_keys(spec: &FfdSpec, base: &Path) -> Result<Self, SpecError> {
+        let m = &spec.model;
         let err = |key: &str, what: String| SpecError::new("model", key, what);
-        let dt = super::clock_only(spec, "an ffd model", DEFAULT_DT)?;
+        let dt = spec.simulation.dt_or(DEFAULT_DT)?;
         let degree = m.degree.map_or([DEFAULT_DEGREE; 3], OneOrThree::axes);
         let control = m
             .control
@@ -460,7 +462,7 @@ impl FfdModel {
                 let path = if f.is_absolute() {
                     f.clone()
                 } else {
-                    spec.base.join(f)
+                    base.join(f)
                 };
                 (read_any_mesh(&path).map_err(|e| err("mesh", e))?, {
                     f.display().to_string()
@@ -514,7 +516,7 @@ impl FfdModel {
 
     /// Rebuilds a model saved by [`Model::save`].
     pub fn load(v: &serde_json::Value) -> Result<Self, SessionError> {
-        let s: Saved = serde_json::from_value(v.clone()).map_err(SessionError::model)?;
+        let s: Saved = serde_json::from_value(v.clone()).map_err(SessionError::kernel)?;
         let l = &s.lattice;
         let total = l
             .control
@@ -537,7 +539,7 @@ impl FfdModel {
             v3(l.min),
             v3(l.max),
         )
-        .map_err(SessionError::model)?;
+        .map_err(SessionError::kernel)?;
         for a in 0..3 {
             if lattice.knots()[a].as_slice() != l.knots[a].as_slice() {
                 return Err(SessionError::model(format!(
@@ -556,17 +558,17 @@ impl FfdModel {
         if s.weights.iter().any(|&w| w != 1.0) {
             lattice
                 .set_weights(s.weights.clone())
-                .map_err(SessionError::model)?;
+                .map_err(SessionError::kernel)?;
         }
         lattice
             .set_control_points(s.control_points.iter().map(|p| v3(*p)).collect())
-            .map_err(SessionError::model)?;
+            .map_err(SessionError::kernel)?;
         let mesh = TriMesh {
             positions: s.mesh.positions.iter().map(|p| v3(*p)).collect(),
             normals: Vec::new(),
             triangles: s.mesh.triangles.clone(),
         };
-        mesh.validate().map_err(SessionError::model)?;
+        mesh.validate().map_err(SessionError::kernel)?;
         let mode = parse_mode(&s.mode)
             .ok_or_else(|| SessionError::model(format!("unknown mode \"{}\"", s.mode)))?;
         if !(s.dt > 0.0 && s.dt.is_finite() && s.time.is_finite()) {
@@ -828,13 +830,8 @@ impl Model for FfdModel {
             time: self.time,
             steps: self.steps,
         };
-        serde_json::to_value(saved).map_err(SessionError::model)
+        serde_json::to_value(saved).map_err(SessionError::kernel)
     }
-}
-
-/// Builds a model from its scenario tables.
-pub fn build(spec: &Spec<'_>) -> Result<Box<dyn Model>, SpecError> {
-    Ok(Box::new(FfdModel::from_spec(spec)?))
 }
 
 /// Rebuilds a saved model.
@@ -941,15 +938,22 @@ pub fn primitive(name: &str) -> Option<TriMesh> {
 // Scenario keys and the session file form
 // ---------------------------------------------------------------------------------------
 
-#[derive(Clone, Copy, Debug, Deserialize)]
+/// The typed spec of an FFD model ([`super::ModelSpec`]).
+pub type FfdSpec = super::KindSpec<ModelKeys, super::NoMaterial, super::ClockKeys>;
+
+/// A count for all three axes or one per axis (`control = 4` or `control = [4, 4, 5]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(untagged)]
-enum OneOrThree {
+pub enum OneOrThree {
+    /// The same for every axis.
     One(usize),
+    /// Per axis.
     Three([usize; 3]),
 }
 
 impl OneOrThree {
-    fn axes(self) -> [usize; 3] {
+    /// Per axis.
+    pub fn axes(self) -> [usize; 3] {
         match self {
             OneOrThree::One(n) => [n; 3],
             OneOrThree::Three(a) => a,
@@ -957,23 +961,20 @@ impl OneOrThree {
     }
 }
 
-#[derive(Debug, Default, Deserialize)]
+/// The `[model]` keys of a `ffd` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct ModelKeys {
-    #[allow(dead_code)]
-    #[serde(default)]
-    kind: Option<String>,
-    #[allow(dead_code)]
-    #[serde(default)]
-    name: Option<String>,
-    mesh: Option<PathBuf>,
-    primitive: Option<String>,
-    degree: Option<OneOrThree>,
-    control: Option<OneOrThree>,
-    margin: Option<f64>,
-    min: Option<V3>,
-    max: Option<V3>,
-    mode: Option<String>,
+pub struct ModelKeys {
+    pub mesh: Option<PathBuf>,
+    pub primitive: Option<String>,
+    pub degree: Option<OneOrThree>,
+    pub control: Option<OneOrThree>,
+    pub margin: Option<f64>,
+    pub min: Option<V3>,
+    pub max: Option<V3>,
+    pub mode: Option<String>,
 }
 
 #[derive(Debug, Serialize, Deserialize)]

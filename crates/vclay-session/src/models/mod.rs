@@ -12,6 +12,7 @@ pub mod solid;
 use std::path::Path;
 
 use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
 
 use crate::error::SessionError;
 use crate::model::{Model, ModelKind};
@@ -86,53 +87,179 @@ pub fn typed<T: DeserializeOwned>(table: &str, t: &toml::Table) -> Result<T, Spe
     })
 }
 
-/// For kinds without physics (FFD, PDE surfaces): refuses a non-empty `[material]` (naming
-/// `what`, e.g. "an ffd model") and reads `[simulation] dt` (the clock's step; `default` when
-/// absent), the only simulation key.
-pub(crate) fn clock_only(spec: &Spec<'_>, what: &str, default: f64) -> Result<f64, SpecError> {
-    #[derive(Debug, Default, serde::Deserialize)]
-    #[serde(deny_unknown_fields)]
-    struct SimKeys {
-        dt: Option<f64>,
-    }
-    if let Some(t) = spec.material
-        && !t.is_empty()
-    {
-        return Err(SpecError::new(
-            "material",
-            t.keys().next().map_or("material", |k| k.as_str()),
-            format!("{what} has no material"),
-        ));
-    }
-    let sim: SimKeys = match spec.simulation {
-        Some(t) => typed("simulation", t)?,
-        None => SimKeys::default(),
-    };
-    let dt = sim.dt.unwrap_or(default);
-    if !(dt > 0.0 && dt.is_finite()) {
-        return Err(SpecError::new(
-            "simulation",
-            "dt",
-            format!("{dt} must be positive and finite"),
-        ));
-    }
-    Ok(dt)
+/// A model as a typed value: its kind and the keys of its `[model]`, `[material]` and
+/// `[simulation]` tables (`docs/formats.md` section 8), without the run length. Scenarios are
+/// read into this ([`ModelSpec::from_tables`]: serde plus the key that failed); the studio, the
+/// Python module and [`crate::open`] build the same values directly. [`ModelSpec::build`] then
+/// validates the values once and makes the model.
+///
+/// Serialized, it mirrors a scenario's model: `kind` beside `model`, `material` and
+/// `simulation` tables.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
+pub enum ModelSpec {
+    /// `dnurbs-curve`.
+    DnurbsCurve(dnurbs::DnurbsSpec),
+    /// `dnurbs-surface`.
+    DnurbsSurface(dnurbs::DnurbsSpec),
+    /// `dnurbs-swung`.
+    DnurbsSwung(dnurbs::DnurbsSpec),
+    /// `subdivision-solid`.
+    SubdivisionSolid(solid::SolidSpec),
+    /// `bspline-solid`.
+    BsplineSolid(solid::SolidSpec),
+    /// `ffd`.
+    Ffd(ffd::FfdSpec),
+    /// `pde-surface`.
+    PdeSurface(pde::PdeSpec),
+    /// `dnurbs-triangular`.
+    DnurbsTriangular(dnurbs_tri::TriangularSpec),
+    /// `dnurbs-patches`.
+    DnurbsPatches(dnurbs_patches::PatchesSpec),
 }
 
-/// Builds a model of `kind` from its scenario tables.
+/// The keys of a kind's `[model]`, `[material]` and `[simulation]` tables as one value.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KindSpec<M, A, S> {
+    /// `[model]`.
+    #[serde(default)]
+    pub model: M,
+    /// `[material]`.
+    #[serde(default)]
+    pub material: A,
+    /// `[simulation]` without `steps` and `duration` (the run length is the scenario's).
+    #[serde(default)]
+    pub simulation: S,
+}
+
+impl<M: DeserializeOwned + Default, A: DeserializeOwned + Default, S: DeserializeOwned + Default>
+    KindSpec<M, A, S>
+{
+    /// Reads the three tables (absent ones take their defaults); `kind` and `name` in the
+    /// model table are the scenario's and are left out.
+    pub fn from_tables(spec: &Spec<'_>) -> Result<Self, SpecError> {
+        let mut model = spec.model.clone();
+        model.remove("kind");
+        model.remove("name");
+        Ok(Self {
+            model: typed("model", &model)?,
+            material: match spec.material {
+                Some(t) => typed("material", t)?,
+                None => A::default(),
+            },
+            simulation: match spec.simulation {
+                Some(t) => typed("simulation", t)?,
+                None => S::default(),
+            },
+        })
+    }
+}
+
+/// A kind without a material (FFD, PDE surfaces): `[material]` has no keys, and any key is an
+/// error that says so.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct NoMaterial {}
+
+impl<'de> Deserialize<'de> for NoMaterial {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let keys = std::collections::BTreeMap::<String, serde::de::IgnoredAny>::deserialize(d)?;
+        match keys.keys().next() {
+            None => Ok(NoMaterial {}),
+            Some(k) => Err(serde::de::Error::custom(format_args!(
+                "unknown field `{k}`: this kind of model has no material"
+            ))),
+        }
+    }
+}
+
+/// `[simulation]` of kinds whose only simulation key is the clock's step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ClockKeys {
+    /// Time step (s) of the model's clock (default: the kind's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dt: Option<f64>,
+}
+
+impl ClockKeys {
+    /// The step, `default` when absent; an error unless it is positive and finite.
+    pub fn dt_or(&self, default: f64) -> Result<f64, SpecError> {
+        let dt = self.dt.unwrap_or(default);
+        if !(dt > 0.0 && dt.is_finite()) {
+            return Err(SpecError::new(
+                "simulation",
+                "dt",
+                format!("{dt} must be positive and finite"),
+            ));
+        }
+        Ok(dt)
+    }
+}
+
+impl ModelSpec {
+    /// The kind.
+    pub fn kind(&self) -> ModelKind {
+        match self {
+            ModelSpec::DnurbsCurve(_) => ModelKind::DnurbsCurve,
+            ModelSpec::DnurbsSurface(_) => ModelKind::DnurbsSurface,
+            ModelSpec::DnurbsSwung(_) => ModelKind::DnurbsSwung,
+            ModelSpec::SubdivisionSolid(_) => ModelKind::SubdivisionSolid,
+            ModelSpec::BsplineSolid(_) => ModelKind::BsplineSolid,
+            ModelSpec::Ffd(_) => ModelKind::Ffd,
+            ModelSpec::PdeSurface(_) => ModelKind::PdeSurface,
+            ModelSpec::DnurbsTriangular(_) => ModelKind::DnurbsTriangular,
+            ModelSpec::DnurbsPatches(_) => ModelKind::DnurbsPatches,
+        }
+    }
+
+    /// Reads a scenario's tables for a model of `kind` (serde; the error names the table and
+    /// the key).
+    pub fn from_tables(kind: ModelKind, spec: &Spec<'_>) -> Result<Self, SpecError> {
+        Ok(match kind {
+            ModelKind::DnurbsCurve => ModelSpec::DnurbsCurve(KindSpec::from_tables(spec)?),
+            ModelKind::DnurbsSurface => ModelSpec::DnurbsSurface(KindSpec::from_tables(spec)?),
+            ModelKind::DnurbsSwung => ModelSpec::DnurbsSwung(KindSpec::from_tables(spec)?),
+            ModelKind::SubdivisionSolid => {
+                ModelSpec::SubdivisionSolid(KindSpec::from_tables(spec)?)
+            }
+            ModelKind::BsplineSolid => ModelSpec::BsplineSolid(KindSpec::from_tables(spec)?),
+            ModelKind::Ffd => ModelSpec::Ffd(KindSpec::from_tables(spec)?),
+            ModelKind::PdeSurface => ModelSpec::PdeSurface(KindSpec::from_tables(spec)?),
+            ModelKind::DnurbsTriangular => {
+                ModelSpec::DnurbsTriangular(KindSpec::from_tables(spec)?)
+            }
+            ModelKind::DnurbsPatches => ModelSpec::DnurbsPatches(KindSpec::from_tables(spec)?),
+        })
+    }
+
+    /// Validates the values and builds the model; relative file names resolve against `base`.
+    /// The error names the table and key at fault.
+    pub fn build(&self, base: &Path) -> Result<Box<dyn Model>, SpecError> {
+        let kind = self.kind();
+        Ok(match self {
+            ModelSpec::DnurbsCurve(s) | ModelSpec::DnurbsSurface(s) | ModelSpec::DnurbsSwung(s) => {
+                Box::new(dnurbs::DnurbsModel::from_keys(kind, s, base)?)
+            }
+            ModelSpec::SubdivisionSolid(s) | ModelSpec::BsplineSolid(s) => {
+                Box::new(solid::SolidModel::from_keys(kind, s, base)?)
+            }
+            ModelSpec::Ffd(s) => Box::new(ffd::FfdModel::from_keys(s, base)?),
+            ModelSpec::PdeSurface(s) => Box::new(pde::PdeSurfaceModel::from_keys(s, base)?),
+            ModelSpec::DnurbsTriangular(s) => {
+                Box::new(dnurbs_tri::TriangularModel::from_keys(s, base)?)
+            }
+            ModelSpec::DnurbsPatches(s) => {
+                Box::new(dnurbs_patches::PatchesModel::from_keys(s, base)?)
+            }
+        })
+    }
+}
+
+/// Builds a model of `kind` from its scenario tables ([`ModelSpec::from_tables`], then
+/// [`ModelSpec::build`]).
 pub fn build(kind: ModelKind, spec: &Spec<'_>) -> Result<Box<dyn Model>, SpecError> {
-    Ok(match kind {
-        ModelKind::SubdivisionSolid | ModelKind::BsplineSolid => {
-            Box::new(solid::SolidModel::from_spec(kind, spec)?)
-        }
-        ModelKind::DnurbsCurve | ModelKind::DnurbsSurface | ModelKind::DnurbsSwung => {
-            dnurbs::build(kind, spec)?
-        }
-        ModelKind::Ffd => ffd::build(spec)?,
-        ModelKind::PdeSurface => pde::build(spec)?,
-        ModelKind::DnurbsTriangular => dnurbs_tri::build(spec)?,
-        ModelKind::DnurbsPatches => dnurbs_patches::build(spec)?,
-    })
+    ModelSpec::from_tables(kind, spec)?.build(spec.base)
 }
 
 /// Rebuilds a model of `kind` from what its [`Model::save`] wrote.

@@ -31,7 +31,7 @@ use vclay_core::{TriMesh, Vec3};
 use vclay_pde::surface::tessellation_samples;
 use vclay_pde::{PdeError, PdeModel, SpecFile, builtin};
 
-use super::{Spec, SpecError, typed};
+use super::SpecError;
 use crate::command::Edit;
 use crate::error::SessionError;
 use crate::model::{
@@ -260,15 +260,16 @@ impl PdeSurfaceModel {
     fn put(&mut self, s: &PdeSnap) -> Result<(), SessionError> {
         if s.constants != self.constants || s.locals != self.locals {
             let model =
-                compile(&self.spec, &s.constants, &s.locals).map_err(SessionError::model)?;
-            let surface = Surface::solve(&model, s.time, self.grid).map_err(SessionError::model)?;
+                compile(&self.spec, &s.constants, &s.locals).map_err(SessionError::kernel)?;
+            let surface =
+                Surface::solve(&model, s.time, self.grid).map_err(SessionError::kernel)?;
             self.model = model;
             self.surface = surface;
             self.constants = s.constants.clone();
             self.locals = s.locals.clone();
         } else if s.time != self.time {
             self.surface =
-                Surface::solve(&self.model, s.time, self.grid).map_err(SessionError::model)?;
+                Surface::solve(&self.model, s.time, self.grid).map_err(SessionError::kernel)?;
         }
         self.dt = s.dt;
         self.time = s.time;
@@ -281,7 +282,8 @@ impl PdeSurfaceModel {
     /// time; returns the old value. Fails leaving the model unchanged.
     fn set_value(&mut self, name: &str, value: f64) -> Result<f64, SessionError> {
         if name == "t" {
-            let surface = Surface::solve(&self.model, value, self.grid).map_err(cmd)?;
+            let surface = Surface::solve(&self.model, value, self.grid)
+                .map_err(SessionError::command_from)?;
             self.surface = surface;
             return Ok(std::mem::replace(&mut self.time, value));
         }
@@ -301,8 +303,10 @@ impl PdeSurfaceModel {
         };
         let mut constants = self.constants.clone();
         constants.insert(name.to_string(), value);
-        let model = compile(&self.spec, &constants, &self.locals).map_err(cmd)?;
-        let surface = Surface::solve(&model, self.time, self.grid).map_err(cmd)?;
+        let model =
+            compile(&self.spec, &constants, &self.locals).map_err(SessionError::command_from)?;
+        let surface =
+            Surface::solve(&model, self.time, self.grid).map_err(SessionError::command_from)?;
         self.model = model;
         self.surface = surface;
         self.constants = constants;
@@ -312,8 +316,10 @@ impl PdeSurfaceModel {
     /// Replaces the added local deformations (recompiling and solving at the current time);
     /// fails leaving the model unchanged.
     fn set_locals(&mut self, locals: Vec<UserLocal>) -> Result<(), SessionError> {
-        let model = compile(&self.spec, &self.constants, &locals).map_err(cmd)?;
-        let surface = Surface::solve(&model, self.time, self.grid).map_err(cmd)?;
+        let model =
+            compile(&self.spec, &self.constants, &locals).map_err(SessionError::command_from)?;
+        let surface =
+            Surface::solve(&model, self.time, self.grid).map_err(SessionError::command_from)?;
         self.model = model;
         self.surface = surface;
         self.locals = locals;
@@ -448,10 +454,10 @@ impl PdeSurfaceModel {
 
     /// Builds a model from a scenario's `[model]` and `[simulation]` tables (see
     /// `docs/formats.md`, kind `pde-surface`).
-    pub fn from_spec(spec: &Spec<'_>) -> Result<Self, SpecError> {
-        let m: ModelKeys = typed("model", spec.model)?;
+    pub fn from_keys(spec: &PdeSpec, base: &Path) -> Result<Self, SpecError> {
+        let m = &spec.model;
         let err = |key: &str, what: String| SpecError::new("model", key, what);
-        let dt = super::clock_only(spec, "a pde-surface model", DEFAULT_DT)?;
+        let dt = spec.simulation.dt_or(DEFAULT_DT)?;
         let grid = m.grid.unwrap_or(DEFAULT_GRID);
         if let Some(n) = grid.iter().find(|&&n| !(2..=MAX_GRID).contains(&n)) {
             return Err(err(
@@ -485,7 +491,7 @@ impl PdeSurfaceModel {
                 let path = if f.is_absolute() {
                     f.clone()
                 } else {
-                    spec.base.join(f)
+                    base.join(f)
                 };
                 let e = |e: PdeError| err("spec", e.to_string());
                 let text = std::fs::read_to_string(&path)
@@ -541,8 +547,8 @@ impl PdeSurfaceModel {
 
     /// Rebuilds a model saved by [`Model::save`].
     pub fn load(v: &serde_json::Value) -> Result<Self, SessionError> {
-        let s: Saved = serde_json::from_value(v.clone()).map_err(SessionError::model)?;
-        let spec: SpecFile = serde_json::from_value(s.spec).map_err(SessionError::model)?;
+        let s: Saved = serde_json::from_value(v.clone()).map_err(SessionError::kernel)?;
+        let spec: SpecFile = serde_json::from_value(s.spec).map_err(SessionError::kernel)?;
         if spec.params.keys().ne(s.constants.keys()) {
             return Err(SessionError::model(
                 "the saved constants are not the spec's params",
@@ -561,7 +567,7 @@ impl PdeSurfaceModel {
             )));
         }
         let mut model = Self::assemble(spec, s.constants, s.grid, s.dt, s.time, &s.source)
-            .map_err(SessionError::model)?;
+            .map_err(SessionError::kernel)?;
         if !s.locals.is_empty() {
             model.set_locals(s.locals).map_err(|e| e.in_model(""))?;
         }
@@ -619,7 +625,7 @@ impl Model for PdeSurfaceModel {
     fn step(&mut self) -> Result<StepReport, SessionError> {
         let t0 = std::time::Instant::now();
         let t = self.time + self.dt;
-        self.surface = Surface::solve(&self.model, t, self.grid).map_err(SessionError::model)?;
+        self.surface = Surface::solve(&self.model, t, self.grid).map_err(SessionError::kernel)?;
         self.time = t;
         self.steps += 1;
         self.revision += 1;
@@ -765,7 +771,7 @@ impl Model for PdeSurfaceModel {
     fn save(&self) -> Result<serde_json::Value, SessionError> {
         let saved = Saved {
             source: self.source.clone(),
-            spec: serde_json::to_value(&self.spec).map_err(SessionError::model)?,
+            spec: serde_json::to_value(&self.spec).map_err(SessionError::kernel)?,
             constants: self.constants.clone(),
             locals: self.locals.clone(),
             grid: self.grid,
@@ -774,13 +780,8 @@ impl Model for PdeSurfaceModel {
             steps: self.steps,
             size: self.size,
         };
-        serde_json::to_value(saved).map_err(SessionError::model)
+        serde_json::to_value(saved).map_err(SessionError::kernel)
     }
-}
-
-/// Builds a model from its scenario tables.
-pub fn build(spec: &Spec<'_>) -> Result<Box<dyn Model>, SpecError> {
-    Ok(Box::new(PdeSurfaceModel::from_spec(spec)?))
 }
 
 /// Rebuilds a saved model.
@@ -792,20 +793,20 @@ pub fn load(saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
 // Scenario keys and the session file form
 // ---------------------------------------------------------------------------------------
 
-#[derive(Debug, Default, Deserialize)]
+/// The typed spec of a PDE surface ([`super::ModelSpec`]).
+pub type PdeSpec = super::KindSpec<ModelKeys, super::NoMaterial, super::ClockKeys>;
+
+/// The `[model]` keys of a `pde-surface` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct ModelKeys {
-    #[allow(dead_code)]
+pub struct ModelKeys {
+    pub spec: Option<PathBuf>,
+    pub builtin: Option<String>,
+    pub grid: Option<[usize; 2]>,
     #[serde(default)]
-    kind: Option<String>,
-    #[allow(dead_code)]
-    #[serde(default)]
-    name: Option<String>,
-    spec: Option<PathBuf>,
-    builtin: Option<String>,
-    grid: Option<[usize; 2]>,
-    #[serde(default)]
-    params: BTreeMap<String, f64>,
+    pub params: BTreeMap<String, f64>,
 }
 
 #[derive(Debug, Serialize, Deserialize)]

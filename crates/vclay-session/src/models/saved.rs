@@ -21,7 +21,7 @@ pub(crate) fn step_implicit<G: GeneralizedGeometry>(
     let t0 = std::time::Instant::now();
     let r = engine
         .step(Integrator::Implicit { dt })
-        .map_err(SessionError::model)?;
+        .map_err(SessionError::from)?;
     *energy = Energy {
         kinetic: r.kinetic_energy,
         elastic: r.elastic_energy,

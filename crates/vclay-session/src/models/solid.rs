@@ -21,7 +21,7 @@ use vclay_solids::{
 };
 use vclay_spline::{KnotVector, NurbsVolume};
 
-use super::{Spec, SpecError, typed};
+use super::SpecError;
 use crate::command::{Edit, V3};
 use crate::error::SessionError;
 use crate::model::{
@@ -52,13 +52,7 @@ pub(crate) struct SolidSnap {
 }
 
 fn kernel(e: SolidsError) -> SessionError {
-    match e {
-        SolidsError::Diverged { .. } => SessionError::Diverged {
-            model: String::new(),
-            what: e.to_string(),
-        },
-        e => SessionError::model(e),
-    }
+    SessionError::from(e)
 }
 
 fn cmd(reason: impl std::fmt::Display) -> SessionError {
@@ -144,7 +138,10 @@ impl SolidModel {
     }
 
     fn add_tool(&mut self, tool: Tool) -> Result<usize, SessionError> {
-        self.solid.add_tool(tool).map(|id| id.0).map_err(cmd)
+        self.solid
+            .add_tool(tool)
+            .map(|id| id.0)
+            .map_err(SessionError::command_from)
     }
 
     fn label(
@@ -232,7 +229,7 @@ impl SolidModel {
                         stiffness.unwrap_or(DEFAULT_ROPE_STIFFNESS),
                         length.unwrap_or(0.0),
                     )
-                    .map_err(cmd)?
+                    .map_err(SessionError::command_from)?
                     .0;
                 let Some(Tool::Rope { point, .. }) = self.solid.tool(ToolId(id)) else {
                     unreachable!("just added a rope")
@@ -270,7 +267,9 @@ impl SolidModel {
                     return Err(cmd(format!("`{name}` is a {}, not a rope", t.action)));
                 }
                 let h = t.handle;
-                self.solid.move_cursor(ToolId(h), v3(*to)).map_err(cmd)?;
+                self.solid
+                    .move_cursor(ToolId(h), v3(*to))
+                    .map_err(SessionError::command_from)?;
                 self.tools.get_mut(name).expect("present").path = None;
                 format!("rope `{name}` cursor at {to:?}")
             }
@@ -307,7 +306,7 @@ impl SolidModel {
                 let id = self
                     .solid
                     .add_region_force(v3(*center), *radius, v3(*force))
-                    .map_err(cmd)?
+                    .map_err(SessionError::command_from)?
                     .0;
                 let label = self.label(name, "region", id).inspect_err(|_| {
                     let _ = self.solid.remove_tool(ToolId(id));
@@ -362,7 +361,9 @@ impl SolidModel {
                     .filter(|&i| self.solid.is_fixed(i) != fix)
                     .collect();
                 let t0 = std::time::Instant::now();
-                self.solid.set_fixed(&pts, fix).map_err(cmd)?;
+                self.solid
+                    .set_fixed(&pts, fix)
+                    .map_err(SessionError::command_from)?;
                 let st = self.solid.stats();
                 let message = if fix {
                     format!(
@@ -443,7 +444,7 @@ impl SolidModel {
                 };
                 self.solid
                     .update_material(list.as_deref(), f)
-                    .map_err(cmd)?;
+                    .map_err(SessionError::command_from)?;
                 match &list {
                     Some(l) => format!("material changed in {} control cells", l.len()),
                     None => "material changed".to_string(),
@@ -460,7 +461,9 @@ impl SolidModel {
                 };
                 let full = self.clone();
                 let t0 = std::time::Instant::now();
-                self.solid.extrude(f, factor.unwrap_or(1.0)).map_err(cmd)?;
+                self.solid
+                    .extrude(f, factor.unwrap_or(1.0))
+                    .map_err(SessionError::command_from)?;
                 self.revision += 1;
                 return Ok(Applied {
                     message: format!(
@@ -482,7 +485,9 @@ impl SolidModel {
                 };
                 let full = self.clone();
                 let t0 = std::time::Instant::now();
-                self.solid.delete_cell(c).map_err(cmd)?;
+                self.solid
+                    .delete_cell(c)
+                    .map_err(SessionError::command_from)?;
                 self.revision += 1;
                 return Ok(Applied {
                     message: format!(
@@ -520,8 +525,13 @@ impl SolidModel {
                 let mut st = self.solid.state();
                 st.control_points[*index] = v3(*to);
                 st.velocities[*index] = Vec3::zeros();
-                st.data_points = self.solid.map_to_data(&st.control_points).map_err(cmd)?;
-                self.solid.set_state(&st).map_err(cmd)?;
+                st.data_points = self
+                    .solid
+                    .map_to_data(&st.control_points)
+                    .map_err(SessionError::command_from)?;
+                self.solid
+                    .set_state(&st)
+                    .map_err(SessionError::command_from)?;
                 format!("moved control point {index} to {to:?}")
             }
             Edit::SetWeight { .. } => {
@@ -542,7 +552,9 @@ impl SolidModel {
                 if let Some(dt) = dt {
                     p.dt = *dt;
                 }
-                self.solid.set_params(p).map_err(cmd)?;
+                self.solid
+                    .set_params(p)
+                    .map_err(SessionError::command_from)?;
                 format!("integrator {:?}, dt {}", p.integrator, p.dt)
             }
             Edit::Data { .. }
@@ -635,7 +647,9 @@ impl SolidModel {
                     "edge_stiffness" => m.edge_stiffness = value,
                     _ => m.virtual_stiffness = value,
                 };
-                self.solid.update_material(None, f).map_err(cmd)?;
+                self.solid
+                    .update_material(None, f)
+                    .map_err(SessionError::command_from)?;
                 return Ok(format!("{name} = {value} in every cell"));
             }
             _ => {
@@ -649,7 +663,9 @@ impl SolidModel {
                 )));
             }
         }
-        self.solid.set_params(p).map_err(cmd)?;
+        self.solid
+            .set_params(p)
+            .map_err(SessionError::command_from)?;
         Ok(format!("{name} = {value}"))
     }
 
@@ -714,13 +730,13 @@ impl SolidModel {
     }
 
     /// Builds a solid from a scenario's `[model]`, `[material]` and `[simulation]` tables.
-    pub fn from_spec(kind: ModelKind, spec: &Spec<'_>) -> Result<Self, SpecError> {
-        let m: ModelKeys = typed("model", spec.model)?;
-        let (source, p) = build_source(kind, &m, spec.base)?;
+    pub fn from_keys(kind: ModelKind, spec: &SolidSpec, base: &Path) -> Result<Self, SpecError> {
+        let m = &spec.model;
+        let (source, p) = build_source(kind, m, base)?;
         let mut field = MaterialField::uniform(Material::default(), source.control_cells());
         let mut metric: Option<f64> = None;
-        if let Some(t) = spec.material {
-            let mk: MaterialKeys = typed("material", t)?;
+        {
+            let mk = &spec.material;
             let merr = |e: SolidsError, cells: bool| match e {
                 SolidsError::InvalidParameter {
                     name,
@@ -780,10 +796,7 @@ impl SolidModel {
                     .map_err(|e| merr(e, true))?;
             }
         }
-        let sim: SimKeys = match spec.simulation {
-            Some(t) => typed("simulation", t)?,
-            None => SimKeys::default(),
-        };
+        let sim = &spec.simulation;
         let mut params = SolidParams::default();
         if let Some(i) = &sim.integrator {
             params.integrator = parse_integrator(i).ok_or_else(|| {
@@ -838,7 +851,7 @@ impl SolidModel {
 
     /// Rebuilds a model saved by [`Model::save`].
     pub fn load(v: &serde_json::Value) -> Result<Self, SessionError> {
-        let s: Saved = serde_json::from_value(v.clone()).map_err(SessionError::model)?;
+        let s: Saved = serde_json::from_value(v.clone()).map_err(SessionError::kernel)?;
         let source = match &s.source {
             SavedSource::Subdivision {
                 lattice,
@@ -847,18 +860,18 @@ impl SolidModel {
                 boundary,
                 levels,
             } => {
-                let control =
-                    formats::ovm::parse(lattice, "session lattice").map_err(SessionError::model)?;
+                let control = formats::ovm::parse(lattice, "session lattice")
+                    .map_err(SessionError::kernel)?;
                 let mut features = Features::none(&control);
                 for &e in creases {
                     features
                         .tag_crease(EdgeId::new(e))
-                        .map_err(SessionError::model)?;
+                        .map_err(SessionError::kernel)?;
                 }
                 for &c in corners {
                     features
                         .tag_corner(VertexId::new(c))
-                        .map_err(SessionError::model)?;
+                        .map_err(SessionError::kernel)?;
                 }
                 SolidSource::Subdivision {
                     control,
@@ -885,7 +898,7 @@ impl SolidModel {
                     })?;
                     kv.push(
                         KnotVector::new(knots[a].clone(), degrees[a], n)
-                            .map_err(SessionError::model)?,
+                            .map_err(SessionError::kernel)?,
                     );
                 }
                 SolidSource::BSpline {
@@ -897,7 +910,7 @@ impl SolidModel {
         };
         let material =
             MaterialField::from_cells(s.material.iter().map(|m| m.to_material()).collect())
-                .map_err(SessionError::model)?;
+                .map_err(SessionError::kernel)?;
         let params = SolidParams {
             integrator: parse_integrator(&s.params.integrator).ok_or_else(|| {
                 SessionError::model(format!("unknown integrator \"{}\"", s.params.integrator))
@@ -931,7 +944,7 @@ impl SolidModel {
             tool_energy_seen: s.state.tool_energy_seen,
         };
         let solid = DynamicSolid::from_parts(source, material, params, &rest, &state)
-            .map_err(SessionError::model)?;
+            .map_err(SessionError::kernel)?;
         for t in &s.tools.tools {
             if solid.tool(ToolId(t.handle)).is_none() {
                 return Err(SessionError::model(format!(
@@ -1422,7 +1435,7 @@ impl Model for SolidModel {
             },
             tools: self.tools.clone(),
         };
-        serde_json::to_value(saved).map_err(SessionError::model)
+        serde_json::to_value(saved).map_err(SessionError::kernel)
     }
 }
 
@@ -1430,28 +1443,27 @@ impl Model for SolidModel {
 // Scenario keys
 // ---------------------------------------------------------------------------------------
 
-#[derive(Debug, Default, Deserialize)]
+/// The `[model]` keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct ModelKeys {
-    #[allow(dead_code)]
-    kind: String,
-    #[serde(default)]
-    name: Option<String>,
-    primitive: Option<String>,
-    file: Option<std::path::PathBuf>,
-    entity: Option<usize>,
-    points: Option<[usize; 3]>,
-    min: Option<V3>,
-    max: Option<V3>,
-    radius: Option<f64>,
-    height: Option<f64>,
-    level: Option<usize>,
-    boundary: Option<String>,
-    control: Option<[usize; 3]>,
-    degree: Option<[usize; 3]>,
-    samples: Option<[usize; 3]>,
+pub struct ModelKeys {
+    pub primitive: Option<String>,
+    pub file: Option<std::path::PathBuf>,
+    pub entity: Option<usize>,
+    pub points: Option<[usize; 3]>,
+    pub min: Option<V3>,
+    pub max: Option<V3>,
+    pub radius: Option<f64>,
+    pub height: Option<f64>,
+    pub level: Option<usize>,
+    pub boundary: Option<String>,
+    pub control: Option<[usize; 3]>,
+    pub degree: Option<[usize; 3]>,
+    pub samples: Option<[usize; 3]>,
     /// Cells of the lattice built from a mesh `file`.
-    cells: Option<usize>,
+    pub cells: Option<usize>,
 }
 
 #[derive(Debug, Default)]
@@ -1483,15 +1495,18 @@ impl Values {
     }
 }
 
-#[derive(Debug, Default, Deserialize)]
+/// The entry keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct CellKeys {
-    cells: Vec<usize>,
-    density: Option<f64>,
-    damping: Option<f64>,
-    edge_stiffness: Option<f64>,
-    virtual_stiffness: Option<f64>,
-    anisotropy: Option<V3>,
+pub struct CellKeys {
+    pub cells: Vec<usize>,
+    pub density: Option<f64>,
+    pub damping: Option<f64>,
+    pub edge_stiffness: Option<f64>,
+    pub virtual_stiffness: Option<f64>,
+    pub anisotropy: Option<V3>,
 }
 
 impl CellKeys {
@@ -1506,29 +1521,38 @@ impl CellKeys {
     }
 }
 
-#[derive(Debug, Default, Deserialize)]
+/// The `[material]` keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct MaterialKeys {
-    density: Option<f64>,
-    damping: Option<f64>,
-    edge_stiffness: Option<f64>,
-    virtual_stiffness: Option<f64>,
-    anisotropy: Option<V3>,
-    energy: Option<String>,
-    metric_stiffness: Option<f64>,
+pub struct MaterialKeys {
+    pub density: Option<f64>,
+    pub damping: Option<f64>,
+    pub edge_stiffness: Option<f64>,
+    pub virtual_stiffness: Option<f64>,
+    pub anisotropy: Option<V3>,
+    pub energy: Option<String>,
+    pub metric_stiffness: Option<f64>,
     #[serde(default)]
-    cells: Vec<CellKeys>,
+    pub cells: Vec<CellKeys>,
 }
 
-#[derive(Debug, Default, Deserialize)]
+/// The `[simulation]` keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
-struct SimKeys {
-    integrator: Option<String>,
-    dt: Option<f64>,
-    divergence_factor: Option<f64>,
-    cg_tolerance: Option<f64>,
-    cg_max_iterations: Option<usize>,
+pub struct SimKeys {
+    pub integrator: Option<String>,
+    pub dt: Option<f64>,
+    pub divergence_factor: Option<f64>,
+    pub cg_tolerance: Option<f64>,
+    pub cg_max_iterations: Option<usize>,
 }
+
+/// The typed spec of a solid ([`super::ModelSpec`]).
+pub type SolidSpec = super::KindSpec<ModelKeys, MaterialKeys, SimKeys>;
 
 fn build_source(
     kind: ModelKind,
@@ -1536,7 +1560,6 @@ fn build_source(
     base: &Path,
 ) -> Result<(SolidSource, Vec<Vec3>), SpecError> {
     let err = |key: &str, what: String| SpecError::new("model", key, what);
-    let _ = &m.name;
     let min = v3(m.min.unwrap_or([0.0; 3]));
     let max = v3(m.max.unwrap_or([1.0; 3]));
     for (k, v) in [("min", &min), ("max", &max)] {
@@ -1619,6 +1642,9 @@ fn build_source(
                         err(key, format!("{}: {e}", f.display()))
                     })?;
                     clay.solid.control().clone()
+                }
+                (None, Some(f)) if extension(f) == "vtu" => {
+                    formats::vtu::read(&resolve(f)).map_err(|e| err("file", e.to_string()))?
                 }
                 (None, Some(f)) => {
                     formats::ovm::read(&resolve(f)).map_err(|e| err("file", e.to_string()))?
@@ -1824,7 +1850,8 @@ fn build_primitive(name: &str, m: &ModelKeys, min: Vec3, max: Vec3) -> Result<La
     if !(h.is_finite() && h > 0.0) {
         return Err(err("height", format!("{h} must be positive")));
     }
-    Ok(match name {
+    let canonical = vclay_lattice::command::canonical_primitive(name).unwrap_or(name);
+    Ok(match canonical {
         "box" => {
             let n = m.points.unwrap_or([4; 3]);
             if let Some(a) = (0..3).find(|&a| n[a] < 2 || n[a] > 64) {
@@ -1855,7 +1882,8 @@ fn build_primitive(name: &str, m: &ModelKeys, min: Vec3, max: Vec3) -> Result<La
             return Err(err(
                 "primitive",
                 format!(
-                    "unknown primitive \"{other}\"; expected box, cylinder, torus, paper-torus, gear, cube-with-holes, l-solid, t-solid, tetrahedron-with-holes, soccer-player, cactus, spiked-object or holed-object"
+                    "unknown primitive \"{other}\"; expected one of {}",
+                    vclay_lattice::command::primitive_names()
                 ),
             ));
         }
