@@ -15,6 +15,22 @@
 //! Cursor moves are coalesced: at most one `move-rope` (or FFD move) per [`DRAG_INTERVAL`],
 //! which bounds the command log's growth.
 //!
+//! # Undo while running
+//! The session layer clears its redo list on every step (redo re-applies the undone commands
+//! to the state undo went back to, which later steps would have moved on from). So an undo
+//! while the simulation runs pauses it ([`Frame::held`]): redo then works, and the simulation
+//! runs again when the redo list is empty again, on the next edit or grab, or on `Run`.
+//! "Nothing to undo / redo" is a [`Notice::Status`], not an error.
+//!
+//! # Time limit
+//! [`Request::TimeLimit`] stops the run (pauses) before a step would take the first model's
+//! clock past the limit (the studio bounds a PDE surface's time by its slider range).
+//!
+//! # Sessions
+//! Each [`Request::Replace`] begins a new generation: frames carry it ([`Frame::generation`])
+//! and [`Notice::Replaced`] marks it in the notice stream, so the UI can drop what the old
+//! session still sent.
+//!
 //! # Divergence
 //! A step that fails pauses the simulation and sends [`Notice::Error`] with the kernel's
 //! message (it names the step and a stable time step) and what to do.
@@ -167,6 +183,10 @@ pub struct Frame {
     pub scheduled: usize,
     /// Wall time to build this frame's display data, seconds.
     pub build_seconds: f64,
+    /// Paused by an undo while running, so that redo stays possible (see the module docs).
+    pub held: bool,
+    /// The session's generation: the number of [`Request::Replace`]s handled before it.
+    pub generation: u64,
 }
 
 /// Messages from the UI to the worker.
@@ -206,6 +226,11 @@ pub enum Request {
     Save(PathBuf),
     /// Set the autosave file (`None`: off).
     Autosave(Option<PathBuf>, Duration),
+    /// Turn autosave off and delete the autosave file (a clean exit: nothing to recover).
+    DiscardAutosave,
+    /// Pause before a step would take the first model's clock past this time (`None`: no
+    /// limit).
+    TimeLimit(Option<f64>),
     /// Export model `model` to `path` through `Model::export`.
     Export {
         /// Model name.
@@ -234,6 +259,8 @@ impl std::fmt::Debug for Request {
             Request::Replace(_) => "Replace",
             Request::Save(_) => "Save",
             Request::Autosave(..) => "Autosave",
+            Request::DiscardAutosave => "DiscardAutosave",
+            Request::TimeLimit(_) => "TimeLimit",
             Request::Export { .. } => "Export",
             Request::Query(_) => "Query",
             Request::Quit => "Quit",
@@ -246,6 +273,12 @@ impl std::fmt::Debug for Request {
 pub enum Notice {
     /// A log line (a command applied, a file saved).
     Log(String),
+    /// A line for the status bar (and the log): undo and redo results, "nothing to undo", a
+    /// run stopped at the time limit.
+    Status(String),
+    /// The session was replaced: what follows belongs to generation `.0` (see
+    /// [`Frame::generation`]).
+    Replaced(u64),
     /// Something failed; `paused` says the simulation was paused (divergence).
     Error {
         /// The message.
@@ -403,6 +436,12 @@ struct State {
     saved_revision: u64,
     autosave: Option<(PathBuf, Duration)>,
     autosaved: (Instant, u64),
+    /// Paused by an undo while running (see the module docs).
+    held: bool,
+    /// Pause before passing this time.
+    time_limit: Option<f64>,
+    /// Replacements handled.
+    generation: u64,
 }
 
 impl State {
@@ -424,6 +463,9 @@ impl State {
             saved_revision: rev,
             autosave: None,
             autosaved: (Instant::now(), rev),
+            held: false,
+            time_limit: None,
+            generation: 0,
         }
     }
 
@@ -462,6 +504,14 @@ impl State {
                 self.shown_revision = None;
             }
             self.apply_drag(false);
+            if self.running && self.at_time_limit() {
+                self.running = false;
+                self.shown_revision = None;
+                let t = self.session.time();
+                self.notify(Notice::Status(format!(
+                    "t = {t:.3} is the end of the time range: paused (Run starts over)"
+                )));
+            }
             if self.running {
                 if self.ahead_of_wall_clock() {
                     std::thread::sleep(Duration::from_millis(1));
@@ -471,6 +521,25 @@ impl State {
             }
             self.publish();
             self.autosave_if_due();
+        }
+    }
+
+    /// Whether the next step would take the first model's clock past the time limit.
+    fn at_time_limit(&self) -> bool {
+        let Some(limit) = self.time_limit else {
+            return false;
+        };
+        self.session
+            .model(None)
+            .is_ok_and(|m| m.time() + m.dt() > limit + 1e-9 * limit.abs().max(1.0))
+    }
+
+    /// Resumes a run that an undo held (see the module docs).
+    fn resume_held(&mut self) {
+        if self.held {
+            self.held = false;
+            self.running = true;
+            self.clock = (Instant::now(), self.session.time());
         }
     }
 
@@ -540,11 +609,13 @@ impl State {
     fn handle(&mut self, r: Request) {
         match r {
             Request::Apply(c) => {
+                self.resume_held();
                 self.apply(c);
             }
             Request::Undo => self.undo(),
             Request::Redo => self.redo(),
             Request::Run(on) => {
+                self.held = false;
                 self.running = on;
                 self.clock = (Instant::now(), self.session.time());
             }
@@ -561,7 +632,10 @@ impl State {
                 ray,
                 tolerance,
                 grab,
-            } => self.grab(ray, tolerance, grab),
+            } => {
+                self.resume_held();
+                self.grab(ray, tolerance, grab)
+            }
             Request::Drag { to } => {
                 if let Some(d) = self.drag.as_mut() {
                     d.pending = Some(to);
@@ -571,7 +645,11 @@ impl State {
             Request::Replace(s) => {
                 self.drop_grab();
                 self.session = *s;
+                self.held = false;
+                self.generation += 1;
+                self.notify(Notice::Replaced(self.generation));
                 self.samples.clear();
+                self.step_times.clear();
                 self.shown_revision = None;
                 self.saved_revision = self.session.revision();
                 self.autosaved = (Instant::now(), self.saved_revision);
@@ -580,6 +658,8 @@ impl State {
             Request::Save(path) => match vclay_session::file::save(&path, &self.session, None) {
                 Ok(()) => {
                     self.saved_revision = self.session.revision();
+                    // The file holds this revision: no autosave of it is needed.
+                    self.autosaved = (Instant::now(), self.saved_revision);
                     self.shown_revision = None;
                     self.notify(Notice::Saved(path));
                 }
@@ -591,6 +671,12 @@ impl State {
             Request::Autosave(p, every) => {
                 self.autosave = p.map(|p| (p, every));
             }
+            Request::DiscardAutosave => {
+                if let Some((p, _)) = self.autosave.take() {
+                    let _ = std::fs::remove_file(p);
+                }
+            }
+            Request::TimeLimit(limit) => self.time_limit = limit.filter(|l| l.is_finite()),
             Request::Export { model, path } => {
                 let r = self
                     .session
@@ -618,11 +704,17 @@ impl State {
     fn undo(&mut self) {
         self.drop_grab();
         match self.session.undo() {
-            Ok(first) => self.notify(Notice::Log(format!("undone: {}", first.message))),
-            Err(e) => self.notify(Notice::Error {
-                message: e.to_string(),
-                paused: false,
-            }),
+            Ok(first) => {
+                let mut line = format!("undone: {}", first.message);
+                if self.running {
+                    // A step would clear the redo list: hold the run until redo is done.
+                    self.running = false;
+                    self.held = true;
+                    line.push_str(" (simulation paused so that redo works; Run continues)");
+                }
+                self.notify(Notice::Status(line));
+            }
+            Err(e) => self.history_error(e),
         }
     }
 
@@ -630,9 +722,20 @@ impl State {
         match self.session.redo() {
             Ok(m) => {
                 let n = m.lines().count();
-                self.notify(Notice::Log(format!("redone ({n} command(s))")));
+                self.notify(Notice::Status(format!("redone ({n} command(s))")));
+                if !self.session.can_redo() {
+                    self.resume_held();
+                }
             }
-            Err(e) => self.notify(Notice::Error {
+            Err(e) => self.history_error(e),
+        }
+    }
+
+    /// "Nothing to undo / redo" is a status line; other failures are errors.
+    fn history_error(&self, e: vclay_session::SessionError) {
+        match e {
+            vclay_session::SessionError::History(_) => self.notify(Notice::Status(e.to_string())),
+            e => self.notify(Notice::Error {
                 message: e.to_string(),
                 paused: false,
             }),
@@ -1069,6 +1172,8 @@ impl State {
             dirty: rev != self.saved_revision,
             scheduled: self.session.schedule().len(),
             build_seconds: t0.elapsed().as_secs_f64(),
+            held: self.held,
+            generation: self.generation,
         });
         drop(slot);
         self.shown_revision = Some(rev);
