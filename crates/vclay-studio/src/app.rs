@@ -358,6 +358,8 @@ impl Studio {
         let running = !self.opts.paused && !pde;
         match &self.worker {
             Some(w) => {
+                // The session replaced was saved, discarded or unchanged: nothing to recover.
+                w.send(Request::DiscardAutosave);
                 w.send(Request::Replace(Box::new(session)));
                 w.send(Request::Run(running));
                 self.generation += 1;
@@ -923,6 +925,14 @@ impl Studio {
             }
             _ => {}
         }
+        self.simulation_ui(ui);
+        ui.separator();
+        ui.heading("Parameters");
+        self.params_ui(ui);
+    }
+
+    /// The simulation section: run, step, integrator, gravity, inflation, speed, PDE time.
+    fn simulation_ui(&mut self, ui: &mut Ui) {
         ui.separator();
         ui.heading("Simulation");
         ui.horizontal(|ui| {
@@ -1029,9 +1039,6 @@ impl Studio {
         if self.kind == Some(ModelKind::PdeSurface) {
             self.pde_time_ui(ui);
         }
-        ui.separator();
-        ui.heading("Parameters");
-        self.params_ui(ui);
     }
 
     /// Run or pause; Run at the end of a PDE surface's time range starts it over from 0.
@@ -1472,6 +1479,8 @@ impl Studio {
                         Ok(s) => {
                             let f = self.file.clone();
                             self.set_session(s, f);
+                            // Not in the file yet: modified, and autosaved again.
+                            self.send(Request::MarkModified);
                         }
                         Err(e) => next = Some(Dialog::Error(e)),
                     }

@@ -228,6 +228,9 @@ pub enum Request {
     Autosave(Option<PathBuf>, Duration),
     /// Turn autosave off and delete the autosave file (a clean exit: nothing to recover).
     DiscardAutosave,
+    /// The session differs from its file (a recovered autosave): it counts as modified and is
+    /// autosaved again.
+    MarkModified,
     /// Pause before a step would take the first model's clock past this time (`None`: no
     /// limit).
     TimeLimit(Option<f64>),
@@ -260,6 +263,7 @@ impl std::fmt::Debug for Request {
             Request::Save(_) => "Save",
             Request::Autosave(..) => "Autosave",
             Request::DiscardAutosave => "DiscardAutosave",
+            Request::MarkModified => "MarkModified",
             Request::TimeLimit(_) => "TimeLimit",
             Request::Export { .. } => "Export",
             Request::Query(_) => "Query",
@@ -675,6 +679,11 @@ impl State {
                 if let Some((p, _)) = self.autosave.take() {
                     let _ = std::fs::remove_file(p);
                 }
+            }
+            Request::MarkModified => {
+                // No revision equals these: dirty until saved, autosaved at the next chance.
+                self.saved_revision = u64::MAX;
+                self.autosaved.1 = u64::MAX;
             }
             Request::TimeLimit(limit) => self.time_limit = limit.filter(|l| l.is_finite()),
             Request::Export { model, path } => {

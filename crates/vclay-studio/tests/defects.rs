@@ -494,17 +494,28 @@ fn save_as_suggests_an_absolute_path_beside_the_file_and_enter_saves() {
 #[test]
 fn an_error_box_is_wide_enough_to_read() {
     let dir = tempfile::tempdir().unwrap();
-    let f = dir.path().join("bad.toml");
-    std::fs::write(&f, "[model]\nkind = \"subdivision-solid\"\nlevel = 99\n").unwrap();
-    let mut h = harness(Options {
-        file: Some(f),
-        ..quiet(dir.path())
-    });
+    let mut h = harness(quiet(dir.path()));
+    // The error follows the open dialog in the same modal area (which kept that dialog's
+    // narrow size before).
+    file_menu(&mut h, "Open...");
+    let missing = dir
+        .path()
+        .join("a/folder/that/does/not/exist/with/a/rather/long/name/model.toml");
+    h.get_by_role(Role::TextInput).click();
     h.step();
+    h.get_by_role(Role::TextInput)
+        .type_text(&missing.display().to_string());
     h.step();
-    let err = h.state().error().unwrap().to_string();
+    h.key_press(Key::Enter);
+    for _ in 0..5 {
+        h.step();
+    }
+    let err = h.state().error().expect("no such file").to_string();
     let w = h.get_by_label(err.as_str()).rect().width();
-    assert!(w >= 300.0, "the message is {w} points wide");
+    assert!(
+        w >= vclay_studio::app::DIALOG_MIN_WIDTH - 30.0,
+        "the message is {w} points wide"
+    );
     h.key_press(Key::Enter);
     h.step();
     assert_eq!(h.state().error(), None, "Enter closes it");
@@ -587,4 +598,27 @@ fn log_lines_show_rounded_numbers() {
     });
     let line = h.state().log().find(|l| l.contains("cursor at")).unwrap();
     assert!(line.ends_with("cursor at [0.123, -2, 1.5]"), "{line}");
+}
+
+#[test]
+fn a_recovered_session_counts_as_modified() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = cube_session(dir.path());
+    let auto = dir.path().join("autosave.session");
+    std::thread::sleep(Duration::from_millis(20));
+    std::fs::copy(&file, &auto).unwrap();
+    let mut h = harness(Options {
+        file: Some(file),
+        autosave: Some(auto),
+        paused: true,
+        ..Default::default()
+    });
+    assert_eq!(h.state().dialog_title(), Some("Recover?"));
+    click(&mut h, Role::Button, "Recover");
+    wait(&mut h, "recovered and modified", |s| {
+        !s.frame().models.is_empty() && s.dirty()
+    });
+    // So quitting asks (and a clean quit would not throw the recovered changes away).
+    request_close(&mut h);
+    assert_eq!(h.state().dialog_title(), Some("Unsaved changes"));
 }
