@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant, SystemTime};
 
-use egui::{Color32, Key, Modifiers, PointerButton, Pos2, Rect, Sense, Ui, Vec2};
+use egui::{Color32, Key, Modifiers, PointerButton, Pos2, Rect, Sense, SurrenderFocusOn, Ui, Vec2};
 use vclay_core::Vec3;
 use vclay_session::{Command, Edit, Session, Target, ToolSpec};
 
@@ -23,6 +23,10 @@ use crate::worker::{AUTOSAVE_INTERVAL, Frame, Grab, Notice, Request, Worker};
 pub const PICK_POINTS: f64 = 8.0;
 /// Log lines kept.
 pub const LOG_LINES: usize = 200;
+/// End of a PDE surface's time range (its time slider): a run stops there.
+pub const PDE_T_MAX: f64 = 10.0;
+/// Least width of a dialog, in points (an error message must be readable).
+pub const DIALOG_MIN_WIDTH: f32 = 420.0;
 
 /// The tool a press in the viewport uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -178,7 +182,30 @@ enum Dialog {
     Export(String),
     Screenshot(String),
     Recover(PathBuf),
-    ConfirmClose,
+    /// Unsaved changes: save, discard or cancel before doing `Then`.
+    Unsaved(Then),
+}
+
+/// What waits for the unsaved-changes prompt (and for the save it may start).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Then {
+    /// Show the open dialog.
+    Open,
+    /// Close the session and show the start page.
+    StartPage,
+    /// Quit.
+    Quit,
+}
+
+/// What a button, Enter or Esc did in a dialog.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Answer {
+    /// The dialog's main action (Enter).
+    Submit,
+    /// The dialog's other action (the prompt's Discard).
+    Other,
+    /// Close (Esc, Cancel).
+    Cancel,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -238,6 +265,15 @@ pub struct Studio {
     ffd_pins: Vec<Vec3>,
     /// A pin pick is on its way to the worker.
     pin_pending: bool,
+    /// What to do once the session is saved (the unsaved-changes prompt's Save).
+    after_save: Option<Then>,
+    /// The worker's session generation whose frames and notices are shown (see
+    /// [`Frame::generation`]).
+    generation: u64,
+    /// The generation of the notices arriving (the last [`Notice::Replaced`] seen).
+    notice_generation: u64,
+    /// The status bar's message (undo, redo, the end of a time range).
+    note: Option<String>,
 }
 
 impl std::fmt::Debug for Studio {
@@ -263,6 +299,11 @@ pub fn default_autosave(file: Option<&Path>) -> PathBuf {
         .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".local/share")))
         .unwrap_or_else(std::env::temp_dir);
     base.join("vclay").join("studio-autosave.session")
+}
+
+/// `p` made absolute (against the working folder); `p` itself if that fails.
+fn absolute(p: &Path) -> PathBuf {
+    std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf())
 }
 
 fn modified(p: &Path) -> Option<SystemTime> {
@@ -298,6 +339,10 @@ impl Studio {
             tools: Vec::new(),
             pde_t: 0.0,
             viewport: Rect::NOTHING,
+            after_save: None,
+            generation: 0,
+            notice_generation: 0,
+            note: None,
         };
         if let Some(f) = &options.file {
             match load::open(f) {
@@ -326,10 +371,25 @@ impl Studio {
     pub fn set_session(&mut self, session: Session, file: Option<PathBuf>) {
         self.tools = session.model(None).map(|m| m.tools()).unwrap_or_default();
         self.tool = Tool::palette(&self.tools)[0];
+        // A PDE surface's time waits for Run (its shape at t = 0 is the model).
+        let pde = takes(&self.tools, "pde-set", None);
+        let running = !self.opts.paused && !pde;
         match &self.worker {
-            Some(w) => w.send(Request::Replace(Box::new(session))),
-            None => self.worker = Some(Worker::start(session, !self.opts.paused)),
+            Some(w) => {
+                // The session replaced was saved, discarded or unchanged: nothing to recover.
+                w.send(Request::DiscardAutosave);
+                w.send(Request::Replace(Box::new(session)));
+                w.send(Request::Run(running));
+                self.generation += 1;
+            }
+            None => {
+                self.worker = Some(Worker::start(session, running));
+                self.generation = 0;
+                self.notice_generation = 0;
+            }
         }
+        self.send(Request::TimeLimit(pde.then_some(PDE_T_MAX)));
+        self.reset_view_state();
         self.file = file;
         let auto = self
             .opts
@@ -346,6 +406,22 @@ impl Studio {
         self.edits.clear();
         self.press = None;
         self.frame = Frame::default();
+    }
+
+    /// Forgets what belonged to the previous session: log, energy plot, grab, pins, pending
+    /// slider values; the next frame fits the camera.
+    fn reset_view_state(&mut self) {
+        self.frame = Frame::default();
+        self.log.clear();
+        self.energy.clear();
+        self.press = None;
+        self.ffd_pins.clear();
+        self.pin_pending = false;
+        self.edits.clear();
+        self.fitted = false;
+        self.pde_t = 0.0;
+        self.note = None;
+        self.scene = Arc::new(SceneBuffers::default());
     }
 
     /// The simulation thread's handle (tests and the benchmark query the session through it).
@@ -376,6 +452,30 @@ impl Studio {
         self.log.iter()
     }
 
+    /// The energy plot's samples `(time, kinetic, elastic)`, oldest first.
+    pub fn energy_samples(&self) -> &[[f64; 3]] {
+        &self.energy
+    }
+
+    /// The status bar's message (undo and redo results, a run stopped at the end of the time
+    /// range).
+    pub fn note(&self) -> Option<&str> {
+        self.note.as_deref()
+    }
+
+    /// The title of the dialog shown, if any.
+    pub fn dialog_title(&self) -> Option<&'static str> {
+        self.dialog.as_ref().map(|d| match d {
+            Dialog::Error(_) => "Error",
+            Dialog::Open(_) => "Open",
+            Dialog::SaveAs(_) => "Save session as",
+            Dialog::Export(_) => "Export the model",
+            Dialog::Screenshot(_) => "Screenshot (PNG)",
+            Dialog::Recover(_) => "Recover?",
+            Dialog::Unsaved(_) => "Unsaved changes",
+        })
+    }
+
     /// Whether the session has changes not saved explicitly.
     pub fn dirty(&self) -> bool {
         self.frame.dirty
@@ -388,7 +488,7 @@ impl Studio {
     }
 
     fn push_log(&mut self, l: String) {
-        self.log.push_back(l);
+        self.log.push_back(crate::text::round_numbers(&l));
         while self.log.len() > LOG_LINES {
             self.log.pop_front();
         }
@@ -404,59 +504,84 @@ impl Studio {
         }
     }
 
-    /// Polls the worker: frames and notices.
+    /// Polls the worker: frames and notices (those of a replaced session are dropped).
     fn poll(&mut self, ctx: &egui::Context) {
         let Some(w) = &self.worker else { return };
         let notices = w.notices();
-        let frame = w.take_frame();
+        let frame = w.take_frame().filter(|f| f.generation == self.generation);
         for n in notices {
-            match n {
-                Notice::Log(l) => self.push_log(l),
-                Notice::Error { message, .. } => {
-                    self.push_log(format!("error: {message}"));
-                    self.dialog = Some(Dialog::Error(message));
-                    self.press = None;
-                }
-                Notice::Grabbed { point, .. } if self.pin_pending => {
-                    self.pin_pending = false;
-                    self.ffd_pins.push(point);
-                    self.press = None;
-                }
-                Notice::Grabbed { point, .. } => {
-                    if self.press == Some(Press::Waiting) {
-                        self.press = Some(Press::Grabbed(point));
-                    }
-                }
-                Notice::Missed => {
-                    if self.press == Some(Press::Waiting) {
-                        self.press = Some(Press::Orbit);
-                    }
-                }
-                Notice::Saved(p) => {
-                    self.push_log(format!("saved {}", p.display()));
-                    self.file = Some(p);
-                }
-                Notice::Autosaved(_) => {}
+            if let Notice::Replaced(g) = n {
+                self.notice_generation = g;
+            } else if self.notice_generation == self.generation {
+                self.notice(ctx, n);
             }
+            // Else it belongs to a session already replaced.
         }
         if let Some(f) = frame {
-            self.energy.extend_from_slice(&f.samples);
-            if self.energy.len() > crate::worker::ENERGY_SAMPLES {
-                let cut = self.energy.len() - crate::worker::ENERGY_SAMPLES;
-                self.energy.drain(..cut);
-            }
-            self.frame = f;
-            if let Some(m) = self.frame.models.first()
-                && takes(&m.tools, "pde-set", None)
-            {
-                self.pde_t = m.time;
-            }
-            self.rebuild_scene();
-            if !self.fitted && !self.frame.models.is_empty() {
-                self.fit();
-                self.fitted = true;
-            }
+            self.take_frame(f);
             ctx.request_repaint();
+        }
+    }
+
+    /// Handles one notice of the worker.
+    fn notice(&mut self, ctx: &egui::Context, n: Notice) {
+        match n {
+            Notice::Log(l) => self.push_log(l),
+            Notice::Status(l) => {
+                self.push_log(l.clone());
+                self.note = Some(l);
+            }
+            Notice::Replaced(_) => {}
+            Notice::Error { message, .. } => {
+                self.push_log(format!("error: {message}"));
+                self.dialog = Some(Dialog::Error(message));
+                self.press = None;
+                // A failed save does not go on to what waited for it.
+                self.after_save = None;
+            }
+            Notice::Grabbed { point, .. } if self.pin_pending => {
+                self.pin_pending = false;
+                self.ffd_pins.push(point);
+                self.press = None;
+            }
+            Notice::Grabbed { point, .. } => {
+                if self.press == Some(Press::Waiting) {
+                    self.press = Some(Press::Grabbed(point));
+                }
+            }
+            Notice::Missed => {
+                if self.press == Some(Press::Waiting) {
+                    self.press = Some(Press::Orbit);
+                }
+            }
+            Notice::Saved(p) => {
+                self.push_log(format!("saved {}", p.display()));
+                self.file = Some(p);
+                if let Some(then) = self.after_save.take() {
+                    self.proceed(ctx, then);
+                }
+            }
+            Notice::Autosaved(_) => {}
+        }
+    }
+
+    /// Shows a frame of the current session.
+    fn take_frame(&mut self, f: Frame) {
+        self.energy.extend_from_slice(&f.samples);
+        if self.energy.len() > crate::worker::ENERGY_SAMPLES {
+            let cut = self.energy.len() - crate::worker::ENERGY_SAMPLES;
+            self.energy.drain(..cut);
+        }
+        self.frame = f;
+        if let Some(m) = self.frame.models.first()
+            && takes(&m.tools, "pde-set", None)
+        {
+            self.pde_t = m.time;
+        }
+        self.rebuild_scene();
+        if !self.fitted && !self.frame.models.is_empty() {
+            self.fit();
+            self.fitted = true;
         }
     }
 
@@ -524,6 +649,10 @@ impl Studio {
     }
 
     fn shortcuts(&mut self, ctx: &egui::Context) {
+        // A dialog or a text field takes the keys (Ctrl+Z in a path field is not the model's).
+        if self.dialog.is_some() || ctx.text_edit_focused() {
+            return;
+        }
         let (undo, redo) = ctx.input_mut(|i| {
             let redo = i.consume_key(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z)
                 || i.consume_key(Modifiers::COMMAND, Key::Y);
@@ -541,10 +670,57 @@ impl Studio {
     }
 
     fn handle_close(&mut self, ctx: &egui::Context) {
-        if ctx.input(|i| i.viewport().close_requested()) && self.dirty() && !self.allow_close {
-            ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
-            self.dialog = Some(Dialog::ConfirmClose);
+        if !ctx.input(|i| i.viewport().close_requested()) {
+            return;
         }
+        if self.dirty() && !self.allow_close {
+            ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
+            self.dialog = Some(Dialog::Unsaved(Then::Quit));
+        } else {
+            self.clean_exit();
+        }
+    }
+
+    /// A deliberate exit: the autosave file goes (nothing to recover next time). The worker
+    /// deletes it before it stops (requests are handled in order).
+    fn clean_exit(&mut self) {
+        self.send(Request::DiscardAutosave);
+    }
+
+    /// Quits now (the user has saved or discarded the changes).
+    fn quit(&mut self, ctx: &egui::Context) {
+        self.allow_close = true;
+        self.clean_exit();
+        ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+    }
+
+    /// Asks about unsaved changes before `then`, or does it at once when there are none.
+    fn confirm(&mut self, ctx: &egui::Context, then: Then) {
+        if self.worker.is_some() && self.dirty() {
+            self.dialog = Some(Dialog::Unsaved(then));
+        } else {
+            self.proceed(ctx, then);
+        }
+    }
+
+    /// Does what waited for the unsaved-changes prompt (the prompt answered, or the save done).
+    fn proceed(&mut self, ctx: &egui::Context, then: Then) {
+        self.after_save = None;
+        match then {
+            Then::Open => self.dialog = Some(Dialog::Open(String::new())),
+            Then::StartPage => self.close_session(),
+            Then::Quit => self.quit(ctx),
+        }
+    }
+
+    /// Closes the session (its autosave goes: the user chose to leave it) and shows the start
+    /// page.
+    fn close_session(&mut self) {
+        self.clean_exit();
+        self.worker = None;
+        self.file = None;
+        self.tools.clear();
+        self.reset_view_state();
     }
 
     fn handle_screenshot(&mut self) {
@@ -577,27 +753,32 @@ impl Studio {
     fn save(&mut self) {
         match &self.file {
             Some(f) if load::is_session_file(f) => self.send(Request::Save(f.clone())),
-            _ => {
-                let suggestion = self
-                    .file
-                    .as_ref()
-                    .map(|f| f.with_extension("session"))
-                    .unwrap_or_else(|| PathBuf::from("model.session"));
-                self.dialog = Some(Dialog::SaveAs(suggestion.display().to_string()));
-            }
+            _ => self.dialog = Some(Dialog::SaveAs(self.suggestion("session"))),
         }
     }
 
+    /// An absolute path with extension `ext` for a save dialog: beside the opened file, else
+    /// in the working folder named after the model.
+    fn suggestion(&self, ext: &str) -> String {
+        let p = match &self.file {
+            Some(f) => f.with_extension(ext),
+            None => PathBuf::from(format!(
+                "{}.{ext}",
+                self.model_name().unwrap_or_else(|| "model".into())
+            )),
+        };
+        absolute(&p).display().to_string()
+    }
+
     fn menu(&mut self, ui: &mut Ui) {
+        let ctx = ui.ctx().clone();
         ui.horizontal(|ui| {
             ui.menu_button("File", |ui| {
                 if ui.button("Open...").clicked() {
-                    self.dialog = Some(Dialog::Open(String::new()));
+                    self.confirm(&ctx, Then::Open);
                 }
                 if ui.button("Start page").clicked() {
-                    self.worker = None;
-                    self.frame = Frame::default();
-                    self.scene = Arc::new(SceneBuffers::default());
+                    self.confirm(&ctx, Then::StartPage);
                 }
                 ui.separator();
                 let has = self.worker.is_some();
@@ -608,16 +789,16 @@ impl Studio {
                     .add_enabled(has, egui::Button::new("Save as..."))
                     .clicked()
                 {
-                    self.dialog = Some(Dialog::SaveAs("model.session".into()));
+                    self.dialog = Some(Dialog::SaveAs(self.suggestion("session")));
                 }
                 if ui
                     .add_enabled(has, egui::Button::new("Export..."))
                     .clicked()
                 {
-                    self.dialog = Some(Dialog::Export("model.obj".into()));
+                    self.dialog = Some(Dialog::Export(self.suggestion("obj")));
                 }
                 if ui.button("Screenshot...").clicked() {
-                    self.dialog = Some(Dialog::Screenshot("vclay-studio.png".into()));
+                    self.dialog = Some(Dialog::Screenshot(self.suggestion("png")));
                 }
                 ui.separator();
                 if ui.button("Quit").clicked() {
@@ -762,12 +943,20 @@ impl Studio {
             }
             _ => {}
         }
+        self.simulation_ui(ui);
+        ui.separator();
+        ui.heading("Parameters");
+        self.params_ui(ui);
+    }
+
+    /// The simulation section: run, step, integrator, gravity, inflation, speed, PDE time.
+    fn simulation_ui(&mut self, ui: &mut Ui) {
         ui.separator();
         ui.heading("Simulation");
         ui.horizontal(|ui| {
             let running = self.frame.running;
             if ui.button(if running { "Pause" } else { "Run" }).clicked() {
-                self.send(Request::Run(!running));
+                self.run_clicked(running);
             }
             if ui.button("Step").clicked() {
                 self.send(Request::Step(1));
@@ -851,19 +1040,39 @@ impl Studio {
         });
         let _ = speed;
         if takes(&self.tools, "pde-set", None) {
-            let mut t = self.pde_t;
-            let r = ui.add(egui::Slider::new(&mut t, 0.0..=10.0).text("time t"));
-            self.pde_t = t;
-            if r.drag_stopped() || (r.changed() && !r.dragged()) {
-                self.apply(Edit::PdeSet {
-                    name: "t".into(),
-                    value: t,
-                });
-            }
+            self.pde_time_ui(ui);
         }
-        ui.separator();
-        ui.heading("Parameters");
-        self.params_ui(ui);
+    }
+
+    /// Run or pause; Run at the end of a PDE surface's time range starts it over from 0.
+    fn run_clicked(&mut self, running: bool) {
+        if !running
+            && let Some(m) = self.frame.models.first()
+            && takes(&m.tools, "pde-set", None)
+            && m.time + m.dt > PDE_T_MAX
+        {
+            self.apply(Edit::PdeSet {
+                name: "t".into(),
+                value: 0.0,
+            });
+        }
+        self.send(Request::Run(!running));
+    }
+
+    /// A PDE surface's time: a slider over `[0, PDE_T_MAX]`; a run stops at its end.
+    fn pde_time_ui(&mut self, ui: &mut Ui) {
+        let mut t = self.pde_t;
+        let r = ui.add(egui::Slider::new(&mut t, 0.0..=PDE_T_MAX).text("time t"));
+        self.pde_t = t;
+        if r.drag_stopped() || (r.changed() && !r.dragged()) {
+            self.apply(Edit::PdeSet {
+                name: "t".into(),
+                value: t,
+            });
+        }
+        ui.small(format!(
+            "Run plays t up to {PDE_T_MAX} and stops there; Run again starts over from 0."
+        ));
     }
 
     fn params_ui(&mut self, ui: &mut Ui) {
@@ -949,6 +1158,10 @@ impl Studio {
                 ui.separator();
                 ui.label("modified");
             }
+            if let Some(n) = &self.note {
+                ui.separator();
+                ui.label(n);
+            }
             if let Some(f) = &self.file {
                 ui.separator();
                 ui.label(f.display().to_string());
@@ -976,8 +1189,13 @@ impl Studio {
         });
         let (pressed, released, pos, delta, mods, scroll, middle, primary) = input;
         let local = |p: Pos2| ((p.x - rect.min.x) as f64, (p.y - rect.min.y) as f64);
-        // Press: start a grab with the tool, or orbit/pan.
+        // Press: start a grab with the tool, or orbit/pan. Only a press on the viewport itself
+        // counts: egui gives one on a dialog, menu or window above it to that layer (the
+        // viewport is then not pressed), and none counts while a dialog or popup is open.
+        let blocked = self.dialog.is_some() || egui::Popup::is_any_open(ui.ctx());
         if pressed
+            && !blocked
+            && resp.is_pointer_button_down_on()
             && let Some(p) = pos
             && rect.contains(p)
         {
@@ -1166,136 +1384,125 @@ impl Studio {
         let modal = egui::Modal::new(egui::Id::unique("vclay-studio-dialog"));
         let d = match d {
             Dialog::Error(msg) => {
-                modal.show(ctx, |ui| {
-                    ui.heading("Error");
-                    ui.label(&msg);
-                    if ui.button("OK").clicked() {
-                        keep = false;
-                    }
-                });
+                let a = modal
+                    .show(ctx, |ui| {
+                        ui.heading("Error");
+                        ui.add(egui::Label::new(&msg).wrap());
+                        buttons(ui, "OK", None)
+                    })
+                    .inner;
+                keep = a.is_none();
                 Dialog::Error(msg)
             }
             Dialog::Open(mut path) => {
-                modal.show(ctx, |ui| {
-                    ui.heading("Open");
-                    ui.text_edit_singleline(&mut path);
-                    ui.horizontal(|ui| {
-                        if ui.button("Open").clicked() {
-                            keep = false;
-                            match load::open(Path::new(&path)) {
-                                Ok(o) => self.set_session(o.session, Some(PathBuf::from(&path))),
-                                Err(e) => next = Some(Dialog::Error(e)),
-                            }
-                        }
-                        if ui.button("Cancel").clicked() {
-                            keep = false;
-                        }
-                    });
-                });
+                let a = path_dialog(ctx, modal, "Open", None, &mut path, "Open");
+                keep = a.is_none();
+                if a == Some(Answer::Submit) {
+                    match load::open(Path::new(&path)) {
+                        Ok(o) => self.set_session(o.session, Some(PathBuf::from(&path))),
+                        Err(e) => next = Some(Dialog::Error(e)),
+                    }
+                }
                 Dialog::Open(path)
             }
             Dialog::SaveAs(mut path) => {
-                modal.show(ctx, |ui| {
-                    ui.heading("Save session as");
-                    ui.text_edit_singleline(&mut path);
-                    ui.horizontal(|ui| {
-                        if ui.button("Save").clicked() {
-                            keep = false;
-                            self.send(Request::Save(PathBuf::from(&path)));
-                        }
-                        if ui.button("Cancel").clicked() {
-                            keep = false;
-                        }
-                    });
-                });
+                match path_dialog(ctx, modal, "Save session as", None, &mut path, "Save") {
+                    Some(Answer::Submit) => {
+                        keep = false;
+                        self.send(Request::Save(PathBuf::from(&path)));
+                    }
+                    Some(_) => {
+                        keep = false;
+                        // Cancelled: what waited for the save does not happen.
+                        self.after_save = None;
+                    }
+                    None => {}
+                }
                 Dialog::SaveAs(path)
             }
             Dialog::Export(mut path) => {
-                modal.show(ctx, |ui| {
-                    ui.heading("Export the model");
-                    ui.label(format!(
-                        "By extension: {}",
-                        vclay_session::model::EXPORT_EXTENSIONS.join(", ")
-                    ));
-                    ui.text_edit_singleline(&mut path);
-                    ui.horizontal(|ui| {
-                        if ui.button("Export").clicked() {
-                            keep = false;
-                            if let Some(m) = self.model_name() {
-                                self.send(Request::Export {
-                                    model: m,
-                                    path: PathBuf::from(&path),
-                                });
-                            }
-                        }
-                        if ui.button("Cancel").clicked() {
-                            keep = false;
-                        }
+                let exts = format!(
+                    "By extension: {}",
+                    vclay_session::model::EXPORT_EXTENSIONS.join(", ")
+                );
+                let a = path_dialog(
+                    ctx,
+                    modal,
+                    "Export the model",
+                    Some(&exts),
+                    &mut path,
+                    "Export",
+                );
+                keep = a.is_none();
+                if a == Some(Answer::Submit)
+                    && let Some(m) = self.model_name()
+                {
+                    self.send(Request::Export {
+                        model: m,
+                        path: PathBuf::from(&path),
                     });
-                });
+                }
                 Dialog::Export(path)
             }
             Dialog::Screenshot(mut path) => {
-                modal.show(ctx, |ui| {
-                    ui.heading("Screenshot (PNG)");
-                    ui.text_edit_singleline(&mut path);
-                    ui.horizontal(|ui| {
-                        if ui.button("Take").clicked() {
-                            keep = false;
-                            self.screenshot(ctx, PathBuf::from(&path));
-                        }
-                        if ui.button("Cancel").clicked() {
-                            keep = false;
-                        }
-                    });
-                });
+                let a = path_dialog(ctx, modal, "Screenshot (PNG)", None, &mut path, "Take");
+                keep = a.is_none();
+                if a == Some(Answer::Submit) {
+                    self.screenshot(ctx, PathBuf::from(&path));
+                }
                 Dialog::Screenshot(path)
             }
             Dialog::Recover(path) => {
-                modal.show(ctx, |ui| {
-                    ui.heading("Recover?");
-                    ui.label(format!(
-                        "An autosaved session newer than the file exists:\n{}",
-                        path.display()
-                    ));
-                    ui.horizontal(|ui| {
-                        if ui.button("Recover").clicked() {
-                            keep = false;
-                            match load::open(&path) {
-                                Ok(o) => {
-                                    let f = self.file.clone();
-                                    self.set_session(o.session, f);
-                                }
-                                Err(e) => next = Some(Dialog::Error(e)),
-                            }
+                let a = modal
+                    .show(ctx, |ui| {
+                        ui.heading("Recover?");
+                        ui.add(
+                            egui::Label::new(format!(
+                                "An autosaved session newer than the file exists:\n{}",
+                                path.display()
+                            ))
+                            .wrap(),
+                        );
+                        buttons(ui, "Recover", Some("Discard"))
+                    })
+                    .inner;
+                keep = a.is_none();
+                if a == Some(Answer::Submit) {
+                    match load::open(&path) {
+                        Ok(o) => {
+                            let f = self.file.clone();
+                            self.set_session(o.session, f);
+                            // Not in the file yet: modified, and autosaved again.
+                            self.send(Request::MarkModified);
                         }
-                        if ui.button("Discard").clicked() {
-                            keep = false;
-                        }
-                    });
-                });
+                        Err(e) => next = Some(Dialog::Error(e)),
+                    }
+                }
                 Dialog::Recover(path)
             }
-            Dialog::ConfirmClose => {
-                modal.show(ctx, |ui| {
-                    ui.heading("Unsaved changes");
-                    ui.label("The session has changes that are not saved.");
-                    ui.horizontal(|ui| {
-                        if ui.button("Save").clicked() {
-                            keep = false;
-                            self.save();
-                        }
-                        if ui.button("Discard and quit").clicked() {
-                            keep = false;
-                            self.allow_close = true;
-                            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
-                        }
-                        if ui.button("Cancel").clicked() {
-                            keep = false;
-                        }
-                    });
-                });
-                Dialog::ConfirmClose
+            Dialog::Unsaved(then) => {
+                let a = modal
+                    .show(ctx, |ui| {
+                        ui.heading("Unsaved changes");
+                        ui.label("The session has changes that are not saved.");
+                        let other = match then {
+                            Then::Quit => "Discard and quit",
+                            _ => "Discard",
+                        };
+                        buttons(ui, "Save", Some(other))
+                    })
+                    .inner;
+                keep = a.is_none();
+                match a {
+                    Some(Answer::Submit) => {
+                        // Saved (perhaps after a save-as dialog), the worker's notice goes on.
+                        self.after_save = Some(then);
+                        self.save();
+                    }
+                    Some(Answer::Other) => self.proceed(ctx, then),
+                    _ => {}
+                }
+                Dialog::Unsaved(then)
             }
         };
         if next.is_some() {
@@ -1304,6 +1511,71 @@ impl Studio {
             self.dialog = Some(d);
         }
     }
+}
+
+/// The dialog's buttons: `ok` (also Enter), `other` if any, and Cancel (also Esc); `None`
+/// while none was pressed. Buttons in a row, after the content.
+fn buttons(ui: &mut Ui, ok: &str, other: Option<&str>) -> Option<Answer> {
+    ui.set_min_width(DIALOG_MIN_WIDTH);
+    let mut a = None;
+    ui.horizontal(|ui| {
+        if ui.button(ok).clicked() {
+            a = Some(Answer::Submit);
+        }
+        if let Some(o) = other
+            && ui.button(o).clicked()
+        {
+            a = Some(Answer::Other);
+        }
+        if ui.button("Cancel").clicked() {
+            a = Some(Answer::Cancel);
+        }
+    });
+    a.or_else(|| keys_answer(ui.ctx()))
+}
+
+/// Enter submits, Esc cancels (both consumed).
+fn keys_answer(ctx: &egui::Context) -> Option<Answer> {
+    ctx.input_mut(|i| {
+        if i.consume_key(Modifiers::NONE, Key::Escape) {
+            Some(Answer::Cancel)
+        } else if i.consume_key(Modifiers::NONE, Key::Enter) {
+            Some(Answer::Submit)
+        } else {
+            None
+        }
+    })
+}
+
+/// A dialog with a path field: its heading, an optional note, the field and the buttons.
+/// The field keeps the keyboard focus while the dialog is open, so text typed in the same
+/// frame as a click on a button is in `path` before the click counts.
+fn path_dialog(
+    ctx: &egui::Context,
+    modal: egui::Modal,
+    title: &str,
+    note: Option<&str>,
+    path: &mut String,
+    ok: &str,
+) -> Option<Answer> {
+    modal
+        .show(ctx, |ui| {
+            ui.heading(title);
+            if let Some(n) = note {
+                ui.add(egui::Label::new(n).wrap());
+            }
+            // By default a click elsewhere takes the focus from the field before the field
+            // reads this frame's keys: the last character typed would be lost.
+            let surrender = ctx.options(|o| o.input_options.surrender_focus_on);
+            ctx.options_mut(|o| o.input_options.surrender_focus_on = SurrenderFocusOn::Never);
+            let r = ui.add(egui::TextEdit::singleline(path).desired_width(f32::INFINITY));
+            ctx.options_mut(|o| o.input_options.surrender_focus_on = surrender);
+            if !r.has_focus() && ctx.memory(|m| m.focused().is_none()) {
+                r.request_focus();
+            }
+            buttons(ui, ok, None)
+        })
+        .inner
 }
 
 /// Writes an egui image as PNG.

@@ -9,7 +9,7 @@
 //! that sends requests and draws frames; [`render`] turns frames into GPU buffers and draws
 //! them with OpenGL (eframe's glow backend, which Mesa's llvmpipe runs without a GPU);
 //! [`camera`] is the orbit camera and the mouse ray; [`load`] opens files and the built-in
-//! models; [`bench`] runs the frame loop headless.
+//! models; [`bench`] runs the frame loop headless; [`text`] rounds numbers in log lines.
 //!
 //! Limitations: one undo snapshot per cursor move (the session layer's undo records), so cursor
 //! moves are coalesced ([`worker::DRAG_INTERVAL`]); file dialogs are text fields (no native
@@ -21,6 +21,7 @@ pub mod bench;
 pub mod camera;
 pub mod load;
 pub mod render;
+pub mod text;
 pub mod worker;
 
 pub use app::{Options, Studio, Tool};

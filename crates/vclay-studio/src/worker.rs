@@ -15,6 +15,20 @@
 //! Cursor moves are coalesced: at most one `move-rope` (or FFD move) per [`DRAG_INTERVAL`],
 //! which bounds the command log's growth.
 //!
+//! # Undo while running
+//! The session layer keeps its redo list across steps (redo applies the undone commands again
+//! at the current time), so undo and redo work while the simulation runs; a new edit clears
+//! the redo list. "Nothing to undo / redo" is a [`Notice::Status`], not an error.
+//!
+//! # Time limit
+//! [`Request::TimeLimit`] stops the run (pauses) before a step would take the first model's
+//! clock past the limit (the studio bounds a PDE surface's time by its slider range).
+//!
+//! # Sessions
+//! Each [`Request::Replace`] begins a new generation: frames carry it ([`Frame::generation`])
+//! and [`Notice::Replaced`] marks it in the notice stream, so the UI can drop what the old
+//! session still sent.
+//!
 //! # Divergence
 //! A step that fails pauses the simulation and sends [`Notice::Error`] with the kernel's
 //! message (it names the step and a stable time step) and what to do.
@@ -167,6 +181,8 @@ pub struct Frame {
     pub scheduled: usize,
     /// Wall time to build this frame's display data, seconds.
     pub build_seconds: f64,
+    /// The session's generation: the number of [`Request::Replace`]s handled before it.
+    pub generation: u64,
 }
 
 /// Messages from the UI to the worker.
@@ -206,6 +222,14 @@ pub enum Request {
     Save(PathBuf),
     /// Set the autosave file (`None`: off).
     Autosave(Option<PathBuf>, Duration),
+    /// Turn autosave off and delete the autosave file (a clean exit: nothing to recover).
+    DiscardAutosave,
+    /// The session differs from its file (a recovered autosave): it counts as modified and is
+    /// autosaved again.
+    MarkModified,
+    /// Pause before a step would take the first model's clock past this time (`None`: no
+    /// limit).
+    TimeLimit(Option<f64>),
     /// Export model `model` to `path` through `Model::export`.
     Export {
         /// Model name.
@@ -234,6 +258,9 @@ impl std::fmt::Debug for Request {
             Request::Replace(_) => "Replace",
             Request::Save(_) => "Save",
             Request::Autosave(..) => "Autosave",
+            Request::DiscardAutosave => "DiscardAutosave",
+            Request::MarkModified => "MarkModified",
+            Request::TimeLimit(_) => "TimeLimit",
             Request::Export { .. } => "Export",
             Request::Query(_) => "Query",
             Request::Quit => "Quit",
@@ -246,6 +273,12 @@ impl std::fmt::Debug for Request {
 pub enum Notice {
     /// A log line (a command applied, a file saved).
     Log(String),
+    /// A line for the status bar (and the log): undo and redo results, "nothing to undo", a
+    /// run stopped at the time limit.
+    Status(String),
+    /// The session was replaced: what follows belongs to generation `.0` (see
+    /// [`Frame::generation`]).
+    Replaced(u64),
     /// Something failed; `paused` says the simulation was paused (divergence).
     Error {
         /// The message.
@@ -403,6 +436,10 @@ struct State {
     saved_revision: u64,
     autosave: Option<(PathBuf, Duration)>,
     autosaved: (Instant, u64),
+    /// Pause before passing this time.
+    time_limit: Option<f64>,
+    /// Replacements handled.
+    generation: u64,
 }
 
 impl State {
@@ -424,6 +461,8 @@ impl State {
             saved_revision: rev,
             autosave: None,
             autosaved: (Instant::now(), rev),
+            time_limit: None,
+            generation: 0,
         }
     }
 
@@ -462,6 +501,14 @@ impl State {
                 self.shown_revision = None;
             }
             self.apply_drag(false);
+            if self.running && self.at_time_limit() {
+                self.running = false;
+                self.shown_revision = None;
+                let t = self.session.time();
+                self.notify(Notice::Status(format!(
+                    "t = {t:.3} is the end of the time range: paused (Run starts over)"
+                )));
+            }
             if self.running {
                 if self.ahead_of_wall_clock() {
                     std::thread::sleep(Duration::from_millis(1));
@@ -472,6 +519,16 @@ impl State {
             self.publish();
             self.autosave_if_due();
         }
+    }
+
+    /// Whether the next step would take the first model's clock past the time limit.
+    fn at_time_limit(&self) -> bool {
+        let Some(limit) = self.time_limit else {
+            return false;
+        };
+        self.session
+            .model(None)
+            .is_ok_and(|m| m.time() + m.dt() > limit + 1e-9 * limit.abs().max(1.0))
     }
 
     fn ahead_of_wall_clock(&self) -> bool {
@@ -571,7 +628,10 @@ impl State {
             Request::Replace(s) => {
                 self.drop_grab();
                 self.session = *s;
+                self.generation += 1;
+                self.notify(Notice::Replaced(self.generation));
                 self.samples.clear();
+                self.step_times.clear();
                 self.shown_revision = None;
                 self.saved_revision = self.session.revision();
                 self.autosaved = (Instant::now(), self.saved_revision);
@@ -580,6 +640,8 @@ impl State {
             Request::Save(path) => match vclay_session::file::save(&path, &self.session, None) {
                 Ok(()) => {
                     self.saved_revision = self.session.revision();
+                    // The file holds this revision: no autosave of it is needed.
+                    self.autosaved = (Instant::now(), self.saved_revision);
                     self.shown_revision = None;
                     self.notify(Notice::Saved(path));
                 }
@@ -591,6 +653,17 @@ impl State {
             Request::Autosave(p, every) => {
                 self.autosave = p.map(|p| (p, every));
             }
+            Request::DiscardAutosave => {
+                if let Some((p, _)) = self.autosave.take() {
+                    let _ = std::fs::remove_file(p);
+                }
+            }
+            Request::MarkModified => {
+                // No revision equals these: dirty until saved, autosaved at the next chance.
+                self.saved_revision = u64::MAX;
+                self.autosaved.1 = u64::MAX;
+            }
+            Request::TimeLimit(limit) => self.time_limit = limit.filter(|l| l.is_finite()),
             Request::Export { model, path } => {
                 let r = self
                     .session
@@ -618,11 +691,8 @@ impl State {
     fn undo(&mut self) {
         self.drop_grab();
         match self.session.undo() {
-            Ok(first) => self.notify(Notice::Log(format!("undone: {}", first.message))),
-            Err(e) => self.notify(Notice::Error {
-                message: e.to_string(),
-                paused: false,
-            }),
+            Ok(first) => self.notify(Notice::Status(format!("undone: {}", first.message))),
+            Err(e) => self.history_error(e),
         }
     }
 
@@ -630,9 +700,17 @@ impl State {
         match self.session.redo() {
             Ok(m) => {
                 let n = m.lines().count();
-                self.notify(Notice::Log(format!("redone ({n} command(s))")));
+                self.notify(Notice::Status(format!("redone ({n} command(s))")));
             }
-            Err(e) => self.notify(Notice::Error {
+            Err(e) => self.history_error(e),
+        }
+    }
+
+    /// "Nothing to undo / redo" is a status line; other failures are errors.
+    fn history_error(&self, e: vclay_session::SessionError) {
+        match e {
+            vclay_session::SessionError::History(_) => self.notify(Notice::Status(e.to_string())),
+            e => self.notify(Notice::Error {
                 message: e.to_string(),
                 paused: false,
             }),
@@ -1070,6 +1148,7 @@ impl State {
             dirty: rev != self.saved_revision,
             scheduled: self.session.schedule().len(),
             build_seconds: t0.elapsed().as_secs_f64(),
+            generation: self.generation,
         });
         drop(slot);
         self.shown_revision = Some(rev);
