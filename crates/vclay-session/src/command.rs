@@ -170,36 +170,43 @@ pub enum Edit {
         /// The tool.
         name: String,
     },
-    /// Fix control points: by id (`points`), by rest position in a box (`min`, `max`), or
-    /// the one nearest `near` (a picked point).
+    /// Fix control points: by id (`points`), by rest position in a box (`min`, `max`), or by
+    /// current position: the one nearest `near` (a picked point), or with `radius` every one
+    /// within `radius` of `near` (a brush).
     Fix {
         /// Control point ids.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         points: Option<Vec<usize>>,
-        /// Box corner.
+        /// Box corner (rest positions).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         min: Option<V3>,
-        /// Box corner.
+        /// Box corner (rest positions).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         max: Option<V3>,
-        /// The control point nearest this position.
+        /// The control point nearest this position (current positions).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         near: Option<V3>,
+        /// With `near`: every control point within this distance of it (current positions).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        radius: Option<f64>,
     },
     /// Free control points (the same selections as [`Edit::Fix`]).
     Free {
         /// Control point ids.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         points: Option<Vec<usize>>,
-        /// Box corner.
+        /// Box corner (rest positions).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         min: Option<V3>,
-        /// Box corner.
+        /// Box corner (rest positions).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         max: Option<V3>,
-        /// The control point nearest this position.
+        /// The control point nearest this position (current positions).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         near: Option<V3>,
+        /// With `near`: every control point within this distance of it (current positions).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        radius: Option<f64>,
     },
     /// Change the material: solids per control cell (`cells`, or those whose centroid is in
     /// `min`/`max`, else all), D-NURBS everywhere.
@@ -595,13 +602,21 @@ impl Edit {
                 min,
                 max,
                 near,
+                radius,
             }
             | Edit::Free {
                 points,
                 min,
                 max,
                 near,
-            } => sel(points, min, max, near)?,
+                radius,
+            } => {
+                sel(points, min, max, near)?;
+                if radius.is_some() && near.is_none() {
+                    return Err(EditError::new("radius", "`radius` goes with `near`"));
+                }
+                pos("radius", *radius, true)?;
+            }
             Edit::Material {
                 min,
                 max,

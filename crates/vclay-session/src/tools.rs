@@ -158,3 +158,114 @@ pub fn v3(a: V3) -> Vec3 {
 pub fn a3(v: &Vec3) -> V3 {
     [v.x, v.y, v.z]
 }
+
+/// The control net of a model, as the shared fix/free tool sees it (D-NURBS curves, surfaces,
+/// swung surfaces and patches; subdivision and B-spline solids).
+pub(crate) trait ControlNet {
+    /// The control points at the current state.
+    fn current_points(&self) -> Vec<Vec3>;
+    /// The control points of the rest shape.
+    fn rest_points(&self) -> Vec<Vec3>;
+    /// Whether control point `i` is fixed.
+    fn is_fixed(&self, i: usize) -> bool;
+    /// Fixes or frees control points `ids` (all or none: on an error nothing changed).
+    fn set_fixed(&mut self, ids: &[usize], fix: bool) -> Result<(), crate::SessionError>;
+}
+
+/// The control points a `fix`/`free` selection names ([`crate::Edit::Fix`]): ids (`points`);
+/// a box of **rest** positions (`min`/`max`, as the file format says, so a scenario's box
+/// means the same points whatever has moved); or what a person points at, by **current**
+/// position: the point nearest `near`, or, with `radius`, every point within `radius` of it
+/// (a brush). The one rule for every kind.
+pub(crate) fn select_points<N: ControlNet + ?Sized>(
+    net: &N,
+    points: &Option<Vec<usize>>,
+    (min, max): (&Option<V3>, &Option<V3>),
+    near: &Option<V3>,
+    radius: Option<f64>,
+) -> Result<Vec<usize>, String> {
+    let current = net.current_points();
+    let n = current.len();
+    if let Some(p) = points {
+        if let Some(&i) = p.iter().find(|&&i| i >= n) {
+            return Err(format!("control point {i} does not exist (there are {n})"));
+        }
+        return Ok(p.clone());
+    }
+    if let (Some(lo), Some(hi)) = (min, max) {
+        let rest = net.rest_points();
+        return Ok((0..n)
+            .filter(|&i| (0..3).all(|a| rest[i][a] >= lo[a] && rest[i][a] <= hi[a]))
+            .collect());
+    }
+    let Some(x) = near else { return Ok(Vec::new()) };
+    let x = v3(*x);
+    Ok(match radius {
+        Some(r) => (0..n).filter(|&i| (current[i] - x).norm() <= r).collect(),
+        None => (0..n)
+            .min_by(|&a, &b| (current[a] - x).norm().total_cmp(&(current[b] - x).norm()))
+            .into_iter()
+            .collect(),
+    })
+}
+
+/// What [`fix_or_free`] did.
+pub(crate) struct FixResult {
+    /// The points selected.
+    pub selected: Vec<usize>,
+    /// The exact inverse: free (or fix) the points whose state changed.
+    pub inverse: crate::Edit,
+}
+
+/// Applies a [`crate::Edit::Fix`] or [`crate::Edit::Free`] to `net`: the selection of
+/// [`select_points`], then the change; returns what was selected and the exact inverse.
+pub(crate) fn fix_or_free<N: ControlNet + ?Sized>(
+    net: &mut N,
+    edit: &crate::Edit,
+) -> Result<FixResult, crate::SessionError> {
+    use crate::Edit;
+    let (fix, points, min, max, near, radius) = match edit {
+        Edit::Fix {
+            points,
+            min,
+            max,
+            near,
+            radius,
+        } => (true, points, min, max, near, radius),
+        Edit::Free {
+            points,
+            min,
+            max,
+            near,
+            radius,
+        } => (false, points, min, max, near, radius),
+        _ => return Err(crate::SessionError::model("not a fix or free edit")),
+    };
+    let selected = select_points(net, points, (min, max), near, *radius)
+        .map_err(|e| crate::SessionError::command("", "", e))?;
+    let changed: Vec<usize> = selected
+        .iter()
+        .copied()
+        .filter(|&i| net.is_fixed(i) != fix)
+        .collect();
+    net.set_fixed(&selected, fix)?;
+    let ids = Some(changed);
+    let inverse = if fix {
+        Edit::Free {
+            points: ids,
+            min: None,
+            max: None,
+            near: None,
+            radius: None,
+        }
+    } else {
+        Edit::Fix {
+            points: ids,
+            min: None,
+            max: None,
+            near: None,
+            radius: None,
+        }
+    };
+    Ok(FixResult { selected, inverse })
+}

@@ -195,7 +195,8 @@ fn tool_edits_undo_exactly() {
             points: Some(vec![40]),
             min: None,
             max: None,
-            near: None
+            near: None,
+            radius: None,
         })
         .is_err()
     );

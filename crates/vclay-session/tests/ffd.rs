@@ -218,6 +218,7 @@ fn edits_that_cannot_apply_leave_the_model_unchanged() {
             min: None,
             max: None,
             near: None,
+            radius: None,
         },
         Edit::Rope {
             name: None,

@@ -157,18 +157,21 @@ fn every_edit(subdivision: bool) -> Vec<Edit> {
             min: Some([-0.1, -0.1, -0.1]),
             max: Some([1.1, 1.1, 0.1]),
             near: None,
+            radius: None,
         },
         Edit::Free {
             points: Some(vec![0, 1]),
             min: None,
             max: None,
             near: None,
+            radius: None,
         },
         Edit::Fix {
             points: None,
             min: None,
             max: None,
             near: Some([1.0, 0.0, 0.0]),
+            radius: None,
         },
         Edit::Material {
             cells: None,
@@ -254,6 +257,7 @@ fn commands_that_cannot_apply_name_the_reason_and_change_nothing() {
                 min: None,
                 max: None,
                 near: None,
+                radius: None,
             },
         ),
         (

@@ -723,19 +723,23 @@ impl State {
         let max = Some([at.x + radius, at.y + radius, at.z + radius]);
         let mut e = template.clone();
         match &mut e {
+            // The points under the brush where they are now (not where they rested).
             Edit::Fix {
                 points,
                 min: a,
                 max: b,
                 near,
+                radius: r,
             }
             | Edit::Free {
                 points,
                 min: a,
                 max: b,
                 near,
+                radius: r,
             } => {
-                (*points, *a, *b, *near) = (None, min, max, None);
+                (*points, *a, *b) = (None, None, None);
+                (*near, *r) = (Some([at.x, at.y, at.z]), Some(radius));
             }
             Edit::Material {
                 cells,
@@ -890,6 +894,7 @@ impl State {
                         min: None,
                         max: None,
                         near: None,
+                        radius: None,
                     }
                 } else {
                     Edit::Free {
@@ -897,6 +902,7 @@ impl State {
                         min: None,
                         max: None,
                         near: None,
+                        radius: None,
                     }
                 };
                 self.apply(one(Self::brush_edit(&template, hit.point, brush)));
@@ -915,6 +921,7 @@ impl State {
                                 min: None,
                                 max: None,
                                 near: None,
+                                radius: None,
                             }
                         } else {
                             Edit::Free {
@@ -922,6 +929,7 @@ impl State {
                                 min: None,
                                 max: None,
                                 near: None,
+                                radius: None,
                             }
                         };
                         self.apply(one(edit));
@@ -936,6 +944,7 @@ impl State {
                             min: None,
                             max: None,
                             near: Some(near),
+                            radius: None,
                         }
                     } else {
                         Edit::Free {
@@ -943,6 +952,7 @@ impl State {
                             min: None,
                             max: None,
                             near: Some(near),
+                            radius: None,
                         }
                     };
                     self.apply(one(edit));

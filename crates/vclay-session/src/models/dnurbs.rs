@@ -1128,39 +1128,6 @@ impl DnurbsModel {
     }
 
     /// Control points selected by ids, a box around rest positions, or the nearest one.
-    fn select(
-        &self,
-        points: &Option<Vec<usize>>,
-        min: &Option<V3>,
-        max: &Option<V3>,
-        near: &Option<V3>,
-    ) -> Result<Vec<usize>, SessionError> {
-        let n = self.engine.control_points(false).len();
-        if let Some(p) = points {
-            if let Some(&i) = p.iter().find(|&&i| i >= n) {
-                return Err(cmd(format!(
-                    "control point {i} does not exist (there are {n})"
-                )));
-            }
-            return Ok(p.clone());
-        }
-        if let (Some(lo), Some(hi)) = (min, max) {
-            let rest = self.engine.control_points(true);
-            return Ok((0..n)
-                .filter(|&i| (0..3).all(|a| rest[i][a] >= lo[a] && rest[i][a] <= hi[a]))
-                .collect());
-        }
-        if let Some(x) = near {
-            let x = v3(*x);
-            let p = self.engine.control_points(false);
-            return Ok((0..n)
-                .min_by(|&a, &b| (p[a] - x).norm().total_cmp(&(p[b] - x).norm()))
-                .into_iter()
-                .collect());
-        }
-        Ok(Vec::new())
-    }
-
     fn set_material_values(
         &mut self,
         mu: Option<f64>,
@@ -1376,46 +1343,13 @@ impl DnurbsModel {
                 }
                 format!("released `{name}`")
             }
-            Edit::Fix {
-                points,
-                min,
-                max,
-                near,
-            }
-            | Edit::Free {
-                points,
-                min,
-                max,
-                near,
-            } => {
+            Edit::Fix { .. } | Edit::Free { .. } => {
                 let fix = matches!(edit, Edit::Fix { .. });
-                let pts = self.select(points, min, max, near)?;
-                let changed: Vec<usize> = pts
-                    .iter()
-                    .copied()
-                    .filter(|&i| self.engine.is_point_fixed(i) != fix)
-                    .collect();
-                for &i in &pts {
-                    if let Err(e) = self.engine.set_point_fixed(i, fix) {
+                let r = match crate::tools::fix_or_free(&mut NetOf(self), edit) {
+                    Ok(r) => r,
+                    Err(e) => {
                         self.put(&before)?;
-                        return Err(cmd(e));
-                    }
-                }
-                let sel = |points: Vec<usize>| (Some(points), None, None, None);
-                let (points, min, max, near) = sel(changed);
-                let inverse = if fix {
-                    Edit::Free {
-                        points,
-                        min,
-                        max,
-                        near,
-                    }
-                } else {
-                    Edit::Fix {
-                        points,
-                        min,
-                        max,
-                        near,
+                        return Err(e);
                     }
                 };
                 self.revision += 1;
@@ -1423,10 +1357,10 @@ impl DnurbsModel {
                     message: format!(
                         "{} {} control points",
                         if fix { "fixed" } else { "freed" },
-                        pts.len()
+                        r.selected.len()
                     ),
                     undo: Undo::Inverse {
-                        edit: inverse,
+                        edit: r.inverse,
                         state: Snapshot::new(before),
                     },
                 });
@@ -2180,6 +2114,30 @@ fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, S
                 if surface { "sheet" } else { "line or circle" }
             ),
         )),
+    }
+}
+
+/// The control net of a D-NURBS for the shared fix/free tool.
+struct NetOf<'a>(&'a mut DnurbsModel);
+
+impl crate::tools::ControlNet for NetOf<'_> {
+    fn current_points(&self) -> Vec<Vec3> {
+        self.0.engine.control_points(false)
+    }
+    fn rest_points(&self) -> Vec<Vec3> {
+        self.0.engine.control_points(true)
+    }
+    fn is_fixed(&self, i: usize) -> bool {
+        self.0.engine.is_point_fixed(i)
+    }
+    fn set_fixed(&mut self, ids: &[usize], fix: bool) -> Result<(), SessionError> {
+        for &i in ids {
+            self.0
+                .engine
+                .set_point_fixed(i, fix)
+                .map_err(SessionError::command_from)?;
+        }
+        Ok(())
     }
 }
 

@@ -372,45 +372,6 @@ impl PatchesModel {
         4 * c..4 * c + 3
     }
 
-    fn select(
-        &self,
-        points: &Option<Vec<usize>>,
-        min: &Option<[f64; 3]>,
-        max: &Option<[f64; 3]>,
-        near: &Option<[f64; 3]>,
-    ) -> Result<Vec<usize>, SessionError> {
-        let pts = self.control_points();
-        match (points, min, max, near) {
-            (Some(ids), None, None, None) => {
-                if let Some(bad) = ids.iter().find(|&&i| i >= pts.len()) {
-                    return Err(cmd_err(format!(
-                        "control point {bad} does not exist ({} control points)",
-                        pts.len()
-                    )));
-                }
-                Ok(ids.clone())
-            }
-            (None, Some(lo), Some(hi), None) => Ok(pts
-                .iter()
-                .enumerate()
-                .filter(|(_, p)| (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k]))
-                .map(|(i, _)| i)
-                .collect()),
-            (None, None, None, Some(x)) => {
-                let x = Vec3::from(*x);
-                Ok(pts
-                    .iter()
-                    .enumerate()
-                    .min_by(|a, b| (a.1 - x).norm().total_cmp(&(b.1 - x).norm()))
-                    .map(|(i, _)| vec![i])
-                    .unwrap_or_default())
-            }
-            _ => Err(cmd_err(
-                "give `points`, or `min` and `max`, or `near` (one selection)",
-            )),
-        }
-    }
-
     /// Puts the tools into the engine's force list for a step starting at `t`.
     fn load_forces(&mut self, t: f64) {
         self.tools
@@ -469,6 +430,33 @@ fn finite3(what: &str, v: &[f64; 3]) -> Result<(), SessionError> {
         Ok(())
     } else {
         Err(cmd_err(format!("{what} {v:?} is not finite")))
+    }
+}
+
+/// The patches' control points (x, y, z of coordinates `4c..4c + 3`) for the shared fix/free
+/// tool.
+impl crate::tools::ControlNet for PatchesModel {
+    fn current_points(&self) -> Vec<Vec3> {
+        Model::control_points(self)
+    }
+    fn rest_points(&self) -> Vec<Vec3> {
+        let q = self.engine.state().rest_coordinates;
+        (0..q.len() / 4)
+            .map(|c| Vec3::new(q[4 * c], q[4 * c + 1], q[4 * c + 2]))
+            .collect()
+    }
+    fn is_fixed(&self, c: usize) -> bool {
+        Self::xyz(c).all(|i| self.engine.is_fixed_coordinate(i))
+    }
+    fn set_fixed(&mut self, ids: &[usize], fix: bool) -> Result<(), SessionError> {
+        for &c in ids {
+            for i in Self::xyz(c) {
+                self.engine
+                    .set_fixed_coordinate(i, fix)
+                    .map_err(SessionError::command_from)?;
+            }
+        }
+        Ok(())
     }
 }
 
@@ -685,31 +673,13 @@ impl Model for PatchesModel {
                 }
                 format!("released `{name}`")
             }
-            Edit::Fix {
-                points,
-                min,
-                max,
-                near,
-            }
-            | Edit::Free {
-                points,
-                min,
-                max,
-                near,
-            } => {
+            Edit::Fix { .. } | Edit::Free { .. } => {
                 let fix = matches!(edit, Edit::Fix { .. });
-                let ids = self.select(points, min, max, near)?;
-                for &c in &ids {
-                    for i in Self::xyz(c) {
-                        self.engine
-                            .set_fixed_coordinate(i, fix)
-                            .map_err(SessionError::command_from)?;
-                    }
-                }
+                let r = crate::tools::fix_or_free(self, edit)?;
                 format!(
                     "{} {} control points",
                     if fix { "fixed" } else { "freed" },
-                    ids.len()
+                    r.selected.len()
                 )
             }
             other => {

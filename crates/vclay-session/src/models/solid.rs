@@ -106,37 +106,6 @@ impl SolidModel {
     }
 
     /// Control points selected by ids, a box around rest positions, or the nearest one.
-    fn select(
-        &self,
-        points: &Option<Vec<usize>>,
-        min: &Option<V3>,
-        max: &Option<V3>,
-        near: &Option<V3>,
-    ) -> Result<Vec<usize>, SessionError> {
-        let n = self.solid.control_points().len();
-        if let Some(p) = points {
-            if let Some(&i) = p.iter().find(|&&i| i >= n) {
-                return Err(cmd(format!(
-                    "control point {i} does not exist (there are {n})"
-                )));
-            }
-            return Ok(p.clone());
-        }
-        if let (Some(lo), Some(hi)) = (min, max) {
-            return Ok(self
-                .solid
-                .control_points_where(|x| (0..3).all(|a| x[a] >= lo[a] && x[a] <= hi[a])));
-        }
-        if let Some(x) = near {
-            return Ok(
-                vclay_solids::tools::nearest(self.solid.control_points(), &v3(*x))
-                    .into_iter()
-                    .collect(),
-            );
-        }
-        Ok(Vec::new())
-    }
-
     fn add_tool(&mut self, tool: Tool) -> Result<usize, SessionError> {
         self.solid
             .add_tool(tool)
@@ -341,62 +310,28 @@ impl SolidModel {
                 let _ = self.solid.remove_tool(ToolId(t.handle));
                 format!("released `{name}`")
             }
-            Edit::Fix {
-                points,
-                min,
-                max,
-                near,
-            }
-            | Edit::Free {
-                points,
-                min,
-                max,
-                near,
-            } => {
+            Edit::Fix { .. } | Edit::Free { .. } => {
                 let fix = matches!(edit, Edit::Fix { .. });
-                let pts = self.select(points, min, max, near)?;
-                let changed: Vec<usize> = pts
-                    .iter()
-                    .copied()
-                    .filter(|&i| self.solid.is_fixed(i) != fix)
-                    .collect();
                 let t0 = std::time::Instant::now();
-                self.solid
-                    .set_fixed(&pts, fix)
-                    .map_err(SessionError::command_from)?;
+                let r = crate::tools::fix_or_free(&mut self.solid, edit)?;
                 let st = self.solid.stats();
                 let message = if fix {
                     format!(
                         "fixed {} control points ({} of {} data points and {} springs remain active; rebuilt in {:.1} ms)",
-                        pts.len(),
+                        r.selected.len(),
                         st.active_data_points,
                         st.data_points,
                         st.active_springs,
                         t0.elapsed().as_secs_f64() * 1e3
                     )
                 } else {
-                    format!("freed {} control points", pts.len())
-                };
-                let inverse = if fix {
-                    Edit::Free {
-                        points: Some(changed),
-                        min: None,
-                        max: None,
-                        near: None,
-                    }
-                } else {
-                    Edit::Fix {
-                        points: Some(changed),
-                        min: None,
-                        max: None,
-                        near: None,
-                    }
+                    format!("freed {} control points", r.selected.len())
                 };
                 self.revision += 1;
                 return Ok(Applied {
                     message,
                     undo: Undo::Inverse {
-                        edit: inverse,
+                        edit: r.inverse,
                         state: Snapshot::new(before),
                     },
                 });
@@ -992,6 +927,22 @@ fn boundary_name(b: BoundaryRule) -> &'static str {
         BoundaryRule::Sharp => "sharp",
         BoundaryRule::Smooth => "smooth",
         BoundaryRule::Interior => "interior",
+    }
+}
+
+/// The control lattice of a solid for the shared fix/free tool.
+impl crate::tools::ControlNet for vclay_solids::DynamicSolid {
+    fn current_points(&self) -> Vec<Vec3> {
+        self.control_points().to_vec()
+    }
+    fn rest_points(&self) -> Vec<Vec3> {
+        self.rest_control_points().to_vec()
+    }
+    fn is_fixed(&self, i: usize) -> bool {
+        vclay_solids::DynamicSolid::is_fixed(self, i)
+    }
+    fn set_fixed(&mut self, ids: &[usize], fix: bool) -> Result<(), SessionError> {
+        vclay_solids::DynamicSolid::set_fixed(self, ids, fix).map_err(SessionError::command_from)
     }
 }
 
