@@ -170,44 +170,10 @@ pub enum Edit {
         /// The tool.
         name: String,
     },
-    /// Fix control points: by id (`points`), by rest position in a box (`min`, `max`), or by
-    /// current position: the one nearest `near` (a picked point), or with `radius` every one
-    /// within `radius` of `near` (a brush).
-    Fix {
-        /// Control point ids.
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        points: Option<Vec<usize>>,
-        /// Box corner (rest positions).
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        min: Option<V3>,
-        /// Box corner (rest positions).
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        max: Option<V3>,
-        /// The control point nearest this position (current positions).
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        near: Option<V3>,
-        /// With `near`: every control point within this distance of it (current positions).
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        radius: Option<f64>,
-    },
+    /// Fix control points (see [`Selection`]).
+    Fix(Selection),
     /// Free control points (the same selections as [`Edit::Fix`]).
-    Free {
-        /// Control point ids.
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        points: Option<Vec<usize>>,
-        /// Box corner (rest positions).
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        min: Option<V3>,
-        /// Box corner (rest positions).
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        max: Option<V3>,
-        /// The control point nearest this position (current positions).
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        near: Option<V3>,
-        /// With `near`: every control point within this distance of it (current positions).
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        radius: Option<f64>,
-    },
+    Free(Selection),
     /// Change the material: solids per control cell (`cells`, or those whose centroid is in
     /// `min`/`max`, else all), D-NURBS everywhere.
     Material {
@@ -401,6 +367,86 @@ impl EditError {
 /// Default core radius of [`Edit::Repel`].
 pub const DEFAULT_REPULSION_CORE: f64 = 0.1;
 
+/// Which control points an [`Edit::Fix`] or [`Edit::Free`] names, exactly one way: by id
+/// (`points`); by **rest** position in a box (`min` and `max`, so a scenario's box names the same
+/// points whatever has moved); or by **current** position, what a person points at: the point
+/// nearest `near`, or with `radius` every point within `radius` of `near` (a brush).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Selection {
+    /// Control point ids.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub points: Option<Vec<usize>>,
+    /// Box corner (rest positions).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min: Option<V3>,
+    /// Box corner (rest positions).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max: Option<V3>,
+    /// The control point nearest this position (current positions).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub near: Option<V3>,
+    /// With `near`: every control point within this distance of it (current positions).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+}
+
+impl Selection {
+    /// The control points `ids`.
+    pub fn ids(ids: Vec<usize>) -> Self {
+        Self {
+            points: Some(ids),
+            ..Self::default()
+        }
+    }
+    /// The control point nearest `x` (current positions).
+    pub fn nearest(x: V3) -> Self {
+        Self {
+            near: Some(x),
+            ..Self::default()
+        }
+    }
+    /// Every control point within `radius` of `x` (current positions): a brush.
+    pub fn brush(x: V3, radius: f64) -> Self {
+        Self {
+            near: Some(x),
+            radius: Some(radius),
+            ..Self::default()
+        }
+    }
+    /// The control points whose rest positions lie in the box `min`..`max`.
+    pub fn rest_box(min: V3, max: V3) -> Self {
+        Self {
+            min: Some(min),
+            max: Some(max),
+            ..Self::default()
+        }
+    }
+
+    /// Checks that exactly one way is given, with finite numbers.
+    pub fn validate(&self) -> Result<(), EditError> {
+        opt3("min", &self.min)?;
+        opt3("max", &self.max)?;
+        opt3("near", &self.near)?;
+        let n = self.points.is_some() as u8
+            + (self.min.is_some() || self.max.is_some()) as u8
+            + self.near.is_some() as u8;
+        if n != 1 {
+            return Err(EditError::new(
+                "points",
+                "give exactly one of `points`, `min` and `max`, or `near`",
+            ));
+        }
+        if self.min.is_some() != self.max.is_some() {
+            return Err(EditError::new("min", "`min` and `max` go together"));
+        }
+        if self.radius.is_some() && self.near.is_none() {
+            return Err(EditError::new("radius", "`radius` goes with `near`"));
+        }
+        pos("radius", self.radius, true)
+    }
+}
+
 /// One point move of [`Edit::FfdMove`].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -423,8 +469,8 @@ impl Edit {
             Edit::Inflate { .. } => "inflate",
             Edit::Data { .. } => "data",
             Edit::Release { .. } => "release",
-            Edit::Fix { .. } => "fix",
-            Edit::Free { .. } => "free",
+            Edit::Fix(_) => "fix",
+            Edit::Free(_) => "free",
             Edit::Material { .. } => "material",
             Edit::Extrude { .. } => "extrude",
             Edit::DeleteCell { .. } => "delete-cell",
@@ -446,65 +492,31 @@ impl Edit {
     /// radii, `until`/`release` not before `at`, exclusive keys. `at` is the time the edit is
     /// scheduled for (0 for an immediate edit).
     pub fn validate(&self, at: f64) -> Result<(), EditError> {
-        fn fin(key: &'static str, v: &[f64]) -> Result<(), EditError> {
-            match v.iter().find(|x| !x.is_finite()) {
-                Some(x) => Err(EditError::new(key, format!("`{key}`: {x} is not finite"))),
-                None => Ok(()),
-            }
+        match self {
+            Edit::Rope { .. }
+            | Edit::MoveRope { .. }
+            | Edit::Force { .. }
+            | Edit::RegionForce { .. }
+            | Edit::Gravity { .. }
+            | Edit::Inflate { .. }
+            | Edit::Data { .. }
+            | Edit::Release { .. }
+            | Edit::PlasticReset
+            | Edit::Stop => self.validate_tool(at),
+            Edit::Fix(_)
+            | Edit::Free(_)
+            | Edit::Material { .. }
+            | Edit::Extrude { .. }
+            | Edit::DeleteCell { .. }
+            | Edit::MovePoint { .. }
+            | Edit::SetWeight { .. }
+            | Edit::FfdMove { .. } => self.validate_net(),
+            _ => self.validate_other(at),
         }
-        fn pos(key: &'static str, v: Option<f64>, allow_zero: bool) -> Result<(), EditError> {
-            match v {
-                Some(x) if !(x.is_finite() && (x > 0.0 || (allow_zero && x == 0.0))) => {
-                    Err(EditError::new(
-                        key,
-                        format!(
-                            "`{key}`: {x} must be {} and finite",
-                            if allow_zero {
-                                "non-negative"
-                            } else {
-                                "positive"
-                            }
-                        ),
-                    ))
-                }
-                _ => Ok(()),
-            }
-        }
-        fn after(key: &'static str, v: Option<f64>, at: f64) -> Result<(), EditError> {
-            match v {
-                Some(x) if !x.is_finite() || x < at => Err(EditError::new(
-                    key,
-                    format!("`{key}`: {x} is before the edit's time {at}"),
-                )),
-                _ => Ok(()),
-            }
-        }
-        fn opt3(key: &'static str, v: &Option<V3>) -> Result<(), EditError> {
-            v.as_ref().map_or(Ok(()), |v| fin(key, v))
-        }
-        fn sel(
-            points: &Option<Vec<usize>>,
-            min: &Option<V3>,
-            max: &Option<V3>,
-            near: &Option<V3>,
-        ) -> Result<(), EditError> {
-            opt3("min", min)?;
-            opt3("max", max)?;
-            opt3("near", near)?;
-            let n = points.is_some() as u8
-                + (min.is_some() || max.is_some()) as u8
-                + near.is_some() as u8;
-            if n != 1 {
-                return Err(EditError::new(
-                    "points",
-                    "give exactly one of `points`, `min` and `max`, or `near`",
-                ));
-            }
-            if min.is_some() != max.is_some() {
-                return Err(EditError::new("min", "`min` and `max` go together"));
-            }
-            Ok(())
-        }
+    }
+
+    /// [`Edit::validate`] for `Rope`, `MoveRope`, `Force`, `RegionForce`, `Gravity`, `Inflate`, `Data`, `Release`, `PlasticReset`, `Stop`.
+    fn validate_tool(&self, at: f64) -> Result<(), EditError> {
         match self {
             Edit::Rope {
                 from,
@@ -597,26 +609,15 @@ impl Edit {
                 pos("stiffness", *stiffness, false)?;
             }
             Edit::Release { .. } | Edit::PlasticReset | Edit::Stop => {}
-            Edit::Fix {
-                points,
-                min,
-                max,
-                near,
-                radius,
-            }
-            | Edit::Free {
-                points,
-                min,
-                max,
-                near,
-                radius,
-            } => {
-                sel(points, min, max, near)?;
-                if radius.is_some() && near.is_none() {
-                    return Err(EditError::new("radius", "`radius` goes with `near`"));
-                }
-                pos("radius", *radius, true)?;
-            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// [`Edit::validate`] for `Fix`, `Free`, `Material`, `Extrude`, `DeleteCell`, `MovePoint`, `SetWeight`, `FfdMove`.
+    fn validate_net(&self) -> Result<(), EditError> {
+        match self {
+            Edit::Fix(sel) | Edit::Free(sel) => sel.validate()?,
             Edit::Material {
                 min,
                 max,
@@ -689,6 +690,14 @@ impl Edit {
                     fin("moves.to", &m.to)?;
                 }
             }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// [`Edit::validate`] for `PdeSet`, `Set`, `PdeLocal`, `Integrator`, `Constraint`, `Repel`.
+    fn validate_other(&self, at: f64) -> Result<(), EditError> {
+        match self {
             Edit::PdeSet { value, .. } | Edit::Set { value, .. } => fin("value", &[*value])?,
             Edit::PdeLocal {
                 name,
@@ -783,7 +792,45 @@ impl Edit {
                 pos("core", *core, false)?;
                 after("until", *until, at)?;
             }
+            _ => {}
         }
         Ok(())
     }
+}
+
+fn fin(key: &'static str, v: &[f64]) -> Result<(), EditError> {
+    match v.iter().find(|x| !x.is_finite()) {
+        Some(x) => Err(EditError::new(key, format!("`{key}`: {x} is not finite"))),
+        None => Ok(()),
+    }
+}
+fn pos(key: &'static str, v: Option<f64>, allow_zero: bool) -> Result<(), EditError> {
+    match v {
+        Some(x) if !(x.is_finite() && (x > 0.0 || (allow_zero && x == 0.0))) => {
+            Err(EditError::new(
+                key,
+                format!(
+                    "`{key}`: {x} must be {} and finite",
+                    if allow_zero {
+                        "non-negative"
+                    } else {
+                        "positive"
+                    }
+                ),
+            ))
+        }
+        _ => Ok(()),
+    }
+}
+fn after(key: &'static str, v: Option<f64>, at: f64) -> Result<(), EditError> {
+    match v {
+        Some(x) if !x.is_finite() || x < at => Err(EditError::new(
+            key,
+            format!("`{key}`: {x} is before the edit's time {at}"),
+        )),
+        _ => Ok(()),
+    }
+}
+fn opt3(key: &'static str, v: &Option<V3>) -> Result<(), EditError> {
+    v.as_ref().map_or(Ok(()), |v| fin(key, v))
 }

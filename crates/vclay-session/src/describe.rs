@@ -125,30 +125,14 @@ const PARAM: KeySpec = key(
     "D-NURBS material point [u, v]",
 );
 
-fn selection() -> Vec<KeySpec> {
-    vec![
-        key("points", "list", "", 0.0, INF, false, "control point ids"),
-        key(
-            "min",
-            "vec3",
-            "length",
-            -INF,
-            INF,
-            false,
-            "box corner (rest positions)",
-        ),
-        key(
-            "max",
-            "vec3",
-            "length",
-            -INF,
-            INF,
-            false,
-            "box corner (rest positions)",
-        ),
-        NEAR,
-    ]
-}
+#[rustfmt::skip]
+const SELECTION: &[KeySpec] = &[
+    key("points", "list", "", 0.0, INF, false, "control point ids"),
+    key("min", "vec3", "length", -INF, INF, false, "box corner (rest positions)"),
+    key("max", "vec3", "length", -INF, INF, false, "box corner (rest positions)"),
+    NEAR,
+    key("radius", "number", "length", 0.0, INF, false, "with `near`: every point within it, current positions (a brush)"),
+];
 
 /// Every action, in the order of `docs/formats.md` section 9.
 pub const ACTIONS: [&str; 24] = [
@@ -178,579 +162,213 @@ pub const ACTIONS: [&str; 24] = [
     "constraint",
 ];
 
+#[rustfmt::skip]
+const ROPE_KEYS: &[KeySpec] = &[
+    key("from", "vec3", "length", -INF, INF, true, "where it grabs, and the cursor's start"),
+    PARAM,
+    key("to", "vec3", "length", -INF, INF, false, "cursor end position"),
+    key("until", "number", "s", 0.0, INF, false, "time the cursor reaches `to`"),
+    key("velocity", "vec3", "length/s", -INF, INF, false, "cursor velocity (not with `to`)"),
+    key("release", "number", "s", 0.0, INF, false, "time the rope is removed"),
+    key("stiffness", "number", "force/length", 0.0, INF, false, "spring stiffness (> 0)"),
+    key("length", "number", "length", 0.0, INF, false, "no force below this length (solids)"),
+    key("kernel", "number", "param", 0.0, INF, false, "D-NURBS Gaussian width (> 0)"),
+    key("start", "number", "s", 0.0, INF, false, "time the cursor starts moving"),
+    NAME,
+];
+
+#[rustfmt::skip]
+const MOVE_ROPE_KEYS: &[KeySpec] = &[
+    key("name", "name", "", 0.0, 0.0, true, "the rope"),
+    key("to", "vec3", "length", -INF, INF, true, "new cursor position"),
+];
+
+#[rustfmt::skip]
+const FORCE_KEYS: &[KeySpec] = &[
+    NEAR,
+    PARAM,
+    key("force", "vec3", "force", -INF, INF, true, "the force"),
+    UNTIL,
+    NAME,
+];
+
+#[rustfmt::skip]
+const REGION_FORCE_KEYS: &[KeySpec] = &[
+    key("center", "vec3", "length", -INF, INF, true, "brush centre"),
+    key("radius", "number", "length", 0.0, INF, true, "brush radius"),
+    key("force", "vec3", "force", -INF, INF, true, "total force, shared"),
+    UNTIL,
+    NAME,
+];
+
+#[rustfmt::skip]
+const GRAVITY_KEYS: &[KeySpec] = &[
+    key("g", "vec3", "length/s^2", -INF, INF, true, "acceleration"),
+    UNTIL,
+    NAME,
+];
+
+#[rustfmt::skip]
+const INFLATE_KEYS: &[KeySpec] = &[
+    key("pressure", "number", "force/area", -INF, INF, true, "pressure (negative deflates)"),
+    UNTIL,
+    NAME,
+];
+
+#[rustfmt::skip]
+const REPEL_KEYS: &[KeySpec] = &[
+    key("center", "vec3", "length", -INF, INF, true, "the repelling point"),
+    key("strength", "number", "force*length^2", -INF, INF, true, "strength (negative attracts)"),
+    key("core", "number", "length", 0.0, INF, false, "core radius (> 0, default 0.1)"),
+    UNTIL,
+    NAME,
+];
+
+#[rustfmt::skip]
+const DATA_KEYS: &[KeySpec] = &[
+    key("points", "list", "length", -INF, INF, true, "data points (at most 2,000)"),
+    key("stiffness", "number", "force/length", 0.0, INF, false, "spring stiffness (> 0)"),
+    NAME,
+];
+
+#[rustfmt::skip]
+const RELEASE_KEYS: &[KeySpec] = &[
+    key("name", "name", "", 0.0, 0.0, true, "the tool, constraint or deformation"),
+];
+
+#[rustfmt::skip]
+const MATERIAL_KEYS: &[KeySpec] = &[
+    key("cells", "list", "", 0.0, INF, false, "control cells (solids)"),
+    key("min", "vec3", "length", -INF, INF, false, "box corner (cells whose centroid is inside)"),
+    key("max", "vec3", "length", -INF, INF, false, "box corner"),
+    key("density", "number", "mass/volume", 0.0, INF, false, "solids: density (> 0)"),
+    key("damping", "number", "1/s", 0.0, INF, false, "solids: damping"),
+    key("edge_stiffness", "number", "force/length", 0.0, INF, false, "solids: edge springs"),
+    key("virtual_stiffness", "number", "force/length", 0.0, INF, false, "solids: virtual springs"),
+    key("anisotropy", "vec3", "", 0.0, INF, false, "solids: stiffness scale per axis (> 0)"),
+    key("mu", "number", "mass/area", 0.0, INF, false, "D-NURBS: mass density"),
+    key("gamma", "number", "1/s", 0.0, INF, false, "D-NURBS: damping density"),
+    key("alpha", "number", "force", 0.0, INF, false, "D-NURBS: tension"),
+    key("beta", "number", "force*length^2", 0.0, INF, false, "D-NURBS: rigidity"),
+];
+
+#[rustfmt::skip]
+const EXTRUDE_KEYS: &[KeySpec] = &[
+    key("face", "integer", "", 0.0, INF, false, "face id"),
+    NEAR,
+    key("factor", "number", "", 0.0, INF, false, "length relative to the face size (default 1)"),
+];
+
+#[rustfmt::skip]
+const DELETE_CELL_KEYS: &[KeySpec] = &[
+    key("cell", "integer", "", 0.0, INF, false, "cell id"),
+    NEAR,
+];
+
+#[rustfmt::skip]
+const PLASTIC_RESET_KEYS: &[KeySpec] = &[
+
+];
+
+#[rustfmt::skip]
+const STOP_KEYS: &[KeySpec] = &[
+
+];
+
+#[rustfmt::skip]
+const MOVE_POINT_KEYS: &[KeySpec] = &[
+    key("index", "integer", "", 0.0, INF, true, "control point"),
+    key("to", "vec3", "length", -INF, INF, true, "new position"),
+];
+
+#[rustfmt::skip]
+const SET_WEIGHT_KEYS: &[KeySpec] = &[
+    key("index", "integer", "", 0.0, INF, true, "control point"),
+    key("weight", "number", "", 0.0, INF, true, "new weight (> 0)"),
+];
+
+#[rustfmt::skip]
+const FFD_MOVE_KEYS: &[KeySpec] = &[
+    key("moves", "list", "length", -INF, INF, true, "[{from, to}, ...] (at most 1,000)"),
+];
+
+#[rustfmt::skip]
+const PDE_SET_KEYS: &[KeySpec] = &[
+    key("name", "name", "", 0.0, 0.0, true, "a boundary constant, or `t`"),
+    key("value", "number", "", -INF, INF, true, "its value"),
+];
+
+#[rustfmt::skip]
+const PDE_LOCAL_KEYS: &[KeySpec] = &[
+    key("name", "name", "", 0.0, 0.0, true, "name of the deformation"),
+    key("patch", "integer", "", 0.0, INF, false, "patch index (default 0)"),
+    key("u", "interval", "param", 0.0, 1.0, true, "[u1, u2] inside [0, 1]"),
+    key("v", "interval", "param", -INF, INF, true, "[v1, v2]"),
+    key("continuity", "text", "", 0.0, 0.0, false, "\"G0\" or \"G1\" (default)"),
+    key("p", "vec3", "length", -INF, INF, true, "amplitude"),
+];
+
+#[rustfmt::skip]
+const SET_KEYS: &[KeySpec] = &[
+    key("name", "name", "", 0.0, 0.0, true, "a parameter the model lists"),
+    key("value", "number", "", -INF, INF, true, "its value (within the parameter's range)"),
+];
+
+#[rustfmt::skip]
+const INTEGRATOR_KEYS: &[KeySpec] = &[
+    key("integrator", "text", "", 0.0, 0.0, false, "solids: symplectic, explicit or implicit"),
+    key("dt", "number", "s", 0.0, INF, false, "time step (> 0)"),
+];
+
+#[rustfmt::skip]
+const CONSTRAINT_KEYS: &[KeySpec] = &[
+    key("type", "text", "", 0.0, 0.0, true, "\"point\" or \"normal\""),
+    key("param", "param", "", -INF, INF, true, "material point [u, v]"),
+    key("target", "vec3", "length", -INF, INF, false, "point constraint: the position"),
+    key("normal", "vec3", "", -INF, INF, false, "normal constraint: the direction"),
+    NAME,
+];
+
 /// The description of `action` (`None` for a name that is no action).
 pub fn tool(action: &str) -> Option<ToolSpec> {
     use Target::*;
-    let (acts_on, keys, help): (Target, Vec<KeySpec>, &'static str) = match action {
-        "rope" => (
-            ModelPoint,
-            vec![
-                key(
-                    "from",
-                    "vec3",
-                    "length",
-                    -INF,
-                    INF,
-                    true,
-                    "where it grabs, and the cursor's start",
-                ),
-                PARAM,
-                key(
-                    "to",
-                    "vec3",
-                    "length",
-                    -INF,
-                    INF,
-                    false,
-                    "cursor end position",
-                ),
-                key(
-                    "until",
-                    "number",
-                    "s",
-                    0.0,
-                    INF,
-                    false,
-                    "time the cursor reaches `to`",
-                ),
-                key(
-                    "velocity",
-                    "vec3",
-                    "length/s",
-                    -INF,
-                    INF,
-                    false,
-                    "cursor velocity (not with `to`)",
-                ),
-                key(
-                    "release",
-                    "number",
-                    "s",
-                    0.0,
-                    INF,
-                    false,
-                    "time the rope is removed",
-                ),
-                key(
-                    "stiffness",
-                    "number",
-                    "force/length",
-                    0.0,
-                    INF,
-                    false,
-                    "spring stiffness (> 0)",
-                ),
-                key(
-                    "length",
-                    "number",
-                    "length",
-                    0.0,
-                    INF,
-                    false,
-                    "no force below this length (solids)",
-                ),
-                key(
-                    "kernel",
-                    "number",
-                    "param",
-                    0.0,
-                    INF,
-                    false,
-                    "D-NURBS Gaussian width (> 0)",
-                ),
-                key(
-                    "start",
-                    "number",
-                    "s",
-                    0.0,
-                    INF,
-                    false,
-                    "time the cursor starts moving",
-                ),
-                NAME,
-            ],
-            "a spring that only pulls a model point towards a cursor",
-        ),
-        "move-rope" => (
-            Named,
-            vec![
-                key("name", "name", "", 0.0, 0.0, true, "the rope"),
-                key(
-                    "to",
-                    "vec3",
-                    "length",
-                    -INF,
-                    INF,
-                    true,
-                    "new cursor position",
-                ),
-            ],
-            "moves a rope's cursor (a drag)",
-        ),
-        "force" => (
-            ModelPoint,
-            vec![
-                NEAR,
-                PARAM,
-                key("force", "vec3", "force", -INF, INF, true, "the force"),
-                UNTIL,
-                NAME,
-            ],
-            "a constant force on one model point",
-        ),
-        "region-force" => (
-            Region,
-            vec![
-                key("center", "vec3", "length", -INF, INF, true, "brush centre"),
-                key("radius", "number", "length", 0.0, INF, true, "brush radius"),
-                key(
-                    "force",
-                    "vec3",
-                    "force",
-                    -INF,
-                    INF,
-                    true,
-                    "total force, shared",
-                ),
-                UNTIL,
-                NAME,
-            ],
-            "a total force shared by the data points within a radius",
-        ),
-        "gravity" => (
-            Whole,
-            vec![
-                key("g", "vec3", "length/s^2", -INF, INF, true, "acceleration"),
-                UNTIL,
-                NAME,
-            ],
-            "gravity; an existing name changes its strength",
-        ),
-        "inflate" => (
-            Whole,
-            vec![
-                key(
-                    "pressure",
-                    "number",
-                    "force/area",
-                    -INF,
-                    INF,
-                    true,
-                    "pressure (negative deflates)",
-                ),
-                UNTIL,
-                NAME,
-            ],
-            "pressure on the boundary surface",
-        ),
-        "repel" => (
-            Whole,
-            vec![
-                key(
-                    "center",
-                    "vec3",
-                    "length",
-                    -INF,
-                    INF,
-                    true,
-                    "the repelling point",
-                ),
-                key(
-                    "strength",
-                    "number",
-                    "force*length^2",
-                    -INF,
-                    INF,
-                    true,
-                    "strength (negative attracts)",
-                ),
-                key(
-                    "core",
-                    "number",
-                    "length",
-                    0.0,
-                    INF,
-                    false,
-                    "core radius (> 0, default 0.1)",
-                ),
-                UNTIL,
-                NAME,
-            ],
-            "repulsion from a point in space",
-        ),
-        "data" => (
-            Whole,
-            vec![
-                key(
-                    "points",
-                    "list",
-                    "length",
-                    -INF,
-                    INF,
-                    true,
-                    "data points (at most 2,000)",
-                ),
-                key(
-                    "stiffness",
-                    "number",
-                    "force/length",
-                    0.0,
-                    INF,
-                    false,
-                    "spring stiffness (> 0)",
-                ),
-                NAME,
-            ],
-            "data points, each pulling the nearest model point (fitting)",
-        ),
-        "release" => (
-            Named,
-            vec![key(
-                "name",
-                "name",
-                "",
-                0.0,
-                0.0,
-                true,
-                "the tool, constraint or deformation",
-            )],
-            "removes a tool, constraint or local deformation",
-        ),
-        "fix" => (ControlPoints, selection(), "fixes control points"),
-        "free" => (ControlPoints, selection(), "frees control points"),
-        "material" => (
-            Whole,
-            vec![
-                key(
-                    "cells",
-                    "list",
-                    "",
-                    0.0,
-                    INF,
-                    false,
-                    "control cells (solids)",
-                ),
-                key(
-                    "min",
-                    "vec3",
-                    "length",
-                    -INF,
-                    INF,
-                    false,
-                    "box corner (cells whose centroid is inside)",
-                ),
-                key("max", "vec3", "length", -INF, INF, false, "box corner"),
-                key(
-                    "density",
-                    "number",
-                    "mass/volume",
-                    0.0,
-                    INF,
-                    false,
-                    "solids: density (> 0)",
-                ),
-                key(
-                    "damping",
-                    "number",
-                    "1/s",
-                    0.0,
-                    INF,
-                    false,
-                    "solids: damping",
-                ),
-                key(
-                    "edge_stiffness",
-                    "number",
-                    "force/length",
-                    0.0,
-                    INF,
-                    false,
-                    "solids: edge springs",
-                ),
-                key(
-                    "virtual_stiffness",
-                    "number",
-                    "force/length",
-                    0.0,
-                    INF,
-                    false,
-                    "solids: virtual springs",
-                ),
-                key(
-                    "anisotropy",
-                    "vec3",
-                    "",
-                    0.0,
-                    INF,
-                    false,
-                    "solids: stiffness scale per axis (> 0)",
-                ),
-                key(
-                    "mu",
-                    "number",
-                    "mass/area",
-                    0.0,
-                    INF,
-                    false,
-                    "D-NURBS: mass density",
-                ),
-                key(
-                    "gamma",
-                    "number",
-                    "1/s",
-                    0.0,
-                    INF,
-                    false,
-                    "D-NURBS: damping density",
-                ),
-                key(
-                    "alpha",
-                    "number",
-                    "force",
-                    0.0,
-                    INF,
-                    false,
-                    "D-NURBS: tension",
-                ),
-                key(
-                    "beta",
-                    "number",
-                    "force*length^2",
-                    0.0,
-                    INF,
-                    false,
-                    "D-NURBS: rigidity",
-                ),
-            ],
-            "changes the material (solids: per control cell)",
-        ),
-        "extrude" => (
-            Face,
-            vec![
-                key("face", "integer", "", 0.0, INF, false, "face id"),
-                NEAR,
-                key(
-                    "factor",
-                    "number",
-                    "",
-                    0.0,
-                    INF,
-                    false,
-                    "length relative to the face size (default 1)",
-                ),
-            ],
-            "extrudes a boundary face into a new cell",
-        ),
-        "delete-cell" => (
-            Cell,
-            vec![key("cell", "integer", "", 0.0, INF, false, "cell id"), NEAR],
-            "deletes a control cell (trimming)",
-        ),
-        "plastic-reset" => (Whole, vec![], "the current shape becomes the rest shape"),
-        "stop" => (Whole, vec![], "zeroes all velocities"),
-        "move-point" => (
-            ControlPoints,
-            vec![
-                key("index", "integer", "", 0.0, INF, true, "control point"),
-                key("to", "vec3", "length", -INF, INF, true, "new position"),
-            ],
-            "moves a control point directly",
-        ),
-        "set-weight" => (
-            ControlPoints,
-            vec![
-                key("index", "integer", "", 0.0, INF, true, "control point"),
-                key("weight", "number", "", 0.0, INF, true, "new weight (> 0)"),
-            ],
-            "sets a control point's weight",
-        ),
-        "ffd-move" => (
-            EmbeddedPoints,
-            vec![key(
-                "moves",
-                "list",
-                "length",
-                -INF,
-                INF,
-                true,
-                "[{from, to}, ...] (at most 1,000)",
-            )],
-            "moves embedded points exactly to targets (direct FFD)",
-        ),
-        "pde-set" => (
-            Whole,
-            vec![
-                key(
-                    "name",
-                    "name",
-                    "",
-                    0.0,
-                    0.0,
-                    true,
-                    "a boundary constant, or `t`",
-                ),
-                key("value", "number", "", -INF, INF, true, "its value"),
-            ],
-            "sets a boundary-function constant or the time",
-        ),
-        "pde-local" => (
-            PatchRegion,
-            vec![
-                key(
-                    "name",
-                    "name",
-                    "",
-                    0.0,
-                    0.0,
-                    true,
-                    "name of the deformation",
-                ),
-                key(
-                    "patch",
-                    "integer",
-                    "",
-                    0.0,
-                    INF,
-                    false,
-                    "patch index (default 0)",
-                ),
-                key(
-                    "u",
-                    "interval",
-                    "param",
-                    0.0,
-                    1.0,
-                    true,
-                    "[u1, u2] inside [0, 1]",
-                ),
-                key("v", "interval", "param", -INF, INF, true, "[v1, v2]"),
-                key(
-                    "continuity",
-                    "text",
-                    "",
-                    0.0,
-                    0.0,
-                    false,
-                    "\"G0\" or \"G1\" (default)",
-                ),
-                key("p", "vec3", "length", -INF, INF, true, "amplitude"),
-            ],
-            "a local deformation of a PDE patch",
-        ),
-        "set" => (
-            Whole,
-            vec![
-                key(
-                    "name",
-                    "name",
-                    "",
-                    0.0,
-                    0.0,
-                    true,
-                    "a parameter the model lists",
-                ),
-                key(
-                    "value",
-                    "number",
-                    "",
-                    -INF,
-                    INF,
-                    true,
-                    "its value (within the parameter's range)",
-                ),
-            ],
-            "sets a model or simulation parameter",
-        ),
-        "integrator" => (
-            Whole,
-            vec![
-                key(
-                    "integrator",
-                    "text",
-                    "",
-                    0.0,
-                    0.0,
-                    false,
-                    "solids: symplectic, explicit or implicit",
-                ),
-                key("dt", "number", "s", 0.0, INF, false, "time step (> 0)"),
-            ],
-            "switches integrator or time step",
-        ),
-        "constraint" => (
-            ModelPoint,
-            vec![
-                key(
-                    "type",
-                    "text",
-                    "",
-                    0.0,
-                    0.0,
-                    true,
-                    "\"point\" or \"normal\"",
-                ),
-                key(
-                    "param",
-                    "param",
-                    "",
-                    -INF,
-                    INF,
-                    true,
-                    "material point [u, v]",
-                ),
-                key(
-                    "target",
-                    "vec3",
-                    "length",
-                    -INF,
-                    INF,
-                    false,
-                    "point constraint: the position",
-                ),
-                key(
-                    "normal",
-                    "vec3",
-                    "",
-                    -INF,
-                    INF,
-                    false,
-                    "normal constraint: the direction",
-                ),
-                NAME,
-            ],
-            "a geometric constraint (point or normal)",
-        ),
+    #[rustfmt::skip]
+    let (acts_on, keys, help): (Target, &[KeySpec], &'static str) = match action {
+        "rope" => (ModelPoint, ROPE_KEYS, "a spring that only pulls a model point towards a cursor"),
+        "move-rope" => (Named, MOVE_ROPE_KEYS, "moves a rope's cursor (a drag)"),
+        "force" => (ModelPoint, FORCE_KEYS, "a constant force on one model point"),
+        "region-force" => (Region, REGION_FORCE_KEYS, "a total force shared by the data points within a radius"),
+        "gravity" => (Whole, GRAVITY_KEYS, "gravity; an existing name changes its strength"),
+        "inflate" => (Whole, INFLATE_KEYS, "pressure on the boundary surface"),
+        "repel" => (Whole, REPEL_KEYS, "repulsion from a point in space"),
+        "data" => (Whole, DATA_KEYS, "data points, each pulling the nearest model point (fitting)"),
+        "release" => (Named, RELEASE_KEYS, "removes a tool, constraint or local deformation"),
+        "fix" => (ControlPoints, SELECTION, "fixes control points"),
+        "free" => (ControlPoints, SELECTION, "frees control points"),
+        "material" => (Whole, MATERIAL_KEYS, "changes the material (solids: per control cell)"),
+        "extrude" => (Face, EXTRUDE_KEYS, "extrudes a boundary face into a new cell"),
+        "delete-cell" => (Cell, DELETE_CELL_KEYS, "deletes a control cell (trimming)"),
+        "plastic-reset" => (Whole, PLASTIC_RESET_KEYS, "the current shape becomes the rest shape"),
+        "stop" => (Whole, STOP_KEYS, "zeroes all velocities"),
+        "move-point" => (ControlPoints, MOVE_POINT_KEYS, "moves a control point directly"),
+        "set-weight" => (ControlPoints, SET_WEIGHT_KEYS, "sets a control point's weight"),
+        "ffd-move" => (EmbeddedPoints, FFD_MOVE_KEYS, "moves embedded points exactly to targets (direct FFD)"),
+        "pde-set" => (Whole, PDE_SET_KEYS, "sets a boundary-function constant or the time"),
+        "pde-local" => (PatchRegion, PDE_LOCAL_KEYS, "a local deformation of a PDE patch"),
+        "set" => (Whole, SET_KEYS, "sets a model or simulation parameter"),
+        "integrator" => (Whole, INTEGRATOR_KEYS, "switches integrator or time step"),
+        "constraint" => (ModelPoint, CONSTRAINT_KEYS, "a geometric constraint (point or normal)"),
         _ => return None,
     };
     Some(ToolSpec {
-        action: ACTIONS
-            .iter()
-            .copied()
-            .find(|a| *a == action)
-            .expect("every described action is listed"),
+        action: ACTIONS.iter().copied().find(|a| *a == action)?,
         acts_on,
-        keys,
+        keys: keys.to_vec(),
         help,
     })
 }
 
-const SOLID: &[&str] = &[
-    "rope",
-    "move-rope",
-    "force",
-    "region-force",
-    "gravity",
-    "inflate",
-    "release",
-    "fix",
-    "free",
-    "material",
-    "plastic-reset",
-    "stop",
-    "move-point",
-    "set",
-    "integrator",
-];
+/// What a subdivision solid takes; a B-spline solid takes the same but for the topology edits.
 const SUBDIVISION: &[&str] = &[
     "rope",
     "move-rope",
@@ -770,6 +388,7 @@ const SUBDIVISION: &[&str] = &[
     "set",
     "integrator",
 ];
+/// What a D-NURBS surface takes; a curve takes the same but for inflation (it has no inside).
 const DNURBS_SURFACE: &[&str] = &[
     "rope",
     "move-rope",
@@ -790,46 +409,38 @@ const DNURBS_SURFACE: &[&str] = &[
     "integrator",
     "constraint",
 ];
-const DNURBS_CURVE: &[&str] = &[
-    "rope",
-    "move-rope",
-    "force",
-    "gravity",
-    "repel",
-    "data",
-    "release",
-    "fix",
-    "free",
-    "material",
-    "plastic-reset",
-    "stop",
-    "move-point",
-    "set-weight",
-    "set",
-    "integrator",
-    "constraint",
-];
 
-/// The actions a model of `kind` takes. A model may still refuse one with a reason (the
-/// frozen-weight D-NURBS engine holds its weights and has no constraints).
-pub fn actions(kind: ModelKind) -> &'static [&'static str] {
+/// The actions a model of `kind` takes, in the order of [`ACTIONS`]. A model may still refuse
+/// one with a reason (the frozen-weight D-NURBS engine holds its weights and has no
+/// constraints).
+pub fn actions(kind: ModelKind) -> Vec<&'static str> {
+    let but = |list: &[&'static str], not: &[&str]| -> Vec<&'static str> {
+        list.iter().copied().filter(|a| !not.contains(a)).collect()
+    };
     match kind {
-        ModelKind::SubdivisionSolid => SUBDIVISION,
-        ModelKind::BsplineSolid => SOLID,
-        ModelKind::DnurbsSurface | ModelKind::DnurbsSwung => DNURBS_SURFACE,
-        ModelKind::DnurbsCurve => DNURBS_CURVE,
-        ModelKind::Ffd => &["ffd-move", "move-point", "set-weight", "set"],
-        ModelKind::PdeSurface => &["pde-set", "pde-local", "release", "set"],
-        ModelKind::DnurbsTriangular => &["set"],
-        ModelKind::DnurbsPatches => &[
-            "rope",
-            "move-rope",
-            "force",
-            "release",
-            "fix",
-            "free",
-            "set",
-        ],
+        ModelKind::SubdivisionSolid => SUBDIVISION.to_vec(),
+        ModelKind::BsplineSolid => but(SUBDIVISION, &["extrude", "delete-cell"]),
+        ModelKind::DnurbsSurface | ModelKind::DnurbsSwung => DNURBS_SURFACE.to_vec(),
+        ModelKind::DnurbsCurve => but(DNURBS_SURFACE, &["inflate"]),
+        ModelKind::Ffd => vec!["ffd-move", "move-point", "set-weight", "set"],
+        ModelKind::PdeSurface => vec!["pde-set", "pde-local", "release", "set"],
+        ModelKind::DnurbsTriangular => vec!["set"],
+        ModelKind::DnurbsPatches => but(
+            DNURBS_SURFACE,
+            &[
+                "gravity",
+                "inflate",
+                "repel",
+                "data",
+                "material",
+                "plastic-reset",
+                "stop",
+                "move-point",
+                "set-weight",
+                "integrator",
+                "constraint",
+            ],
+        ),
     }
 }
 
@@ -869,8 +480,8 @@ fn keys_not_taken(kind: ModelKind, action: &str) -> &'static [&'static str] {
 pub fn tools_for(kind: ModelKind) -> Vec<ToolSpec> {
     let solid = matches!(kind, ModelKind::SubdivisionSolid | ModelKind::BsplineSolid);
     actions(kind)
-        .iter()
-        .filter_map(|a| tool(a))
+        .into_iter()
+        .filter_map(tool)
         .map(|mut t| {
             let skip = keys_not_taken(kind, t.action);
             t.keys.retain(|k| !skip.contains(&k.name));

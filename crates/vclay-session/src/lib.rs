@@ -30,7 +30,7 @@ pub mod scenario;
 pub mod session;
 pub mod tools;
 
-pub use command::{Command, Edit, PointMove};
+pub use command::{Command, Edit, PointMove, Selection};
 pub use describe::{KeySpec, Target, ToolSpec};
 pub use error::SessionError;
 pub use model::{

@@ -162,6 +162,32 @@ impl LineSet {
         self.points.push(b);
         self.segments.push([i, i + 1]);
     }
+    /// The edges of a structured `dims[0] x dims[1] x dims[2]` grid of points (point `(i, j,
+    /// k)` at index `(i dims[1] + j) dims[2] + k`): control lattices of B-spline solids and FFD.
+    pub fn grid(role: LineRole, points: Vec<Vec3>, dims: [usize; 3]) -> Self {
+        let idx = |i: usize, j: usize, k: usize| ((i * dims[1] + j) * dims[2] + k) as u32;
+        let mut segments = Vec::new();
+        for i in 0..dims[0] {
+            for j in 0..dims[1] {
+                for k in 0..dims[2] {
+                    if i + 1 < dims[0] {
+                        segments.push([idx(i, j, k), idx(i + 1, j, k)]);
+                    }
+                    if j + 1 < dims[1] {
+                        segments.push([idx(i, j, k), idx(i, j + 1, k)]);
+                    }
+                    if k + 1 < dims[2] {
+                        segments.push([idx(i, j, k), idx(i, j, k + 1)]);
+                    }
+                }
+            }
+        }
+        Self {
+            role: Some(role),
+            points,
+            segments,
+        }
+    }
     /// Adds a polyline through `pts`.
     pub fn polyline(&mut self, pts: &[Vec3]) {
         let i = self.points.len() as u32;
@@ -329,6 +355,30 @@ pub(crate) fn restore_state<M: Stateful>(
 ) -> Result<(), SessionError> {
     model.put_state(&snapshot.take::<M::State>()?)
 }
+
+/// The [`Model`] methods every [`Stateful`] kind implements the same way: `undo` by the inverse
+/// edit and the state ([`undo_by_state`]), `snapshot`, `restore`, and `clone_model` (the kind
+/// is `Clone`). Used inside `impl Model for Kind`.
+macro_rules! stateful_methods {
+    () => {
+        fn undo(&mut self, undo: $crate::model::Undo) -> Result<(), $crate::SessionError> {
+            $crate::model::undo_by_state(self, undo)
+        }
+        fn snapshot(&self) -> $crate::model::Snapshot {
+            $crate::model::snapshot_of(self)
+        }
+        fn restore(
+            &mut self,
+            snapshot: &$crate::model::Snapshot,
+        ) -> Result<(), $crate::SessionError> {
+            $crate::model::restore_state(self, snapshot)
+        }
+        fn clone_model(&self) -> Box<dyn $crate::model::Model> {
+            Box::new(self.clone())
+        }
+    };
+}
+pub(crate) use stateful_methods;
 
 /// How to undo an applied edit.
 #[derive(Debug)]

@@ -179,28 +179,27 @@ pub(crate) trait ControlNet {
 /// (a brush). The one rule for every kind.
 pub(crate) fn select_points<N: ControlNet + ?Sized>(
     net: &N,
-    points: &Option<Vec<usize>>,
-    (min, max): (&Option<V3>, &Option<V3>),
-    near: &Option<V3>,
-    radius: Option<f64>,
+    sel: &crate::command::Selection,
 ) -> Result<Vec<usize>, String> {
     let current = net.current_points();
     let n = current.len();
-    if let Some(p) = points {
+    if let Some(p) = &sel.points {
         if let Some(&i) = p.iter().find(|&&i| i >= n) {
             return Err(format!("control point {i} does not exist (there are {n})"));
         }
         return Ok(p.clone());
     }
-    if let (Some(lo), Some(hi)) = (min, max) {
+    if let (Some(lo), Some(hi)) = (sel.min, sel.max) {
         let rest = net.rest_points();
         return Ok((0..n)
             .filter(|&i| (0..3).all(|a| rest[i][a] >= lo[a] && rest[i][a] <= hi[a]))
             .collect());
     }
-    let Some(x) = near else { return Ok(Vec::new()) };
-    let x = v3(*x);
-    Ok(match radius {
+    let Some(x) = sel.near else {
+        return Ok(Vec::new());
+    };
+    let x = v3(x);
+    Ok(match sel.radius {
         Some(r) => (0..n).filter(|&i| (current[i] - x).norm() <= r).collect(),
         None => (0..n)
             .min_by(|&a, &b| (current[a] - x).norm().total_cmp(&(current[b] - x).norm()))
@@ -224,48 +223,19 @@ pub(crate) fn fix_or_free<N: ControlNet + ?Sized>(
     edit: &crate::Edit,
 ) -> Result<FixResult, crate::SessionError> {
     use crate::Edit;
-    let (fix, points, min, max, near, radius) = match edit {
-        Edit::Fix {
-            points,
-            min,
-            max,
-            near,
-            radius,
-        } => (true, points, min, max, near, radius),
-        Edit::Free {
-            points,
-            min,
-            max,
-            near,
-            radius,
-        } => (false, points, min, max, near, radius),
+    let (fix, sel) = match edit {
+        Edit::Fix(sel) => (true, sel),
+        Edit::Free(sel) => (false, sel),
         _ => return Err(crate::SessionError::model("not a fix or free edit")),
     };
-    let selected = select_points(net, points, (min, max), near, *radius)
-        .map_err(|e| crate::SessionError::command("", "", e))?;
+    let selected = select_points(net, sel).map_err(|e| crate::SessionError::command("", "", e))?;
     let changed: Vec<usize> = selected
         .iter()
         .copied()
         .filter(|&i| net.is_fixed(i) != fix)
         .collect();
     net.set_fixed(&selected, fix)?;
-    let ids = Some(changed);
-    let inverse = if fix {
-        Edit::Free {
-            points: ids,
-            min: None,
-            max: None,
-            near: None,
-            radius: None,
-        }
-    } else {
-        Edit::Fix {
-            points: ids,
-            min: None,
-            max: None,
-            near: None,
-            radius: None,
-        }
-    };
+    let ids = crate::command::Selection::ids(changed);
+    let inverse = if fix { Edit::Free(ids) } else { Edit::Fix(ids) };
     Ok(FixResult { selected, inverse })
 }

@@ -153,27 +153,27 @@ fn common_edits(surface: bool, frozen: bool) -> Vec<Edit> {
             points: vec![[0.1, 0.1, 0.3], [-0.2, 0.0, 0.2]],
             stiffness: Some(20.0),
         },
-        Edit::Fix {
+        Edit::Fix(vclay_session::Selection {
             points: Some(vec![1, 2]),
             min: None,
             max: None,
             near: None,
             radius: None,
-        },
-        Edit::Fix {
+        }),
+        Edit::Fix(vclay_session::Selection {
             points: None,
             min: Some([-5.0, -5.0, -5.0]),
             max: Some([0.0, 5.0, 5.0]),
             near: None,
             radius: None,
-        },
-        Edit::Free {
+        }),
+        Edit::Free(vclay_session::Selection {
             points: None,
             min: None,
             max: None,
             near: Some([-1.0, 0.0, 0.0]),
             radius: None,
-        },
+        }),
         Edit::Material {
             cells: None,
             min: None,
@@ -361,13 +361,13 @@ fn swung_commands() {
             pressure: 0.5,
             until: None,
         },
-        Edit::Fix {
+        Edit::Fix(vclay_session::Selection {
             points: Some(vec![0]),
             min: None,
             max: None,
             near: None,
             radius: None,
-        },
+        }),
         Edit::Stop,
         Edit::PlasticReset,
         Edit::SetWeight {

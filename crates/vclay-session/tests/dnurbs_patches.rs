@@ -191,13 +191,13 @@ fn tool_edits_undo_exactly() {
         .is_err()
     );
     assert!(
-        m.apply(&Edit::Fix {
+        m.apply(&Edit::Fix(vclay_session::Selection {
             points: Some(vec![40]),
             min: None,
             max: None,
             near: None,
             radius: None,
-        })
+        }))
         .is_err()
     );
     m.undo(applied.undo).unwrap();

@@ -213,13 +213,13 @@ fn edits_that_cannot_apply_leave_the_model_unchanged() {
     let mut s = session();
     let before = (saved(&s), positions(&s));
     let bad = [
-        Edit::Fix {
+        Edit::Fix(vclay_session::Selection {
             points: Some(vec![0]),
             min: None,
             max: None,
             near: None,
             radius: None,
-        },
+        }),
         Edit::Rope {
             name: None,
             from: [0.0; 3],

@@ -25,13 +25,13 @@ fn fix(
     min: Option<[f64; 3]>,
     max: Option<[f64; 3]>,
 ) -> Edit {
-    Edit::Fix {
+    Edit::Fix(vclay_session::Selection {
         points: None,
         min,
         max,
         near,
         radius,
-    }
+    })
 }
 
 fn count(message: &str) -> usize {

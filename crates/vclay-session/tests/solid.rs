@@ -152,27 +152,27 @@ fn every_edit(subdivision: bool) -> Vec<Edit> {
         Edit::Release {
             name: "warm".into(),
         },
-        Edit::Fix {
+        Edit::Fix(vclay_session::Selection {
             points: None,
             min: Some([-0.1, -0.1, -0.1]),
             max: Some([1.1, 1.1, 0.1]),
             near: None,
             radius: None,
-        },
-        Edit::Free {
+        }),
+        Edit::Free(vclay_session::Selection {
             points: Some(vec![0, 1]),
             min: None,
             max: None,
             near: None,
             radius: None,
-        },
-        Edit::Fix {
+        }),
+        Edit::Fix(vclay_session::Selection {
             points: None,
             min: None,
             max: None,
             near: Some([1.0, 0.0, 0.0]),
             radius: None,
-        },
+        }),
         Edit::Material {
             cells: None,
             min: Some([0.0, 0.0, 0.0]),
@@ -252,13 +252,13 @@ fn commands_that_cannot_apply_name_the_reason_and_change_nothing() {
         ),
         (
             cube,
-            Edit::Fix {
+            Edit::Fix(vclay_session::Selection {
                 points: Some(vec![999]),
                 min: None,
                 max: None,
                 near: None,
                 radius: None,
-            },
+            }),
         ),
         (
             cube,

@@ -41,7 +41,8 @@ use std::time::{Duration, Instant};
 
 use vclay_core::{TriMesh, Vec3};
 use vclay_session::{
-    Command, Edit, Element, Energy, Hit, LineSet, Param, PointMove, Ray, Session, ToolSpec,
+    Command, Edit, Element, Energy, Hit, LineSet, Param, PointMove, Ray, Selection, Session,
+    ToolSpec,
 };
 
 /// Least time between two applied cursor moves of one drag.
@@ -717,30 +718,15 @@ impl State {
         }
     }
 
-    /// The edit of a brush stroke at `at`: `template` with its box around `at`.
+    /// The edit of a brush stroke at `at`: `template` acting on the points within `radius` of
+    /// `at` (fix/free: at their current positions; material: the cells in the box around it).
     fn brush_edit(template: &Edit, at: Vec3, radius: f64) -> Edit {
         let min = Some([at.x - radius, at.y - radius, at.z - radius]);
         let max = Some([at.x + radius, at.y + radius, at.z + radius]);
         let mut e = template.clone();
         match &mut e {
             // The points under the brush where they are now (not where they rested).
-            Edit::Fix {
-                points,
-                min: a,
-                max: b,
-                near,
-                radius: r,
-            }
-            | Edit::Free {
-                points,
-                min: a,
-                max: b,
-                near,
-                radius: r,
-            } => {
-                (*points, *a, *b) = (None, None, None);
-                (*near, *r) = (Some([at.x, at.y, at.z]), Some(radius));
-            }
+            Edit::Fix(sel) | Edit::Free(sel) => *sel = Selection::brush([at.x, at.y, at.z], radius),
             Edit::Material {
                 cells,
                 min: a,
@@ -886,76 +872,20 @@ impl State {
                 };
                 self.apply(one(edit));
             }
-            Grab::Fix { brush } | Grab::Free { brush } if brush > 0.0 => {
+            Grab::Fix { brush } | Grab::Free { brush } => {
                 let fix = matches!(grab, Grab::Fix { .. });
-                let template = if fix {
-                    Edit::Fix {
-                        points: None,
-                        min: None,
-                        max: None,
-                        near: None,
-                        radius: None,
-                    }
+                let of = |sel: Selection| if fix { Edit::Fix(sel) } else { Edit::Free(sel) };
+                if brush > 0.0 {
+                    let template = of(Selection::default());
+                    self.apply(one(Self::brush_edit(&template, hit.point, brush)));
+                    active = Some(Active::Brush {
+                        edit: Box::new(template),
+                        radius: brush,
+                    });
+                } else if let Element::ControlPoint { index } = hit.element {
+                    self.apply(one(of(Selection::ids(vec![index]))));
                 } else {
-                    Edit::Free {
-                        points: None,
-                        min: None,
-                        max: None,
-                        near: None,
-                        radius: None,
-                    }
-                };
-                self.apply(one(Self::brush_edit(&template, hit.point, brush)));
-                active = Some(Active::Brush {
-                    edit: Box::new(template),
-                    radius: brush,
-                });
-            }
-            Grab::Fix { .. } | Grab::Free { .. } => {
-                let fix = matches!(grab, Grab::Fix { .. });
-                let near = match hit.element {
-                    Element::ControlPoint { index } => {
-                        let edit = if fix {
-                            Edit::Fix {
-                                points: Some(vec![index]),
-                                min: None,
-                                max: None,
-                                near: None,
-                                radius: None,
-                            }
-                        } else {
-                            Edit::Free {
-                                points: Some(vec![index]),
-                                min: None,
-                                max: None,
-                                near: None,
-                                radius: None,
-                            }
-                        };
-                        self.apply(one(edit));
-                        None
-                    }
-                    _ => Some(p),
-                };
-                if let Some(near) = near {
-                    let edit = if fix {
-                        Edit::Fix {
-                            points: None,
-                            min: None,
-                            max: None,
-                            near: Some(near),
-                            radius: None,
-                        }
-                    } else {
-                        Edit::Free {
-                            points: None,
-                            min: None,
-                            max: None,
-                            near: Some(near),
-                            radius: None,
-                        }
-                    };
-                    self.apply(one(edit));
+                    self.apply(one(of(Selection::nearest(p))));
                 }
             }
             Grab::Extrude => {

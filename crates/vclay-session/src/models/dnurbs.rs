@@ -45,12 +45,12 @@ use vclay_dynamics::{DnurbsCurve, DnurbsSurface};
 use vclay_io::model::Entity;
 use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
 
-use super::SpecError;
+use super::{SpecError, misrouted};
 use crate::command::{Edit, V3};
 use crate::error::SessionError;
 use crate::model::{
     Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, restore_state, snapshot_of, undo_by_state, unsupported_export,
+    StepReport, Undo, extension, unsupported_export,
 };
 use crate::tools::{CursorPath, ScheduledTool, ToolTable, a3, v3};
 
@@ -1195,7 +1195,39 @@ impl DnurbsModel {
 
     fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
         let before = self.snap();
-        let surface = !self.engine.is_curve();
+        match edit {
+            Edit::Rope { .. } | Edit::MoveRope { .. } | Edit::Force { .. } => {
+                self.apply_rope_edit(edit, before)
+            }
+            Edit::Gravity { .. }
+            | Edit::Inflate { .. }
+            | Edit::Repel { .. }
+            | Edit::Data { .. }
+            | Edit::Release { .. } => self.apply_field_edit(edit, before),
+            Edit::Fix { .. } | Edit::Free { .. } | Edit::Material { .. } => {
+                self.apply_net_edit(edit, before)
+            }
+            Edit::PlasticReset
+            | Edit::Stop
+            | Edit::MovePoint { .. }
+            | Edit::SetWeight { .. }
+            | Edit::Set { .. }
+            | Edit::Integrator { .. } => self.apply_state_edit(edit, before),
+            _ => self.apply_constraint_edit(edit, before),
+        }
+    }
+
+    /// The end of an edit whose undo is the state before it: a new revision, the message.
+    fn edited(&mut self, message: String, before: Snap) -> Result<Applied, SessionError> {
+        self.revision += 1;
+        Ok(Applied {
+            message,
+            undo: Undo::State(Snapshot::new(before)),
+        })
+    }
+
+    /// [`Self::apply_edit`] for `Rope`, `MoveRope`, `Force`.
+    fn apply_rope_edit(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
         let message = match edit {
             Edit::Rope {
                 name,
@@ -1270,6 +1302,15 @@ impl DnurbsModel {
                 let label = self.add_tool(name, "force", "force", vec![f], None, *until)?;
                 format!("force `{label}` at material point {prm:?}")
             }
+            _ => return Err(misrouted()),
+        };
+        self.edited(message, before)
+    }
+
+    /// [`Self::apply_edit`] for `Gravity`, `Inflate`, `Repel`, `Data`, `Release`.
+    fn apply_field_edit(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
+        let surface = !self.engine.is_curve();
+        let message = match edit {
             Edit::Gravity { name, g, until } => {
                 self.field_tool(name, "gravity", ForceDesc::Gravity { g: *g }, *until)?
             }
@@ -1343,6 +1384,14 @@ impl DnurbsModel {
                 }
                 format!("released `{name}`")
             }
+            _ => return Err(misrouted()),
+        };
+        self.edited(message, before)
+    }
+
+    /// [`Self::apply_edit`] for `Fix`, `Material`.
+    fn apply_net_edit(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
+        let message = match edit {
             Edit::Fix { .. } | Edit::Free { .. } => {
                 let fix = matches!(edit, Edit::Fix { .. });
                 let r = match crate::tools::fix_or_free(&mut NetOf(self), edit) {
@@ -1400,6 +1449,14 @@ impl DnurbsModel {
                 self.set_material_values(*mu, *gamma, *alpha, *beta)?;
                 "material changed".to_string()
             }
+            _ => return Err(misrouted()),
+        };
+        self.edited(message, before)
+    }
+
+    /// [`Self::apply_edit`] for `PlasticReset`, `Stop`, `MovePoint`, `SetWeight`, `Set`, `Integrator`.
+    fn apply_state_edit(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
+        let message = match edit {
             Edit::PlasticReset => {
                 let e = self.engine.elastic_energy();
                 self.engine
@@ -1447,6 +1504,18 @@ impl DnurbsModel {
                 }
                 format!("integrator implicit (eq 18), dt {}", self.dt)
             }
+            _ => return Err(misrouted()),
+        };
+        self.edited(message, before)
+    }
+
+    /// [`Self::apply_edit`] for `Constraint`, `RegionForce`, `Extrude`, `DeleteCell`, `FfdMove`, `PdeSet`, `PdeLocal`.
+    fn apply_constraint_edit(
+        &mut self,
+        edit: &Edit,
+        before: Snap,
+    ) -> Result<Applied, SessionError> {
+        let message = match edit {
             Edit::Constraint {
                 name,
                 kind,
@@ -1516,12 +1585,9 @@ impl DnurbsModel {
             | Edit::FfdMove { .. }
             | Edit::PdeSet { .. }
             | Edit::PdeLocal { .. } => return Err(self.unsupported(edit)),
+            _ => return Err(misrouted()),
         };
-        self.revision += 1;
-        Ok(Applied {
-            message,
-            undo: Undo::State(Snapshot::new(before)),
-        })
+        self.edited(message, before)
     }
 
     fn set_param(&mut self, name: &str, value: f64) -> Result<String, SessionError> {
@@ -1639,60 +1705,7 @@ impl DnurbsModel {
             }
         };
         // Material.
-        let mk = &spec.material;
-        let preset = match &mk.preset {
-            Some(p) => Some(Preset::by_name(p).ok_or_else(|| {
-                err(
-                    "material",
-                    "preset",
-                    format!("no Table 1 preset named \"{p}\""),
-                )
-            })?),
-            None => None,
-        };
-        let [mu0, g0, a0, b0] = DEFAULT_MATERIAL;
-        let mut mat = match (preset, surface) {
-            (Some(p), true) => p.surface_material(),
-            (Some(p), false) => p.curve_material(),
-            (None, true) => Material::surface(mu0, g0, a0, b0),
-            (None, false) => Material::curve(mu0, g0, a0, b0),
-        };
-        for (key, v) in [
-            ("mu", mk.mu),
-            ("gamma", mk.gamma),
-            ("alpha", mk.alpha),
-            ("beta", mk.beta),
-        ] {
-            if let Some(v) = v {
-                if !(v.is_finite() && v >= 0.0) {
-                    return Err(err(
-                        "material",
-                        key,
-                        format!("{v} must be finite and non-negative"),
-                    ));
-                }
-                let d = Density::Constant(v);
-                match key {
-                    "mu" => mat.mu = d,
-                    "gamma" => mat.gamma = d,
-                    "alpha" => mat.alpha.iter_mut().for_each(|a| *a = d.clone()),
-                    _ => mat.beta.iter_mut().for_each(|b| *b = d.clone()),
-                }
-            }
-        }
-        let mut consts = Mat::from_material(&mat).expect("constant densities");
-        let per_span = match mk.per.as_deref() {
-            None => !surface,
-            Some("knot-span") => true,
-            Some("parameter") => false,
-            Some(o) => {
-                return Err(err(
-                    "material",
-                    "per",
-                    format!("\"{o}\": expected \"knot-span\" or \"parameter\""),
-                ));
-            }
-        };
+        let (mat, mut consts, per_span, preset) = material_of(surface, &spec.material)?;
         // Simulation.
         let sim = &spec.simulation;
         let dt = sim.dt.or(preset.map(|p| p.dt)).ok_or_else(|| {
@@ -1716,29 +1729,7 @@ impl DnurbsModel {
                 ));
             }
         };
-        let quadrature = match (sim.quadrature.as_deref(), sim.quadrature_tolerance) {
-            (Some("fixed"), Some(_)) => {
-                return Err(err(
-                    "simulation",
-                    "quadrature_tolerance",
-                    "only the \"weight-aware\" rule takes a tolerance".into(),
-                ));
-            }
-            (Some("fixed"), None) => Quad::Fixed,
-            (None | Some("weight-aware"), t) => Quad::WeightAware {
-                tolerance: t.unwrap_or(vclay_dynamics::dnurbs::DEFAULT_QUADRATURE_TOLERANCE),
-            },
-            (Some(o), _) => {
-                return Err(err(
-                    "simulation",
-                    "quadrature",
-                    format!("\"{o}\": expected \"weight-aware\" or \"fixed\""),
-                ));
-            }
-        };
-        if let Err(e) = quadrature.rule().validate() {
-            return Err(err("simulation", "quadrature_tolerance", e.to_string()));
-        }
+        let quadrature = quadrature_of(sim)?;
         if frozen && sim.quadrature.is_some() {
             return Err(err(
                 "simulation",
@@ -1912,6 +1903,98 @@ fn reference(absolute: bool) -> ElasticReference {
     }
 }
 
+/// The material of a D-NURBS from its `[material]` keys: the material, its constants, whether
+/// densities are per knot span, and the Table 1 preset named.
+fn material_of(
+    surface: bool,
+    mk: &MaterialKeys,
+) -> Result<(Material, Mat, bool, Option<&'static Preset>), SpecError> {
+    let err = |table: &str, key: &str, what: String| SpecError::new(table, key, what);
+    let preset = match &mk.preset {
+        Some(p) => Some(Preset::by_name(p).ok_or_else(|| {
+            err(
+                "material",
+                "preset",
+                format!("no Table 1 preset named \"{p}\""),
+            )
+        })?),
+        None => None,
+    };
+    let [mu0, g0, a0, b0] = DEFAULT_MATERIAL;
+    let mut mat = match (preset, surface) {
+        (Some(p), true) => p.surface_material(),
+        (Some(p), false) => p.curve_material(),
+        (None, true) => Material::surface(mu0, g0, a0, b0),
+        (None, false) => Material::curve(mu0, g0, a0, b0),
+    };
+    for (key, v) in [
+        ("mu", mk.mu),
+        ("gamma", mk.gamma),
+        ("alpha", mk.alpha),
+        ("beta", mk.beta),
+    ] {
+        if let Some(v) = v {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(err(
+                    "material",
+                    key,
+                    format!("{v} must be finite and non-negative"),
+                ));
+            }
+            let d = Density::Constant(v);
+            match key {
+                "mu" => mat.mu = d,
+                "gamma" => mat.gamma = d,
+                "alpha" => mat.alpha.iter_mut().for_each(|a| *a = d.clone()),
+                _ => mat.beta.iter_mut().for_each(|b| *b = d.clone()),
+            }
+        }
+    }
+    let consts = Mat::from_material(&mat).expect("constant densities");
+    let per_span = match mk.per.as_deref() {
+        None => !surface,
+        Some("knot-span") => true,
+        Some("parameter") => false,
+        Some(o) => {
+            return Err(err(
+                "material",
+                "per",
+                format!("\"{o}\": expected \"knot-span\" or \"parameter\""),
+            ));
+        }
+    };
+    Ok((mat, consts, per_span, preset))
+}
+
+/// The quadrature rule of a D-NURBS from its `[simulation]` keys.
+fn quadrature_of(sim: &SimKeys) -> Result<Quad, SpecError> {
+    let err = |table: &str, key: &str, what: String| SpecError::new(table, key, what);
+    let quadrature = match (sim.quadrature.as_deref(), sim.quadrature_tolerance) {
+        (Some("fixed"), Some(_)) => {
+            return Err(err(
+                "simulation",
+                "quadrature_tolerance",
+                "only the \"weight-aware\" rule takes a tolerance".into(),
+            ));
+        }
+        (Some("fixed"), None) => Quad::Fixed,
+        (None | Some("weight-aware"), t) => Quad::WeightAware {
+            tolerance: t.unwrap_or(vclay_dynamics::dnurbs::DEFAULT_QUADRATURE_TOLERANCE),
+        },
+        (Some(o), _) => {
+            return Err(err(
+                "simulation",
+                "quadrature",
+                format!("\"{o}\": expected \"weight-aware\" or \"fixed\""),
+            ));
+        }
+    };
+    if let Err(e) = quadrature.rule().validate() {
+        return Err(err("simulation", "quadrature_tolerance", e.to_string()));
+    }
+    Ok(quadrature)
+}
+
 /// The old runner's setup: reference, weight penalty, frozen weights, fixed control points
 /// (x, y, z of the n-th control point's coordinate group).
 fn setup<G: GeneralizedGeometry>(
@@ -1957,6 +2040,42 @@ fn fix_frozen<G: DnurbsGeometry>(d: &mut Dnurbs<G>, fix: &[usize]) -> Result<(),
     Ok(())
 }
 
+/// The source of a swung D-NURBS: one of the primitives of `d-nurbs.txt` section 4.3.
+fn swung_source(m: &ModelKeys) -> Result<Source, SpecError> {
+    let err = |key: &str, what: String| SpecError::new("model", key, what);
+    let ext = m.extent.unwrap_or(1.0);
+    let g = match m.primitive.as_deref() {
+        Some("sphere") => SwungGeometry::sphere(ext),
+        Some("torus") => SwungGeometry::torus(2.0 * ext, 0.5 * ext),
+        Some("hat") => SwungGeometry::hat(),
+        Some("wine-glass") => SwungGeometry::wine_glass(),
+        Some("cube" | "cubical") => SwungGeometry::cube(ext),
+        Some(o) => {
+            return Err(err(
+                "primitive",
+                format!(
+                    "unknown swung primitive \"{o}\"; expected sphere, torus, hat, wine-glass or cube"
+                ),
+            ));
+        }
+        None => {
+            return Err(err(
+                "primitive",
+                "missing (sphere, torus, hat, wine-glass or cube)".into(),
+            ));
+        }
+    }
+    .map_err(|e| err("primitive", e.to_string()))?;
+    Ok(Source::Swung {
+        profile: CurveData::of(&g.profile().map_err(|e| err("primitive", e.to_string()))?),
+        trajectory: CurveData::of(
+            &g.trajectory()
+                .map_err(|e| err("primitive", e.to_string()))?,
+        ),
+        alpha: g.alpha(),
+    })
+}
+
 fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, SpecError> {
     let err = |key: &str, what: String| SpecError::new("model", key, what);
     let surface = kind != ModelKind::DnurbsCurve;
@@ -1974,37 +2093,7 @@ fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, S
         ));
     }
     if kind == ModelKind::DnurbsSwung {
-        let ext = m.extent.unwrap_or(1.0);
-        let g = match m.primitive.as_deref() {
-            Some("sphere") => SwungGeometry::sphere(ext),
-            Some("torus") => SwungGeometry::torus(2.0 * ext, 0.5 * ext),
-            Some("hat") => SwungGeometry::hat(),
-            Some("wine-glass") => SwungGeometry::wine_glass(),
-            Some("cube" | "cubical") => SwungGeometry::cube(ext),
-            Some(o) => {
-                return Err(err(
-                    "primitive",
-                    format!(
-                        "unknown swung primitive \"{o}\"; expected sphere, torus, hat, wine-glass or cube"
-                    ),
-                ));
-            }
-            None => {
-                return Err(err(
-                    "primitive",
-                    "missing (sphere, torus, hat, wine-glass or cube)".into(),
-                ));
-            }
-        }
-        .map_err(|e| err("primitive", e.to_string()))?;
-        return Ok(Source::Swung {
-            profile: CurveData::of(&g.profile().map_err(|e| err("primitive", e.to_string()))?),
-            trajectory: CurveData::of(
-                &g.trajectory()
-                    .map_err(|e| err("primitive", e.to_string()))?,
-            ),
-            alpha: g.alpha(),
-        });
+        return swung_source(m);
     }
     if let Some(s) = &m.surface {
         if m.file.is_some() || m.primitive.is_some() || m.size.is_some() || !surface {
@@ -2432,21 +2521,7 @@ impl Model for DnurbsModel {
         self.apply_edit(edit)
     }
 
-    fn undo(&mut self, undo: Undo) -> Result<(), SessionError> {
-        undo_by_state(self, undo)
-    }
-
-    fn snapshot(&self) -> Snapshot {
-        snapshot_of(self)
-    }
-
-    fn restore(&mut self, snapshot: &Snapshot) -> Result<(), SessionError> {
-        restore_state(self, snapshot)
-    }
-
-    fn clone_model(&self) -> Box<dyn Model> {
-        Box::new(self.clone())
-    }
+    crate::model::stateful_methods!();
 
     fn export(&self, path: &Path) -> Result<(), SessionError> {
         let ext = extension(path);

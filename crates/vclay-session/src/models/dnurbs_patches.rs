@@ -38,7 +38,7 @@ use crate::command::Edit;
 use crate::error::SessionError;
 use crate::model::{
     Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, restore_state, snapshot_of, undo_by_state, unsupported_export,
+    StepReport, Undo, extension, unsupported_export,
 };
 
 /// Default display samples per patch and direction.
@@ -694,18 +694,7 @@ impl Model for PatchesModel {
             undo: Undo::State(Snapshot::new(before)),
         })
     }
-    fn undo(&mut self, undo: Undo) -> Result<(), SessionError> {
-        undo_by_state(self, undo)
-    }
-    fn snapshot(&self) -> Snapshot {
-        snapshot_of(self)
-    }
-    fn restore(&mut self, snapshot: &Snapshot) -> Result<(), SessionError> {
-        restore_state(self, snapshot)
-    }
-    fn clone_model(&self) -> Box<dyn Model> {
-        Box::new(self.clone())
-    }
+    crate::model::stateful_methods!();
     fn control_points(&self) -> Vec<Vec3> {
         (0..self.patch_count())
             .filter_map(|k| self.patch(k).ok())

@@ -41,7 +41,7 @@ use crate::command::{Edit, PointMove, V3};
 use crate::error::SessionError;
 use crate::model::{
     Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, restore_state, snapshot_of, undo_by_state, unsupported_export,
+    StepReport, Undo, extension, unsupported_export,
 };
 use crate::tools::{a3, v3};
 
@@ -586,26 +586,11 @@ impl FfdModel {
     }
 
     fn lattice_edges(&self) -> LineSet {
-        let mut set = LineSet::new(LineRole::LatticeEdges);
-        let dims = self.lattice.dims();
-        set.points = self.lattice.control_points().to_vec();
-        let idx = |i: usize, j: usize, k: usize| ((i * dims[1] + j) * dims[2] + k) as u32;
-        for i in 0..dims[0] {
-            for j in 0..dims[1] {
-                for k in 0..dims[2] {
-                    if i + 1 < dims[0] {
-                        set.segments.push([idx(i, j, k), idx(i + 1, j, k)]);
-                    }
-                    if j + 1 < dims[1] {
-                        set.segments.push([idx(i, j, k), idx(i, j + 1, k)]);
-                    }
-                    if k + 1 < dims[2] {
-                        set.segments.push([idx(i, j, k), idx(i, j, k + 1)]);
-                    }
-                }
-            }
-        }
-        set
+        LineSet::grid(
+            LineRole::LatticeEdges,
+            self.lattice.control_points().to_vec(),
+            self.lattice.dims(),
+        )
     }
 }
 
@@ -753,21 +738,7 @@ impl Model for FfdModel {
         self.apply_edit(edit)
     }
 
-    fn undo(&mut self, undo: Undo) -> Result<(), SessionError> {
-        undo_by_state(self, undo)
-    }
-
-    fn snapshot(&self) -> Snapshot {
-        snapshot_of(self)
-    }
-
-    fn restore(&mut self, snapshot: &Snapshot) -> Result<(), SessionError> {
-        restore_state(self, snapshot)
-    }
-
-    fn clone_model(&self) -> Box<dyn Model> {
-        Box::new(self.clone())
-    }
+    crate::model::stateful_methods!();
 
     fn export(&self, path: &Path) -> Result<(), SessionError> {
         let io = |e: &dyn std::fmt::Display| SessionError::io(path, e);

@@ -277,3 +277,9 @@ pub fn load(kind: ModelKind, saved: &serde_json::Value) -> Result<Box<dyn Model>
         ModelKind::DnurbsPatches => dnurbs_patches::load(saved)?,
     })
 }
+
+/// The error of a kind's edit dispatcher handing an edit to a group of arms that does not
+/// hold it (a bug, reported instead of a panic).
+pub(crate) fn misrouted() -> SessionError {
+    SessionError::model("internal: an edit was dispatched to the wrong group")
+}

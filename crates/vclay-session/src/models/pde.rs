@@ -36,7 +36,7 @@ use crate::command::Edit;
 use crate::error::SessionError;
 use crate::model::{
     Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, restore_state, snapshot_of, undo_by_state, unsupported_export,
+    StepReport, Undo, extension, unsupported_export,
 };
 
 /// Default `[simulation] dt`: 1/30 s (one display frame).
@@ -724,21 +724,7 @@ impl Model for PdeSurfaceModel {
         self.apply_edit(edit)
     }
 
-    fn undo(&mut self, undo: Undo) -> Result<(), SessionError> {
-        undo_by_state(self, undo)
-    }
-
-    fn snapshot(&self) -> Snapshot {
-        snapshot_of(self)
-    }
-
-    fn restore(&mut self, snapshot: &Snapshot) -> Result<(), SessionError> {
-        restore_state(self, snapshot)
-    }
-
-    fn clone_model(&self) -> Box<dyn Model> {
-        Box::new(self.clone())
-    }
+    crate::model::stateful_methods!();
 
     fn export(&self, path: &Path) -> Result<(), SessionError> {
         let io = |e: &dyn std::fmt::Display| SessionError::io(path, e);

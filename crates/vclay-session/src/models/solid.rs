@@ -21,12 +21,12 @@ use vclay_solids::{
 };
 use vclay_spline::{KnotVector, NurbsVolume};
 
-use super::SpecError;
+use super::{SpecError, misrouted};
 use crate::command::{Edit, V3};
 use crate::error::SessionError;
 use crate::model::{
     Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, restore_state, snapshot_of, undo_by_state, unsupported_export,
+    StepReport, Undo, extension, unsupported_export,
 };
 use crate::tools::{CursorPath, ToolTable, a3, v3};
 
@@ -172,7 +172,34 @@ impl SolidModel {
 
     fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
         let before = self.snap();
-        let state_undo = |s: SolidSnap| Undo::State(Snapshot::new(s));
+        match edit {
+            Edit::Rope { .. } | Edit::MoveRope { .. } | Edit::Force { .. } => {
+                self.apply_rope_edit(edit, before)
+            }
+            Edit::RegionForce { .. }
+            | Edit::Gravity { .. }
+            | Edit::Inflate { .. }
+            | Edit::Release { .. } => self.apply_field_edit(edit, before),
+            Edit::Fix { .. }
+            | Edit::Free { .. }
+            | Edit::Material { .. }
+            | Edit::Extrude { .. }
+            | Edit::DeleteCell { .. } => self.apply_shape_edit(edit, before),
+            _ => self.apply_state_edit(edit, before),
+        }
+    }
+
+    /// The end of an edit whose undo is the state before it: a new revision, the message.
+    fn edited(&mut self, message: String, before: SolidSnap) -> Result<Applied, SessionError> {
+        self.revision += 1;
+        Ok(Applied {
+            message,
+            undo: Undo::State(Snapshot::new(before)),
+        })
+    }
+
+    /// [`Self::apply_edit`] for `Rope`, `MoveRope`, `Force`.
+    fn apply_rope_edit(&mut self, edit: &Edit, before: SolidSnap) -> Result<Applied, SessionError> {
         let message = match edit {
             Edit::Rope {
                 name,
@@ -265,6 +292,18 @@ impl SolidModel {
                 self.track(&label, "force", id, None, *until);
                 format!("force `{label}` on data point {point}")
             }
+            _ => return Err(misrouted()),
+        };
+        self.edited(message, before)
+    }
+
+    /// [`Self::apply_edit`] for `RegionForce`, `Gravity`, `Inflate`, `Release`.
+    fn apply_field_edit(
+        &mut self,
+        edit: &Edit,
+        before: SolidSnap,
+    ) -> Result<Applied, SessionError> {
+        let message = match edit {
             Edit::RegionForce {
                 name,
                 center,
@@ -310,6 +349,18 @@ impl SolidModel {
                 let _ = self.solid.remove_tool(ToolId(t.handle));
                 format!("released `{name}`")
             }
+            _ => return Err(misrouted()),
+        };
+        self.edited(message, before)
+    }
+
+    /// [`Self::apply_edit`] for `Fix`, `Material`, `Extrude`, `DeleteCell`.
+    fn apply_shape_edit(
+        &mut self,
+        edit: &Edit,
+        before: SolidSnap,
+    ) -> Result<Applied, SessionError> {
+        let message = match edit {
             Edit::Fix { .. } | Edit::Free { .. } => {
                 let fix = matches!(edit, Edit::Fix { .. });
                 let t0 = std::time::Instant::now();
@@ -433,6 +484,18 @@ impl SolidModel {
                     undo: Undo::Model(Box::new(full)),
                 });
             }
+            _ => return Err(misrouted()),
+        };
+        self.edited(message, before)
+    }
+
+    /// [`Self::apply_edit`] for `PlasticReset`, `Stop`, `MovePoint`, `SetWeight`, `Set`, `Integrator`, `Data`, `Constraint`, `Repel`, `FfdMove`, `PdeSet`, `PdeLocal`.
+    fn apply_state_edit(
+        &mut self,
+        edit: &Edit,
+        before: SolidSnap,
+    ) -> Result<Applied, SessionError> {
+        let message = match edit {
             Edit::PlasticReset => {
                 let full = self.clone();
                 let e = self.solid.energy().internal;
@@ -504,12 +567,9 @@ impl SolidModel {
                     self.kind()
                 )));
             }
+            _ => return Err(misrouted()),
         };
-        self.revision += 1;
-        Ok(Applied {
-            message,
-            undo: state_undo(before),
-        })
+        self.edited(message, before)
     }
 
     fn cells_in_box(&self, lo: &V3, hi: &V3) -> Vec<usize> {
@@ -642,23 +702,7 @@ impl SolidModel {
             }
             SolidSource::BSpline { knots, .. } => {
                 let dims = knots.each_ref().map(KnotVector::control_points);
-                set.points = p.to_vec();
-                let idx = |i: usize, j: usize, k: usize| ((i * dims[1] + j) * dims[2] + k) as u32;
-                for i in 0..dims[0] {
-                    for j in 0..dims[1] {
-                        for k in 0..dims[2] {
-                            if i + 1 < dims[0] {
-                                set.segments.push([idx(i, j, k), idx(i + 1, j, k)]);
-                            }
-                            if j + 1 < dims[1] {
-                                set.segments.push([idx(i, j, k), idx(i, j + 1, k)]);
-                            }
-                            if k + 1 < dims[2] {
-                                set.segments.push([idx(i, j, k), idx(i, j, k + 1)]);
-                            }
-                        }
-                    }
-                }
+                set = LineSet::grid(set.role.unwrap_or(LineRole::ControlNet), p.to_vec(), dims);
             }
         }
         set
@@ -1177,21 +1221,7 @@ impl Model for SolidModel {
         self.apply_edit(edit)
     }
 
-    fn undo(&mut self, undo: Undo) -> Result<(), SessionError> {
-        undo_by_state(self, undo)
-    }
-
-    fn snapshot(&self) -> Snapshot {
-        snapshot_of(self)
-    }
-
-    fn restore(&mut self, snapshot: &Snapshot) -> Result<(), SessionError> {
-        restore_state(self, snapshot)
-    }
-
-    fn clone_model(&self) -> Box<dyn Model> {
-        Box::new(self.clone())
-    }
+    crate::model::stateful_methods!();
 
     fn export(&self, path: &Path) -> Result<(), SessionError> {
         let ext = extension(path);
@@ -1521,249 +1551,283 @@ fn build_source(
     if (0..3).any(|a| max[a] <= min[a]) {
         return Err(err("max", "must exceed `min` along every axis".into()));
     }
-    let forbid = |key: &str, present: bool| {
-        if present {
-            Err(err(key, format!("is not a key of kind \"{kind}\"")))
-        } else {
-            Ok(())
-        }
-    };
-    let from_file_only = |keys: &[(&str, bool)]| match keys.iter().find(|k| k.1) {
-        Some((key, _)) => Err(err(
-            key,
-            "describes a primitive; it does not apply to a model read from `file`".into(),
-        )),
-        None => Ok(()),
-    };
-    let resolve = |f: &Path| {
-        if f.is_absolute() {
-            f.to_path_buf()
-        } else {
-            base.join(f)
-        }
-    };
     match kind {
-        ModelKind::SubdivisionSolid => {
-            forbid("control", m.control.is_some())?;
-            forbid("degree", m.degree.is_some())?;
-            forbid("samples", m.samples.is_some())?;
-            forbid("entity", m.entity.is_some())?;
-            forbid(
-                "cells",
-                m.cells.is_some() && !m.file.as_deref().is_some_and(is_mesh),
-            )?;
-            if m.file.is_some() {
-                from_file_only(&[
-                    ("points", m.points.is_some()),
-                    ("min", m.min.is_some()),
-                    ("max", m.max.is_some()),
-                    ("radius", m.radius.is_some()),
-                    ("height", m.height.is_some()),
-                ])?;
-            }
-            let lattice: Lattice = match (&m.primitive, &m.file) {
-                (Some(_), Some(_)) => {
-                    return Err(err(
-                        "file",
-                        "give either `primitive` or `file`, not both".into(),
-                    ));
-                }
-                (None, Some(f)) if is_mesh(f) => {
-                    // Any closed mesh becomes clay: a hexahedral lattice of about `cells`
-                    // cells whose level-`level` boundary is fitted to it
-                    // (`vclay_lattice::lattice_from_mesh`, issue 19).
-                    let mesh =
-                        super::ffd::read_any_mesh(&resolve(f)).map_err(|e| err("file", e))?;
-                    let params = vclay_lattice::ClayParams {
-                        cells: m.cells.unwrap_or(DEFAULT_MESH_CELLS),
-                        levels: m
-                            .level
-                            .unwrap_or(2)
-                            .min(vclay_lattice::from_mesh::MAX_LEVELS),
-                        boundary: parse_boundary(m.boundary.as_deref().unwrap_or("smooth"))
-                            .filter(|b| *b != BoundaryRule::Interior)
-                            .unwrap_or(BoundaryRule::Smooth),
-                        ..Default::default()
-                    };
-                    let clay = vclay_lattice::lattice_from_mesh(&mesh, &params).map_err(|e| {
-                        let key = match &e {
-                            vclay_lattice::ClayError::Parameter { .. } => "cells",
-                            _ => "file",
-                        };
-                        err(key, format!("{}: {e}", f.display()))
-                    })?;
-                    clay.solid.control().clone()
-                }
-                (None, Some(f)) if extension(f) == "vtu" => {
-                    formats::vtu::read(&resolve(f)).map_err(|e| err("file", e.to_string()))?
-                }
-                (None, Some(f)) => {
-                    formats::ovm::read(&resolve(f)).map_err(|e| err("file", e.to_string()))?
-                }
-                (prim, None) => build_primitive(prim.as_deref().unwrap_or("box"), m, min, max)?,
-            };
-            let level = m.level.unwrap_or(2);
-            if level > vclay_solids::model::MAX_LEVEL {
-                return Err(err(
-                    "level",
-                    format!(
-                        "{level} is above the maximum {}",
-                        vclay_solids::model::MAX_LEVEL
-                    ),
-                ));
-            }
-            // Memory: every level multiplies the cells by about 8 (hexahedra; other cells by
-            // their vertex count); the dynamic solid keeps the hierarchy, springs and per-step
-            // arrays (about BYTES_PER_DATA_CELL per finest cell).
-            let cells = lattice.num_cells() as f64 * 8f64.powi(level as i32);
-            let bytes = cells * BYTES_PER_DATA_CELL;
-            if bytes > MAX_SOLID_BYTES as f64 {
-                return Err(err(
-                    "level",
-                    format!(
-                        "level {level} of this lattice makes about {cells:.3e} data cells, an \
-                         estimated {:.1} GB; the limit is {:.1} GB (a lower level, or fewer \
-                         control cells)",
-                        bytes / 1e9,
-                        MAX_SOLID_BYTES as f64 / 1e9
-                    ),
-                ));
-            }
-            let boundary =
-                parse_boundary(m.boundary.as_deref().unwrap_or("sharp")).ok_or_else(|| {
-                    err(
-                        "boundary",
-                        format!(
-                            "unknown rule \"{}\"; expected \"sharp\", \"smooth\" or \"interior\"",
-                            m.boundary.as_deref().unwrap_or("")
-                        ),
-                    )
-                })?;
-            Ok(SolidSource::subdivision(lattice, boundary, level))
-        }
-        ModelKind::BsplineSolid => {
-            for (k, present) in [
-                ("cells", m.cells.is_some()),
-                ("primitive", m.primitive.is_some()),
-                ("level", m.level.is_some()),
-                ("boundary", m.boundary.is_some()),
-                ("points", m.points.is_some()),
-                ("radius", m.radius.is_some()),
-                ("height", m.height.is_some()),
-            ] {
-                forbid(k, present)?;
-            }
-            let samples = m.samples.unwrap_or([10; 3]);
-            for (a, &n) in samples.iter().enumerate() {
-                if n < 2 {
-                    return Err(err(
-                        "samples",
-                        format!("{n} samples along axis {a}; at least 2 needed"),
-                    ));
-                }
-                if n > MAX_SAMPLES {
-                    return Err(err(
-                        "samples",
-                        format!("{n} samples along axis {a}; at most {MAX_SAMPLES}"),
-                    ));
-                }
-            }
-            if samples.iter().product::<usize>() > MAX_SAMPLE_POINTS {
-                return Err(err(
-                    "samples",
-                    format!(
-                        "{samples:?} makes {} data points; at most {MAX_SAMPLE_POINTS}",
-                        samples.iter().product::<usize>()
-                    ),
-                ));
-            }
-            if let Some(f) = &m.file {
-                from_file_only(&[
-                    ("control", m.control.is_some()),
-                    ("degree", m.degree.is_some()),
-                    ("min", m.min.is_some()),
-                    ("max", m.max.is_some()),
-                ])?;
-                let path = resolve(f);
-                let idx = m.entity.unwrap_or(0);
-                let entities =
-                    vclay_io::model::read_model(&path).map_err(|e| err("file", e.to_string()))?;
-                let count = entities.len();
-                let vol = match entities.into_iter().nth(idx) {
-                    Some(vclay_io::Entity::Volume(v)) => v,
-                    Some(other) => {
-                        return Err(err(
-                            "entity",
-                            format!(
-                                "entity {idx} of {} is a {}, not a nurbs-volume",
-                                path.display(),
-                                other.type_name()
-                            ),
-                        ));
-                    }
-                    None => {
-                        return Err(err(
-                            "entity",
-                            format!(
-                                "{} has {count} entities; there is no entity {idx}",
-                                path.display()
-                            ),
-                        ));
-                    }
-                };
-                return Ok((
-                    SolidSource::BSpline {
-                        knots: vol.knots().clone(),
-                        weights: vol.weights().to_vec(),
-                        samples,
-                    },
-                    vol.control_points().to_vec(),
-                ));
-            }
-            if m.entity.is_some() {
-                return Err(err(
-                    "entity",
-                    "selects an entity of `file`; give `file`".into(),
-                ));
-            }
-            let control = m.control.unwrap_or([4; 3]);
-            let degree = m.degree.unwrap_or([3; 3]);
-            if let Some(a) = (0..3).find(|&a| control[a] > 256) {
-                return Err(err(
-                    "control",
-                    format!("{} control points along axis {a}; at most 256", control[a]),
-                ));
-            }
-            let total: usize = control.iter().product();
-            if total > MAX_CONTROL_POINTS {
-                return Err(err(
-                    "control",
-                    format!(
-                        "{control:?} makes {total} control points; at most {MAX_CONTROL_POINTS}"
-                    ),
-                ));
-            }
-            let mut knots = Vec::with_capacity(3);
-            for a in 0..3 {
-                knots.push(
-                    KnotVector::clamped_uniform(degree[a], control[a])
-                        .map_err(|e| err("control", format!("axis {a}: {e}")))?,
-                );
-            }
-            let knots: [KnotVector; 3] = knots.try_into().expect("three axes");
-            let vol = NurbsVolume::box_lattice(degree, control, min, max)
-                .map_err(|e| err("control", e.to_string()))?;
-            Ok((
-                SolidSource::BSpline {
-                    knots,
-                    weights: vec![1.0; vol.control_points().len()],
-                    samples,
-                },
-                vol.control_points().to_vec(),
-            ))
-        }
+        ModelKind::SubdivisionSolid => subdivision_source(m, base, min, max),
+        ModelKind::BsplineSolid => bspline_source(m, base, min, max),
         _ => Err(err("kind", format!("{kind} is not a solid"))),
     }
+}
+
+/// An error unless `key`, given (`present`), is a key of `kind`.
+fn forbid_key(kind: ModelKind, key: &str, present: bool) -> Result<(), SpecError> {
+    if present {
+        Err(SpecError::new(
+            "model",
+            key,
+            format!("is not a key of kind \"{kind}\""),
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+/// An error naming the first of `keys` given: primitive keys with a model read from `file`.
+fn from_file_only(keys: &[(&str, bool)]) -> Result<(), SpecError> {
+    match keys.iter().find(|k| k.1) {
+        Some((key, _)) => Err(SpecError::new(
+            "model",
+            key,
+            "describes a primitive; it does not apply to a model read from `file`",
+        )),
+        None => Ok(()),
+    }
+}
+
+/// `f` resolved against `base` unless it is absolute.
+fn resolve_in(base: &Path, f: &Path) -> std::path::PathBuf {
+    if f.is_absolute() {
+        f.to_path_buf()
+    } else {
+        base.join(f)
+    }
+}
+
+/// The control lattice of a `subdivision-solid`: a primitive, a lattice file or clay from a
+/// mesh file.
+fn subdivision_source(
+    m: &ModelKeys,
+    base: &Path,
+    min: Vec3,
+    max: Vec3,
+) -> Result<(SolidSource, Vec<Vec3>), SpecError> {
+    const KIND: ModelKind = ModelKind::SubdivisionSolid;
+    let err = |key: &str, what: String| SpecError::new("model", key, what);
+    let forbid = |key: &str, present: bool| forbid_key(KIND, key, present);
+    let resolve = |f: &Path| resolve_in(base, f);
+    forbid("control", m.control.is_some())?;
+    forbid("degree", m.degree.is_some())?;
+    forbid("samples", m.samples.is_some())?;
+    forbid("entity", m.entity.is_some())?;
+    forbid(
+        "cells",
+        m.cells.is_some() && !m.file.as_deref().is_some_and(is_mesh),
+    )?;
+    if m.file.is_some() {
+        from_file_only(&[
+            ("points", m.points.is_some()),
+            ("min", m.min.is_some()),
+            ("max", m.max.is_some()),
+            ("radius", m.radius.is_some()),
+            ("height", m.height.is_some()),
+        ])?;
+    }
+    let lattice: Lattice = match (&m.primitive, &m.file) {
+        (Some(_), Some(_)) => {
+            return Err(err(
+                "file",
+                "give either `primitive` or `file`, not both".into(),
+            ));
+        }
+        (None, Some(f)) if is_mesh(f) => {
+            // Any closed mesh becomes clay: a hexahedral lattice of about `cells`
+            // cells whose level-`level` boundary is fitted to it
+            // (`vclay_lattice::lattice_from_mesh`, issue 19).
+            let mesh = super::ffd::read_any_mesh(&resolve(f)).map_err(|e| err("file", e))?;
+            let params = vclay_lattice::ClayParams {
+                cells: m.cells.unwrap_or(DEFAULT_MESH_CELLS),
+                levels: m
+                    .level
+                    .unwrap_or(2)
+                    .min(vclay_lattice::from_mesh::MAX_LEVELS),
+                boundary: parse_boundary(m.boundary.as_deref().unwrap_or("smooth"))
+                    .filter(|b| *b != BoundaryRule::Interior)
+                    .unwrap_or(BoundaryRule::Smooth),
+                ..Default::default()
+            };
+            let clay = vclay_lattice::lattice_from_mesh(&mesh, &params).map_err(|e| {
+                let key = match &e {
+                    vclay_lattice::ClayError::Parameter { .. } => "cells",
+                    _ => "file",
+                };
+                err(key, format!("{}: {e}", f.display()))
+            })?;
+            clay.solid.control().clone()
+        }
+        (None, Some(f)) if extension(f) == "vtu" => {
+            formats::vtu::read(&resolve(f)).map_err(|e| err("file", e.to_string()))?
+        }
+        (None, Some(f)) => {
+            formats::ovm::read(&resolve(f)).map_err(|e| err("file", e.to_string()))?
+        }
+        (prim, None) => build_primitive(prim.as_deref().unwrap_or("box"), m, min, max)?,
+    };
+    let level = m.level.unwrap_or(2);
+    if level > vclay_solids::model::MAX_LEVEL {
+        return Err(err(
+            "level",
+            format!(
+                "{level} is above the maximum {}",
+                vclay_solids::model::MAX_LEVEL
+            ),
+        ));
+    }
+    // Memory: every level multiplies the cells by about 8 (hexahedra; other cells by
+    // their vertex count); the dynamic solid keeps the hierarchy, springs and per-step
+    // arrays (about BYTES_PER_DATA_CELL per finest cell).
+    let cells = lattice.num_cells() as f64 * 8f64.powi(level as i32);
+    let bytes = cells * BYTES_PER_DATA_CELL;
+    if bytes > MAX_SOLID_BYTES as f64 {
+        return Err(err(
+            "level",
+            format!(
+                "level {level} of this lattice makes about {cells:.3e} data cells, an \
+                 estimated {:.1} GB; the limit is {:.1} GB (a lower level, or fewer \
+                 control cells)",
+                bytes / 1e9,
+                MAX_SOLID_BYTES as f64 / 1e9
+            ),
+        ));
+    }
+    let boundary = parse_boundary(m.boundary.as_deref().unwrap_or("sharp")).ok_or_else(|| {
+        err(
+            "boundary",
+            format!(
+                "unknown rule \"{}\"; expected \"sharp\", \"smooth\" or \"interior\"",
+                m.boundary.as_deref().unwrap_or("")
+            ),
+        )
+    })?;
+    Ok(SolidSource::subdivision(lattice, boundary, level))
+}
+
+/// The control net of a `bspline-solid`: a box lattice or a volume of a model file.
+fn bspline_source(
+    m: &ModelKeys,
+    base: &Path,
+    min: Vec3,
+    max: Vec3,
+) -> Result<(SolidSource, Vec<Vec3>), SpecError> {
+    const KIND: ModelKind = ModelKind::BsplineSolid;
+    let err = |key: &str, what: String| SpecError::new("model", key, what);
+    let forbid = |key: &str, present: bool| forbid_key(KIND, key, present);
+    let resolve = |f: &Path| resolve_in(base, f);
+    for (k, present) in [
+        ("cells", m.cells.is_some()),
+        ("primitive", m.primitive.is_some()),
+        ("level", m.level.is_some()),
+        ("boundary", m.boundary.is_some()),
+        ("points", m.points.is_some()),
+        ("radius", m.radius.is_some()),
+        ("height", m.height.is_some()),
+    ] {
+        forbid(k, present)?;
+    }
+    let samples = m.samples.unwrap_or([10; 3]);
+    for (a, &n) in samples.iter().enumerate() {
+        if n < 2 {
+            return Err(err(
+                "samples",
+                format!("{n} samples along axis {a}; at least 2 needed"),
+            ));
+        }
+        if n > MAX_SAMPLES {
+            return Err(err(
+                "samples",
+                format!("{n} samples along axis {a}; at most {MAX_SAMPLES}"),
+            ));
+        }
+    }
+    if samples.iter().product::<usize>() > MAX_SAMPLE_POINTS {
+        return Err(err(
+            "samples",
+            format!(
+                "{samples:?} makes {} data points; at most {MAX_SAMPLE_POINTS}",
+                samples.iter().product::<usize>()
+            ),
+        ));
+    }
+    if let Some(f) = &m.file {
+        from_file_only(&[
+            ("control", m.control.is_some()),
+            ("degree", m.degree.is_some()),
+            ("min", m.min.is_some()),
+            ("max", m.max.is_some()),
+        ])?;
+        let path = resolve(f);
+        let idx = m.entity.unwrap_or(0);
+        let entities =
+            vclay_io::model::read_model(&path).map_err(|e| err("file", e.to_string()))?;
+        let count = entities.len();
+        let vol = match entities.into_iter().nth(idx) {
+            Some(vclay_io::Entity::Volume(v)) => v,
+            Some(other) => {
+                return Err(err(
+                    "entity",
+                    format!(
+                        "entity {idx} of {} is a {}, not a nurbs-volume",
+                        path.display(),
+                        other.type_name()
+                    ),
+                ));
+            }
+            None => {
+                return Err(err(
+                    "entity",
+                    format!(
+                        "{} has {count} entities; there is no entity {idx}",
+                        path.display()
+                    ),
+                ));
+            }
+        };
+        return Ok((
+            SolidSource::BSpline {
+                knots: vol.knots().clone(),
+                weights: vol.weights().to_vec(),
+                samples,
+            },
+            vol.control_points().to_vec(),
+        ));
+    }
+    if m.entity.is_some() {
+        return Err(err(
+            "entity",
+            "selects an entity of `file`; give `file`".into(),
+        ));
+    }
+    let control = m.control.unwrap_or([4; 3]);
+    let degree = m.degree.unwrap_or([3; 3]);
+    if let Some(a) = (0..3).find(|&a| control[a] > 256) {
+        return Err(err(
+            "control",
+            format!("{} control points along axis {a}; at most 256", control[a]),
+        ));
+    }
+    let total: usize = control.iter().product();
+    if total > MAX_CONTROL_POINTS {
+        return Err(err(
+            "control",
+            format!("{control:?} makes {total} control points; at most {MAX_CONTROL_POINTS}"),
+        ));
+    }
+    let mut knots = Vec::with_capacity(3);
+    for a in 0..3 {
+        knots.push(
+            KnotVector::clamped_uniform(degree[a], control[a])
+                .map_err(|e| err("control", format!("axis {a}: {e}")))?,
+        );
+    }
+    let knots: [KnotVector; 3] = knots.try_into().expect("three axes");
+    let vol = NurbsVolume::box_lattice(degree, control, min, max)
+        .map_err(|e| err("control", e.to_string()))?;
+    Ok((
+        SolidSource::BSpline {
+            knots,
+            weights: vec![1.0; vol.control_points().len()],
+            samples,
+        },
+        vol.control_points().to_vec(),
+    ))
 }
 
 /// Default `cells` of a subdivision solid built from a mesh `file` (500 cells at level 2 are
