@@ -17,12 +17,12 @@ pub struct SubdivideArgs {
     /// Control lattice to read (OpenVolumeMesh .ovm text file).
     pub input: Option<PathBuf>,
     /// Built-in control lattice instead of INPUT: box[:AxBxC] (points per axis, default 4x4x4),
-    /// cylinder[:SECTORS[xLAYERS[xRINGS]]] (default 4x2x0), torus (the paper's) or
-    /// torus:SEGMENTSxCROSS, gear, cube-with-holes, tetrahedron-with-holes[:HOLE] (split into
-    /// 10 convex cells, default 0.4), tetrahedron-with-holes-paper[:HOLE] (the paper's single
-    /// cell, which folds; default 0.5), soccer-player, cactus, spiked-object, holed-object,
-    /// l[:ARMxWIDTH] (default 2x1),
-    /// t[:ARMxWIDTH] (default 1x1).
+    /// cylinder[:SECTORS[xLAYERS[xRINGS]]] (default 4x2x0), torus[:SEGMENTSxCROSS] (default
+    /// 8x4), paper-torus (the paper's), gear, cube-with-holes, tetrahedron-with-holes[:HOLE]
+    /// (split into 10 convex cells, default 0.4), tetrahedron-with-holes-paper[:HOLE] (the
+    /// paper's single cell, which folds; default 0.5), soccer-player, cactus, spiked-object,
+    /// holed-object, l-solid[:ARMxWIDTH] (default 2x1; also l), t-solid[:ARMxWIDTH] (default
+    /// 1x1; also t). The same names as a scenario's `primitive`.
     #[arg(long, value_name = "NAME[:ARGS]")]
     pub primitive: Option<String>,
     /// Number of subdivision levels (0 keeps the control lattice).

@@ -53,36 +53,37 @@ impl SpecError {
     }
 }
 
-/// Deserializes a table into `T`, turning serde's message into a [`SpecError`] whose key is
-/// the first name it quotes (``unknown field `fro` `` names `fro`).
+/// Deserializes a table into `T` (serde on the parsed value, no text round trip), turning the
+/// error into a [`SpecError`] whose key is the field that failed: the name an unknown or
+/// missing field error quotes, else the first segment of the path `serde_path_to_error` kept
+/// (`cells[1].density` names `cells`).
 pub fn typed<T: DeserializeOwned>(table: &str, t: &toml::Table) -> Result<T, SpecError> {
-    // Parse the table's own TOML text, so that a type error carries a span, which names the
-    // key (serde's message for a wrong type does not).
-    let text = toml::to_string(t).unwrap_or_default();
-    toml::from_str::<T>(&text).map_err(|e| {
-        let msg = e.message().to_string();
-        let from_span = e.span().and_then(|sp| {
-            let start = text[..sp.start.min(text.len())]
-                .rfind('\n')
-                .map_or(0, |i| i + 1);
-            let line = text[start..].lines().next()?;
-            let (k, _) = line.split_once('=')?;
-            let k = k.trim().trim_matches('"');
-            (!k.is_empty() && !k.starts_with('[')).then(|| k.to_string())
-        });
+    serde_path_to_error::deserialize(toml::Value::Table(t.clone())).map_err(|e| {
+        let path = e.path().to_string();
+        let msg = e.into_inner().message().to_string();
         let quoted = msg
             .split('`')
             .nth(1)
             .filter(|k| !k.contains(' '))
             .map(str::to_string);
+        let first = path
+            .split(['.', '['])
+            .next()
+            .filter(|k| !k.is_empty() && *k != "?")
+            .map(str::to_string);
         let key = quoted
             .filter(|_| msg.starts_with("unknown field") || msg.starts_with("missing field"))
-            .or(from_span)
+            .or(first)
             .unwrap_or_else(|| table.to_string());
+        let what = if path.is_empty() || path == "." || msg.contains(&path) {
+            msg
+        } else {
+            format!("`{path}`: {msg}")
+        };
         SpecError {
             table: table.to_string(),
             key,
-            what: msg,
+            what,
         }
     })
 }
