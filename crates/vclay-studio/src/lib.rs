@@ -21,6 +21,7 @@ pub mod bench;
 pub mod camera;
 pub mod load;
 pub mod render;
+pub mod symmetry;
 pub mod text;
 pub mod worker;
 
