@@ -19,7 +19,9 @@
 pub mod app;
 pub mod bench;
 pub mod camera;
+pub mod keys;
 pub mod load;
+pub mod pick;
 pub mod render;
 pub mod symmetry;
 pub mod text;
