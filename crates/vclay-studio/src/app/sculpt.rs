@@ -27,6 +27,8 @@ pub const HOVER_COLOR: Color32 = Color32::from_rgb(255, 240, 80);
 pub const FIXED_COLOR: Color32 = Color32::from_rgb(70, 140, 255);
 /// Colour of FFD pins.
 pub const PIN_COLOR: Color32 = Color32::from_rgb(240, 60, 220);
+/// Most point-triangle tests per frame for hiding the handles behind the surface.
+const VISIBILITY_BUDGET: usize = 4_000_000;
 /// Segments of the brush circle.
 const CIRCLE_SEGMENTS: usize = 48;
 /// Largest brush radius relative to the model size, the force brush's and the others'.
@@ -290,16 +292,25 @@ impl Studio {
                 .map(|(x, y)| rect.min + Vec2::new(x as f32, y as f32))
         };
         if self.shows_handles() {
-            for c in self.points_of(&[LineRole::ControlNet, LineRole::LatticeEdges]) {
+            let handles = self.points_of(&[LineRole::ControlNet, LineRole::LatticeEdges]);
+            let seen = self.visibility(&handles);
+            for (c, v) in handles.into_iter().zip(seen) {
                 if let Some(s) = at(c) {
-                    painter.circle(s, 3.0, HANDLE_COLOR, Stroke::new(1.0, Color32::BLACK));
+                    if v {
+                        painter.circle(s, 3.0, HANDLE_COLOR, Stroke::new(1.0, Color32::BLACK));
+                    } else {
+                        // Behind the surface: faint, as in an x-ray view.
+                        painter.circle_filled(s, 2.0, HANDLE_COLOR.gamma_multiply(0.35));
+                    }
                 }
             }
             if let Some(s) = self.hovered_handle.and_then(at) {
                 painter.circle_stroke(s, 7.0, Stroke::new(2.0, HOVER_COLOR));
             }
         }
-        for c in self.points_of(&[LineRole::Fixed]) {
+        let fixed = self.points_of(&[LineRole::Fixed]);
+        let seen = self.visibility(&fixed);
+        for (c, _) in fixed.into_iter().zip(seen).filter(|(_, v)| *v) {
             if let Some(s) = at(c) {
                 let r = Rect::from_center_size(s, Vec2::splat(7.0));
                 painter.rect_filled(r, 1.0, FIXED_COLOR);
@@ -322,6 +333,28 @@ impl Studio {
         }
         self.tool_at_cursor(&painter);
         axes_gizmo(&painter, rect, &self.camera);
+    }
+
+    /// Whether each of `points` is in sight (no display surface between it and the eye). All
+    /// are when the test would cost too much for one frame (many points on a fine mesh).
+    fn visibility(&self, points: &[Vec3]) -> Vec<bool> {
+        let tris: usize = self.frame.models.iter().map(|m| m.mesh.triangles.len()).sum();
+        if points.len().saturating_mul(tris) > VISIBILITY_BUDGET {
+            return vec![true; points.len()];
+        }
+        let eye = self.camera.eye();
+        points
+            .iter()
+            .map(|&p| {
+                let d = p - eye;
+                let ray = vclay_session::Ray {
+                    origin: eye,
+                    direction: d,
+                };
+                // Distances are in units of |d|: the point itself is at 1.
+                crate::pick::ray_frame(&ray, &self.frame).is_none_or(|h| h.distance > 0.995)
+            })
+            .collect()
     }
 
     /// The brush circle on the surface's tangent plane under the mouse, and its mirror images.
