@@ -338,7 +338,12 @@ impl Studio {
     /// Whether each of `points` is in sight (no display surface between it and the eye). All
     /// are when the test would cost too much for one frame (many points on a fine mesh).
     fn visibility(&self, points: &[Vec3]) -> Vec<bool> {
-        let tris: usize = self.frame.models.iter().map(|m| m.mesh.triangles.len()).sum();
+        let tris: usize = self
+            .frame
+            .models
+            .iter()
+            .map(|m| m.mesh.triangles.len())
+            .sum();
         if points.len().saturating_mul(tris) > VISIBILITY_BUDGET {
             return vec![true; points.len()];
         }
