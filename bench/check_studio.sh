@@ -4,7 +4,8 @@
 # takes a screenshot with ImageMagick and checks that
 #   - the screenshot is not blank (many colours, and the clay colour is present), and
 #   - the autosaved session's geometry differs from the input (control points away from the
-#     rest shape) and its log holds the studio's rope drag (`move-rope`).
+#     rest shape) and its log holds the studio's rope drag (`move-rope`) and a force-brush
+#     stroke picked by its key (G; `region-force`).
 # The screenshot stays in target/check-studio/ (a CI artifact). Says SKIPPED and exits 0 when
 # Xvfb, xdotool or ImageMagick is missing. VCLAY_STUDIO=path uses a built binary; else this
 # builds the debug one (the profile CI's `cargo test --workspace` already built).
@@ -61,6 +62,17 @@ for k in $(seq 1 20); do
 done
 sleep 1.5
 xdotool mouseup 1
+# A force-brush stroke (key G) across the re-fitted cube: several dabs along the drag.
+xdotool mousemove 179 12 click 1
+sleep 1
+xdotool windowfocus "$win" 2>/dev/null || true
+xdotool mousemove $x0 $y0 key g
+sleep 0.5
+xdotool mousedown 1
+for k in $(seq 1 10); do
+  xdotool mousemove $((x0 + 12 * k)) $((y0 + 2 * k)); sleep 0.1
+done
+xdotool mouseup 1
 sleep 5 # autosave every 3 s
 import -window root "$work/studio.png"
 colors=$(convert "$work/studio.png" -format %k info:)
@@ -81,6 +93,7 @@ print(f"check_studio: autosave at t = {m['state']['time']:.3f}: {len(actions)} c
       f"({', '.join(sorted(set(actions)))}), max control point displacement {d:.4f}")
 assert d > 1e-3, "the autosaved geometry equals the input"
 assert "move-rope" in actions, "the studio's drag is not in the autosaved log"
+assert "region-force" in actions, "the force-brush stroke (key G) is not in the autosaved log"
 assert clay > 2000, "the model is not visible in the screenshot"
 PY
 echo "check_studio: passed"

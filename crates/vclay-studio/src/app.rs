@@ -3,7 +3,11 @@
 //! `eframe::App::ui` calls it in the real window and `egui_kittest` calls it in the tests.
 //!
 //! The UI never touches a model: it sends [`Request`]s to the simulation thread
-//! ([`crate::worker`]) and draws the [`Frame`]s it gets back.
+//! ([`crate::worker`]) and draws the [`Frame`]s it gets back. The sculpting habits (shortcuts,
+//! help overlay, brush circle, symmetry, handles) are in [`sculpt`].
+
+mod sculpt;
+pub use sculpt::BrushCursor;
 
 use std::collections::{BTreeMap, VecDeque};
 use std::path::{Path, PathBuf};
@@ -16,7 +20,9 @@ use vclay_session::{Command, Edit, Session, Target, ToolSpec};
 
 use crate::camera::{Camera, View};
 use crate::load;
-use crate::render::{DrawParams, Layers, SceneBuffers, SharedScene};
+use crate::pick::SurfaceHit;
+use crate::render::{DrawParams, Grid, Layers, SceneBuffers, SharedScene};
+use crate::symmetry::Symmetry;
 use crate::worker::{AUTOSAVE_INTERVAL, Frame, Grab, Notice, Request, Worker};
 
 /// Pick tolerance in screen points.
@@ -165,7 +171,7 @@ impl Default for ToolOptions {
             duration: 0.1,
             pull: false,
             paint: [1.0, 2.0, 400.0],
-            brush: 0.0,
+            brush: 0.08,
             weight: 1.0,
             local: [0.15, 0.5],
             integrator: 0,
@@ -184,6 +190,8 @@ enum Dialog {
     Recover(PathBuf),
     /// Unsaved changes: save, discard or cancel before doing `Then`.
     Unsaved(Then),
+    /// The shortcuts (F1 or ?).
+    Help,
 }
 
 /// What waits for the unsaved-changes prompt (and for the save it may start).
@@ -274,6 +282,16 @@ pub struct Studio {
     notice_generation: u64,
     /// The status bar's message (undo, redo, the end of a time range).
     note: Option<String>,
+    /// The tool symmetry (sent to the worker with each press).
+    pub symmetry: Symmetry,
+    /// The surface under the mouse (brush tools).
+    hover: Option<SurfaceHit>,
+    /// The control point under the mouse (handles shown).
+    hovered_handle: Option<Vec3>,
+    /// The mouse in the viewport.
+    pointer: Option<Pos2>,
+    /// The ground grid (placed when the camera frames the model).
+    grid: Option<Grid>,
 }
 
 impl std::fmt::Debug for Studio {
@@ -343,10 +361,15 @@ impl Studio {
             generation: 0,
             notice_generation: 0,
             note: None,
+            symmetry: Symmetry::default(),
+            hover: None,
+            hovered_handle: None,
+            pointer: None,
+            grid: None,
         };
         if let Some(f) = &options.file {
             match load::open(f) {
-                Ok(o) => s.set_session(o.session, Some(f.clone())),
+                Ok(o) => s.set_opened(o, Some(f.clone())),
                 Err(e) => s.dialog = Some(Dialog::Error(e)),
             }
         }
@@ -365,6 +388,17 @@ impl Studio {
             }
         }
         s
+    }
+
+    /// Replaces the session with an opened file's: a scenario's run stops at its end step
+    /// (the status line says so; Run continues past it).
+    pub fn set_opened(&mut self, opened: vclay_session::Opened, file: Option<PathBuf>) {
+        let end = opened.run.as_ref().map(|r| r.end_step);
+        let now = opened.session.model(None).map_or(0, |m| m.steps());
+        self.set_session(opened.session, file);
+        if let Some(end) = end.filter(|&e| e > now) {
+            self.send(Request::StopAt(Some(end)));
+        }
     }
 
     /// Replaces the session (a new simulation thread if none runs).
@@ -389,6 +423,7 @@ impl Studio {
             }
         }
         self.send(Request::TimeLimit(pde.then_some(PDE_T_MAX)));
+        self.send(Request::StopAt(None));
         self.reset_view_state();
         self.file = file;
         let auto = self
@@ -421,6 +456,9 @@ impl Studio {
         self.fitted = false;
         self.pde_t = 0.0;
         self.note = None;
+        self.hover = None;
+        self.hovered_handle = None;
+        self.grid = None;
         self.scene = Arc::new(SceneBuffers::default());
     }
 
@@ -473,6 +511,7 @@ impl Studio {
             Dialog::Screenshot(_) => "Screenshot (PNG)",
             Dialog::Recover(_) => "Recover?",
             Dialog::Unsaved(_) => "Unsaved changes",
+            Dialog::Help => "Help",
         })
     }
 
@@ -586,13 +625,16 @@ impl Studio {
     }
 
     fn rebuild_scene(&mut self) {
-        self.scene = Arc::new(SceneBuffers::build(&self.frame, &self.layers));
+        let grid = self.grid.filter(|_| self.layers.grid);
+        self.scene = Arc::new(SceneBuffers::build(&self.frame, &self.layers).with_grid(grid));
     }
 
-    /// Fits the camera to the scene.
+    /// Fits the camera to the scene (the ground grid moves under it).
     pub fn fit(&mut self) {
         if let Some((lo, hi)) = self.scene.bounds {
             self.camera.fit(lo, hi);
+            self.grid = Grid::under(lo, hi);
+            self.rebuild_scene();
         }
     }
 
@@ -645,27 +687,6 @@ impl Studio {
         if self.frame.running || self.press.is_some() {
             // The worker wakes us with each new frame; this keeps the frame-rate figure alive.
             ctx.request_repaint_after(Duration::from_millis(250));
-        }
-    }
-
-    fn shortcuts(&mut self, ctx: &egui::Context) {
-        // A dialog or a text field takes the keys (Ctrl+Z in a path field is not the model's).
-        if self.dialog.is_some() || ctx.text_edit_focused() {
-            return;
-        }
-        let (undo, redo) = ctx.input_mut(|i| {
-            let redo = i.consume_key(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z)
-                || i.consume_key(Modifiers::COMMAND, Key::Y);
-            let undo = i.consume_key(Modifiers::COMMAND, Key::Z);
-            (undo, redo)
-        });
-        if redo {
-            self.send(Request::Redo);
-        } else if undo {
-            self.send(Request::Undo);
-        }
-        if ctx.input_mut(|i| i.consume_key(Modifiers::COMMAND, Key::S)) {
-            self.save();
         }
     }
 
@@ -849,6 +870,10 @@ impl Studio {
         ui.checkbox(&mut self.layers.wireframe, "Wireframe");
         ui.checkbox(&mut self.layers.control_net, "Control net");
         ui.checkbox(&mut self.layers.data_points, "Data points");
+        ui.checkbox(&mut self.layers.grid, "Grid");
+        if ui.button("Help (F1)").clicked() {
+            self.dialog = Some(Dialog::Help);
+        }
         if before != self.layers {
             self.rebuild_scene();
         }
@@ -887,9 +912,12 @@ impl Studio {
         let tools = Tool::palette(&self.tools);
         ui.horizontal_wrapped(|ui| {
             for t in tools {
-                ui.selectable_value(&mut self.tool, t, t.label());
+                let key = crate::keys::tool_key(t).name();
+                ui.selectable_value(&mut self.tool, t, format!("{} ({key})", t.label()))
+                    .on_hover_text(format!("key {key}"));
             }
         });
+        self.symmetry_ui(ui);
         let o = &mut self.options;
         match self.tool {
             Tool::Rope => {
@@ -1150,6 +1178,10 @@ impl Studio {
             ));
             ui.separator();
             ui.label(format!("{} triangles", self.scene.tri_indices.len() / 3));
+            if self.symmetry.any() {
+                ui.separator();
+                ui.label(format!("symmetry {}", self.symmetry.label()));
+            }
             if self.frame.scheduled > 0 {
                 ui.separator();
                 ui.label(format!("{} scheduled", self.frame.scheduled));
@@ -1172,6 +1204,7 @@ impl Studio {
     fn viewport_ui(&mut self, ui: &mut Ui) {
         let (rect, resp) = ui.allocate_exact_size(ui.available_size(), Sense::click_and_drag());
         self.viewport = rect;
+        self.hover(ui, rect);
         ui.painter()
             .rect_filled(rect, 0.0, Color32::from_rgb(38, 42, 50));
         let (w, h) = (rect.width() as f64, rect.height() as f64);
@@ -1211,6 +1244,7 @@ impl Studio {
                 let ray = self.camera.ray(x, y, w, h);
                 let per_point =
                     2.0 * self.camera.distance * (crate::camera::FOV_Y / 2.0).tan() / h.max(1.0);
+                self.send(Request::Symmetry(self.symmetry));
                 self.send(Request::Grab {
                     ray,
                     tolerance: PICK_POINTS * per_point,
@@ -1222,6 +1256,19 @@ impl Studio {
         // Drag.
         if primary && delta != Vec2::ZERO {
             match self.press {
+                Some(Press::Grabbed(_)) if self.is_brush() => {
+                    // A stroke: the brush acts where the mouse meets the model.
+                    if let Some(p) = pos {
+                        let (x, y) = local(p);
+                        let per_point =
+                            2.0 * self.camera.distance * (crate::camera::FOV_Y / 2.0).tan()
+                                / h.max(1.0);
+                        self.send(Request::Stroke {
+                            ray: self.camera.ray(x, y, w, h),
+                            tolerance: PICK_POINTS * per_point,
+                        });
+                    }
+                }
                 Some(Press::Grabbed(cursor)) => {
                     let next = if mods.alt {
                         let per_point =
@@ -1260,8 +1307,10 @@ impl Studio {
         if resp.double_clicked() {
             self.fit();
         }
-        // Grab cursor marker.
+        self.paint_3d(ui, rect);
+        // Grab cursor marker (not for a brush: its circle follows the mouse).
         if let Some(Press::Grabbed(c)) = self.press
+            && !self.is_brush()
             && let Some((x, y)) = self.camera.project(c, w, h)
         {
             ui.painter().circle_stroke(
@@ -1270,7 +1319,7 @@ impl Studio {
                 egui::Stroke::new(1.5, Color32::YELLOW),
             );
         }
-        self.paint_3d(ui, rect);
+        self.overlays(ui, rect);
     }
 
     fn grab_for_tool(&self) -> Option<Grab> {
@@ -1336,9 +1385,12 @@ impl Studio {
             mvp[k] = *v as f32;
         }
         let b = self.camera.back();
+        let (r, u) = self.camera.right_up();
+        let f = |v: Vec3| [v.x as f32, v.y as f32, v.z as f32];
         let params = DrawParams {
             mvp,
-            light: [b.x as f32, b.y as f32, b.z as f32],
+            view: f(b),
+            lights: crate::render::lights(b, r, u).map(f),
             shaded: self.layers.shaded,
             wireframe: self.layers.wireframe,
         };
@@ -1399,7 +1451,7 @@ impl Studio {
                 keep = a.is_none();
                 if a == Some(Answer::Submit) {
                     match load::open(Path::new(&path)) {
-                        Ok(o) => self.set_session(o.session, Some(PathBuf::from(&path))),
+                        Ok(o) => self.set_opened(o, Some(PathBuf::from(&path))),
                         Err(e) => next = Some(Dialog::Error(e)),
                     }
                 }
@@ -1471,7 +1523,7 @@ impl Studio {
                     match load::open(&path) {
                         Ok(o) => {
                             let f = self.file.clone();
-                            self.set_session(o.session, f);
+                            self.set_opened(o, f);
                             // Not in the file yet: modified, and autosaved again.
                             self.send(Request::MarkModified);
                         }
@@ -1479,6 +1531,10 @@ impl Studio {
                     }
                 }
                 Dialog::Recover(path)
+            }
+            Dialog::Help => {
+                keep = self.help_dialog(ctx, modal);
+                Dialog::Help
             }
             Dialog::Unsaved(then) => {
                 let a = modal

@@ -9,7 +9,9 @@
 //! that sends requests and draws frames; [`render`] turns frames into GPU buffers and draws
 //! them with OpenGL (eframe's glow backend, which Mesa's llvmpipe runs without a GPU);
 //! [`camera`] is the orbit camera and the mouse ray; [`load`] opens files and the built-in
-//! models; [`bench`] runs the frame loop headless; [`text`] rounds numbers in log lines.
+//! models; [`bench`] runs the frame loop headless; [`text`] rounds numbers in log lines;
+//! [`keys`] is the shortcut table (keys and the help overlay); [`pick`] finds the surface under
+//! the mouse on the UI thread (brush circle, handles); [`symmetry`] mirrors tool actions.
 //!
 //! Limitations: one undo snapshot per cursor move (the session layer's undo records), so cursor
 //! moves are coalesced ([`worker::DRAG_INTERVAL`]); file dialogs are text fields (no native
@@ -19,8 +21,11 @@
 pub mod app;
 pub mod bench;
 pub mod camera;
+pub mod keys;
 pub mod load;
+pub mod pick;
 pub mod render;
+pub mod symmetry;
 pub mod text;
 pub mod worker;
 

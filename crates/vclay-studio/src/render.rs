@@ -3,8 +3,12 @@
 //! `egui::PaintCallback` with eframe's glow context).
 //!
 //! One vertex format for everything: position, normal, colour (9 `f32`). Triangles are lit by
-//! a headlight (two-sided Lambert plus a little specular, so the inside of a deleted cell is
-//! visible); lines and markers take their colour per role ([`role_color`]). Geometry stays `f64`
+//! three lights that move with the camera (a studio's three-point lighting: a key light above
+//! and left of the eye, a fill from the right, a rim light from behind) over a sky/ground
+//! ambient along world z, two-sided (the inside of a deleted cell is visible), with a key-light
+//! highlight and a little Fresnel edge: faces at different angles read differently from every
+//! view, where a headlight washed out the faces turned towards the viewer. Lines and markers
+//! take their colour per role ([`role_color`]). A ground grid ([`Grid`]) lies under the model. Geometry stays `f64`
 //! in the session; the conversion to `f32` happens here, once per revision, and the GPU buffers
 //! are re-uploaded only when the revision changes.
 //!
@@ -51,6 +55,8 @@ pub struct Layers {
     pub control_net: bool,
     /// Data points.
     pub data_points: bool,
+    /// The ground grid.
+    pub grid: bool,
 }
 
 impl Default for Layers {
@@ -60,6 +66,7 @@ impl Default for Layers {
             wireframe: false,
             control_net: false,
             data_points: false,
+            grid: true,
         }
     }
 }
@@ -79,8 +86,8 @@ impl Layers {
 /// indices.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SceneBuffers {
-    /// Session revision (and layer set) these were built for.
-    pub key: (u64, u8),
+    /// Session revision, layer set and grid these were built for.
+    pub key: (u64, u8, u64),
     /// Triangle vertices.
     pub tri_vertices: Vec<f32>,
     /// Triangle indices.
@@ -106,7 +113,7 @@ impl SceneBuffers {
     pub fn build(frame: &Frame, layers: &Layers) -> Self {
         let bits = layers.control_net as u8 | (layers.data_points as u8) << 1;
         let mut b = SceneBuffers {
-            key: (frame.revision, bits),
+            key: (frame.revision, bits, 0),
             ..Default::default()
         };
         let mut lo = Vec3::repeat(f64::INFINITY);
@@ -195,13 +202,118 @@ impl SceneBuffers {
     }
 }
 
+/// Colour of the ground grid's lines.
+pub const GRID_COLOR: [f32; 3] = [0.30, 0.32, 0.37];
+/// Colour of the grid's two centre lines.
+pub const GRID_CENTRE_COLOR: [f32; 3] = [0.42, 0.44, 0.50];
+
+/// A ground grid: a square of lines `2 * half * spacing` wide around `centre`, in the plane
+/// `z = z`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grid {
+    /// Centre (x, y), a multiple of `spacing`.
+    pub centre: [f64; 2],
+    /// Height.
+    pub z: f64,
+    /// Line spacing: 1, 2 or 5 times a power of ten.
+    pub spacing: f64,
+    /// Lines on each side of the centre.
+    pub half: u32,
+}
+
+impl Grid {
+    /// The grid under the box `[lo, hi]`: just below it, about as wide as three of the box's
+    /// diagonals, with 10 to 25 lines each way.
+    pub fn under(lo: Vec3, hi: Vec3) -> Option<Self> {
+        let diag = (hi - lo).norm();
+        if !(diag.is_finite() && diag > 0.0) {
+            return None;
+        }
+        let raw = diag / 6.0;
+        let p = 10f64.powf(raw.log10().floor());
+        let spacing = if raw / p > 5.0 {
+            5.0 * p
+        } else if raw / p > 2.0 {
+            2.0 * p
+        } else {
+            p
+        };
+        let c = (lo + hi) * 0.5;
+        Some(Self {
+            centre: [
+                (c.x / spacing).round() * spacing,
+                (c.y / spacing).round() * spacing,
+            ],
+            z: lo.z - 0.01 * diag,
+            spacing,
+            half: (1.5 * diag / spacing).ceil().clamp(1.0, 200.0) as u32,
+        })
+    }
+
+    /// A number that changes when the grid does (the GPU upload's key).
+    pub fn key(&self) -> u64 {
+        self.centre[0].to_bits()
+            ^ self.centre[1].to_bits().rotate_left(21)
+            ^ self.z.to_bits().rotate_left(42)
+            ^ self.spacing.to_bits().rotate_left(7)
+            ^ u64::from(self.half)
+    }
+}
+
+impl SceneBuffers {
+    /// Adds the grid's lines (they do not count in [`SceneBuffers::bounds`]).
+    pub fn with_grid(mut self, grid: Option<Grid>) -> Self {
+        let Some(g) = grid else { return self };
+        self.key.2 = g.key();
+        let z = Vec3::zeros();
+        let n = g.half as i64;
+        let ext = g.half as f64 * g.spacing;
+        for k in -n..=n {
+            let o = k as f64 * g.spacing;
+            let c = if k == 0 {
+                GRID_CENTRE_COLOR
+            } else {
+                GRID_COLOR
+            };
+            let (x, y) = (g.centre[0], g.centre[1]);
+            for (p, q) in [
+                (
+                    Vec3::new(x + o, y - ext, g.z),
+                    Vec3::new(x + o, y + ext, g.z),
+                ),
+                (
+                    Vec3::new(x - ext, y + o, g.z),
+                    Vec3::new(x + ext, y + o, g.z),
+                ),
+            ] {
+                push(&mut self.line_vertices, &p, &z, c);
+                push(&mut self.line_vertices, &q, &z, c);
+            }
+        }
+        self
+    }
+}
+
+/// The three lights of a view, towards the lights, in world coordinates: key (above and left
+/// of the eye), fill (right), rim (behind the model, above). `back` points from the model to
+/// the eye; `right` and `up` span the view plane.
+pub fn lights(back: Vec3, right: Vec3, up: Vec3) -> [Vec3; 3] {
+    [
+        (back + up * 0.8 - right * 0.6).normalize(),
+        (back * 0.6 + right - up * 0.2).normalize(),
+        (-back + up * 0.6).normalize(),
+    ]
+}
+
 /// Camera and style for one draw.
 #[derive(Clone, Copy, Debug)]
 pub struct DrawParams {
     /// Projection times view, column-major `f32`.
     pub mvp: [f32; 16],
-    /// Unit vector from the scene towards the eye (the headlight).
-    pub light: [f32; 3],
+    /// Unit vector from the scene towards the eye.
+    pub view: [f32; 3],
+    /// Unit vectors towards the key, fill and rim lights ([`lights`]).
+    pub lights: [[f32; 3]; 3],
     /// Draw shaded triangles.
     pub shaded: bool,
     /// Draw triangle edges.
@@ -232,17 +344,26 @@ mod gl {
         precision mediump float;
         in vec3 v_normal;
         in vec3 v_color;
-        uniform vec3 u_light;
+        uniform vec3 u_view;
+        uniform vec3 u_key;
+        uniform vec3 u_fill;
+        uniform vec3 u_rim;
         uniform float u_lit;
         out vec4 out_color;
         void main() {
             vec3 c = v_color;
             if (u_lit > 0.5) {
                 float len = length(v_normal);
-                vec3 n = len > 0.0 ? v_normal / len : u_light;
-                float d = abs(dot(n, u_light));
-                float s = pow(d, 24.0) * 0.25;
-                c = v_color * (0.25 + 0.75 * d) + vec3(s);
+                vec3 n = len > 0.0 ? v_normal / len : u_view;
+                // Two-sided: the side facing the viewer is lit.
+                if (dot(n, u_view) < 0.0) n = -n;
+                float key = max(dot(n, u_key), 0.0);
+                float fill = max(dot(n, u_fill), 0.0);
+                float rim = max(dot(n, u_rim), 0.0);
+                vec3 ambient = mix(vec3(0.13, 0.12, 0.13), vec3(0.30, 0.31, 0.34), 0.5 + 0.5 * n.z);
+                float spec = pow(max(dot(n, normalize(u_key + u_view)), 0.0), 40.0) * 0.22;
+                float edge = pow(1.0 - max(dot(n, u_view), 0.0), 3.0) * 0.12;
+                c = v_color * (ambient + 0.72 * key + 0.28 * fill + 0.22 * rim) + vec3(spec + edge);
             }
             out_color = vec4(c, 1.0);
         }
@@ -262,7 +383,7 @@ mod gl {
         lines: Buffers,
         points: Buffers,
         counts: [i32; 5],
-        key: Option<(u64, u8)>,
+        key: Option<(u64, u8, u64)>,
     }
 
     impl std::fmt::Debug for GlScene {
@@ -430,7 +551,12 @@ mod gl {
                 gl.use_program(Some(self.program));
                 let u = |n: &str| gl.get_uniform_location(self.program, n);
                 gl.uniform_matrix_4_f32_slice(u("u_mvp").as_ref(), false, &p.mvp);
-                gl.uniform_3_f32(u("u_light").as_ref(), p.light[0], p.light[1], p.light[2]);
+                let v3 =
+                    |name: &str, v: [f32; 3]| gl.uniform_3_f32(u(name).as_ref(), v[0], v[1], v[2]);
+                v3("u_view", p.view);
+                v3("u_key", p.lights[0]);
+                v3("u_fill", p.lights[1]);
+                v3("u_rim", p.lights[2]);
                 gl.uniform_1_f32(u("u_point").as_ref(), MARKER_PX);
                 let lit = u("u_lit");
                 if p.shaded && self.counts[0] > 0 {

@@ -45,12 +45,16 @@ use vclay_session::{
     ToolSpec,
 };
 
+use crate::symmetry::{Axes, Symmetry};
+
 /// Least time between two applied cursor moves of one drag.
 pub const DRAG_INTERVAL: Duration = Duration::from_millis(40);
 /// Default autosave interval.
 pub const AUTOSAVE_INTERVAL: Duration = Duration::from_secs(3);
 /// Name of the studio's rope tool.
 pub const ROPE: &str = "studio-rope";
+/// A brush acts again once the stroke has moved this fraction of its radius.
+pub const STROKE_SPACING: f64 = 0.5;
 /// Energy samples kept for the plot.
 pub const ENERGY_SAMPLES: usize = 4000;
 
@@ -215,8 +219,21 @@ pub enum Request {
         /// The cursor.
         to: Vec3,
     },
+    /// A brush stroke goes on under the mouse `ray`: the brush acts where it meets the model
+    /// (picked within `tolerance`), spaced by [`STROKE_SPACING`] of its radius.
+    Stroke {
+        /// The mouse ray.
+        ray: Ray,
+        /// Pick tolerance (model units).
+        tolerance: f64,
+    },
     /// Release the grab.
     Drop,
+    /// The axes the tools mirror across (see [`crate::symmetry`]); taken at the next press.
+    Symmetry(Symmetry),
+    /// Pause once the first model's step count reaches this (a scenario's run length), and
+    /// say so; Run then goes on past it. `None`: no such stop.
+    StopAt(Option<u64>),
     /// Replace the session (open, new); `path` is where explicit saves go.
     Replace(Box<Session>),
     /// Save the session to `path` (clears the dirty flag).
@@ -255,7 +272,10 @@ impl std::fmt::Debug for Request {
             Request::Speed(_) => "Speed",
             Request::Grab { .. } => "Grab",
             Request::Drag { .. } => "Drag",
+            Request::Stroke { .. } => "Stroke",
             Request::Drop => "Drop",
+            Request::Symmetry(_) => "Symmetry",
+            Request::StopAt(_) => "StopAt",
             Request::Replace(_) => "Replace",
             Request::Save(_) => "Save",
             Request::Autosave(..) => "Autosave",
@@ -390,11 +410,16 @@ impl Drop for Worker {
 }
 
 enum Active {
-    Rope,
-    /// A brush: the edit made at each cursor position, a box of half-size `radius` around it.
+    /// A rope named `name` whose cursor follows the drag.
+    Rope {
+        name: String,
+    },
+    /// A brush: `edit` made again at each stroke position (see `State::stroke_edit`), over
+    /// `radius`, acting `duration` seconds where it acts for a time (the force brush).
     Brush {
         edit: Box<Edit>,
         radius: f64,
+        duration: Option<f64>,
     },
     ControlPoint {
         model: String,
@@ -414,11 +439,43 @@ enum Active {
     },
 }
 
+/// One acting copy of a press: the press itself (`flip` all false) or a mirror image.
+struct Part {
+    flip: Axes,
+    active: Active,
+}
+
 struct Drag {
     model: String,
-    active: Active,
+    /// Centre of the symmetry planes (the model's bounding box at the press).
+    centre: Vec3,
+    parts: Vec<Part>,
+    /// The cursor's next position.
     pending: Option<Vec3>,
+    /// A brush stroke's next mouse ray and pick tolerance.
+    pending_ray: Option<(Ray, f64)>,
+    /// Where the stroke acted last (the press itself, not a mirror image).
+    last_at: Option<Vec3>,
+    /// Least distance between two positions at which a brush acts.
+    spacing: f64,
     last_applied: Instant,
+}
+
+/// The material point of a surface or curve hit (D-NURBS ropes and forces take one).
+fn surface_param(hit: &Hit) -> Option<[f64; 2]> {
+    match hit.element {
+        Element::SurfacePoint { param } => Some(param),
+        Element::CurvePoint { u } => Some([u, 0.0]),
+        _ => None,
+    }
+}
+
+/// The control cell under a hit (subdivision solids).
+fn cell(h: &Hit) -> Option<usize> {
+    h.extra.iter().find_map(|e| match e {
+        Some(Element::Cell { index }) => Some(*index),
+        _ => None,
+    })
 }
 
 struct State {
@@ -439,6 +496,10 @@ struct State {
     autosaved: (Instant, u64),
     /// Pause before passing this time.
     time_limit: Option<f64>,
+    /// Pause when the first model's step count reaches this (a scenario's end).
+    stop_at: Option<u64>,
+    /// Mirror symmetry of the tools.
+    symmetry: Symmetry,
     /// Replacements handled.
     generation: u64,
 }
@@ -463,6 +524,8 @@ impl State {
             autosave: None,
             autosaved: (Instant::now(), rev),
             time_limit: None,
+            stop_at: None,
+            symmetry: Symmetry::default(),
             generation: 0,
         }
     }
@@ -483,7 +546,11 @@ impl State {
     fn run(mut self, rx: Receiver<Request>) {
         loop {
             // Wait for requests while there is nothing to do.
-            let idle = !self.running && self.drag.as_ref().is_none_or(|d| d.pending.is_none());
+            let idle = !self.running
+                && self
+                    .drag
+                    .as_ref()
+                    .is_none_or(|d| d.pending.is_none() && d.pending_ray.is_none());
             let first = if idle {
                 match rx.recv_timeout(Duration::from_millis(100)) {
                     Ok(r) => Some(r),
@@ -510,6 +577,14 @@ impl State {
                     "t = {t:.3} is the end of the time range: paused (Run starts over)"
                 )));
             }
+            if self.running && self.at_scenario_end() {
+                self.running = false;
+                self.shown_revision = None;
+                let (n, t) = (self.stop_at.take().unwrap_or(0), self.session.time());
+                self.notify(Notice::Status(format!(
+                    "scenario finished at step {n} (t = {t:.3}); Run continues past it"
+                )));
+            }
             if self.running {
                 if self.ahead_of_wall_clock() {
                     std::thread::sleep(Duration::from_millis(1));
@@ -530,6 +605,12 @@ impl State {
         self.session
             .model(None)
             .is_ok_and(|m| m.time() + m.dt() > limit + 1e-9 * limit.abs().max(1.0))
+    }
+
+    /// Whether the first model has taken the scenario's steps.
+    fn at_scenario_end(&self) -> bool {
+        self.stop_at
+            .is_some_and(|n| self.session.model(None).is_ok_and(|m| m.steps() >= n))
     }
 
     fn ahead_of_wall_clock(&self) -> bool {
@@ -625,10 +706,18 @@ impl State {
                     d.pending = Some(to);
                 }
             }
+            Request::Stroke { ray, tolerance } => {
+                if let Some(d) = self.drag.as_mut() {
+                    d.pending_ray = Some((ray, tolerance));
+                }
+            }
             Request::Drop => self.drop_grab(),
+            Request::Symmetry(s) => self.symmetry = s,
+            Request::StopAt(n) => self.stop_at = n,
             Request::Replace(s) => {
                 self.drop_grab();
                 self.session = *s;
+                self.stop_at = None;
                 self.generation += 1;
                 self.notify(Notice::Replaced(self.generation));
                 self.samples.clear();
@@ -740,213 +829,61 @@ impl State {
         e
     }
 
+    /// Whether `grab` acts at the mirror images too when symmetry is on.
+    fn mirrored(grab: &Grab) -> bool {
+        matches!(
+            grab,
+            Grab::Rope { .. }
+                | Grab::Force { .. }
+                | Grab::Fix { .. }
+                | Grab::Free { .. }
+                | Grab::PaintMaterial { .. }
+        )
+    }
+
+    /// Least distance between two positions of a stroke at which a brush acts again.
+    fn spacing(grab: &Grab) -> f64 {
+        match grab {
+            Grab::Force { radius, .. } => radius * STROKE_SPACING,
+            Grab::Fix { brush } | Grab::Free { brush } | Grab::PaintMaterial { brush, .. } => {
+                brush * STROKE_SPACING
+            }
+            _ => 0.0,
+        }
+    }
+
     fn grab(&mut self, ray: Ray, tolerance: f64, grab: Grab) {
         self.drop_grab();
         let Some((model, hit)) = self.session.pick(&ray, tolerance) else {
             self.notify(Notice::Missed);
             return;
         };
-        let tools = match self.session.model(Some(&model)) {
-            Ok(m) => m.tools(),
-            Err(_) => return,
+        let Ok(m) = self.session.model(Some(&model)) else {
+            return;
         };
+        let tools = m.tools();
+        let centre = m
+            .display_mesh()
+            .ok()
+            .and_then(|mesh| crate::symmetry::centre(&mesh.positions))
+            .unwrap_or(hit.point);
+        // The press and its mirror images (a mirror image off the model acts nowhere).
+        let mut hits = vec![([false; 3], hit)];
+        if Self::mirrored(&grab) {
+            for flip in self.symmetry.mirrors() {
+                let r = crate::symmetry::reflect_ray(flip, centre, &ray);
+                if let Some((m2, h)) = self.session.pick(&r, tolerance)
+                    && m2 == model
+                {
+                    hits.push((flip, h));
+                }
+            }
+        }
         self.session.begin_group();
-        let time = self.session.model(Some(&model)).map_or(0.0, |m| m.time());
-        let p = [hit.point.x, hit.point.y, hit.point.z];
-        let param = match hit.element {
-            Element::SurfacePoint { param } => Some(param),
-            Element::CurvePoint { u } => Some([u, 0.0]),
-            _ => None,
-        };
-        // A material point where the model's rope and force take one (D-NURBS).
-        let rope_param = crate::app::takes(&tools, "rope", Some("param"));
-        let force_param = crate::app::takes(&tools, "force", Some("param"));
-        let cell = |h: &Hit| {
-            h.extra.iter().find_map(|e| match e {
-                Some(Element::Cell { index }) => Some(*index),
-                _ => None,
-            })
-        };
-        let one = |edit: Edit| Command::to(&model, edit);
-        let mut active = None;
-        match grab {
-            Grab::Rope { stiffness } => {
-                let edit = Edit::Rope {
-                    name: Some(ROPE.into()),
-                    from: p,
-                    param: if rope_param { param } else { None },
-                    to: None,
-                    until: None,
-                    velocity: None,
-                    release: None,
-                    stiffness,
-                    length: None,
-                    kernel: None,
-                    start: None,
-                };
-                if self.apply(one(edit)) {
-                    active = Some(Active::Rope);
-                }
-            }
-            Grab::ControlPoint => {
-                if let Element::ControlPoint { index } = hit.element {
-                    active = Some(Active::ControlPoint {
-                        model: model.clone(),
-                        index,
-                    });
-                } else {
-                    self.notify(Notice::Error {
-                        message: "no control point under the mouse (show the control net and \
-                                  press on one of its points)"
-                            .into(),
-                        paused: false,
-                    });
-                }
-            }
-            Grab::FfdPoint { pins } => {
-                active = Some(Active::Ffd {
-                    model: model.clone(),
-                    last: hit.point,
-                    pins,
-                });
-            }
-            Grab::FfdPin => {}
-            Grab::PdeLocal { half } => match (hit.element, hit.extra[0]) {
-                (Element::SurfacePoint { param }, patch) => {
-                    self.locals += 1;
-                    active = Some(Active::PdeLocal {
-                        name: format!("studio-local-{}", self.locals),
-                        patch: match patch {
-                            Some(Element::Patch { index }) => index,
-                            _ => 0,
-                        },
-                        uv: param,
-                        start: hit.point,
-                        half,
-                    });
-                }
-                _ => self.notify(Notice::Error {
-                    message: "a local deformation starts on a PDE surface's point".into(),
-                    paused: false,
-                }),
-            },
-            Grab::Weight { weight } => match hit.element {
-                Element::ControlPoint { index } => {
-                    self.apply(one(Edit::SetWeight { index, weight }));
-                }
-                _ => self.notify(Notice::Error {
-                    message: "click a control point to set its weight".into(),
-                    paused: false,
-                }),
-            },
-            Grab::Force {
-                direction,
-                strength,
-                radius,
-                duration,
-            } => {
-                let f = direction * strength;
-                let force = [f.x, f.y, f.z];
-                let until = Some(time + duration.max(0.0));
-                // A brush where the model takes one (solids), else a force at the point.
-                let edit = if crate::app::takes(&tools, "region-force", None) {
-                    Edit::RegionForce {
-                        name: None,
-                        center: p,
-                        radius: radius.max(1e-9),
-                        force,
-                        until,
-                    }
-                } else {
-                    Edit::Force {
-                        name: None,
-                        near: if force_param && param.is_some() {
-                            None
-                        } else {
-                            Some(p)
-                        },
-                        param: if force_param { param } else { None },
-                        force,
-                        until,
-                    }
-                };
-                self.apply(one(edit));
-            }
-            Grab::Fix { brush } | Grab::Free { brush } => {
-                let fix = matches!(grab, Grab::Fix { .. });
-                let of = |sel: Selection| if fix { Edit::Fix(sel) } else { Edit::Free(sel) };
-                if brush > 0.0 {
-                    let template = of(Selection::default());
-                    self.apply(one(Self::brush_edit(&template, hit.point, brush)));
-                    active = Some(Active::Brush {
-                        edit: Box::new(template),
-                        radius: brush,
-                    });
-                } else if let Element::ControlPoint { index } = hit.element {
-                    self.apply(one(of(Selection::ids(vec![index]))));
-                } else {
-                    self.apply(one(of(Selection::nearest(p))));
-                }
-            }
-            Grab::Extrude => {
-                let face = hit.extra.iter().find_map(|e| match e {
-                    Some(Element::Face { index }) => Some(*index),
-                    _ => None,
-                });
-                let edit = Edit::Extrude {
-                    face,
-                    near: if face.is_none() { Some(p) } else { None },
-                    factor: None,
-                };
-                self.apply(one(edit));
-            }
-            Grab::DeleteCell => {
-                let c = cell(&hit);
-                let edit = Edit::DeleteCell {
-                    cell: c,
-                    near: if c.is_none() { Some(p) } else { None },
-                };
-                self.apply(one(edit));
-            }
-            Grab::PaintMaterial {
-                brush,
-                density,
-                damping,
-                edge_stiffness,
-            } => {
-                let template = Edit::Material {
-                    cells: None,
-                    min: None,
-                    max: None,
-                    density: Some(density),
-                    damping: Some(damping),
-                    edge_stiffness: Some(edge_stiffness),
-                    virtual_stiffness: None,
-                    anisotropy: None,
-                    mu: None,
-                    gamma: None,
-                    alpha: None,
-                    beta: None,
-                };
-                if brush > 0.0 {
-                    self.apply(one(Self::brush_edit(&template, hit.point, brush)));
-                    active = Some(Active::Brush {
-                        edit: Box::new(template),
-                        radius: brush,
-                    });
-                } else if let Some(c) = cell(&hit) {
-                    let mut edit = template;
-                    if let Edit::Material { cells, .. } = &mut edit {
-                        *cells = Some(vec![c]);
-                    }
-                    self.apply(one(edit));
-                } else {
-                    self.notify(Notice::Error {
-                        message: "material painting needs a solid's control cell under the mouse"
-                            .into(),
-                        paused: false,
-                    });
-                }
+        let mut parts = Vec::new();
+        for (flip, h) in hits {
+            if let Some(active) = self.start(&model, &tools, flip, &h, &grab) {
+                parts.push(Part { flip, active });
             }
         }
         self.notify(Notice::Grabbed {
@@ -954,42 +891,335 @@ impl State {
             point: hit.point,
             element: hit.element,
         });
-        match active {
-            Some(active) => {
-                self.drag = Some(Drag {
-                    model,
-                    active,
-                    pending: None,
-                    last_applied: Instant::now() - DRAG_INTERVAL,
-                });
+        if parts.is_empty() {
+            self.session.end_group();
+            return;
+        }
+        self.drag = Some(Drag {
+            model,
+            centre,
+            parts,
+            pending: None,
+            pending_ray: None,
+            last_at: Some(hit.point),
+            spacing: Self::spacing(&grab),
+            last_applied: Instant::now() - DRAG_INTERVAL,
+        });
+    }
+
+    /// Starts `grab` at `hit` on `model` (a mirror image when `flip` has an axis): applies its
+    /// first command and returns what the drag that follows does.
+    fn start(
+        &mut self,
+        model: &str,
+        tools: &[ToolSpec],
+        flip: Axes,
+        hit: &Hit,
+        grab: &Grab,
+    ) -> Option<Active> {
+        let p = [hit.point.x, hit.point.y, hit.point.z];
+        let one = |edit: Edit| Command::to(model, edit);
+        match grab {
+            Grab::Rope { stiffness } => {
+                // A material point where the model's rope takes one (D-NURBS).
+                let param = if crate::app::takes(tools, "rope", Some("param")) {
+                    surface_param(hit)
+                } else {
+                    None
+                };
+                let name = format!("{ROPE}{}", crate::symmetry::suffix(flip));
+                let edit = Edit::Rope {
+                    name: Some(name.clone()),
+                    from: p,
+                    param,
+                    to: None,
+                    until: None,
+                    velocity: None,
+                    release: None,
+                    stiffness: *stiffness,
+                    length: None,
+                    kernel: None,
+                    start: None,
+                };
+                self.apply(one(edit)).then_some(Active::Rope { name })
             }
-            None => self.session.end_group(),
+            Grab::ControlPoint => {
+                if let Element::ControlPoint { index } = hit.element {
+                    return Some(Active::ControlPoint {
+                        model: model.to_string(),
+                        index,
+                    });
+                }
+                self.notify(Notice::Error {
+                    message: "no control point under the mouse (show the control net and \
+                              press on one of its points)"
+                        .into(),
+                    paused: false,
+                });
+                None
+            }
+            Grab::FfdPoint { pins } => Some(Active::Ffd {
+                model: model.to_string(),
+                last: hit.point,
+                pins: pins.clone(),
+            }),
+            Grab::FfdPin => None,
+            Grab::PdeLocal { half } => self.start_pde_local(hit, *half),
+            Grab::Weight { weight } => {
+                match hit.element {
+                    Element::ControlPoint { index } => {
+                        self.apply(one(Edit::SetWeight {
+                            index,
+                            weight: *weight,
+                        }));
+                    }
+                    _ => self.notify(Notice::Error {
+                        message: "click a control point to set its weight".into(),
+                        paused: false,
+                    }),
+                }
+                None
+            }
+            Grab::Force {
+                direction,
+                strength,
+                radius,
+                duration,
+            } => self.start_force(
+                model,
+                tools,
+                flip,
+                hit,
+                *direction * *strength,
+                *radius,
+                *duration,
+            ),
+            Grab::Fix { brush } | Grab::Free { brush } => {
+                self.start_fix(model, hit, matches!(grab, Grab::Fix { .. }), *brush)
+            }
+            Grab::Extrude => {
+                let face = hit.extra.iter().find_map(|e| match e {
+                    Some(Element::Face { index }) => Some(*index),
+                    _ => None,
+                });
+                self.apply(one(Edit::Extrude {
+                    face,
+                    near: if face.is_none() { Some(p) } else { None },
+                    factor: None,
+                }));
+                None
+            }
+            Grab::DeleteCell => {
+                let c = cell(hit);
+                self.apply(one(Edit::DeleteCell {
+                    cell: c,
+                    near: if c.is_none() { Some(p) } else { None },
+                }));
+                None
+            }
+            Grab::PaintMaterial { brush, .. } => self.start_paint(model, hit, grab, *brush),
         }
     }
 
-    /// Applies the pending cursor move of the drag, at most once per [`DRAG_INTERVAL`]
-    /// (`force`: now).
-    fn apply_drag(&mut self, force: bool) {
-        let Some(d) = self.drag.as_mut() else { return };
-        let Some(to) = d.pending else { return };
-        if !force && d.last_applied.elapsed() < DRAG_INTERVAL {
-            if !self.running {
-                // Nothing else to do: wait out the interval without spinning.
-                std::thread::sleep(Duration::from_millis(2));
+    fn start_pde_local(&mut self, hit: &Hit, half: [f64; 2]) -> Option<Active> {
+        match (hit.element, hit.extra[0]) {
+            (Element::SurfacePoint { param }, patch) => {
+                self.locals += 1;
+                Some(Active::PdeLocal {
+                    name: format!("studio-local-{}", self.locals),
+                    patch: match patch {
+                        Some(Element::Patch { index }) => index,
+                        _ => 0,
+                    },
+                    uv: param,
+                    start: hit.point,
+                    half,
+                })
             }
-            return;
+            _ => {
+                self.notify(Notice::Error {
+                    message: "a local deformation starts on a PDE surface's point".into(),
+                    paused: false,
+                });
+                None
+            }
         }
-        d.pending = None;
-        d.last_applied = Instant::now();
-        let t = [to.x, to.y, to.z];
-        let cmd = match &mut d.active {
-            Active::Brush { edit, radius } => {
-                Command::to(&d.model, Self::brush_edit(edit, to, *radius))
+    }
+
+    /// The force brush: a force at the hit (a region force where the model takes one), made
+    /// again along the stroke.
+    #[allow(clippy::too_many_arguments)]
+    fn start_force(
+        &mut self,
+        model: &str,
+        tools: &[ToolSpec],
+        flip: Axes,
+        hit: &Hit,
+        force: Vec3,
+        radius: f64,
+        duration: f64,
+    ) -> Option<Active> {
+        let f = crate::symmetry::reflect_dir(flip, force);
+        let force = [f.x, f.y, f.z];
+        let template = if crate::app::takes(tools, "region-force", None) {
+            Edit::RegionForce {
+                name: None,
+                center: [0.0; 3],
+                radius: radius.max(1e-9),
+                force,
+                until: None,
             }
-            Active::Rope => Command::to(
-                &d.model,
+        } else {
+            Edit::Force {
+                name: None,
+                near: None,
+                // A material point where the model's force takes one (D-NURBS).
+                param: crate::app::takes(tools, "force", Some("param")).then_some([0.0; 2]),
+                force,
+                until: None,
+            }
+        };
+        let duration = Some(duration.max(0.0));
+        let edit = self.stroke_edit(
+            model,
+            &template,
+            hit.point,
+            surface_param(hit),
+            radius,
+            duration,
+        );
+        self.apply(Command::to(model, edit));
+        Some(Active::Brush {
+            edit: Box::new(template),
+            radius,
+            duration,
+        })
+    }
+
+    fn start_fix(&mut self, model: &str, hit: &Hit, fix: bool, brush: f64) -> Option<Active> {
+        let make = |sel: Selection| if fix { Edit::Fix(sel) } else { Edit::Free(sel) };
+        if brush > 0.0 {
+            let template = make(Selection::default());
+            let edit = self.stroke_edit(model, &template, hit.point, None, brush, None);
+            self.apply(Command::to(model, edit));
+            return Some(Active::Brush {
+                edit: Box::new(template),
+                radius: brush,
+                duration: None,
+            });
+        }
+        let edit = match hit.element {
+            Element::ControlPoint { index } => make(Selection::ids(vec![index])),
+            _ => make(Selection::nearest([hit.point.x, hit.point.y, hit.point.z])),
+        };
+        self.apply(Command::to(model, edit));
+        None
+    }
+
+    fn start_paint(&mut self, model: &str, hit: &Hit, grab: &Grab, brush: f64) -> Option<Active> {
+        let Grab::PaintMaterial {
+            density,
+            damping,
+            edge_stiffness,
+            ..
+        } = *grab
+        else {
+            return None;
+        };
+        let template = Edit::Material {
+            cells: None,
+            min: None,
+            max: None,
+            density: Some(density),
+            damping: Some(damping),
+            edge_stiffness: Some(edge_stiffness),
+            virtual_stiffness: None,
+            anisotropy: None,
+            mu: None,
+            gamma: None,
+            alpha: None,
+            beta: None,
+        };
+        if brush > 0.0 {
+            let edit = self.stroke_edit(model, &template, hit.point, None, brush, None);
+            self.apply(Command::to(model, edit));
+            return Some(Active::Brush {
+                edit: Box::new(template),
+                radius: brush,
+                duration: None,
+            });
+        }
+        if let Some(c) = cell(hit) {
+            let mut edit = template;
+            if let Edit::Material { cells, .. } = &mut edit {
+                *cells = Some(vec![c]);
+            }
+            self.apply(Command::to(model, edit));
+        } else {
+            self.notify(Notice::Error {
+                message: "material painting needs a solid's control cell under the mouse".into(),
+                paused: false,
+            });
+        }
+        None
+    }
+
+    /// The edit of a brush at `at` (`param`: the material point there, where the edit takes
+    /// one): `template` with its box, centre or point there, acting for `duration` seconds of
+    /// the model's time from now.
+    fn stroke_edit(
+        &self,
+        model: &str,
+        template: &Edit,
+        at: Vec3,
+        param: Option<[f64; 2]>,
+        radius: f64,
+        duration: Option<f64>,
+    ) -> Edit {
+        let until = duration.map(|d| self.session.model(Some(model)).map_or(0.0, |m| m.time()) + d);
+        let p = [at.x, at.y, at.z];
+        match template {
+            Edit::RegionForce { force, radius, .. } => Edit::RegionForce {
+                name: None,
+                center: p,
+                radius: *radius,
+                force: *force,
+                until,
+            },
+            Edit::Force {
+                force, param: tp, ..
+            } => {
+                let param = if tp.is_some() { param } else { None };
+                Edit::Force {
+                    name: None,
+                    near: if param.is_some() { None } else { Some(p) },
+                    param,
+                    force: *force,
+                    until,
+                }
+            }
+            t => Self::brush_edit(t, at, radius),
+        }
+    }
+
+    /// The command of `part` for the cursor at `to` (the primary part's; a mirror image's
+    /// cursor is its reflection).
+    fn part_command(&self, d_model: &str, centre: Vec3, part: &mut Part, to: Vec3) -> Command {
+        let to = crate::symmetry::reflect(part.flip, centre, to);
+        let t = [to.x, to.y, to.z];
+        match &mut part.active {
+            Active::Brush {
+                edit,
+                radius,
+                duration,
+            } => Command::to(
+                d_model,
+                self.stroke_edit(d_model, edit, to, None, *radius, *duration),
+            ),
+            Active::Rope { name } => Command::to(
+                d_model,
                 Edit::MoveRope {
-                    name: ROPE.into(),
+                    name: name.clone(),
                     to: t,
                 },
             ),
@@ -1010,7 +1240,7 @@ impl State {
                 // The G1 bump's peak is p / 256 (eq 32 at the region's centre).
                 let p = (to - *start) * 256.0;
                 Command::to(
-                    &d.model,
+                    d_model,
                     Edit::PdeLocal {
                         name: name.clone(),
                         patch: *patch,
@@ -1031,8 +1261,87 @@ impl State {
                 }));
                 Command::to(model, Edit::FfdMove { moves })
             }
+        }
+    }
+
+    /// Applies the pending cursor move (or brush stroke position) of the drag, at most once
+    /// per [`DRAG_INTERVAL`] (`force`: now, and a brush acts even nearer than its spacing).
+    fn apply_drag(&mut self, force: bool) {
+        let Some(d) = self.drag.as_ref() else { return };
+        if d.pending.is_none() && d.pending_ray.is_none() {
+            return;
+        }
+        if !force && d.last_applied.elapsed() < DRAG_INTERVAL {
+            if !self.running {
+                // Nothing else to do: wait out the interval without spinning.
+                std::thread::sleep(Duration::from_millis(2));
+            }
+            return;
+        }
+        let Some(mut d) = self.drag.take() else {
+            return;
         };
-        self.apply(cmd);
+        d.last_applied = Instant::now();
+        if let Some((ray, tol)) = d.pending_ray.take() {
+            self.stroke_at(&mut d, &ray, tol, force);
+        } else if let Some(to) = d.pending.take() {
+            let brush = d
+                .parts
+                .iter()
+                .any(|p| matches!(p.active, Active::Brush { .. }));
+            let near = d.last_at.is_some_and(|l| (to - l).norm() < d.spacing);
+            if brush && near && !force {
+                // Too near the last position: wait for the cursor to move on.
+                d.pending = Some(to);
+            } else {
+                d.last_at = Some(to);
+                let model = d.model.clone();
+                let centre = d.centre;
+                for part in &mut d.parts {
+                    let c = self.part_command(&model, centre, part, to);
+                    self.apply(c);
+                }
+            }
+        }
+        self.drag = Some(d);
+    }
+
+    /// A brush stroke's position from the mouse ray: the brush acts where the ray meets the
+    /// model (its mirror images where the mirrored rays do), once the stroke has moved by the
+    /// brush's spacing.
+    fn stroke_at(&mut self, d: &mut Drag, ray: &Ray, tolerance: f64, force: bool) {
+        let Some((m, hit)) = self.session.pick(ray, tolerance) else {
+            return;
+        };
+        if m != d.model
+            || (!force
+                && d.last_at
+                    .is_some_and(|l| (hit.point - l).norm() < d.spacing))
+        {
+            return;
+        }
+        d.last_at = Some(hit.point);
+        for part in &d.parts {
+            let Active::Brush {
+                edit,
+                radius,
+                duration,
+            } = &part.active
+            else {
+                continue;
+            };
+            let (at, param) = if part.flip == [false; 3] {
+                (hit.point, surface_param(&hit))
+            } else {
+                let r = crate::symmetry::reflect_ray(part.flip, d.centre, ray);
+                match self.session.pick(&r, tolerance) {
+                    Some((m2, h)) if m2 == d.model => (h.point, surface_param(&h)),
+                    _ => continue,
+                }
+            };
+            let e = self.stroke_edit(&d.model, edit, at, param, *radius, *duration);
+            self.apply(Command::to(&d.model, e));
+        }
     }
 
     fn drop_grab(&mut self) {
@@ -1041,13 +1350,10 @@ impl State {
         }
         self.apply_drag(true);
         let Some(d) = self.drag.take() else { return };
-        if matches!(d.active, Active::Rope) {
-            self.apply(Command::to(
-                &d.model,
-                Edit::Release {
-                    name: ROPE.to_string(),
-                },
-            ));
+        for part in &d.parts {
+            if let Active::Rope { name } = &part.active {
+                self.apply(Command::to(&d.model, Edit::Release { name: name.clone() }));
+            }
         }
         self.session.end_group();
     }

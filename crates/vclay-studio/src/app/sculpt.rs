@@ -1,0 +1,456 @@
+//! The studio's sculpting habits (Blender sculpt mode, SculptGL): keyboard shortcuts and the
+//! help overlay, the brush circle under the cursor and the brush size on `[` `]`, symmetry
+//! toggles, and what the viewport draws over the model (control-point handles with a hover
+//! highlight, fixed points, FFD pins, mirrored brush circles, the active tool at the cursor,
+//! the axes gizmo).
+
+use egui::{Color32, Key, Modifiers, Pos2, Rect, Stroke, Ui, Vec2};
+use vclay_core::Vec3;
+use vclay_session::LineRole;
+
+use super::{Dialog, PICK_POINTS, Studio, Tool};
+use crate::camera::View;
+use crate::keys::{BRUSH_STEP, SHORTCUTS, tool_key};
+use crate::pick::tangents;
+use crate::symmetry::reflect;
+use crate::worker::Request;
+
+/// Colour of the brush circle.
+pub const BRUSH_COLOR: Color32 = Color32::from_rgb(255, 255, 255);
+/// Colour of a mirrored brush circle.
+pub const MIRROR_COLOR: Color32 = Color32::from_rgb(120, 200, 255);
+/// Colour of control-point handles.
+pub const HANDLE_COLOR: Color32 = Color32::from_rgb(255, 160, 40);
+/// Colour of the handle under the cursor.
+pub const HOVER_COLOR: Color32 = Color32::from_rgb(255, 240, 80);
+/// Colour of fixed points.
+pub const FIXED_COLOR: Color32 = Color32::from_rgb(70, 140, 255);
+/// Colour of FFD pins.
+pub const PIN_COLOR: Color32 = Color32::from_rgb(240, 60, 220);
+/// Most point-triangle tests per frame for hiding the handles behind the surface.
+const VISIBILITY_BUDGET: usize = 4_000_000;
+/// Segments of the brush circle.
+const CIRCLE_SEGMENTS: usize = 48;
+/// Largest brush radius relative to the model size, the force brush's and the others'.
+const RADIUS_RANGE: [(f64, f64); 2] = [(0.01, 1.0), (0.0, 0.5)];
+
+/// The brush under the cursor: where it would act, and how far.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BrushCursor {
+    /// The surface point under the mouse.
+    pub centre: Vec3,
+    /// The surface normal there (facing the viewer).
+    pub normal: Vec3,
+    /// The brush radius, model units (0: the tool acts on the one element picked).
+    pub radius: f64,
+}
+
+impl Studio {
+    /// Whether the active tool is a brush (the circle, `[` `]`, strokes).
+    pub fn is_brush(&self) -> bool {
+        matches!(
+            self.tool,
+            Tool::Force | Tool::Fix | Tool::Free | Tool::Paint
+        )
+    }
+
+    /// The active brush's radius relative to the model size (`None`: not a brush).
+    pub fn brush_radius(&self) -> Option<f64> {
+        match self.tool {
+            Tool::Force => Some(self.options.radius),
+            Tool::Fix | Tool::Free | Tool::Paint => Some(self.options.brush),
+            _ => None,
+        }
+    }
+
+    /// Scales the active brush by `factor` within its slider's range (growing a click tool,
+    /// radius 0, gives it the smallest brush).
+    pub fn scale_brush(&mut self, factor: f64) {
+        let (r, (lo, hi)) = match self.tool {
+            Tool::Force => (&mut self.options.radius, RADIUS_RANGE[0]),
+            Tool::Fix | Tool::Free | Tool::Paint => (&mut self.options.brush, RADIUS_RANGE[1]),
+            _ => return,
+        };
+        let next = if *r <= 0.0 && factor > 1.0 {
+            0.02
+        } else if factor < 1.0 && *r * factor < 0.01 {
+            lo
+        } else {
+            *r * factor
+        };
+        *r = next.clamp(lo, hi);
+    }
+
+    /// The brush circle shown under the mouse, if the active tool is a brush and the mouse is
+    /// over the model.
+    pub fn brush_cursor(&self) -> Option<BrushCursor> {
+        let hit = self.hover?;
+        Some(BrushCursor {
+            centre: hit.point,
+            normal: hit.normal,
+            radius: self.brush_radius()? * self.model_size(),
+        })
+    }
+
+    /// The control point (handle) under the mouse, if handles are shown.
+    pub fn hovered_handle(&self) -> Option<Vec3> {
+        self.hovered_handle
+    }
+
+    /// Sets the tool symmetry (the worker takes it at the next press).
+    pub fn set_symmetry(&mut self, axes: crate::symmetry::Axes) {
+        self.symmetry = crate::symmetry::Symmetry(axes);
+    }
+
+    /// The symmetry toggles (X, Y, Z) of the tools that mirror.
+    pub(super) fn symmetry_ui(&mut self, ui: &mut Ui) {
+        if !(self.is_brush() || self.tool == Tool::Rope) {
+            return;
+        }
+        ui.horizontal(|ui| {
+            ui.label("Symmetry:");
+            for (k, name) in ["X", "Y", "Z"].iter().enumerate() {
+                ui.toggle_value(&mut self.symmetry.0[k], *name)
+                    .on_hover_text(format!(
+                        "mirror across {} (key {name})",
+                        name.to_lowercase()
+                    ));
+            }
+        });
+    }
+
+    /// The keys (see [`crate::keys`]); none while a dialog is open or a text field has focus.
+    pub(super) fn shortcuts(&mut self, ctx: &egui::Context) {
+        // A dialog or a text field takes the keys (Ctrl+Z in a path field is not the model's).
+        if self.dialog.is_some() || ctx.text_edit_focused() {
+            return;
+        }
+        let (undo, redo, save) = ctx.input_mut(|i| {
+            let redo = i.consume_key(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z)
+                || i.consume_key(Modifiers::COMMAND, Key::Y);
+            let undo = i.consume_key(Modifiers::COMMAND, Key::Z);
+            let save = i.consume_key(Modifiers::COMMAND, Key::S);
+            (undo, redo, save)
+        });
+        if redo {
+            self.send(Request::Redo);
+        } else if undo {
+            self.send(Request::Undo);
+        }
+        if save {
+            self.save();
+        }
+        // Plain keys (the Ctrl combinations above are consumed already).
+        let pressed = |k: Key| ctx.input_mut(|i| i.consume_key(Modifiers::NONE, k));
+        if pressed(Key::F1) || pressed(Key::Questionmark) {
+            self.dialog = Some(Dialog::Help);
+            return;
+        }
+        if self.worker.is_none() {
+            return;
+        }
+        for t in Tool::palette(&self.tools) {
+            if pressed(tool_key(t)) {
+                self.tool = t;
+            }
+        }
+        if pressed(Key::F) {
+            self.fit();
+        }
+        if pressed(Key::OpenBracket) {
+            self.scale_brush(1.0 / BRUSH_STEP);
+        }
+        if pressed(Key::CloseBracket) {
+            self.scale_brush(BRUSH_STEP);
+        }
+        if pressed(Key::Space) {
+            let running = self.frame.running;
+            self.run_clicked(running);
+        }
+        for (k, axis) in [(Key::X, 0), (Key::Y, 1), (Key::Z, 2)] {
+            if pressed(k) {
+                self.symmetry.0[axis] = !self.symmetry.0[axis];
+            }
+        }
+        for (k, v) in [
+            (Key::Num1, View::Front),
+            (Key::Num3, View::Side),
+            (Key::Num7, View::Top),
+            (Key::Num0, View::Iso),
+        ] {
+            if pressed(k) {
+                self.camera.set_view(v);
+            }
+        }
+        let before = self.layers;
+        if pressed(Key::W) {
+            self.layers.wireframe = !self.layers.wireframe;
+        }
+        if pressed(Key::N) {
+            self.layers.control_net = !self.layers.control_net;
+        }
+        if before != self.layers {
+            self.rebuild_scene();
+        }
+    }
+
+    /// The help overlay's content: every shortcut.
+    pub(super) fn help_ui(&self, ui: &mut Ui) {
+        ui.heading("Shortcuts");
+        egui::Grid::new("help-keys")
+            .num_columns(2)
+            .striped(true)
+            .show(ui, |ui| {
+                for t in Tool::ALL {
+                    let offered = self.worker.is_none() || Tool::palette(&self.tools).contains(&t);
+                    let text = egui::RichText::new(format!("{} tool", t.label()));
+                    ui.monospace(tool_key(t).name());
+                    ui.label(if offered { text } else { text.weak() });
+                    ui.end_row();
+                }
+                for (k, what) in SHORTCUTS {
+                    ui.monospace(k);
+                    ui.label(what);
+                    ui.end_row();
+                }
+            });
+        ui.small("Keys act while no dialog is open and no text field has the focus.");
+    }
+
+    /// The help overlay; `false` once it is closed (its button, Esc, Enter, F1 or ?).
+    pub(super) fn help_dialog(&self, ctx: &egui::Context, modal: egui::Modal) -> bool {
+        let closed = modal
+            .show(ctx, |ui| {
+                ui.set_min_width(super::DIALOG_MIN_WIDTH);
+                self.help_ui(ui);
+                ui.button("Close").clicked()
+            })
+            .inner;
+        let keys = ctx.input_mut(|i| {
+            [Key::Escape, Key::Enter, Key::F1, Key::Questionmark]
+                .iter()
+                .any(|&k| i.consume_key(Modifiers::NONE, k))
+        });
+        !(closed || keys)
+    }
+
+    /// The mouse over the model: the surface under it (for the brush circle) and the handle
+    /// under it.
+    pub(super) fn hover(&mut self, ui: &Ui, rect: Rect) {
+        let pos = ui
+            .input(|i| i.pointer.hover_pos())
+            .filter(|p| rect.contains(*p));
+        self.pointer = pos;
+        self.hover = None;
+        self.hovered_handle = None;
+        let Some(p) = pos else { return };
+        let (w, h) = (rect.width() as f64, rect.height() as f64);
+        let (x, y) = ((p.x - rect.min.x) as f64, (p.y - rect.min.y) as f64);
+        if self.is_brush() {
+            let ray = self.camera.ray(x, y, w, h);
+            self.hover = crate::pick::ray_frame(&ray, &self.frame);
+        }
+        if self.shows_handles() {
+            let mut best = PICK_POINTS;
+            for c in self.points_of(&[LineRole::ControlNet, LineRole::LatticeEdges]) {
+                if let Some((px, py)) = self.camera.project(c, w, h) {
+                    let d = ((px - x).powi(2) + (py - y).powi(2)).sqrt();
+                    if d < best {
+                        best = d;
+                        self.hovered_handle = Some(c);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Whether control-point handles are drawn: the control net is shown or the control point
+    /// tool is active.
+    fn shows_handles(&self) -> bool {
+        self.layers.control_net || self.tool == Tool::ControlPoint
+    }
+
+    /// The points of the frame's line sets with one of `roles`.
+    fn points_of(&self, roles: &[LineRole]) -> Vec<Vec3> {
+        self.frame
+            .models
+            .iter()
+            .flat_map(|m| m.lines.iter())
+            .filter(|l| l.role.is_some_and(|r| roles.contains(&r)))
+            .flat_map(|l| l.points.iter().copied())
+            .collect()
+    }
+
+    /// Draws over the model: handles, fixed points, pins, the brush circles, the tool at the
+    /// cursor, the axes gizmo.
+    pub(super) fn overlays(&self, ui: &Ui, rect: Rect) {
+        let painter = ui.painter_at(rect);
+        let (w, h) = (rect.width() as f64, rect.height() as f64);
+        let at = |p: Vec3| {
+            self.camera
+                .project(p, w, h)
+                .map(|(x, y)| rect.min + Vec2::new(x as f32, y as f32))
+        };
+        if self.shows_handles() {
+            let handles = self.points_of(&[LineRole::ControlNet, LineRole::LatticeEdges]);
+            let seen = self.visibility(&handles);
+            for (c, v) in handles.into_iter().zip(seen) {
+                if let Some(s) = at(c) {
+                    if v {
+                        painter.circle(s, 3.0, HANDLE_COLOR, Stroke::new(1.0, Color32::BLACK));
+                    } else {
+                        // Behind the surface: faint, as in an x-ray view.
+                        painter.circle_filled(s, 2.0, HANDLE_COLOR.gamma_multiply(0.35));
+                    }
+                }
+            }
+            if let Some(s) = self.hovered_handle.and_then(at) {
+                painter.circle_stroke(s, 7.0, Stroke::new(2.0, HOVER_COLOR));
+            }
+        }
+        let fixed = self.points_of(&[LineRole::Fixed]);
+        let seen = self.visibility(&fixed);
+        for (c, _) in fixed.into_iter().zip(seen).filter(|(_, v)| *v) {
+            if let Some(s) = at(c) {
+                let r = Rect::from_center_size(s, Vec2::splat(7.0));
+                painter.rect_filled(r, 1.0, FIXED_COLOR);
+                painter.rect_stroke(
+                    r,
+                    1.0,
+                    Stroke::new(1.0, Color32::WHITE),
+                    egui::StrokeKind::Outside,
+                );
+            }
+        }
+        for &c in &self.ffd_pins {
+            if let Some(s) = at(c) {
+                painter.circle_stroke(s, 6.0, Stroke::new(2.0, PIN_COLOR));
+                painter.circle_filled(s, 2.0, PIN_COLOR);
+            }
+        }
+        if let Some(b) = self.brush_cursor() {
+            self.brush_circles(&painter, rect, &b);
+        }
+        self.tool_at_cursor(&painter);
+        axes_gizmo(&painter, rect, &self.camera);
+    }
+
+    /// Whether each of `points` is in sight (no display surface between it and the eye). All
+    /// are when the test would cost too much for one frame (many points on a fine mesh).
+    fn visibility(&self, points: &[Vec3]) -> Vec<bool> {
+        let tris: usize = self
+            .frame
+            .models
+            .iter()
+            .map(|m| m.mesh.triangles.len())
+            .sum();
+        if points.len().saturating_mul(tris) > VISIBILITY_BUDGET {
+            return vec![true; points.len()];
+        }
+        let eye = self.camera.eye();
+        points
+            .iter()
+            .map(|&p| {
+                let d = p - eye;
+                let ray = vclay_session::Ray {
+                    origin: eye,
+                    direction: d,
+                };
+                // Distances are in units of |d|: the point itself is at 1.
+                crate::pick::ray_frame(&ray, &self.frame).is_none_or(|h| h.distance > 0.995)
+            })
+            .collect()
+    }
+
+    /// The brush circle on the surface's tangent plane under the mouse, and its mirror images.
+    fn brush_circles(&self, painter: &egui::Painter, rect: Rect, b: &BrushCursor) {
+        let (w, h) = (rect.width() as f64, rect.height() as f64);
+        let circle = |centre: Vec3, normal: Vec3, color: Color32| {
+            let (t1, t2) = tangents(normal);
+            // A click tool (radius 0) shows the pick's reach instead.
+            let r = if b.radius > 0.0 {
+                b.radius
+            } else {
+                PICK_POINTS * 2.0 * self.camera.distance * (crate::camera::FOV_Y / 2.0).tan() / h
+            };
+            let pts: Vec<Pos2> = (0..CIRCLE_SEGMENTS)
+                .filter_map(|k| {
+                    let a = k as f64 / CIRCLE_SEGMENTS as f64 * std::f64::consts::TAU;
+                    let p = centre + (t1 * a.cos() + t2 * a.sin()) * r;
+                    self.camera
+                        .project(p, w, h)
+                        .map(|(x, y)| rect.min + Vec2::new(x as f32, y as f32))
+                })
+                .collect();
+            if pts.len() == CIRCLE_SEGMENTS {
+                painter.add(egui::Shape::closed_line(pts, Stroke::new(1.5, color)));
+            }
+        };
+        circle(b.centre, b.normal, BRUSH_COLOR);
+        if let Some(c) = self.symmetry_centre() {
+            for f in self.symmetry.mirrors() {
+                let n = crate::symmetry::reflect_dir(f, b.normal);
+                circle(reflect(f, c, b.centre), n, MIRROR_COLOR);
+            }
+        }
+    }
+
+    /// The centre of the symmetry planes: the first model's bounding box (as the worker
+    /// takes it at a press).
+    pub fn symmetry_centre(&self) -> Option<Vec3> {
+        self.frame
+            .models
+            .first()
+            .and_then(|m| crate::symmetry::centre(&m.mesh.positions))
+    }
+
+    /// The active tool's name (and brush size) beside the cursor.
+    fn tool_at_cursor(&self, painter: &egui::Painter) {
+        let Some(p) = self.pointer else { return };
+        let mut text = self.tool.label().to_string();
+        if let Some(r) = self.brush_radius() {
+            text += &format!("  r {r:.2}");
+        }
+        if self.tool == Tool::Force {
+            text += &format!("  s {:.0}", self.options.force);
+        }
+        if self.symmetry.any() && (self.is_brush() || self.tool == Tool::Rope) {
+            text += &format!("  sym {}", self.symmetry.label());
+        }
+        painter.text(
+            p + Vec2::new(14.0, 14.0),
+            egui::Align2::LEFT_TOP,
+            text,
+            egui::FontId::proportional(12.0),
+            Color32::from_gray(230),
+        );
+    }
+}
+
+/// The world axes as seen from the camera, in the viewport's bottom-left corner (x red, y
+/// green, z blue, as Blender's).
+fn axes_gizmo(painter: &egui::Painter, rect: Rect, camera: &crate::camera::Camera) {
+    let o = Pos2::new(rect.min.x + 40.0, rect.max.y - 40.0);
+    let (r, u) = camera.right_up();
+    let back = camera.back();
+    let mut axes = [
+        (Vec3::x(), "x", Color32::from_rgb(230, 70, 70)),
+        (Vec3::y(), "y", Color32::from_rgb(110, 200, 80)),
+        (Vec3::z(), "z", Color32::from_rgb(80, 140, 255)),
+    ];
+    // The axis nearest the viewer last (on top).
+    axes.sort_by(|a, b| a.0.dot(&back).total_cmp(&b.0.dot(&back)));
+    painter.circle_filled(o, 32.0, Color32::from_black_alpha(60));
+    for (a, name, c) in axes {
+        let d = Vec2::new(a.dot(&r) as f32, -(a.dot(&u) as f32)) * 24.0;
+        painter.line_segment([o, o + d], Stroke::new(2.0, c));
+        painter.circle_filled(o + d, 7.0, c);
+        painter.text(
+            o + d,
+            egui::Align2::CENTER_CENTER,
+            name,
+            egui::FontId::proportional(10.0),
+            Color32::BLACK,
+        );
+    }
+}

@@ -1,0 +1,425 @@
+//! The sculpting habits of issue 27 (a designer used to Blender's sculpt mode and SculptGL),
+//! each driven through the UI (egui_kittest) or the simulation thread: a scenario's run stops at
+//! its end step and says so; shortcuts pick tools, resize the brush, toggle symmetry, run and
+//! frame, and stay out of text fields; F1 shows every shortcut; the brush circle follows the
+//! mouse over the model; a force stroke acts along the drag and undoes as one; symmetry mirrors
+//! a fix stroke and a rope in one undo group; control-point handles light up under the mouse.
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use egui::accesskit::Role;
+use egui::{Key, Modifiers, Pos2, Vec2};
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use vclay_core::Vec3;
+use vclay_session::{Edit, LineRole, Ray};
+use vclay_studio::load::{builtin, builtin_named};
+use vclay_studio::symmetry::Symmetry;
+use vclay_studio::worker::{Grab, Request, Worker};
+use vclay_studio::{Options, Studio, Tool};
+
+fn harness(opts: Options) -> Harness<'static, Studio> {
+    Harness::builder()
+        .with_size(Vec2::new(1280.0, 800.0))
+        .with_max_steps(100_000)
+        .build_ui_state(|ui, s: &mut Studio| s.show(ui), Studio::new(opts))
+}
+
+fn quiet(dir: &Path) -> Options {
+    Options {
+        autosave: Some(dir.join("autosave.session")),
+        no_recovery: true,
+        ..Default::default()
+    }
+}
+
+/// Steps the UI until `done` holds (at most `secs` of wall time).
+fn wait_for(
+    h: &mut Harness<'static, Studio>,
+    secs: u64,
+    what: &str,
+    mut done: impl FnMut(&Studio) -> bool,
+) {
+    let t = Instant::now();
+    while !done(h.state()) {
+        assert!(
+            t.elapsed() < Duration::from_secs(secs),
+            "timed out: {what}; note {:?}, log {:?}",
+            h.state().note(),
+            h.state().log().collect::<Vec<_>>()
+        );
+        h.step();
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+fn click(h: &mut Harness<'static, Studio>, role: Role, label: &str) {
+    for _ in 0..50 {
+        if h.query_by_role_and_label(role, label).is_some() {
+            break;
+        }
+        h.step();
+    }
+    h.get_by_role_and_label(role, label).click();
+    h.step();
+    h.step();
+}
+
+/// The paused cube from the start page.
+fn paused_cube(dir: &Path) -> Harness<'static, Studio> {
+    let mut h = harness(Options {
+        paused: true,
+        ..quiet(dir)
+    });
+    click(
+        &mut h,
+        Role::Button,
+        "4^3 subdivision cube (rope, extrude, delete cell)",
+    );
+    wait_for(&mut h, 30, "first frame", |s| !s.frame().models.is_empty());
+    h.step();
+    h
+}
+
+fn key(h: &mut Harness<'static, Studio>, k: Key) {
+    h.key_press(k);
+    h.step();
+}
+
+fn edits(s: &Studio) -> Vec<Edit> {
+    s.worker()
+        .unwrap()
+        .query(|s| s.log().iter().map(|l| l.command.edit.clone()).collect())
+        .unwrap()
+}
+
+/// The viewport point `(fx, fy)` of the way across (0.5, 0.5: the centre).
+fn at(s: &Studio, fx: f32, fy: f32) -> Pos2 {
+    let r = s.viewport();
+    r.min + Vec2::new(r.width() * fx, r.height() * fy)
+}
+
+#[test]
+fn a_scenario_stops_at_its_end_step_and_says_so() {
+    // fig9a's rope pulls the egg's pole up forever; the scenario ends at step 400.
+    let dir = tempfile::tempdir().unwrap();
+    let file =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenarios/fig9a_swung_egg.toml");
+    let mut h = harness(Options {
+        file: Some(file),
+        ..quiet(dir.path())
+    });
+    wait_for(&mut h, 30, "first frame", |s| !s.frame().models.is_empty());
+    click(&mut h, Role::Button, "max");
+    wait_for(&mut h, 300, "the run stops", |s| {
+        !s.frame().running && s.frame().steps > 0
+    });
+    assert_eq!(h.state().frame().steps, 400);
+    let note = h.state().note().unwrap_or_default().to_string();
+    assert!(
+        note.starts_with("scenario finished at step 400 (t = ")
+            && note.contains("Run continues past it"),
+        "{note}"
+    );
+    std::thread::sleep(Duration::from_millis(200));
+    h.step();
+    assert_eq!(h.state().frame().steps, 400, "it stays stopped");
+    // Run goes on past the end.
+    key(&mut h, Key::Space);
+    wait_for(&mut h, 60, "running past the end", |s| {
+        s.frame().steps > 410
+    });
+}
+
+#[test]
+fn shortcuts_pick_tools_size_the_brush_toggle_symmetry_run_and_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = paused_cube(dir.path());
+    key(&mut h, Key::G);
+    assert_eq!(h.state().tool, Tool::Force);
+    let r0 = h.state().options.radius;
+    key(&mut h, Key::CloseBracket);
+    assert!((h.state().options.radius - r0 * 1.25).abs() < 1e-12);
+    key(&mut h, Key::OpenBracket);
+    assert!((h.state().options.radius - r0).abs() < 1e-12);
+    key(&mut h, Key::H);
+    assert_eq!(h.state().tool, Tool::Fix);
+    key(&mut h, Key::R);
+    assert_eq!(h.state().tool, Tool::Rope);
+    // Not offered by the cube: the key does nothing.
+    key(&mut h, Key::M);
+    assert_eq!(h.state().tool, Tool::Rope);
+    key(&mut h, Key::X);
+    key(&mut h, Key::Z);
+    assert_eq!(h.state().symmetry, Symmetry([true, false, true]));
+    key(&mut h, Key::Z);
+    assert_eq!(h.state().symmetry, Symmetry([true, false, false]));
+    key(&mut h, Key::Space);
+    wait_for(&mut h, 20, "running", |s| s.frame().running);
+    key(&mut h, Key::Space);
+    wait_for(&mut h, 20, "paused", |s| !s.frame().running);
+    // F frames the model again after a zoom.
+    let framed = h.state().camera.clone();
+    h.state_mut().camera.distance *= 3.0;
+    h.state_mut().camera.target += Vec3::new(1.0, 0.0, 0.0);
+    key(&mut h, Key::F);
+    let c = &h.state().camera;
+    assert!((c.distance - framed.distance).abs() < 1e-3 * framed.distance);
+    assert!((c.target - framed.target).norm() < 1e-3);
+    // In a text field the letters are text, not tools.
+    click(&mut h, Role::Button, "File");
+    click(&mut h, Role::Button, "Screenshot...");
+    h.get_by_role(Role::TextInput).type_text("g");
+    h.step();
+    key(&mut h, Key::G);
+    key(&mut h, Key::X);
+    assert_eq!(h.state().tool, Tool::Rope);
+    assert_eq!(h.state().symmetry, Symmetry([true, false, false]));
+    assert_eq!(h.state().dialog_title(), Some("Screenshot (PNG)"));
+    h.key_press(Key::Escape);
+    h.step();
+    assert_eq!(h.state().dialog_title(), None);
+}
+
+#[test]
+fn f1_shows_every_shortcut_and_esc_closes_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = paused_cube(dir.path());
+    key(&mut h, Key::F1);
+    assert_eq!(h.state().dialog_title(), Some("Help"));
+    h.step();
+    for (_, what) in vclay_studio::keys::SHORTCUTS {
+        assert!(
+            h.query_by_label(what).is_some(),
+            "{what} is not in the help"
+        );
+    }
+    for t in Tool::ALL {
+        let l = format!("{} tool", t.label());
+        assert!(h.query_by_label(&l).is_some(), "{l} is not in the help");
+    }
+    // Keys are the dialog's while it is open.
+    key(&mut h, Key::G);
+    assert_eq!(h.state().tool, Tool::Rope);
+    key(&mut h, Key::Escape);
+    assert_eq!(h.state().dialog_title(), None);
+    key(&mut h, Key::Questionmark);
+    assert_eq!(h.state().dialog_title(), Some("Help"));
+}
+
+#[test]
+fn the_brush_circle_follows_the_mouse_over_the_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = paused_cube(dir.path());
+    key(&mut h, Key::G);
+    let c = at(h.state(), 0.5, 0.5);
+    h.hover_at(c);
+    h.step();
+    let b = h
+        .state()
+        .brush_cursor()
+        .expect("a brush circle over the cube");
+    let s = h.state();
+    let r = s.viewport();
+    let ray = s.camera.ray(
+        (c.x - r.min.x) as f64,
+        (c.y - r.min.y) as f64,
+        r.width() as f64,
+        r.height() as f64,
+    );
+    let hit = s
+        .worker()
+        .unwrap()
+        .query(move |s| s.pick(&ray, 0.0).map(|h| h.1.point))
+        .unwrap()
+        .unwrap();
+    assert!((b.centre - hit).norm() < 1e-2, "{b:?} vs {hit:?}");
+    let size = s.frame().models[0].size;
+    assert!((b.radius - s.options.radius * size).abs() < 1e-12);
+    assert!((b.normal.norm() - 1.0).abs() < 1e-9);
+    // It moves with the mouse, and it is gone off the model.
+    h.hover_at(c + Vec2::new(20.0, 10.0));
+    h.step();
+    let moved = h.state().brush_cursor().unwrap();
+    assert!((moved.centre - b.centre).norm() > 1e-3);
+    h.hover_at(at(h.state(), 0.02, 0.05));
+    h.step();
+    assert_eq!(h.state().brush_cursor(), None);
+    // ] grows it.
+    h.hover_at(c);
+    h.step();
+    key(&mut h, Key::CloseBracket);
+    let grown = h.state().brush_cursor().unwrap();
+    assert!((grown.radius - 1.25 * b.radius).abs() < 1e-9);
+}
+
+#[test]
+fn a_force_stroke_acts_along_the_drag_and_undoes_as_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = paused_cube(dir.path());
+    key(&mut h, Key::G);
+    let (a, b) = (at(h.state(), 0.42, 0.5), at(h.state(), 0.58, 0.5));
+    h.hover_at(a);
+    h.drag_at(a);
+    h.step();
+    for k in 1..=16 {
+        h.hover_at(a + (b - a) * (k as f32 / 16.0));
+        h.step();
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    h.drop_at(b);
+    h.step();
+    std::thread::sleep(Duration::from_millis(100));
+    let log = edits(h.state());
+    let centres: Vec<[f64; 3]> = log
+        .iter()
+        .filter_map(|e| match e {
+            Edit::RegionForce { center, .. } => Some(*center),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(centres.len(), log.len(), "only forces: {log:?}");
+    assert!(
+        centres.len() >= 3,
+        "the brush acts along the stroke: {log:?}"
+    );
+    // Spaced by half the radius at least, so a stroke of a few radii is a few commands.
+    let r = h.state().options.radius * h.state().frame().models[0].size;
+    for w in centres.windows(2) {
+        let d = Vec3::from(w[1]) - Vec3::from(w[0]);
+        assert!(d.norm() >= 0.5 * r - 1e-9, "{centres:?}");
+    }
+    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    h.step();
+    wait_for(&mut h, 20, "one undo", |s| edits(s).is_empty());
+}
+
+fn fixed(w: &Worker) -> Vec<Vec3> {
+    w.query(|s| {
+        s.model(None)
+            .unwrap()
+            .display_lines()
+            .into_iter()
+            .find(|l| l.role == Some(LineRole::Fixed))
+            .map_or(Vec::new(), |l| l.points)
+    })
+    .unwrap()
+}
+
+fn down_at(x: f64, y: f64) -> Ray {
+    Ray {
+        origin: Vec3::new(x, y, 3.0),
+        direction: Vec3::new(0.0, 0.0, -1.0),
+    }
+}
+
+#[test]
+fn symmetry_mirrors_a_fix_stroke_and_a_rope_in_one_undo_group() {
+    let session = builtin(builtin_named("cube").unwrap()).unwrap();
+    let w = Worker::start(session, false);
+    w.send(Request::Symmetry(Symmetry([true, false, false])));
+    // A fix brush at the top face's corner (0, 0, 1): the mirror across x = 1/2 fixes (1, 0, 1).
+    w.send(Request::Grab {
+        ray: down_at(0.05, 0.05),
+        tolerance: 0.0,
+        grab: Grab::Fix { brush: 0.1 },
+    });
+    w.send(Request::Drop);
+    let f = fixed(&w);
+    assert_eq!(f.len(), 2, "{f:?}");
+    for want in [Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 0.0, 1.0)] {
+        assert!(
+            f.iter().any(|p| (p - want).norm() < 1e-6),
+            "{want:?} in {f:?}"
+        );
+    }
+    w.send(Request::Undo);
+    assert!(fixed(&w).is_empty(), "one undo takes both back");
+    // A rope: two ropes, the mirror's cursor mirrored, released together.
+    w.send(Request::Grab {
+        ray: down_at(0.2, 0.5),
+        tolerance: 0.0,
+        grab: Grab::Rope { stiffness: None },
+    });
+    w.send(Request::Drag {
+        to: Vec3::new(0.1, 0.5, 1.5),
+    });
+    w.send(Request::Drop);
+    let log = w
+        .query(|s| {
+            s.log()
+                .iter()
+                .map(|l| l.command.edit.clone())
+                .collect::<Vec<_>>()
+        })
+        .unwrap();
+    let ropes: Vec<(String, [f64; 3])> = log
+        .iter()
+        .filter_map(|e| match e {
+            Edit::MoveRope { name, to } => Some((name.clone(), *to)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(ropes.len(), 2, "{log:?}");
+    assert!(
+        (ropes[0].1[0] - 0.1).abs() < 1e-9 && (ropes[1].1[0] - 0.9).abs() < 1e-9,
+        "{ropes:?}"
+    );
+    assert_ne!(ropes[0].0, ropes[1].0);
+    let releases = log
+        .iter()
+        .filter(|e| matches!(e, Edit::Release { .. }))
+        .count();
+    assert_eq!(releases, 2, "{log:?}");
+    w.send(Request::Undo);
+    assert_eq!(w.query(|s| s.log().len()).unwrap(), 0);
+}
+
+#[test]
+fn a_control_point_handle_lights_up_under_the_mouse() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Options {
+        paused: true,
+        ..quiet(dir.path())
+    });
+    click(
+        &mut h,
+        Role::Button,
+        "Swung D-NURBS egg (Egg sculpting material)",
+    );
+    wait_for(&mut h, 30, "first frame", |s| !s.frame().models.is_empty());
+    h.step();
+    assert_eq!(h.state().hovered_handle(), None);
+    key(&mut h, Key::N); // the control net (and its handles)
+    wait_for(&mut h, 20, "the control net", |s| {
+        s.frame().models[0]
+            .lines
+            .iter()
+            .any(|l| l.role == Some(LineRole::ControlNet))
+    });
+    let s = h.state();
+    let r = s.viewport();
+    // The control point nearest the viewer, where the mouse goes.
+    let cp = s.frame().models[0]
+        .lines
+        .iter()
+        .filter(|l| l.role == Some(LineRole::ControlNet))
+        .flat_map(|l| l.points.clone())
+        .max_by(|a, b| a.dot(&s.camera.back()).total_cmp(&b.dot(&s.camera.back())))
+        .unwrap();
+    let (x, y) = s
+        .camera
+        .project(cp, r.width() as f64, r.height() as f64)
+        .unwrap();
+    h.hover_at(r.min + Vec2::new(x as f32, y as f32 + 2.0));
+    h.step();
+    let got = h
+        .state()
+        .hovered_handle()
+        .expect("a handle under the mouse");
+    assert!((got - cp).norm() < 0.2, "{got:?} vs {cp:?}");
+    h.hover_at(at(h.state(), 0.02, 0.05));
+    h.step();
+    assert_eq!(h.state().hovered_handle(), None);
+}
