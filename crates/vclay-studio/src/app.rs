@@ -399,6 +399,7 @@ impl Studio {
         if let Some(end) = end.filter(|&e| e > now) {
             self.send(Request::StopAt(Some(end)));
         }
+        self.send(Request::RunInfo(opened.run.map(Box::new)));
     }
 
     /// Replaces the session (a new simulation thread if none runs).

@@ -234,6 +234,9 @@ pub enum Request {
     /// Pause once the first model's step count reaches this (a scenario's run length), and
     /// say so; Run then goes on past it. `None`: no such stop.
     StopAt(Option<u64>),
+    /// The run the opened file describes (a scenario's name, end step and outputs): kept in
+    /// saved and autosaved sessions, so that `vclay run` and Recover go on to the same end.
+    RunInfo(Option<Box<vclay_session::file::RunInfo>>),
     /// Replace the session (open, new); `path` is where explicit saves go.
     Replace(Box<Session>),
     /// Save the session to `path` (clears the dirty flag).
@@ -276,6 +279,7 @@ impl std::fmt::Debug for Request {
             Request::Drop => "Drop",
             Request::Symmetry(_) => "Symmetry",
             Request::StopAt(_) => "StopAt",
+            Request::RunInfo(_) => "RunInfo",
             Request::Replace(_) => "Replace",
             Request::Save(_) => "Save",
             Request::Autosave(..) => "Autosave",
@@ -498,6 +502,8 @@ struct State {
     time_limit: Option<f64>,
     /// Pause when the first model's step count reaches this (a scenario's end).
     stop_at: Option<u64>,
+    /// What saves write as the run information (see [`Request::RunInfo`]).
+    run_info: Option<vclay_session::file::RunInfo>,
     /// Mirror symmetry of the tools.
     symmetry: Symmetry,
     /// Replacements handled.
@@ -525,6 +531,7 @@ impl State {
             autosaved: (Instant::now(), rev),
             time_limit: None,
             stop_at: None,
+            run_info: None,
             symmetry: Symmetry::default(),
             generation: 0,
         }
@@ -714,10 +721,12 @@ impl State {
             Request::Drop => self.drop_grab(),
             Request::Symmetry(s) => self.symmetry = s,
             Request::StopAt(n) => self.stop_at = n,
+            Request::RunInfo(r) => self.run_info = r.map(|r| *r),
             Request::Replace(s) => {
                 self.drop_grab();
                 self.session = *s;
                 self.stop_at = None;
+                self.run_info = None;
                 self.generation += 1;
                 self.notify(Notice::Replaced(self.generation));
                 self.samples.clear();
@@ -727,19 +736,21 @@ impl State {
                 self.autosaved = (Instant::now(), self.saved_revision);
                 self.clock = (Instant::now(), self.session.time());
             }
-            Request::Save(path) => match vclay_session::file::save(&path, &self.session, None) {
-                Ok(()) => {
-                    self.saved_revision = self.session.revision();
-                    // The file holds this revision: no autosave of it is needed.
-                    self.autosaved = (Instant::now(), self.saved_revision);
-                    self.shown_revision = None;
-                    self.notify(Notice::Saved(path));
+            Request::Save(path) => {
+                match vclay_session::file::save(&path, &self.session, self.run_info.as_ref()) {
+                    Ok(()) => {
+                        self.saved_revision = self.session.revision();
+                        // The file holds this revision: no autosave of it is needed.
+                        self.autosaved = (Instant::now(), self.saved_revision);
+                        self.shown_revision = None;
+                        self.notify(Notice::Saved(path));
+                    }
+                    Err(e) => self.notify(Notice::Error {
+                        message: e.to_string(),
+                        paused: false,
+                    }),
                 }
-                Err(e) => self.notify(Notice::Error {
-                    message: e.to_string(),
-                    paused: false,
-                }),
-            },
+            }
             Request::Autosave(p, every) => {
                 self.autosave = p.map(|p| (p, every));
             }
@@ -1410,7 +1421,7 @@ impl State {
             return;
         }
         let path = path.clone();
-        match vclay_session::file::save(&path, &self.session, None) {
+        match vclay_session::file::save(&path, &self.session, self.run_info.as_ref()) {
             Ok(()) => {
                 self.autosaved = (Instant::now(), rev);
                 let _ = self.notices.send(Notice::Autosaved(path));

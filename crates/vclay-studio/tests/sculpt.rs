@@ -125,6 +125,17 @@ fn a_scenario_stops_at_its_end_step_and_says_so() {
     std::thread::sleep(Duration::from_millis(200));
     h.step();
     assert_eq!(h.state().frame().steps, 400, "it stays stopped");
+    // A save keeps the scenario's run (name, end step, outputs): `vclay run` and Recover go on
+    // to the same end.
+    let saved = dir.path().join("egg.session");
+    h.state()
+        .worker()
+        .unwrap()
+        .send(Request::Save(saved.clone()));
+    wait_for(&mut h, 30, "the save", |_| saved.exists());
+    let (_, run) = vclay_session::file::load(&saved).unwrap();
+    let run = run.expect("the saved run information");
+    assert_eq!((run.name.as_str(), run.end_step), ("fig9a_swung_egg", 400));
     // Run goes on past the end.
     key(&mut h, Key::Space);
     wait_for(&mut h, 60, "running past the end", |s| {
