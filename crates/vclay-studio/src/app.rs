@@ -160,6 +160,9 @@ pub struct ToolOptions {
     pub gravity: (bool, f64),
     /// Inflation on, and its pressure.
     pub inflate: (bool, f64),
+    /// Sculpt mode (the default): at the end of each pull the shape reached becomes the rest
+    /// shape ([`crate::worker::Request::Sculpt`]); off: the papers' elastic clay.
+    pub sculpt: bool,
 }
 
 impl Default for ToolOptions {
@@ -175,6 +178,7 @@ impl Default for ToolOptions {
             weight: 1.0,
             local: [0.15, 0.5],
             integrator: 0,
+            sculpt: true,
             gravity: (false, 9.81),
             inflate: (false, 5.0),
         }
@@ -1015,9 +1019,16 @@ impl Studio {
             }
         }
         if physical {
-            if ui.button("Plastic reset").clicked() {
-                self.apply(Edit::PlasticReset);
-            }
+            ui.horizontal(|ui| {
+                ui.checkbox(&mut self.options.sculpt, "Sculpt (K)")
+                    .on_hover_text(
+                        "on: what you pull stays (the shape at the end of each pull becomes the \
+                     rest shape and the motion stops); off: elastic clay that springs back",
+                    );
+                if ui.button("Plastic reset").clicked() {
+                    self.apply(Edit::PlasticReset);
+                }
+            });
             let (mut on, mut g) = self.options.gravity;
             let c1 = ui.checkbox(&mut on, "Gravity").changed();
             let r = ui.add(egui::Slider::new(&mut g, 0.0..=50.0).text("g"));
@@ -1246,6 +1257,7 @@ impl Studio {
                 let per_point =
                     2.0 * self.camera.distance * (crate::camera::FOV_Y / 2.0).tan() / h.max(1.0);
                 self.send(Request::Symmetry(self.symmetry));
+                self.send(Request::Sculpt(self.options.sculpt));
                 self.send(Request::Grab {
                     ray,
                     tolerance: PICK_POINTS * per_point,

@@ -31,7 +31,7 @@ pub fn tool_key(t: Tool) -> Key {
 pub const BRUSH_STEP: f64 = 1.25;
 
 /// The shortcuts that are not tool letters: (keys, what they do), in the help's order.
-pub const SHORTCUTS: [(&str, &str); 17] = [
+pub const SHORTCUTS: [(&str, &str); 18] = [
     ("F1 or ?", "this help (Esc closes it)"),
     ("Space", "run / pause the simulation"),
     ("F", "frame the model"),
@@ -39,6 +39,10 @@ pub const SHORTCUTS: [(&str, &str); 17] = [
     (
         "X  Y  Z",
         "symmetry across x / y / z (through the model's centre)",
+    ),
+    (
+        "K",
+        "sculpt (what you pull stays) / elastic (it springs back)",
     ),
     ("1  3  7  0", "front / side / top / iso view"),
     ("W", "wireframe on / off"),
@@ -71,7 +75,16 @@ mod tests {
 
     #[test]
     fn tool_keys_differ_from_each_other_and_from_the_other_shortcuts() {
-        let taken = [Key::F, Key::X, Key::Y, Key::Z, Key::W, Key::N, Key::Space];
+        let taken = [
+            Key::F,
+            Key::K,
+            Key::X,
+            Key::Y,
+            Key::Z,
+            Key::W,
+            Key::N,
+            Key::Space,
+        ];
         let mut seen = Vec::new();
         for t in Tool::ALL {
             let k = tool_key(t);

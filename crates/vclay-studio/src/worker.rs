@@ -231,6 +231,11 @@ pub enum Request {
     Drop,
     /// The axes the tools mirror across (see [`crate::symmetry`]); taken at the next press.
     Symmetry(Symmetry),
+    /// Sculpt mode: at the end of each rope pull or force stroke the shape reached becomes the
+    /// rest shape and the motion stops (the papers' plastic reset, journal section 5.4, applied
+    /// per stroke), so what the designer pulls stays. Off: the papers' elastic clay, which
+    /// springs back. Taken at the next press; only for models that take `plastic-reset`.
+    Sculpt(bool),
     /// Pause once the first model's step count reaches this (a scenario's run length), and
     /// say so; Run then goes on past it. `None`: no such stop.
     StopAt(Option<u64>),
@@ -278,6 +283,7 @@ impl std::fmt::Debug for Request {
             Request::Stroke { .. } => "Stroke",
             Request::Drop => "Drop",
             Request::Symmetry(_) => "Symmetry",
+            Request::Sculpt(_) => "Sculpt",
             Request::StopAt(_) => "StopAt",
             Request::RunInfo(_) => "RunInfo",
             Request::Replace(_) => "Replace",
@@ -502,6 +508,10 @@ struct State {
     time_limit: Option<f64>,
     /// Pause when the first model's step count reaches this (a scenario's end).
     stop_at: Option<u64>,
+    /// Sculpt mode (see [`Request::Sculpt`]).
+    sculpt: bool,
+    /// The run was paused by the scenario's end (a press runs it again).
+    ended: bool,
     /// What saves write as the run information (see [`Request::RunInfo`]).
     run_info: Option<vclay_session::file::RunInfo>,
     /// Mirror symmetry of the tools.
@@ -532,6 +542,8 @@ impl State {
             time_limit: None,
             stop_at: None,
             run_info: None,
+            sculpt: false,
+            ended: false,
             symmetry: Symmetry::default(),
             generation: 0,
         }
@@ -586,6 +598,7 @@ impl State {
             }
             if self.running && self.at_scenario_end() {
                 self.running = false;
+                self.ended = true;
                 self.shown_revision = None;
                 let (n, t) = (self.stop_at.take().unwrap_or(0), self.session.time());
                 self.notify(Notice::Status(format!(
@@ -691,6 +704,7 @@ impl State {
             Request::Undo => self.undo(),
             Request::Redo => self.redo(),
             Request::Run(on) => {
+                self.ended = false;
                 self.running = on;
                 self.clock = (Instant::now(), self.session.time());
             }
@@ -707,7 +721,16 @@ impl State {
                 ray,
                 tolerance,
                 grab,
-            } => self.grab(ray, tolerance, grab),
+            } => {
+                // A scenario that reached its end paused the run, not the designer: a pull
+                // afterwards runs the clay again (a pull on paused clay would do nothing).
+                if self.ended {
+                    self.ended = false;
+                    self.running = true;
+                    self.clock = (Instant::now(), self.session.time());
+                }
+                self.grab(ray, tolerance, grab)
+            }
             Request::Drag { to } => {
                 if let Some(d) = self.drag.as_mut() {
                     d.pending = Some(to);
@@ -720,12 +743,14 @@ impl State {
             }
             Request::Drop => self.drop_grab(),
             Request::Symmetry(s) => self.symmetry = s,
+            Request::Sculpt(on) => self.sculpt = on,
             Request::StopAt(n) => self.stop_at = n,
             Request::RunInfo(r) => self.run_info = r.map(|r| *r),
             Request::Replace(s) => {
                 self.drop_grab();
                 self.session = *s;
                 self.stop_at = None;
+                self.ended = false;
                 self.run_info = None;
                 self.generation += 1;
                 self.notify(Notice::Replaced(self.generation));
@@ -1361,10 +1386,27 @@ impl State {
         }
         self.apply_drag(true);
         let Some(d) = self.drag.take() else { return };
+        let mut pulled = false;
         for part in &d.parts {
-            if let Active::Rope { name } = &part.active {
-                self.apply(Command::to(&d.model, Edit::Release { name: name.clone() }));
+            match &part.active {
+                Active::Rope { name } => {
+                    pulled = true;
+                    self.apply(Command::to(&d.model, Edit::Release { name: name.clone() }));
+                }
+                Active::Brush {
+                    duration: Some(_), ..
+                } => pulled = true,
+                _ => {}
             }
+        }
+        // Sculpt mode: the shape reached stays (one undo step with the pull).
+        let keeps = self
+            .session
+            .model(Some(&d.model))
+            .is_ok_and(|m| m.accepts(&Edit::PlasticReset));
+        if self.sculpt && pulled && keeps {
+            self.apply(Command::to(&d.model, Edit::Stop));
+            self.apply(Command::to(&d.model, Edit::PlasticReset));
         }
         self.session.end_group();
     }

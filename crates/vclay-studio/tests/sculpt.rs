@@ -136,11 +136,23 @@ fn a_scenario_stops_at_its_end_step_and_says_so() {
     let (_, run) = vclay_session::file::load(&saved).unwrap();
     let run = run.expect("the saved run information");
     assert_eq!((run.name.as_str(), run.end_step), ("fig9a_swung_egg", 400));
-    // Run goes on past the end.
-    key(&mut h, Key::Space);
+    // A pull after the end runs the clay again (the scenario paused it, not the designer).
+    let w = h.state().worker().unwrap();
+    w.send(Request::Grab {
+        ray: Ray {
+            origin: Vec3::new(0.0, 0.0, 10.0),
+            direction: Vec3::new(0.0, 0.0, -1.0),
+        },
+        tolerance: 0.0,
+        grab: Grab::Rope { stiffness: None },
+    });
+    w.send(Request::Drop);
     wait_for(&mut h, 60, "running past the end", |s| {
         s.frame().steps > 410
     });
+    // Space pauses it as ever.
+    key(&mut h, Key::Space);
+    wait_for(&mut h, 30, "paused", |s| !s.frame().running);
 }
 
 #[test]
@@ -290,7 +302,13 @@ fn a_force_stroke_acts_along_the_drag_and_undoes_as_one() {
             _ => None,
         })
         .collect();
-    assert_eq!(centres.len(), log.len(), "only forces: {log:?}");
+    // The forces, then (sculpt mode, the default) the stop and plastic reset that keep the
+    // shape the stroke made.
+    assert_eq!(centres.len() + 2, log.len(), "only forces: {log:?}");
+    assert!(
+        matches!(log[log.len() - 2..], [Edit::Stop, Edit::PlasticReset]),
+        "{log:?}"
+    );
     assert!(
         centres.len() >= 3,
         "the brush acts along the stroke: {log:?}"
@@ -433,4 +451,55 @@ fn a_control_point_handle_lights_up_under_the_mouse() {
     h.hover_at(at(h.state(), 0.02, 0.05));
     h.step();
     assert_eq!(h.state().hovered_handle(), None);
+}
+
+/// The top of the 4^3 cube after a rope pull with the bottom fixed, `settle` steps after the
+/// release, in sculpt mode or not.
+fn top_after_pull(sculpt: bool, settle: u64) -> f64 {
+    let session = builtin(builtin_named("cube").unwrap()).unwrap();
+    let w = Worker::start(session, false);
+    w.send(Request::Apply(vclay_session::Command::new(Edit::Fix(
+        vclay_session::Selection::rest_box([-0.1, -0.1, -0.1], [1.1, 1.1, 0.01]),
+    ))));
+    w.send(Request::Sculpt(sculpt));
+    w.send(Request::Grab {
+        ray: down_at(0.5, 0.5),
+        tolerance: 0.0,
+        grab: Grab::Rope { stiffness: None },
+    });
+    w.send(Request::Drag {
+        to: Vec3::new(0.5, 0.5, 1.8),
+    });
+    // The worker applies a drag's cursor at most every DRAG_INTERVAL.
+    std::thread::sleep(Duration::from_millis(150));
+    w.send(Request::Step(400));
+    w.send(Request::Drop);
+    w.send(Request::Step(settle));
+    w.query(|s| {
+        s.model(None)
+            .unwrap()
+            .data_points()
+            .iter()
+            .map(|p| p.z)
+            .fold(f64::MIN, f64::max)
+    })
+    .unwrap()
+}
+
+#[test]
+fn in_sculpt_mode_what_is_pulled_stays() {
+    // Pulled up from z = 1 and released: sculpted clay keeps its height, elastic clay (the
+    // papers' mode) springs back down.
+    let kept = top_after_pull(true, 600);
+    let elastic = top_after_pull(false, 600);
+    let at_release = top_after_pull(true, 0);
+    assert!(at_release > 1.05, "the pull raised the top: {at_release}");
+    assert!(
+        (kept - at_release).abs() < 0.1 * (at_release - 1.0),
+        "sculpt keeps the shape: {kept} after, {at_release} at the release"
+    );
+    assert!(
+        elastic - 1.0 < 0.5 * (kept - 1.0),
+        "elastic springs back: {elastic} (sculpt {kept})"
+    );
 }

@@ -167,6 +167,9 @@ impl Studio {
             let running = self.frame.running;
             self.run_clicked(running);
         }
+        if pressed(Key::K) {
+            self.options.sculpt = !self.options.sculpt;
+        }
         for (k, axis) in [(Key::X, 0), (Key::Y, 1), (Key::Z, 2)] {
             if pressed(k) {
                 self.symmetry.0[axis] = !self.symmetry.0[axis];
