@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use vclay_studio::{Options, Studio, bench};
 
-const USAGE: &str = "usage: vclay-studio [FILE] [--autosave PATH] [--paused] [--no-recovery]\n       vclay-studio --bench [FRAMES]\n\nFILE: a scenario (.toml), a session (.session), a lattice (.ovm), a model (.json) or a mesh\n(.obj, .stl, .ply). Without FILE the start page offers built-in models.";
+const USAGE: &str = "usage: vclay-studio [FILE] [--autosave PATH] [--paused] [--no-recovery]\n       vclay-studio --bench [FRAMES]\n\nFILE: any file vclay reads, recognized by its content: a scenario, a session, a model file\n(JSON, STEP, IGES), a PDE spec, a triangular model, a lattice (.ovm, .vtu) or a mesh (.obj,\n.stl, .ply, .glb). Without FILE the start page offers built-in models.";
 
 fn main() -> anyhow::Result<()> {
     let mut args = std::env::args().skip(1);
