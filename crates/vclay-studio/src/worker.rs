@@ -41,11 +41,16 @@ use std::time::{Duration, Instant};
 
 use vclay_core::{TriMesh, Vec3};
 use vclay_session::{
-    Command, Edit, Element, Energy, Hit, LineSet, Param, PointMove, Ray, Selection, Session,
-    ToolSpec,
+    Command, Edit, Element, Energy, Hit, LineRole, LineSet, Param, PointMove, Ray, Selection,
+    Session, ToolSpec,
 };
 
 use crate::symmetry::{Axes, Symmetry};
+
+/// Sculpt mode's anchor reach (see `Worker::anchor`): control points farther than this fraction
+/// of the model's size (its rest bounding box diagonal) from the grab are held during a pull of
+/// a model with nothing fixed.
+pub const ANCHOR_FRACTION: f64 = 0.6;
 
 /// Least time between two applied cursor moves of one drag.
 pub const DRAG_INTERVAL: Duration = Duration::from_millis(40);
@@ -469,6 +474,9 @@ struct Drag {
     /// Least distance between two positions at which a brush acts.
     spacing: f64,
     last_applied: Instant,
+    /// Control points fixed for the pull only (sculpt mode on a model with nothing fixed),
+    /// freed at the release.
+    anchors: Vec<usize>,
 }
 
 /// The material point of a surface or curve hit (D-NURBS ropes and forces take one).
@@ -916,6 +924,7 @@ impl State {
             }
         }
         self.session.begin_group();
+        let anchors = self.anchor(&model, &grab, &hits);
         let mut parts = Vec::new();
         for (flip, h) in hits {
             if let Some(active) = self.start(&model, &tools, flip, &h, &grab) {
@@ -928,6 +937,7 @@ impl State {
             element: hit.element,
         });
         if parts.is_empty() {
+            self.free_anchors(&model, anchors);
             self.session.end_group();
             return;
         }
@@ -940,7 +950,43 @@ impl State {
             last_at: Some(hit.point),
             spacing: Self::spacing(&grab),
             last_applied: Instant::now() - DRAG_INTERVAL,
+            anchors,
         });
+    }
+
+    /// Sculpt mode's anchor: a rope pull on a model with no fixed control point would move it
+    /// as a whole, so for the pull the control points farther than [`ANCHOR_FRACTION`] of the
+    /// model's size from every grabbed point are fixed (and freed at the release), and the
+    /// pull deforms the clay where it is pulled. Returns the anchored points.
+    fn anchor(&mut self, model: &str, grab: &Grab, hits: &[([bool; 3], Hit)]) -> Vec<usize> {
+        let Ok(m) = self.session.model(Some(model)) else {
+            return Vec::new();
+        };
+        let fixable = m.accepts(&Edit::Fix(Selection::default()));
+        let none_fixed = m
+            .display_lines()
+            .iter()
+            .all(|l| l.role != Some(LineRole::Fixed) || l.points.is_empty());
+        if !(self.sculpt && matches!(grab, Grab::Rope { .. }) && fixable && none_fixed) {
+            return Vec::new();
+        }
+        let reach = ANCHOR_FRACTION * m.size();
+        let pts = m.control_points();
+        let far: Vec<usize> = (0..pts.len())
+            .filter(|&i| hits.iter().all(|(_, h)| (pts[i] - h.point).norm() > reach))
+            .collect();
+        if far.is_empty() || far.len() == pts.len() {
+            return Vec::new();
+        }
+        let fix = Command::to(model, Edit::Fix(Selection::ids(far.clone())));
+        if self.apply(fix) { far } else { Vec::new() }
+    }
+
+    /// Frees the points [`Self::anchor`] fixed.
+    fn free_anchors(&mut self, model: &str, anchors: Vec<usize>) {
+        if !anchors.is_empty() {
+            self.apply(Command::to(model, Edit::Free(Selection::ids(anchors))));
+        }
     }
 
     /// Starts `grab` at `hit` on `model` (a mirror image when `flip` has an axis): applies its
@@ -1399,6 +1445,7 @@ impl State {
                 _ => {}
             }
         }
+        self.free_anchors(&d.model, d.anchors.clone());
         // Sculpt mode: the shape reached stays (one undo step with the pull).
         let keeps = self
             .session

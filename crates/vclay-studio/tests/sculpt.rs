@@ -503,3 +503,49 @@ fn in_sculpt_mode_what_is_pulled_stays() {
         "elastic springs back: {elastic} (sculpt {kept})"
     );
 }
+
+/// Lowest and highest data point of the free 4^3 cube (nothing fixed) after a rope pull up from
+/// its top, at the release.
+fn free_cube_pull(sculpt: bool) -> (f64, f64) {
+    let session = builtin(builtin_named("cube").unwrap()).unwrap();
+    let w = Worker::start(session, false);
+    w.send(Request::Sculpt(sculpt));
+    w.send(Request::Grab {
+        ray: down_at(0.5, 0.5),
+        tolerance: 0.0,
+        grab: Grab::Rope { stiffness: None },
+    });
+    w.send(Request::Drag {
+        to: Vec3::new(0.5, 0.5, 1.8),
+    });
+    std::thread::sleep(Duration::from_millis(150));
+    w.send(Request::Step(400));
+    w.send(Request::Drop);
+    let z = w
+        .query(|s| {
+            s.model(None)
+                .unwrap()
+                .data_points()
+                .iter()
+                .map(|p| p.z)
+                .collect::<Vec<_>>()
+        })
+        .unwrap();
+    let fixed_after = fixed(&w).len();
+    assert_eq!(fixed_after, 0, "the anchor is freed at the release");
+    (
+        z.iter().copied().fold(f64::MAX, f64::min),
+        z.iter().copied().fold(f64::MIN, f64::max),
+    )
+}
+
+#[test]
+fn sculpt_mode_anchors_a_free_solid_so_a_pull_deforms_it() {
+    // The elastic clay of the papers: a rope on a free cube lifts it whole. Sculpt mode holds
+    // the control points far from the grab for the pull, so the top rises and the bottom stays.
+    let (low, high) = free_cube_pull(true);
+    let (low_free, high_free) = free_cube_pull(false);
+    assert!(high > 1.05, "the top rose: {high}");
+    assert!(low.abs() < 0.02, "the bottom stayed: {low}");
+    assert!(low_free > 0.05, "a free cube moves as a whole: {low_free} (top {high_free})");
+}
