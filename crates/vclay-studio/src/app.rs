@@ -203,6 +203,8 @@ enum Dialog {
 enum Then {
     /// Show the open dialog.
     Open,
+    /// Open the recently opened file of this index (File > Open recent).
+    OpenRecent(usize),
     /// Close the session and show the start page.
     StartPage,
     /// Quit.
@@ -241,6 +243,9 @@ pub struct Options {
     pub paused: bool,
     /// Do not offer recovery (tests, scripts).
     pub no_recovery: bool,
+    /// The list of recently opened files (JSON; `None`: none kept). The binary keeps it in
+    /// `$XDG_CONFIG_HOME/vclay/recent.json` (else `~/.config/vclay/recent.json`).
+    pub recent: Option<PathBuf>,
 }
 
 /// The studio (see the [module docs](self)).
@@ -271,6 +276,9 @@ pub struct Studio {
     shots: Arc<Mutex<Vec<Result<PathBuf, String>>>>,
     /// What the first model takes (`Model::tools`): the palette and panels follow from it.
     tools: Vec<ToolSpec>,
+    /// Recently opened files, newest first, and where they are kept.
+    recent: Vec<PathBuf>,
+    recent_file: Option<PathBuf>,
     pde_t: f64,
     viewport: Rect,
     /// FFD points held in place while another is dragged (multi-point moves, eq 12).
@@ -360,6 +368,8 @@ impl Studio {
             shots: Arc::new(Mutex::new(Vec::new())),
             tools: Vec::new(),
             pde_t: 0.0,
+            recent: crate::recent::load(options.recent.as_deref()),
+            recent_file: options.recent.clone(),
             viewport: Rect::NOTHING,
             after_save: None,
             generation: 0,
@@ -371,11 +381,10 @@ impl Studio {
             pointer: None,
             grid: None,
         };
-        if let Some(f) = &options.file {
-            match load::open(f) {
-                Ok(o) => s.set_opened(o, Some(f.clone())),
-                Err(e) => s.dialog = Some(Dialog::Error(e)),
-            }
+        if let Some(f) = &options.file
+            && let Err(e) = s.open_file(f)
+        {
+            s.dialog = Some(Dialog::Error(e));
         }
         if !options.no_recovery && s.dialog.is_none() {
             let auto = options
@@ -392,6 +401,20 @@ impl Studio {
             }
         }
         s
+    }
+
+    /// Opens `path` (any file vclay reads, [`load::open`]) as the session, and puts it first in
+    /// the recent files.
+    pub fn open_file(&mut self, path: &Path) -> Result<(), String> {
+        let o = load::open(path)?;
+        self.set_opened(o, Some(path.to_path_buf()));
+        self.recent = crate::recent::remember(self.recent_file.as_deref(), path);
+        Ok(())
+    }
+
+    /// The recently opened files, newest first.
+    pub fn recent(&self) -> &[PathBuf] {
+        &self.recent
     }
 
     /// Replaces the session with an opened file's: a scenario's run stops at its end step
@@ -734,6 +757,13 @@ impl Studio {
         self.after_save = None;
         match then {
             Then::Open => self.dialog = Some(Dialog::Open(String::new())),
+            Then::OpenRecent(k) => {
+                if let Some(p) = self.recent.get(k).cloned()
+                    && let Err(e) = self.open_file(&p)
+                {
+                    self.dialog = Some(Dialog::Error(e));
+                }
+            }
             Then::StartPage => self.close_session(),
             Then::Quit => self.quit(ctx),
         }
@@ -803,6 +833,20 @@ impl Studio {
                 if ui.button("Open...").clicked() {
                     self.confirm(&ctx, Then::Open);
                 }
+                let recent: Vec<String> = self
+                    .recent
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect();
+                ui.add_enabled_ui(!recent.is_empty(), |ui| {
+                    ui.menu_button("Open recent", |ui| {
+                        for (k, label) in recent.iter().enumerate() {
+                            if ui.button(label).clicked() {
+                                self.confirm(&ctx, Then::OpenRecent(k));
+                            }
+                        }
+                    });
+                });
                 if ui.button("Start page").clicked() {
                     self.confirm(&ctx, Then::StartPage);
                 }
@@ -1462,11 +1506,10 @@ impl Studio {
             Dialog::Open(mut path) => {
                 let a = path_dialog(ctx, modal, "Open", None, &mut path, "Open");
                 keep = a.is_none();
-                if a == Some(Answer::Submit) {
-                    match load::open(Path::new(&path)) {
-                        Ok(o) => self.set_opened(o, Some(PathBuf::from(&path))),
-                        Err(e) => next = Some(Dialog::Error(e)),
-                    }
+                if a == Some(Answer::Submit)
+                    && let Err(e) = self.open_file(Path::new(&path))
+                {
+                    next = Some(Dialog::Error(e));
                 }
                 Dialog::Open(path)
             }

@@ -24,6 +24,7 @@ pub mod camera;
 pub mod keys;
 pub mod load;
 pub mod pick;
+pub mod recent;
 pub mod render;
 pub mod symmetry;
 pub mod text;

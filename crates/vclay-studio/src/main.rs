@@ -10,7 +10,10 @@ const USAGE: &str = "usage: vclay-studio [FILE] [--autosave PATH] [--paused] [--
 
 fn main() -> anyhow::Result<()> {
     let mut args = std::env::args().skip(1);
-    let mut opts = Options::default();
+    let mut opts = Options {
+        recent: vclay_studio::recent::default_file(),
+        ..Options::default()
+    };
     let mut bench_frames = None;
     while let Some(a) = args.next() {
         match a.as_str() {

@@ -547,5 +547,63 @@ fn sculpt_mode_anchors_a_free_solid_so_a_pull_deforms_it() {
     let (low_free, high_free) = free_cube_pull(false);
     assert!(high > 1.05, "the top rose: {high}");
     assert!(low.abs() < 0.02, "the bottom stayed: {low}");
-    assert!(low_free > 0.05, "a free cube moves as a whole: {low_free} (top {high_free})");
+    assert!(
+        low_free > 0.05,
+        "a free cube moves as a whole: {low_free} (top {high_free})"
+    );
+}
+
+#[test]
+fn files_opened_come_back_under_open_recent() {
+    let dir = tempfile::tempdir().unwrap();
+    let list = dir.path().join("config/recent.json");
+    let egg = dir.path().join("egg.toml");
+    std::fs::write(
+        &egg,
+        "[model]\nkind = \"dnurbs-swung\"\nprimitive = \"sphere\"\n[simulation]\ndt = 0.01\n",
+    )
+    .unwrap();
+    let cube = dir.path().join("cube.toml");
+    std::fs::write(
+        &cube,
+        "[model]\nkind = \"subdivision-solid\"\nprimitive = \"box\"\nlevel = 1\n",
+    )
+    .unwrap();
+    // Opening the egg at start-up puts it in the list.
+    let mut h = harness(Options {
+        file: Some(egg.clone()),
+        recent: Some(list.clone()),
+        paused: true,
+        ..quiet(dir.path())
+    });
+    wait_for(&mut h, 30, "the egg", |s| !s.frame().models.is_empty());
+    let egg_abs = std::fs::canonicalize(&egg).unwrap();
+    assert_eq!(h.state().recent(), std::slice::from_ref(&egg_abs));
+    drop(h);
+    // A later start with the cube: both listed, newest first; File > Open recent > egg opens it.
+    let mut h = harness(Options {
+        file: Some(cube.clone()),
+        recent: Some(list.clone()),
+        paused: true,
+        ..quiet(dir.path())
+    });
+    wait_for(&mut h, 30, "the cube", |s| {
+        s.frame()
+            .models
+            .first()
+            .is_some_and(|m| m.summary.contains("springs"))
+    });
+    let cube_abs = std::fs::canonicalize(&cube).unwrap();
+    assert_eq!(h.state().recent(), [cube_abs, egg_abs.clone()]);
+    click(&mut h, Role::Button, "File");
+    click(&mut h, Role::Button, "Open recent");
+    click(&mut h, Role::Button, &egg_abs.display().to_string());
+    // The cube was not modified (paused, untouched): no prompt, the egg opens.
+    wait_for(&mut h, 30, "the egg again", |s| {
+        s.frame()
+            .models
+            .first()
+            .is_some_and(|m| m.summary.starts_with("dnurbs-swung"))
+    });
+    assert_eq!(h.state().recent()[0], egg_abs);
 }
