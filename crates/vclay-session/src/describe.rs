@@ -135,30 +135,11 @@ const SELECTION: &[KeySpec] = &[
 ];
 
 /// Every action, in the order of `docs/formats.md` section 9.
+#[rustfmt::skip]
 pub const ACTIONS: [&str; 24] = [
-    "rope",
-    "move-rope",
-    "force",
-    "region-force",
-    "gravity",
-    "inflate",
-    "repel",
-    "data",
-    "release",
-    "fix",
-    "free",
-    "material",
-    "extrude",
-    "delete-cell",
-    "plastic-reset",
-    "stop",
-    "move-point",
-    "set-weight",
-    "ffd-move",
-    "pde-set",
-    "pde-local",
-    "set",
-    "integrator",
+    "rope", "move-rope", "force", "region-force", "gravity", "inflate", "repel", "data",
+    "release", "fix", "free", "material", "extrude", "delete-cell", "plastic-reset", "stop",
+    "move-point", "set-weight", "ffd-move", "pde-set", "pde-local", "set", "integrator",
     "constraint",
 ];
 
@@ -369,45 +350,18 @@ pub fn tool(action: &str) -> Option<ToolSpec> {
 }
 
 /// What a subdivision solid takes; a B-spline solid takes the same but for the topology edits.
+#[rustfmt::skip]
 const SUBDIVISION: &[&str] = &[
-    "rope",
-    "move-rope",
-    "force",
-    "region-force",
-    "gravity",
-    "inflate",
-    "release",
-    "fix",
-    "free",
-    "material",
-    "extrude",
-    "delete-cell",
-    "plastic-reset",
-    "stop",
-    "move-point",
-    "set",
+    "rope", "move-rope", "force", "region-force", "gravity", "inflate", "release", "fix",
+    "free", "material", "extrude", "delete-cell", "plastic-reset", "stop", "move-point", "set",
     "integrator",
 ];
 /// What a D-NURBS surface takes; a curve takes the same but for inflation (it has no inside).
+#[rustfmt::skip]
 const DNURBS_SURFACE: &[&str] = &[
-    "rope",
-    "move-rope",
-    "force",
-    "gravity",
-    "inflate",
-    "repel",
-    "data",
-    "release",
-    "fix",
-    "free",
-    "material",
-    "plastic-reset",
-    "stop",
-    "move-point",
-    "set-weight",
-    "set",
-    "integrator",
-    "constraint",
+    "rope", "move-rope", "force", "gravity", "inflate", "repel", "data", "release", "fix",
+    "free", "material", "plastic-reset", "stop", "move-point", "set-weight", "set",
+    "integrator", "constraint",
 ];
 
 /// The actions a model of `kind` takes, in the order of [`ACTIONS`]. A model may still refuse
