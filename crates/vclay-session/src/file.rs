@@ -176,9 +176,10 @@ pub fn parse(text: &str, file: &str) -> Result<(Session, Option<RunInfo>), Sessi
                 format!("no model named `{name}` in the file"),
             ));
         }
-        t.command
-            .edit
-            .validate(t.at)
+        // The one check of a scheduled edit (the kind takes it, its values), as for a scenario:
+        // it is not checked again when it fires.
+        let target = session.model(t.command.model.as_deref())?;
+        crate::session::check_edit(target, &t.command.edit, t.at)
             .map_err(|e| err(0, &format!("schedule[{k}].{}", e.key), e.what))?;
     }
     for (k, l) in saved.log.iter().enumerate() {

@@ -15,8 +15,9 @@
 //! passed puts the model back as it was just before the command (its clock included). Redo
 //! applies the undone command again to that state, which reproduces the state just after it.
 //! A new command clears the redo list; a step does not (redo then applies the command at the
-//! current time, so undo and redo work while a front end keeps the simulation running). Scheduled commands that have fired are
-//! ordinary log entries: undoing one does not schedule it again.
+//! current time, so undo and redo work while a front end keeps the simulation running).
+//! Scheduled commands that have fired are ordinary log entries: undoing one does not schedule
+//! it again.
 //!
 //! # Undo groups
 //! [`Session::begin_group`] and [`Session::end_group`] bracket the commands of one user action

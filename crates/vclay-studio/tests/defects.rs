@@ -11,9 +11,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use egui::accesskit::Role;
-use egui::{
-    Event, Key, Modifiers, PointerButton, Vec2, ViewportCommand, ViewportEvent, ViewportId,
-};
+use egui::{Event, Key, Modifiers, PointerButton, ViewportCommand, ViewportEvent, ViewportId};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use vclay_core::Vec3;
@@ -22,47 +20,12 @@ use vclay_studio::load::{builtin, builtin_named};
 use vclay_studio::worker::{Frame, Grab, Notice, Request, Worker};
 use vclay_studio::{Options, Studio, Tool};
 
-fn harness(opts: Options) -> Harness<'static, Studio> {
-    Harness::builder()
-        .with_size(Vec2::new(1280.0, 800.0))
-        .with_max_steps(100_000)
-        .build_ui_state(|ui, s: &mut Studio| s.show(ui), Studio::new(opts))
-}
-
-/// Options with the autosave in `dir` and no recovery prompt.
-fn quiet(dir: &Path) -> Options {
-    Options {
-        autosave: Some(dir.join("autosave.session")),
-        no_recovery: true,
-        ..Default::default()
-    }
-}
+mod common;
+use common::{click, harness, quiet, wait_for};
 
 /// Steps the UI until `done` holds (at most 30 s of wall time).
-fn wait(h: &mut Harness<'static, Studio>, what: &str, mut done: impl FnMut(&Studio) -> bool) {
-    let t = Instant::now();
-    while !done(h.state()) {
-        assert!(
-            t.elapsed() < Duration::from_secs(30),
-            "timed out: {what}; log {:?}",
-            h.state().log().collect::<Vec<_>>()
-        );
-        h.step();
-        std::thread::sleep(Duration::from_millis(5));
-    }
-}
-
-/// Steps until a node labelled `label` with `role` shows, then clicks it.
-fn click(h: &mut Harness<'static, Studio>, role: Role, label: &str) {
-    for _ in 0..50 {
-        if h.query_by_role_and_label(role, label).is_some() {
-            break;
-        }
-        h.step();
-    }
-    h.get_by_role_and_label(role, label).click();
-    h.step();
-    h.step();
+fn wait(h: &mut Harness<'static, Studio>, what: &str, done: impl FnMut(&Studio) -> bool) {
+    wait_for(h, 30, what, done)
 }
 
 /// File > `item`.

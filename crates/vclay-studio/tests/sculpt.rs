@@ -6,7 +6,7 @@
 //! a fix stroke and a rope in one undo group; control-point handles light up under the mouse.
 
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use egui::accesskit::Role;
 use egui::{Key, Modifiers, Pos2, Vec2};
@@ -19,52 +19,8 @@ use vclay_studio::symmetry::Symmetry;
 use vclay_studio::worker::{Grab, Request, Worker};
 use vclay_studio::{Options, Studio, Tool};
 
-fn harness(opts: Options) -> Harness<'static, Studio> {
-    Harness::builder()
-        .with_size(Vec2::new(1280.0, 800.0))
-        .with_max_steps(100_000)
-        .build_ui_state(|ui, s: &mut Studio| s.show(ui), Studio::new(opts))
-}
-
-fn quiet(dir: &Path) -> Options {
-    Options {
-        autosave: Some(dir.join("autosave.session")),
-        no_recovery: true,
-        ..Default::default()
-    }
-}
-
-/// Steps the UI until `done` holds (at most `secs` of wall time).
-fn wait_for(
-    h: &mut Harness<'static, Studio>,
-    secs: u64,
-    what: &str,
-    mut done: impl FnMut(&Studio) -> bool,
-) {
-    let t = Instant::now();
-    while !done(h.state()) {
-        assert!(
-            t.elapsed() < Duration::from_secs(secs),
-            "timed out: {what}; note {:?}, log {:?}",
-            h.state().note(),
-            h.state().log().collect::<Vec<_>>()
-        );
-        h.step();
-        std::thread::sleep(Duration::from_millis(5));
-    }
-}
-
-fn click(h: &mut Harness<'static, Studio>, role: Role, label: &str) {
-    for _ in 0..50 {
-        if h.query_by_role_and_label(role, label).is_some() {
-            break;
-        }
-        h.step();
-    }
-    h.get_by_role_and_label(role, label).click();
-    h.step();
-    h.step();
-}
+mod common;
+use common::{click, harness, quiet, wait_for};
 
 /// The paused cube from the start page.
 fn paused_cube(dir: &Path) -> Harness<'static, Studio> {
