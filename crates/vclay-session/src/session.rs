@@ -15,7 +15,10 @@
 //! passed puts the model back as it was just before the command (its clock included). Redo
 //! applies the undone command again to that state, which reproduces the state just after it.
 //! A new command clears the redo list; a step does not (redo then applies the command at the
-//! current time, so undo and redo work while a front end keeps the simulation running).
+//! current time, so undo and redo work while a front end keeps the simulation running). A group
+//! whose commands had steps between them (a drag) cannot be given back by applying its commands
+//! again at once: its redo, with nothing in between since the undo, puts back the model exactly
+//! as it was before the undo (a copy the undo keeps).
 //! Scheduled commands that have fired are ordinary log entries: undoing one does not schedule
 //! it again.
 //!
@@ -72,6 +75,19 @@ struct UndoEntry {
     group: Option<u64>,
 }
 
+/// See `Session::redo_exact`.
+#[derive(Debug)]
+struct RedoExact {
+    /// The model undone.
+    model: usize,
+    /// Its copy from before the undo.
+    after: Box<dyn Model>,
+    /// The session's revision and the model's step count just after the undo: if either moved,
+    /// something happened since, and redo applies the commands again instead.
+    revision: u64,
+    steps: u64,
+}
+
 #[derive(Debug)]
 struct Entry {
     name: String,
@@ -87,6 +103,10 @@ pub struct Session {
     undo: Vec<UndoEntry>,
     /// Undone commands, one list per undo step (a group, or one command), in applied order.
     redo: Vec<Vec<LogEntry>>,
+    /// The model as it was before the last undo, while nothing has happened since: redo then
+    /// puts it back exactly (a drag's deformation, which applying its commands again without
+    /// the steps between them would not give).
+    redo_exact: Option<RedoExact>,
     revision: u64,
     /// The open undo group and its nesting depth.
     group: Option<(u64, usize)>,
@@ -227,6 +247,7 @@ impl Session {
         let i = self.resolve(command.model.as_deref())?;
         let msg = self.apply_to(i, command, false)?;
         self.redo.clear();
+        self.redo_exact = None;
         Ok(msg)
     }
 
@@ -305,9 +326,16 @@ impl Session {
     pub fn undo(&mut self) -> Result<LogEntry, SessionError> {
         let last = self.undo.last().ok_or(SessionError::History("undo"))?;
         let group = last.group;
+        let target = last.model;
+        // The state before the undo, for an exact redo of a group (see `redo_exact`; a single
+        // command redoes exactly by applying it again, and needs no copy).
+        let after = group.map(|_| self.models[target].model.clone_model());
+        let mut one_model = true;
+        self.redo_exact = None;
         let mut undone: Vec<LogEntry> = Vec::new();
         loop {
             let Some(entry) = self.undo.pop() else { break };
+            one_model &= entry.model == target;
             let k = self.log.len().saturating_sub(entry.commands);
             let logs: Vec<LogEntry> = self.log.drain(k..).collect();
             let name = logs.first().map_or(String::new(), |l| l.model.clone());
@@ -338,6 +366,14 @@ impl Session {
             .cloned()
             .ok_or(SessionError::History("undo"))?;
         self.redo.push(undone);
+        if let (true, Some(after)) = (one_model, after) {
+            self.redo_exact = Some(RedoExact {
+                model: target,
+                after,
+                revision: self.revision,
+                steps: self.models[target].model.steps(),
+            });
+        }
         Ok(first)
     }
 
@@ -345,6 +381,17 @@ impl Session {
     /// command).
     pub fn redo(&mut self) -> Result<String, SessionError> {
         let logs = self.redo.pop().ok_or(SessionError::History("redo"))?;
+        if let Some(x) = self.redo_exact.take() {
+            let fresh =
+                x.revision == self.revision && self.models[x.model].model.steps() == x.steps;
+            let name = &self.models[x.model].name;
+            // Only where applying the commands again cannot give the state back: steps ran
+            // between them (a drag). A command, or commands of one instant, redo exactly anyway.
+            let spans_steps = logs.first().map(|l| l.step) != logs.last().map(|l| l.step);
+            if fresh && spans_steps && logs.iter().all(|l| &l.model == name) {
+                return Ok(self.redo_exactly(x, logs));
+            }
+        }
         let grouped = logs.len() > 1;
         if grouped {
             self.begin_group();
@@ -378,6 +425,28 @@ impl Session {
                 Err(e)
             }
         }
+    }
+
+    /// Redo when nothing happened since the undo: the model as it was before the undo comes
+    /// back bit for bit (a drag's deformation included), and its undo record is the model undone.
+    fn redo_exactly(&mut self, x: RedoExact, logs: Vec<LogEntry>) -> String {
+        let before = std::mem::replace(&mut self.models[x.model].model, x.after);
+        let message = logs
+            .iter()
+            .map(|l| l.message.as_str())
+            .collect::<Vec<_>>()
+            .join("\n");
+        // Still a group (of one record), so that its undo keeps a copy for the next redo.
+        self.next_group += 1;
+        self.undo.push(UndoEntry {
+            model: x.model,
+            undo: Undo::Model(before),
+            commands: logs.len(),
+            group: Some(self.next_group),
+        });
+        self.log.extend(logs);
+        self.revision += 1;
+        message
     }
 
     /// Whether there is something to undo / redo.

@@ -297,3 +297,57 @@ fn a_bad_value_in_a_session_file_names_its_path() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn redo_right_after_undo_gives_back_a_drag_exactly() {
+    // A drag is commands with steps between them; applying them again at once would not deform
+    // the model. Redo with nothing in between puts back the model as it was before the undo.
+    let text = "[model]\nkind = \"subdivision-solid\"\nprimitive = \"box\"\npoints = [3, 3, 3]\nlevel = 1\n";
+    let mut s = Scenario::parse(text, "d.toml", "d", Path::new("."))
+        .unwrap()
+        .session;
+    s.begin_group();
+    s.apply(Command::new(Edit::Rope {
+        name: Some("drag".into()),
+        from: [1.0, 1.0, 1.0],
+        param: None,
+        to: None,
+        until: None,
+        velocity: None,
+        release: None,
+        stiffness: None,
+        length: None,
+        kernel: None,
+        start: None,
+    }))
+    .unwrap();
+    s.apply(Command::new(Edit::MoveRope {
+        name: "drag".into(),
+        to: [1.5, 1.5, 1.5],
+    }))
+    .unwrap();
+    s.run(50).unwrap();
+    s.apply(Command::new(Edit::Release {
+        name: "drag".into(),
+    }))
+    .unwrap();
+    s.apply(Command::new(Edit::PlasticReset)).unwrap();
+    s.end_group();
+    let dragged = saved_all(&s);
+    s.undo().unwrap();
+    s.redo().unwrap();
+    assert_same(&saved_all(&s)["models"], &dragged["models"], "exact redo");
+    // Undo and redo again: the same.
+    s.undo().unwrap();
+    s.redo().unwrap();
+    assert_same(
+        &saved_all(&s)["models"],
+        &dragged["models"],
+        "second exact redo",
+    );
+    // After a step in between, redo applies the commands again (no exact copy).
+    s.undo().unwrap();
+    s.run(1).unwrap();
+    s.redo().unwrap();
+    assert_ne!(saved_all(&s)["models"], dragged["models"]);
+}
