@@ -16,9 +16,11 @@
 //! which bounds the command log's growth.
 //!
 //! # Undo while running
-//! The session layer keeps its redo list across steps (redo applies the undone commands again
-//! at the current time), so undo and redo work while the simulation runs; a new edit clears
-//! the redo list. "Nothing to undo / redo" is a [`Notice::Status`], not an error.
+//! The session layer keeps its redo list across steps, but a drag (commands with steps between
+//! them) redoes exactly only if nothing happened since its undo. So an undo while running holds
+//! the simulation; redo gives the drag back exactly, and the run goes on when the redo list is
+//! empty, at the next edit or press, or on Run. A new edit clears the redo list. "Nothing to
+//! undo / redo" is a [`Notice::Status`], not an error.
 //!
 //! # Time limit
 //! [`Request::TimeLimit`] stops the run (pauses) before a step would take the first model's
@@ -520,6 +522,8 @@ struct State {
     sculpt: bool,
     /// The run was paused by the scenario's end (a press runs it again).
     ended: bool,
+    /// The run was held by an undo (see `Worker::undo`).
+    held: bool,
     /// What saves write as the run information (see [`Request::RunInfo`]).
     run_info: Option<vclay_session::file::RunInfo>,
     /// Mirror symmetry of the tools.
@@ -552,6 +556,7 @@ impl State {
             run_info: None,
             sculpt: false,
             ended: false,
+            held: false,
             symmetry: Symmetry::default(),
             generation: 0,
         }
@@ -707,12 +712,14 @@ impl State {
     fn handle(&mut self, r: Request) {
         match r {
             Request::Apply(c) => {
+                self.resume_held();
                 self.apply(c);
             }
             Request::Undo => self.undo(),
             Request::Redo => self.redo(),
             Request::Run(on) => {
                 self.ended = false;
+                self.held = false;
                 self.running = on;
                 self.clock = (Instant::now(), self.session.time());
             }
@@ -737,6 +744,7 @@ impl State {
                     self.running = true;
                     self.clock = (Instant::now(), self.session.time());
                 }
+                self.resume_held();
                 self.grab(ray, tolerance, grab)
             }
             Request::Drag { to } => {
@@ -759,6 +767,7 @@ impl State {
                 self.session = *s;
                 self.stop_at = None;
                 self.ended = false;
+                self.held = false;
                 self.run_info = None;
                 self.generation += 1;
                 self.notify(Notice::Replaced(self.generation));
@@ -825,8 +834,27 @@ impl State {
     fn undo(&mut self) {
         self.drop_grab();
         match self.session.undo() {
-            Ok(first) => self.notify(Notice::Status(format!("undone: {}", first.message))),
+            Ok(first) => {
+                let mut line = format!("undone: {}", first.message);
+                if self.running {
+                    // Steps after an undo would make a drag's redo apply its commands again at
+                    // once (no deformation); held, the session gives the drag back exactly.
+                    self.running = false;
+                    self.held = true;
+                    line.push_str(" (simulation held so that redo gives it back; Run continues)");
+                }
+                self.notify(Notice::Status(line));
+            }
             Err(e) => self.history_error(e),
+        }
+    }
+
+    /// Runs again a simulation an undo held (see [`Self::undo`]).
+    fn resume_held(&mut self) {
+        if self.held {
+            self.held = false;
+            self.running = true;
+            self.clock = (Instant::now(), self.session.time());
         }
     }
 
@@ -835,6 +863,9 @@ impl State {
             Ok(m) => {
                 let n = m.lines().count();
                 self.notify(Notice::Status(format!("redone ({n} command(s))")));
+                if !self.session.can_redo() {
+                    self.resume_held();
+                }
             }
             Err(e) => self.history_error(e),
         }

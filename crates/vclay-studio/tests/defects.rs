@@ -174,15 +174,15 @@ fn redo_works_while_the_simulation_runs() {
     // The simulation would have stepped many times by now.
     std::thread::sleep(Duration::from_millis(300));
     let _ = w.take_frame();
-    // Still running, and the steps since kept the redo list (the session layer's rule).
-    let running = next_frame(&w);
-    assert!(running.running && running.can_redo, "{running:?}");
+    // Held by the undo, so that redo gives the drag back exactly.
+    let held = next_frame(&w);
+    assert!(!held.running && held.can_redo, "{held:?}");
     w.send(Request::Redo);
     notices_until(&w, |n| is_status(n, "redone"));
     assert_eq!(w.query(|s| s.log().len()).unwrap(), dragged);
     let _ = w.take_frame();
     let after = next_frame(&w);
-    assert!(after.running, "{after:?}");
+    assert!(after.running, "redo done, the run goes on: {after:?}");
     let t0 = after.time;
     std::thread::sleep(Duration::from_millis(200));
     assert!(w.query(|s| s.time()).unwrap() > t0, "time goes on");
