@@ -10,6 +10,7 @@
 pub mod math;
 pub mod mesh;
 pub mod par;
+pub mod plasticity;
 pub mod quadrature;
 pub mod team;
 pub mod text;
@@ -19,6 +20,7 @@ pub mod triangle_rule;
 pub use math::{Interval, Vec3, Vec4};
 pub use mesh::{MeshError, MeshSink, TriMesh};
 pub use par::Parallelism;
+pub use plasticity::Plasticity;
 pub use quadrature::GaussLegendre;
 pub use tolerance::Tolerance;
 pub use triangle_rule::TriangleRule;

@@ -625,3 +625,46 @@ fn profile_dynamic_sheet_steps() {
     });
     eprintln!("{} quadrature points", m.quadrature_points());
 }
+
+/// Plastic flow (`vclay_core::plasticity`): the full fraction with no yield is the plastic
+/// reset (no elastic energy left, rest coordinates equal to the current ones); a yield past
+/// every displacement changes nothing; half the fraction leaves part of the energy.
+#[test]
+fn plastic_flow_is_the_reset_in_its_limit_and_respects_the_yield_distance() {
+    let pulled = || {
+        let geo = RationalGeometry::from_surface(&wavy_rational_surface(5));
+        let mut d = GeneralizedDnurbs::new(geo, Material::surface(1.0, 4.0, 1.0, 0.1)).unwrap();
+        d.forces_mut().push(Force::Spring {
+            param: [0.5, 0.5],
+            target: Target::Fixed(Vec3::new(0.5, 0.5, 0.8)),
+            stiffness: 100.0,
+            kernel: None,
+        });
+        for _ in 0..30 {
+            d.step(Integrator::Implicit { dt: 0.05 }).unwrap();
+        }
+        d.forces_mut().clear();
+        d.stop();
+        d
+    };
+    let mut full = pulled();
+    let e0 = full.elastic_energy().unwrap();
+    assert!(e0 > 1e-4, "{e0}");
+    assert!(full.plastic_flow(1.0, 0.0).unwrap() > 0);
+    assert_eq!(
+        full.state().rest_coordinates,
+        full.geometry().coordinates().to_vec()
+    );
+    assert!(full.elastic_energy().unwrap() < 1e-12 * e0.max(1.0));
+
+    let mut stiff = pulled();
+    assert_eq!(stiff.plastic_flow(1.0, 10.0).unwrap(), 0);
+    assert_eq!(stiff.elastic_energy().unwrap(), e0);
+
+    let mut half = pulled();
+    half.plastic_flow(0.5, 0.0).unwrap();
+    let e = half.elastic_energy().unwrap();
+    assert!(e > 0.05 * e0 && e < 0.5 * e0, "{e} of {e0}");
+    assert!(half.plastic_flow(-0.1, 0.0).is_err());
+    assert!(half.plastic_flow(0.5, f64::NAN).is_err());
+}

@@ -595,3 +595,59 @@ fn data_points_are_renumbered_for_locality_consistently() {
         assert_eq!(a, b, "face {f}");
     }
 }
+
+/// Plastic flow (`vclay_core::plasticity`): a full fraction with no yield is the plastic
+/// reset; a yield larger than every displacement changes nothing; a partial flow keeps the
+/// shape under stress and puts the springs' rest lengths between the two; the rest shape goes
+/// back exactly (undo).
+#[test]
+fn plastic_flow_is_the_reset_in_its_limit_and_goes_back_exactly() {
+    let pulled = || {
+        let (source, p) = bspline_source(4, 5);
+        let mut s =
+            DynamicSolid::new(source, p, Material::default(), SolidParams::default()).unwrap();
+        let rope = s.attach_rope(Vec3::new(1.5, 1.5, 1.5), 40.0, 0.0).unwrap();
+        s.run(100).unwrap();
+        s.remove_tool(rope).unwrap();
+        s.stop();
+        s
+    };
+    let max_force = |s: &DynamicSolid| {
+        s.internal_forces()
+            .iter()
+            .map(|x| x.norm())
+            .fold(0.0, f64::max)
+    };
+    let mut full = pulled();
+    let before = max_force(&full);
+    let (rest0, data0) = {
+        let (c, d) = full.rest_shape();
+        (c.to_vec(), d.to_vec())
+    };
+    let moved_most = full
+        .control_points()
+        .iter()
+        .zip(&rest0)
+        .map(|(a, b)| (a - b).norm())
+        .fold(0.0, f64::max);
+    assert!(full.plastic_flow(1.0, 0.0).unwrap() > 0);
+    assert!(max_force(&full) < 1e-9 * before, "{}", max_force(&full));
+
+    let mut stiff = pulled();
+    assert_eq!(stiff.plastic_flow(1.0, 1.01 * moved_most).unwrap(), 0);
+    assert_eq!(max_force(&stiff), before);
+
+    let mut half = pulled();
+    let n = half.plastic_flow(0.5, 0.0).unwrap();
+    assert!(n > 0);
+    let mid = max_force(&half);
+    assert!(
+        mid > 1e-3 * before && mid < 0.9 * before,
+        "{mid} vs {before}"
+    );
+    half.set_rest_shape(&rest0, &data0).unwrap();
+    assert_eq!(max_force(&half), before, "rest shape put back exactly");
+    assert!(half.plastic_flow(1.5, 0.0).is_err());
+    assert!(half.plastic_flow(0.5, -1.0).is_err());
+    assert!(half.set_rest_shape(&rest0[1..], &data0).is_err());
+}

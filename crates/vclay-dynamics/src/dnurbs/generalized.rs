@@ -1379,6 +1379,83 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         Ok(())
     }
 
+    /// Plastic flow: moves the rest shape toward the current shape where it is deformed past a
+    /// yield distance, by `fraction` of the overstress (see `vclay_core::plasticity` for the
+    /// law, `docs/sculpting.md` for its derivation). Per coordinate group `g` (a control point's
+    /// `x, y, z, w`; [`GeneralizedGeometry::coordinate_groups`]) with displacement
+    /// `e = q_g - q0_g` measured on its non-weight coordinates,
+    ///
+    /// ```text
+    /// q0_g <- q0_g + fraction * max(0, 1 - yield / |e|) * (q_g - q0_g)
+    /// ```
+    ///
+    /// (the weights move with their point). `fraction = 1`, `yield = 0` is the plastic reset of
+    /// [`Self::set_rest_shape_to_current`] without stopping the motion. The rest values of eq
+    /// (17) are evaluated again at the new rest coordinates (one pass over the quadrature
+    /// points, as the reset) when any point yielded. Returns how many groups yielded.
+    ///
+    /// # Errors
+    /// [`DynamicsError::Parameter`] for `fraction` outside `[0, 1]` or a negative or
+    /// non-finite `yield_distance`.
+    pub fn plastic_flow(
+        &mut self,
+        fraction: f64,
+        yield_distance: f64,
+    ) -> Result<usize, DynamicsError> {
+        for (name, value, ok) in [
+            (
+                "plastic flow fraction",
+                fraction,
+                (0.0..=1.0).contains(&fraction),
+            ),
+            (
+                "yield distance",
+                yield_distance,
+                yield_distance.is_finite() && yield_distance >= 0.0,
+            ),
+        ] {
+            if !ok {
+                return Err(DynamicsError::Parameter {
+                    name,
+                    value,
+                    why: "fraction in [0, 1], yield distance finite and non-negative",
+                });
+            }
+        }
+        let q = self.geometry.coordinates();
+        let weights = self.geometry.weight_coordinates();
+        let mut is_weight = vec![false; q.len()];
+        for w in weights {
+            if let Some(x) = is_weight.get_mut(w) {
+                *x = true;
+            }
+        }
+        let mut rest = self.rest_coordinates.clone();
+        let mut yielded = 0;
+        for g in self.geometry.coordinate_groups() {
+            let e2: f64 = g
+                .clone()
+                .filter(|&i| !is_weight[i])
+                .map(|i| (q[i] - rest[i]).powi(2))
+                .sum();
+            let f =
+                vclay_core::plasticity::plastic_flow_factor(fraction, yield_distance, e2.sqrt());
+            if f > 0.0 {
+                yielded += 1;
+                for i in g {
+                    rest[i] += f * (q[i] - rest[i]);
+                }
+            }
+        }
+        if yielded > 0 {
+            let mut geometry = self.geometry.clone();
+            geometry.set_coordinates(&rest)?;
+            self.rest = rest_values(&geometry, &self.quad)?;
+            self.rest_coordinates = rest;
+        }
+        Ok(yielded)
+    }
+
     /// Steps taken.
     pub fn steps(&self) -> usize {
         self.steps

@@ -1380,6 +1380,106 @@ impl DynamicSolid {
         }
     }
 
+    /// Plastic flow (the rate form of [`Self::plastic_reset`]; `vclay_core::plasticity` has the
+    /// law): every control point displaced from its rest position by more than
+    /// `yield_distance` moves its rest position toward its current one,
+    ///
+    /// ```text
+    /// p0_i <- p0_i + fraction * max(0, 1 - yield / |p_i - p0_i|) * (p_i - p0_i)
+    /// ```
+    ///
+    /// and the springs' rest lengths (edge and virtual, journal section 5.4) are taken from the
+    /// new rest data points `d0 = A p0` (eq 3's control map). Motion, masses and stiffnesses
+    /// stay. `fraction = 1`, `yield_distance = 0` is the plastic reset. Returns how many control
+    /// points yielded.
+    ///
+    /// # Errors
+    /// [`SolidsError::InvalidParameter`] for `fraction` outside `[0, 1]` or a negative or
+    /// non-finite `yield_distance`.
+    pub fn plastic_flow(
+        &mut self,
+        fraction: f64,
+        yield_distance: f64,
+    ) -> Result<usize, SolidsError> {
+        vclay_core::plasticity::check_flow(fraction, yield_distance).map_err(|why| {
+            invalid(
+                "plastic flow",
+                format!("{fraction}, {yield_distance}"),
+                &why,
+            )
+        })?;
+        let mut rest = self.p_rest.clone();
+        let mut yielded = 0;
+        for (r, p) in rest.iter_mut().zip(&self.p) {
+            let e = p - *r;
+            let f = vclay_core::plasticity::plastic_flow_factor(fraction, yield_distance, e.norm());
+            if f > 0.0 {
+                *r += e * f;
+                yielded += 1;
+            }
+        }
+        if yielded > 0 {
+            let d_rest = self.disc.map.apply(&rest);
+            self.put_rest_shape(rest, d_rest);
+        }
+        Ok(yielded)
+    }
+
+    /// The rest shape (rest control points and rest data points, whose distances are the
+    /// springs' rest lengths) for undo; [`Self::set_rest_shape`] puts it back.
+    pub fn rest_shape(&self) -> (&[Vec3], &[Vec3]) {
+        (&self.p_rest, &self.d_rest)
+    }
+
+    /// Puts back a rest shape taken by [`Self::rest_shape`] (the same counts): rest control
+    /// points, rest data points and the rest lengths that follow from them. Nothing is done
+    /// when both are bitwise the current ones.
+    ///
+    /// # Errors
+    /// [`SolidsError::InvalidParameter`] for wrong counts or non-finite points.
+    pub fn set_rest_shape(&mut self, control: &[Vec3], data: &[Vec3]) -> Result<(), SolidsError> {
+        if control.len() != self.p.len() || data.len() != self.d.len() {
+            return Err(invalid(
+                "rest shape",
+                format!("{} control and {} data points", control.len(), data.len()),
+                &format!("{} and {}", self.p.len(), self.d.len()),
+            ));
+        }
+        if let Some(i) = control
+            .iter()
+            .chain(data)
+            .position(|x| !x.iter().all(|c| c.is_finite()))
+        {
+            return Err(invalid("rest shape", format!("point {i}"), "finite"));
+        }
+        let same = |a: &[Vec3], b: &[Vec3]| {
+            a.iter().zip(b).all(|(x, y)| {
+                x.iter()
+                    .zip(y.iter())
+                    .all(|(u, v)| u.to_bits() == v.to_bits())
+            })
+        };
+        if !(same(control, &self.p_rest) && same(data, &self.d_rest)) {
+            self.put_rest_shape(control.to_vec(), data.to_vec());
+        }
+        Ok(())
+    }
+
+    /// Installs a rest shape: rest lengths of all springs, the metric energy's rest metric,
+    /// the divergence scale.
+    fn put_rest_shape(&mut self, control: Vec<Vec3>, data: Vec<Vec3>) {
+        self.springs.reset_rest(&data);
+        if let Some(a) = &mut self.active_springs {
+            a.reset_rest(&data);
+        }
+        self.energy_scale = spring_energy_scale(&self.springs);
+        if let Some(m) = &mut self.metric {
+            m.reset_rest(&control);
+        }
+        self.p_rest = control;
+        self.d_rest = data;
+    }
+
     /// Stops all motion (velocities to zero).
     pub fn stop(&mut self) {
         self.v.iter_mut().for_each(|v| *v = Vec3::zeros());
