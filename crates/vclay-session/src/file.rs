@@ -41,6 +41,17 @@ struct SavedModel {
     name: String,
     kind: String,
     state: serde_json::Value,
+    /// Plastic flow after each step (absent: off; files without it read as before).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    plasticity: Option<SavedPlasticity>,
+}
+
+/// [`vclay_core::Plasticity`] in a session file.
+#[derive(Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SavedPlasticity {
+    rate: f64,
+    yield_distance: f64,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -69,6 +80,10 @@ pub fn to_value(
             name: name.to_string(),
             kind: m.kind().name().to_string(),
             state: m.save().map_err(|e| e.in_model(name))?,
+            plasticity: session.plasticity(Some(name)).map(|p| SavedPlasticity {
+                rate: p.rate,
+                yield_distance: p.yield_distance,
+            }),
         });
     }
     serde_json::to_value(SavedSession {
@@ -165,6 +180,14 @@ pub fn parse(text: &str, file: &str) -> Result<(Session, Option<RunInfo>), Sessi
         session
             .add_model(&m.name, model)
             .map_err(|e| err(0, &format!("models[{i}].name"), e.to_string()))?;
+        if let Some(p) = m.plasticity {
+            let key = format!("models[{i}].plasticity");
+            let p = vclay_core::Plasticity::new(p.rate, p.yield_distance)
+                .map_err(|what| err(0, &key, what))?;
+            session
+                .set_plasticity(Some(&m.name), Some(p))
+                .map_err(|e| err(0, &key, e.to_string()))?;
+        }
     }
     for (k, t) in saved.schedule.iter().enumerate() {
         if let Some(name) = &t.command.model

@@ -40,3 +40,4 @@ pub use model::{
 pub use models::ModelSpec;
 pub use open::{FileKind, Opened, open};
 pub use session::{LogEntry, Session, Timed};
+pub use vclay_core::Plasticity;

@@ -485,6 +485,19 @@ pub trait Model: Send + Sync + std::fmt::Debug {
     fn export_formats(&self) -> Vec<&'static str> {
         EXPORT_EXTENSIONS.to_vec()
     }
+    /// One step of plastic flow (`vclay_core::plasticity`): rest positions displaced past
+    /// `yield_distance` move toward the current shape by `fraction` of the overstress; returns
+    /// how many control points yielded. The session calls it after each step of a model whose
+    /// [`Session::set_plasticity`](crate::Session::set_plasticity) is set. Models whose undo
+    /// snapshots include the rest shape implement it (solids, D-NURBS with dynamic weights).
+    /// Default: the kind has no rest shape to flow.
+    fn plastic_flow(&mut self, fraction: f64, yield_distance: f64) -> Result<usize, SessionError> {
+        let _ = (fraction, yield_distance);
+        Err(SessionError::model(format!(
+            "a {} model has no plastic flow (no rest shape that follows the clay)",
+            self.kind()
+        )))
+    }
 }
 
 /// Builds the error for an extension a kind does not export.

@@ -35,6 +35,7 @@ use serde::{Deserialize, Serialize};
 use crate::command::{Command, Edit, EditError};
 use crate::error::SessionError;
 use crate::model::{Hit, Model, Ray, StepReport, Undo};
+use vclay_core::Plasticity;
 
 /// A command scheduled for a time (a scenario's timeline entry).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -92,6 +93,8 @@ struct RedoExact {
 struct Entry {
     name: String,
     model: Box<dyn Model>,
+    /// Plastic flow after each step ([`Session::set_plasticity`]).
+    plasticity: Option<Plasticity>,
 }
 
 /// Models of any kind, their commands and history (see the [module docs](self)).
@@ -142,6 +145,7 @@ impl Session {
         self.models.push(Entry {
             name: name.to_string(),
             model,
+            plasticity: None,
         });
         self.revision += 1;
         Ok(())
@@ -482,7 +486,46 @@ impl Session {
     ) -> Result<StepReport, SessionError> {
         lines.extend(self.apply_due(i)?);
         let e = &mut self.models[i];
-        e.model.step().map_err(|err| err.in_model(&e.name))
+        let report = e.model.step().map_err(|err| err.in_model(&e.name))?;
+        if let Some(p) = e.plasticity {
+            e.model
+                .plastic_flow(p.fraction(e.model.dt()), p.yield_distance)
+                .map_err(|err| err.in_model(&e.name))?;
+        }
+        Ok(report)
+    }
+
+    /// Sets the plastic flow of model `name` (the first when `None`): after each of its steps
+    /// the rest shape follows the shape where it is displaced past `yield_distance`, at `rate`
+    /// (`vclay_core::plasticity`; the studio's sculpt mode). `None` turns it off (the papers'
+    /// elastic clay). A setting of the session, saved in session files, not an undo step; what
+    /// the flow did to the rest shape is undone with the steps that did it.
+    ///
+    /// # Errors
+    /// An unknown model, or a kind without a rest shape to flow (FFD, PDE, D-NURBS with frozen
+    /// weights).
+    pub fn set_plasticity(
+        &mut self,
+        name: Option<&str>,
+        plasticity: Option<Plasticity>,
+    ) -> Result<(), SessionError> {
+        let i = self.resolve(name)?;
+        let e = &mut self.models[i];
+        if let Some(p) = plasticity {
+            // A flow of fraction 0 changes nothing and fails where the kind has none.
+            e.model
+                .plastic_flow(0.0, p.yield_distance)
+                .map_err(|err| err.in_model(&e.name))?;
+        }
+        e.plasticity = plasticity;
+        Ok(())
+    }
+
+    /// The plastic flow of model `name` (the first when `None`), if set.
+    pub fn plasticity(&self, name: Option<&str>) -> Option<Plasticity> {
+        self.resolve(name)
+            .ok()
+            .and_then(|i| self.models[i].plasticity)
     }
 
     /// Advances every model by one step; returns one report per model and the log lines of

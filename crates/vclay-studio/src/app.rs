@@ -164,6 +164,19 @@ pub struct ToolOptions {
     /// Sculpt mode (the default): at the end of each pull the shape reached becomes the rest
     /// shape ([`crate::worker::Request::Sculpt`]); off: the papers' elastic clay.
     pub sculpt: bool,
+    /// Sculpt mode's plastic flow: on, its rate (1/s) and its yield distance relative to the
+    /// model size ([`crate::worker::Request::Flow`]); off, the shape is kept at the release.
+    pub flow: (bool, f64, f64),
+}
+
+impl ToolOptions {
+    /// The flow request of these options.
+    pub fn flow_request(&self) -> Option<crate::worker::Flow> {
+        self.flow.0.then_some(crate::worker::Flow {
+            rate: self.flow.1,
+            yield_fraction: self.flow.2,
+        })
+    }
 }
 
 impl Default for ToolOptions {
@@ -180,6 +193,7 @@ impl Default for ToolOptions {
             local: [0.15, 0.5],
             integrator: 0,
             sculpt: true,
+            flow: (false, 5.0, 0.01),
             gravity: (false, 9.81),
             inflate: (false, 5.0),
         }
@@ -1065,15 +1079,24 @@ impl Studio {
         }
         if physical {
             ui.horizontal(|ui| {
-                ui.checkbox(&mut self.options.sculpt, "Sculpt (K)")
+                if ui
+                    .checkbox(&mut self.options.sculpt, "Sculpt (K)")
                     .on_hover_text(
                         "on: what you pull stays (the shape at the end of each pull becomes the \
-                     rest shape and the motion stops); off: elastic clay that springs back",
-                    );
+                     rest shape and the motion stops, or the clay yields as you pull with plastic \
+                     flow); off: elastic clay that springs back",
+                    )
+                    .changed()
+                {
+                    self.send(Request::Sculpt(self.options.sculpt));
+                }
                 if ui.button("Plastic reset").clicked() {
                     self.apply(Edit::PlasticReset);
                 }
             });
+            if self.options.sculpt {
+                self.flow_ui(ui);
+            }
             let (mut on, mut g) = self.options.gravity;
             let c1 = ui.checkbox(&mut on, "Gravity").changed();
             let r = ui.add(egui::Slider::new(&mut g, 0.0..=50.0).text("g"));
@@ -1303,6 +1326,7 @@ impl Studio {
                     2.0 * self.camera.distance * (crate::camera::FOV_Y / 2.0).tan() / h.max(1.0);
                 self.send(Request::Symmetry(self.symmetry));
                 self.send(Request::Sculpt(self.options.sculpt));
+                self.send(Request::Flow(self.options.flow_request()));
                 self.send(Request::Grab {
                     ray,
                     tolerance: PICK_POINTS * per_point,

@@ -49,6 +49,15 @@ use vclay_session::{
 
 use crate::symmetry::{Axes, Symmetry};
 
+/// Sculpt mode's plastic flow (see [`Request::Flow`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Flow {
+    /// Rate `gamma` (1/s) at which the rest shape follows the clay past the yield.
+    pub rate: f64,
+    /// Yield distance as a fraction of the model's size (bounding-box diagonal).
+    pub yield_fraction: f64,
+}
+
 /// Sculpt mode's anchor reach (see `Worker::anchor`): control points farther than this fraction
 /// of the model's size (its rest bounding box diagonal) from the grab are held during a pull of
 /// a model with nothing fixed.
@@ -243,6 +252,13 @@ pub enum Request {
     /// per stroke), so what the designer pulls stays. Off: the papers' elastic clay, which
     /// springs back. Taken at the next press; only for models that take `plastic-reset`.
     Sculpt(bool),
+    /// Sculpt mode's plastic flow (`vclay_core::plasticity`, docs/sculpting.md): `Some`, the
+    /// rest shape follows the clay during a pull, after every step, where it is displaced past
+    /// the yield distance (a fraction of the model's size), at the rate; the clay then springs
+    /// back only by its elastic part at the release, and nothing is reset there. `None`: the
+    /// whole shape reached is kept at the release (the flow's limit of infinite rate and zero
+    /// yield). Applies while sculpt mode is on, to every model that has a rest shape.
+    Flow(Option<Flow>),
     /// Pause once the first model's step count reaches this (a scenario's run length), and
     /// say so; Run then goes on past it. `None`: no such stop.
     StopAt(Option<u64>),
@@ -291,6 +307,7 @@ impl std::fmt::Debug for Request {
             Request::Drop => "Drop",
             Request::Symmetry(_) => "Symmetry",
             Request::Sculpt(_) => "Sculpt",
+            Request::Flow(_) => "Flow",
             Request::StopAt(_) => "StopAt",
             Request::RunInfo(_) => "RunInfo",
             Request::Replace(_) => "Replace",
@@ -520,6 +537,8 @@ struct State {
     stop_at: Option<u64>,
     /// Sculpt mode (see [`Request::Sculpt`]).
     sculpt: bool,
+    /// Sculpt mode's plastic flow (see [`Request::Flow`]).
+    flow: Option<Flow>,
     /// The run was paused by the scenario's end (a press runs it again).
     ended: bool,
     /// The run was held by an undo (see `Worker::undo`).
@@ -555,6 +574,7 @@ impl State {
             stop_at: None,
             run_info: None,
             sculpt: false,
+            flow: None,
             ended: false,
             held: false,
             symmetry: Symmetry::default(),
@@ -759,12 +779,20 @@ impl State {
             }
             Request::Drop => self.drop_grab(),
             Request::Symmetry(s) => self.symmetry = s,
-            Request::Sculpt(on) => self.sculpt = on,
+            Request::Sculpt(on) => {
+                self.sculpt = on;
+                self.set_flow();
+            }
+            Request::Flow(f) => {
+                self.flow = f;
+                self.set_flow();
+            }
             Request::StopAt(n) => self.stop_at = n,
             Request::RunInfo(r) => self.run_info = r.map(|r| *r),
             Request::Replace(s) => {
                 self.drop_grab();
                 self.session = *s;
+                self.set_flow();
                 self.stop_at = None;
                 self.ended = false;
                 self.held = false;
@@ -1482,11 +1510,33 @@ impl State {
             .session
             .model(Some(&d.model))
             .is_ok_and(|m| m.accepts(&Edit::PlasticReset));
-        if self.sculpt && pulled && keeps {
+        if self.sculpt && self.flow.is_none() && pulled && keeps {
             self.apply(Command::to(&d.model, Edit::Stop));
             self.apply(Command::to(&d.model, Edit::PlasticReset));
         }
         self.session.end_group();
+    }
+
+    /// Puts the sculpt mode's plastic flow on every model that has a rest shape (off where
+    /// sculpt mode or the flow is off). The yield distance scales with each model's size.
+    fn set_flow(&mut self) {
+        let names: Vec<String> = self
+            .session
+            .model_names()
+            .into_iter()
+            .map(str::to_string)
+            .collect();
+        for name in names {
+            let p = match (self.sculpt, self.flow) {
+                (true, Some(f)) => self.session.model(Some(&name)).ok().and_then(|m| {
+                    vclay_session::Plasticity::new(f.rate, f.yield_fraction * m.size()).ok()
+                }),
+                _ => None,
+            };
+            // Kinds without a rest shape (FFD, PDE, frozen weights) refuse the flow: they
+            // have nothing to keep.
+            let _ = self.session.set_plasticity(Some(&name), p);
+        }
     }
 
     fn publish(&mut self) {

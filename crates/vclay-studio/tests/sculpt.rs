@@ -16,7 +16,7 @@ use vclay_core::Vec3;
 use vclay_session::{Edit, LineRole, Ray};
 use vclay_studio::load::{builtin, builtin_named};
 use vclay_studio::symmetry::Symmetry;
-use vclay_studio::worker::{Grab, Request, Worker};
+use vclay_studio::worker::{Flow, Grab, Request, Worker};
 use vclay_studio::{Options, Studio, Tool};
 
 mod common;
@@ -412,12 +412,18 @@ fn a_control_point_handle_lights_up_under_the_mouse() {
 /// The top of the 4^3 cube after a rope pull with the bottom fixed, `settle` steps after the
 /// release, in sculpt mode or not.
 fn top_after_pull(sculpt: bool, settle: u64) -> f64 {
+    top_after_flow_pull(sculpt, None, settle)
+}
+
+/// [`top_after_pull`] with sculpt mode's plastic flow.
+fn top_after_flow_pull(sculpt: bool, flow: Option<Flow>, settle: u64) -> f64 {
     let session = builtin(builtin_named("cube").unwrap()).unwrap();
     let w = Worker::start(session, false);
     w.send(Request::Apply(vclay_session::Command::new(Edit::Fix(
         vclay_session::Selection::rest_box([-0.1, -0.1, -0.1], [1.1, 1.1, 0.01]),
     ))));
     w.send(Request::Sculpt(sculpt));
+    w.send(Request::Flow(flow));
     w.send(Request::Grab {
         ray: down_at(0.5, 0.5),
         tolerance: 0.0,
@@ -457,6 +463,47 @@ fn in_sculpt_mode_what_is_pulled_stays() {
     assert!(
         elastic - 1.0 < 0.5 * (kept - 1.0),
         "elastic springs back: {elastic} (sculpt {kept})"
+    );
+}
+
+#[test]
+fn plastic_flow_keeps_what_yields_and_springs_back_the_elastic_part() {
+    // Sculpt mode with plastic flow: the rest shape follows the pull while it lasts, so after
+    // the release the top stays up by what yielded; a slow flow keeps less than a fast one, and
+    // both keep more than elastic clay. A large yield distance keeps nothing.
+    let fast = top_after_flow_pull(
+        true,
+        Some(Flow {
+            rate: 50.0,
+            yield_fraction: 0.0,
+        }),
+        600,
+    );
+    let slow = top_after_flow_pull(
+        true,
+        Some(Flow {
+            rate: 0.5,
+            yield_fraction: 0.0,
+        }),
+        600,
+    );
+    let stiff = top_after_flow_pull(
+        true,
+        Some(Flow {
+            rate: 50.0,
+            yield_fraction: 1.0,
+        }),
+        600,
+    );
+    let elastic = top_after_pull(false, 600);
+    assert!(fast > 1.1, "a fast flow keeps the pull: {fast}");
+    assert!(
+        slow - 1.0 < 0.8 * (fast - 1.0) && slow > elastic,
+        "a slow flow keeps less: slow {slow}, fast {fast}, elastic {elastic}"
+    );
+    assert!(
+        (stiff - elastic).abs() < 0.02,
+        "below the yield the clay is elastic: {stiff} vs {elastic}"
     );
 }
 

@@ -119,6 +119,43 @@ impl Studio {
         });
     }
 
+    /// Sculpt mode's plastic flow (docs/sculpting.md): off, the shape reached is kept whole at
+    /// the release; on, the rest shape follows the clay during the pull past a yield distance
+    /// at a rate, and the elastic part springs back. Sent to the worker at once.
+    pub(super) fn flow_ui(&mut self, ui: &mut Ui) {
+        let (mut on, mut rate, mut yield_fraction) = self.options.flow;
+        let mut changed = false;
+        ui.horizontal(|ui| {
+            changed |= ui
+                .checkbox(&mut on, "Plastic flow")
+                .on_hover_text(
+                    "off: the whole shape reached is kept at the release; on: the clay yields \
+                     while you pull (past the yield distance, at the rate) and springs back by \
+                     its elastic part",
+                )
+                .changed();
+        });
+        if on {
+            let r = ui.add(
+                egui::Slider::new(&mut rate, 0.1..=100.0)
+                    .logarithmic(true)
+                    .text("rate 1/s"),
+            );
+            let y = ui.add(
+                egui::Slider::new(&mut yield_fraction, 0.0..=0.2)
+                    .text("yield")
+                    .custom_formatter(|v, _| format!("{:.1} %", 100.0 * v)),
+            );
+            changed |= r.drag_stopped() || (r.changed() && !r.dragged());
+            changed |= y.drag_stopped() || (y.changed() && !y.dragged());
+        }
+        self.options.flow = (on, rate, yield_fraction);
+        if changed {
+            self.send(Request::Sculpt(self.options.sculpt));
+            self.send(Request::Flow(self.options.flow_request()));
+        }
+    }
+
     /// The keys (see [`crate::keys`]); none while a dialog is open or a text field has focus.
     pub(super) fn shortcuts(&mut self, ctx: &egui::Context) {
         // A dialog or a text field takes the keys (Ctrl+Z in a path field is not the model's).
@@ -169,6 +206,7 @@ impl Studio {
         }
         if pressed(Key::K) {
             self.options.sculpt = !self.options.sculpt;
+            self.send(Request::Sculpt(self.options.sculpt));
         }
         for (k, axis) in [(Key::X, 0), (Key::Y, 1), (Key::Z, 2)] {
             if pressed(k) {
