@@ -35,7 +35,7 @@ cleanup() {
   kill "$xvfb" 2>/dev/null || true
 }
 trap cleanup EXIT
-export DISPLAY=$display LIBGL_ALWAYS_SOFTWARE=1
+export DISPLAY=$display LIBGL_ALWAYS_SOFTWARE=1 VCLAY_NO_NATIVE_DIALOGS=1
 for _ in $(seq 50); do xdpyinfo >/dev/null 2>&1 && break; sleep 0.1; done 2>/dev/null || sleep 2
 
 "$studio" examples/scenarios/fig07_rope_cube.toml --autosave "$work/autosave.session" \

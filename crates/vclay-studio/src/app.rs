@@ -211,6 +211,42 @@ enum Dialog {
     Unsaved(Then),
     /// The shortcuts (F1 or ?).
     Help,
+    /// Waiting for the desktop's file chooser ([`crate::native`]); `typed` is the path the
+    /// typed dialog starts from if the person prefers it or the chooser fails.
+    Native {
+        purpose: PathPurpose,
+        answer: std::sync::mpsc::Receiver<crate::native::Answer>,
+        typed: String,
+    },
+}
+
+/// What a path dialog is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum PathPurpose {
+    Open,
+    SaveAs,
+    Export,
+    Screenshot,
+}
+
+impl PathPurpose {
+    fn title(self) -> &'static str {
+        match self {
+            PathPurpose::Open => "Open",
+            PathPurpose::SaveAs => "Save session as",
+            PathPurpose::Export => "Export the model",
+            PathPurpose::Screenshot => "Screenshot (PNG)",
+        }
+    }
+    /// The typed-path dialog for this purpose.
+    fn typed(self, path: String) -> Dialog {
+        match self {
+            PathPurpose::Open => Dialog::Open(path),
+            PathPurpose::SaveAs => Dialog::SaveAs(path),
+            PathPurpose::Export => Dialog::Export(path),
+            PathPurpose::Screenshot => Dialog::Screenshot(path),
+        }
+    }
 }
 
 /// What waits for the unsaved-changes prompt (and for the save it may start).
@@ -261,6 +297,9 @@ pub struct Options {
     /// The list of recently opened files (JSON; `None`: none kept). The binary keeps it in
     /// `$XDG_CONFIG_HOME/vclay/recent.json` (else `~/.config/vclay/recent.json`).
     pub recent: Option<PathBuf>,
+    /// The desktop's file chooser for Open, Save as, Export and Screenshot (`None`: the typed
+    /// path dialogs). The binary uses [`crate::native::Chooser::find`].
+    pub chooser: Option<crate::native::Chooser>,
 }
 
 /// The studio (see the [module docs](self)).
@@ -555,6 +594,7 @@ impl Studio {
             Dialog::Recover(_) => "Recover?",
             Dialog::Unsaved(_) => "Unsaved changes",
             Dialog::Help => "Help",
+            Dialog::Native { purpose, .. } => purpose.title(),
         })
     }
 
@@ -771,7 +811,7 @@ impl Studio {
     fn proceed(&mut self, ctx: &egui::Context, then: Then) {
         self.after_save = None;
         match then {
-            Then::Open => self.dialog = Some(Dialog::Open(String::new())),
+            Then::Open => self.ask_path(PathPurpose::Open, String::new()),
             Then::OpenRecent(k) => {
                 if let Some(p) = self.recent.get(k).cloned()
                     && let Err(e) = self.open_file(&p)
@@ -821,10 +861,73 @@ impl Studio {
         ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(cb));
     }
 
+    /// Asks for a path: the desktop's file chooser when there is one ([`crate::native`]),
+    /// else the typed-path dialog starting at `start`.
+    fn ask_path(&mut self, purpose: PathPurpose, start: String) {
+        self.dialog = Some(match &self.opts.chooser {
+            Some(c) => {
+                let native = if purpose == PathPurpose::Open {
+                    crate::native::Purpose::Open
+                } else {
+                    crate::native::Purpose::Save
+                };
+                let from = match (&self.file, purpose) {
+                    (Some(f), PathPurpose::Open) => {
+                        f.parent().map(|d| d.join("")).unwrap_or_default()
+                    }
+                    _ => PathBuf::from(&start),
+                };
+                Dialog::Native {
+                    purpose,
+                    answer: c.ask(native, purpose.title(), &from),
+                    typed: start,
+                }
+            }
+            None => purpose.typed(start),
+        });
+    }
+
+    /// Does what a path dialog was for once it is answered: opens, saves, exports or takes
+    /// the screenshot on Submit; on Cancel a save that something waited for is dropped.
+    /// Returns the next dialog (an error).
+    fn path_answered(
+        &mut self,
+        ctx: &egui::Context,
+        purpose: PathPurpose,
+        answer: Option<Answer>,
+        path: &str,
+    ) -> Option<Dialog> {
+        match answer {
+            Some(Answer::Submit) => match purpose {
+                PathPurpose::Open => {
+                    if let Err(e) = self.open_file(Path::new(path)) {
+                        return Some(Dialog::Error(e));
+                    }
+                }
+                PathPurpose::SaveAs => self.send(Request::Save(PathBuf::from(path))),
+                PathPurpose::Export => {
+                    if let Some(m) = self.model_name() {
+                        self.send(Request::Export {
+                            model: m,
+                            path: PathBuf::from(path),
+                        });
+                    }
+                }
+                PathPurpose::Screenshot => self.screenshot(ctx, PathBuf::from(path)),
+            },
+            Some(_) if purpose == PathPurpose::SaveAs => {
+                // Cancelled: what waited for the save does not happen.
+                self.after_save = None;
+            }
+            _ => {}
+        }
+        None
+    }
+
     fn save(&mut self) {
         match &self.file {
             Some(f) if load::is_session_file(f) => self.send(Request::Save(f.clone())),
-            _ => self.dialog = Some(Dialog::SaveAs(self.suggestion("session"))),
+            _ => self.ask_path(PathPurpose::SaveAs, self.suggestion("session")),
         }
     }
 
@@ -874,16 +977,16 @@ impl Studio {
                     .add_enabled(has, egui::Button::new("Save as..."))
                     .clicked()
                 {
-                    self.dialog = Some(Dialog::SaveAs(self.suggestion("session")));
+                    self.ask_path(PathPurpose::SaveAs, self.suggestion("session"));
                 }
                 if ui
                     .add_enabled(has, egui::Button::new("Export..."))
                     .clicked()
                 {
-                    self.dialog = Some(Dialog::Export(self.suggestion("obj")));
+                    self.ask_path(PathPurpose::Export, self.suggestion("obj"));
                 }
                 if ui.button("Screenshot...").clicked() {
-                    self.dialog = Some(Dialog::Screenshot(self.suggestion("png")));
+                    self.ask_path(PathPurpose::Screenshot, self.suggestion("png"));
                 }
                 ui.separator();
                 if ui.button("Quit").clicked() {
@@ -1513,7 +1616,7 @@ impl Studio {
 
     fn dialogs(&mut self, ctx: &egui::Context) {
         let Some(d) = self.dialog.take() else { return };
-        let mut keep = true;
+        let mut keep: bool;
         let mut next: Option<Dialog> = None;
         let modal = egui::Modal::new(egui::Id::unique("vclay-studio-dialog"));
         let d = match d {
@@ -1530,27 +1633,14 @@ impl Studio {
             }
             Dialog::Open(mut path) => {
                 let a = path_dialog(ctx, modal, "Open", None, &mut path, "Open");
+                next = self.path_answered(ctx, PathPurpose::Open, a, &path);
                 keep = a.is_none();
-                if a == Some(Answer::Submit)
-                    && let Err(e) = self.open_file(Path::new(&path))
-                {
-                    next = Some(Dialog::Error(e));
-                }
                 Dialog::Open(path)
             }
             Dialog::SaveAs(mut path) => {
-                match path_dialog(ctx, modal, "Save session as", None, &mut path, "Save") {
-                    Some(Answer::Submit) => {
-                        keep = false;
-                        self.send(Request::Save(PathBuf::from(&path)));
-                    }
-                    Some(_) => {
-                        keep = false;
-                        // Cancelled: what waited for the save does not happen.
-                        self.after_save = None;
-                    }
-                    None => {}
-                }
+                let a = path_dialog(ctx, modal, "Save session as", None, &mut path, "Save");
+                next = self.path_answered(ctx, PathPurpose::SaveAs, a, &path);
+                keep = a.is_none();
                 Dialog::SaveAs(path)
             }
             Dialog::Export(mut path) => {
@@ -1566,24 +1656,58 @@ impl Studio {
                     &mut path,
                     "Export",
                 );
+                next = self.path_answered(ctx, PathPurpose::Export, a, &path);
                 keep = a.is_none();
-                if a == Some(Answer::Submit)
-                    && let Some(m) = self.model_name()
-                {
-                    self.send(Request::Export {
-                        model: m,
-                        path: PathBuf::from(&path),
-                    });
-                }
                 Dialog::Export(path)
             }
             Dialog::Screenshot(mut path) => {
                 let a = path_dialog(ctx, modal, "Screenshot (PNG)", None, &mut path, "Take");
+                next = self.path_answered(ctx, PathPurpose::Screenshot, a, &path);
                 keep = a.is_none();
-                if a == Some(Answer::Submit) {
-                    self.screenshot(ctx, PathBuf::from(&path));
-                }
                 Dialog::Screenshot(path)
+            }
+            Dialog::Native {
+                purpose,
+                answer,
+                typed,
+            } => {
+                let got = answer.try_recv();
+                let a = modal
+                    .show(ctx, |ui| {
+                        ui.heading(purpose.title());
+                        ui.label("Choose the file in the system's file dialog.");
+                        buttons(ui, "Type the path instead", None)
+                    })
+                    .inner;
+                keep = false;
+                match (got, a) {
+                    (Ok(Ok(Some(path))), _) => {
+                        let path = path.display().to_string();
+                        next = self.path_answered(ctx, purpose, Some(Answer::Submit), &path);
+                    }
+                    (Ok(Ok(None)), _) | (_, Some(Answer::Cancel)) => {
+                        next = self.path_answered(ctx, purpose, Some(Answer::Cancel), "");
+                    }
+                    (Ok(Err(why)), _) => {
+                        // The chooser is broken here: type paths from now on.
+                        self.push_log(format!("file dialog: {why}; type the path instead"));
+                        self.opts.chooser = None;
+                        next = Some(purpose.typed(typed.clone()));
+                    }
+                    (Err(std::sync::mpsc::TryRecvError::Disconnected), _) => {
+                        next = Some(purpose.typed(typed.clone()));
+                    }
+                    (_, Some(_)) => next = Some(purpose.typed(typed.clone())),
+                    (Err(_), None) => {
+                        keep = true;
+                        ctx.request_repaint_after(std::time::Duration::from_millis(100));
+                    }
+                }
+                Dialog::Native {
+                    purpose,
+                    answer,
+                    typed,
+                }
             }
             Dialog::Recover(path) => {
                 let a = modal

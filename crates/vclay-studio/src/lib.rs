@@ -10,12 +10,12 @@
 //! them with OpenGL (eframe's glow backend, which Mesa's llvmpipe runs without a GPU);
 //! [`camera`] is the orbit camera and the mouse ray; [`load`] opens files and the built-in
 //! models; [`bench`] runs the frame loop headless; [`text`] rounds numbers in log lines;
-//! [`keys`] is the shortcut table (keys and the help overlay); [`pick`] finds the surface under
+//! [`native`] asks the desktop's file chooser; [`keys`] is the shortcut table (keys and the help overlay); [`pick`] finds the surface under
 //! the mouse on the UI thread (brush circle, handles); [`symmetry`] mirrors tool actions.
 //!
 //! Limitations: one undo snapshot per cursor move (the session layer's undo records), so cursor
-//! moves are coalesced ([`worker::DRAG_INTERVAL`]); file dialogs are text fields (no native
-//! dialog dependency).
+//! moves are coalesced ([`worker::DRAG_INTERVAL`]); file dialogs are the desktop's own where it
+//! has a chooser program ([`native`]), else text fields.
 #![warn(missing_docs)]
 
 pub mod app;
@@ -23,6 +23,7 @@ pub mod bench;
 pub mod camera;
 pub mod keys;
 pub mod load;
+pub mod native;
 pub mod pick;
 pub mod recent;
 pub mod render;

@@ -12,6 +12,7 @@ fn main() -> anyhow::Result<()> {
     let mut args = std::env::args().skip(1);
     let mut opts = Options {
         recent: vclay_studio::recent::default_file(),
+        chooser: vclay_studio::native::Chooser::find(),
         ..Options::default()
     };
     let mut bench_frames = None;
