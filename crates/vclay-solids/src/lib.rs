@@ -68,4 +68,4 @@ pub use solid::{
     DynamicSolid, Energy, Integrator, PHASED_POINTS, SolidParams, SolidRest, SolidState,
     SolidStats, StepReport, ToolId,
 };
-pub use tools::Tool;
+pub use tools::{Falloff, Tool};

@@ -6,8 +6,9 @@
 //!   of stiffness `k` that only pulls ("non-compressible" rope: no force while the distance is
 //!   below the rope length `L`): `f = -k (l - L) u` for `l > L`. The cursor can move.
 //! * [`Tool::PointForce`]: a constant force on one data point.
-//! * [`Tool::RegionForce`]: a total force shared equally by the data points within a radius of a
-//!   centre (chosen when the tool is added).
+//! * [`Tool::RegionForce`]: a total force shared by the data points within a radius of a centre
+//!   (chosen when the tool is added), equally (the paper) or by a [`Falloff`] of the distance
+//!   from the centre (a sculpting brush's profile).
 //! * [`Tool::Gravity`]: `f_i = m_i g`.
 //! * [`Tool::Inflation`]: a pressure `P` on the boundary: each boundary face adds `P N / k` to
 //!   each of its `k` vertices, with `N` the outward area vector of the face (Newell's formula).
@@ -37,7 +38,8 @@ pub enum Tool {
         /// Force.
         force: Vec3,
     },
-    /// A total force spread over data points.
+    /// A total force spread over data points: point `points[k]` takes the share
+    /// `weights[k] / sum(weights)` (equal shares when `weights` is empty).
     RegionForce {
         /// Data points (chosen at creation).
         points: Vec<usize>,
@@ -47,6 +49,10 @@ pub enum Tool {
         center: Vec3,
         /// Radius used to choose the points.
         radius: f64,
+        /// How the share falls off with the distance from the centre.
+        falloff: Falloff,
+        /// The falloff's weight of each point of `points` at creation (empty: equal shares).
+        weights: Vec<f64>,
     },
     /// Gravity, acceleration `g`.
     Gravity {
@@ -113,8 +119,18 @@ impl Tool {
                 add(*point, *force);
                 0.0
             }
-            Tool::RegionForce { points, force, .. } => {
-                if !points.is_empty() {
+            Tool::RegionForce {
+                points,
+                force,
+                weights,
+                ..
+            } => {
+                let total: f64 = weights.iter().sum();
+                if weights.len() == points.len() && total > 0.0 {
+                    for (&i, w) in points.iter().zip(weights) {
+                        add(i, force * (w / total));
+                    }
+                } else if !points.is_empty() {
                     let share = force / points.len() as f64;
                     for &i in points {
                         add(i, share);
@@ -205,11 +221,25 @@ impl Tool {
                 index(*point)?;
                 finite("force", force)?;
             }
-            Tool::RegionForce { points, force, .. } => {
+            Tool::RegionForce {
+                points,
+                force,
+                weights,
+                ..
+            } => {
                 for &p in points {
                     index(p)?;
                 }
                 finite("force", force)?;
+                if !(weights.is_empty() || weights.len() == points.len())
+                    || weights.iter().any(|w| !(w.is_finite() && *w >= 0.0))
+                {
+                    return Err(invalid(
+                        "weights",
+                        weights.len(),
+                        "one finite non-negative weight per point, or none",
+                    ));
+                }
             }
             Tool::Gravity { g } => finite("g", g)?,
             Tool::Inflation { pressure } => {
@@ -219,6 +249,80 @@ impl Tool {
             }
         }
         Ok(())
+    }
+}
+
+/// The profile of a region force (a sculpting brush): the weight of a point at distance `r`
+/// from the centre of a region of radius `R`, as a function of `t = r / R` in `[0, 1]`, with
+/// `s = 1 - t`. The names are Blender's sculpt-brush falloff presets.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Falloff {
+    /// `1`: every point the same share (the paper's region force).
+    #[default]
+    Constant,
+    /// `3 s^2 - 2 s^3` (smoothstep): full at the centre, flat at both ends.
+    Smooth,
+    /// `s`.
+    Linear,
+    /// `sqrt(1 - t^2)`: a hemisphere.
+    Sphere,
+    /// `s^2`: concentrated at the centre.
+    Sharp,
+}
+
+impl Falloff {
+    /// Every falloff, in the order front ends list them.
+    pub const ALL: [Falloff; 5] = [
+        Falloff::Constant,
+        Falloff::Smooth,
+        Falloff::Linear,
+        Falloff::Sphere,
+        Falloff::Sharp,
+    ];
+
+    /// The weight at `t = r / R` (clamped to `[0, 1]`).
+    pub fn weight(self, t: f64) -> f64 {
+        let t = if t.is_finite() {
+            t.clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        let s = 1.0 - t;
+        match self {
+            Falloff::Constant => 1.0,
+            Falloff::Smooth => s * s * (3.0 - 2.0 * s),
+            Falloff::Linear => s,
+            Falloff::Sphere => (1.0 - t * t).max(0.0).sqrt(),
+            Falloff::Sharp => s * s,
+        }
+    }
+
+    /// The name in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Falloff::Constant => "constant",
+            Falloff::Smooth => "smooth",
+            Falloff::Linear => "linear",
+            Falloff::Sphere => "sphere",
+            Falloff::Sharp => "sharp",
+        }
+    }
+
+    /// The falloff named `name` (see [`Falloff::name`]).
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|f| f.name() == name)
+    }
+
+    /// The weights of `points` of `d` for a region at `center` of `radius` (empty for
+    /// [`Falloff::Constant`]: equal shares). A region of radius 0 weighs its points equally.
+    pub fn weights(self, d: &[Vec3], points: &[usize], center: &Vec3, radius: f64) -> Vec<f64> {
+        if self == Falloff::Constant || radius <= 0.0 {
+            return Vec::new();
+        }
+        points
+            .iter()
+            .map(|&i| self.weight((d[i] - center).norm() / radius))
+            .collect()
     }
 }
 
@@ -248,6 +352,45 @@ pub fn within(d: &[Vec3], c: &Vec3, radius: f64) -> Vec<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn falloffs_are_full_at_the_centre_and_zero_at_the_rim_but_constant() {
+        for f in Falloff::ALL {
+            assert_eq!(f.weight(0.0), 1.0, "{f:?}");
+            let rim = f.weight(1.0);
+            assert_eq!(rim, if f == Falloff::Constant { 1.0 } else { 0.0 }, "{f:?}");
+            // Non-increasing from the centre out.
+            let w: Vec<f64> = (0..=10).map(|k| f.weight(k as f64 / 10.0)).collect();
+            assert!(w.windows(2).all(|p| p[1] <= p[0]), "{f:?} {w:?}");
+            assert_eq!(Falloff::from_name(f.name()), Some(f));
+        }
+        assert!((Falloff::Smooth.weight(0.5) - 0.5).abs() < 1e-15);
+        assert!(Falloff::Sharp.weight(0.5) < Falloff::Linear.weight(0.5));
+    }
+
+    #[test]
+    fn a_weighted_region_force_keeps_its_total_and_leans_to_the_centre() {
+        let d: Vec<Vec3> = (0..5)
+            .map(|i| Vec3::new(i as f64 * 0.25, 0.0, 0.0))
+            .collect();
+        let points: Vec<usize> = (0..5).collect();
+        let center = Vec3::zeros();
+        let weights = Falloff::Smooth.weights(&d, &points, &center, 1.25);
+        let tool = Tool::RegionForce {
+            points,
+            force: Vec3::new(0.0, 0.0, 2.0),
+            center,
+            radius: 1.25,
+            falloff: Falloff::Smooth,
+            weights,
+        };
+        let mut f = vec![Vec3::zeros(); 5];
+        tool.add_forces(&d, &[1.0; 5], &Boundary::default(), &mut f);
+        let total: f64 = f.iter().map(|x| x.z).sum();
+        assert!((total - 2.0).abs() < 1e-14, "{total}");
+        assert!(f.windows(2).all(|p| p[1].z < p[0].z), "{f:?}");
+        assert!(tool.validate(5).is_ok());
+    }
 
     #[test]
     fn tools_applied_block_by_block_add_up_to_the_whole() {
@@ -284,6 +427,16 @@ mod tests {
                 force: Vec3::new(0.3, 0.0, 0.0),
                 center: Vec3::zeros(),
                 radius: 1.0,
+                falloff: Falloff::Constant,
+                weights: vec![],
+            },
+            Tool::RegionForce {
+                points: vec![1, 2, 5],
+                force: Vec3::new(0.3, 0.0, 0.0),
+                center: Vec3::zeros(),
+                radius: 2.5,
+                falloff: Falloff::Smooth,
+                weights: vec![0.9, 0.5, 0.1],
             },
             Tool::Gravity {
                 g: Vec3::new(0.0, 0.0, -9.81),

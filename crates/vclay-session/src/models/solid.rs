@@ -16,8 +16,8 @@ use vclay_lattice::{
     primitives,
 };
 use vclay_solids::{
-    DynamicSolid, Integrator, Material, MaterialField, SolidParams, SolidRest, SolidSource,
-    SolidState, SolidsError, Tool, ToolId,
+    DynamicSolid, Falloff, Integrator, Material, MaterialField, SolidParams, SolidRest,
+    SolidSource, SolidState, SolidsError, Tool, ToolId,
 };
 use vclay_spline::{KnotVector, NurbsVolume};
 
@@ -2023,6 +2023,16 @@ enum SavedTool {
         force: V3,
         center: V3,
         radius: f64,
+        /// Brush profile (absent: constant, equal shares).
+        #[serde(
+            default,
+            skip_serializing_if = "Option::is_none",
+            deserialize_with = "known_falloff"
+        )]
+        falloff: Option<String>,
+        /// The profile's weight per point (absent: equal shares).
+        #[serde(default, skip_serializing_if = "Vec::is_empty")]
+        weights: Vec<f64>,
     },
     Gravity {
         g: V3,
@@ -2055,17 +2065,33 @@ impl From<&Tool> for SavedTool {
                 force,
                 center,
                 radius,
+                falloff,
+                weights,
             } => SavedTool::RegionForce {
                 points: points.clone(),
                 force: a3(force),
                 center: a3(center),
                 radius: *radius,
+                falloff: (*falloff != Falloff::Constant).then(|| falloff.name().to_string()),
+                weights: weights.clone(),
             },
             Tool::Gravity { g } => SavedTool::Gravity { g: a3(g) },
             Tool::Inflation { pressure } => SavedTool::Inflation {
                 pressure: *pressure,
             },
         }
+    }
+}
+
+/// A falloff name of a saved region force, checked when the file is read.
+fn known_falloff<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<String>, D::Error> {
+    let name = Option::<String>::deserialize(d)?;
+    match &name {
+        Some(n) if Falloff::from_name(n).is_none() => Err(serde::de::Error::custom(format!(
+            "unknown falloff \"{n}\"; expected one of {}",
+            Falloff::ALL.map(Falloff::name).join(", ")
+        ))),
+        _ => Ok(name),
     }
 }
 
@@ -2092,11 +2118,19 @@ impl SavedTool {
                 force,
                 center,
                 radius,
+                falloff,
+                weights,
             } => Tool::RegionForce {
                 points: points.clone(),
                 force: v3(*force),
                 center: v3(*center),
                 radius: *radius,
+                // Checked when the file is read (`known_falloff`).
+                falloff: falloff
+                    .as_deref()
+                    .and_then(Falloff::from_name)
+                    .unwrap_or_default(),
+                weights: weights.clone(),
             },
             SavedTool::Gravity { g } => Tool::Gravity { g: v3(*g) },
             SavedTool::Inflation { pressure } => Tool::Inflation {

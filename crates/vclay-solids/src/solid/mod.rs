@@ -55,7 +55,7 @@ use crate::material::{Material, MaterialField};
 use crate::metric::MetricEnergy;
 use crate::model::{Discretization, SolidSource};
 use crate::springs::{ForceWorkspace, SpringSet};
-use crate::tools::{Boundary, Tool, nearest, within};
+use crate::tools::{Boundary, Falloff, Tool, nearest, within};
 
 mod phased;
 pub use phased::PHASED_POINTS;
@@ -1313,22 +1313,37 @@ impl DynamicSolid {
         })
     }
 
-    /// A region force on the data points within `radius` of `center`.
+    /// A region force on the data points within `radius` of `center`, in equal shares.
     pub fn add_region_force(
         &mut self,
         center: Vec3,
         radius: f64,
         force: Vec3,
     ) -> Result<ToolId, SolidsError> {
+        self.add_region_force_with(center, radius, force, Falloff::Constant)
+    }
+
+    /// A region force on the data points within `radius` of `center`, shared by `falloff` of
+    /// their distance from the centre (a sculpting brush's profile; [`Falloff`]).
+    pub fn add_region_force_with(
+        &mut self,
+        center: Vec3,
+        radius: f64,
+        force: Vec3,
+        falloff: Falloff,
+    ) -> Result<ToolId, SolidsError> {
         if !(radius.is_finite() && radius >= 0.0) {
             return Err(invalid("radius", radius, "non-negative and finite"));
         }
         let points = within(&self.d, &center, radius);
+        let weights = falloff.weights(&self.d, &points, &center, radius);
         self.add_tool(Tool::RegionForce {
             points,
             force,
             center,
             radius,
+            falloff,
+            weights,
         })
     }
 
@@ -1598,8 +1613,13 @@ impl DynamicSolid {
                     points,
                     center,
                     radius,
+                    falloff,
+                    weights,
                     ..
-                } => *points = within(&d, center, *radius),
+                } => {
+                    *points = within(&d, center, *radius);
+                    *weights = falloff.weights(&d, points, center, *radius);
+                }
                 Tool::Gravity { .. } | Tool::Inflation { .. } => {}
             }
         }
