@@ -160,6 +160,18 @@ impl Engine {
         each!(self, gen d => d.set_rest_shape_to_current(),
             frozen d => { d.set_rest_shape_to_current(); Ok(()) })
     }
+    /// Plastic flow (`vclay_core::plasticity`) of the generalized engines; frozen-weight
+    /// engines have no rest coordinates in their undo state and refuse it.
+    fn plastic_flow(&mut self, fraction: f64, yield_distance: f64) -> Result<usize, SessionError> {
+        let frozen = || {
+            SessionError::model(
+                "a D-NURBS with frozen weights (engine = \"frozen\") has no plastic flow; use the \
+                 generalized engine",
+            )
+        };
+        each!(self, gen d => d.plastic_flow(fraction, yield_distance).map_err(dyn_err),
+            frozen _d => Err(frozen()))
+    }
     fn elastic_energy(&self) -> f64 {
         each!(self, gen d => d.elastic_energy().unwrap_or(f64::NAN), frozen d => d.elastic_energy())
     }
@@ -2323,6 +2335,10 @@ impl Model for DnurbsModel {
             iterations: r.solver.iterations,
             seconds: t0.elapsed().as_secs_f64(),
         })
+    }
+
+    fn plastic_flow(&mut self, fraction: f64, yield_distance: f64) -> Result<usize, SessionError> {
+        self.engine.plastic_flow(fraction, yield_distance)
     }
 
     fn energy(&self) -> Energy {

@@ -49,6 +49,9 @@ pub(crate) struct SolidSnap {
     tools: ToolTable,
     params: SolidParams,
     material: MaterialField,
+    /// Rest control and data points: plastic flow moves them while the clay steps, so undoing
+    /// a pull puts them back too (docs/sculpting.md).
+    rest: (Vec<Vec3>, Vec<Vec3>),
 }
 
 fn kernel(e: SolidsError) -> SessionError {
@@ -85,6 +88,10 @@ impl SolidModel {
             tools: self.tools.clone(),
             params: *self.solid.params(),
             material: self.solid.material().clone(),
+            rest: {
+                let (c, d) = self.solid.rest_shape();
+                (c.to_vec(), d.to_vec())
+            },
         }
     }
 
@@ -96,6 +103,9 @@ impl SolidModel {
         }
         self.solid.set_params(s.params).map_err(kernel)?;
         self.solid.set_state(&s.state).map_err(kernel)?;
+        self.solid
+            .set_rest_shape(&s.rest.0, &s.rest.1)
+            .map_err(kernel)?;
         self.tools = s.tools.clone();
         self.revision += 1;
         Ok(())
@@ -1056,6 +1066,12 @@ impl Model for SolidModel {
             iterations: r.cg_iterations,
             seconds: r.seconds,
         })
+    }
+
+    fn plastic_flow(&mut self, fraction: f64, yield_distance: f64) -> Result<usize, SessionError> {
+        self.solid
+            .plastic_flow(fraction, yield_distance)
+            .map_err(kernel)
     }
 
     fn energy(&self) -> Energy {
