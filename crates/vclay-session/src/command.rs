@@ -129,6 +129,11 @@ pub enum Edit {
         /// Time it is removed.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         until: Option<f64>,
+        /// How the force's share falls off from the centre (`vclay_solids::Falloff`:
+        /// `constant`, the default and the paper's equal shares, `smooth`, `linear`, `sphere`,
+        /// `sharp`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        falloff: Option<String>,
     },
     /// Gravity `g` (an acceleration). Giving an existing name changes its strength.
     Gravity {
@@ -571,12 +576,24 @@ impl Edit {
                 radius,
                 force,
                 until,
+                falloff,
                 ..
             } => {
                 fin("center", center)?;
                 fin("force", force)?;
                 pos("radius", Some(*radius), true)?;
                 after("until", *until, at)?;
+                if let Some(f) = falloff
+                    && vclay_solids::Falloff::from_name(f).is_none()
+                {
+                    return Err(EditError::new(
+                        "falloff",
+                        format!(
+                            "`falloff`: unknown \"{f}\"; expected one of {}",
+                            vclay_solids::Falloff::ALL.map(|f| f.name()).join(", ")
+                        ),
+                    ));
+                }
             }
             Edit::Gravity { g, until, .. } => {
                 fin("g", g)?;

@@ -51,6 +51,8 @@ pub struct KeySpec {
     pub required: bool,
     /// One line.
     pub help: &'static str,
+    /// The values a `"text"` key takes (empty: any text).
+    pub choices: &'static [&'static str],
 }
 
 /// A tool: one [`crate::Edit`] action as data.
@@ -85,8 +87,12 @@ const fn key(
         max,
         required,
         help,
+        choices: &[],
     }
 }
+
+/// The region force's falloff names (`vclay_solids::Falloff`), constant first (the default).
+pub const FALLOFFS: &[&str] = &["constant", "smooth", "linear", "sphere", "sharp"];
 
 const NAME: KeySpec = key(
     "name",
@@ -179,6 +185,10 @@ const REGION_FORCE_KEYS: &[KeySpec] = &[
     key("radius", "number", "length", 0.0, INF, true, "brush radius"),
     key("force", "vec3", "force", -INF, INF, true, "total force, shared"),
     UNTIL,
+    KeySpec {
+        choices: FALLOFFS,
+        ..key("falloff", "text", "", 0.0, 0.0, false, "how the share falls off from the centre")
+    },
     NAME,
 ];
 
@@ -449,6 +459,12 @@ pub fn tools_for(kind: ModelKind) -> Vec<ToolSpec> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_falloff_choices_are_the_kernels() {
+        let kernel: Vec<&str> = vclay_solids::Falloff::ALL.map(|f| f.name()).to_vec();
+        assert_eq!(super::FALLOFFS, kernel.as_slice());
+    }
+
     use super::*;
 
     #[test]

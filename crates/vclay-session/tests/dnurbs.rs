@@ -260,6 +260,7 @@ fn not_applicable() -> Vec<Edit> {
             radius: 1.0,
             force: [0.0, 0.0, 1.0],
             until: None,
+            falloff: None,
         },
         Edit::PdeSet {
             name: "a".into(),

@@ -138,6 +138,7 @@ fn every_edit(subdivision: bool) -> Vec<Edit> {
             radius: 0.4,
             force: [0.0, 0.0, -2.0],
             until: None,
+            falloff: None,
         },
         Edit::Gravity {
             name: Some("g".into()),

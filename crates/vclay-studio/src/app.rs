@@ -146,6 +146,9 @@ pub struct ToolOptions {
     pub duration: f64,
     /// Pull instead of push.
     pub pull: bool,
+    /// How the force brush's share falls off from its centre on solids (one of
+    /// `vclay_session::describe::FALLOFFS`; default `smooth`, as Blender's brushes).
+    pub falloff: &'static str,
     /// Material painting: density, damping, edge stiffness.
     pub paint: [f64; 3],
     /// Brush half-size of fix, free and material painting, relative to the model size (0: one
@@ -187,6 +190,7 @@ impl Default for ToolOptions {
             radius: 0.15,
             duration: 0.1,
             pull: false,
+            falloff: "smooth",
             paint: [1.0, 2.0, 400.0],
             brush: 0.08,
             weight: 1.0,
@@ -1099,6 +1103,22 @@ impl Studio {
                 ui.add(egui::Slider::new(&mut o.radius, 0.01..=1.0).text("radius (x size)"));
                 ui.add(egui::Slider::new(&mut o.duration, 0.01..=2.0).text("duration (s)"));
                 ui.checkbox(&mut o.pull, "pull (towards the viewer)");
+                // The falloff choices come from the model's tool description.
+                if let Some(k) = self
+                    .tools
+                    .iter()
+                    .filter(|t| t.action == "region-force")
+                    .flat_map(|t| t.keys.iter())
+                    .find(|k| k.name == "falloff" && !k.choices.is_empty())
+                {
+                    egui::ComboBox::from_label("falloff")
+                        .selected_text(o.falloff)
+                        .show_ui(ui, |ui| {
+                            for c in k.choices {
+                                ui.selectable_value(&mut o.falloff, c, *c);
+                            }
+                        });
+                }
             }
             Tool::FfdPoint => {
                 ui.small("Drag a point of the object: it goes exactly where the mouse is (eq 7). Ctrl+click pins points that stay in place while you drag another (eq 12).");
@@ -1521,6 +1541,7 @@ impl Studio {
                     strength: o.force,
                     radius: o.radius * self.model_size(),
                     duration: o.duration,
+                    falloff: o.falloff,
                 }
             }
             Tool::Fix => Grab::Fix {

@@ -116,6 +116,9 @@ pub enum Grab {
         radius: f64,
         /// Seconds of simulated time it acts.
         duration: f64,
+        /// How a region force's share falls off from the centre (one of
+        /// `vclay_session::describe::FALLOFFS`; solids).
+        falloff: &'static str,
     },
     /// Fix the control point nearest the hit; with `brush > 0`, every control point whose rest
     /// position is within a box of half-size `brush` around the hit, and around every cursor
@@ -1126,13 +1129,14 @@ impl State {
                 strength,
                 radius,
                 duration,
+                falloff,
             } => self.start_force(
                 model,
                 tools,
                 flip,
                 hit,
                 *direction * *strength,
-                *radius,
+                (*radius, falloff),
                 *duration,
             ),
             Grab::Fix { brush } | Grab::Free { brush } => {
@@ -1197,7 +1201,7 @@ impl State {
         flip: Axes,
         hit: &Hit,
         force: Vec3,
-        radius: f64,
+        (radius, falloff): (f64, &str),
         duration: f64,
     ) -> Option<Active> {
         let f = crate::symmetry::reflect_dir(flip, force);
@@ -1209,6 +1213,9 @@ impl State {
                 radius: radius.max(1e-9),
                 force,
                 until: None,
+                falloff: (falloff != "constant"
+                    && crate::app::takes(tools, "region-force", Some("falloff")))
+                .then(|| falloff.to_string()),
             }
         } else {
             Edit::Force {
@@ -1320,12 +1327,18 @@ impl State {
         let until = duration.map(|d| self.session.model(Some(model)).map_or(0.0, |m| m.time()) + d);
         let p = [at.x, at.y, at.z];
         match template {
-            Edit::RegionForce { force, radius, .. } => Edit::RegionForce {
+            Edit::RegionForce {
+                force,
+                radius,
+                falloff,
+                ..
+            } => Edit::RegionForce {
                 name: None,
                 center: p,
                 radius: *radius,
                 force: *force,
                 until,
+                falloff: falloff.clone(),
             },
             Edit::Force {
                 force, param: tp, ..

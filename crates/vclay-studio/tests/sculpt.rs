@@ -258,6 +258,13 @@ fn a_force_stroke_acts_along_the_drag_and_undoes_as_one() {
             _ => None,
         })
         .collect();
+    // The brush's default profile (smooth, from the model's tool description).
+    assert!(
+        log.iter()
+            .all(|e| !matches!(e, Edit::RegionForce { falloff, .. }
+            if falloff.as_deref() != Some("smooth"))),
+        "{log:?}"
+    );
     // The forces, then (sculpt mode, the default) the stop and plastic reset that keep the
     // shape the stroke made.
     assert_eq!(centres.len() + 2, log.len(), "only forces: {log:?}");

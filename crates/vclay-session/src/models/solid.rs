@@ -320,10 +320,16 @@ impl SolidModel {
                 radius,
                 force,
                 until,
+                falloff,
             } => {
+                // The name was checked by `Edit::validate`.
+                let falloff = falloff
+                    .as_deref()
+                    .and_then(Falloff::from_name)
+                    .unwrap_or_default();
                 let id = self
                     .solid
-                    .add_region_force(v3(*center), *radius, v3(*force))
+                    .add_region_force_with(v3(*center), *radius, v3(*force), falloff)
                     .map_err(SessionError::command_from)?
                     .0;
                 let label = self.label(name, "region", id).inspect_err(|_| {

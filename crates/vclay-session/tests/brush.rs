@@ -1,0 +1,101 @@
+//! The region force's falloff (a sculpting brush's profile, `vclay_solids::Falloff`) through the
+//! session layer: a smooth brush dents the centre deeper than the paper's equal shares; an unknown falloff is refused naming the key; session files keep it.
+mod common;
+use common::assert_same;
+
+use std::path::Path;
+
+use vclay_session::scenario::Scenario;
+use vclay_session::{Command, Edit, Session, file};
+
+const CUBE: &str = r#"
+[model]
+kind = "subdivision-solid"
+points = [4, 4, 4]
+level = 1
+[simulation]
+dt = 0.002
+steps = 10
+"#;
+
+fn cube() -> Session {
+    Scenario::parse(CUBE, "c.toml", "c", Path::new("."))
+        .unwrap()
+        .session
+}
+
+fn push(falloff: Option<&str>) -> Edit {
+    Edit::RegionForce {
+        name: Some("push".into()),
+        center: [0.5, 0.5, 1.0],
+        radius: 0.45,
+        force: [0.0, 0.0, -20.0],
+        until: None,
+        falloff: falloff.map(str::to_string),
+    }
+}
+
+/// Sinking of the top data point nearest the brush centre and of one near its rim.
+fn dents(falloff: Option<&str>) -> (f64, f64) {
+    let mut s = cube();
+    let d0 = s.model(None).unwrap().data_points();
+    s.apply(Command::new(push(falloff))).unwrap();
+    s.run(60).unwrap();
+    let d = s.model(None).unwrap().data_points();
+    let near = |x: f64, y: f64| {
+        (0..d0.len())
+            .min_by(|&a, &b| {
+                let da = (d0[a].x - x).powi(2) + (d0[a].y - y).powi(2) + (d0[a].z - 1.0).powi(2);
+                let db = (d0[b].x - x).powi(2) + (d0[b].y - y).powi(2) + (d0[b].z - 1.0).powi(2);
+                da.total_cmp(&db)
+            })
+            .unwrap()
+    };
+    let (c, r) = (near(0.5, 0.5), near(0.5 + 0.35, 0.5));
+    (d0[c].z - d[c].z, d0[r].z - d[r].z)
+}
+
+#[test]
+fn a_smooth_brush_dents_the_centre_deeper_than_equal_shares() {
+    let (c_equal, r_equal) = dents(None);
+    let (c_smooth, r_smooth) = dents(Some("smooth"));
+    assert!(c_equal > 0.0 && r_equal > 0.0, "{c_equal} {r_equal}");
+    assert!(
+        c_smooth > c_equal,
+        "centre: smooth {c_smooth}, equal {c_equal}"
+    );
+    // Nothing is fixed: the same total force moves both cubes alike; the dent's depth (centre
+    // below rim) is what the profile shapes.
+    assert!(
+        c_smooth - r_smooth > 1.2 * (c_equal - r_equal),
+        "dent: smooth {c_smooth} - {r_smooth}, equal {c_equal} - {r_equal}"
+    );
+    // The same total force: "constant" is the default.
+    assert_eq!(dents(Some("constant")), (c_equal, r_equal));
+}
+
+#[test]
+fn an_unknown_falloff_is_refused_and_files_keep_a_known_one() {
+    let mut s = cube();
+    let e = s
+        .apply(Command::new(push(Some("gaussian"))))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("falloff") && e.contains("smooth"), "{e}");
+    s.apply(Command::new(push(Some("sharp")))).unwrap();
+    s.run(5).unwrap();
+    let v = file::to_value(&s, None).unwrap();
+    let text = serde_json::to_string(&v).unwrap();
+    assert!(text.contains("\"falloff\":\"sharp\""));
+    let (mut back, _) = file::parse(&text, "b.session").unwrap();
+    s.run(5).unwrap();
+    back.run(5).unwrap();
+    assert_same(
+        &file::to_value(&back, None).unwrap()["models"],
+        &file::to_value(&s, None).unwrap()["models"],
+        "continued with a sharp brush",
+    );
+    let bad = text.replace("\"falloff\":\"sharp\"", "\"falloff\":\"soft\"");
+    let e = file::parse(&bad, "b.session").unwrap_err().to_string();
+    assert!(e.contains("unknown falloff \"soft\""), "{e}");
+}
