@@ -34,8 +34,8 @@ pub use command::{Command, Edit, PointMove, Selection};
 pub use describe::{KeySpec, Target, ToolSpec};
 pub use error::SessionError;
 pub use model::{
-    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo,
+    Applied, Element, Energy, FieldSpec, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray,
+    Snapshot, StepReport, Undo,
 };
 pub use models::ModelSpec;
 pub use open::{FileKind, Opened, open};

@@ -485,6 +485,17 @@ pub trait Model: Send + Sync + std::fmt::Debug {
     fn export_formats(&self) -> Vec<&'static str> {
         EXPORT_EXTENSIONS.to_vec()
     }
+    /// The scalar fields the display mesh can be coloured by (painted material, ...).
+    /// Default: none.
+    fn display_fields(&self) -> Vec<FieldSpec> {
+        Vec::new()
+    }
+    /// Field `name` (one of [`Model::display_fields`]) at the vertices of
+    /// [`Model::display_mesh`], in its vertex order; `None` for a field the model does not have.
+    fn display_field(&self, name: &str) -> Option<Vec<f64>> {
+        let _ = name;
+        None
+    }
     /// One step of plastic flow (`vclay_core::plasticity`): rest positions displaced past
     /// `yield_distance` move toward the current shape by `fraction` of the overstress; returns
     /// how many control points yielded. The session calls it after each step of a model whose
@@ -498,6 +509,17 @@ pub trait Model: Send + Sync + std::fmt::Debug {
             self.kind()
         )))
     }
+}
+
+/// A scalar field over a model's display mesh ([`Model::display_fields`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FieldSpec {
+    /// Name ([`Model::display_field`] takes it).
+    pub name: &'static str,
+    /// Unit (`""` where none).
+    pub unit: &'static str,
+    /// One line.
+    pub help: &'static str,
 }
 
 /// Builds the error for an extension a kind does not export.

@@ -316,6 +316,10 @@ pub struct Studio {
     pub camera: Camera,
     /// Layers drawn.
     pub layers: Layers,
+    /// The scalar field the meshes are coloured by (`Model::display_fields`: painted
+    /// material), `None` for the clay colour; with `colour_chosen` once picked in View.
+    pub colour_by: Option<&'static str>,
+    colour_chosen: bool,
     /// The active tool.
     pub tool: Tool,
     /// Tool options.
@@ -408,6 +412,8 @@ impl Studio {
             gl: Arc::new(Mutex::new(None)),
             camera: Camera::default(),
             layers: Layers::default(),
+            colour_by: None,
+            colour_chosen: false,
             tool: Tool::Orbit,
             options: ToolOptions::default(),
             file: None,
@@ -1042,6 +1048,7 @@ impl Studio {
         ui.checkbox(&mut self.layers.control_net, "Control net");
         ui.checkbox(&mut self.layers.data_points, "Data points");
         ui.checkbox(&mut self.layers.grid, "Grid");
+        self.colour_ui(ui);
         if ui.button("Help (F1)").clicked() {
             self.dialog = Some(Dialog::Help);
         }
@@ -1155,6 +1162,10 @@ impl Studio {
                         .logarithmic(true)
                         .text("edge stiffness"),
                 );
+                // Painting shows what it paints (unless a colouring was chosen in View).
+                if !self.colour_chosen && self.colour_by.is_none() {
+                    self.set_colour_by(Some("edge-stiffness"));
+                }
             }
             _ => {}
         }

@@ -140,7 +140,7 @@ pub fn run(case: &Case, frames: usize) -> std::result::Result<Result, String> {
             session.step().map_err(|e| e.to_string())?;
         }
         let t1 = Instant::now();
-        let (models, energy) = model_views(&session);
+        let (models, energy) = model_views(&session, None);
         let frame = Frame {
             revision: session.revision(),
             models,

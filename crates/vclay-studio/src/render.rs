@@ -86,7 +86,8 @@ impl Layers {
 /// indices.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SceneBuffers {
-    /// Session revision, layer set and grid these were built for.
+    /// Session revision, layer set, and grid and colour field (hashed together) these were
+    /// built for.
     pub key: (u64, u8, u64),
     /// Triangle vertices.
     pub tri_vertices: Vec<f32>,
@@ -100,6 +101,73 @@ pub struct SceneBuffers {
     pub point_vertices: Vec<f32>,
     /// Bounding box of everything (f64), `None` when empty.
     pub bounds: Option<(Vec3, Vec3)>,
+}
+
+/// Colour of `t` in `[0, 1]` on Moreland's cool-to-warm diverging map (blue, light grey at
+/// the middle, red): low values of a painted field cool, high values warm.
+pub fn colour_map(t: f32) -> [f32; 3] {
+    const COOL: [f32; 3] = [0.23, 0.30, 0.75];
+    const MID: [f32; 3] = [0.87, 0.87, 0.87];
+    const WARM: [f32; 3] = [0.71, 0.02, 0.15];
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.5
+    };
+    let (a, b, u) = if t < 0.5 {
+        (COOL, MID, 2.0 * t)
+    } else {
+        (MID, WARM, 2.0 * t - 1.0)
+    };
+    [0, 1, 2].map(|k| a[k] + (b[k] - a[k]) * u)
+}
+
+/// How a field's values map onto [`colour_map`]: linearly between `lo` and `hi`, or by their
+/// logarithm when the values are positive and span a factor of 4 or more (stiffnesses and
+/// densities are painted in orders of magnitude: 50 next to 100 next to 3000 must read apart).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FieldScale {
+    /// Smallest finite value.
+    pub lo: f64,
+    /// Largest finite value.
+    pub hi: f64,
+    /// Logarithmic.
+    pub log: bool,
+}
+
+impl FieldScale {
+    /// Where `x` lies on the map, in `[0, 1]`.
+    pub fn t(&self, x: f64) -> f32 {
+        let t = if self.log {
+            (x.max(self.lo) / self.lo).ln() / (self.hi / self.lo).ln()
+        } else {
+            (x - self.lo) / (self.hi - self.lo)
+        };
+        t as f32
+    }
+}
+
+/// The scale of a field's finite values, `None` when it is (nearly) uniform: a field with
+/// nothing painted keeps the clay colour. Nearly: a spread below 1e-9 of its magnitude.
+pub fn field_range(f: &[f64]) -> Option<FieldScale> {
+    let (lo, hi) = f
+        .iter()
+        .filter(|x| x.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+            (lo.min(x), hi.max(x))
+        });
+    (hi - lo > 1e-9 * hi.abs().max(lo.abs())).then_some(FieldScale {
+        lo,
+        hi,
+        log: lo > 0.0 && hi >= 4.0 * lo,
+    })
+}
+
+/// A hash of a field's values (the GPU upload's key changes with the colours).
+fn field_hash(f: &[f64]) -> u64 {
+    f.iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, x| {
+        (h ^ x.to_bits()).wrapping_mul(0x0000_0100_0000_01b3)
+    })
 }
 
 fn push(v: &mut Vec<f32>, p: &Vec3, n: &Vec3, c: [f32; 3]) {
@@ -129,13 +197,25 @@ impl SceneBuffers {
             let base = (b.tri_vertices.len() / STRIDE) as u32;
             b.tri_vertices.reserve(mesh.positions.len() * STRIDE);
             let zero = Vec3::zeros();
+            let colours = m
+                .field
+                .as_deref()
+                .filter(|f| f.len() == mesh.positions.len())
+                .and_then(|f| field_range(f).map(|r| (f, r)));
+            if let Some((f, _)) = colours {
+                b.key.2 ^= field_hash(f);
+            }
             for (i, p) in mesh.positions.iter().enumerate() {
                 grow(p);
+                let c = match colours {
+                    Some((f, scale)) => colour_map(scale.t(f[i])),
+                    None => CLAY,
+                };
                 push(
                     &mut b.tri_vertices,
                     p,
                     mesh.normals.get(i).unwrap_or(&zero),
-                    CLAY,
+                    c,
                 );
             }
             let nv = mesh.positions.len() as u32;
@@ -264,7 +344,7 @@ impl SceneBuffers {
     /// Adds the grid's lines (they do not count in [`SceneBuffers::bounds`]).
     pub fn with_grid(mut self, grid: Option<Grid>) -> Self {
         let Some(g) = grid else { return self };
-        self.key.2 = g.key();
+        self.key.2 ^= g.key();
         let z = Vec3::zeros();
         let n = g.half as i64;
         let ext = g.half as f64 * g.spacing;

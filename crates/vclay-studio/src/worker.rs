@@ -43,8 +43,8 @@ use std::time::{Duration, Instant};
 
 use vclay_core::{TriMesh, Vec3};
 use vclay_session::{
-    Command, Edit, Element, Energy, Hit, LineRole, LineSet, Param, PointMove, Ray, Selection,
-    Session, ToolSpec,
+    Command, Edit, Element, Energy, FieldSpec, Hit, LineRole, LineSet, Param, PointMove, Ray,
+    Selection, Session, ToolSpec,
 };
 
 use crate::symmetry::{Axes, Symmetry};
@@ -172,6 +172,10 @@ pub struct ModelView {
     pub dt: f64,
     /// Simulated time.
     pub time: f64,
+    /// The scalar fields the mesh can be coloured by (`Model::display_fields`).
+    pub fields: Vec<FieldSpec>,
+    /// The field chosen by [`Request::ColourBy`] at the mesh's vertices, if the model has it.
+    pub field: Option<Arc<Vec<f64>>>,
 }
 
 /// What the UI draws: the session's models at one revision.
@@ -262,6 +266,9 @@ pub enum Request {
     /// whole shape reached is kept at the release (the flow's limit of infinite rate and zero
     /// yield). Applies while sculpt mode is on, to every model that has a rest shape.
     Flow(Option<Flow>),
+    /// Colour the meshes by this scalar field (`Model::display_fields`: painted material);
+    /// `None`: clay colour.
+    ColourBy(Option<String>),
     /// Pause once the first model's step count reaches this (a scenario's run length), and
     /// say so; Run then goes on past it. `None`: no such stop.
     StopAt(Option<u64>),
@@ -311,6 +318,7 @@ impl std::fmt::Debug for Request {
             Request::Symmetry(_) => "Symmetry",
             Request::Sculpt(_) => "Sculpt",
             Request::Flow(_) => "Flow",
+            Request::ColourBy(_) => "ColourBy",
             Request::StopAt(_) => "StopAt",
             Request::RunInfo(_) => "RunInfo",
             Request::Replace(_) => "Replace",
@@ -542,6 +550,8 @@ struct State {
     sculpt: bool,
     /// Sculpt mode's plastic flow (see [`Request::Flow`]).
     flow: Option<Flow>,
+    /// The field the meshes are coloured by (see [`Request::ColourBy`]).
+    colour_by: Option<String>,
     /// The run was paused by the scenario's end (a press runs it again).
     ended: bool,
     /// The run was held by an undo (see `Worker::undo`).
@@ -578,6 +588,7 @@ impl State {
             run_info: None,
             sculpt: false,
             flow: None,
+            colour_by: None,
             ended: false,
             held: false,
             symmetry: Symmetry::default(),
@@ -789,6 +800,10 @@ impl State {
             Request::Flow(f) => {
                 self.flow = f;
                 self.set_flow();
+            }
+            Request::ColourBy(f) => {
+                self.colour_by = f;
+                self.shown_revision = None;
             }
             Request::StopAt(n) => self.stop_at = n,
             Request::RunInfo(r) => self.run_info = r.map(|r| *r),
@@ -1565,7 +1580,7 @@ impl State {
             return;
         }
         let t0 = Instant::now();
-        let (models, energy) = model_views(&self.session);
+        let (models, energy) = model_views(&self.session, self.colour_by.as_deref());
         let n = self.step_times.len().max(1) as f64;
         let step_seconds = self.step_times.iter().map(|s| s.1).sum::<f64>() / n;
         let steps = self
@@ -1621,8 +1636,9 @@ impl State {
 }
 
 /// The display data of every model of `session` and their summed energies (what a frame
-/// carries; the benchmark times exactly this).
-pub fn model_views(session: &Session) -> (Vec<ModelView>, Energy) {
+/// carries; the benchmark times exactly this); `colour_by` names the field to colour meshes by
+/// (see [`Request::ColourBy`]).
+pub fn model_views(session: &Session, colour_by: Option<&str>) -> (Vec<ModelView>, Energy) {
     let mut models = Vec::new();
     let mut energy = Energy::default();
     for name in session.model_names() {
@@ -1643,6 +1659,8 @@ pub fn model_views(session: &Session) -> (Vec<ModelView>, Energy) {
             size: m.size(),
             dt: m.dt(),
             time: m.time(),
+            fields: m.display_fields(),
+            field: colour_by.and_then(|f| m.display_field(f)).map(Arc::new),
         });
     }
     (models, energy)

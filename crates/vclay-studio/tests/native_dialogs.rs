@@ -85,6 +85,12 @@ fn a_cancelled_chooser_closes_and_a_broken_one_falls_back_to_typing() {
         s.log().any(|l| l.contains("type the path instead"))
     });
     assert_eq!(h.state().dialog_title(), Some("Open"));
-    // The typed dialog is really there: its path field takes the keyboard.
+    // The typed dialog is really there (drawn by the next frames): its path field.
+    for _ in 0..20 {
+        if h.query_by_role(Role::TextInput).is_some() {
+            break;
+        }
+        h.step();
+    }
     assert!(h.query_by_role(Role::TextInput).is_some());
 }

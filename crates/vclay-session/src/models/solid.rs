@@ -25,8 +25,8 @@ use super::{SpecError, misrouted};
 use crate::command::{Edit, V3};
 use crate::error::SessionError;
 use crate::model::{
-    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, unsupported_export,
+    Applied, Element, Energy, FieldSpec, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray,
+    Snapshot, StepReport, Undo, extension, unsupported_export,
 };
 use crate::tools::{CursorPath, ToolTable, a3, v3};
 
@@ -53,6 +53,31 @@ pub(crate) struct SolidSnap {
     /// a pull puts them back too (docs/sculpting.md).
     rest: (Vec<Vec3>, Vec<Vec3>),
 }
+
+/// The painted material a solid's display mesh can be coloured by (journal section 4.3's
+/// per-cell material; `Model::display_field`).
+const SOLID_FIELDS: [FieldSpec; 4] = [
+    FieldSpec {
+        name: "edge-stiffness",
+        unit: "force/length",
+        help: "modulus of the edge springs",
+    },
+    FieldSpec {
+        name: "virtual-stiffness",
+        unit: "force/length",
+        help: "modulus of the virtual springs",
+    },
+    FieldSpec {
+        name: "density",
+        unit: "mass/volume",
+        help: "mass per unit volume",
+    },
+    FieldSpec {
+        name: "damping",
+        unit: "1/s x density",
+        help: "damping per unit volume",
+    },
+];
 
 fn kernel(e: SolidsError) -> SessionError {
     SessionError::from(e)
@@ -681,9 +706,15 @@ impl SolidModel {
     }
 
     fn boundary_mesh(&self) -> TriMesh {
+        self.boundary_mesh_and_points().0
+    }
+
+    /// The boundary mesh and, per mesh vertex, its data point.
+    fn boundary_mesh_and_points(&self) -> (TriMesh, Vec<u32>) {
         let (off, verts) = self.solid.boundary_loops();
         let d = self.solid.data_points();
         let mut map = vec![u32::MAX; d.len()];
+        let mut points = Vec::new();
         let mut mesh = TriMesh::new();
         for k in 0..off.len().saturating_sub(1) {
             let lp = &verts[off[k] as usize..off[k + 1] as usize];
@@ -693,6 +724,7 @@ impl SolidModel {
                     if map[v as usize] == u32::MAX {
                         map[v as usize] = mesh.positions.len() as u32;
                         mesh.positions.push(d[v as usize]);
+                        points.push(v);
                     }
                     map[v as usize]
                 })
@@ -702,7 +734,7 @@ impl SolidModel {
             }
         }
         mesh.compute_normals();
-        mesh
+        (mesh, points)
     }
 
     fn control_net(&self) -> LineSet {
@@ -1072,6 +1104,23 @@ impl Model for SolidModel {
             iterations: r.cg_iterations,
             seconds: r.seconds,
         })
+    }
+
+    fn display_fields(&self) -> Vec<FieldSpec> {
+        SOLID_FIELDS.to_vec()
+    }
+
+    fn display_field(&self, name: &str) -> Option<Vec<f64>> {
+        let f: fn(&Material) -> f64 = match name {
+            "edge-stiffness" => |m| m.edge_stiffness,
+            "virtual-stiffness" => |m| m.virtual_stiffness,
+            "density" => |m| m.density,
+            "damping" => |m| m.damping,
+            _ => return None,
+        };
+        let per_point = self.solid.data_point_material(f);
+        let (_, points) = self.boundary_mesh_and_points();
+        Some(points.iter().map(|&i| per_point[i as usize]).collect())
     }
 
     fn plastic_flow(&mut self, fraction: f64, yield_distance: f64) -> Result<usize, SessionError> {

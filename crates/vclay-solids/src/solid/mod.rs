@@ -1395,6 +1395,32 @@ impl DynamicSolid {
         }
     }
 
+    /// A material quantity `f` per data point: the mean of `f` over the materials of the control
+    /// cells of the data cells around the point (the control cell of each data cell,
+    /// `Discretization::cell_parent`), for showing painted material as a colour map. Points in
+    /// no cell (none in a valid lattice) get `f` of the first cell's material.
+    pub fn data_point_material(&self, f: impl Fn(&Material) -> f64) -> Vec<f64> {
+        let data = &self.disc.data;
+        let nd = self.d.len();
+        let mut sum = vec![0.0; nd];
+        let mut count = vec![0u32; nd];
+        let values: Vec<f64> = (0..self.material.len())
+            .map(|c| f(self.material.cell(c)))
+            .collect();
+        for c in 0..data.num_cells() {
+            let v = values[self.disc.cell_parent[c] as usize];
+            for p in data.cell_vertices(CellId::new(c)) {
+                sum[p.index()] += v;
+                count[p.index()] += 1;
+            }
+        }
+        let fallback = values.first().copied().unwrap_or(0.0);
+        sum.iter()
+            .zip(&count)
+            .map(|(s, &n)| if n > 0 { s / n as f64 } else { fallback })
+            .collect()
+    }
+
     /// Plastic flow (the rate form of [`Self::plastic_reset`]; `vclay_core::plasticity` has the
     /// law): every control point displaced from its rest position by more than
     /// `yield_distance` moves its rest position toward its current one,

@@ -326,6 +326,7 @@ impl Studio {
     /// cursor, the axes gizmo.
     pub(super) fn overlays(&self, ui: &Ui, rect: Rect) {
         let painter = ui.painter_at(rect);
+        self.colour_legend(&painter, rect);
         let (w, h) = (rect.width() as f64, rect.height() as f64);
         let at = |p: Vec3| {
             self.camera
@@ -458,13 +459,19 @@ impl Studio {
         if self.symmetry.any() && (self.is_brush() || self.tool == Tool::Rope) {
             text += &format!("  sym {}", self.symmetry.label());
         }
-        painter.text(
-            p + Vec2::new(14.0, 14.0),
-            egui::Align2::LEFT_TOP,
-            text,
-            egui::FontId::proportional(12.0),
-            Color32::from_gray(230),
-        );
+        // Right of the cursor, or left of it near the viewport's right edge (the text stays
+        // whole).
+        let font = egui::FontId::proportional(12.0);
+        let width = painter
+            .layout_no_wrap(text.clone(), font.clone(), Color32::WHITE)
+            .size()
+            .x;
+        let (offset, align) = if p.x + 14.0 + width > painter.clip_rect().max.x {
+            (Vec2::new(-14.0, 14.0), egui::Align2::RIGHT_TOP)
+        } else {
+            (Vec2::new(14.0, 14.0), egui::Align2::LEFT_TOP)
+        };
+        painter.text(p + offset, align, text, font, Color32::from_gray(230));
     }
 }
 
@@ -492,6 +499,99 @@ fn axes_gizmo(painter: &egui::Painter, rect: Rect, camera: &crate::camera::Camer
             name,
             egui::FontId::proportional(10.0),
             Color32::BLACK,
+        );
+    }
+}
+
+impl Studio {
+    /// The designer's choice of colouring (View > Colour): [`Self::set_colour_by`], and the
+    /// paint tool no longer switches to the stiffness map by itself.
+    pub fn choose_colour(&mut self, field: Option<&'static str>) {
+        self.colour_chosen = true;
+        self.set_colour_by(field);
+    }
+
+    /// Colours the meshes by `field` (one of the first model's `display_fields`; `None`: clay).
+    pub fn set_colour_by(&mut self, field: Option<&'static str>) {
+        let known = field.is_none_or(|f| {
+            self.frame
+                .models
+                .first()
+                .is_some_and(|m| m.fields.iter().any(|s| s.name == f))
+        });
+        if known && field != self.colour_by {
+            self.colour_by = field;
+            self.send(Request::ColourBy(field.map(str::to_string)));
+        }
+    }
+
+    /// View > Colour: clay, or a field the model offers (painted material).
+    pub(super) fn colour_ui(&mut self, ui: &mut Ui) {
+        let Some(fields) = self.frame.models.first().map(|m| m.fields.clone()) else {
+            return;
+        };
+        if fields.is_empty() {
+            return;
+        }
+        let mut chosen = self.colour_by;
+        egui::ComboBox::from_label("Colour")
+            .selected_text(chosen.unwrap_or("clay"))
+            .show_ui(ui, |ui| {
+                ui.selectable_value(&mut chosen, None, "clay");
+                for f in &fields {
+                    ui.selectable_value(&mut chosen, Some(f.name), f.name)
+                        .on_hover_text(format!("{} ({})", f.help, f.unit));
+                }
+            });
+        if chosen != self.colour_by {
+            self.choose_colour(chosen);
+        }
+    }
+
+    /// The colour map's legend (bottom right of the viewport): the field, its range, the ramp.
+    pub(super) fn colour_legend(&self, painter: &egui::Painter, rect: Rect) {
+        let (Some(name), Some(m)) = (self.colour_by, self.frame.models.first()) else {
+            return;
+        };
+        let Some(field) = m.field.as_deref() else {
+            return;
+        };
+        let w = 160.0;
+        let bar = Rect::from_min_size(
+            Pos2::new(rect.max.x - w - 16.0, rect.max.y - 40.0),
+            Vec2::new(w, 10.0),
+        );
+        let text = match crate::render::field_range(field) {
+            Some(scale) => {
+                let n = 32;
+                for k in 0..n {
+                    let t = (k as f32 + 0.5) / n as f32;
+                    let c = crate::render::colour_map(t).map(|x| (x * 255.0) as u8);
+                    let x0 = bar.min.x + bar.width() * k as f32 / n as f32;
+                    painter.rect_filled(
+                        Rect::from_min_max(
+                            Pos2::new(x0, bar.min.y),
+                            Pos2::new(x0 + bar.width() / n as f32 + 0.5, bar.max.y),
+                        ),
+                        0.0,
+                        Color32::from_rgb(c[0], c[1], c[2]),
+                    );
+                }
+                format!(
+                    "{name}: {} .. {}{}",
+                    crate::text::round_numbers(&format!("{}", scale.lo)),
+                    crate::text::round_numbers(&format!("{}", scale.hi)),
+                    if scale.log { " (log)" } else { "" }
+                )
+            }
+            None => format!("{name}: uniform (clay colour)"),
+        };
+        painter.text(
+            Pos2::new(bar.max.x, bar.min.y - 4.0),
+            egui::Align2::RIGHT_BOTTOM,
+            text,
+            egui::FontId::proportional(12.0),
+            Color32::WHITE,
         );
     }
 }
