@@ -223,7 +223,8 @@ fn the_pde_glass_opens_paused_and_its_run_stops_at_the_end_of_the_time_slider() 
     click(&mut h, Role::Button, "max");
     click(&mut h, Role::Button, "Run");
     wait(&mut h, "running", |s| s.frame().running);
-    wait(&mut h, "the run stops at the end", |s| {
+    // t = 10 at full speed: about 15 s of a loaded 2-core machine (the other tests run too).
+    wait_for(&mut h, 120, "the run stops at the end", |s| {
         !s.frame().running && s.frame().time > 1.0
     });
     let t = h.state().frame().time;
