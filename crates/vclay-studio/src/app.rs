@@ -934,6 +934,10 @@ impl Studio {
         None
     }
 
+    fn save_as(&mut self) {
+        self.ask_path(PathPurpose::SaveAs, self.suggestion("session"));
+    }
+
     fn save(&mut self) {
         match &self.file {
             Some(f) if load::is_session_file(f) => self.send(Request::Save(f.clone())),
@@ -987,7 +991,7 @@ impl Studio {
                     .add_enabled(has, egui::Button::new("Save as..."))
                     .clicked()
                 {
-                    self.ask_path(PathPurpose::SaveAs, self.suggestion("session"));
+                    self.save_as();
                 }
                 if ui
                     .add_enabled(has, egui::Button::new("Export..."))

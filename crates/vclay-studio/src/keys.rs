@@ -31,7 +31,7 @@ pub fn tool_key(t: Tool) -> Key {
 pub const BRUSH_STEP: f64 = 1.25;
 
 /// The shortcuts that are not tool letters: (keys, what they do), in the help's order.
-pub const SHORTCUTS: [(&str, &str); 18] = [
+pub const SHORTCUTS: [(&str, &str); 20] = [
     ("F1 or ?", "this help (Esc closes it)"),
     ("Space", "run / pause the simulation"),
     ("F", "frame the model"),
@@ -50,6 +50,8 @@ pub const SHORTCUTS: [(&str, &str); 18] = [
     ("Ctrl+Z", "undo (a whole stroke or drag is one step)"),
     ("Ctrl+Shift+Z, Ctrl+Y", "redo"),
     ("Ctrl+S", "save the session"),
+    ("Ctrl+Shift+S", "save the session as (a new file)"),
+    ("Ctrl+O", "open a file"),
     ("drag (empty space)", "orbit"),
     ("Shift+drag, middle drag", "pan"),
     ("wheel", "zoom"),

@@ -162,13 +162,21 @@ impl Studio {
         if self.dialog.is_some() || ctx.text_edit_focused() {
             return;
         }
-        let (undo, redo, save) = ctx.input_mut(|i| {
+        let (undo, redo, save, save_as, open) = ctx.input_mut(|i| {
             let redo = i.consume_key(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z)
                 || i.consume_key(Modifiers::COMMAND, Key::Y);
             let undo = i.consume_key(Modifiers::COMMAND, Key::Z);
+            let save_as = i.consume_key(Modifiers::COMMAND | Modifiers::SHIFT, Key::S);
             let save = i.consume_key(Modifiers::COMMAND, Key::S);
-            (undo, redo, save)
+            let open = i.consume_key(Modifiers::COMMAND, Key::O);
+            (undo, redo, save, save_as, open)
         });
+        if save_as && self.worker.is_some() {
+            self.save_as();
+        }
+        if open {
+            self.confirm(ctx, super::Then::Open);
+        }
         if redo {
             self.send(Request::Redo);
         } else if undo {

@@ -1,0 +1,194 @@
+#!/usr/bin/env bash
+# A designer's session in a real window (issue 27): the studio on the fig07 rope cube under Xvfb
+# with Mesa's llvmpipe, driven by xdotool the way a person would, with screenshots kept in
+# target/check-designer/ (CI artifacts). Steps and what is checked (from the sessions saved on
+# the way, read back with Python):
+#   1. front view (key 1), frame (F); the cube's box on screen is found from the clay colour;
+#   2. the fix brush (H), grown twice with ], strokes along the cube's bottom edge: the control
+#      points it fixed are the bottom ones (all in the lower half, three or more at the bottom);
+#   3. symmetry X on, the rope (R) pulls the top right up: the mirrored rope pulls the top left,
+#      and both sides rise alike;
+#   4. released in sculpt mode (the default), the shape stays: the session saved 0.7 s after the
+#      release and the one saved 2.5 s later have the same control points;
+#   5. paused (Space) and saved, Ctrl+O opens the Open dialog, three clicks land in its path
+#      field over the model, Esc closes it: no rope was attached (the log's rope count is
+#      unchanged);
+#   6. the last session saved is opened again in a new studio and saved at once: the control
+#      points are the same.
+# Says SKIPPED and exits 0 when Xvfb, xdotool or ImageMagick is missing. VCLAY_STUDIO=path uses
+# a built binary; else this builds the debug one.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$PWD
+for tool in Xvfb xdotool import convert python3; do
+  if ! command -v "$tool" >/dev/null 2>&1; then
+    echo "check_designer: SKIPPED: $tool not installed (apt-get install xvfb xdotool imagemagick libgl1-mesa-dri)"
+    exit 0
+  fi
+done
+target=${CARGO_TARGET_DIR:-$root/target}
+studio=${VCLAY_STUDIO:-}
+if [ -z "$studio" ]; then
+  cargo build -q -p vclay-studio
+  studio=$target/debug/vclay-studio
+fi
+work=$root/target/check-designer
+rm -rf "$work"; mkdir -p "$work"
+# A display no other X server holds.
+n=80
+while [ -e "/tmp/.X$n-lock" ] && [ "$n" -lt 99 ]; do n=$((n + 1)); done
+display=:$n
+Xvfb "$display" -screen 0 1280x800x24 -nolisten tcp -noreset >"$work/xvfb.log" 2>&1 &
+xvfb=$!
+studio_pid=
+cleanup() {
+  [ -n "$studio_pid" ] && kill "$studio_pid" 2>/dev/null || true
+  kill "$xvfb" 2>/dev/null || true
+}
+trap cleanup EXIT
+export DISPLAY=$display LIBGL_ALWAYS_SOFTWARE=1 VCLAY_NO_NATIVE_DIALOGS=1
+ready=
+for _ in $(seq 100); do
+  if command -v xdpyinfo >/dev/null 2>&1; then xdpyinfo >/dev/null 2>&1 && { ready=1; break; }
+  else sleep 2; ready=1; break; fi
+  kill -0 "$xvfb" 2>/dev/null || break
+  sleep 0.1
+done
+[ -n "$ready" ] || { cat "$work/xvfb.log"; echo "check_designer: FAILED: Xvfb did not start"; exit 1; }
+
+win=
+start() { # FILE: starts the studio on FILE and waits for its window
+  "$studio" "$1" --autosave "$work/autosave.session" --no-recovery >>"$work/studio.log" 2>&1 &
+  studio_pid=$!
+  win=
+  for _ in $(seq 300); do
+    win=$(xdotool search --name "vclay studio" 2>/dev/null | head -1 || true)
+    [ -n "$win" ] && break
+    kill -0 "$studio_pid" 2>/dev/null || { cat "$work/studio.log"; echo "check_designer: FAILED: the studio exited"; exit 1; }
+    sleep 0.1
+  done
+  [ -n "$win" ] || { echo "check_designer: FAILED: no window"; exit 1; }
+  xdotool windowmove "$win" 0 0 windowsize "$win" 1280 800 2>/dev/null || true
+  sleep 3
+  xdotool windowfocus "$win" 2>/dev/null || true
+}
+save_as() { # PATH: Ctrl+Shift+S, type the path, Enter
+  xdotool key ctrl+shift+s; sleep 0.8
+  xdotool key ctrl+a; xdotool type --delay 5 "$1"; xdotool key Return
+  for _ in $(seq 50); do [ -s "$1" ] && break; sleep 0.1; done
+  [ -s "$1" ] || { echo "check_designer: FAILED: $1 was not saved"; exit 1; }
+}
+drag() { # X0 Y0 X1 Y1 STEPS HOLD: a press, a drag in STEPS moves, HOLD s, release
+  xdotool mousemove "$1" "$2"; sleep 0.3; xdotool mousedown 1
+  for k in $(seq 1 "$5"); do
+    xdotool mousemove $(($1 + ($3 - $1) * k / $5)) $(($2 + ($4 - $2) * k / $5)); sleep 0.06
+  done
+  sleep "$6"; xdotool mouseup 1
+}
+
+# 1. The scenario's own rope pulls the cube and lets go; it ends (and pauses) at t = 1.5 s.
+start examples/scenarios/fig07_rope_cube.toml
+sleep 3
+xdotool mousemove 600 500; sleep 0.3; xdotool key 1; sleep 0.5; xdotool key f; sleep 1.5
+import -window root "$work/1_front.png"
+# The viewport is x 308..1012, y 33..768 of the 1280 x 800 window.
+box=$(convert "$work/1_front.png" -crop 704x735+308+33 +repage -fuzz 18% -fill white \
+  -opaque "rgb(200,150,120)" -fill black +opaque white -format "%@" info:)
+read -r bw bh bx by <<<"$(echo "$box" | sed 's/[x+]/ /g')"
+bx=$((bx + 308)); by=$((by + 33))
+echo "check_designer: the cube on screen: ${bw}x${bh} at ($bx, $by)"
+[ "$bw" -gt 100 ] && [ "$bh" -gt 100 ] || { echo "check_designer: FAILED: no cube in the front view"; exit 1; }
+save_as "$work/0_before.session"
+
+# 2. Fix brush, grown twice (]), along the bottom edge.
+xdotool key h; sleep 0.3; xdotool key bracketright; sleep 0.2; xdotool key bracketright; sleep 0.3
+drag $((bx + bw / 10)) $((by + bh * 93 / 100)) $((bx + bw * 9 / 10)) $((by + bh * 93 / 100)) 20 0.2
+sleep 0.5
+
+# 3. Symmetry X, rope up from the top right (its mirror pulls the top left).
+xdotool key x; sleep 0.2; xdotool key r; sleep 0.3
+drag $((bx + bw * 8 / 10)) $((by + bh * 6 / 100)) $((bx + bw * 8 / 10)) $((by - bh * 30 / 100)) 25 1.5
+import -window root "$work/2_pulled.png"
+
+# 4. Saved 0.7 s after the release and 2.5 s later.
+sleep 0.7
+save_as "$work/1_released.session"
+sleep 2.5
+# Paused (Space) and saved: nothing is unsaved, so Ctrl+O opens its dialog without a prompt.
+xdotool key space; sleep 0.5
+save_as "$work/2_later.session"
+import -window root "$work/3_later.png"
+
+# 5. Clicks inside the Open dialog over the model attach nothing.
+xdotool key ctrl+o; sleep 0.8
+import -window root "$work/4_dialog.png"
+for k in 1 2 3; do xdotool mousemove $((600 + 10 * k)) 400 click 1; sleep 0.3; done
+xdotool key Escape; sleep 0.5
+save_as "$work/3_after_dialog.session"
+
+# 6. Reopen in a new studio, save at once.
+kill "$studio_pid" 2>/dev/null || true; wait "$studio_pid" 2>/dev/null || true; studio_pid=
+start "$work/3_after_dialog.session"
+save_as "$work/4_reopened.session"
+import -window root "$work/5_reopened.png"
+
+python3 - "$work" <<'PY'
+import json, sys
+work = sys.argv[1]
+def load(name):
+    s = json.load(open(f"{work}/{name}.session"))
+    return s, s["models"][0]["state"]
+def points(m):
+    return m["state"]["control_points"]
+def ropes(s):
+    # The studio's ropes (the scenario's own rope is named `rope`).
+    return [e for e in s["log"] if e["command"]["action"] == "rope"
+            and str(e["command"].get("name", "")).startswith("studio-rope")]
+before_s, before = load("0_before")
+released_s, released = load("1_released")
+later_s, later = load("2_later")
+dialog_s, dialog = load("3_after_dialog")
+reopened_s, reopened = load("4_reopened")
+p0 = points(before)
+zs = [p[2] for p in p0]
+zlo, zhi = min(zs), max(zs)
+size = max(max(p[k] for p in p0) - min(p[k] for p in p0) for k in range(3))
+
+# 2. The fixed points are the bottom ones.
+fixed = [i for i, f in enumerate(released["rest"]["fixed"]) if f]
+heights = [(p0[i][2] - zlo) / (zhi - zlo) for i in fixed]
+print(f"check_designer: fix brush fixed {len(fixed)} control points, heights {[round(h, 2) for h in heights]}")
+assert sum(h < 0.1 for h in heights) >= 3, "the fix stroke fixed too few bottom points"
+assert max(heights) < 0.5, "the fix brush fixed points away from the stroke"
+
+# 3. Two ropes, mirrored; both sides rose alike.
+r = ropes(released_s)
+print(f"check_designer: ropes {[e['command'].get('name') for e in r]}")
+assert len(r) == 2, f"symmetry X gives two ropes: {len(r)}"
+xs = [p[0] for p in p0]
+cx = 0.5 * (min(xs) + max(xs))
+p1 = points(released)
+def rise(side):
+    return max(p1[i][2] - p0[i][2] for i in range(len(p0)) if side * (p0[i][0] - cx) > 0.1 * size)
+left, right = rise(-1), rise(1)
+print(f"check_designer: the pull raised the left by {left:.3f}, the right by {right:.3f} (size {size:.3f})")
+assert right > 0.05 * size, "the rope did not pull the top up"
+assert abs(left - right) < 0.35 * max(left, right), "the mirrored side did not move alike"
+
+# 4. Sculpt mode keeps the shape after the release.
+p2 = points(later)
+drift = max(abs(a - b) for p, q in zip(p1, p2) for a, b in zip(p, q))
+print(f"check_designer: 2.5 s after the release the shape moved by {drift:.2e}")
+assert drift < 1e-3 * size, "the released shape did not stay"
+assert "plastic-reset" in [e["command"]["action"] for e in released_s["log"]]
+
+# 5. The dialog's clicks attached nothing.
+assert len(ropes(dialog_s)) == len(ropes(later_s)), "a click in the dialog attached a rope"
+
+# 6. Reopened, the same shape.
+p3, p4 = points(dialog), points(reopened)
+diff = max(abs(a - b) for p, q in zip(p3, p4) for a, b in zip(p, q))
+print(f"check_designer: reopened and saved again: control points differ by {diff:.2e}")
+assert len(p3) == len(p4) and diff < 1e-9 * size, "the reopened session differs"
+PY
+echo "check_designer: passed (screenshots in $work)"
