@@ -668,3 +668,29 @@ fn plastic_flow_is_the_reset_in_its_limit_and_respects_the_yield_distance() {
     assert!(half.plastic_flow(-0.1, 0.0).is_err());
     assert!(half.plastic_flow(0.5, f64::NAN).is_err());
 }
+
+/// `set_rest_coordinates` (the smooth brush's rest shape): the current coordinates as the rest
+/// leave no elastic energy; a wrong length or a zero weight is refused.
+#[test]
+fn the_rest_coordinates_can_be_set() {
+    let geo = RationalGeometry::from_surface(&wavy_rational_surface(5));
+    let mut d = GeneralizedDnurbs::new(geo, Material::surface(1.0, 4.0, 1.0, 0.1)).unwrap();
+    d.forces_mut().push(Force::Spring {
+        param: [0.5, 0.5],
+        target: Target::Fixed(Vec3::new(0.5, 0.5, 0.8)),
+        stiffness: 100.0,
+        kernel: None,
+    });
+    for _ in 0..20 {
+        d.step(Integrator::Implicit { dt: 0.05 }).unwrap();
+    }
+    assert!(d.elastic_energy().unwrap() > 1e-6);
+    let q = d.geometry().coordinates().to_vec();
+    d.set_rest_coordinates(&q).unwrap();
+    assert!(d.elastic_energy().unwrap() < 1e-12);
+    assert_eq!(d.rest_coordinates(), q.as_slice());
+    assert!(d.set_rest_coordinates(&q[1..]).is_err());
+    let mut bad = q.clone();
+    bad[3] = 0.0;
+    assert!(d.set_rest_coordinates(&bad).is_err());
+}

@@ -651,3 +651,28 @@ fn plastic_flow_is_the_reset_in_its_limit_and_goes_back_exactly() {
     assert!(half.plastic_flow(0.5, -1.0).is_err());
     assert!(half.set_rest_shape(&rest0[1..], &data0).is_err());
 }
+
+/// `set_rest_control_points` (the smooth brush's rest shape): the current control points as the
+/// rest shape leave no internal force (as the plastic reset); a wrong count is refused.
+#[test]
+fn the_rest_control_points_can_be_set() {
+    let (source, p) = bspline_source(4, 5);
+    let mut s = DynamicSolid::new(source, p, Material::default(), SolidParams::default()).unwrap();
+    let rope = s.attach_rope(Vec3::new(1.5, 1.5, 1.5), 40.0, 0.0).unwrap();
+    s.run(50).unwrap();
+    s.remove_tool(rope).unwrap();
+    s.stop();
+    let now = s.control_points().to_vec();
+    s.set_rest_control_points(&now).unwrap();
+    let f = s
+        .internal_forces()
+        .iter()
+        .map(|x| x.norm())
+        .fold(0.0, f64::max);
+    assert!(f < 1e-9, "{f}");
+    assert_eq!(s.rest_shape().0, now.as_slice());
+    assert!(s.set_rest_control_points(&now[1..]).is_err());
+    let mut bad = now.clone();
+    bad[0].x = f64::NAN;
+    assert!(s.set_rest_control_points(&bad).is_err());
+}

@@ -1456,6 +1456,27 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         Ok(yielded)
     }
 
+    /// Replaces the rest coordinates `q0` (the smooth brush's smoothed rest shape) and
+    /// evaluates eq (17)'s rest values at them, as the plastic reset does; the shape, its
+    /// motion and the material stay, and the elastic forces then pull the shape towards the new
+    /// rest shape.
+    ///
+    /// # Errors
+    /// [`DynamicsError::NoSuchCoordinate`] for a wrong length; the geometry's own checks
+    /// (finite values, positive weights).
+    pub fn set_rest_coordinates(&mut self, rest: &[f64]) -> Result<(), DynamicsError> {
+        let mut geometry = self.geometry.clone();
+        geometry.set_coordinates(rest)?;
+        self.rest = rest_values(&geometry, &self.quad)?;
+        self.rest_coordinates = rest.to_vec();
+        Ok(())
+    }
+
+    /// The rest coordinates `q0` (see [`Self::set_rest_coordinates`]).
+    pub fn rest_coordinates(&self) -> &[f64] {
+        &self.rest_coordinates
+    }
+
     /// Steps taken.
     pub fn steps(&self) -> usize {
         self.steps

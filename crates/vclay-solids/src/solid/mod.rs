@@ -1466,6 +1466,33 @@ impl DynamicSolid {
         Ok(yielded)
     }
 
+    /// Replaces the rest control points (the smooth brush's smoothed rest shape): the rest data
+    /// points become `A p0` (eq 3's control map) and the springs' rest lengths follow, as in
+    /// [`Self::plastic_flow`]; the clay then settles towards the new rest shape by its own
+    /// dynamics. Motion, masses and stiffnesses stay.
+    ///
+    /// # Errors
+    /// [`SolidsError::InvalidParameter`] for a wrong count or non-finite points.
+    pub fn set_rest_control_points(&mut self, rest: &[Vec3]) -> Result<(), SolidsError> {
+        if rest.len() != self.p.len() {
+            return Err(invalid(
+                "rest control points",
+                rest.len(),
+                &format!("{} points", self.p.len()),
+            ));
+        }
+        if let Some(i) = rest.iter().position(|x| !x.iter().all(|c| c.is_finite())) {
+            return Err(invalid(
+                "rest control points",
+                format!("point {i}"),
+                "finite",
+            ));
+        }
+        let d_rest = self.disc.map.apply(rest);
+        self.put_rest_shape(rest.to_vec(), d_rest);
+        Ok(())
+    }
+
     /// The rest shape (rest control points and rest data points, whose distances are the
     /// springs' rest lengths) for undo; [`Self::set_rest_shape`] puts it back.
     pub fn rest_shape(&self) -> (&[Vec3], &[Vec3]) {
