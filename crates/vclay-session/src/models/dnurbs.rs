@@ -52,7 +52,7 @@ use crate::model::{
     Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
     StepReport, Undo, extension, unsupported_export,
 };
-use crate::tools::{CursorPath, ScheduledTool, ToolTable, a3, v3};
+use crate::tools::{CursorPath, ToolHost, ToolTable, a3, field_tool, v3};
 
 /// Rope and data spring stiffness when neither the edit nor a preset (its `k`) gives one.
 pub const DEFAULT_ROPE_STIFFNESS: f64 = 50.0;
@@ -914,10 +914,7 @@ impl DnurbsModel {
                 },
             });
         }
-        let h = self.add_slot(descs);
-        let label = self.label(&None, "forces", h)?;
-        self.track(&label, "forces", h, None, None);
-        Ok(())
+        self.add_tool(&None, "forces", descs).map(drop)
     }
 
     /// Which engine runs the model: `"generalized"` or `"frozen"`.
@@ -1017,62 +1014,16 @@ impl DnurbsModel {
         self.slots.iter_mut().find(|s| s.handle == h)
     }
 
-    fn label(
-        &self,
-        name: &Option<String>,
-        what: &str,
-        handle: usize,
-    ) -> Result<String, SessionError> {
-        let taken = |n: &str| self.constraints.iter().any(|c| c.name == n);
-        if let Some(n) = name
-            && taken(n)
-        {
-            return Err(cmd(format!(
-                "a constraint named `{n}` is active (release it first)"
-            )));
-        }
-        let mut l = self
-            .tools
-            .label(name.as_deref(), what, handle)
-            .map_err(cmd)?;
-        let mut k = 1;
-        while taken(&l) {
-            l = format!("{what}{handle}_c{k}");
-            k += 1;
-        }
-        Ok(l)
-    }
-
-    fn track(
-        &mut self,
-        label: &str,
-        action: &str,
-        handle: usize,
-        path: Option<CursorPath>,
-        release: Option<f64>,
-    ) {
-        self.tools.tools.push(ScheduledTool {
-            name: label.to_string(),
-            action: action.to_string(),
-            handle,
-            path,
-            release,
-        });
-    }
-
     /// Adds a slot under a new name; on a taken name nothing changes.
     fn add_tool(
         &mut self,
         name: &Option<String>,
         what: &str,
-        action: &str,
         forces: Vec<ForceDesc>,
-        path: Option<CursorPath>,
-        release: Option<f64>,
     ) -> Result<String, SessionError> {
-        let label = self.label(name, what, self.next_handle)?;
+        let label = ToolHost::label(self, name.as_deref(), what, self.next_handle).map_err(cmd)?;
         let h = self.add_slot(forces);
-        self.track(&label, action, h, path, release);
+        self.tools.track(&label, what, h, None, None);
         Ok(label)
     }
 
@@ -1100,34 +1051,7 @@ impl DnurbsModel {
         s.unwrap_or(self.default_k)
     }
 
-    /// Gravity and inflation: an existing tool of that name changes strength.
-    fn field_tool(
-        &mut self,
-        name: &Option<String>,
-        action: &str,
-        force: ForceDesc,
-        until: Option<f64>,
-    ) -> Result<String, SessionError> {
-        if let Some(n) = name
-            && let Some(t) = self.tools.get(n).cloned()
-        {
-            if t.action != action {
-                return Err(cmd(format!(
-                    "the tool `{n}` is a {}, not {action}",
-                    t.action
-                )));
-            }
-            self.slot_mut(t.handle).expect("slot of a tool").forces = vec![force];
-            self.sync_forces();
-            let e = self.tools.get_mut(n).expect("present");
-            e.release = until.or(e.release);
-            return Ok(format!("{action} `{n}` changed"));
-        }
-        let label = self.add_tool(name, action, action, vec![force], None, until)?;
-        Ok(format!("{action} `{label}` on"))
-    }
-
-    /// Control points selected by ids, a box around rest positions, or the nearest one.
+    /// Sets the uniform material constants given (`d-nurbs.txt` eqs 16-17).
     fn set_material_values(
         &mut self,
         mu: Option<f64>,
@@ -1196,14 +1120,17 @@ impl DnurbsModel {
     fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
         let before = self.snap();
         match edit {
-            Edit::Rope { .. } | Edit::MoveRope { .. } | Edit::Force { .. } => {
-                self.apply_rope_edit(edit, before)
+            Edit::Rope { .. }
+            | Edit::MoveRope { .. }
+            | Edit::Force { .. }
+            | Edit::Release { .. } => {
+                let message = crate::tools::tool_edit(self, edit)?;
+                self.edited(message, before)
             }
             Edit::Gravity { .. }
             | Edit::Inflate { .. }
             | Edit::Repel { .. }
-            | Edit::Data { .. }
-            | Edit::Release { .. } => self.apply_field_edit(edit, before),
+            | Edit::Data { .. } => self.apply_field_edit(edit, before),
             Edit::Fix { .. } | Edit::Free { .. } | Edit::Material { .. } => {
                 self.apply_net_edit(edit, before)
             }
@@ -1226,93 +1153,12 @@ impl DnurbsModel {
         })
     }
 
-    /// [`Self::apply_edit`] for `Rope`, `MoveRope`, `Force`.
-    fn apply_rope_edit(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
-        let message = match edit {
-            Edit::Rope {
-                name,
-                from,
-                param,
-                to,
-                until,
-                velocity,
-                release,
-                stiffness,
-                length,
-                kernel,
-                start,
-            } => {
-                if length.is_some_and(|l| l > 0.0) {
-                    return Err(cmd(
-                        "`length` is for solids; a D-NURBS spring (eq 19) pulls at any length",
-                    ));
-                }
-                let prm = self.param_or_near(param, Some(from))?;
-                let spring = ForceDesc::Spring {
-                    param: prm,
-                    target: *from,
-                    velocity: *velocity,
-                    stiffness: self.stiffness(*stiffness),
-                    kernel: *kernel,
-                };
-                let path = to.map(|to| {
-                    let start = start.unwrap_or(self.engine.time());
-                    CursorPath::Linear {
-                        from: *from,
-                        to,
-                        start,
-                        end: until.unwrap_or(start),
-                    }
-                });
-                let label = self.add_tool(name, "rope", "rope", vec![spring], path, *release)?;
-                format!("rope `{label}` attached at material point {prm:?}")
-            }
-            Edit::MoveRope { name, to } => {
-                let t = self
-                    .tools
-                    .get(name)
-                    .ok_or_else(|| cmd(format!("no active rope named `{name}`")))?;
-                if t.action != "rope" {
-                    return Err(cmd(format!("`{name}` is a {}, not a rope", t.action)));
-                }
-                let h = t.handle;
-                if let Some(ForceDesc::Spring {
-                    target, velocity, ..
-                }) = self.slot_mut(h).and_then(|s| s.forces.first_mut())
-                {
-                    *target = *to;
-                    *velocity = None;
-                }
-                self.sync_forces();
-                self.tools.get_mut(name).expect("present").path = None;
-                format!("rope `{name}` cursor at {to:?}")
-            }
-            Edit::Force {
-                name,
-                near,
-                param,
-                force,
-                until,
-            } => {
-                let prm = self.param_or_near(param, near.as_ref())?;
-                let f = ForceDesc::Point {
-                    param: prm,
-                    force: *force,
-                };
-                let label = self.add_tool(name, "force", "force", vec![f], None, *until)?;
-                format!("force `{label}` at material point {prm:?}")
-            }
-            _ => return Err(misrouted()),
-        };
-        self.edited(message, before)
-    }
-
-    /// [`Self::apply_edit`] for `Gravity`, `Inflate`, `Repel`, `Data`, `Release`.
+    /// [`Self::apply_edit`] for `Gravity`, `Inflate`, `Repel`, `Data`.
     fn apply_field_edit(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
         let surface = !self.engine.is_curve();
         let message = match edit {
             Edit::Gravity { name, g, until } => {
-                self.field_tool(name, "gravity", ForceDesc::Gravity { g: *g }, *until)?
+                field_tool(self, name, "gravity", ForceDesc::Gravity { g: *g }, *until)?
             }
             Edit::Inflate {
                 name,
@@ -1322,7 +1168,8 @@ impl DnurbsModel {
                 if !surface {
                     return Err(cmd("inflation needs a surface (s_u x s_v), not a curve"));
                 }
-                self.field_tool(
+                field_tool(
+                    self,
                     name,
                     "inflate",
                     ForceDesc::Inflation {
@@ -1344,7 +1191,8 @@ impl DnurbsModel {
                         "the frozen-weight engine repels surfaces only (use engine = \"generalized\")",
                     ));
                 }
-                self.field_tool(
+                field_tool(
+                    self,
                     name,
                     "repel",
                     ForceDesc::Repulsion {
@@ -1368,21 +1216,8 @@ impl DnurbsModel {
                         stiffness: k,
                     })
                     .collect();
-                let label = self.add_tool(name, "data", "data", f, None, None)?;
+                let label = self.add_tool(name, "data", f)?;
                 format!("data `{label}`: {} points", points.len())
-            }
-            Edit::Release { name } => {
-                if let Some(t) = self.tools.remove(name) {
-                    self.remove_slot(t.handle);
-                } else if let Some(i) = self.constraints.iter().position(|c| &c.name == name) {
-                    let mut cs = self.constraints.clone();
-                    cs.remove(i);
-                    self.engine.sync_constraints(&cs)?;
-                    self.constraints = cs;
-                } else {
-                    return Err(cmd(format!("no active tool or constraint named `{name}`")));
-                }
-                format!("released `{name}`")
             }
             _ => return Err(misrouted()),
         };
@@ -1393,7 +1228,6 @@ impl DnurbsModel {
     fn apply_net_edit(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
         let message = match edit {
             Edit::Fix { .. } | Edit::Free { .. } => {
-                let fix = matches!(edit, Edit::Fix { .. });
                 let r = match crate::tools::fix_or_free(&mut NetOf(self), edit) {
                     Ok(r) => r,
                     Err(e) => {
@@ -1403,11 +1237,7 @@ impl DnurbsModel {
                 };
                 self.revision += 1;
                 return Ok(Applied {
-                    message: format!(
-                        "{} {} control points",
-                        if fix { "fixed" } else { "freed" },
-                        r.selected.len()
-                    ),
+                    message: crate::tools::fixed_message(edit, &r),
                     undo: Undo::Inverse {
                         edit: r.inverse,
                         state: Snapshot::new(before),
@@ -2203,6 +2033,132 @@ fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, S
                 if surface { "sheet" } else { "line or circle" }
             ),
         )),
+    }
+}
+
+/// A D-NURBS's tools for the shared rope, force and release edits: a handle is a slot of
+/// force descriptions (the engine's force list is rebuilt from the slots).
+impl ToolHost for DnurbsModel {
+    type Field = ForceDesc;
+    fn table(&self) -> &ToolTable {
+        &self.tools
+    }
+    fn table_mut(&mut self) -> &mut ToolTable {
+        &mut self.tools
+    }
+    /// [`ToolTable::label`], refusing a constraint's name (an unnamed tool skips them).
+    fn label(&self, name: Option<&str>, what: &str, handle: usize) -> Result<String, String> {
+        let taken = |n: &str| self.constraints.iter().any(|c| c.name == n);
+        if let Some(n) = name
+            && taken(n)
+        {
+            return Err(format!(
+                "a constraint named `{n}` is active (release it first)"
+            ));
+        }
+        let mut l = self.tools.label(name, what, handle)?;
+        let mut k = 1;
+        while taken(&l) {
+            l = format!("{what}{handle}_c{k}");
+            k += 1;
+        }
+        Ok(l)
+    }
+    fn attach_rope(
+        &mut self,
+        edit: &Edit,
+    ) -> Result<(usize, Option<CursorPath>, String), SessionError> {
+        let Edit::Rope {
+            from,
+            param,
+            to,
+            until,
+            velocity,
+            stiffness,
+            length,
+            kernel,
+            start,
+            ..
+        } = edit
+        else {
+            return Err(misrouted());
+        };
+        if length.is_some_and(|l| l > 0.0) {
+            return Err(cmd(
+                "`length` is for solids; a D-NURBS spring (eq 19) pulls at any length",
+            ));
+        }
+        let prm = self.param_or_near(param, Some(from))?;
+        let spring = ForceDesc::Spring {
+            param: prm,
+            target: *from,
+            velocity: *velocity,
+            stiffness: self.stiffness(*stiffness),
+            kernel: *kernel,
+        };
+        let path = to.map(|to| {
+            let start = start.unwrap_or(self.engine.time());
+            CursorPath::Linear {
+                from: *from,
+                to,
+                start,
+                end: until.unwrap_or(start),
+            }
+        });
+        let h = self.add_slot(vec![spring]);
+        Ok((h, path, format!("at material point {prm:?}")))
+    }
+    fn attach_force(&mut self, edit: &Edit) -> Result<(usize, String), SessionError> {
+        let Edit::Force {
+            near, param, force, ..
+        } = edit
+        else {
+            return Err(misrouted());
+        };
+        let prm = self.param_or_near(param, near.as_ref())?;
+        let h = self.add_slot(vec![ForceDesc::Point {
+            param: prm,
+            force: *force,
+        }]);
+        Ok((h, format!("at material point {prm:?}")))
+    }
+    fn attach_field(&mut self, field: ForceDesc) -> Result<usize, SessionError> {
+        Ok(self.add_slot(vec![field]))
+    }
+    fn replace_field(&mut self, handle: usize, field: ForceDesc) -> Result<usize, SessionError> {
+        self.slot_mut(handle).expect("slot of a tool").forces = vec![field];
+        self.sync_forces();
+        Ok(handle)
+    }
+    fn move_cursor(&mut self, handle: usize, to: V3) -> Result<(), SessionError> {
+        if let Some(ForceDesc::Spring {
+            target, velocity, ..
+        }) = self.slot_mut(handle).and_then(|s| s.forces.first_mut())
+        {
+            *target = to;
+            *velocity = None;
+        }
+        self.sync_forces();
+        Ok(())
+    }
+    fn detach(&mut self, handle: usize) {
+        self.remove_slot(handle);
+    }
+    /// The slot just added goes, and its handle is free again.
+    fn take_back(&mut self, handle: usize) {
+        self.remove_slot(handle);
+        self.next_handle = handle;
+    }
+    /// A constraint (section 6.2) of that name.
+    fn release_other(&mut self, name: &str) -> Result<(), SessionError> {
+        let Some(i) = self.constraints.iter().position(|c| c.name == name) else {
+            return Err(cmd(format!("no active tool or constraint named `{name}`")));
+        };
+        let mut cs = self.constraints.clone();
+        cs.remove(i);
+        self.engine.sync_constraints(&cs)?;
+        self.constraints = cs;
+        Ok(())
     }
 }
 

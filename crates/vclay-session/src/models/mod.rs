@@ -5,6 +5,7 @@ pub mod dnurbs;
 pub mod dnurbs_patches;
 pub mod dnurbs_tri;
 pub mod ffd;
+pub mod generalized;
 pub mod pde;
 mod saved;
 pub mod solid;

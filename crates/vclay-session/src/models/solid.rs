@@ -28,7 +28,7 @@ use crate::model::{
     Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
     StepReport, Undo, extension, unsupported_export,
 };
-use crate::tools::{CursorPath, ToolTable, a3, v3};
+use crate::tools::{CursorPath, ToolHost, ToolTable, a3, field_tool, v3};
 
 /// Default rope stiffness of the solids.
 pub const DEFAULT_ROPE_STIFFNESS: f64 = 50.0;
@@ -105,7 +105,6 @@ impl SolidModel {
         matches!(self.solid.source(), SolidSource::Subdivision { .. })
     }
 
-    /// Control points selected by ids, a box around rest positions, or the nearest one.
     fn add_tool(&mut self, tool: Tool) -> Result<usize, SessionError> {
         self.solid
             .add_tool(tool)
@@ -113,73 +112,19 @@ impl SolidModel {
             .map_err(SessionError::command_from)
     }
 
-    fn label(
-        &self,
-        name: &Option<String>,
-        what: &str,
-        handle: usize,
-    ) -> Result<String, SessionError> {
-        self.tools.label(name.as_deref(), what, handle).map_err(cmd)
-    }
-
-    /// Adds a scheduled tool entry.
-    fn track(
-        &mut self,
-        label: &str,
-        action: &str,
-        handle: usize,
-        path: Option<CursorPath>,
-        release: Option<f64>,
-    ) {
-        self.tools.tools.push(crate::tools::ScheduledTool {
-            name: label.to_string(),
-            action: action.to_string(),
-            handle,
-            path,
-            release,
-        });
-    }
-
-    /// Gravity and inflation: an existing tool of that name changes strength.
-    fn replace_field_tool(
-        &mut self,
-        name: &Option<String>,
-        action: &str,
-        tool: Tool,
-        until: Option<f64>,
-    ) -> Result<String, SessionError> {
-        if let Some(n) = name
-            && let Some(t) = self.tools.get(n).cloned()
-        {
-            if t.action != action {
-                return Err(cmd(format!(
-                    "the tool `{n}` is a {}, not {action}",
-                    t.action
-                )));
-            }
-            let id = self.add_tool(tool)?;
-            let _ = self.solid.remove_tool(ToolId(t.handle));
-            let e = self.tools.get_mut(n).expect("present");
-            e.handle = id;
-            e.release = until.or(e.release);
-            return Ok(format!("{action} `{n}` changed"));
-        }
-        let id = self.add_tool(tool)?;
-        let label = self.label(name, action, id)?;
-        self.track(&label, action, id, None, until);
-        Ok(format!("{action} `{label}` on"))
-    }
-
     fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
         let before = self.snap();
         match edit {
-            Edit::Rope { .. } | Edit::MoveRope { .. } | Edit::Force { .. } => {
-                self.apply_rope_edit(edit, before)
+            Edit::Rope { .. }
+            | Edit::MoveRope { .. }
+            | Edit::Force { .. }
+            | Edit::Release { .. } => {
+                let message = crate::tools::tool_edit(self, edit)?;
+                self.edited(message, before)
             }
-            Edit::RegionForce { .. }
-            | Edit::Gravity { .. }
-            | Edit::Inflate { .. }
-            | Edit::Release { .. } => self.apply_field_edit(edit, before),
+            Edit::RegionForce { .. } | Edit::Gravity { .. } | Edit::Inflate { .. } => {
+                self.apply_field_edit(edit, before)
+            }
             Edit::Fix { .. }
             | Edit::Free { .. }
             | Edit::Material { .. }
@@ -198,106 +143,7 @@ impl SolidModel {
         })
     }
 
-    /// [`Self::apply_edit`] for `Rope`, `MoveRope`, `Force`.
-    fn apply_rope_edit(&mut self, edit: &Edit, before: SolidSnap) -> Result<Applied, SessionError> {
-        let message = match edit {
-            Edit::Rope {
-                name,
-                from,
-                param,
-                to,
-                until,
-                velocity,
-                release,
-                stiffness,
-                length,
-                kernel,
-                start,
-            } => {
-                if param.is_some() || kernel.is_some() {
-                    return Err(cmd("`param` and `kernel` are for D-NURBS models"));
-                }
-                let f = v3(*from);
-                let id = self
-                    .solid
-                    .attach_rope(
-                        f,
-                        stiffness.unwrap_or(DEFAULT_ROPE_STIFFNESS),
-                        length.unwrap_or(0.0),
-                    )
-                    .map_err(SessionError::command_from)?
-                    .0;
-                let Some(Tool::Rope { point, .. }) = self.solid.tool(ToolId(id)) else {
-                    unreachable!("just added a rope")
-                };
-                let point = *point;
-                let label = match self.label(name, "rope", id) {
-                    Ok(l) => l,
-                    Err(e) => {
-                        let _ = self.solid.remove_tool(ToolId(id));
-                        return Err(e);
-                    }
-                };
-                let start = start.unwrap_or(self.solid.time());
-                let path = match (to, velocity) {
-                    (_, Some(v)) => CursorPath::Velocity {
-                        from: *from,
-                        velocity: *v,
-                    },
-                    (to, None) => CursorPath::Linear {
-                        from: *from,
-                        to: to.unwrap_or(*from),
-                        start,
-                        end: until.unwrap_or(start),
-                    },
-                };
-                self.track(&label, "rope", id, Some(path), *release);
-                format!("rope `{label}` attached to data point {point}")
-            }
-            Edit::MoveRope { name, to } => {
-                let t = self
-                    .tools
-                    .get(name)
-                    .ok_or_else(|| cmd(format!("no active rope named `{name}`")))?;
-                if t.action != "rope" {
-                    return Err(cmd(format!("`{name}` is a {}, not a rope", t.action)));
-                }
-                let h = t.handle;
-                self.solid
-                    .move_cursor(ToolId(h), v3(*to))
-                    .map_err(SessionError::command_from)?;
-                self.tools.get_mut(name).expect("present").path = None;
-                format!("rope `{name}` cursor at {to:?}")
-            }
-            Edit::Force {
-                name,
-                near,
-                param,
-                force,
-                until,
-            } => {
-                let Some(near) = near else {
-                    let _ = param;
-                    return Err(cmd("solids take `near`, not `param`"));
-                };
-                let point =
-                    vclay_solids::tools::nearest(self.solid.data_points(), &v3(*near)).unwrap_or(0);
-                let id = self.add_tool(Tool::PointForce {
-                    point,
-                    force: v3(*force),
-                })?;
-                let label = self.label(name, "force", id).inspect_err(|_| {
-                    let _ = self.solid.remove_tool(ToolId(id));
-                })?;
-                self.track(&label, "force", id, None, *until);
-                format!("force `{label}` on data point {point}")
-            }
-            _ => return Err(misrouted()),
-        };
-        self.edited(message, before)
-    }
-
-    /// [`Self::apply_edit`] for `RegionForce`, `Gravity`, `Inflate`, `Release`.
+    /// [`Self::apply_edit`] for `RegionForce`, `Gravity`, `Inflate`.
     fn apply_field_edit(
         &mut self,
         edit: &Edit,
@@ -316,10 +162,14 @@ impl SolidModel {
                     .add_region_force(v3(*center), *radius, v3(*force))
                     .map_err(SessionError::command_from)?
                     .0;
-                let label = self.label(name, "region", id).inspect_err(|_| {
-                    let _ = self.solid.remove_tool(ToolId(id));
-                })?;
-                self.track(&label, "region-force", id, None, *until);
+                let label = self
+                    .tools
+                    .label(name.as_deref(), "region", id)
+                    .map_err(|e| {
+                        let _ = self.solid.remove_tool(ToolId(id));
+                        cmd(e)
+                    })?;
+                self.tools.track(&label, "region-force", id, None, *until);
                 let n = match self.solid.tool(ToolId(id)) {
                     Some(Tool::RegionForce { points, .. }) => points.len(),
                     _ => 0,
@@ -327,13 +177,14 @@ impl SolidModel {
                 format!("region force `{label}` on {n} data points")
             }
             Edit::Gravity { name, g, until } => {
-                self.replace_field_tool(name, "gravity", Tool::Gravity { g: v3(*g) }, *until)?
+                field_tool(self, name, "gravity", Tool::Gravity { g: v3(*g) }, *until)?
             }
             Edit::Inflate {
                 name,
                 pressure,
                 until,
-            } => self.replace_field_tool(
+            } => field_tool(
+                self,
                 name,
                 "inflate",
                 Tool::Inflation {
@@ -341,14 +192,6 @@ impl SolidModel {
                 },
                 *until,
             )?,
-            Edit::Release { name } => {
-                let t = self
-                    .tools
-                    .remove(name)
-                    .ok_or_else(|| cmd(format!("no active tool named `{name}`")))?;
-                let _ = self.solid.remove_tool(ToolId(t.handle));
-                format!("released `{name}`")
-            }
             _ => return Err(misrouted()),
         };
         self.edited(message, before)
@@ -987,6 +830,97 @@ impl crate::tools::ControlNet for vclay_solids::DynamicSolid {
     }
     fn set_fixed(&mut self, ids: &[usize], fix: bool) -> Result<(), SessionError> {
         vclay_solids::DynamicSolid::set_fixed(self, ids, fix).map_err(SessionError::command_from)
+    }
+}
+
+/// A solid's tools for the shared rope, force and release edits: a handle is the kernel's tool
+/// id.
+impl ToolHost for SolidModel {
+    type Field = Tool;
+    fn table(&self) -> &ToolTable {
+        &self.tools
+    }
+    fn table_mut(&mut self) -> &mut ToolTable {
+        &mut self.tools
+    }
+    fn attach_rope(
+        &mut self,
+        edit: &Edit,
+    ) -> Result<(usize, Option<CursorPath>, String), SessionError> {
+        let Edit::Rope {
+            from,
+            param,
+            to,
+            until,
+            velocity,
+            stiffness,
+            length,
+            kernel,
+            start,
+            ..
+        } = edit
+        else {
+            return Err(misrouted());
+        };
+        if param.is_some() || kernel.is_some() {
+            return Err(cmd("`param` and `kernel` are for D-NURBS models"));
+        }
+        let id = self
+            .solid
+            .attach_rope(
+                v3(*from),
+                stiffness.unwrap_or(DEFAULT_ROPE_STIFFNESS),
+                length.unwrap_or(0.0),
+            )
+            .map_err(SessionError::command_from)?
+            .0;
+        let Some(Tool::Rope { point, .. }) = self.solid.tool(ToolId(id)) else {
+            unreachable!("just added a rope")
+        };
+        let start = start.unwrap_or(self.solid.time());
+        let path = match (to, velocity) {
+            (_, Some(v)) => CursorPath::Velocity {
+                from: *from,
+                velocity: *v,
+            },
+            (to, None) => CursorPath::Linear {
+                from: *from,
+                to: to.unwrap_or(*from),
+                start,
+                end: until.unwrap_or(start),
+            },
+        };
+        Ok((id, Some(path), format!("to data point {point}")))
+    }
+    fn attach_force(&mut self, edit: &Edit) -> Result<(usize, String), SessionError> {
+        let Edit::Force { near, force, .. } = edit else {
+            return Err(misrouted());
+        };
+        let Some(near) = near else {
+            return Err(cmd("solids take `near`, not `param`"));
+        };
+        let point = vclay_solids::tools::nearest(self.solid.data_points(), &v3(*near)).unwrap_or(0);
+        let id = self.add_tool(Tool::PointForce {
+            point,
+            force: v3(*force),
+        })?;
+        Ok((id, format!("on data point {point}")))
+    }
+    fn attach_field(&mut self, field: Tool) -> Result<usize, SessionError> {
+        self.add_tool(field)
+    }
+    fn replace_field(&mut self, handle: usize, field: Tool) -> Result<usize, SessionError> {
+        let id = self.add_tool(field)?;
+        let _ = self.solid.remove_tool(ToolId(handle));
+        Ok(id)
+    }
+    fn move_cursor(&mut self, handle: usize, to: V3) -> Result<(), SessionError> {
+        self.solid
+            .move_cursor(ToolId(handle), v3(to))
+            .map_err(SessionError::command_from)
+    }
+    fn detach(&mut self, handle: usize) {
+        let _ = self.solid.remove_tool(ToolId(handle));
     }
 }
 
