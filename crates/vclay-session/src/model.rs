@@ -314,9 +314,14 @@ pub(crate) trait Stateful {
     fn take_state(&self) -> Self::State;
     /// Puts a snapshot back (bit for bit).
     fn put_state(&mut self, state: &Self::State) -> Result<(), SessionError>;
+    /// Applies an edit, or fails leaving the model unchanged ([`Model::apply`]).
+    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError>;
     /// Applies the exact inverse edit of an [`Undo::Inverse`] record (before the snapshot is
-    /// put back). Kinds whose snapshot covers everything the edit changed may ignore a failure.
-    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError>;
+    /// put back): by default as any edit. Kinds whose snapshot covers everything the edit
+    /// changed may ignore a failure.
+    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError> {
+        self.apply_edit(edit).map(drop)
+    }
 }
 
 impl Snapshot {
@@ -356,11 +361,18 @@ pub(crate) fn restore_state<M: Stateful>(
     model.put_state(&snapshot.take::<M::State>()?)
 }
 
-/// The [`Model`] methods every [`Stateful`] kind implements the same way: `undo` by the inverse
+/// The [`Model`] methods every [`Stateful`] kind implements the same way: `apply` by
+/// [`Stateful::apply_edit`], `undo` by the inverse
 /// edit and the state ([`undo_by_state`]), `snapshot`, `restore`, and `clone_model` (the kind
 /// is `Clone`). Used inside `impl Model for Kind`.
 macro_rules! stateful_methods {
     () => {
+        fn apply(
+            &mut self,
+            edit: &$crate::Edit,
+        ) -> Result<$crate::model::Applied, $crate::SessionError> {
+            $crate::model::Stateful::apply_edit(self, edit)
+        }
         fn undo(&mut self, undo: $crate::model::Undo) -> Result<(), $crate::SessionError> {
             $crate::model::undo_by_state(self, undo)
         }

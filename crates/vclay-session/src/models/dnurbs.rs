@@ -48,6 +48,7 @@ use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
 use super::{SpecError, misrouted};
 use crate::command::{Edit, V3};
 use crate::error::SessionError;
+use crate::model::Stateful;
 use crate::model::{
     Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
     StepReport, Undo, extension, unsupported_export,
@@ -948,41 +949,6 @@ impl DnurbsModel {
         }
     }
 
-    fn snap(&self) -> Snap {
-        Snap {
-            state: self.engine.state(),
-            material: self.material.clone(),
-            dt: self.dt,
-            slots: self.slots.clone(),
-            next_handle: self.next_handle,
-            constraints: self.constraints.clone(),
-            tools: self.tools.clone(),
-            kinetic: self.kinetic,
-            steps: self.steps,
-        }
-    }
-
-    fn put(&mut self, s: &Snap) -> Result<(), SessionError> {
-        if self.material != s.material {
-            self.engine
-                .set_material(s.material.to_material())
-                .map_err(dyn_err)?;
-            self.material = s.material.clone();
-        }
-        self.engine.set_state(&s.state).map_err(dyn_err)?;
-        self.slots = s.slots.clone();
-        self.sync_forces();
-        self.constraints = s.constraints.clone();
-        self.engine.sync_constraints(&self.constraints)?;
-        self.dt = s.dt;
-        self.next_handle = s.next_handle;
-        self.tools = s.tools.clone();
-        self.kinetic = s.kinetic;
-        self.steps = s.steps;
-        self.revision += 1;
-        Ok(())
-    }
-
     fn sync_forces(&mut self) {
         let f = self
             .external
@@ -1117,33 +1083,6 @@ impl DnurbsModel {
             .map_err(SessionError::command_from)
     }
 
-    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        let before = self.snap();
-        match edit {
-            Edit::Rope { .. }
-            | Edit::MoveRope { .. }
-            | Edit::Force { .. }
-            | Edit::Release { .. } => {
-                let message = crate::tools::tool_edit(self, edit)?;
-                self.edited(message, before)
-            }
-            Edit::Gravity { .. }
-            | Edit::Inflate { .. }
-            | Edit::Repel { .. }
-            | Edit::Data { .. } => self.apply_field_edit(edit, before),
-            Edit::Fix { .. } | Edit::Free { .. } | Edit::Material { .. } => {
-                self.apply_net_edit(edit, before)
-            }
-            Edit::PlasticReset
-            | Edit::Stop
-            | Edit::MovePoint { .. }
-            | Edit::SetWeight { .. }
-            | Edit::Set { .. }
-            | Edit::Integrator { .. } => self.apply_state_edit(edit, before),
-            _ => self.apply_constraint_edit(edit, before),
-        }
-    }
-
     /// The end of an edit whose undo is the state before it: a new revision, the message.
     fn edited(&mut self, message: String, before: Snap) -> Result<Applied, SessionError> {
         self.revision += 1;
@@ -1231,7 +1170,7 @@ impl DnurbsModel {
                 let r = match crate::tools::fix_or_free(&mut NetOf(self), edit) {
                     Ok(r) => r,
                     Err(e) => {
-                        self.put(&before)?;
+                        self.put_state(&before)?;
                         return Err(e);
                     }
                 };
@@ -1719,7 +1658,7 @@ impl DnurbsModel {
             kinetic: s.kinetic,
             steps: s.steps,
         };
-        m.put(&snap)?;
+        m.put_state(&snap)?;
         m.revision = 1;
         Ok(m)
     }
@@ -2189,13 +2128,63 @@ impl crate::tools::ControlNet for NetOf<'_> {
 impl crate::model::Stateful for DnurbsModel {
     type State = Snap;
     fn take_state(&self) -> Snap {
-        self.snap()
+        Snap {
+            state: self.engine.state(),
+            material: self.material.clone(),
+            dt: self.dt,
+            slots: self.slots.clone(),
+            next_handle: self.next_handle,
+            constraints: self.constraints.clone(),
+            tools: self.tools.clone(),
+            kinetic: self.kinetic,
+            steps: self.steps,
+        }
     }
-    fn put_state(&mut self, state: &Snap) -> Result<(), SessionError> {
-        self.put(state)
+    fn put_state(&mut self, s: &Snap) -> Result<(), SessionError> {
+        if self.material != s.material {
+            self.engine
+                .set_material(s.material.to_material())
+                .map_err(dyn_err)?;
+            self.material = s.material.clone();
+        }
+        self.engine.set_state(&s.state).map_err(dyn_err)?;
+        self.slots = s.slots.clone();
+        self.sync_forces();
+        self.constraints = s.constraints.clone();
+        self.engine.sync_constraints(&self.constraints)?;
+        self.dt = s.dt;
+        self.next_handle = s.next_handle;
+        self.tools = s.tools.clone();
+        self.kinetic = s.kinetic;
+        self.steps = s.steps;
+        self.revision += 1;
+        Ok(())
     }
-    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError> {
-        self.apply_edit(edit).map(drop)
+    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
+        let before = self.take_state();
+        match edit {
+            Edit::Rope { .. }
+            | Edit::MoveRope { .. }
+            | Edit::Force { .. }
+            | Edit::Release { .. } => {
+                let message = crate::tools::tool_edit(self, edit)?;
+                self.edited(message, before)
+            }
+            Edit::Gravity { .. }
+            | Edit::Inflate { .. }
+            | Edit::Repel { .. }
+            | Edit::Data { .. } => self.apply_field_edit(edit, before),
+            Edit::Fix { .. } | Edit::Free { .. } | Edit::Material { .. } => {
+                self.apply_net_edit(edit, before)
+            }
+            Edit::PlasticReset
+            | Edit::Stop
+            | Edit::MovePoint { .. }
+            | Edit::SetWeight { .. }
+            | Edit::Set { .. }
+            | Edit::Integrator { .. } => self.apply_state_edit(edit, before),
+            _ => self.apply_constraint_edit(edit, before),
+        }
     }
 }
 
@@ -2471,10 +2460,6 @@ impl Model for DnurbsModel {
             ));
         }
         v
-    }
-
-    fn apply(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        self.apply_edit(edit)
     }
 
     crate::model::stateful_methods!();

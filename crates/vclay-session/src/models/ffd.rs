@@ -136,27 +136,6 @@ impl FfdModel {
         self.embedded.rest_positions()
     }
 
-    fn snap(&self) -> FfdSnap {
-        FfdSnap {
-            control_points: self.lattice.control_points().to_vec(),
-            weights: self.lattice.weights().to_vec(),
-            mode: self.mode,
-            dt: self.dt,
-            time: self.time,
-            steps: self.steps,
-        }
-    }
-
-    fn put(&mut self, s: &FfdSnap) -> Result<(), SessionError> {
-        self.set_lattice(s.control_points.clone(), s.weights.clone())?;
-        self.mode = s.mode;
-        self.dt = s.dt;
-        self.time = s.time;
-        self.steps = s.steps;
-        self.revision += 1;
-        Ok(())
-    }
-
     /// Replaces control points and weights (weights first, as [`FfdModel::load`] does) and
     /// re-evaluates the mesh in full.
     fn set_lattice(&mut self, points: Vec<Vec3>, weights: Vec<f64>) -> Result<(), SessionError> {
@@ -271,130 +250,6 @@ impl FfdModel {
             .map(|p| p.name.as_str())
             .collect::<Vec<_>>()
             .join(", ")
-    }
-
-    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        let before = self.snap();
-        let (message, inverse) = match edit {
-            Edit::FfdMove { moves } => {
-                let message = self.ffd_move(moves)?;
-                let inverse = Edit::FfdMove {
-                    moves: moves
-                        .iter()
-                        .map(|m| PointMove {
-                            from: m.to,
-                            to: m.from,
-                        })
-                        .collect(),
-                };
-                (message, inverse)
-            }
-            Edit::MovePoint { index, to } => {
-                let n = self.lattice.control_point_count();
-                if *index >= n {
-                    return Err(cmd(format!(
-                        "lattice control point {index} does not exist (there are {n})"
-                    )));
-                }
-                let old = self.lattice.control_points()[*index];
-                let mut pts = self.lattice.control_points().to_vec();
-                pts[*index] = v3(*to);
-                let w = self.lattice.weights().to_vec();
-                self.set_lattice(pts, w).map_err(|e| cmd(reason(e)))?;
-                (
-                    format!("moved lattice control point {index} to {to:?}"),
-                    Edit::MovePoint {
-                        index: *index,
-                        to: a3(&old),
-                    },
-                )
-            }
-            Edit::SetWeight { index, weight } => {
-                let n = self.lattice.control_point_count();
-                if *index >= n {
-                    return Err(cmd(format!(
-                        "lattice control point {index} does not exist (there are {n})"
-                    )));
-                }
-                let old = self.lattice.weights()[*index];
-                let mut w = self.lattice.weights().to_vec();
-                w[*index] = *weight;
-                let pts = self.lattice.control_points().to_vec();
-                if let Err(e) = self.set_lattice(pts, w) {
-                    self.put(&before)?;
-                    return Err(cmd(reason(e)));
-                }
-                (
-                    format!("weight of lattice control point {index} = {weight}"),
-                    Edit::SetWeight {
-                        index: *index,
-                        weight: old,
-                    },
-                )
-            }
-            Edit::Set { name, value } => {
-                let old = match name.as_str() {
-                    "dt" => {
-                        if !(*value > 0.0 && value.is_finite()) {
-                            return Err(cmd(format!("dt = {value}: must be positive")));
-                        }
-                        std::mem::replace(&mut self.dt, *value)
-                    }
-                    "least_squares" => {
-                        let mode = match *value {
-                            0.0 => SolveMode::Exact,
-                            1.0 => SolveMode::LeastSquares,
-                            _ => {
-                                return Err(cmd(format!(
-                                    "least_squares = {value}: 0 (exact, eq 12) or 1 (least squares)"
-                                )));
-                            }
-                        };
-                        let old = self.mode == SolveMode::LeastSquares;
-                        self.mode = mode;
-                        f64::from(u8::from(old))
-                    }
-                    _ => {
-                        return Err(cmd(format!(
-                            "no parameter `{name}`; an ffd model has {}",
-                            self.param_names()
-                        )));
-                    }
-                };
-                (
-                    format!("{name} = {value}"),
-                    Edit::Set {
-                        name: name.clone(),
-                        value: old,
-                    },
-                )
-            }
-            Edit::Fix { .. } | Edit::Free { .. } => {
-                return Err(cmd(format!(
-                    "an {} model has no fixed control points: direct manipulation \
-                     (ffd-direct-manipulation.txt eqs 7 and 12) moves every control point of \
-                     the support; use a multi-point `ffd-move` with the points to keep as moves \
-                     onto themselves",
-                    ModelKind::Ffd
-                )));
-            }
-            _ => {
-                return Err(cmd(format!(
-                    "`{}` does not apply to an {} model (it takes ffd-move, move-point, \
-                     set-weight, set)",
-                    edit.action(),
-                    ModelKind::Ffd
-                )));
-            }
-        };
-        self.revision += 1;
-        Ok(Applied {
-            message,
-            undo: Undo::Inverse {
-                edit: inverse,
-                state: Snapshot::new(before),
-            },
-        })
     }
 
     /// Builds a model from a scenario's `[model]` and `[simulation]` tables (see
@@ -606,10 +461,146 @@ fn reason(e: SessionError) -> String {
 impl crate::model::Stateful for FfdModel {
     type State = FfdSnap;
     fn take_state(&self) -> FfdSnap {
-        self.snap()
+        FfdSnap {
+            control_points: self.lattice.control_points().to_vec(),
+            weights: self.lattice.weights().to_vec(),
+            mode: self.mode,
+            dt: self.dt,
+            time: self.time,
+            steps: self.steps,
+        }
     }
-    fn put_state(&mut self, state: &FfdSnap) -> Result<(), SessionError> {
-        self.put(state)
+    fn put_state(&mut self, s: &FfdSnap) -> Result<(), SessionError> {
+        self.set_lattice(s.control_points.clone(), s.weights.clone())?;
+        self.mode = s.mode;
+        self.dt = s.dt;
+        self.time = s.time;
+        self.steps = s.steps;
+        self.revision += 1;
+        Ok(())
+    }
+    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
+        let before = self.take_state();
+        let (message, inverse) = match edit {
+            Edit::FfdMove { moves } => {
+                let message = self.ffd_move(moves)?;
+                let inverse = Edit::FfdMove {
+                    moves: moves
+                        .iter()
+                        .map(|m| PointMove {
+                            from: m.to,
+                            to: m.from,
+                        })
+                        .collect(),
+                };
+                (message, inverse)
+            }
+            Edit::MovePoint { index, to } => {
+                let n = self.lattice.control_point_count();
+                if *index >= n {
+                    return Err(cmd(format!(
+                        "lattice control point {index} does not exist (there are {n})"
+                    )));
+                }
+                let old = self.lattice.control_points()[*index];
+                let mut pts = self.lattice.control_points().to_vec();
+                pts[*index] = v3(*to);
+                let w = self.lattice.weights().to_vec();
+                self.set_lattice(pts, w).map_err(|e| cmd(reason(e)))?;
+                (
+                    format!("moved lattice control point {index} to {to:?}"),
+                    Edit::MovePoint {
+                        index: *index,
+                        to: a3(&old),
+                    },
+                )
+            }
+            Edit::SetWeight { index, weight } => {
+                let n = self.lattice.control_point_count();
+                if *index >= n {
+                    return Err(cmd(format!(
+                        "lattice control point {index} does not exist (there are {n})"
+                    )));
+                }
+                let old = self.lattice.weights()[*index];
+                let mut w = self.lattice.weights().to_vec();
+                w[*index] = *weight;
+                let pts = self.lattice.control_points().to_vec();
+                if let Err(e) = self.set_lattice(pts, w) {
+                    self.put_state(&before)?;
+                    return Err(cmd(reason(e)));
+                }
+                (
+                    format!("weight of lattice control point {index} = {weight}"),
+                    Edit::SetWeight {
+                        index: *index,
+                        weight: old,
+                    },
+                )
+            }
+            Edit::Set { name, value } => {
+                let old = match name.as_str() {
+                    "dt" => {
+                        if !(*value > 0.0 && value.is_finite()) {
+                            return Err(cmd(format!("dt = {value}: must be positive")));
+                        }
+                        std::mem::replace(&mut self.dt, *value)
+                    }
+                    "least_squares" => {
+                        let mode = match *value {
+                            0.0 => SolveMode::Exact,
+                            1.0 => SolveMode::LeastSquares,
+                            _ => {
+                                return Err(cmd(format!(
+                                    "least_squares = {value}: 0 (exact, eq 12) or 1 (least squares)"
+                                )));
+                            }
+                        };
+                        let old = self.mode == SolveMode::LeastSquares;
+                        self.mode = mode;
+                        f64::from(u8::from(old))
+                    }
+                    _ => {
+                        return Err(cmd(format!(
+                            "no parameter `{name}`; an ffd model has {}",
+                            self.param_names()
+                        )));
+                    }
+                };
+                (
+                    format!("{name} = {value}"),
+                    Edit::Set {
+                        name: name.clone(),
+                        value: old,
+                    },
+                )
+            }
+            Edit::Fix { .. } | Edit::Free { .. } => {
+                return Err(cmd(format!(
+                    "an {} model has no fixed control points: direct manipulation \
+                     (ffd-direct-manipulation.txt eqs 7 and 12) moves every control point of \
+                     the support; use a multi-point `ffd-move` with the points to keep as moves \
+                     onto themselves",
+                    ModelKind::Ffd
+                )));
+            }
+            _ => {
+                return Err(cmd(format!(
+                    "`{}` does not apply to an {} model (it takes ffd-move, move-point, \
+                     set-weight, set)",
+                    edit.action(),
+                    ModelKind::Ffd
+                )));
+            }
+        };
+        self.revision += 1;
+        Ok(Applied {
+            message,
+            undo: Undo::Inverse {
+                edit: inverse,
+                state: Snapshot::new(before),
+            },
+        })
     }
     fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError> {
         // The snapshot put back after it is the exact state either way; the inverse can fail
@@ -732,10 +723,6 @@ impl Model for FfdModel {
                 doc: "multi-point ffd-move: 0 exact (eq 12, conflicts are errors), 1 minimum-norm least squares".into(),
             },
         ]
-    }
-
-    fn apply(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        self.apply_edit(edit)
     }
 
     crate::model::stateful_methods!();

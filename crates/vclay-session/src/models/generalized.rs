@@ -165,6 +165,20 @@ impl<K: GeneralizedKind> crate::model::Stateful for GeneralizedModel<K> {
         self.revision += 1;
         Ok(())
     }
+    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
+        let before = self.take_state();
+        let message = match edit {
+            Edit::Set { name, value } if name == "dt" => self.set_dt(*value)?,
+            _ => self.kind.apply(&mut self.engine, edit)?,
+        };
+        if K::EDITS_REDRAW {
+            self.revision += 1;
+        }
+        Ok(Applied {
+            message,
+            undo: Undo::State(Snapshot::new(before)),
+        })
+    }
     fn apply_inverse(&mut self, _edit: &Edit) -> Result<(), SessionError> {
         // The snapshot holds everything the edits change.
         Ok(())
@@ -235,20 +249,6 @@ impl<K: GeneralizedKind> Model for GeneralizedModel<K> {
         }];
         v.extend(self.kind.params());
         v
-    }
-    fn apply(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        let before = crate::model::Stateful::take_state(self);
-        let message = match edit {
-            Edit::Set { name, value } if name == "dt" => self.set_dt(*value)?,
-            _ => self.kind.apply(&mut self.engine, edit)?,
-        };
-        if K::EDITS_REDRAW {
-            self.revision += 1;
-        }
-        Ok(Applied {
-            message,
-            undo: Undo::State(Snapshot::new(before)),
-        })
     }
     crate::model::stateful_methods!();
     fn control_points(&self) -> Vec<Vec3> {

@@ -79,28 +79,6 @@ impl SolidModel {
         &self.tools
     }
 
-    fn snap(&self) -> SolidSnap {
-        SolidSnap {
-            state: self.solid.state(),
-            tools: self.tools.clone(),
-            params: *self.solid.params(),
-            material: self.solid.material().clone(),
-        }
-    }
-
-    fn put(&mut self, s: &SolidSnap) -> Result<(), SessionError> {
-        if self.solid.material() != &s.material {
-            self.solid
-                .set_material(s.material.clone())
-                .map_err(kernel)?;
-        }
-        self.solid.set_params(s.params).map_err(kernel)?;
-        self.solid.set_state(&s.state).map_err(kernel)?;
-        self.tools = s.tools.clone();
-        self.revision += 1;
-        Ok(())
-    }
-
     fn is_subdivision(&self) -> bool {
         matches!(self.solid.source(), SolidSource::Subdivision { .. })
     }
@@ -110,28 +88,6 @@ impl SolidModel {
             .add_tool(tool)
             .map(|id| id.0)
             .map_err(SessionError::command_from)
-    }
-
-    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        let before = self.snap();
-        match edit {
-            Edit::Rope { .. }
-            | Edit::MoveRope { .. }
-            | Edit::Force { .. }
-            | Edit::Release { .. } => {
-                let message = crate::tools::tool_edit(self, edit)?;
-                self.edited(message, before)
-            }
-            Edit::RegionForce { .. } | Edit::Gravity { .. } | Edit::Inflate { .. } => {
-                self.apply_field_edit(edit, before)
-            }
-            Edit::Fix { .. }
-            | Edit::Free { .. }
-            | Edit::Material { .. }
-            | Edit::Extrude { .. }
-            | Edit::DeleteCell { .. } => self.apply_shape_edit(edit, before),
-            _ => self.apply_state_edit(edit, before),
-        }
     }
 
     /// The end of an edit whose undo is the state before it: a new revision, the message.
@@ -927,13 +883,45 @@ impl ToolHost for SolidModel {
 impl crate::model::Stateful for SolidModel {
     type State = SolidSnap;
     fn take_state(&self) -> SolidSnap {
-        self.snap()
+        SolidSnap {
+            state: self.solid.state(),
+            tools: self.tools.clone(),
+            params: *self.solid.params(),
+            material: self.solid.material().clone(),
+        }
     }
-    fn put_state(&mut self, state: &SolidSnap) -> Result<(), SessionError> {
-        self.put(state)
+    fn put_state(&mut self, s: &SolidSnap) -> Result<(), SessionError> {
+        if self.solid.material() != &s.material {
+            self.solid
+                .set_material(s.material.clone())
+                .map_err(kernel)?;
+        }
+        self.solid.set_params(s.params).map_err(kernel)?;
+        self.solid.set_state(&s.state).map_err(kernel)?;
+        self.tools = s.tools.clone();
+        self.revision += 1;
+        Ok(())
     }
-    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError> {
-        self.apply_edit(edit).map(drop)
+    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
+        let before = self.take_state();
+        match edit {
+            Edit::Rope { .. }
+            | Edit::MoveRope { .. }
+            | Edit::Force { .. }
+            | Edit::Release { .. } => {
+                let message = crate::tools::tool_edit(self, edit)?;
+                self.edited(message, before)
+            }
+            Edit::RegionForce { .. } | Edit::Gravity { .. } | Edit::Inflate { .. } => {
+                self.apply_field_edit(edit, before)
+            }
+            Edit::Fix { .. }
+            | Edit::Free { .. }
+            | Edit::Material { .. }
+            | Edit::Extrude { .. }
+            | Edit::DeleteCell { .. } => self.apply_shape_edit(edit, before),
+            _ => self.apply_state_edit(edit, before),
+        }
     }
 }
 
@@ -1149,10 +1137,6 @@ impl Model for SolidModel {
                 "implicit: CG iteration cap",
             ),
         ]
-    }
-
-    fn apply(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        self.apply_edit(edit)
     }
 
     crate::model::stateful_methods!();
