@@ -6,7 +6,7 @@
 use serde::{Deserialize, Serialize};
 use vclay_core::Vec3;
 
-use crate::command::V3;
+use crate::command::{RopeRequest, V3};
 
 /// How a rope's cursor moves by itself.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -300,11 +300,11 @@ pub(crate) trait ToolHost {
     fn label(&self, name: Option<&str>, what: &str, handle: usize) -> Result<String, String> {
         self.table().label(name, what, handle)
     }
-    /// Attaches the spring of an [`crate::Edit::Rope`]; returns its handle, its cursor path
-    /// and where it holds (`"to data point 3"`, `"at material point [0.5, 0.5]"`).
+    /// Attaches the spring of a rope; returns its handle, its cursor path and where it holds
+    /// (`"to data point 3"`, `"at material point [0.5, 0.5]"`).
     fn attach_rope(
         &mut self,
-        edit: &crate::Edit,
+        rope: &RopeRequest,
     ) -> Result<(usize, Option<CursorPath>, String), crate::SessionError>;
     /// Attaches the force of an [`crate::Edit::Force`]; returns its handle and where it acts
     /// (`"on data point 3"`, `"at material point [0.5, 0.5]"`).
@@ -335,11 +335,11 @@ pub(crate) trait ToolHost {
 /// The name of tool `handle` just attached; if refused, the tool is taken back.
 fn name_new<H: ToolHost + ?Sized>(
     host: &mut H,
-    name: &Option<String>,
+    name: Option<&str>,
     what: &str,
     handle: usize,
 ) -> Result<String, crate::SessionError> {
-    host.label(name.as_deref(), what, handle).map_err(|e| {
+    host.label(name, what, handle).map_err(|e| {
         host.take_back(handle);
         cmd(e)
     })
@@ -353,10 +353,11 @@ pub(crate) fn tool_edit<H: ToolHost + ?Sized>(
 ) -> Result<String, crate::SessionError> {
     use crate::Edit;
     match edit {
-        Edit::Rope { name, release, .. } => {
-            let (h, path, at) = host.attach_rope(edit)?;
+        Edit::Rope { .. } => {
+            let (rope, name, release) = RopeRequest::of(edit).expect("a rope");
+            let (h, path, at) = host.attach_rope(&rope)?;
             let label = name_new(host, name, "rope", h)?;
-            host.table_mut().track(&label, "rope", h, path, *release);
+            host.table_mut().track(&label, "rope", h, path, release);
             Ok(format!("rope `{label}` attached {at}"))
         }
         Edit::MoveRope { name, to } => {
@@ -367,7 +368,7 @@ pub(crate) fn tool_edit<H: ToolHost + ?Sized>(
         }
         Edit::Force { name, until, .. } => {
             let (h, at) = host.attach_force(edit)?;
-            let label = name_new(host, name, "force", h)?;
+            let label = name_new(host, name.as_deref(), "force", h)?;
             host.table_mut().track(&label, "force", h, None, *until);
             Ok(format!("force `{label}` {at}"))
         }
@@ -408,7 +409,7 @@ pub(crate) fn field_tool<H: ToolHost + ?Sized>(
         return Ok(format!("{action} `{n}` changed"));
     }
     let h = host.attach_field(field)?;
-    let label = name_new(host, name, action, h)?;
+    let label = name_new(host, name.as_deref(), action, h)?;
     host.table_mut().track(&label, action, h, None, until);
     Ok(format!("{action} `{label}` on"))
 }

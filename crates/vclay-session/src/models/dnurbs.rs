@@ -47,6 +47,7 @@ use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
 
 use super::{SpecError, misrouted};
 use crate::command::{Edit, V3};
+use crate::command::{MaterialRequest, RopeRequest};
 use crate::error::SessionError;
 use crate::model::Stateful;
 use crate::model::{
@@ -1183,39 +1184,23 @@ impl DnurbsModel {
                     },
                 });
             }
-            Edit::Material {
-                cells,
-                min,
-                max,
-                density,
-                damping,
-                edge_stiffness,
-                virtual_stiffness,
-                anisotropy,
-                mu,
-                gamma,
-                alpha,
-                beta,
-            } => {
-                if density.is_some()
-                    || damping.is_some()
-                    || edge_stiffness.is_some()
-                    || virtual_stiffness.is_some()
-                    || anisotropy.is_some()
-                {
+            Edit::Material { .. } => {
+                let m = MaterialRequest::of(edit).ok_or_else(misrouted)?;
+                if m.solid_given() {
                     return Err(cmd(
                         "`density`, `damping`, `edge_stiffness`, `virtual_stiffness`, `anisotropy` are solid materials; D-NURBS take mu, gamma, alpha, beta",
                     ));
                 }
-                if cells.is_some() || min.is_some() || max.is_some() {
+                if m.region_given() {
                     return Err(cmd(
                         "a D-NURBS material is uniform: `cells`, `min` and `max` do not apply",
                     ));
                 }
-                if mu.is_none() && gamma.is_none() && alpha.is_none() && beta.is_none() {
+                if !m.dnurbs_given() {
                     return Err(cmd("give at least one of mu, gamma, alpha, beta"));
                 }
-                self.set_material_values(*mu, *gamma, *alpha, *beta)?;
+                let [mu, gamma, alpha, beta] = m.dnurbs;
+                self.set_material_values(mu, gamma, alpha, beta)?;
                 "material changed".to_string()
             }
             _ => return Err(misrouted()),
@@ -2005,43 +1990,28 @@ impl ToolHost for DnurbsModel {
     }
     fn attach_rope(
         &mut self,
-        edit: &Edit,
+        r: &RopeRequest,
     ) -> Result<(usize, Option<CursorPath>, String), SessionError> {
-        let Edit::Rope {
-            from,
-            param,
-            to,
-            until,
-            velocity,
-            stiffness,
-            length,
-            kernel,
-            start,
-            ..
-        } = edit
-        else {
-            return Err(misrouted());
-        };
-        if length.is_some_and(|l| l > 0.0) {
+        if r.length.is_some_and(|l| l > 0.0) {
             return Err(cmd(
                 "`length` is for solids; a D-NURBS spring (eq 19) pulls at any length",
             ));
         }
-        let prm = self.param_or_near(param, Some(from))?;
+        let prm = self.param_or_near(&r.param, Some(&r.from))?;
         let spring = ForceDesc::Spring {
             param: prm,
-            target: *from,
-            velocity: *velocity,
-            stiffness: self.stiffness(*stiffness),
-            kernel: *kernel,
+            target: r.from,
+            velocity: r.velocity,
+            stiffness: self.stiffness(r.stiffness),
+            kernel: r.kernel,
         };
-        let path = to.map(|to| {
-            let start = start.unwrap_or(self.engine.time());
+        let path = r.to.map(|to| {
+            let start = r.start.unwrap_or(self.engine.time());
             CursorPath::Linear {
-                from: *from,
+                from: r.from,
                 to,
                 start,
-                end: until.unwrap_or(start),
+                end: r.until.unwrap_or(start),
             }
         });
         let h = self.add_slot(vec![spring]);

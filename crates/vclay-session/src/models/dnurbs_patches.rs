@@ -40,6 +40,7 @@ use super::SpecError;
 use super::generalized::{GeneralizedKind, GeneralizedModel, constant_material};
 use super::saved::SavedState;
 use crate::command::Edit;
+use crate::command::RopeRequest;
 use crate::error::SessionError;
 use crate::model::{LineRole, LineSet, Model, ModelKind};
 
@@ -352,9 +353,9 @@ fn param_of(
 }
 
 impl Patches {
-    fn name(&mut self, given: &Option<String>, prefix: &str) -> Result<String, SessionError> {
+    fn name(&mut self, given: Option<&str>, prefix: &str) -> Result<String, SessionError> {
         let name = match given {
-            Some(n) => n.clone(),
+            Some(n) => n.to_string(),
             None => {
                 self.tools.next += 1;
                 format!("{prefix}{}", self.tools.next - 1)
@@ -370,46 +371,33 @@ impl Patches {
 
     /// `rope`: a delta spring (eq 19) to a cursor moving linearly from `from` to `to`.
     fn rope(&mut self, engine: &Engine, edit: &Edit) -> Result<String, SessionError> {
-        let Edit::Rope {
-            name,
-            from,
-            param,
-            to,
-            until,
-            velocity,
-            release,
-            stiffness,
-            length,
-            kernel,
-            start,
-        } = edit
-        else {
+        let Some((r, name, release)) = RopeRequest::of(edit) else {
             return Err(super::misrouted());
         };
-        if velocity.is_some() || length.is_some() || kernel.is_some() {
+        if r.velocity.is_some() || r.length.is_some() || r.kernel.is_some() {
             return Err(cmd_err(
                 "a dnurbs-patches rope takes from, param, to, start, until, release and stiffness (not velocity, length or kernel)",
             ));
         }
-        finite3("from", from)?;
-        let to = to.unwrap_or(*from);
+        finite3("from", &r.from)?;
+        let to = r.to.unwrap_or(r.from);
         finite3("to", &to)?;
-        let k = stiffness.unwrap_or(self.settings.k);
+        let k = r.stiffness.unwrap_or(self.settings.k);
         if !(k.is_finite() && k > 0.0) {
             return Err(cmd_err(format!("stiffness {k}: must be positive")));
         }
-        let param = param_of(engine, *param, *from)?;
+        let param = param_of(engine, r.param, r.from)?;
         let name = self.name(name, "rope")?;
-        let start = start.unwrap_or(engine.time());
-        let until = until.unwrap_or(start).max(start);
+        let start = r.start.unwrap_or(engine.time());
+        let until = r.until.unwrap_or(start).max(start);
         self.tools.ropes.push(Rope {
             name: name.clone(),
             param,
-            from: *from,
+            from: r.from,
             to,
             start,
             until,
-            release: *release,
+            release,
             stiffness: k,
         });
         Ok(format!("rope `{name}` attached at parameter {param:?}"))
@@ -433,7 +421,7 @@ impl Patches {
             (None, Some(x)) => param_of(engine, None, *x)?,
             (None, None) => return Err(cmd_err("a force needs `param` or `near`")),
         };
-        let name = self.name(name, "force")?;
+        let name = self.name(name.as_deref(), "force")?;
         self.tools.forces.push(PointForce {
             name: name.clone(),
             param,

@@ -23,6 +23,7 @@ use vclay_spline::{KnotVector, NurbsVolume};
 
 use super::{SpecError, misrouted};
 use crate::command::{Edit, V3};
+use crate::command::{MaterialRequest, RopeRequest};
 use crate::error::SessionError;
 use crate::model::{
     Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
@@ -186,45 +187,34 @@ impl SolidModel {
                     },
                 });
             }
-            Edit::Material {
-                cells,
-                min,
-                max,
-                density,
-                damping,
-                edge_stiffness,
-                virtual_stiffness,
-                anisotropy,
-                mu,
-                gamma,
-                alpha,
-                beta,
-            } => {
-                if mu.is_some() || gamma.is_some() || alpha.is_some() || beta.is_some() {
+            Edit::Material { .. } => {
+                let r = MaterialRequest::of(edit).ok_or_else(misrouted)?;
+                if r.dnurbs_given() {
                     return Err(cmd(
                         "`mu`, `gamma`, `alpha`, `beta` are D-NURBS materials; solids take density, damping, edge_stiffness, virtual_stiffness, anisotropy",
                     ));
                 }
-                let list: Option<Vec<usize>> = match (cells, min, max) {
+                let list: Option<Vec<usize>> = match (&r.cells, &r.min, &r.max) {
                     (Some(c), _, _) => Some(c.clone()),
                     (None, Some(lo), Some(hi)) => Some(self.cells_in_box(lo, hi)),
                     _ => None,
                 };
+                let [density, damping, edge_stiffness, virtual_stiffness] = r.solid;
                 let f = |m: &mut Material| {
                     if let Some(x) = density {
-                        m.density = *x;
+                        m.density = x;
                     }
                     if let Some(x) = damping {
-                        m.damping = *x;
+                        m.damping = x;
                     }
                     if let Some(x) = edge_stiffness {
-                        m.edge_stiffness = *x;
+                        m.edge_stiffness = x;
                     }
                     if let Some(x) = virtual_stiffness {
-                        m.virtual_stiffness = *x;
+                        m.virtual_stiffness = x;
                     }
-                    if let Some(x) = anisotropy {
-                        m.anisotropy = *x;
+                    if let Some(x) = r.anisotropy {
+                        m.anisotropy = x;
                     }
                 };
                 self.solid
@@ -801,49 +791,34 @@ impl ToolHost for SolidModel {
     }
     fn attach_rope(
         &mut self,
-        edit: &Edit,
+        r: &RopeRequest,
     ) -> Result<(usize, Option<CursorPath>, String), SessionError> {
-        let Edit::Rope {
-            from,
-            param,
-            to,
-            until,
-            velocity,
-            stiffness,
-            length,
-            kernel,
-            start,
-            ..
-        } = edit
-        else {
-            return Err(misrouted());
-        };
-        if param.is_some() || kernel.is_some() {
+        if r.param.is_some() || r.kernel.is_some() {
             return Err(cmd("`param` and `kernel` are for D-NURBS models"));
         }
         let id = self
             .solid
             .attach_rope(
-                v3(*from),
-                stiffness.unwrap_or(DEFAULT_ROPE_STIFFNESS),
-                length.unwrap_or(0.0),
+                v3(r.from),
+                r.stiffness.unwrap_or(DEFAULT_ROPE_STIFFNESS),
+                r.length.unwrap_or(0.0),
             )
             .map_err(SessionError::command_from)?
             .0;
         let Some(Tool::Rope { point, .. }) = self.solid.tool(ToolId(id)) else {
             unreachable!("just added a rope")
         };
-        let start = start.unwrap_or(self.solid.time());
-        let path = match (to, velocity) {
-            (_, Some(v)) => CursorPath::Velocity {
-                from: *from,
-                velocity: *v,
+        let start = r.start.unwrap_or(self.solid.time());
+        let path = match r.velocity {
+            Some(velocity) => CursorPath::Velocity {
+                from: r.from,
+                velocity,
             },
-            (to, None) => CursorPath::Linear {
-                from: *from,
-                to: to.unwrap_or(*from),
+            None => CursorPath::Linear {
+                from: r.from,
+                to: r.to.unwrap_or(r.from),
                 start,
-                end: until.unwrap_or(start),
+                end: r.until.unwrap_or(start),
             },
         };
         Ok((id, Some(path), format!("to data point {point}")))
