@@ -2546,61 +2546,64 @@ pub fn load(kind: ModelKind, saved: &serde_json::Value) -> Result<Box<dyn Model>
 /// The typed spec of a D-NURBS curve, surface or swung surface ([`super::ModelSpec`]).
 pub type DnurbsSpec = super::KindSpec<ModelKeys, MaterialKeys, SimKeys>;
 
-keys! {
-    /// The `[model]` keys of a `dnurbs-*` model as a typed value; each field is the key of
-    /// the same name in `docs/formats.md` section 8 (absent: the documented default).
-    pub struct ModelKeys {
-        /// The surface itself, given as a value by a front end (the Python module's
-        /// `dnurbs_surface`); not a scenario key.
-        #[serde(skip)]
-        pub surface: Option<vclay_spline::NurbsSurface>,
-        #[serde(default)]
-        pub engine: Option<String>,
-        #[serde(default)]
-        pub primitive: Option<String>,
-        #[serde(default)]
-        pub file: Option<std::path::PathBuf>,
-        #[serde(default)]
-        pub entity: Option<usize>,
-        #[serde(default)]
-        pub size: Option<Vec<usize>>,
-        #[serde(default)]
-        pub degree: Option<Vec<usize>>,
-        #[serde(default)]
-        pub extent: Option<f64>,
-        #[serde(default)]
-        pub weights: Option<String>,
-        #[serde(default)]
-        pub fix: Vec<usize>,
-    }
+/// The `[model]` keys of a `dnurbs-*` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelKeys {
+    /// The surface itself, given as a value by a front end (the Python module's
+    /// `dnurbs_surface`); not a scenario key.
+    #[serde(skip)]
+    pub surface: Option<vclay_spline::NurbsSurface>,
+    #[serde(default)]
+    pub engine: Option<String>,
+    #[serde(default)]
+    pub primitive: Option<String>,
+    #[serde(default)]
+    pub file: Option<std::path::PathBuf>,
+    #[serde(default)]
+    pub entity: Option<usize>,
+    #[serde(default)]
+    pub size: Option<Vec<usize>>,
+    #[serde(default)]
+    pub degree: Option<Vec<usize>>,
+    #[serde(default)]
+    pub extent: Option<f64>,
+    #[serde(default)]
+    pub weights: Option<String>,
+    #[serde(default)]
+    pub fix: Vec<usize>,
 }
 
-keys! {
-    /// The `[material]` keys of a `dnurbs-*` model as a typed value; each field is the key of
-    /// the same name in `docs/formats.md` section 8 (absent: the documented default).
-    pub struct MaterialKeys {
-        pub preset: Option<String>,
-        /// `"knot-span"` or `"parameter"` (issue 18).
-        pub per: Option<String>,
-        pub mu: Option<f64>,
-        pub gamma: Option<f64>,
-        pub alpha: Option<f64>,
-        pub beta: Option<f64>,
-    }
+/// The `[material]` keys of a `dnurbs-*` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialKeys {
+    pub preset: Option<String>,
+    /// `"knot-span"` or `"parameter"` (issue 18).
+    pub per: Option<String>,
+    pub mu: Option<f64>,
+    pub gamma: Option<f64>,
+    pub alpha: Option<f64>,
+    pub beta: Option<f64>,
 }
 
-keys! {
-    /// The `[simulation]` keys of a `dnurbs-*` model as a typed value; each field is the key of
-    /// the same name in `docs/formats.md` section 8 (absent: the documented default).
-    pub struct SimKeys {
-        pub dt: Option<f64>,
-        pub reference: Option<String>,
-        pub weight_penalty: Option<f64>,
-        /// `"weight-aware"` (default) or `"fixed"` (the paper's rule), issue 18.
-        pub quadrature: Option<String>,
-        /// Relative accuracy of the weight-aware rule.
-        pub quadrature_tolerance: Option<f64>,
-    }
+/// The `[simulation]` keys of a `dnurbs-*` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimKeys {
+    pub dt: Option<f64>,
+    pub reference: Option<String>,
+    pub weight_penalty: Option<f64>,
+    /// `"weight-aware"` (default) or `"fixed"` (the paper's rule), issue 18.
+    pub quadrature: Option<String>,
+    /// Relative accuracy of the weight-aware rule.
+    pub quadrature_tolerance: Option<f64>,
 }
 
 /// The quadrature rule of a saved or specified model (see

@@ -640,28 +640,30 @@ pub fn load(saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
 /// The typed spec of a multi-patch D-NURBS ([`super::ModelSpec`]).
 pub type PatchesSpec = super::KindSpec<ModelKeys, MaterialKeys, SimKeys>;
 
-keys! {
-    /// The `[model]` keys of a `dnurbs-patches` model as a typed value; each field is the key of
-    /// the same name in `docs/formats.md` section 8 (absent: the documented default).
-    pub struct ModelKeys {
-        #[serde(default)]
-        pub patch: Vec<PatchKeys>,
-        #[serde(default)]
-        pub join: Vec<JoinKeys>,
-        pub tessellation: Option<usize>,
-    }
+/// The `[model]` keys of a `dnurbs-patches` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelKeys {
+    #[serde(default)]
+    pub patch: Vec<PatchKeys>,
+    #[serde(default)]
+    pub join: Vec<JoinKeys>,
+    pub tessellation: Option<usize>,
 }
 
-keys! {
-    /// The entry keys of a `dnurbs-patches` model as a typed value; each field is the key of
-    /// the same name in `docs/formats.md` section 8 (absent: the documented default).
-    pub struct PatchKeys {
-        pub origin: Option<[f64; 3]>,
-        pub size: Option<[f64; 2]>,
-        pub controls: Option<[usize; 2]>,
-        pub degree: Option<[usize; 2]>,
-        pub file: Option<PathBuf>,
-    }
+/// The entry keys of a `dnurbs-patches` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PatchKeys {
+    pub origin: Option<[f64; 3]>,
+    pub size: Option<[f64; 2]>,
+    pub controls: Option<[usize; 2]>,
+    pub degree: Option<[usize; 2]>,
+    pub file: Option<PathBuf>,
 }
 
 impl PatchKeys {
@@ -730,34 +732,37 @@ impl PatchKeys {
     }
 }
 
-keys! {
-    /// The entry keys of a `dnurbs-patches` model as a typed value; each field is the key of
-    /// the same name in `docs/formats.md` section 8 (absent: the documented default).
-    pub struct JoinKeys {
-        pub a: usize,
-        pub b: usize,
-        pub continuity: String,
-    }
+/// The entry keys of a `dnurbs-patches` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Deserialize, Clone, Default, PartialEq, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct JoinKeys {
+    pub a: usize,
+    pub b: usize,
+    pub continuity: String,
 }
 
-keys! {
-    /// The `[material]` keys of a `dnurbs-patches` model as a typed value; each field is the key of
-    /// the same name in `docs/formats.md` section 8 (absent: the documented default).
-    pub struct MaterialKeys {
-        pub preset: Option<String>,
-        pub mu: Option<f64>,
-        pub gamma: Option<f64>,
-        pub alpha: Option<[f64; 2]>,
-        pub beta: Option<[f64; 3]>,
-    }
+/// The `[material]` keys of a `dnurbs-patches` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialKeys {
+    pub preset: Option<String>,
+    pub mu: Option<f64>,
+    pub gamma: Option<f64>,
+    pub alpha: Option<[f64; 2]>,
+    pub beta: Option<[f64; 3]>,
 }
 
-keys! {
-    /// The `[simulation]` keys of a `dnurbs-patches` model as a typed value; each field is the key of
-    /// the same name in `docs/formats.md` section 8 (absent: the documented default).
-    pub struct SimKeys {
-        pub dt: Option<f64>,
-    }
+/// The `[simulation]` keys of a `dnurbs-patches` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimKeys {
+    pub dt: Option<f64>,
 }
 
 #[derive(Debug, Serialize, Deserialize)]

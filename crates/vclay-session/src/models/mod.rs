@@ -1,20 +1,6 @@
 //! The model kinds behind [`crate::Model`]: how each is built from a scenario's tables and
 //! rebuilt from a session file.
 
-/// Declares the typed keys of one scenario table: a serde struct whose fields are the keys of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default) and that
-/// refuses a key it does not know. Every kind's `ModelKeys`, `MaterialKeys` and `SimKeys` (and
-/// their entries) are declared so.
-macro_rules! keys {
-    ($(#[$m:meta])* pub struct $name:ident { $($body:tt)* }) => {
-        $(#[$m])*
-        #[allow(missing_docs)]
-        #[derive(Debug, Default, Clone, PartialEq, ::serde::Serialize, ::serde::Deserialize)]
-        #[serde(deny_unknown_fields)]
-        pub struct $name { $($body)* }
-    };
-}
-
 pub mod dnurbs;
 pub mod dnurbs_patches;
 pub mod dnurbs_tri;

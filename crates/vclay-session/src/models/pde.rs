@@ -769,16 +769,17 @@ pub fn load(saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
 /// The typed spec of a PDE surface ([`super::ModelSpec`]).
 pub type PdeSpec = super::KindSpec<ModelKeys, super::NoMaterial, super::ClockKeys>;
 
-keys! {
-    /// The `[model]` keys of a `pde-surface` model as a typed value; each field is the key of
-    /// the same name in `docs/formats.md` section 8 (absent: the documented default).
-    pub struct ModelKeys {
-        pub spec: Option<PathBuf>,
-        pub builtin: Option<String>,
-        pub grid: Option<[usize; 2]>,
-        #[serde(default)]
-        pub params: BTreeMap<String, f64>,
-    }
+/// The `[model]` keys of a `pde-surface` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelKeys {
+    pub spec: Option<PathBuf>,
+    pub builtin: Option<String>,
+    pub grid: Option<[usize; 2]>,
+    #[serde(default)]
+    pub params: BTreeMap<String, f64>,
 }
 
 #[derive(Debug, Serialize, Deserialize)]

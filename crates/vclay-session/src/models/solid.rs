@@ -1317,26 +1317,27 @@ impl Model for SolidModel {
 // Scenario keys
 // ---------------------------------------------------------------------------------------
 
-keys! {
-    /// The `[model]` keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
-    /// the same name in `docs/formats.md` section 8 (absent: the documented default).
-    pub struct ModelKeys {
-        pub primitive: Option<String>,
-        pub file: Option<std::path::PathBuf>,
-        pub entity: Option<usize>,
-        pub points: Option<[usize; 3]>,
-        pub min: Option<V3>,
-        pub max: Option<V3>,
-        pub radius: Option<f64>,
-        pub height: Option<f64>,
-        pub level: Option<usize>,
-        pub boundary: Option<String>,
-        pub control: Option<[usize; 3]>,
-        pub degree: Option<[usize; 3]>,
-        pub samples: Option<[usize; 3]>,
-        /// Cells of the lattice built from a mesh `file`.
-        pub cells: Option<usize>,
-    }
+/// The `[model]` keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelKeys {
+    pub primitive: Option<String>,
+    pub file: Option<std::path::PathBuf>,
+    pub entity: Option<usize>,
+    pub points: Option<[usize; 3]>,
+    pub min: Option<V3>,
+    pub max: Option<V3>,
+    pub radius: Option<f64>,
+    pub height: Option<f64>,
+    pub level: Option<usize>,
+    pub boundary: Option<String>,
+    pub control: Option<[usize; 3]>,
+    pub degree: Option<[usize; 3]>,
+    pub samples: Option<[usize; 3]>,
+    /// Cells of the lattice built from a mesh `file`.
+    pub cells: Option<usize>,
 }
 
 #[derive(Debug, Default)]
@@ -1368,17 +1369,18 @@ impl Values {
     }
 }
 
-keys! {
-    /// The entry keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
-    /// the same name in `docs/formats.md` section 8 (absent: the documented default).
-    pub struct CellKeys {
-        pub cells: Vec<usize>,
-        pub density: Option<f64>,
-        pub damping: Option<f64>,
-        pub edge_stiffness: Option<f64>,
-        pub virtual_stiffness: Option<f64>,
-        pub anisotropy: Option<V3>,
-    }
+/// The entry keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct CellKeys {
+    pub cells: Vec<usize>,
+    pub density: Option<f64>,
+    pub damping: Option<f64>,
+    pub edge_stiffness: Option<f64>,
+    pub virtual_stiffness: Option<f64>,
+    pub anisotropy: Option<V3>,
 }
 
 impl CellKeys {
@@ -1393,32 +1395,34 @@ impl CellKeys {
     }
 }
 
-keys! {
-    /// The `[material]` keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
-    /// the same name in `docs/formats.md` section 8 (absent: the documented default).
-    pub struct MaterialKeys {
-        pub density: Option<f64>,
-        pub damping: Option<f64>,
-        pub edge_stiffness: Option<f64>,
-        pub virtual_stiffness: Option<f64>,
-        pub anisotropy: Option<V3>,
-        pub energy: Option<String>,
-        pub metric_stiffness: Option<f64>,
-        #[serde(default)]
-        pub cells: Vec<CellKeys>,
-    }
+/// The `[material]` keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialKeys {
+    pub density: Option<f64>,
+    pub damping: Option<f64>,
+    pub edge_stiffness: Option<f64>,
+    pub virtual_stiffness: Option<f64>,
+    pub anisotropy: Option<V3>,
+    pub energy: Option<String>,
+    pub metric_stiffness: Option<f64>,
+    #[serde(default)]
+    pub cells: Vec<CellKeys>,
 }
 
-keys! {
-    /// The `[simulation]` keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
-    /// the same name in `docs/formats.md` section 8 (absent: the documented default).
-    pub struct SimKeys {
-        pub integrator: Option<String>,
-        pub dt: Option<f64>,
-        pub divergence_factor: Option<f64>,
-        pub cg_tolerance: Option<f64>,
-        pub cg_max_iterations: Option<usize>,
-    }
+/// The `[simulation]` keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
+/// the same name in `docs/formats.md` section 8 (absent: the documented default).
+#[allow(missing_docs)]
+#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimKeys {
+    pub integrator: Option<String>,
+    pub dt: Option<f64>,
+    pub divergence_factor: Option<f64>,
+    pub cg_tolerance: Option<f64>,
+    pub cg_max_iterations: Option<usize>,
 }
 
 /// The typed spec of a solid ([`super::ModelSpec`]).
