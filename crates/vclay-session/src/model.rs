@@ -316,11 +316,20 @@ pub(crate) trait Stateful {
     fn put_state(&mut self, state: &Self::State) -> Result<(), SessionError>;
     /// Applies an edit, or fails leaving the model unchanged ([`Model::apply`]).
     fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError>;
+    /// Whether [`Stateful::apply_inverse`] ignores a failure of the inverse edit: kinds whose
+    /// snapshot, put back after it, is the exact state either way (FFD and PDE surfaces: the
+    /// inverse can fail where the forward edit did not, e.g. FFD's inversion of `Q` at the
+    /// target).
+    const INVERSE_MAY_FAIL: bool = false;
     /// Applies the exact inverse edit of an [`Undo::Inverse`] record (before the snapshot is
-    /// put back): by default as any edit. Kinds whose snapshot covers everything the edit
-    /// changed may ignore a failure.
+    /// put back), as any edit.
     fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError> {
-        self.apply_edit(edit).map(drop)
+        let applied = self.apply_edit(edit);
+        if Self::INVERSE_MAY_FAIL {
+            Ok(())
+        } else {
+            applied.map(drop)
+        }
     }
 }
 
@@ -391,6 +400,24 @@ macro_rules! stateful_methods {
     };
 }
 pub(crate) use stateful_methods;
+
+/// The clock getters of [`Model`] (`time`, `dt`, `steps`), each the expression given, written
+/// with `self`: `clock_methods!(self => self.time, self.dt, self.steps);` inside `impl Model for
+/// Kind`.
+macro_rules! clock_methods {
+    ($s:ident => $time:expr, $dt:expr, $steps:expr) => {
+        fn time(&$s) -> f64 {
+            $time
+        }
+        fn dt(&$s) -> f64 {
+            $dt
+        }
+        fn steps(&$s) -> u64 {
+            $steps
+        }
+    };
+}
+pub(crate) use clock_methods;
 
 /// How to undo an applied edit.
 #[derive(Debug)]

@@ -2193,15 +2193,7 @@ impl Model for DnurbsModel {
         s
     }
 
-    fn time(&self) -> f64 {
-        self.engine.time()
-    }
-    fn dt(&self) -> f64 {
-        self.dt
-    }
-    fn steps(&self) -> u64 {
-        self.steps
-    }
+    crate::model::clock_methods!(self => self.engine.time(), self.dt, self.steps);
 
     fn step(&mut self) -> Result<StepReport, SessionError> {
         let due = self.tools.due(self.engine.time(), self.dt);
@@ -2335,13 +2327,7 @@ impl Model for DnurbsModel {
         let cp = if matches!(self.engine, Engine::Swung(_)) {
             None
         } else {
-            let p = self.engine.control_points(false);
-            crate::pick::ray_points(ray, &p, tolerance).map(|(i, s)| Hit {
-                distance: s,
-                point: p[i],
-                element: Element::ControlPoint { index: i },
-                extra: [None, None],
-            })
+            crate::pick::control_point(ray, &self.engine.control_points(false), tolerance)
         };
         let model = if self.engine.is_curve() {
             let mut best: Option<(f64, f64, Vec3)> = None;
@@ -2532,11 +2518,6 @@ impl Model for DnurbsModel {
         };
         serde_json::to_value(saved).map_err(SessionError::kernel)
     }
-}
-
-/// Rebuilds a saved model.
-pub fn load(kind: ModelKind, saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
-    Ok(Box::new(DnurbsModel::load(kind, saved)?))
 }
 
 // ---------------------------------------------------------------------------------------

@@ -31,18 +31,20 @@ use serde::{Deserialize, Serialize};
 use vclay_core::{TriMesh, Vec3};
 use vclay_dynamics::dnurbs::generalized::{GeneralizedGeometry, GeneralizedState};
 use vclay_dynamics::dnurbs::{
-    Continuity, ElasticReference, Force, GeneralizedDnurbs, PatchesGeometry, Preset, Target,
+    Continuity, ElasticReference, Force, GeneralizedDnurbs, PatchesGeometry, Target,
 };
 use vclay_io::model::Entity;
 use vclay_spline::{NurbsSurface, ParametricSurface};
 
 use super::SpecError;
-use super::generalized::{GeneralizedKind, GeneralizedModel, constant_material};
+use super::generalized::{
+    GeneralizedKind, GeneralizedModel, check_material_and_dt, constant_material, table_one,
+};
 use super::saved::SavedState;
 use crate::command::Edit;
 use crate::command::RopeRequest;
 use crate::error::SessionError;
-use crate::model::{LineRole, LineSet, Model, ModelKind};
+use crate::model::{LineRole, LineSet, ModelKind};
 
 /// Default display samples per patch and direction.
 pub const DEFAULT_TESSELLATION: usize = 24;
@@ -248,13 +250,7 @@ impl PatchesModel {
             joins.push(Join { a: j.a, b: j.b, g1 });
         }
         let preset_name = mat.preset.clone().unwrap_or_else(|| "Egg sculpting".into());
-        let preset: &Preset = Preset::by_name(&preset_name).ok_or_else(|| {
-            SpecError::new(
-                "material",
-                "preset",
-                format!("{preset_name:?} is not a Table 1 row"),
-            )
-        })?;
+        let preset = table_one(&preset_name)?;
         let tessellation = m.tessellation.unwrap_or(DEFAULT_TESSELLATION);
         if !(2..=256).contains(&tessellation) {
             return Err(SpecError::new(
@@ -275,31 +271,18 @@ impl PatchesModel {
             k: preset.k,
             dt: sim.dt.unwrap_or(preset.dt),
         };
-        let all = [
-            ("mu", settings.mu),
-            ("gamma", settings.gamma),
-            ("alpha", settings.alpha[0]),
-            ("alpha", settings.alpha[1]),
-            ("beta", settings.beta[0]),
-            ("beta", settings.beta[1]),
-            ("beta", settings.beta[2]),
-        ];
-        for (key, v) in all {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(SpecError::new(
-                    "material",
-                    key,
-                    format!("{v} must be finite and non-negative"),
-                ));
-            }
-        }
-        if !(settings.dt.is_finite() && settings.dt > 0.0) {
-            return Err(SpecError::new(
-                "simulation",
-                "dt",
-                format!("{} must be positive and finite", settings.dt),
-            ));
-        }
+        check_material_and_dt(
+            &[
+                ("mu", settings.mu),
+                ("gamma", settings.gamma),
+                ("alpha", settings.alpha[0]),
+                ("alpha", settings.alpha[1]),
+                ("beta", settings.beta[0]),
+                ("beta", settings.beta[1]),
+                ("beta", settings.beta[2]),
+            ],
+            settings.dt,
+        )?;
         Self::build(settings, Tools::default()).map_err(|e| SpecError::new("model", "join", e))
     }
 
@@ -630,11 +613,6 @@ impl GeneralizedKind for Patches {
         })
         .map_err(SessionError::kernel)
     }
-}
-
-/// Rebuilds a saved model.
-pub fn load(saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
-    Ok(Box::new(PatchesModel::load(saved)?))
 }
 
 /// The typed spec of a multi-patch D-NURBS ([`super::ModelSpec`]).

@@ -28,15 +28,18 @@ use vclay_core::{TriMesh, Vec3};
 use vclay_dynamics::dnurbs::generalized::{GeneralizedGeometry, GeneralizedState};
 use vclay_dynamics::dnurbs::rounding::{ROUNDING_WEIGHT_PENALTY, RoundingKind, RoundingModel};
 use vclay_dynamics::dnurbs::{
-    Constraint, GeneralizedDnurbs, Preset, TriangleQuadrature, TriangularGeometry,
+    Constraint, GeneralizedDnurbs, TriangleQuadrature, TriangularGeometry,
 };
 
 use super::SpecError;
-use super::generalized::{GeneralizedKind, GeneralizedModel, constant_material, reference};
+use super::generalized::{
+    GeneralizedKind, GeneralizedModel, check_material_and_dt, constant_material, reference,
+    table_one,
+};
 use super::saved::SavedState;
 use crate::command::Edit;
 use crate::error::SessionError;
-use crate::model::{LineRole, LineSet, Model, ModelKind, Param};
+use crate::model::{LineRole, LineSet, ModelKind, Param};
 
 /// Default display tessellation level (`level^2` triangles per domain triangle).
 pub const DEFAULT_TESSELLATION: usize = 6;
@@ -179,13 +182,7 @@ impl TriangularModel {
                 .unwrap_or("Corner rounding")
                 .to_string()
         });
-        let preset: &Preset = Preset::by_name(&preset_name).ok_or_else(|| {
-            SpecError::new(
-                "material",
-                "preset",
-                format!("{preset_name:?} is not a Table 1 row"),
-            )
-        })?;
+        let preset = table_one(&preset_name)?;
         let subdivided = match m.quadrature.as_deref() {
             None | Some("subdivided") => true,
             Some("whole") => false,
@@ -243,26 +240,14 @@ impl TriangularModel {
             }),
             dt: sim.dt.unwrap_or(preset.dt),
         };
-        for (key, v) in [
-            ("mu", settings.mu),
-            ("gamma", settings.gamma),
-            ("weight_penalty", settings.weight_penalty),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(SpecError::new(
-                    "material",
-                    key,
-                    format!("{v} must be finite and non-negative"),
-                ));
-            }
-        }
-        if !(settings.dt.is_finite() && settings.dt > 0.0) {
-            return Err(SpecError::new(
-                "simulation",
-                "dt",
-                format!("{} must be positive and finite", settings.dt),
-            ));
-        }
+        check_material_and_dt(
+            &[
+                ("mu", settings.mu),
+                ("gamma", settings.gamma),
+                ("weight_penalty", settings.weight_penalty),
+            ],
+            settings.dt,
+        )?;
         Self::build(settings).map_err(|e| SpecError::new("model", "kind", e))
     }
 
@@ -404,11 +389,6 @@ impl GeneralizedKind for Triangular {
         })
         .map_err(SessionError::kernel)
     }
-}
-
-/// Rebuilds a saved model.
-pub fn load(saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
-    Ok(Box::new(TriangularModel::load(saved)?))
 }
 
 /// The typed spec of a triangular D-NURBS ([`super::ModelSpec`]).

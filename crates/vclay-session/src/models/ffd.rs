@@ -136,6 +136,17 @@ impl FfdModel {
         self.embedded.rest_positions()
     }
 
+    /// An error unless lattice control point `index` exists.
+    fn check_index(&self, index: usize) -> Result<(), SessionError> {
+        let n = self.lattice.control_point_count();
+        if index >= n {
+            return Err(cmd(format!(
+                "lattice control point {index} does not exist (there are {n})"
+            )));
+        }
+        Ok(())
+    }
+
     /// Replaces control points and weights (weights first, as [`FfdModel::load`] does) and
     /// re-evaluates the mesh in full.
     fn set_lattice(&mut self, points: Vec<Vec3>, weights: Vec<f64>) -> Result<(), SessionError> {
@@ -460,6 +471,7 @@ fn reason(e: SessionError) -> String {
 
 impl crate::model::Stateful for FfdModel {
     type State = FfdSnap;
+    const INVERSE_MAY_FAIL: bool = true;
     fn take_state(&self) -> FfdSnap {
         FfdSnap {
             control_points: self.lattice.control_points().to_vec(),
@@ -496,12 +508,7 @@ impl crate::model::Stateful for FfdModel {
                 (message, inverse)
             }
             Edit::MovePoint { index, to } => {
-                let n = self.lattice.control_point_count();
-                if *index >= n {
-                    return Err(cmd(format!(
-                        "lattice control point {index} does not exist (there are {n})"
-                    )));
-                }
+                self.check_index(*index)?;
                 let old = self.lattice.control_points()[*index];
                 let mut pts = self.lattice.control_points().to_vec();
                 pts[*index] = v3(*to);
@@ -516,12 +523,7 @@ impl crate::model::Stateful for FfdModel {
                 )
             }
             Edit::SetWeight { index, weight } => {
-                let n = self.lattice.control_point_count();
-                if *index >= n {
-                    return Err(cmd(format!(
-                        "lattice control point {index} does not exist (there are {n})"
-                    )));
-                }
+                self.check_index(*index)?;
                 let old = self.lattice.weights()[*index];
                 let mut w = self.lattice.weights().to_vec();
                 w[*index] = *weight;
@@ -602,12 +604,6 @@ impl crate::model::Stateful for FfdModel {
             },
         })
     }
-    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError> {
-        // The snapshot put back after it is the exact state either way; the inverse can fail
-        // where the forward edit did not (FFD: the inversion of `Q` at the target).
-        let _ = self.apply_edit(edit);
-        Ok(())
-    }
 }
 
 impl Model for FfdModel {
@@ -633,15 +629,7 @@ impl Model for FfdModel {
         )
     }
 
-    fn time(&self) -> f64 {
-        self.time
-    }
-    fn dt(&self) -> f64 {
-        self.dt
-    }
-    fn steps(&self) -> u64 {
-        self.steps
-    }
+    crate::model::clock_methods!(self => self.time, self.dt, self.steps);
 
     fn step(&mut self) -> Result<StepReport, SessionError> {
         let t0 = std::time::Instant::now();
@@ -678,13 +666,7 @@ impl Model for FfdModel {
     }
 
     fn pick(&self, ray: &Ray, tolerance: f64) -> Option<Hit> {
-        let p = self.lattice.control_points();
-        let cp = crate::pick::ray_points(ray, p, tolerance).map(|(i, s)| Hit {
-            distance: s,
-            point: p[i],
-            element: Element::ControlPoint { index: i },
-            extra: [None, None],
-        });
+        let cp = crate::pick::control_point(ray, self.lattice.control_points(), tolerance);
         let mesh = self.embedded.mesh();
         let surf = crate::pick::ray_mesh(ray, mesh).map(|(s, t, bary)| {
             let corner = (0..3)
@@ -790,11 +772,6 @@ impl Model for FfdModel {
         };
         serde_json::to_value(saved).map_err(SessionError::kernel)
     }
-}
-
-/// Rebuilds a saved model.
-pub fn load(saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
-    Ok(Box::new(FfdModel::load(saved)?))
 }
 
 // ---------------------------------------------------------------------------------------

@@ -15,8 +15,9 @@ use std::path::Path;
 
 use vclay_core::{TriMesh, Vec3};
 use vclay_dynamics::dnurbs::generalized::{GeneralizedGeometry, GeneralizedState};
-use vclay_dynamics::dnurbs::{Density, ElasticReference, GeneralizedDnurbs, Material};
+use vclay_dynamics::dnurbs::{Density, ElasticReference, GeneralizedDnurbs, Material, Preset};
 
+use super::SpecError;
 use super::saved::{SavedState, step_implicit};
 use crate::command::Edit;
 use crate::error::SessionError;
@@ -145,6 +146,39 @@ pub(crate) fn constant_material(mu: f64, gamma: f64, alpha: &[f64], beta: &[f64]
     }
 }
 
+/// The Table 1 row named by `[material] preset` (`d-nurbs.txt` Table 1).
+pub(crate) fn table_one(name: &str) -> Result<&'static Preset, SpecError> {
+    Preset::by_name(name).ok_or_else(|| {
+        SpecError::new(
+            "material",
+            "preset",
+            format!("{name:?} is not a Table 1 row"),
+        )
+    })
+}
+
+/// Checks `[material]` values (finite and non-negative) and `[simulation] dt` (positive and
+/// finite); the error names the first key at fault.
+pub(crate) fn check_material_and_dt(material: &[(&str, f64)], dt: f64) -> Result<(), SpecError> {
+    for &(key, v) in material {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(SpecError::new(
+                "material",
+                key,
+                format!("{v} must be finite and non-negative"),
+            ));
+        }
+    }
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(SpecError::new(
+            "simulation",
+            "dt",
+            format!("{dt} must be positive and finite"),
+        ));
+    }
+    Ok(())
+}
+
 /// The elastic reference of a saved flag (`absolute`).
 pub(crate) fn reference(absolute: bool) -> ElasticReference {
     if absolute {
@@ -192,15 +226,7 @@ impl<K: GeneralizedKind> Model for GeneralizedModel<K> {
     fn summary(&self) -> String {
         self.kind.summary(&self.engine)
     }
-    fn time(&self) -> f64 {
-        self.engine.time()
-    }
-    fn dt(&self) -> f64 {
-        self.kind.dt()
-    }
-    fn steps(&self) -> u64 {
-        self.engine.steps() as u64
-    }
+    crate::model::clock_methods!(self => self.engine.time(), self.kind.dt(), self.engine.steps() as u64);
     fn step(&mut self) -> Result<StepReport, SessionError> {
         self.kind.before_step(&mut self.engine);
         let report = step_implicit(&mut self.engine, self.kind.dt(), &mut self.energy)?;

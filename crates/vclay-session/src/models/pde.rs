@@ -422,6 +422,7 @@ impl PdeSurfaceModel {
 
 impl crate::model::Stateful for PdeSurfaceModel {
     type State = PdeSnap;
+    const INVERSE_MAY_FAIL: bool = true;
     fn take_state(&self) -> PdeSnap {
         PdeSnap {
             constants: self.constants.clone(),
@@ -576,12 +577,6 @@ impl crate::model::Stateful for PdeSurfaceModel {
             },
         })
     }
-    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError> {
-        // The snapshot put back after it is the exact state either way; the inverse can fail
-        // where the forward edit did not (FFD: the inversion of `Q` at the target).
-        let _ = self.apply_edit(edit);
-        Ok(())
-    }
 }
 
 impl Model for PdeSurfaceModel {
@@ -603,15 +598,7 @@ impl Model for PdeSurfaceModel {
         )
     }
 
-    fn time(&self) -> f64 {
-        self.time
-    }
-    fn dt(&self) -> f64 {
-        self.dt
-    }
-    fn steps(&self) -> u64 {
-        self.steps
-    }
+    crate::model::clock_methods!(self => self.time, self.dt, self.steps);
 
     fn step(&mut self) -> Result<StepReport, SessionError> {
         let t0 = std::time::Instant::now();
@@ -755,11 +742,6 @@ impl Model for PdeSurfaceModel {
         };
         serde_json::to_value(saved).map_err(SessionError::kernel)
     }
-}
-
-/// Rebuilds a saved model.
-pub fn load(saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
-    Ok(Box::new(PdeSurfaceModel::load(saved)?))
 }
 
 // ---------------------------------------------------------------------------------------

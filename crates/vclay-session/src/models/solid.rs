@@ -922,15 +922,7 @@ impl Model for SolidModel {
         )
     }
 
-    fn time(&self) -> f64 {
-        self.solid.time()
-    }
-    fn dt(&self) -> f64 {
-        self.solid.params().dt
-    }
-    fn steps(&self) -> u64 {
-        self.solid.steps()
-    }
+    crate::model::clock_methods!(self => self.solid.time(), self.solid.params().dt, self.solid.steps());
 
     fn step(&mut self) -> Result<StepReport, SessionError> {
         let t = self.solid.time();
@@ -1024,13 +1016,7 @@ impl Model for SolidModel {
     }
 
     fn pick(&self, ray: &Ray, tolerance: f64) -> Option<Hit> {
-        let p = self.solid.control_points();
-        let cp = crate::pick::ray_points(ray, p, tolerance).map(|(i, s)| Hit {
-            distance: s,
-            point: p[i],
-            element: Element::ControlPoint { index: i },
-            extra: [None, None],
-        });
+        let cp = crate::pick::control_point(ray, self.solid.control_points(), tolerance);
         let mesh = self.boundary_mesh();
         let surf = crate::pick::ray_mesh(ray, &mesh).map(|(s, _, _)| {
             let x = ray.origin + ray.direction * s;
