@@ -155,6 +155,17 @@ impl LineSet {
             ..Default::default()
         }
     }
+    /// Markers at the points of `points` whose index `keep` accepts (fixed control points).
+    pub fn markers(role: LineRole, points: &[Vec3], keep: impl Fn(usize) -> bool) -> Self {
+        Self {
+            role: Some(role),
+            points: (0..points.len())
+                .filter(|&i| keep(i))
+                .map(|i| points[i])
+                .collect(),
+            segments: Vec::new(),
+        }
+    }
     /// Adds a segment from `a` to `b`.
     pub fn segment(&mut self, a: Vec3, b: Vec3) {
         let i = self.points.len() as u32;
@@ -282,6 +293,19 @@ pub struct Param {
     pub max: f64,
     /// What it is.
     pub doc: String,
+}
+
+impl Param {
+    /// A parameter `name` at `value`, with its range and what it is.
+    pub fn new(name: &str, value: f64, min: f64, max: f64, doc: &str) -> Self {
+        Self {
+            name: name.into(),
+            value,
+            min,
+            max,
+            doc: doc.into(),
+        }
+    }
 }
 
 /// An opaque copy of a model's evolving state, taken by [`Model::snapshot`].
@@ -444,6 +468,31 @@ pub struct Applied {
     pub message: String,
     /// How to undo it.
     pub undo: Undo,
+}
+
+impl Applied {
+    /// An edit undone by putting back `before`, the state taken just before it
+    /// ([`Undo::State`]).
+    pub(crate) fn by_state<S: Any + Send + Sync>(message: String, before: S) -> Self {
+        Self {
+            message,
+            undo: Undo::State(Snapshot::new(before)),
+        }
+    }
+    /// An edit undone by its exact `inverse`, then `before` ([`Undo::Inverse`]).
+    pub(crate) fn by_inverse<S: Any + Send + Sync>(
+        message: String,
+        inverse: Edit,
+        before: S,
+    ) -> Self {
+        Self {
+            message,
+            undo: Undo::Inverse {
+                edit: inverse,
+                state: Snapshot::new(before),
+            },
+        }
+    }
 }
 
 /// Export formats, chosen by file extension.

@@ -51,8 +51,8 @@ use crate::command::{MaterialRequest, RopeRequest};
 use crate::error::SessionError;
 use crate::model::Stateful;
 use crate::model::{
-    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, unsupported_export,
+    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, StepReport,
+    extension, unsupported_export,
 };
 use crate::tools::{CursorPath, ToolHost, ToolTable, a3, field_tool, v3};
 
@@ -1087,10 +1087,7 @@ impl DnurbsModel {
     /// The end of an edit whose undo is the state before it: a new revision, the message.
     fn edited(&mut self, message: String, before: Snap) -> Result<Applied, SessionError> {
         self.revision += 1;
-        Ok(Applied {
-            message,
-            undo: Undo::State(Snapshot::new(before)),
-        })
+        Ok(Applied::by_state(message, before))
     }
 
     /// [`Self::apply_edit`] for `Gravity`, `Inflate`, `Repel`, `Data`.
@@ -1176,13 +1173,11 @@ impl DnurbsModel {
                     }
                 };
                 self.revision += 1;
-                return Ok(Applied {
-                    message: crate::tools::fixed_message(edit, &r),
-                    undo: Undo::Inverse {
-                        edit: r.inverse,
-                        state: Snapshot::new(before),
-                    },
-                });
+                return Ok(Applied::by_inverse(
+                    crate::tools::fixed_message(edit, &r),
+                    r.inverse,
+                    before,
+                ));
             }
             Edit::Material { .. } => {
                 let m = MaterialRequest::of(edit).ok_or_else(misrouted)?;
@@ -2261,12 +2256,9 @@ impl Model for DnurbsModel {
             out.push(c);
         }
         let p = self.engine.control_points(false);
-        let mut fixed = LineSet::new(LineRole::Fixed);
-        fixed.points = (0..p.len())
-            .filter(|&i| self.engine.is_point_fixed(i))
-            .map(|i| p[i])
-            .collect();
-        out.push(fixed);
+        out.push(LineSet::markers(LineRole::Fixed, &p, |i| {
+            self.engine.is_point_fixed(i)
+        }));
         let t = self.engine.time();
         let size = self.size;
         let mut ropes = LineSet::new(LineRole::Ropes);
@@ -2374,13 +2366,7 @@ impl Model for DnurbsModel {
     }
 
     fn params(&self) -> Vec<Param> {
-        let par = |name: &str, value: f64, min: f64, max: f64, doc: &str| Param {
-            name: name.into(),
-            value,
-            min,
-            max,
-            doc: doc.into(),
-        };
+        let par = Param::new;
         let m = &self.material;
         let mut v = vec![
             par("mu", m.mu, 0.0, 100.0, "mass density (eq 16)"),

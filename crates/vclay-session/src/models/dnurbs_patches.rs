@@ -550,13 +550,8 @@ impl GeneralizedKind for Patches {
                 ropes.segment(p, r.cursor(t));
             }
         }
-        let mut fixed = LineSet::new(LineRole::Fixed);
         let f = &engine.state().fixed;
-        for (c, p) in control_points(engine).into_iter().enumerate() {
-            if f[4 * c] {
-                fixed.points.push(p);
-            }
-        }
+        let fixed = LineSet::markers(LineRole::Fixed, &control_points(engine), |c| f[4 * c]);
         vec![net, ropes, fixed]
     }
     fn control_points(&self, engine: &Engine) -> Vec<Vec3> {
@@ -734,14 +729,8 @@ pub struct MaterialKeys {
     pub beta: Option<[f64; 3]>,
 }
 
-/// The `[simulation]` keys of a `dnurbs-patches` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct SimKeys {
-    pub dt: Option<f64>,
-}
+/// The `[simulation]` keys of this kind: only the clock's step `dt` (absent: the preset's).
+pub type SimKeys = super::ClockKeys;
 
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

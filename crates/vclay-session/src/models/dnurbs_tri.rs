@@ -344,13 +344,13 @@ impl GeneralizedKind for Triangular {
         engine.geometry().control_points().to_vec()
     }
     fn params(&self) -> Vec<Param> {
-        vec![Param {
-            name: "weight_penalty".into(),
-            value: self.settings.weight_penalty,
-            min: 0.0,
-            max: 1000.0,
-            doc: "penalty c/2 sum (w - w0)^2 holding the weights near their initial values".into(),
-        }]
+        vec![Param::new(
+            "weight_penalty",
+            self.settings.weight_penalty,
+            0.0,
+            1000.0,
+            "penalty c/2 sum (w - w0)^2 holding the weights near their initial values",
+        )]
     }
     fn apply(
         &mut self,
@@ -422,14 +422,8 @@ pub struct MaterialKeys {
     pub weight_penalty: Option<f64>,
 }
 
-/// The `[simulation]` keys of a `dnurbs-triangular` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct SimKeys {
-    pub dt: Option<f64>,
-}
+/// The `[simulation]` keys of this kind: only the clock's step `dt` (absent: the preset's).
+pub type SimKeys = super::ClockKeys;
 
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

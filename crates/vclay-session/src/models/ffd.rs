@@ -40,8 +40,8 @@ use super::SpecError;
 use crate::command::{Edit, PointMove, V3};
 use crate::error::SessionError;
 use crate::model::{
-    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, unsupported_export,
+    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, StepReport,
+    extension, unsupported_export,
 };
 use crate::tools::{a3, v3};
 
@@ -596,13 +596,7 @@ impl crate::model::Stateful for FfdModel {
             }
         };
         self.revision += 1;
-        Ok(Applied {
-            message,
-            undo: Undo::Inverse {
-                edit: inverse,
-                state: Snapshot::new(before),
-            },
-        })
+        Ok(Applied::by_inverse(message, inverse, before))
     }
 }
 
@@ -690,20 +684,20 @@ impl Model for FfdModel {
 
     fn params(&self) -> Vec<Param> {
         vec![
-            Param {
-                name: "dt".into(),
-                value: self.dt,
-                min: 1e-4,
-                max: 1.0,
-                doc: "clock step (s); FFD has no dynamics".into(),
-            },
-            Param {
-                name: "least_squares".into(),
-                value: f64::from(u8::from(self.mode == SolveMode::LeastSquares)),
-                min: 0.0,
-                max: 1.0,
-                doc: "multi-point ffd-move: 0 exact (eq 12, conflicts are errors), 1 minimum-norm least squares".into(),
-            },
+            Param::new(
+                "dt",
+                self.dt,
+                1e-4,
+                1.0,
+                "clock step (s); FFD has no dynamics",
+            ),
+            Param::new(
+                "least_squares",
+                f64::from(u8::from(self.mode == SolveMode::LeastSquares)),
+                0.0,
+                1.0,
+                "multi-point ffd-move: 0 exact (eq 12, conflicts are errors), 1 minimum-norm least squares",
+            ),
         ]
     }
 

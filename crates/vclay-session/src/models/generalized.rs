@@ -22,8 +22,8 @@ use super::saved::{SavedState, step_implicit};
 use crate::command::Edit;
 use crate::error::SessionError;
 use crate::model::{
-    Applied, Element, Energy, Hit, LineSet, Model, ModelKind, Param, Ray, Snapshot, StepReport,
-    Undo, extension, unsupported_export,
+    Applied, Element, Energy, Hit, LineSet, Model, ModelKind, Param, Ray, StepReport, extension,
+    unsupported_export,
 };
 
 /// What a kind over [`GeneralizedDnurbs`] adds to [`GeneralizedModel`]: its settings and tools,
@@ -208,10 +208,7 @@ impl<K: GeneralizedKind> crate::model::Stateful for GeneralizedModel<K> {
         if K::EDITS_REDRAW {
             self.revision += 1;
         }
-        Ok(Applied {
-            message,
-            undo: Undo::State(Snapshot::new(before)),
-        })
+        Ok(Applied::by_state(message, before))
     }
     fn apply_inverse(&mut self, _edit: &Edit) -> Result<(), SessionError> {
         // The snapshot holds everything the edits change.
@@ -266,13 +263,13 @@ impl<K: GeneralizedKind> Model for GeneralizedModel<K> {
         })
     }
     fn params(&self) -> Vec<Param> {
-        let mut v = vec![Param {
-            name: "dt".into(),
-            value: self.kind.dt(),
-            min: 1e-4,
-            max: 0.1,
-            doc: "time step of eq 18".into(),
-        }];
+        let mut v = vec![Param::new(
+            "dt",
+            self.kind.dt(),
+            1e-4,
+            0.1,
+            "time step of eq 18",
+        )];
         v.extend(self.kind.params());
         v
     }

@@ -35,8 +35,8 @@ use super::SpecError;
 use crate::command::Edit;
 use crate::error::SessionError;
 use crate::model::{
-    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, unsupported_export,
+    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, StepReport,
+    extension, unsupported_export,
 };
 
 /// Default `[simulation] dt`: 1/30 s (one display frame).
@@ -538,13 +538,11 @@ impl crate::model::Stateful for PdeSurfaceModel {
                 };
                 self.set_locals(locals)?;
                 self.revision += 1;
-                return Ok(Applied {
-                    message: format!(
-                        "local deformation `{name}` {} on patch {patch}",
-                        if replaced { "changed" } else { "added" }
-                    ),
-                    undo: Undo::State(Snapshot::new(before)),
-                });
+                let message = format!(
+                    "local deformation `{name}` {} on patch {patch}",
+                    if replaced { "changed" } else { "added" }
+                );
+                return Ok(Applied::by_state(message, before));
             }
             Edit::Release { name } => {
                 let mut locals = self.locals.clone();
@@ -555,10 +553,8 @@ impl crate::model::Stateful for PdeSurfaceModel {
                 }
                 self.set_locals(locals)?;
                 self.revision += 1;
-                return Ok(Applied {
-                    message: format!("local deformation `{name}` removed"),
-                    undo: Undo::State(Snapshot::new(before)),
-                });
+                let message = format!("local deformation `{name}` removed");
+                return Ok(Applied::by_state(message, before));
             }
             _ => {
                 return Err(cmd(format!(
@@ -569,13 +565,7 @@ impl crate::model::Stateful for PdeSurfaceModel {
             }
         };
         self.revision += 1;
-        Ok(Applied {
-            message,
-            undo: Undo::Inverse {
-                edit: inverse,
-                state: Snapshot::new(before),
-            },
-        })
+        Ok(Applied::by_inverse(message, inverse, before))
     }
 }
 
@@ -688,13 +678,13 @@ impl Model for PdeSurfaceModel {
                 }
             })
             .collect();
-        out.push(Param {
-            name: "dt".into(),
-            value: self.dt,
-            min: 1e-4,
-            max: 1.0,
-            doc: "time step of the PDE's t per session step".into(),
-        });
+        out.push(Param::new(
+            "dt",
+            self.dt,
+            1e-4,
+            1.0,
+            "time step of the PDE's t per session step",
+        ));
         out
     }
 

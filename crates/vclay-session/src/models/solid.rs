@@ -26,8 +26,8 @@ use crate::command::{Edit, V3};
 use crate::command::{MaterialRequest, RopeRequest};
 use crate::error::SessionError;
 use crate::model::{
-    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, unsupported_export,
+    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, StepReport,
+    Undo, extension, unsupported_export,
 };
 use crate::tools::{CursorPath, ToolHost, ToolTable, a3, field_tool, v3};
 
@@ -94,10 +94,7 @@ impl SolidModel {
     /// The end of an edit whose undo is the state before it: a new revision, the message.
     fn edited(&mut self, message: String, before: SolidSnap) -> Result<Applied, SessionError> {
         self.revision += 1;
-        Ok(Applied {
-            message,
-            undo: Undo::State(Snapshot::new(before)),
-        })
+        Ok(Applied::by_state(message, before))
     }
 
     /// [`Self::apply_edit`] for `RegionForce`, `Gravity`, `Inflate`.
@@ -179,13 +176,7 @@ impl SolidModel {
                     format!("freed {} control points", r.selected.len())
                 };
                 self.revision += 1;
-                return Ok(Applied {
-                    message,
-                    undo: Undo::Inverse {
-                        edit: r.inverse,
-                        state: Snapshot::new(before),
-                    },
-                });
+                return Ok(Applied::by_inverse(message, r.inverse, before));
             }
             Edit::Material { .. } => {
                 let r = MaterialRequest::of(edit).ok_or_else(misrouted)?;
@@ -977,12 +968,9 @@ impl Model for SolidModel {
     fn display_lines(&self) -> Vec<LineSet> {
         let mut out = vec![self.control_net()];
         let p = self.solid.control_points();
-        let mut fixed = LineSet::new(LineRole::Fixed);
-        fixed.points = (0..p.len())
-            .filter(|&i| self.solid.is_fixed(i))
-            .map(|i| p[i])
-            .collect();
-        out.push(fixed);
+        out.push(LineSet::markers(LineRole::Fixed, p, |i| {
+            self.solid.is_fixed(i)
+        }));
         let d = self.solid.data_points();
         if d.len() <= 20_000 {
             let mut dp = LineSet::new(LineRole::DataPoints);
@@ -1045,13 +1033,7 @@ impl Model for SolidModel {
     fn params(&self) -> Vec<Param> {
         let p = self.solid.params();
         let m = self.solid.material().cell(0);
-        let par = |name: &str, value: f64, min: f64, max: f64, doc: &str| Param {
-            name: name.into(),
-            value,
-            min,
-            max,
-            doc: doc.into(),
-        };
+        let par = Param::new;
         vec![
             par("dt", p.dt, 1e-5, 0.05, "time step (s)"),
             par(
