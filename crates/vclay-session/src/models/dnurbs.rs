@@ -471,12 +471,7 @@ struct Mat {
 
 impl Mat {
     fn to_material(&self) -> Material {
-        let m = Material {
-            mu: Density::Constant(self.mu),
-            gamma: Density::Constant(self.gamma),
-            alpha: self.alpha.iter().map(|&a| Density::Constant(a)).collect(),
-            beta: self.beta.iter().map(|&b| Density::Constant(b)).collect(),
-        };
+        let m = super::generalized::constant_material(self.mu, self.gamma, &self.alpha, &self.beta);
         match &self.spans {
             Some([u, v]) => m.per_unit_knot_span([u, v]),
             None => m,
