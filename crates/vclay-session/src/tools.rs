@@ -332,6 +332,29 @@ pub(crate) trait ToolHost {
     }
 }
 
+/// Whether `edit` is one of [`tool_edit`]'s: `rope`, `move-rope`, `force` or `release`.
+pub(crate) fn is_tool_edit(edit: &crate::Edit) -> bool {
+    use crate::Edit;
+    matches!(
+        edit,
+        Edit::Rope { .. } | Edit::MoveRope { .. } | Edit::Force { .. } | Edit::Release { .. }
+    )
+}
+
+/// The [`ToolHost`] accessors of a kind whose [`ToolTable`] is the field named: inside
+/// `impl ToolHost for Kind`.
+macro_rules! tool_table {
+    ($field:ident) => {
+        fn table(&self) -> &$crate::tools::ToolTable {
+            &self.$field
+        }
+        fn table_mut(&mut self) -> &mut $crate::tools::ToolTable {
+            &mut self.$field
+        }
+    };
+}
+pub(crate) use tool_table;
+
 /// The name of tool `handle` just attached; if refused, the tool is taken back.
 fn name_new<H: ToolHost + ?Sized>(
     host: &mut H,

@@ -1085,10 +1085,12 @@ impl DnurbsModel {
         Ok(Applied::by_state(message, before))
     }
 
-    /// [`Self::apply_edit`] for `Gravity`, `Inflate`, `Repel`, `Data`.
+    /// [`Self::apply_edit`] for the shared tool edits (`Rope`, `MoveRope`, `Force`, `Release`)
+    /// and `Gravity`, `Inflate`, `Repel`, `Data`.
     fn apply_field_edit(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
         let surface = !self.engine.is_curve();
         let message = match edit {
+            _ if crate::tools::is_tool_edit(edit) => crate::tools::tool_edit(self, edit)?,
             Edit::Gravity { name, g, until } => {
                 field_tool(self, name, "gravity", ForceDesc::Gravity { g: *g }, *until)?
             }
@@ -1954,12 +1956,7 @@ fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, S
 /// force descriptions (the engine's force list is rebuilt from the slots).
 impl ToolHost for DnurbsModel {
     type Field = ForceDesc;
-    fn table(&self) -> &ToolTable {
-        &self.tools
-    }
-    fn table_mut(&mut self) -> &mut ToolTable {
-        &mut self.tools
-    }
+    crate::tools::tool_table!(tools);
     /// [`ToolTable::label`], refusing a constraint's name (an unnamed tool skips them).
     fn label(&self, name: Option<&str>, what: &str, handle: usize) -> Result<String, String> {
         let taken = |n: &str| self.constraints.iter().any(|c| c.name == n);
@@ -2123,13 +2120,7 @@ impl crate::model::Stateful for DnurbsModel {
     fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
         let before = self.take_state();
         match edit {
-            Edit::Rope { .. }
-            | Edit::MoveRope { .. }
-            | Edit::Force { .. }
-            | Edit::Release { .. } => {
-                let message = crate::tools::tool_edit(self, edit)?;
-                self.edited(message, before)
-            }
+            _ if crate::tools::is_tool_edit(edit) => self.apply_field_edit(edit, before),
             Edit::Gravity { .. }
             | Edit::Inflate { .. }
             | Edit::Repel { .. }

@@ -97,13 +97,15 @@ impl SolidModel {
         Ok(Applied::by_state(message, before))
     }
 
-    /// [`Self::apply_edit`] for `RegionForce`, `Gravity`, `Inflate`.
+    /// [`Self::apply_edit`] for the shared tool edits (`Rope`, `MoveRope`, `Force`, `Release`)
+    /// and `RegionForce`, `Gravity`, `Inflate`.
     fn apply_field_edit(
         &mut self,
         edit: &Edit,
         before: SolidSnap,
     ) -> Result<Applied, SessionError> {
         let message = match edit {
+            _ if crate::tools::is_tool_edit(edit) => crate::tools::tool_edit(self, edit)?,
             Edit::RegionForce {
                 name,
                 center,
@@ -774,12 +776,7 @@ impl crate::tools::ControlNet for vclay_solids::DynamicSolid {
 /// id.
 impl ToolHost for SolidModel {
     type Field = Tool;
-    fn table(&self) -> &ToolTable {
-        &self.tools
-    }
-    fn table_mut(&mut self) -> &mut ToolTable {
-        &mut self.tools
-    }
+    crate::tools::tool_table!(tools);
     fn attach_rope(
         &mut self,
         r: &RopeRequest,
@@ -871,13 +868,7 @@ impl crate::model::Stateful for SolidModel {
     fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
         let before = self.take_state();
         match edit {
-            Edit::Rope { .. }
-            | Edit::MoveRope { .. }
-            | Edit::Force { .. }
-            | Edit::Release { .. } => {
-                let message = crate::tools::tool_edit(self, edit)?;
-                self.edited(message, before)
-            }
+            _ if crate::tools::is_tool_edit(edit) => self.apply_field_edit(edit, before),
             Edit::RegionForce { .. } | Edit::Gravity { .. } | Edit::Inflate { .. } => {
                 self.apply_field_edit(edit, before)
             }
