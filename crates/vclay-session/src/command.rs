@@ -523,38 +523,28 @@ impl Edit {
     /// [`Edit::validate`] for `Rope`, `MoveRope`, `Force`, `RegionForce`, `Gravity`, `Inflate`, `Data`, `Release`, `PlasticReset`, `Stop`.
     fn validate_tool(&self, at: f64) -> Result<(), EditError> {
         match self {
-            Edit::Rope {
-                from,
-                param,
-                to,
-                until,
-                velocity,
-                release,
-                stiffness,
-                length,
-                kernel,
-                ..
-            } => {
-                fin("from", from)?;
-                opt3("to", to)?;
-                opt3("velocity", velocity)?;
-                if let Some(p) = param {
+            Edit::Rope { .. } => {
+                let (r, _, release) = RopeRequest::of(self).expect("a rope");
+                fin("from", &r.from)?;
+                opt3("to", &r.to)?;
+                opt3("velocity", &r.velocity)?;
+                if let Some(p) = &r.param {
                     fin("param", p)?;
                 }
-                if to.is_some() && velocity.is_some() {
+                if r.to.is_some() && r.velocity.is_some() {
                     return Err(EditError::new(
                         "to",
                         "`to` and `velocity` exclude each other",
                     ));
                 }
-                if until.is_some() && to.is_none() {
+                if r.until.is_some() && r.to.is_none() {
                     return Err(EditError::new("until", "`until` needs `to`"));
                 }
-                after("until", *until, at)?;
-                after("release", *release, at)?;
-                pos("stiffness", *stiffness, false)?;
-                pos("length", *length, true)?;
-                pos("kernel", *kernel, false)?;
+                after("until", r.until, at)?;
+                after("release", release, at)?;
+                pos("stiffness", r.stiffness, false)?;
+                pos("length", r.length, true)?;
+                pos("kernel", r.kernel, false)?;
             }
             Edit::MoveRope { to, .. } => fin("to", to)?,
             Edit::Force {
@@ -635,45 +625,7 @@ impl Edit {
     fn validate_net(&self) -> Result<(), EditError> {
         match self {
             Edit::Fix(sel) | Edit::Free(sel) => sel.validate()?,
-            Edit::Material {
-                min,
-                max,
-                cells,
-                density,
-                damping,
-                edge_stiffness,
-                virtual_stiffness,
-                anisotropy,
-                mu,
-                gamma,
-                alpha,
-                beta,
-            } => {
-                opt3("min", min)?;
-                opt3("max", max)?;
-                if min.is_some() != max.is_some() {
-                    return Err(EditError::new("min", "`min` and `max` go together"));
-                }
-                if cells.is_some() && min.is_some() {
-                    return Err(EditError::new(
-                        "cells",
-                        "give `cells` or `min` and `max`, not both",
-                    ));
-                }
-                pos("density", *density, false)?;
-                pos("damping", *damping, true)?;
-                pos("edge_stiffness", *edge_stiffness, true)?;
-                pos("virtual_stiffness", *virtual_stiffness, true)?;
-                if let Some(a) = anisotropy {
-                    for &x in a {
-                        pos("anisotropy", Some(x), false)?;
-                    }
-                }
-                pos("mu", *mu, true)?;
-                pos("gamma", *gamma, true)?;
-                pos("alpha", *alpha, true)?;
-                pos("beta", *beta, true)?;
-            }
+            Edit::Material { .. } => MaterialRequest::of(self).expect("a material").validate()?,
             Edit::Extrude { face, near, factor } => {
                 opt3("near", near)?;
                 if face.is_some() == near.is_some() {
@@ -850,4 +802,160 @@ fn after(key: &'static str, v: Option<f64>, at: f64) -> Result<(), EditError> {
 }
 fn opt3(key: &'static str, v: &Option<V3>) -> Result<(), EditError> {
     v.as_ref().map_or(Ok(()), |v| fin(key, v))
+}
+
+/// A rope as the kinds attach it: the keys of [`Edit::Rope`] but its name and release
+/// time, which the [`ToolTable`] keeps (see the edit for each key's meaning).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct RopeRequest {
+    /// Where the rope grabs the model, and the cursor's start.
+    pub from: V3,
+    /// D-NURBS: the material point to attach to.
+    pub param: Option<[f64; 2]>,
+    /// Cursor end position.
+    pub to: Option<V3>,
+    /// Time the cursor starts moving towards `to`.
+    pub start: Option<f64>,
+    /// Time the cursor reaches `to`.
+    pub until: Option<f64>,
+    /// Cursor velocity (a moving target).
+    pub velocity: Option<V3>,
+    /// Spring stiffness.
+    pub stiffness: Option<f64>,
+    /// Rope length (solids).
+    pub length: Option<f64>,
+    /// D-NURBS: Gaussian kernel width.
+    pub kernel: Option<f64>,
+}
+
+impl RopeRequest {
+    /// The rope of an [`Edit::Rope`], with its name and release time.
+    pub fn of(edit: &Edit) -> Option<(Self, Option<&str>, Option<f64>)> {
+        let Edit::Rope {
+            name,
+            from,
+            param,
+            to,
+            until,
+            velocity,
+            release,
+            stiffness,
+            length,
+            kernel,
+            start,
+        } = edit
+        else {
+            return None;
+        };
+        let rope = Self {
+            from: *from,
+            param: *param,
+            to: *to,
+            start: *start,
+            until: *until,
+            velocity: *velocity,
+            stiffness: *stiffness,
+            length: *length,
+            kernel: *kernel,
+        };
+        Some((rope, name.as_deref(), *release))
+    }
+}
+
+/// The keys of an [`Edit::Material`] by what they apply to: the region (solids: `cells`, or a
+/// box `min`/`max`), the solid material (the densities and stiffnesses of
+/// `subdivision-solids-journal.txt` eq 10) and the uniform D-NURBS densities (`d-nurbs.txt`
+/// eqs 16-17); see the edit for each key's meaning.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct MaterialRequest {
+    /// Control cells (solids).
+    pub cells: Option<Vec<usize>>,
+    /// Box corners (solids).
+    pub min: Option<V3>,
+    /// Box corners (solids).
+    pub max: Option<V3>,
+    /// `density`, `damping`, `edge_stiffness`, `virtual_stiffness` (solids).
+    pub solid: [Option<f64>; 4],
+    /// Anisotropy factors (solids).
+    pub anisotropy: Option<V3>,
+    /// `mu`, `gamma`, `alpha`, `beta` (D-NURBS).
+    pub dnurbs: [Option<f64>; 4],
+}
+
+impl MaterialRequest {
+    /// The keys of an [`Edit::Material`].
+    pub fn of(edit: &Edit) -> Option<Self> {
+        let Edit::Material {
+            cells,
+            min,
+            max,
+            density,
+            damping,
+            edge_stiffness,
+            virtual_stiffness,
+            anisotropy,
+            mu,
+            gamma,
+            alpha,
+            beta,
+        } = edit
+        else {
+            return None;
+        };
+        Some(Self {
+            cells: cells.clone(),
+            min: *min,
+            max: *max,
+            solid: [*density, *damping, *edge_stiffness, *virtual_stiffness],
+            anisotropy: *anisotropy,
+            dnurbs: [*mu, *gamma, *alpha, *beta],
+        })
+    }
+
+    /// Whether a solid material key is given.
+    pub fn solid_given(&self) -> bool {
+        self.solid.iter().any(Option::is_some) || self.anisotropy.is_some()
+    }
+
+    /// Whether a D-NURBS material key is given.
+    pub fn dnurbs_given(&self) -> bool {
+        self.dnurbs.iter().any(Option::is_some)
+    }
+
+    /// Whether a region (`cells`, `min`, `max`) is given.
+    pub fn region_given(&self) -> bool {
+        self.cells.is_some() || self.min.is_some() || self.max.is_some()
+    }
+
+    /// [`Edit::validate`] of the keys.
+    fn validate(&self) -> Result<(), EditError> {
+        opt3("min", &self.min)?;
+        opt3("max", &self.max)?;
+        if self.min.is_some() != self.max.is_some() {
+            return Err(EditError::new("min", "`min` and `max` go together"));
+        }
+        if self.cells.is_some() && self.min.is_some() {
+            return Err(EditError::new(
+                "cells",
+                "give `cells` or `min` and `max`, not both",
+            ));
+        }
+        let [density, damping, edge_stiffness, virtual_stiffness] = self.solid;
+        pos("density", density, false)?;
+        pos("damping", damping, true)?;
+        pos("edge_stiffness", edge_stiffness, true)?;
+        pos("virtual_stiffness", virtual_stiffness, true)?;
+        if let Some(a) = &self.anisotropy {
+            for &x in a {
+                pos("anisotropy", Some(x), false)?;
+            }
+        }
+        for (key, v) in ["mu", "gamma", "alpha", "beta"]
+            .into_iter()
+            .zip(self.dnurbs)
+        {
+            pos(key, v, true)?;
+        }
+        Ok(())
+    }
 }

@@ -155,6 +155,17 @@ impl LineSet {
             ..Default::default()
         }
     }
+    /// Markers at the points of `points` whose index `keep` accepts (fixed control points).
+    pub fn markers(role: LineRole, points: &[Vec3], keep: impl Fn(usize) -> bool) -> Self {
+        Self {
+            role: Some(role),
+            points: (0..points.len())
+                .filter(|&i| keep(i))
+                .map(|i| points[i])
+                .collect(),
+            segments: Vec::new(),
+        }
+    }
     /// Adds a segment from `a` to `b`.
     pub fn segment(&mut self, a: Vec3, b: Vec3) {
         let i = self.points.len() as u32;
@@ -284,6 +295,19 @@ pub struct Param {
     pub doc: String,
 }
 
+impl Param {
+    /// A parameter `name` at `value`, with its range and what it is.
+    pub fn new(name: &str, value: f64, min: f64, max: f64, doc: &str) -> Self {
+        Self {
+            name: name.into(),
+            value,
+            min,
+            max,
+            doc: doc.into(),
+        }
+    }
+}
+
 /// An opaque copy of a model's evolving state, taken by [`Model::snapshot`].
 pub struct Snapshot(pub Box<dyn Any + Send + Sync>);
 
@@ -314,9 +338,23 @@ pub(crate) trait Stateful {
     fn take_state(&self) -> Self::State;
     /// Puts a snapshot back (bit for bit).
     fn put_state(&mut self, state: &Self::State) -> Result<(), SessionError>;
+    /// Applies an edit, or fails leaving the model unchanged ([`Model::apply`]).
+    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError>;
+    /// Whether [`Stateful::apply_inverse`] ignores a failure of the inverse edit: kinds whose
+    /// snapshot, put back after it, is the exact state either way (FFD and PDE surfaces: the
+    /// inverse can fail where the forward edit did not, e.g. FFD's inversion of `Q` at the
+    /// target).
+    const INVERSE_MAY_FAIL: bool = false;
     /// Applies the exact inverse edit of an [`Undo::Inverse`] record (before the snapshot is
-    /// put back). Kinds whose snapshot covers everything the edit changed may ignore a failure.
-    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError>;
+    /// put back), as any edit.
+    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError> {
+        let applied = self.apply_edit(edit);
+        if Self::INVERSE_MAY_FAIL {
+            Ok(())
+        } else {
+            applied.map(drop)
+        }
+    }
 }
 
 impl Snapshot {
@@ -356,11 +394,18 @@ pub(crate) fn restore_state<M: Stateful>(
     model.put_state(&snapshot.take::<M::State>()?)
 }
 
-/// The [`Model`] methods every [`Stateful`] kind implements the same way: `undo` by the inverse
+/// The [`Model`] methods every [`Stateful`] kind implements the same way: `apply` by
+/// [`Stateful::apply_edit`], `undo` by the inverse
 /// edit and the state ([`undo_by_state`]), `snapshot`, `restore`, and `clone_model` (the kind
 /// is `Clone`). Used inside `impl Model for Kind`.
 macro_rules! stateful_methods {
     () => {
+        fn apply(
+            &mut self,
+            edit: &$crate::Edit,
+        ) -> Result<$crate::model::Applied, $crate::SessionError> {
+            $crate::model::Stateful::apply_edit(self, edit)
+        }
         fn undo(&mut self, undo: $crate::model::Undo) -> Result<(), $crate::SessionError> {
             $crate::model::undo_by_state(self, undo)
         }
@@ -379,6 +424,24 @@ macro_rules! stateful_methods {
     };
 }
 pub(crate) use stateful_methods;
+
+/// The clock getters of [`Model`] (`time`, `dt`, `steps`), each the expression given, written
+/// with `self`: `clock_methods!(self => self.time, self.dt, self.steps);` inside `impl Model for
+/// Kind`.
+macro_rules! clock_methods {
+    ($s:ident => $time:expr, $dt:expr, $steps:expr) => {
+        fn time(&$s) -> f64 {
+            $time
+        }
+        fn dt(&$s) -> f64 {
+            $dt
+        }
+        fn steps(&$s) -> u64 {
+            $steps
+        }
+    };
+}
+pub(crate) use clock_methods;
 
 /// How to undo an applied edit.
 #[derive(Debug)]
@@ -405,6 +468,31 @@ pub struct Applied {
     pub message: String,
     /// How to undo it.
     pub undo: Undo,
+}
+
+impl Applied {
+    /// An edit undone by putting back `before`, the state taken just before it
+    /// ([`Undo::State`]).
+    pub(crate) fn by_state<S: Any + Send + Sync>(message: String, before: S) -> Self {
+        Self {
+            message,
+            undo: Undo::State(Snapshot::new(before)),
+        }
+    }
+    /// An edit undone by its exact `inverse`, then `before` ([`Undo::Inverse`]).
+    pub(crate) fn by_inverse<S: Any + Send + Sync>(
+        message: String,
+        inverse: Edit,
+        before: S,
+    ) -> Self {
+        Self {
+            message,
+            undo: Undo::Inverse {
+                edit: inverse,
+                state: Snapshot::new(before),
+            },
+        }
+    }
 }
 
 /// Export formats, chosen by file extension.

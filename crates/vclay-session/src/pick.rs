@@ -3,7 +3,7 @@
 
 use vclay_core::{TriMesh, Vec3};
 
-use crate::model::Ray;
+use crate::model::{Element, Hit, Ray};
 
 /// The nearest triangle of `mesh` that `ray` crosses: `(distance along the ray, triangle,
 /// barycentric weights of its three corners)`. Both sides of a triangle count.
@@ -67,6 +67,17 @@ pub fn ray_points(ray: &Ray, points: &[Vec3], tolerance: f64) -> Option<(usize, 
         }
     }
     best.map(|(i, s, _)| (i, s))
+}
+
+/// The control point of `points` that [`ray_points`] finds, as a [`Hit`] on
+/// [`Element::ControlPoint`].
+pub fn control_point(ray: &Ray, points: &[Vec3], tolerance: f64) -> Option<Hit> {
+    ray_points(ray, points, tolerance).map(|(i, s)| Hit {
+        distance: s,
+        point: points[i],
+        element: Element::ControlPoint { index: i },
+        extra: [None, None],
+    })
 }
 
 /// Checks a ray: finite, non-zero direction.

@@ -6,7 +6,7 @@
 use serde::{Deserialize, Serialize};
 use vclay_core::Vec3;
 
-use crate::command::V3;
+use crate::command::{RopeRequest, V3};
 
 /// How a rope's cursor moves by itself.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -126,6 +126,35 @@ impl ToolTable {
         }
     }
 
+    /// Adds a tool entry (its forces already attached under `handle`).
+    pub fn track(
+        &mut self,
+        name: &str,
+        action: &str,
+        handle: usize,
+        path: Option<CursorPath>,
+        release: Option<f64>,
+    ) {
+        self.tools.push(ScheduledTool {
+            name: name.to_string(),
+            action: action.to_string(),
+            handle,
+            path,
+            release,
+        });
+    }
+
+    /// The handle of the rope named `name` (an error names what the name is if not a rope).
+    pub fn rope(&self, name: &str) -> Result<usize, String> {
+        let t = self
+            .get(name)
+            .ok_or_else(|| format!("no active rope named `{name}`"))?;
+        if t.action != "rope" {
+            return Err(format!("`{name}` is a {}, not a rope", t.action));
+        }
+        Ok(t.handle)
+    }
+
     /// Removes the tools released at or before `t + dt / 2` and returns them with the cursor
     /// positions of the remaining moving ropes at `t` (the order the scenario runner has always
     /// used: commands of the step first, then expiry, then cursors).
@@ -216,6 +245,16 @@ pub(crate) struct FixResult {
     pub inverse: crate::Edit,
 }
 
+/// The log line of a [`fix_or_free`]: "fixed 3 control points" or "freed 3 control points".
+pub(crate) fn fixed_message(edit: &crate::Edit, r: &FixResult) -> String {
+    let fix = matches!(edit, crate::Edit::Fix { .. });
+    format!(
+        "{} {} control points",
+        if fix { "fixed" } else { "freed" },
+        r.selected.len()
+    )
+}
+
 /// Applies a [`crate::Edit::Fix`] or [`crate::Edit::Free`] to `net`: the selection of
 /// [`select_points`], then the change; returns what was selected and the exact inverse.
 pub(crate) fn fix_or_free<N: ControlNet + ?Sized>(
@@ -238,4 +277,162 @@ pub(crate) fn fix_or_free<N: ControlNet + ?Sized>(
     let ids = crate::command::Selection::ids(changed);
     let inverse = if fix { Edit::Free(ids) } else { Edit::Fix(ids) };
     Ok(FixResult { selected, inverse })
+}
+
+fn cmd(reason: impl std::fmt::Display) -> crate::SessionError {
+    crate::SessionError::command("", "", reason)
+}
+
+/// A model whose tools a [`ToolTable`] names, as the shared `rope`, `move-rope`, `force`,
+/// `release` and field-tool (`gravity`, `inflate`, ...) edits see it ([`tool_edit`],
+/// [`field_tool`]): D-NURBS curves and surfaces (a handle is a slot of force descriptions) and
+/// solids (a handle is the kernel's tool id). The kind attaches and detaches forces; the
+/// naming, the schedule (cursor paths, release times) and the messages are shared.
+pub(crate) trait ToolHost {
+    /// A field tool's force (gravity, inflation, repulsion), as the kind describes it.
+    type Field;
+    /// The named tools.
+    fn table(&self) -> &ToolTable;
+    /// The named tools, mutably.
+    fn table_mut(&mut self) -> &mut ToolTable;
+    /// The name for a new tool: [`ToolTable::label`] (kinds with other named things add their
+    /// own rule).
+    fn label(&self, name: Option<&str>, what: &str, handle: usize) -> Result<String, String> {
+        self.table().label(name, what, handle)
+    }
+    /// Attaches the spring of a rope; returns its handle, its cursor path and where it holds
+    /// (`"to data point 3"`, `"at material point [0.5, 0.5]"`).
+    fn attach_rope(
+        &mut self,
+        rope: &RopeRequest,
+    ) -> Result<(usize, Option<CursorPath>, String), crate::SessionError>;
+    /// Attaches the force of an [`crate::Edit::Force`]; returns its handle and where it acts
+    /// (`"on data point 3"`, `"at material point [0.5, 0.5]"`).
+    fn attach_force(&mut self, edit: &crate::Edit) -> Result<(usize, String), crate::SessionError>;
+    /// Attaches a field tool's force; returns its handle.
+    fn attach_field(&mut self, field: Self::Field) -> Result<usize, crate::SessionError>;
+    /// Replaces the force of field tool `handle`; returns the handle it has now.
+    fn replace_field(
+        &mut self,
+        handle: usize,
+        field: Self::Field,
+    ) -> Result<usize, crate::SessionError>;
+    /// Moves the cursor of rope `handle` to `to` (it stops following its path).
+    fn move_cursor(&mut self, handle: usize, to: V3) -> Result<(), crate::SessionError>;
+    /// Removes the forces of tool `handle`.
+    fn detach(&mut self, handle: usize);
+    /// Takes back tool `handle` just attached (its name was refused): as if never attached.
+    fn take_back(&mut self, handle: usize) {
+        self.detach(handle);
+    }
+    /// Releases something named `name` that is not a tool (D-NURBS constraints); the error
+    /// when there is none.
+    fn release_other(&mut self, name: &str) -> Result<(), crate::SessionError> {
+        Err(cmd(format!("no active tool named `{name}`")))
+    }
+}
+
+/// Whether `edit` is one of [`tool_edit`]'s: `rope`, `move-rope`, `force` or `release`.
+pub(crate) fn is_tool_edit(edit: &crate::Edit) -> bool {
+    use crate::Edit;
+    matches!(
+        edit,
+        Edit::Rope { .. } | Edit::MoveRope { .. } | Edit::Force { .. } | Edit::Release { .. }
+    )
+}
+
+/// The [`ToolHost`] accessors of a kind whose [`ToolTable`] is the field named: inside
+/// `impl ToolHost for Kind`.
+macro_rules! tool_table {
+    ($field:ident) => {
+        fn table(&self) -> &$crate::tools::ToolTable {
+            &self.$field
+        }
+        fn table_mut(&mut self) -> &mut $crate::tools::ToolTable {
+            &mut self.$field
+        }
+    };
+}
+pub(crate) use tool_table;
+
+/// The name of tool `handle` just attached; if refused, the tool is taken back.
+fn name_new<H: ToolHost + ?Sized>(
+    host: &mut H,
+    name: Option<&str>,
+    what: &str,
+    handle: usize,
+) -> Result<String, crate::SessionError> {
+    host.label(name, what, handle).map_err(|e| {
+        host.take_back(handle);
+        cmd(e)
+    })
+}
+
+/// Applies `rope`, `move-rope`, `force` or `release` to `host` (the one implementation for
+/// every kind with a [`ToolTable`]); returns the log line.
+pub(crate) fn tool_edit<H: ToolHost + ?Sized>(
+    host: &mut H,
+    edit: &crate::Edit,
+) -> Result<String, crate::SessionError> {
+    use crate::Edit;
+    match edit {
+        Edit::Rope { .. } => {
+            let (rope, name, release) = RopeRequest::of(edit).expect("a rope");
+            let (h, path, at) = host.attach_rope(&rope)?;
+            let label = name_new(host, name, "rope", h)?;
+            host.table_mut().track(&label, "rope", h, path, release);
+            Ok(format!("rope `{label}` attached {at}"))
+        }
+        Edit::MoveRope { name, to } => {
+            let h = host.table().rope(name).map_err(cmd)?;
+            host.move_cursor(h, *to)?;
+            host.table_mut().get_mut(name).expect("present").path = None;
+            Ok(format!("rope `{name}` cursor at {to:?}"))
+        }
+        Edit::Force { name, until, .. } => {
+            let (h, at) = host.attach_force(edit)?;
+            let label = name_new(host, name.as_deref(), "force", h)?;
+            host.table_mut().track(&label, "force", h, None, *until);
+            Ok(format!("force `{label}` {at}"))
+        }
+        Edit::Release { name } => {
+            match host.table_mut().remove(name) {
+                Some(t) => host.detach(t.handle),
+                None => host.release_other(name)?,
+            }
+            Ok(format!("released `{name}`"))
+        }
+        _ => Err(crate::models::misrouted()),
+    }
+}
+
+/// A field tool (`gravity`, `inflate`, `repel`): a tool named `name` that exists already
+/// (of the same action) changes its force, else a new tool starts; `until` is its release
+/// time (kept when not given for an existing tool). Returns the log line.
+pub(crate) fn field_tool<H: ToolHost + ?Sized>(
+    host: &mut H,
+    name: &Option<String>,
+    action: &str,
+    field: H::Field,
+    until: Option<f64>,
+) -> Result<String, crate::SessionError> {
+    if let Some(n) = name
+        && let Some(t) = host.table().get(n).cloned()
+    {
+        if t.action != action {
+            return Err(cmd(format!(
+                "the tool `{n}` is a {}, not {action}",
+                t.action
+            )));
+        }
+        let h = host.replace_field(t.handle, field)?;
+        let e = host.table_mut().get_mut(n).expect("present");
+        e.handle = h;
+        e.release = until.or(e.release);
+        return Ok(format!("{action} `{n}` changed"));
+    }
+    let h = host.attach_field(field)?;
+    let label = name_new(host, name.as_deref(), action, h)?;
+    host.table_mut().track(&label, action, h, None, until);
+    Ok(format!("{action} `{label}` on"))
 }

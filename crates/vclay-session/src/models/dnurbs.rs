@@ -47,12 +47,14 @@ use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
 
 use super::{SpecError, misrouted};
 use crate::command::{Edit, V3};
+use crate::command::{MaterialRequest, RopeRequest};
 use crate::error::SessionError;
+use crate::model::Stateful;
 use crate::model::{
-    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, unsupported_export,
+    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, StepReport,
+    extension, unsupported_export,
 };
-use crate::tools::{CursorPath, ScheduledTool, ToolTable, a3, v3};
+use crate::tools::{CursorPath, ToolHost, ToolTable, a3, field_tool, v3};
 
 /// Rope and data spring stiffness when neither the edit nor a preset (its `k`) gives one.
 pub const DEFAULT_ROPE_STIFFNESS: f64 = 50.0;
@@ -481,12 +483,7 @@ struct Mat {
 
 impl Mat {
     fn to_material(&self) -> Material {
-        let m = Material {
-            mu: Density::Constant(self.mu),
-            gamma: Density::Constant(self.gamma),
-            alpha: self.alpha.iter().map(|&a| Density::Constant(a)).collect(),
-            beta: self.beta.iter().map(|&b| Density::Constant(b)).collect(),
-        };
+        let m = super::generalized::constant_material(self.mu, self.gamma, &self.alpha, &self.beta);
         match &self.spans {
             Some([u, v]) => m.per_unit_knot_span([u, v]),
             None => m,
@@ -926,10 +923,7 @@ impl DnurbsModel {
                 },
             });
         }
-        let h = self.add_slot(descs);
-        let label = self.label(&None, "forces", h)?;
-        self.track(&label, "forces", h, None, None);
-        Ok(())
+        self.add_tool(&None, "forces", descs).map(drop)
     }
 
     /// Which engine runs the model: `"generalized"` or `"frozen"`.
@@ -963,41 +957,6 @@ impl DnurbsModel {
         }
     }
 
-    fn snap(&self) -> Snap {
-        Snap {
-            state: self.engine.state(),
-            material: self.material.clone(),
-            dt: self.dt,
-            slots: self.slots.clone(),
-            next_handle: self.next_handle,
-            constraints: self.constraints.clone(),
-            tools: self.tools.clone(),
-            kinetic: self.kinetic,
-            steps: self.steps,
-        }
-    }
-
-    fn put(&mut self, s: &Snap) -> Result<(), SessionError> {
-        if self.material != s.material {
-            self.engine
-                .set_material(s.material.to_material())
-                .map_err(dyn_err)?;
-            self.material = s.material.clone();
-        }
-        self.engine.set_state(&s.state).map_err(dyn_err)?;
-        self.slots = s.slots.clone();
-        self.sync_forces();
-        self.constraints = s.constraints.clone();
-        self.engine.sync_constraints(&self.constraints)?;
-        self.dt = s.dt;
-        self.next_handle = s.next_handle;
-        self.tools = s.tools.clone();
-        self.kinetic = s.kinetic;
-        self.steps = s.steps;
-        self.revision += 1;
-        Ok(())
-    }
-
     fn sync_forces(&mut self) {
         let f = self
             .external
@@ -1029,62 +988,16 @@ impl DnurbsModel {
         self.slots.iter_mut().find(|s| s.handle == h)
     }
 
-    fn label(
-        &self,
-        name: &Option<String>,
-        what: &str,
-        handle: usize,
-    ) -> Result<String, SessionError> {
-        let taken = |n: &str| self.constraints.iter().any(|c| c.name == n);
-        if let Some(n) = name
-            && taken(n)
-        {
-            return Err(cmd(format!(
-                "a constraint named `{n}` is active (release it first)"
-            )));
-        }
-        let mut l = self
-            .tools
-            .label(name.as_deref(), what, handle)
-            .map_err(cmd)?;
-        let mut k = 1;
-        while taken(&l) {
-            l = format!("{what}{handle}_c{k}");
-            k += 1;
-        }
-        Ok(l)
-    }
-
-    fn track(
-        &mut self,
-        label: &str,
-        action: &str,
-        handle: usize,
-        path: Option<CursorPath>,
-        release: Option<f64>,
-    ) {
-        self.tools.tools.push(ScheduledTool {
-            name: label.to_string(),
-            action: action.to_string(),
-            handle,
-            path,
-            release,
-        });
-    }
-
     /// Adds a slot under a new name; on a taken name nothing changes.
     fn add_tool(
         &mut self,
         name: &Option<String>,
         what: &str,
-        action: &str,
         forces: Vec<ForceDesc>,
-        path: Option<CursorPath>,
-        release: Option<f64>,
     ) -> Result<String, SessionError> {
-        let label = self.label(name, what, self.next_handle)?;
+        let label = ToolHost::label(self, name.as_deref(), what, self.next_handle).map_err(cmd)?;
         let h = self.add_slot(forces);
-        self.track(&label, action, h, path, release);
+        self.tools.track(&label, what, h, None, None);
         Ok(label)
     }
 
@@ -1112,34 +1025,7 @@ impl DnurbsModel {
         s.unwrap_or(self.default_k)
     }
 
-    /// Gravity and inflation: an existing tool of that name changes strength.
-    fn field_tool(
-        &mut self,
-        name: &Option<String>,
-        action: &str,
-        force: ForceDesc,
-        until: Option<f64>,
-    ) -> Result<String, SessionError> {
-        if let Some(n) = name
-            && let Some(t) = self.tools.get(n).cloned()
-        {
-            if t.action != action {
-                return Err(cmd(format!(
-                    "the tool `{n}` is a {}, not {action}",
-                    t.action
-                )));
-            }
-            self.slot_mut(t.handle).expect("slot of a tool").forces = vec![force];
-            self.sync_forces();
-            let e = self.tools.get_mut(n).expect("present");
-            e.release = until.or(e.release);
-            return Ok(format!("{action} `{n}` changed"));
-        }
-        let label = self.add_tool(name, action, action, vec![force], None, until)?;
-        Ok(format!("{action} `{label}` on"))
-    }
-
-    /// Control points selected by ids, a box around rest positions, or the nearest one.
+    /// Sets the uniform material constants given (`d-nurbs.txt` eqs 16-17).
     fn set_material_values(
         &mut self,
         mu: Option<f64>,
@@ -1205,126 +1091,20 @@ impl DnurbsModel {
             .map_err(SessionError::command_from)
     }
 
-    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        let before = self.snap();
-        match edit {
-            Edit::Rope { .. } | Edit::MoveRope { .. } | Edit::Force { .. } => {
-                self.apply_rope_edit(edit, before)
-            }
-            Edit::Gravity { .. }
-            | Edit::Inflate { .. }
-            | Edit::Repel { .. }
-            | Edit::Data { .. }
-            | Edit::Release { .. } => self.apply_field_edit(edit, before),
-            Edit::Fix { .. } | Edit::Free { .. } | Edit::Material { .. } => {
-                self.apply_net_edit(edit, before)
-            }
-            Edit::PlasticReset
-            | Edit::Stop
-            | Edit::MovePoint { .. }
-            | Edit::SetWeight { .. }
-            | Edit::Set { .. }
-            | Edit::Integrator { .. } => self.apply_state_edit(edit, before),
-            _ => self.apply_constraint_edit(edit, before),
-        }
-    }
-
     /// The end of an edit whose undo is the state before it: a new revision, the message.
     fn edited(&mut self, message: String, before: Snap) -> Result<Applied, SessionError> {
         self.revision += 1;
-        Ok(Applied {
-            message,
-            undo: Undo::State(Snapshot::new(before)),
-        })
+        Ok(Applied::by_state(message, before))
     }
 
-    /// [`Self::apply_edit`] for `Rope`, `MoveRope`, `Force`.
-    fn apply_rope_edit(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
-        let message = match edit {
-            Edit::Rope {
-                name,
-                from,
-                param,
-                to,
-                until,
-                velocity,
-                release,
-                stiffness,
-                length,
-                kernel,
-                start,
-            } => {
-                if length.is_some_and(|l| l > 0.0) {
-                    return Err(cmd(
-                        "`length` is for solids; a D-NURBS spring (eq 19) pulls at any length",
-                    ));
-                }
-                let prm = self.param_or_near(param, Some(from))?;
-                let spring = ForceDesc::Spring {
-                    param: prm,
-                    target: *from,
-                    velocity: *velocity,
-                    stiffness: self.stiffness(*stiffness),
-                    kernel: *kernel,
-                };
-                let path = to.map(|to| {
-                    let start = start.unwrap_or(self.engine.time());
-                    CursorPath::Linear {
-                        from: *from,
-                        to,
-                        start,
-                        end: until.unwrap_or(start),
-                    }
-                });
-                let label = self.add_tool(name, "rope", "rope", vec![spring], path, *release)?;
-                format!("rope `{label}` attached at material point {prm:?}")
-            }
-            Edit::MoveRope { name, to } => {
-                let t = self
-                    .tools
-                    .get(name)
-                    .ok_or_else(|| cmd(format!("no active rope named `{name}`")))?;
-                if t.action != "rope" {
-                    return Err(cmd(format!("`{name}` is a {}, not a rope", t.action)));
-                }
-                let h = t.handle;
-                if let Some(ForceDesc::Spring {
-                    target, velocity, ..
-                }) = self.slot_mut(h).and_then(|s| s.forces.first_mut())
-                {
-                    *target = *to;
-                    *velocity = None;
-                }
-                self.sync_forces();
-                self.tools.get_mut(name).expect("present").path = None;
-                format!("rope `{name}` cursor at {to:?}")
-            }
-            Edit::Force {
-                name,
-                near,
-                param,
-                force,
-                until,
-            } => {
-                let prm = self.param_or_near(param, near.as_ref())?;
-                let f = ForceDesc::Point {
-                    param: prm,
-                    force: *force,
-                };
-                let label = self.add_tool(name, "force", "force", vec![f], None, *until)?;
-                format!("force `{label}` at material point {prm:?}")
-            }
-            _ => return Err(misrouted()),
-        };
-        self.edited(message, before)
-    }
-
-    /// [`Self::apply_edit`] for `Gravity`, `Inflate`, `Repel`, `Data`, `Release`.
+    /// [`Self::apply_edit`] for the shared tool edits (`Rope`, `MoveRope`, `Force`, `Release`)
+    /// and `Gravity`, `Inflate`, `Repel`, `Data`.
     fn apply_field_edit(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
         let surface = !self.engine.is_curve();
         let message = match edit {
+            _ if crate::tools::is_tool_edit(edit) => crate::tools::tool_edit(self, edit)?,
             Edit::Gravity { name, g, until } => {
-                self.field_tool(name, "gravity", ForceDesc::Gravity { g: *g }, *until)?
+                field_tool(self, name, "gravity", ForceDesc::Gravity { g: *g }, *until)?
             }
             Edit::Inflate {
                 name,
@@ -1334,7 +1114,8 @@ impl DnurbsModel {
                 if !surface {
                     return Err(cmd("inflation needs a surface (s_u x s_v), not a curve"));
                 }
-                self.field_tool(
+                field_tool(
+                    self,
                     name,
                     "inflate",
                     ForceDesc::Inflation {
@@ -1356,7 +1137,8 @@ impl DnurbsModel {
                         "the frozen-weight engine repels surfaces only (use engine = \"generalized\")",
                     ));
                 }
-                self.field_tool(
+                field_tool(
+                    self,
                     name,
                     "repel",
                     ForceDesc::Repulsion {
@@ -1380,21 +1162,8 @@ impl DnurbsModel {
                         stiffness: k,
                     })
                     .collect();
-                let label = self.add_tool(name, "data", "data", f, None, None)?;
+                let label = self.add_tool(name, "data", f)?;
                 format!("data `{label}`: {} points", points.len())
-            }
-            Edit::Release { name } => {
-                if let Some(t) = self.tools.remove(name) {
-                    self.remove_slot(t.handle);
-                } else if let Some(i) = self.constraints.iter().position(|c| &c.name == name) {
-                    let mut cs = self.constraints.clone();
-                    cs.remove(i);
-                    self.engine.sync_constraints(&cs)?;
-                    self.constraints = cs;
-                } else {
-                    return Err(cmd(format!("no active tool or constraint named `{name}`")));
-                }
-                format!("released `{name}`")
             }
             _ => return Err(misrouted()),
         };
@@ -1405,60 +1174,37 @@ impl DnurbsModel {
     fn apply_net_edit(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
         let message = match edit {
             Edit::Fix { .. } | Edit::Free { .. } => {
-                let fix = matches!(edit, Edit::Fix { .. });
                 let r = match crate::tools::fix_or_free(&mut NetOf(self), edit) {
                     Ok(r) => r,
                     Err(e) => {
-                        self.put(&before)?;
+                        self.put_state(&before)?;
                         return Err(e);
                     }
                 };
                 self.revision += 1;
-                return Ok(Applied {
-                    message: format!(
-                        "{} {} control points",
-                        if fix { "fixed" } else { "freed" },
-                        r.selected.len()
-                    ),
-                    undo: Undo::Inverse {
-                        edit: r.inverse,
-                        state: Snapshot::new(before),
-                    },
-                });
+                return Ok(Applied::by_inverse(
+                    crate::tools::fixed_message(edit, &r),
+                    r.inverse,
+                    before,
+                ));
             }
-            Edit::Material {
-                cells,
-                min,
-                max,
-                density,
-                damping,
-                edge_stiffness,
-                virtual_stiffness,
-                anisotropy,
-                mu,
-                gamma,
-                alpha,
-                beta,
-            } => {
-                if density.is_some()
-                    || damping.is_some()
-                    || edge_stiffness.is_some()
-                    || virtual_stiffness.is_some()
-                    || anisotropy.is_some()
-                {
+            Edit::Material { .. } => {
+                let m = MaterialRequest::of(edit).ok_or_else(misrouted)?;
+                if m.solid_given() {
                     return Err(cmd(
                         "`density`, `damping`, `edge_stiffness`, `virtual_stiffness`, `anisotropy` are solid materials; D-NURBS take mu, gamma, alpha, beta",
                     ));
                 }
-                if cells.is_some() || min.is_some() || max.is_some() {
+                if m.region_given() {
                     return Err(cmd(
                         "a D-NURBS material is uniform: `cells`, `min` and `max` do not apply",
                     ));
                 }
-                if mu.is_none() && gamma.is_none() && alpha.is_none() && beta.is_none() {
+                if !m.dnurbs_given() {
                     return Err(cmd("give at least one of mu, gamma, alpha, beta"));
                 }
-                self.set_material_values(*mu, *gamma, *alpha, *beta)?;
+                let [mu, gamma, alpha, beta] = m.dnurbs;
+                self.set_material_values(mu, gamma, alpha, beta)?;
                 "material changed".to_string()
             }
             _ => return Err(misrouted()),
@@ -1901,7 +1647,7 @@ impl DnurbsModel {
             kinetic: s.kinetic,
             steps: s.steps,
         };
-        m.put(&snap)?;
+        m.put_state(&snap)?;
         m.revision = 1;
         Ok(m)
     }
@@ -2218,6 +1964,112 @@ fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, S
     }
 }
 
+/// A D-NURBS's tools for the shared rope, force and release edits: a handle is a slot of
+/// force descriptions (the engine's force list is rebuilt from the slots).
+impl ToolHost for DnurbsModel {
+    type Field = ForceDesc;
+    crate::tools::tool_table!(tools);
+    /// [`ToolTable::label`], refusing a constraint's name (an unnamed tool skips them).
+    fn label(&self, name: Option<&str>, what: &str, handle: usize) -> Result<String, String> {
+        let taken = |n: &str| self.constraints.iter().any(|c| c.name == n);
+        if let Some(n) = name
+            && taken(n)
+        {
+            return Err(format!(
+                "a constraint named `{n}` is active (release it first)"
+            ));
+        }
+        let mut l = self.tools.label(name, what, handle)?;
+        let mut k = 1;
+        while taken(&l) {
+            l = format!("{what}{handle}_c{k}");
+            k += 1;
+        }
+        Ok(l)
+    }
+    fn attach_rope(
+        &mut self,
+        r: &RopeRequest,
+    ) -> Result<(usize, Option<CursorPath>, String), SessionError> {
+        if r.length.is_some_and(|l| l > 0.0) {
+            return Err(cmd(
+                "`length` is for solids; a D-NURBS spring (eq 19) pulls at any length",
+            ));
+        }
+        let prm = self.param_or_near(&r.param, Some(&r.from))?;
+        let spring = ForceDesc::Spring {
+            param: prm,
+            target: r.from,
+            velocity: r.velocity,
+            stiffness: self.stiffness(r.stiffness),
+            kernel: r.kernel,
+        };
+        let path = r.to.map(|to| {
+            let start = r.start.unwrap_or(self.engine.time());
+            CursorPath::Linear {
+                from: r.from,
+                to,
+                start,
+                end: r.until.unwrap_or(start),
+            }
+        });
+        let h = self.add_slot(vec![spring]);
+        Ok((h, path, format!("at material point {prm:?}")))
+    }
+    fn attach_force(&mut self, edit: &Edit) -> Result<(usize, String), SessionError> {
+        let Edit::Force {
+            near, param, force, ..
+        } = edit
+        else {
+            return Err(misrouted());
+        };
+        let prm = self.param_or_near(param, near.as_ref())?;
+        let h = self.add_slot(vec![ForceDesc::Point {
+            param: prm,
+            force: *force,
+        }]);
+        Ok((h, format!("at material point {prm:?}")))
+    }
+    fn attach_field(&mut self, field: ForceDesc) -> Result<usize, SessionError> {
+        Ok(self.add_slot(vec![field]))
+    }
+    fn replace_field(&mut self, handle: usize, field: ForceDesc) -> Result<usize, SessionError> {
+        self.slot_mut(handle).expect("slot of a tool").forces = vec![field];
+        self.sync_forces();
+        Ok(handle)
+    }
+    fn move_cursor(&mut self, handle: usize, to: V3) -> Result<(), SessionError> {
+        if let Some(ForceDesc::Spring {
+            target, velocity, ..
+        }) = self.slot_mut(handle).and_then(|s| s.forces.first_mut())
+        {
+            *target = to;
+            *velocity = None;
+        }
+        self.sync_forces();
+        Ok(())
+    }
+    fn detach(&mut self, handle: usize) {
+        self.remove_slot(handle);
+    }
+    /// The slot just added goes, and its handle is free again.
+    fn take_back(&mut self, handle: usize) {
+        self.remove_slot(handle);
+        self.next_handle = handle;
+    }
+    /// A constraint (section 6.2) of that name.
+    fn release_other(&mut self, name: &str) -> Result<(), SessionError> {
+        let Some(i) = self.constraints.iter().position(|c| c.name == name) else {
+            return Err(cmd(format!("no active tool or constraint named `{name}`")));
+        };
+        let mut cs = self.constraints.clone();
+        cs.remove(i);
+        self.engine.sync_constraints(&cs)?;
+        self.constraints = cs;
+        Ok(())
+    }
+}
+
 /// The control net of a D-NURBS for the shared fix/free tool.
 struct NetOf<'a>(&'a mut DnurbsModel);
 
@@ -2245,13 +2097,57 @@ impl crate::tools::ControlNet for NetOf<'_> {
 impl crate::model::Stateful for DnurbsModel {
     type State = Snap;
     fn take_state(&self) -> Snap {
-        self.snap()
+        Snap {
+            state: self.engine.state(),
+            material: self.material.clone(),
+            dt: self.dt,
+            slots: self.slots.clone(),
+            next_handle: self.next_handle,
+            constraints: self.constraints.clone(),
+            tools: self.tools.clone(),
+            kinetic: self.kinetic,
+            steps: self.steps,
+        }
     }
-    fn put_state(&mut self, state: &Snap) -> Result<(), SessionError> {
-        self.put(state)
+    fn put_state(&mut self, s: &Snap) -> Result<(), SessionError> {
+        if self.material != s.material {
+            self.engine
+                .set_material(s.material.to_material())
+                .map_err(dyn_err)?;
+            self.material = s.material.clone();
+        }
+        self.engine.set_state(&s.state).map_err(dyn_err)?;
+        self.slots = s.slots.clone();
+        self.sync_forces();
+        self.constraints = s.constraints.clone();
+        self.engine.sync_constraints(&self.constraints)?;
+        self.dt = s.dt;
+        self.next_handle = s.next_handle;
+        self.tools = s.tools.clone();
+        self.kinetic = s.kinetic;
+        self.steps = s.steps;
+        self.revision += 1;
+        Ok(())
     }
-    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError> {
-        self.apply_edit(edit).map(drop)
+    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
+        let before = self.take_state();
+        match edit {
+            _ if crate::tools::is_tool_edit(edit) => self.apply_field_edit(edit, before),
+            Edit::Gravity { .. }
+            | Edit::Inflate { .. }
+            | Edit::Repel { .. }
+            | Edit::Data { .. } => self.apply_field_edit(edit, before),
+            Edit::Fix { .. } | Edit::Free { .. } | Edit::Material { .. } => {
+                self.apply_net_edit(edit, before)
+            }
+            Edit::PlasticReset
+            | Edit::Stop
+            | Edit::MovePoint { .. }
+            | Edit::SetWeight { .. }
+            | Edit::Set { .. }
+            | Edit::Integrator { .. } => self.apply_state_edit(edit, before),
+            _ => self.apply_constraint_edit(edit, before),
+        }
     }
 }
 
@@ -2290,15 +2186,7 @@ impl Model for DnurbsModel {
         s
     }
 
-    fn time(&self) -> f64 {
-        self.engine.time()
-    }
-    fn dt(&self) -> f64 {
-        self.dt
-    }
-    fn steps(&self) -> u64 {
-        self.steps
-    }
+    crate::model::clock_methods!(self => self.engine.time(), self.dt, self.steps);
 
     fn step(&mut self) -> Result<StepReport, SessionError> {
         let due = self.tools.due(self.engine.time(), self.dt);
@@ -2370,12 +2258,9 @@ impl Model for DnurbsModel {
             out.push(c);
         }
         let p = self.engine.control_points(false);
-        let mut fixed = LineSet::new(LineRole::Fixed);
-        fixed.points = (0..p.len())
-            .filter(|&i| self.engine.is_point_fixed(i))
-            .map(|i| p[i])
-            .collect();
-        out.push(fixed);
+        out.push(LineSet::markers(LineRole::Fixed, &p, |i| {
+            self.engine.is_point_fixed(i)
+        }));
         let t = self.engine.time();
         let size = self.size;
         let mut ropes = LineSet::new(LineRole::Ropes);
@@ -2436,13 +2321,7 @@ impl Model for DnurbsModel {
         let cp = if matches!(self.engine, Engine::Swung(_)) {
             None
         } else {
-            let p = self.engine.control_points(false);
-            crate::pick::ray_points(ray, &p, tolerance).map(|(i, s)| Hit {
-                distance: s,
-                point: p[i],
-                element: Element::ControlPoint { index: i },
-                extra: [None, None],
-            })
+            crate::pick::control_point(ray, &self.engine.control_points(false), tolerance)
         };
         let model = if self.engine.is_curve() {
             let mut best: Option<(f64, f64, Vec3)> = None;
@@ -2489,13 +2368,7 @@ impl Model for DnurbsModel {
     }
 
     fn params(&self) -> Vec<Param> {
-        let par = |name: &str, value: f64, min: f64, max: f64, doc: &str| Param {
-            name: name.into(),
-            value,
-            min,
-            max,
-            doc: doc.into(),
-        };
+        let par = Param::new;
         let m = &self.material;
         let mut v = vec![
             par("mu", m.mu, 0.0, 100.0, "mass density (eq 16)"),
@@ -2531,10 +2404,6 @@ impl Model for DnurbsModel {
             ));
         }
         v
-    }
-
-    fn apply(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        self.apply_edit(edit)
     }
 
     crate::model::stateful_methods!();
@@ -2637,11 +2506,6 @@ impl Model for DnurbsModel {
         };
         serde_json::to_value(saved).map_err(SessionError::kernel)
     }
-}
-
-/// Rebuilds a saved model.
-pub fn load(kind: ModelKind, saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
-    Ok(Box::new(DnurbsModel::load(kind, saved)?))
 }
 
 // ---------------------------------------------------------------------------------------

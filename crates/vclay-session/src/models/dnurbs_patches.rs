@@ -19,6 +19,11 @@
 //! `from`), `move-rope`, `force` (constant, at `param` or nearest `near`), `release`, `fix` and
 //! `free` (control points by global id, box or nearest; x, y, z are frozen), `set dt`. Others
 //! are refused with a message.
+//!
+//! The model is [`GeneralizedModel`] over `GeneralizedDnurbs<PatchesGeometry>`; this file holds
+//! what is the kind's own ([`Patches`]): its keys, how the patches and joins are built, its
+//! ropes and forces (a cursor path and release rule of their own, kept by session files), the
+//! patch control nets, the model JSON export and the saved settings.
 
 use std::path::{Path, PathBuf};
 
@@ -26,20 +31,20 @@ use serde::{Deserialize, Serialize};
 use vclay_core::{TriMesh, Vec3};
 use vclay_dynamics::dnurbs::generalized::{GeneralizedGeometry, GeneralizedState};
 use vclay_dynamics::dnurbs::{
-    Continuity, Density, ElasticReference, Force, GeneralizedDnurbs, Material, PatchesGeometry,
-    Preset, Target,
+    Continuity, ElasticReference, Force, GeneralizedDnurbs, PatchesGeometry, Target,
 };
 use vclay_io::model::Entity;
 use vclay_spline::{NurbsSurface, ParametricSurface};
 
 use super::SpecError;
-use super::saved::{SavedState, step_implicit};
-use crate::command::Edit;
-use crate::error::SessionError;
-use crate::model::{
-    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, unsupported_export,
+use super::generalized::{
+    GeneralizedKind, GeneralizedModel, check_material_and_dt, constant_material, table_one,
 };
+use super::saved::SavedState;
+use crate::command::Edit;
+use crate::command::RopeRequest;
+use crate::error::SessionError;
+use crate::model::{LineRole, LineSet, ModelKind};
 
 /// Default display samples per patch and direction.
 pub const DEFAULT_TESSELLATION: usize = 24;
@@ -117,22 +122,21 @@ struct PointForce {
 /// Tools and counters that evolve with the edits.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub(crate) struct Tools {
+pub struct Tools {
     ropes: Vec<Rope>,
     forces: Vec<PointForce>,
     next: usize,
 }
 
-/// Several D-NURBS patches with continuity joins (see the [module docs](self)).
+/// The `dnurbs-patches` kind's part of [`GeneralizedModel`]: its settings and tools.
 #[derive(Clone, Debug)]
-pub struct PatchesModel {
+pub struct Patches {
     settings: Settings,
     tools: Tools,
-    engine: GeneralizedDnurbs<PatchesGeometry>,
-    size: f64,
-    revision: u64,
-    energy: Energy,
 }
+
+/// Several D-NURBS patches with continuity joins (see the [module docs](self)).
+pub type PatchesModel = GeneralizedModel<Patches>;
 
 fn model_err(e: impl std::fmt::Display) -> SessionError {
     SessionError::model(e)
@@ -190,55 +194,24 @@ impl PatchesModel {
             hi = hi.sup(p);
         }
         let size = (hi - lo).norm().max(f64::MIN_POSITIVE);
-        let material = Material {
-            mu: Density::Constant(settings.mu),
-            gamma: Density::Constant(settings.gamma),
-            alpha: settings
-                .alpha
-                .iter()
-                .map(|&a| Density::Constant(a))
-                .collect(),
-            beta: settings
-                .beta
-                .iter()
-                .map(|&b| Density::Constant(b))
-                .collect(),
-        };
+        let material =
+            constant_material(settings.mu, settings.gamma, &settings.alpha, &settings.beta);
         let mut engine = GeneralizedDnurbs::new(geometry, material).map_err(|e| e.to_string())?;
         engine.set_elastic_reference(ElasticReference::RestShape);
         for t in ties {
             engine.add_tie(t).map_err(|e| e.to_string())?;
         }
-        let elastic = engine.elastic_energy().unwrap_or(0.0);
-        Ok(Self {
-            settings,
-            tools,
-            engine,
-            size,
-            revision: 0,
-            energy: Energy {
-                elastic,
-                ..Energy::default()
-            },
-        })
-    }
-
-    /// The engine (for tests and tools).
-    pub fn engine(&self) -> &GeneralizedDnurbs<PatchesGeometry> {
-        &self.engine
+        Ok(Self::new(Patches { settings, tools }, engine, size))
     }
 
     /// Patch `k`'s current surface.
     pub fn patch(&self, k: usize) -> Result<NurbsSurface, SessionError> {
-        self.engine
-            .geometry()
-            .patch(k)
-            .map_err(SessionError::kernel)
+        patch(self.engine(), k)
     }
 
     /// Number of patches.
     pub fn patch_count(&self) -> usize {
-        self.engine.geometry().len()
+        self.engine().geometry().len()
     }
 
     /// Builds the model from its scenario tables.
@@ -277,13 +250,7 @@ impl PatchesModel {
             joins.push(Join { a: j.a, b: j.b, g1 });
         }
         let preset_name = mat.preset.clone().unwrap_or_else(|| "Egg sculpting".into());
-        let preset: &Preset = Preset::by_name(&preset_name).ok_or_else(|| {
-            SpecError::new(
-                "material",
-                "preset",
-                format!("{preset_name:?} is not a Table 1 row"),
-            )
-        })?;
+        let preset = table_one(&preset_name)?;
         let tessellation = m.tessellation.unwrap_or(DEFAULT_TESSELLATION);
         if !(2..=256).contains(&tessellation) {
             return Err(SpecError::new(
@@ -304,81 +271,235 @@ impl PatchesModel {
             k: preset.k,
             dt: sim.dt.unwrap_or(preset.dt),
         };
-        let all = [
-            ("mu", settings.mu),
-            ("gamma", settings.gamma),
-            ("alpha", settings.alpha[0]),
-            ("alpha", settings.alpha[1]),
-            ("beta", settings.beta[0]),
-            ("beta", settings.beta[1]),
-            ("beta", settings.beta[2]),
-        ];
-        for (key, v) in all {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(SpecError::new(
-                    "material",
-                    key,
-                    format!("{v} must be finite and non-negative"),
-                ));
-            }
-        }
-        if !(settings.dt.is_finite() && settings.dt > 0.0) {
-            return Err(SpecError::new(
-                "simulation",
-                "dt",
-                format!("{} must be positive and finite", settings.dt),
-            ));
-        }
+        check_material_and_dt(
+            &[
+                ("mu", settings.mu),
+                ("gamma", settings.gamma),
+                ("alpha", settings.alpha[0]),
+                ("alpha", settings.alpha[1]),
+                ("beta", settings.beta[0]),
+                ("beta", settings.beta[1]),
+                ("beta", settings.beta[2]),
+            ],
+            settings.dt,
+        )?;
         Self::build(settings, Tools::default()).map_err(|e| SpecError::new("model", "join", e))
     }
 
     /// Rebuilds a saved model.
     pub fn load(v: &serde_json::Value) -> Result<Self, SessionError> {
         let saved: Saved = serde_json::from_value(v.clone()).map_err(SessionError::kernel)?;
-        let mut m = Self::build(saved.settings, saved.tools).map_err(model_err)?;
-        m.engine
-            .set_state(&GeneralizedState::from(saved.state))
-            .map_err(SessionError::kernel)?;
-        Ok(m)
+        Self::build(saved.settings, saved.tools)
+            .map_err(model_err)?
+            .with_state(saved.state)
     }
+}
 
-    fn mesh(&self) -> Result<TriMesh, SessionError> {
-        let mut mesh = TriMesh::new();
-        let n = self.settings.tessellation;
-        for k in 0..self.patch_count() {
-            let mut part = TriMesh::new();
-            vclay_spline::tessellate_surface(&self.patch(k)?, [n, n], &mut part)
-                .map_err(SessionError::kernel)?;
-            mesh.append(&part);
+type Engine = GeneralizedDnurbs<PatchesGeometry>;
+
+/// Patch `k`'s current surface.
+fn patch(engine: &Engine, k: usize) -> Result<NurbsSurface, SessionError> {
+    engine.geometry().patch(k).map_err(SessionError::kernel)
+}
+
+/// The surface point at a global parameter (the patch whose shifted domain holds it, as
+/// [`PatchesGeometry`] locates it).
+fn point_at(engine: &Engine, param: [f64; 2]) -> Option<Vec3> {
+    let g = engine.geometry();
+    let k = (0..g.len())
+        .rev()
+        .find(|&k| param[0] - g.global_param(k, [0.0, 0.0])[0] >= -0.5)
+        .unwrap_or(0);
+    let shift = g.global_param(k, [0.0, 0.0])[0];
+    let s = g.patch(k).ok()?;
+    s.point(param[0] - shift, param[1]).ok()
+}
+
+/// Control point `c`'s index range of x, y, z in the coordinates.
+fn xyz(c: usize) -> std::ops::Range<usize> {
+    4 * c..4 * c + 3
+}
+
+fn param_of(
+    engine: &Engine,
+    param: Option<[f64; 2]>,
+    near: [f64; 3],
+) -> Result<[f64; 2], SessionError> {
+    match param {
+        Some(p) if p.iter().all(|x| x.is_finite()) => Ok(p),
+        Some(p) => Err(cmd_err(format!("param {p:?} is not finite"))),
+        None => engine
+            .geometry()
+            .nearest_param(&Vec3::from(near))
+            .map_err(SessionError::command_from),
+    }
+}
+
+impl Patches {
+    fn name(&mut self, given: Option<&str>, prefix: &str) -> Result<String, SessionError> {
+        let name = match given {
+            Some(n) => n.to_string(),
+            None => {
+                self.tools.next += 1;
+                format!("{prefix}{}", self.tools.next - 1)
+            }
+        };
+        if self.tools.ropes.iter().any(|r| r.name == name)
+            || self.tools.forces.iter().any(|f| f.name == name)
+        {
+            return Err(cmd_err(format!("a tool named {name:?} exists already")));
         }
-        Ok(mesh)
+        Ok(name)
     }
 
-    /// The surface point at a global parameter (the patch whose shifted domain holds it, as
-    /// [`PatchesGeometry`] locates it).
-    fn point_at(&self, param: [f64; 2]) -> Option<Vec3> {
-        let g = self.engine.geometry();
-        let k = (0..g.len())
-            .rev()
-            .find(|&k| param[0] - g.global_param(k, [0.0, 0.0])[0] >= -0.5)
-            .unwrap_or(0);
-        let shift = g.global_param(k, [0.0, 0.0])[0];
-        let s = g.patch(k).ok()?;
-        s.point(param[0] - shift, param[1]).ok()
+    /// `rope`: a delta spring (eq 19) to a cursor moving linearly from `from` to `to`.
+    fn rope(&mut self, engine: &Engine, edit: &Edit) -> Result<String, SessionError> {
+        let Some((r, name, release)) = RopeRequest::of(edit) else {
+            return Err(super::misrouted());
+        };
+        if r.velocity.is_some() || r.length.is_some() || r.kernel.is_some() {
+            return Err(cmd_err(
+                "a dnurbs-patches rope takes from, param, to, start, until, release and stiffness (not velocity, length or kernel)",
+            ));
+        }
+        finite3("from", &r.from)?;
+        let to = r.to.unwrap_or(r.from);
+        finite3("to", &to)?;
+        let k = r.stiffness.unwrap_or(self.settings.k);
+        if !(k.is_finite() && k > 0.0) {
+            return Err(cmd_err(format!("stiffness {k}: must be positive")));
+        }
+        let param = param_of(engine, r.param, r.from)?;
+        let name = self.name(name, "rope")?;
+        let start = r.start.unwrap_or(engine.time());
+        let until = r.until.unwrap_or(start).max(start);
+        self.tools.ropes.push(Rope {
+            name: name.clone(),
+            param,
+            from: r.from,
+            to,
+            start,
+            until,
+            release,
+            stiffness: k,
+        });
+        Ok(format!("rope `{name}` attached at parameter {param:?}"))
     }
 
-    /// Control point `c`'s index range of x, y, z in the coordinates.
-    fn xyz(c: usize) -> std::ops::Range<usize> {
-        4 * c..4 * c + 3
+    /// `force`: a constant force at `param` or at the point nearest `near`.
+    fn force(&mut self, engine: &Engine, edit: &Edit) -> Result<String, SessionError> {
+        let Edit::Force {
+            name,
+            near,
+            param,
+            force,
+            until,
+        } = edit
+        else {
+            return Err(super::misrouted());
+        };
+        finite3("force", force)?;
+        let param = match (param, near) {
+            (Some(_), _) => param_of(engine, *param, [0.0; 3])?,
+            (None, Some(x)) => param_of(engine, None, *x)?,
+            (None, None) => return Err(cmd_err("a force needs `param` or `near`")),
+        };
+        let name = self.name(name.as_deref(), "force")?;
+        self.tools.forces.push(PointForce {
+            name: name.clone(),
+            param,
+            force: *force,
+            until: *until,
+        });
+        Ok(format!("force `{name}` at parameter {param:?}"))
     }
+}
 
-    /// Puts the tools into the engine's force list for a step starting at `t`.
-    fn load_forces(&mut self, t: f64) {
+fn finite3(what: &str, v: &[f64; 3]) -> Result<(), SessionError> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(cmd_err(format!("{what} {v:?} is not finite")))
+    }
+}
+
+/// The patches' control points (x, y, z of coordinates `4c..4c + 3`) for the shared fix/free
+/// tool.
+struct PatchNet<'a>(&'a mut Engine);
+
+impl crate::tools::ControlNet for PatchNet<'_> {
+    fn current_points(&self) -> Vec<Vec3> {
+        control_points(self.0)
+    }
+    fn rest_points(&self) -> Vec<Vec3> {
+        let q = self.0.state().rest_coordinates;
+        (0..q.len() / 4)
+            .map(|c| Vec3::new(q[4 * c], q[4 * c + 1], q[4 * c + 2]))
+            .collect()
+    }
+    fn is_fixed(&self, c: usize) -> bool {
+        xyz(c).all(|i| self.0.is_fixed_coordinate(i))
+    }
+    fn set_fixed(&mut self, ids: &[usize], fix: bool) -> Result<(), SessionError> {
+        for &c in ids {
+            for i in xyz(c) {
+                self.0
+                    .set_fixed_coordinate(i, fix)
+                    .map_err(SessionError::command_from)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Every patch's control points, patch after patch.
+fn control_points(engine: &Engine) -> Vec<Vec3> {
+    (0..engine.geometry().len())
+        .filter_map(|k| patch(engine, k).ok())
+        .flat_map(|s| s.control_points().to_vec())
+        .collect()
+}
+
+impl GeneralizedKind for Patches {
+    type Geometry = PatchesGeometry;
+    /// The time step and the tools.
+    type State = (f64, Tools);
+    const KIND: ModelKind = ModelKind::DnurbsPatches;
+    const EXPORTS: &'static [&'static str] = &["json", "obj", "ply", "stl"];
+    const EDITS_REDRAW: bool = true;
+    const MESH_NAME: &'static str = "dnurbs-patches";
+    fn dt(&self) -> f64 {
+        self.settings.dt
+    }
+    fn set_dt(&mut self, dt: f64) {
+        self.settings.dt = dt;
+    }
+    fn take(&self) -> (f64, Tools) {
+        (self.settings.dt, self.tools.clone())
+    }
+    fn put(&mut self, s: &(f64, Tools)) {
+        self.settings.dt = s.0;
+        self.tools = s.1.clone();
+    }
+    fn summary(&self, engine: &Engine) -> String {
+        format!(
+            "dnurbs-patches: {} patches, {} control points, {} joins ({} ties), {} ropes, {} forces",
+            engine.geometry().len(),
+            engine.geometry().coordinates().len() / 4,
+            self.settings.joins.len(),
+            engine.ties().len(),
+            self.tools.ropes.len(),
+            self.tools.forces.len()
+        )
+    }
+    /// Puts the tools into the engine's force list for a step starting at the engine's time.
+    fn before_step(&mut self, engine: &mut Engine) {
+        let t = engine.time();
         self.tools
             .ropes
             .retain(|r| r.release.is_none_or(|rel| t < rel));
         self.tools.forces.retain(|f| f.until.is_none_or(|u| t < u));
-        let forces = self.engine.forces_mut();
+        let forces = engine.forces_mut();
         forces.clear();
         for r in &self.tools.ropes {
             forces.push(Force::Spring {
@@ -395,135 +516,21 @@ impl PatchesModel {
             });
         }
     }
-
-    fn name(&mut self, given: &Option<String>, prefix: &str) -> Result<String, SessionError> {
-        let name = match given {
-            Some(n) => n.clone(),
-            None => {
-                self.tools.next += 1;
-                format!("{prefix}{}", self.tools.next - 1)
-            }
-        };
-        if self.tools.ropes.iter().any(|r| r.name == name)
-            || self.tools.forces.iter().any(|f| f.name == name)
-        {
-            return Err(cmd_err(format!("a tool named {name:?} exists already")));
+    fn mesh(&self, engine: &Engine) -> Result<TriMesh, SessionError> {
+        let mut mesh = TriMesh::new();
+        let n = self.settings.tessellation;
+        for k in 0..engine.geometry().len() {
+            let mut part = TriMesh::new();
+            vclay_spline::tessellate_surface(&patch(engine, k)?, [n, n], &mut part)
+                .map_err(SessionError::kernel)?;
+            mesh.append(&part);
         }
-        Ok(name)
+        Ok(mesh)
     }
-
-    fn param_of(&self, param: Option<[f64; 2]>, near: [f64; 3]) -> Result<[f64; 2], SessionError> {
-        match param {
-            Some(p) if p.iter().all(|x| x.is_finite()) => Ok(p),
-            Some(p) => Err(cmd_err(format!("param {p:?} is not finite"))),
-            None => self
-                .engine
-                .geometry()
-                .nearest_param(&Vec3::from(near))
-                .map_err(SessionError::command_from),
-        }
-    }
-}
-
-fn finite3(what: &str, v: &[f64; 3]) -> Result<(), SessionError> {
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(())
-    } else {
-        Err(cmd_err(format!("{what} {v:?} is not finite")))
-    }
-}
-
-/// The patches' control points (x, y, z of coordinates `4c..4c + 3`) for the shared fix/free
-/// tool.
-impl crate::tools::ControlNet for PatchesModel {
-    fn current_points(&self) -> Vec<Vec3> {
-        Model::control_points(self)
-    }
-    fn rest_points(&self) -> Vec<Vec3> {
-        let q = self.engine.state().rest_coordinates;
-        (0..q.len() / 4)
-            .map(|c| Vec3::new(q[4 * c], q[4 * c + 1], q[4 * c + 2]))
-            .collect()
-    }
-    fn is_fixed(&self, c: usize) -> bool {
-        Self::xyz(c).all(|i| self.engine.is_fixed_coordinate(i))
-    }
-    fn set_fixed(&mut self, ids: &[usize], fix: bool) -> Result<(), SessionError> {
-        for &c in ids {
-            for i in Self::xyz(c) {
-                self.engine
-                    .set_fixed_coordinate(i, fix)
-                    .map_err(SessionError::command_from)?;
-            }
-        }
-        Ok(())
-    }
-}
-
-impl crate::model::Stateful for PatchesModel {
-    type State = (GeneralizedState, f64, Tools);
-    fn take_state(&self) -> Self::State {
-        (self.engine.state(), self.settings.dt, self.tools.clone())
-    }
-    fn put_state(&mut self, s: &Self::State) -> Result<(), SessionError> {
-        self.engine.set_state(&s.0).map_err(SessionError::kernel)?;
-        self.settings.dt = s.1;
-        self.tools = s.2.clone();
-        self.revision += 1;
-        Ok(())
-    }
-    fn apply_inverse(&mut self, _edit: &Edit) -> Result<(), SessionError> {
-        // The snapshot holds everything the edits change.
-        Ok(())
-    }
-}
-
-impl Model for PatchesModel {
-    fn kind(&self) -> ModelKind {
-        ModelKind::DnurbsPatches
-    }
-    fn summary(&self) -> String {
-        format!(
-            "dnurbs-patches: {} patches, {} control points, {} joins ({} ties), {} ropes, {} forces",
-            self.patch_count(),
-            self.engine.geometry().coordinates().len() / 4,
-            self.settings.joins.len(),
-            self.engine.ties().len(),
-            self.tools.ropes.len(),
-            self.tools.forces.len()
-        )
-    }
-    fn time(&self) -> f64 {
-        self.engine.time()
-    }
-    fn dt(&self) -> f64 {
-        self.settings.dt
-    }
-    fn steps(&self) -> u64 {
-        self.engine.steps() as u64
-    }
-    fn step(&mut self) -> Result<StepReport, SessionError> {
-        self.load_forces(self.engine.time());
-        let report = step_implicit(&mut self.engine, self.settings.dt, &mut self.energy)?;
-        self.revision += 1;
-        Ok(report)
-    }
-    fn energy(&self) -> Energy {
-        self.energy
-    }
-    fn size(&self) -> f64 {
-        self.size
-    }
-    fn revision(&self) -> u64 {
-        self.revision
-    }
-    fn display_mesh(&self) -> Result<TriMesh, SessionError> {
-        self.mesh()
-    }
-    fn display_lines(&self) -> Vec<LineSet> {
+    fn display_lines(&self, engine: &Engine) -> Vec<LineSet> {
         let mut net = LineSet::new(LineRole::ControlNet);
-        for k in 0..self.patch_count() {
-            let Ok(s) = self.patch(k) else { continue };
+        for k in 0..engine.geometry().len() {
+            let Ok(s) = patch(engine, k) else { continue };
             let [n, m] = s.dims();
             for i in 0..n {
                 for j in 0..m {
@@ -537,99 +544,22 @@ impl Model for PatchesModel {
             }
         }
         let mut ropes = LineSet::new(LineRole::Ropes);
-        let t = self.engine.time();
+        let t = engine.time();
         for r in &self.tools.ropes {
-            if let Some(p) = self.point_at(r.param) {
+            if let Some(p) = point_at(engine, r.param) {
                 ropes.segment(p, r.cursor(t));
             }
         }
-        let mut fixed = LineSet::new(LineRole::Fixed);
-        let f = &self.engine.state().fixed;
-        for (c, p) in self.control_points().into_iter().enumerate() {
-            if f[4 * c] {
-                fixed.points.push(p);
-            }
-        }
+        let f = &engine.state().fixed;
+        let fixed = LineSet::markers(LineRole::Fixed, &control_points(engine), |c| f[4 * c]);
         vec![net, ropes, fixed]
     }
-    fn pick(&self, ray: &Ray, _tolerance: f64) -> Option<Hit> {
-        let mesh = self.mesh().ok()?;
-        crate::pick::ray_mesh(ray, &mesh).map(|(s, _, _)| {
-            let point = ray.origin + ray.direction * s;
-            let param = self
-                .engine
-                .geometry()
-                .nearest_param(&point)
-                .unwrap_or([0.0, 0.0]);
-            Hit {
-                distance: s,
-                point,
-                element: Element::SurfacePoint { param },
-                extra: [None, None],
-            }
-        })
+    fn control_points(&self, engine: &Engine) -> Vec<Vec3> {
+        control_points(engine)
     }
-    fn params(&self) -> Vec<Param> {
-        vec![Param {
-            name: "dt".into(),
-            value: self.settings.dt,
-            min: 1e-4,
-            max: 0.1,
-            doc: "time step of eq 18".into(),
-        }]
-    }
-    fn apply(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        let before = crate::model::Stateful::take_state(self);
-        let t = self.engine.time();
-        let msg = match edit {
-            Edit::Set { name, value } if name == "dt" => {
-                if !(value.is_finite() && *value > 0.0) {
-                    return Err(cmd_err(format!("dt = {value}: must be positive")));
-                }
-                self.settings.dt = *value;
-                format!("dt = {value}")
-            }
-            Edit::Rope {
-                name,
-                from,
-                param,
-                to,
-                until,
-                velocity,
-                release,
-                stiffness,
-                length,
-                kernel,
-                start,
-            } => {
-                if velocity.is_some() || length.is_some() || kernel.is_some() {
-                    return Err(cmd_err(
-                        "a dnurbs-patches rope takes from, param, to, start, until, release and stiffness (not velocity, length or kernel)",
-                    ));
-                }
-                finite3("from", from)?;
-                let to = to.unwrap_or(*from);
-                finite3("to", &to)?;
-                let k = stiffness.unwrap_or(self.settings.k);
-                if !(k.is_finite() && k > 0.0) {
-                    return Err(cmd_err(format!("stiffness {k}: must be positive")));
-                }
-                let param = self.param_of(*param, *from)?;
-                let name = self.name(name, "rope")?;
-                let start = start.unwrap_or(t);
-                let until = until.unwrap_or(start).max(start);
-                self.tools.ropes.push(Rope {
-                    name: name.clone(),
-                    param,
-                    from: *from,
-                    to,
-                    start,
-                    until,
-                    release: *release,
-                    stiffness: k,
-                });
-                format!("rope `{name}` attached at parameter {param:?}")
-            }
+    fn apply(&mut self, engine: &mut Engine, edit: &Edit) -> Result<String, SessionError> {
+        Ok(match edit {
+            Edit::Rope { .. } => self.rope(engine, edit)?,
             Edit::MoveRope { name, to } => {
                 finite3("to", to)?;
                 let r = self
@@ -642,28 +572,7 @@ impl Model for PatchesModel {
                 r.to = *to;
                 format!("rope `{name}` cursor at {to:?}")
             }
-            Edit::Force {
-                name,
-                near,
-                param,
-                force,
-                until,
-            } => {
-                finite3("force", force)?;
-                let param = match (param, near) {
-                    (Some(_), _) => self.param_of(*param, [0.0; 3])?,
-                    (None, Some(x)) => self.param_of(None, *x)?,
-                    (None, None) => return Err(cmd_err("a force needs `param` or `near`")),
-                };
-                let name = self.name(name, "force")?;
-                self.tools.forces.push(PointForce {
-                    name: name.clone(),
-                    param,
-                    force: *force,
-                    until: *until,
-                });
-                format!("force `{name}` at parameter {param:?}")
-            }
+            Edit::Force { .. } => self.force(engine, edit)?,
             Edit::Release { name } => {
                 let n = self.tools.ropes.len() + self.tools.forces.len();
                 self.tools.ropes.retain(|r| &r.name != name);
@@ -674,67 +583,31 @@ impl Model for PatchesModel {
                 format!("released `{name}`")
             }
             Edit::Fix { .. } | Edit::Free { .. } => {
-                let fix = matches!(edit, Edit::Fix { .. });
-                let r = crate::tools::fix_or_free(self, edit)?;
-                format!(
-                    "{} {} control points",
-                    if fix { "fixed" } else { "freed" },
-                    r.selected.len()
-                )
+                let r = crate::tools::fix_or_free(&mut PatchNet(engine), edit)?;
+                crate::tools::fixed_message(edit, &r)
             }
             other => {
                 return Err(cmd_err(format!(
                     "a dnurbs-patches model takes rope, move-rope, force, release, fix, free and `set dt` only, not {other:?}"
                 )));
             }
-        };
-        self.revision += 1;
-        Ok(Applied {
-            message: msg,
-            undo: Undo::State(Snapshot::new(before)),
         })
     }
-    crate::model::stateful_methods!();
-    fn control_points(&self) -> Vec<Vec3> {
-        (0..self.patch_count())
-            .filter_map(|k| self.patch(k).ok())
-            .flat_map(|s| s.control_points().to_vec())
-            .collect()
-    }
-    fn export(&self, path: &Path) -> Result<(), SessionError> {
-        let io = |e: &dyn std::fmt::Display| SessionError::io(path, e);
-        match extension(path).as_str() {
-            "json" => {
-                let mut entities = Vec::with_capacity(self.patch_count());
-                for k in 0..self.patch_count() {
-                    entities.push(Entity::Surface(self.patch(k)?));
-                }
-                vclay_io::model::write_model(path, &entities).map_err(|e| io(&e))
-            }
-            "obj" | "ply" | "stl" => vclay_io::write_mesh(path, &self.mesh()?).map_err(|e| io(&e)),
-            _ => Err(unsupported_export(
-                self.kind(),
-                path,
-                &self.export_formats(),
-            )),
+    fn write_json(&self, engine: &Engine, path: &Path) -> Result<(), SessionError> {
+        let mut entities = Vec::with_capacity(engine.geometry().len());
+        for k in 0..engine.geometry().len() {
+            entities.push(Entity::Surface(patch(engine, k)?));
         }
+        vclay_io::model::write_model(path, &entities).map_err(|e| SessionError::io(path, e))
     }
-    fn export_formats(&self) -> Vec<&'static str> {
-        vec!["json", "obj", "ply", "stl"]
-    }
-    fn save(&self) -> Result<serde_json::Value, SessionError> {
+    fn save(&self, state: &GeneralizedState) -> Result<serde_json::Value, SessionError> {
         serde_json::to_value(Saved {
             settings: self.settings.clone(),
             tools: self.tools.clone(),
-            state: SavedState::from(&self.engine.state()),
+            state: SavedState::from(state),
         })
         .map_err(SessionError::kernel)
     }
-}
-
-/// Rebuilds a saved model.
-pub fn load(saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
-    Ok(Box::new(PatchesModel::load(saved)?))
 }
 
 /// The typed spec of a multi-patch D-NURBS ([`super::ModelSpec`]).
@@ -856,14 +729,8 @@ pub struct MaterialKeys {
     pub beta: Option<[f64; 3]>,
 }
 
-/// The `[simulation]` keys of a `dnurbs-patches` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct SimKeys {
-    pub dt: Option<f64>,
-}
+/// The `[simulation]` keys of this kind: only the clock's step `dt` (absent: the preset's).
+pub type SimKeys = super::ClockKeys;
 
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

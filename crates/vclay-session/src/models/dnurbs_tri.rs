@@ -16,6 +16,10 @@
 //!
 //! Edits: `set dt`, `set weight_penalty`; other tools (ropes, forces, fixing) are not offered
 //! for this kind yet and are refused with a message.
+//!
+//! The model is [`GeneralizedModel`] over `GeneralizedDnurbs<TriangularGeometry>`; this file
+//! holds what is the kind's own ([`Triangular`]): its keys, how the surface is built, the
+//! Bezier-pattern control net, the triangular NURBS export and the saved settings.
 
 use std::path::{Path, PathBuf};
 
@@ -24,18 +28,18 @@ use vclay_core::{TriMesh, Vec3};
 use vclay_dynamics::dnurbs::generalized::{GeneralizedGeometry, GeneralizedState};
 use vclay_dynamics::dnurbs::rounding::{ROUNDING_WEIGHT_PENALTY, RoundingKind, RoundingModel};
 use vclay_dynamics::dnurbs::{
-    Constraint, Density, ElasticReference, GeneralizedDnurbs, Material, Preset, TriangleQuadrature,
-    TriangularGeometry,
+    Constraint, GeneralizedDnurbs, TriangleQuadrature, TriangularGeometry,
 };
 
 use super::SpecError;
-use super::saved::{SavedState, step_implicit};
+use super::generalized::{
+    GeneralizedKind, GeneralizedModel, check_material_and_dt, constant_material, reference,
+    table_one,
+};
+use super::saved::SavedState;
 use crate::command::Edit;
 use crate::error::SessionError;
-use crate::model::{
-    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, unsupported_export,
-};
+use crate::model::{LineRole, LineSet, ModelKind, Param};
 
 /// Default display tessellation level (`level^2` triangles per domain triangle).
 pub const DEFAULT_TESSELLATION: usize = 6;
@@ -67,15 +71,14 @@ struct Settings {
     dt: f64,
 }
 
-/// A triangular D-NURBS model (see the [module docs](self)).
+/// The `dnurbs-triangular` kind's part of [`GeneralizedModel`]: its settings.
 #[derive(Clone, Debug)]
-pub struct TriangularModel {
+pub struct Triangular {
     settings: Settings,
-    engine: GeneralizedDnurbs<TriangularGeometry>,
-    size: f64,
-    revision: u64,
-    energy: Energy,
 }
+
+/// A triangular D-NURBS model (see the [module docs](self)).
+pub type TriangularModel = GeneralizedModel<Triangular>;
 
 fn model_err(e: impl std::fmt::Display) -> SessionError {
     SessionError::model(e)
@@ -92,20 +95,8 @@ impl TriangularModel {
                 points: settings.points.unwrap_or(6),
             }
         };
-        let material = Material {
-            mu: Density::Constant(settings.mu),
-            gamma: Density::Constant(settings.gamma),
-            alpha: settings
-                .alpha
-                .iter()
-                .map(|&a| Density::Constant(a))
-                .collect(),
-            beta: settings
-                .beta
-                .iter()
-                .map(|&b| Density::Constant(b))
-                .collect(),
-        };
+        let material =
+            constant_material(settings.mu, settings.gamma, &settings.alpha, &settings.beta);
         let (surface, constraints, fixed): (_, Vec<Constraint>, Vec<usize>) = match &settings.source
         {
             Source::Rounding(name) => {
@@ -123,11 +114,7 @@ impl TriangularModel {
         let geometry = TriangularGeometry::new(surface).with_quadrature(quadrature);
         let size = geometry.scale();
         let mut engine = GeneralizedDnurbs::new(geometry, material).map_err(|e| e.to_string())?;
-        engine.set_elastic_reference(if settings.absolute {
-            ElasticReference::Absolute
-        } else {
-            ElasticReference::RestShape
-        });
+        engine.set_elastic_reference(reference(settings.absolute));
         engine
             .set_weight_penalty(settings.weight_penalty)
             .map_err(|e| e.to_string())?;
@@ -142,22 +129,7 @@ impl TriangularModel {
         for c in constraints {
             engine.add_constraint(c).map_err(|e| e.to_string())?;
         }
-        let elastic = engine.elastic_energy().unwrap_or(0.0);
-        Ok(Self {
-            settings,
-            engine,
-            size,
-            revision: 0,
-            energy: Energy {
-                elastic,
-                ..Energy::default()
-            },
-        })
-    }
-
-    /// The engine (for tests and tools).
-    pub fn engine(&self) -> &GeneralizedDnurbs<TriangularGeometry> {
-        &self.engine
+        Ok(Self::new(Triangular { settings }, engine, size))
     }
 
     /// Builds the model from its scenario tables.
@@ -210,13 +182,7 @@ impl TriangularModel {
                 .unwrap_or("Corner rounding")
                 .to_string()
         });
-        let preset: &Preset = Preset::by_name(&preset_name).ok_or_else(|| {
-            SpecError::new(
-                "material",
-                "preset",
-                format!("{preset_name:?} is not a Table 1 row"),
-            )
-        })?;
+        let preset = table_one(&preset_name)?;
         let subdivided = match m.quadrature.as_deref() {
             None | Some("subdivided") => true,
             Some("whole") => false,
@@ -274,78 +240,48 @@ impl TriangularModel {
             }),
             dt: sim.dt.unwrap_or(preset.dt),
         };
-        for (key, v) in [
-            ("mu", settings.mu),
-            ("gamma", settings.gamma),
-            ("weight_penalty", settings.weight_penalty),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(SpecError::new(
-                    "material",
-                    key,
-                    format!("{v} must be finite and non-negative"),
-                ));
-            }
-        }
-        if !(settings.dt.is_finite() && settings.dt > 0.0) {
-            return Err(SpecError::new(
-                "simulation",
-                "dt",
-                format!("{} must be positive and finite", settings.dt),
-            ));
-        }
+        check_material_and_dt(
+            &[
+                ("mu", settings.mu),
+                ("gamma", settings.gamma),
+                ("weight_penalty", settings.weight_penalty),
+            ],
+            settings.dt,
+        )?;
         Self::build(settings).map_err(|e| SpecError::new("model", "kind", e))
     }
 
     /// Rebuilds a saved model.
     pub fn load(v: &serde_json::Value) -> Result<Self, SessionError> {
         let saved: Saved = serde_json::from_value(v.clone()).map_err(SessionError::kernel)?;
-        let mut m = Self::build(saved.settings).map_err(model_err)?;
-        m.engine
-            .set_state(&GeneralizedState::from(saved.state))
-            .map_err(SessionError::kernel)?;
-        Ok(m)
-    }
-
-    fn mesh(&self) -> Result<TriMesh, SessionError> {
-        let mut mesh = TriMesh::new();
-        self.engine
-            .geometry()
-            .surface()
-            .tessellate(self.settings.tessellation, &mut mesh)
-            .map_err(SessionError::kernel)?;
-        Ok(mesh)
+        Self::build(saved.settings)
+            .map_err(model_err)?
+            .with_state(saved.state)
     }
 }
 
-impl crate::model::Stateful for TriangularModel {
-    type State = (GeneralizedState, f64, f64);
-    fn take_state(&self) -> Self::State {
-        (
-            self.engine.state(),
-            self.settings.dt,
-            self.settings.weight_penalty,
-        )
+impl GeneralizedKind for Triangular {
+    type Geometry = TriangularGeometry;
+    /// The time step and the weight penalty.
+    type State = (f64, f64);
+    const KIND: ModelKind = ModelKind::DnurbsTriangular;
+    const EXPORTS: &'static [&'static str] = &["json", "obj", "ply", "stl", "glb"];
+    const EDITS_REDRAW: bool = false;
+    const MESH_NAME: &'static str = "triangular-dnurbs";
+    fn dt(&self) -> f64 {
+        self.settings.dt
     }
-    fn put_state(&mut self, s: &Self::State) -> Result<(), SessionError> {
-        self.engine.set_state(&s.0).map_err(SessionError::kernel)?;
-        self.settings.dt = s.1;
-        self.settings.weight_penalty = s.2;
-        self.revision += 1;
-        Ok(())
+    fn set_dt(&mut self, dt: f64) {
+        self.settings.dt = dt;
     }
-    fn apply_inverse(&mut self, _edit: &Edit) -> Result<(), SessionError> {
-        // The snapshot holds everything the edits change.
-        Ok(())
+    fn take(&self) -> (f64, f64) {
+        (self.settings.dt, self.settings.weight_penalty)
     }
-}
-
-impl Model for TriangularModel {
-    fn kind(&self) -> ModelKind {
-        ModelKind::DnurbsTriangular
+    fn put(&mut self, s: &(f64, f64)) {
+        (self.settings.dt, self.settings.weight_penalty) = *s;
     }
-    fn summary(&self) -> String {
-        let s = self.engine.geometry().surface();
+    fn summary(&self, engine: &GeneralizedDnurbs<TriangularGeometry>) -> String {
+        let s = engine.geometry().surface();
         format!(
             "dnurbs-triangular ({}): degree {}, {} domain triangles, {} control points, {} constraints",
             match &self.settings.source {
@@ -355,39 +291,25 @@ impl Model for TriangularModel {
             s.basis().degree(),
             s.basis().domain().triangles().len(),
             s.control_points().len(),
-            self.engine.constraints().len()
+            engine.constraints().len()
         )
     }
-    fn time(&self) -> f64 {
-        self.engine.time()
+    fn mesh(
+        &self,
+        engine: &GeneralizedDnurbs<TriangularGeometry>,
+    ) -> Result<TriMesh, SessionError> {
+        let mut mesh = TriMesh::new();
+        engine
+            .geometry()
+            .surface()
+            .tessellate(self.settings.tessellation, &mut mesh)
+            .map_err(SessionError::kernel)?;
+        Ok(mesh)
     }
-    fn dt(&self) -> f64 {
-        self.settings.dt
-    }
-    fn steps(&self) -> u64 {
-        self.engine.steps() as u64
-    }
-    fn step(&mut self) -> Result<StepReport, SessionError> {
-        let report = step_implicit(&mut self.engine, self.settings.dt, &mut self.energy)?;
-        self.revision += 1;
-        Ok(report)
-    }
-    fn energy(&self) -> Energy {
-        self.energy
-    }
-    fn size(&self) -> f64 {
-        self.size
-    }
-    fn revision(&self) -> u64 {
-        self.revision
-    }
-    fn display_mesh(&self) -> Result<TriMesh, SessionError> {
-        self.mesh()
-    }
-    fn display_lines(&self) -> Vec<LineSet> {
+    fn display_lines(&self, engine: &GeneralizedDnurbs<TriangularGeometry>) -> Vec<LineSet> {
         // The control net: the points of each domain triangle's functions joined in the
         // Bezier pattern (markers when the net is shared), and the constraint points.
-        let g = self.engine.geometry();
+        let g = engine.geometry();
         let pts = g.control_points();
         let mut net = LineSet::new(LineRole::ControlNet);
         let basis = g.surface().basis();
@@ -411,127 +333,62 @@ impl Model for TriangularModel {
             }
         }
         let mut cons = LineSet::new(LineRole::Constraints);
-        for c in self.engine.constraints() {
+        for c in engine.constraints() {
             if let Constraint::Point { target, .. } = c {
                 cons.points.push(*target);
             }
         }
         vec![net, cons]
     }
-    fn pick(&self, ray: &Ray, _tolerance: f64) -> Option<Hit> {
-        let mesh = self.mesh().ok()?;
-        crate::pick::ray_mesh(ray, &mesh).map(|(s, _, _)| {
-            let point = ray.origin + ray.direction * s;
-            let param = self
-                .engine
-                .geometry()
-                .nearest_param(&point)
-                .unwrap_or([0.0, 0.0]);
-            Hit {
-                distance: s,
-                point,
-                element: Element::SurfacePoint { param },
-                extra: [None, None],
-            }
-        })
+    fn control_points(&self, engine: &GeneralizedDnurbs<TriangularGeometry>) -> Vec<Vec3> {
+        engine.geometry().control_points().to_vec()
     }
     fn params(&self) -> Vec<Param> {
-        vec![
-            Param {
-                name: "dt".into(),
-                value: self.settings.dt,
-                min: 1e-4,
-                max: 0.1,
-                doc: "time step of eq 18".into(),
-            },
-            Param {
-                name: "weight_penalty".into(),
-                value: self.settings.weight_penalty,
-                min: 0.0,
-                max: 1000.0,
-                doc: "penalty c/2 sum (w - w0)^2 holding the weights near their initial values"
-                    .into(),
-            },
-        ]
+        vec![Param::new(
+            "weight_penalty",
+            self.settings.weight_penalty,
+            0.0,
+            1000.0,
+            "penalty c/2 sum (w - w0)^2 holding the weights near their initial values",
+        )]
     }
-    fn apply(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        let before = crate::model::Stateful::take_state(self);
-        let msg = match edit {
-            Edit::Set { name, value } if name == "dt" => {
-                if !(value.is_finite() && *value > 0.0) {
-                    return Err(SessionError::command(
-                        "",
-                        "",
-                        format!("dt = {value}: must be positive"),
-                    ));
-                }
-                self.settings.dt = *value;
-                format!("dt = {value}")
-            }
+    fn apply(
+        &mut self,
+        engine: &mut GeneralizedDnurbs<TriangularGeometry>,
+        edit: &Edit,
+    ) -> Result<String, SessionError> {
+        match edit {
             Edit::Set { name, value } if name == "weight_penalty" => {
-                self.engine
+                engine
                     .set_weight_penalty(*value)
                     .map_err(SessionError::kernel)?;
                 self.settings.weight_penalty = *value;
-                format!("weight_penalty = {value}")
+                Ok(format!("weight_penalty = {value}"))
             }
-            other => {
-                return Err(SessionError::command(
-                    "",
-                    "",
-                    format!(
-                        "a dnurbs-triangular model takes `set dt` and `set weight_penalty` only, not {other:?}"
-                    ),
-                ));
-            }
-        };
-        Ok(Applied {
-            message: msg,
-            undo: Undo::State(Snapshot::new(before)),
-        })
-    }
-    crate::model::stateful_methods!();
-    fn control_points(&self) -> Vec<Vec3> {
-        self.engine.geometry().control_points().to_vec()
-    }
-    fn export(&self, path: &Path) -> Result<(), SessionError> {
-        let io = |e: &dyn std::fmt::Display| SessionError::io(path, e);
-        match extension(path).as_str() {
-            "json" => {
-                vclay_io::triangular::write_triangular(path, self.engine.geometry().surface(), None)
-                    .map_err(|e| io(&e))
-            }
-            "obj" | "ply" | "stl" => vclay_io::write_mesh(path, &self.mesh()?).map_err(|e| io(&e)),
-            "glb" => vclay_io::gltf::write_glb(
-                path,
-                &[vclay_io::gltf::GlbMesh::new(
-                    "triangular-dnurbs".to_string(),
-                    self.mesh()?,
-                )],
-            )
-            .map_err(|e| io(&e)),
-            _ => Err(unsupported_export(
-                self.kind(),
-                path,
-                &self.export_formats(),
+            other => Err(SessionError::command(
+                "",
+                "",
+                format!(
+                    "a dnurbs-triangular model takes `set dt` and `set weight_penalty` only, not {other:?}"
+                ),
             )),
         }
     }
-    fn export_formats(&self) -> Vec<&'static str> {
-        vec!["json", "obj", "ply", "stl", "glb"]
+    fn write_json(
+        &self,
+        engine: &GeneralizedDnurbs<TriangularGeometry>,
+        path: &Path,
+    ) -> Result<(), SessionError> {
+        vclay_io::triangular::write_triangular(path, engine.geometry().surface(), None)
+            .map_err(|e| SessionError::io(path, e))
     }
-    fn save(&self) -> Result<serde_json::Value, SessionError> {
+    fn save(&self, state: &GeneralizedState) -> Result<serde_json::Value, SessionError> {
         serde_json::to_value(Saved {
             settings: self.settings.clone(),
-            state: SavedState::from(&self.engine.state()),
+            state: SavedState::from(state),
         })
         .map_err(SessionError::kernel)
     }
-}
-
-/// Rebuilds a saved model.
-pub fn load(saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
-    Ok(Box::new(TriangularModel::load(saved)?))
 }
 
 /// The typed spec of a triangular D-NURBS ([`super::ModelSpec`]).
@@ -565,14 +422,8 @@ pub struct MaterialKeys {
     pub weight_penalty: Option<f64>,
 }
 
-/// The `[simulation]` keys of a `dnurbs-triangular` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct SimKeys {
-    pub dt: Option<f64>,
-}
+/// The `[simulation]` keys of this kind: only the clock's step `dt` (absent: the preset's).
+pub type SimKeys = super::ClockKeys;
 
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -40,8 +40,8 @@ use super::SpecError;
 use crate::command::{Edit, PointMove, V3};
 use crate::error::SessionError;
 use crate::model::{
-    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, unsupported_export,
+    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, StepReport,
+    extension, unsupported_export,
 };
 use crate::tools::{a3, v3};
 
@@ -136,24 +136,14 @@ impl FfdModel {
         self.embedded.rest_positions()
     }
 
-    fn snap(&self) -> FfdSnap {
-        FfdSnap {
-            control_points: self.lattice.control_points().to_vec(),
-            weights: self.lattice.weights().to_vec(),
-            mode: self.mode,
-            dt: self.dt,
-            time: self.time,
-            steps: self.steps,
+    /// An error unless lattice control point `index` exists.
+    fn check_index(&self, index: usize) -> Result<(), SessionError> {
+        let n = self.lattice.control_point_count();
+        if index >= n {
+            return Err(cmd(format!(
+                "lattice control point {index} does not exist (there are {n})"
+            )));
         }
-    }
-
-    fn put(&mut self, s: &FfdSnap) -> Result<(), SessionError> {
-        self.set_lattice(s.control_points.clone(), s.weights.clone())?;
-        self.mode = s.mode;
-        self.dt = s.dt;
-        self.time = s.time;
-        self.steps = s.steps;
-        self.revision += 1;
         Ok(())
     }
 
@@ -271,130 +261,6 @@ impl FfdModel {
             .map(|p| p.name.as_str())
             .collect::<Vec<_>>()
             .join(", ")
-    }
-
-    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        let before = self.snap();
-        let (message, inverse) = match edit {
-            Edit::FfdMove { moves } => {
-                let message = self.ffd_move(moves)?;
-                let inverse = Edit::FfdMove {
-                    moves: moves
-                        .iter()
-                        .map(|m| PointMove {
-                            from: m.to,
-                            to: m.from,
-                        })
-                        .collect(),
-                };
-                (message, inverse)
-            }
-            Edit::MovePoint { index, to } => {
-                let n = self.lattice.control_point_count();
-                if *index >= n {
-                    return Err(cmd(format!(
-                        "lattice control point {index} does not exist (there are {n})"
-                    )));
-                }
-                let old = self.lattice.control_points()[*index];
-                let mut pts = self.lattice.control_points().to_vec();
-                pts[*index] = v3(*to);
-                let w = self.lattice.weights().to_vec();
-                self.set_lattice(pts, w).map_err(|e| cmd(reason(e)))?;
-                (
-                    format!("moved lattice control point {index} to {to:?}"),
-                    Edit::MovePoint {
-                        index: *index,
-                        to: a3(&old),
-                    },
-                )
-            }
-            Edit::SetWeight { index, weight } => {
-                let n = self.lattice.control_point_count();
-                if *index >= n {
-                    return Err(cmd(format!(
-                        "lattice control point {index} does not exist (there are {n})"
-                    )));
-                }
-                let old = self.lattice.weights()[*index];
-                let mut w = self.lattice.weights().to_vec();
-                w[*index] = *weight;
-                let pts = self.lattice.control_points().to_vec();
-                if let Err(e) = self.set_lattice(pts, w) {
-                    self.put(&before)?;
-                    return Err(cmd(reason(e)));
-                }
-                (
-                    format!("weight of lattice control point {index} = {weight}"),
-                    Edit::SetWeight {
-                        index: *index,
-                        weight: old,
-                    },
-                )
-            }
-            Edit::Set { name, value } => {
-                let old = match name.as_str() {
-                    "dt" => {
-                        if !(*value > 0.0 && value.is_finite()) {
-                            return Err(cmd(format!("dt = {value}: must be positive")));
-                        }
-                        std::mem::replace(&mut self.dt, *value)
-                    }
-                    "least_squares" => {
-                        let mode = match *value {
-                            0.0 => SolveMode::Exact,
-                            1.0 => SolveMode::LeastSquares,
-                            _ => {
-                                return Err(cmd(format!(
-                                    "least_squares = {value}: 0 (exact, eq 12) or 1 (least squares)"
-                                )));
-                            }
-                        };
-                        let old = self.mode == SolveMode::LeastSquares;
-                        self.mode = mode;
-                        f64::from(u8::from(old))
-                    }
-                    _ => {
-                        return Err(cmd(format!(
-                            "no parameter `{name}`; an ffd model has {}",
-                            self.param_names()
-                        )));
-                    }
-                };
-                (
-                    format!("{name} = {value}"),
-                    Edit::Set {
-                        name: name.clone(),
-                        value: old,
-                    },
-                )
-            }
-            Edit::Fix { .. } | Edit::Free { .. } => {
-                return Err(cmd(format!(
-                    "an {} model has no fixed control points: direct manipulation \
-                     (ffd-direct-manipulation.txt eqs 7 and 12) moves every control point of \
-                     the support; use a multi-point `ffd-move` with the points to keep as moves \
-                     onto themselves",
-                    ModelKind::Ffd
-                )));
-            }
-            _ => {
-                return Err(cmd(format!(
-                    "`{}` does not apply to an {} model (it takes ffd-move, move-point, \
-                     set-weight, set)",
-                    edit.action(),
-                    ModelKind::Ffd
-                )));
-            }
-        };
-        self.revision += 1;
-        Ok(Applied {
-            message,
-            undo: Undo::Inverse {
-                edit: inverse,
-                state: Snapshot::new(before),
-            },
-        })
     }
 
     /// Builds a model from a scenario's `[model]` and `[simulation]` tables (see
@@ -605,17 +471,132 @@ fn reason(e: SessionError) -> String {
 
 impl crate::model::Stateful for FfdModel {
     type State = FfdSnap;
+    const INVERSE_MAY_FAIL: bool = true;
     fn take_state(&self) -> FfdSnap {
-        self.snap()
+        FfdSnap {
+            control_points: self.lattice.control_points().to_vec(),
+            weights: self.lattice.weights().to_vec(),
+            mode: self.mode,
+            dt: self.dt,
+            time: self.time,
+            steps: self.steps,
+        }
     }
-    fn put_state(&mut self, state: &FfdSnap) -> Result<(), SessionError> {
-        self.put(state)
-    }
-    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError> {
-        // The snapshot put back after it is the exact state either way; the inverse can fail
-        // where the forward edit did not (FFD: the inversion of `Q` at the target).
-        let _ = self.apply_edit(edit);
+    fn put_state(&mut self, s: &FfdSnap) -> Result<(), SessionError> {
+        self.set_lattice(s.control_points.clone(), s.weights.clone())?;
+        self.mode = s.mode;
+        self.dt = s.dt;
+        self.time = s.time;
+        self.steps = s.steps;
+        self.revision += 1;
         Ok(())
+    }
+    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
+        let before = self.take_state();
+        let (message, inverse) = match edit {
+            Edit::FfdMove { moves } => {
+                let message = self.ffd_move(moves)?;
+                let inverse = Edit::FfdMove {
+                    moves: moves
+                        .iter()
+                        .map(|m| PointMove {
+                            from: m.to,
+                            to: m.from,
+                        })
+                        .collect(),
+                };
+                (message, inverse)
+            }
+            Edit::MovePoint { index, to } => {
+                self.check_index(*index)?;
+                let old = self.lattice.control_points()[*index];
+                let mut pts = self.lattice.control_points().to_vec();
+                pts[*index] = v3(*to);
+                let w = self.lattice.weights().to_vec();
+                self.set_lattice(pts, w).map_err(|e| cmd(reason(e)))?;
+                (
+                    format!("moved lattice control point {index} to {to:?}"),
+                    Edit::MovePoint {
+                        index: *index,
+                        to: a3(&old),
+                    },
+                )
+            }
+            Edit::SetWeight { index, weight } => {
+                self.check_index(*index)?;
+                let old = self.lattice.weights()[*index];
+                let mut w = self.lattice.weights().to_vec();
+                w[*index] = *weight;
+                let pts = self.lattice.control_points().to_vec();
+                if let Err(e) = self.set_lattice(pts, w) {
+                    self.put_state(&before)?;
+                    return Err(cmd(reason(e)));
+                }
+                (
+                    format!("weight of lattice control point {index} = {weight}"),
+                    Edit::SetWeight {
+                        index: *index,
+                        weight: old,
+                    },
+                )
+            }
+            Edit::Set { name, value } => {
+                let old = match name.as_str() {
+                    "dt" => {
+                        if !(*value > 0.0 && value.is_finite()) {
+                            return Err(cmd(format!("dt = {value}: must be positive")));
+                        }
+                        std::mem::replace(&mut self.dt, *value)
+                    }
+                    "least_squares" => {
+                        let mode = match *value {
+                            0.0 => SolveMode::Exact,
+                            1.0 => SolveMode::LeastSquares,
+                            _ => {
+                                return Err(cmd(format!(
+                                    "least_squares = {value}: 0 (exact, eq 12) or 1 (least squares)"
+                                )));
+                            }
+                        };
+                        let old = self.mode == SolveMode::LeastSquares;
+                        self.mode = mode;
+                        f64::from(u8::from(old))
+                    }
+                    _ => {
+                        return Err(cmd(format!(
+                            "no parameter `{name}`; an ffd model has {}",
+                            self.param_names()
+                        )));
+                    }
+                };
+                (
+                    format!("{name} = {value}"),
+                    Edit::Set {
+                        name: name.clone(),
+                        value: old,
+                    },
+                )
+            }
+            Edit::Fix { .. } | Edit::Free { .. } => {
+                return Err(cmd(format!(
+                    "an {} model has no fixed control points: direct manipulation \
+                     (ffd-direct-manipulation.txt eqs 7 and 12) moves every control point of \
+                     the support; use a multi-point `ffd-move` with the points to keep as moves \
+                     onto themselves",
+                    ModelKind::Ffd
+                )));
+            }
+            _ => {
+                return Err(cmd(format!(
+                    "`{}` does not apply to an {} model (it takes ffd-move, move-point, \
+                     set-weight, set)",
+                    edit.action(),
+                    ModelKind::Ffd
+                )));
+            }
+        };
+        self.revision += 1;
+        Ok(Applied::by_inverse(message, inverse, before))
     }
 }
 
@@ -642,15 +623,7 @@ impl Model for FfdModel {
         )
     }
 
-    fn time(&self) -> f64 {
-        self.time
-    }
-    fn dt(&self) -> f64 {
-        self.dt
-    }
-    fn steps(&self) -> u64 {
-        self.steps
-    }
+    crate::model::clock_methods!(self => self.time, self.dt, self.steps);
 
     fn step(&mut self) -> Result<StepReport, SessionError> {
         let t0 = std::time::Instant::now();
@@ -687,13 +660,7 @@ impl Model for FfdModel {
     }
 
     fn pick(&self, ray: &Ray, tolerance: f64) -> Option<Hit> {
-        let p = self.lattice.control_points();
-        let cp = crate::pick::ray_points(ray, p, tolerance).map(|(i, s)| Hit {
-            distance: s,
-            point: p[i],
-            element: Element::ControlPoint { index: i },
-            extra: [None, None],
-        });
+        let cp = crate::pick::control_point(ray, self.lattice.control_points(), tolerance);
         let mesh = self.embedded.mesh();
         let surf = crate::pick::ray_mesh(ray, mesh).map(|(s, t, bary)| {
             let corner = (0..3)
@@ -717,25 +684,21 @@ impl Model for FfdModel {
 
     fn params(&self) -> Vec<Param> {
         vec![
-            Param {
-                name: "dt".into(),
-                value: self.dt,
-                min: 1e-4,
-                max: 1.0,
-                doc: "clock step (s); FFD has no dynamics".into(),
-            },
-            Param {
-                name: "least_squares".into(),
-                value: f64::from(u8::from(self.mode == SolveMode::LeastSquares)),
-                min: 0.0,
-                max: 1.0,
-                doc: "multi-point ffd-move: 0 exact (eq 12, conflicts are errors), 1 minimum-norm least squares".into(),
-            },
+            Param::new(
+                "dt",
+                self.dt,
+                1e-4,
+                1.0,
+                "clock step (s); FFD has no dynamics",
+            ),
+            Param::new(
+                "least_squares",
+                f64::from(u8::from(self.mode == SolveMode::LeastSquares)),
+                0.0,
+                1.0,
+                "multi-point ffd-move: 0 exact (eq 12, conflicts are errors), 1 minimum-norm least squares",
+            ),
         ]
-    }
-
-    fn apply(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        self.apply_edit(edit)
     }
 
     crate::model::stateful_methods!();
@@ -803,11 +766,6 @@ impl Model for FfdModel {
         };
         serde_json::to_value(saved).map_err(SessionError::kernel)
     }
-}
-
-/// Rebuilds a saved model.
-pub fn load(saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
-    Ok(Box::new(FfdModel::load(saved)?))
 }
 
 // ---------------------------------------------------------------------------------------

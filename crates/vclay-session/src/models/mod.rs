@@ -5,6 +5,7 @@ pub mod dnurbs;
 pub mod dnurbs_patches;
 pub mod dnurbs_tri;
 pub mod ffd;
+pub mod generalized;
 pub mod pde;
 mod saved;
 pub mod solid;
@@ -270,12 +271,12 @@ pub fn load(kind: ModelKind, saved: &serde_json::Value) -> Result<Box<dyn Model>
             Box::new(solid::SolidModel::load(saved)?)
         }
         ModelKind::DnurbsCurve | ModelKind::DnurbsSurface | ModelKind::DnurbsSwung => {
-            dnurbs::load(kind, saved)?
+            Box::new(dnurbs::DnurbsModel::load(kind, saved)?)
         }
-        ModelKind::Ffd => ffd::load(saved)?,
-        ModelKind::PdeSurface => pde::load(saved)?,
-        ModelKind::DnurbsTriangular => dnurbs_tri::load(saved)?,
-        ModelKind::DnurbsPatches => dnurbs_patches::load(saved)?,
+        ModelKind::Ffd => Box::new(ffd::FfdModel::load(saved)?),
+        ModelKind::PdeSurface => Box::new(pde::PdeSurfaceModel::load(saved)?),
+        ModelKind::DnurbsTriangular => Box::new(dnurbs_tri::TriangularModel::load(saved)?),
+        ModelKind::DnurbsPatches => Box::new(dnurbs_patches::PatchesModel::load(saved)?),
     })
 }
 

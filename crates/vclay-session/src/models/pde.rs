@@ -35,8 +35,8 @@ use super::SpecError;
 use crate::command::Edit;
 use crate::error::SessionError;
 use crate::model::{
-    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
-    StepReport, Undo, extension, unsupported_export,
+    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, StepReport,
+    extension, unsupported_export,
 };
 
 /// Default `[simulation] dt`: 1/30 s (one display frame).
@@ -247,37 +247,6 @@ impl PdeSurfaceModel {
         &self.locals
     }
 
-    fn snap(&self) -> PdeSnap {
-        PdeSnap {
-            constants: self.constants.clone(),
-            locals: self.locals.clone(),
-            dt: self.dt,
-            time: self.time,
-            steps: self.steps,
-        }
-    }
-
-    fn put(&mut self, s: &PdeSnap) -> Result<(), SessionError> {
-        if s.constants != self.constants || s.locals != self.locals {
-            let model =
-                compile(&self.spec, &s.constants, &s.locals).map_err(SessionError::kernel)?;
-            let surface =
-                Surface::solve(&model, s.time, self.grid).map_err(SessionError::kernel)?;
-            self.model = model;
-            self.surface = surface;
-            self.constants = s.constants.clone();
-            self.locals = s.locals.clone();
-        } else if s.time != self.time {
-            self.surface =
-                Surface::solve(&self.model, s.time, self.grid).map_err(SessionError::kernel)?;
-        }
-        self.dt = s.dt;
-        self.time = s.time;
-        self.steps = s.steps;
-        self.revision += 1;
-        Ok(())
-    }
-
     /// Sets constant `name` (recompiling and solving at the current time) or, for `t`, the
     /// time; returns the old value. Fails leaving the model unchanged.
     fn set_value(&mut self, name: &str, value: f64) -> Result<f64, SessionError> {
@@ -324,132 +293,6 @@ impl PdeSurfaceModel {
         self.surface = surface;
         self.locals = locals;
         Ok(())
-    }
-
-    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        let before = self.snap();
-        let (message, inverse) = match edit {
-            Edit::PdeSet { name, value } => {
-                let old = self.set_value(name, *value)?;
-                (
-                    format!("{name} = {value} (residual {:.3e})", self.surface.residual),
-                    Edit::PdeSet {
-                        name: name.clone(),
-                        value: old,
-                    },
-                )
-            }
-            Edit::Set { name, value } => {
-                let old = if name == "dt" {
-                    if !(*value > 0.0 && value.is_finite()) {
-                        return Err(cmd(format!("dt = {value}: must be positive")));
-                    }
-                    std::mem::replace(&mut self.dt, *value)
-                } else if self.constants.contains_key(name) {
-                    self.set_value(name, *value)?
-                } else {
-                    return Err(cmd(format!(
-                        "no parameter `{name}`; a {} model has {}",
-                        ModelKind::PdeSurface,
-                        self.params()
-                            .iter()
-                            .map(|p| p.name.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    )));
-                };
-                (
-                    format!("{name} = {value}"),
-                    Edit::Set {
-                        name: name.clone(),
-                        value: old,
-                    },
-                )
-            }
-            Edit::PdeLocal {
-                name,
-                patch,
-                u,
-                v,
-                continuity,
-                p,
-            } => {
-                let mut locals = self.locals.clone();
-                // `v` is clipped to the patch's v range (a region dragged across the seam of a
-                // closed surface stops at it).
-                let n = self.model.patches.len();
-                let (v0, v1) = self
-                    .model
-                    .patches
-                    .get(*patch)
-                    .map(|p| p.v_range)
-                    .ok_or_else(|| {
-                        cmd(format!("patch {patch} does not exist (the spec has {n})"))
-                    })?;
-                let v = [v[0].max(v0), v[1].min(v1)];
-                if v[0] >= v[1] {
-                    return Err(cmd(format!(
-                        "`v` does not meet patch {patch}'s v range [{v0}, {v1}]"
-                    )));
-                }
-                let local = UserLocal {
-                    name: name.clone(),
-                    patch: *patch,
-                    u: *u,
-                    v,
-                    continuity: continuity.clone().unwrap_or_else(|| "G1".into()),
-                    p: *p,
-                };
-                let replaced = match locals.iter_mut().find(|l| l.name == *name) {
-                    Some(l) => {
-                        *l = local;
-                        true
-                    }
-                    None => {
-                        locals.push(local);
-                        false
-                    }
-                };
-                self.set_locals(locals)?;
-                self.revision += 1;
-                return Ok(Applied {
-                    message: format!(
-                        "local deformation `{name}` {} on patch {patch}",
-                        if replaced { "changed" } else { "added" }
-                    ),
-                    undo: Undo::State(Snapshot::new(before)),
-                });
-            }
-            Edit::Release { name } => {
-                let mut locals = self.locals.clone();
-                let n = locals.len();
-                locals.retain(|l| l.name != *name);
-                if locals.len() == n {
-                    return Err(cmd(format!("no local deformation named `{name}`")));
-                }
-                self.set_locals(locals)?;
-                self.revision += 1;
-                return Ok(Applied {
-                    message: format!("local deformation `{name}` removed"),
-                    undo: Undo::State(Snapshot::new(before)),
-                });
-            }
-            _ => {
-                return Err(cmd(format!(
-                    "`{}` does not apply to a {} model (it takes pde-set, pde-local, release, set)",
-                    edit.action(),
-                    ModelKind::PdeSurface
-                )));
-            }
-        };
-        self.revision += 1;
-        Ok(Applied {
-            message,
-            undo: Undo::Inverse {
-                edit: inverse,
-                state: Snapshot::new(before),
-            },
-        })
     }
 
     /// Builds a model from a scenario's `[model]` and `[simulation]` tables (see
@@ -579,17 +422,150 @@ impl PdeSurfaceModel {
 
 impl crate::model::Stateful for PdeSurfaceModel {
     type State = PdeSnap;
+    const INVERSE_MAY_FAIL: bool = true;
     fn take_state(&self) -> PdeSnap {
-        self.snap()
+        PdeSnap {
+            constants: self.constants.clone(),
+            locals: self.locals.clone(),
+            dt: self.dt,
+            time: self.time,
+            steps: self.steps,
+        }
     }
-    fn put_state(&mut self, state: &PdeSnap) -> Result<(), SessionError> {
-        self.put(state)
-    }
-    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError> {
-        // The snapshot put back after it is the exact state either way; the inverse can fail
-        // where the forward edit did not (FFD: the inversion of `Q` at the target).
-        let _ = self.apply_edit(edit);
+    fn put_state(&mut self, s: &PdeSnap) -> Result<(), SessionError> {
+        if s.constants != self.constants || s.locals != self.locals {
+            let model =
+                compile(&self.spec, &s.constants, &s.locals).map_err(SessionError::kernel)?;
+            let surface =
+                Surface::solve(&model, s.time, self.grid).map_err(SessionError::kernel)?;
+            self.model = model;
+            self.surface = surface;
+            self.constants = s.constants.clone();
+            self.locals = s.locals.clone();
+        } else if s.time != self.time {
+            self.surface =
+                Surface::solve(&self.model, s.time, self.grid).map_err(SessionError::kernel)?;
+        }
+        self.dt = s.dt;
+        self.time = s.time;
+        self.steps = s.steps;
+        self.revision += 1;
         Ok(())
+    }
+    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
+        let before = self.take_state();
+        let (message, inverse) = match edit {
+            Edit::PdeSet { name, value } => {
+                let old = self.set_value(name, *value)?;
+                (
+                    format!("{name} = {value} (residual {:.3e})", self.surface.residual),
+                    Edit::PdeSet {
+                        name: name.clone(),
+                        value: old,
+                    },
+                )
+            }
+            Edit::Set { name, value } => {
+                let old = if name == "dt" {
+                    if !(*value > 0.0 && value.is_finite()) {
+                        return Err(cmd(format!("dt = {value}: must be positive")));
+                    }
+                    std::mem::replace(&mut self.dt, *value)
+                } else if self.constants.contains_key(name) {
+                    self.set_value(name, *value)?
+                } else {
+                    return Err(cmd(format!(
+                        "no parameter `{name}`; a {} model has {}",
+                        ModelKind::PdeSurface,
+                        self.params()
+                            .iter()
+                            .map(|p| p.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )));
+                };
+                (
+                    format!("{name} = {value}"),
+                    Edit::Set {
+                        name: name.clone(),
+                        value: old,
+                    },
+                )
+            }
+            Edit::PdeLocal {
+                name,
+                patch,
+                u,
+                v,
+                continuity,
+                p,
+            } => {
+                let mut locals = self.locals.clone();
+                // `v` is clipped to the patch's v range (a region dragged across the seam of a
+                // closed surface stops at it).
+                let n = self.model.patches.len();
+                let (v0, v1) = self
+                    .model
+                    .patches
+                    .get(*patch)
+                    .map(|p| p.v_range)
+                    .ok_or_else(|| {
+                        cmd(format!("patch {patch} does not exist (the spec has {n})"))
+                    })?;
+                let v = [v[0].max(v0), v[1].min(v1)];
+                if v[0] >= v[1] {
+                    return Err(cmd(format!(
+                        "`v` does not meet patch {patch}'s v range [{v0}, {v1}]"
+                    )));
+                }
+                let local = UserLocal {
+                    name: name.clone(),
+                    patch: *patch,
+                    u: *u,
+                    v,
+                    continuity: continuity.clone().unwrap_or_else(|| "G1".into()),
+                    p: *p,
+                };
+                let replaced = match locals.iter_mut().find(|l| l.name == *name) {
+                    Some(l) => {
+                        *l = local;
+                        true
+                    }
+                    None => {
+                        locals.push(local);
+                        false
+                    }
+                };
+                self.set_locals(locals)?;
+                self.revision += 1;
+                let message = format!(
+                    "local deformation `{name}` {} on patch {patch}",
+                    if replaced { "changed" } else { "added" }
+                );
+                return Ok(Applied::by_state(message, before));
+            }
+            Edit::Release { name } => {
+                let mut locals = self.locals.clone();
+                let n = locals.len();
+                locals.retain(|l| l.name != *name);
+                if locals.len() == n {
+                    return Err(cmd(format!("no local deformation named `{name}`")));
+                }
+                self.set_locals(locals)?;
+                self.revision += 1;
+                let message = format!("local deformation `{name}` removed");
+                return Ok(Applied::by_state(message, before));
+            }
+            _ => {
+                return Err(cmd(format!(
+                    "`{}` does not apply to a {} model (it takes pde-set, pde-local, release, set)",
+                    edit.action(),
+                    ModelKind::PdeSurface
+                )));
+            }
+        };
+        self.revision += 1;
+        Ok(Applied::by_inverse(message, inverse, before))
     }
 }
 
@@ -612,15 +588,7 @@ impl Model for PdeSurfaceModel {
         )
     }
 
-    fn time(&self) -> f64 {
-        self.time
-    }
-    fn dt(&self) -> f64 {
-        self.dt
-    }
-    fn steps(&self) -> u64 {
-        self.steps
-    }
+    crate::model::clock_methods!(self => self.time, self.dt, self.steps);
 
     fn step(&mut self) -> Result<StepReport, SessionError> {
         let t0 = std::time::Instant::now();
@@ -710,18 +678,14 @@ impl Model for PdeSurfaceModel {
                 }
             })
             .collect();
-        out.push(Param {
-            name: "dt".into(),
-            value: self.dt,
-            min: 1e-4,
-            max: 1.0,
-            doc: "time step of the PDE's t per session step".into(),
-        });
+        out.push(Param::new(
+            "dt",
+            self.dt,
+            1e-4,
+            1.0,
+            "time step of the PDE's t per session step",
+        ));
         out
-    }
-
-    fn apply(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        self.apply_edit(edit)
     }
 
     crate::model::stateful_methods!();
@@ -768,11 +732,6 @@ impl Model for PdeSurfaceModel {
         };
         serde_json::to_value(saved).map_err(SessionError::kernel)
     }
-}
-
-/// Rebuilds a saved model.
-pub fn load(saved: &serde_json::Value) -> Result<Box<dyn Model>, SessionError> {
-    Ok(Box::new(PdeSurfaceModel::load(saved)?))
 }
 
 // ---------------------------------------------------------------------------------------

@@ -23,12 +23,13 @@ use vclay_spline::{KnotVector, NurbsVolume};
 
 use super::{SpecError, misrouted};
 use crate::command::{Edit, V3};
+use crate::command::{MaterialRequest, RopeRequest};
 use crate::error::SessionError;
 use crate::model::{
     Applied, Element, Energy, FieldSpec, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray,
-    Snapshot, StepReport, Undo, extension, unsupported_export,
+    StepReport, Undo, extension, unsupported_export,
 };
-use crate::tools::{CursorPath, ToolTable, a3, v3};
+use crate::tools::{CursorPath, ToolHost, ToolTable, a3, field_tool, v3};
 
 /// Default rope stiffness of the solids.
 pub const DEFAULT_ROPE_STIFFNESS: f64 = 50.0;
@@ -107,40 +108,10 @@ impl SolidModel {
         &self.tools
     }
 
-    fn snap(&self) -> SolidSnap {
-        SolidSnap {
-            state: self.solid.state(),
-            tools: self.tools.clone(),
-            params: *self.solid.params(),
-            material: self.solid.material().clone(),
-            rest: {
-                let (c, d) = self.solid.rest_shape();
-                (c.to_vec(), d.to_vec())
-            },
-        }
-    }
-
-    fn put(&mut self, s: &SolidSnap) -> Result<(), SessionError> {
-        if self.solid.material() != &s.material {
-            self.solid
-                .set_material(s.material.clone())
-                .map_err(kernel)?;
-        }
-        self.solid.set_params(s.params).map_err(kernel)?;
-        self.solid.set_state(&s.state).map_err(kernel)?;
-        self.solid
-            .set_rest_shape(&s.rest.0, &s.rest.1)
-            .map_err(kernel)?;
-        self.tools = s.tools.clone();
-        self.revision += 1;
-        Ok(())
-    }
-
     fn is_subdivision(&self) -> bool {
         matches!(self.solid.source(), SolidSource::Subdivision { .. })
     }
 
-    /// Control points selected by ids, a box around rest positions, or the nearest one.
     fn add_tool(&mut self, tool: Tool) -> Result<usize, SessionError> {
         self.solid
             .add_tool(tool)
@@ -148,197 +119,21 @@ impl SolidModel {
             .map_err(SessionError::command_from)
     }
 
-    fn label(
-        &self,
-        name: &Option<String>,
-        what: &str,
-        handle: usize,
-    ) -> Result<String, SessionError> {
-        self.tools.label(name.as_deref(), what, handle).map_err(cmd)
-    }
-
-    /// Adds a scheduled tool entry.
-    fn track(
-        &mut self,
-        label: &str,
-        action: &str,
-        handle: usize,
-        path: Option<CursorPath>,
-        release: Option<f64>,
-    ) {
-        self.tools.tools.push(crate::tools::ScheduledTool {
-            name: label.to_string(),
-            action: action.to_string(),
-            handle,
-            path,
-            release,
-        });
-    }
-
-    /// Gravity and inflation: an existing tool of that name changes strength.
-    fn replace_field_tool(
-        &mut self,
-        name: &Option<String>,
-        action: &str,
-        tool: Tool,
-        until: Option<f64>,
-    ) -> Result<String, SessionError> {
-        if let Some(n) = name
-            && let Some(t) = self.tools.get(n).cloned()
-        {
-            if t.action != action {
-                return Err(cmd(format!(
-                    "the tool `{n}` is a {}, not {action}",
-                    t.action
-                )));
-            }
-            let id = self.add_tool(tool)?;
-            let _ = self.solid.remove_tool(ToolId(t.handle));
-            let e = self.tools.get_mut(n).expect("present");
-            e.handle = id;
-            e.release = until.or(e.release);
-            return Ok(format!("{action} `{n}` changed"));
-        }
-        let id = self.add_tool(tool)?;
-        let label = self.label(name, action, id)?;
-        self.track(&label, action, id, None, until);
-        Ok(format!("{action} `{label}` on"))
-    }
-
-    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        let before = self.snap();
-        match edit {
-            Edit::Rope { .. } | Edit::MoveRope { .. } | Edit::Force { .. } => {
-                self.apply_rope_edit(edit, before)
-            }
-            Edit::RegionForce { .. }
-            | Edit::Gravity { .. }
-            | Edit::Inflate { .. }
-            | Edit::Release { .. } => self.apply_field_edit(edit, before),
-            Edit::Fix { .. }
-            | Edit::Free { .. }
-            | Edit::Material { .. }
-            | Edit::Extrude { .. }
-            | Edit::DeleteCell { .. } => self.apply_shape_edit(edit, before),
-            _ => self.apply_state_edit(edit, before),
-        }
-    }
-
     /// The end of an edit whose undo is the state before it: a new revision, the message.
     fn edited(&mut self, message: String, before: SolidSnap) -> Result<Applied, SessionError> {
         self.revision += 1;
-        Ok(Applied {
-            message,
-            undo: Undo::State(Snapshot::new(before)),
-        })
+        Ok(Applied::by_state(message, before))
     }
 
-    /// [`Self::apply_edit`] for `Rope`, `MoveRope`, `Force`.
-    fn apply_rope_edit(&mut self, edit: &Edit, before: SolidSnap) -> Result<Applied, SessionError> {
-        let message = match edit {
-            Edit::Rope {
-                name,
-                from,
-                param,
-                to,
-                until,
-                velocity,
-                release,
-                stiffness,
-                length,
-                kernel,
-                start,
-            } => {
-                if param.is_some() || kernel.is_some() {
-                    return Err(cmd("`param` and `kernel` are for D-NURBS models"));
-                }
-                let f = v3(*from);
-                let id = self
-                    .solid
-                    .attach_rope(
-                        f,
-                        stiffness.unwrap_or(DEFAULT_ROPE_STIFFNESS),
-                        length.unwrap_or(0.0),
-                    )
-                    .map_err(SessionError::command_from)?
-                    .0;
-                let Some(Tool::Rope { point, .. }) = self.solid.tool(ToolId(id)) else {
-                    unreachable!("just added a rope")
-                };
-                let point = *point;
-                let label = match self.label(name, "rope", id) {
-                    Ok(l) => l,
-                    Err(e) => {
-                        let _ = self.solid.remove_tool(ToolId(id));
-                        return Err(e);
-                    }
-                };
-                let start = start.unwrap_or(self.solid.time());
-                let path = match (to, velocity) {
-                    (_, Some(v)) => CursorPath::Velocity {
-                        from: *from,
-                        velocity: *v,
-                    },
-                    (to, None) => CursorPath::Linear {
-                        from: *from,
-                        to: to.unwrap_or(*from),
-                        start,
-                        end: until.unwrap_or(start),
-                    },
-                };
-                self.track(&label, "rope", id, Some(path), *release);
-                format!("rope `{label}` attached to data point {point}")
-            }
-            Edit::MoveRope { name, to } => {
-                let t = self
-                    .tools
-                    .get(name)
-                    .ok_or_else(|| cmd(format!("no active rope named `{name}`")))?;
-                if t.action != "rope" {
-                    return Err(cmd(format!("`{name}` is a {}, not a rope", t.action)));
-                }
-                let h = t.handle;
-                self.solid
-                    .move_cursor(ToolId(h), v3(*to))
-                    .map_err(SessionError::command_from)?;
-                self.tools.get_mut(name).expect("present").path = None;
-                format!("rope `{name}` cursor at {to:?}")
-            }
-            Edit::Force {
-                name,
-                near,
-                param,
-                force,
-                until,
-            } => {
-                let Some(near) = near else {
-                    let _ = param;
-                    return Err(cmd("solids take `near`, not `param`"));
-                };
-                let point =
-                    vclay_solids::tools::nearest(self.solid.data_points(), &v3(*near)).unwrap_or(0);
-                let id = self.add_tool(Tool::PointForce {
-                    point,
-                    force: v3(*force),
-                })?;
-                let label = self.label(name, "force", id).inspect_err(|_| {
-                    let _ = self.solid.remove_tool(ToolId(id));
-                })?;
-                self.track(&label, "force", id, None, *until);
-                format!("force `{label}` on data point {point}")
-            }
-            _ => return Err(misrouted()),
-        };
-        self.edited(message, before)
-    }
-
-    /// [`Self::apply_edit`] for `RegionForce`, `Gravity`, `Inflate`, `Release`.
+    /// [`Self::apply_edit`] for the shared tool edits (`Rope`, `MoveRope`, `Force`, `Release`)
+    /// and `RegionForce`, `Gravity`, `Inflate`.
     fn apply_field_edit(
         &mut self,
         edit: &Edit,
         before: SolidSnap,
     ) -> Result<Applied, SessionError> {
         let message = match edit {
+            _ if crate::tools::is_tool_edit(edit) => crate::tools::tool_edit(self, edit)?,
             Edit::RegionForce {
                 name,
                 center,
@@ -357,10 +152,14 @@ impl SolidModel {
                     .add_region_force_with(v3(*center), *radius, v3(*force), falloff)
                     .map_err(SessionError::command_from)?
                     .0;
-                let label = self.label(name, "region", id).inspect_err(|_| {
-                    let _ = self.solid.remove_tool(ToolId(id));
-                })?;
-                self.track(&label, "region-force", id, None, *until);
+                let label = self
+                    .tools
+                    .label(name.as_deref(), "region", id)
+                    .map_err(|e| {
+                        let _ = self.solid.remove_tool(ToolId(id));
+                        cmd(e)
+                    })?;
+                self.tools.track(&label, "region-force", id, None, *until);
                 let n = match self.solid.tool(ToolId(id)) {
                     Some(Tool::RegionForce { points, .. }) => points.len(),
                     _ => 0,
@@ -368,13 +167,14 @@ impl SolidModel {
                 format!("region force `{label}` on {n} data points")
             }
             Edit::Gravity { name, g, until } => {
-                self.replace_field_tool(name, "gravity", Tool::Gravity { g: v3(*g) }, *until)?
+                field_tool(self, name, "gravity", Tool::Gravity { g: v3(*g) }, *until)?
             }
             Edit::Inflate {
                 name,
                 pressure,
                 until,
-            } => self.replace_field_tool(
+            } => field_tool(
+                self,
                 name,
                 "inflate",
                 Tool::Inflation {
@@ -382,14 +182,6 @@ impl SolidModel {
                 },
                 *until,
             )?,
-            Edit::Release { name } => {
-                let t = self
-                    .tools
-                    .remove(name)
-                    .ok_or_else(|| cmd(format!("no active tool named `{name}`")))?;
-                let _ = self.solid.remove_tool(ToolId(t.handle));
-                format!("released `{name}`")
-            }
             _ => return Err(misrouted()),
         };
         self.edited(message, before)
@@ -420,53 +212,36 @@ impl SolidModel {
                     format!("freed {} control points", r.selected.len())
                 };
                 self.revision += 1;
-                return Ok(Applied {
-                    message,
-                    undo: Undo::Inverse {
-                        edit: r.inverse,
-                        state: Snapshot::new(before),
-                    },
-                });
+                return Ok(Applied::by_inverse(message, r.inverse, before));
             }
-            Edit::Material {
-                cells,
-                min,
-                max,
-                density,
-                damping,
-                edge_stiffness,
-                virtual_stiffness,
-                anisotropy,
-                mu,
-                gamma,
-                alpha,
-                beta,
-            } => {
-                if mu.is_some() || gamma.is_some() || alpha.is_some() || beta.is_some() {
+            Edit::Material { .. } => {
+                let r = MaterialRequest::of(edit).ok_or_else(misrouted)?;
+                if r.dnurbs_given() {
                     return Err(cmd(
                         "`mu`, `gamma`, `alpha`, `beta` are D-NURBS materials; solids take density, damping, edge_stiffness, virtual_stiffness, anisotropy",
                     ));
                 }
-                let list: Option<Vec<usize>> = match (cells, min, max) {
+                let list: Option<Vec<usize>> = match (&r.cells, &r.min, &r.max) {
                     (Some(c), _, _) => Some(c.clone()),
                     (None, Some(lo), Some(hi)) => Some(self.cells_in_box(lo, hi)),
                     _ => None,
                 };
+                let [density, damping, edge_stiffness, virtual_stiffness] = r.solid;
                 let f = |m: &mut Material| {
                     if let Some(x) = density {
-                        m.density = *x;
+                        m.density = x;
                     }
                     if let Some(x) = damping {
-                        m.damping = *x;
+                        m.damping = x;
                     }
                     if let Some(x) = edge_stiffness {
-                        m.edge_stiffness = *x;
+                        m.edge_stiffness = x;
                     }
                     if let Some(x) = virtual_stiffness {
-                        m.virtual_stiffness = *x;
+                        m.virtual_stiffness = x;
                     }
-                    if let Some(x) = anisotropy {
-                        m.anisotropy = *x;
+                    if let Some(x) = r.anisotropy {
+                        m.anisotropy = x;
                     }
                 };
                 self.solid
@@ -1038,16 +813,120 @@ impl crate::tools::ControlNet for vclay_solids::DynamicSolid {
     }
 }
 
+/// A solid's tools for the shared rope, force and release edits: a handle is the kernel's tool
+/// id.
+impl ToolHost for SolidModel {
+    type Field = Tool;
+    crate::tools::tool_table!(tools);
+    fn attach_rope(
+        &mut self,
+        r: &RopeRequest,
+    ) -> Result<(usize, Option<CursorPath>, String), SessionError> {
+        if r.param.is_some() || r.kernel.is_some() {
+            return Err(cmd("`param` and `kernel` are for D-NURBS models"));
+        }
+        let id = self
+            .solid
+            .attach_rope(
+                v3(r.from),
+                r.stiffness.unwrap_or(DEFAULT_ROPE_STIFFNESS),
+                r.length.unwrap_or(0.0),
+            )
+            .map_err(SessionError::command_from)?
+            .0;
+        let Some(Tool::Rope { point, .. }) = self.solid.tool(ToolId(id)) else {
+            unreachable!("just added a rope")
+        };
+        let start = r.start.unwrap_or(self.solid.time());
+        let path = match r.velocity {
+            Some(velocity) => CursorPath::Velocity {
+                from: r.from,
+                velocity,
+            },
+            None => CursorPath::Linear {
+                from: r.from,
+                to: r.to.unwrap_or(r.from),
+                start,
+                end: r.until.unwrap_or(start),
+            },
+        };
+        Ok((id, Some(path), format!("to data point {point}")))
+    }
+    fn attach_force(&mut self, edit: &Edit) -> Result<(usize, String), SessionError> {
+        let Edit::Force { near, force, .. } = edit else {
+            return Err(misrouted());
+        };
+        let Some(near) = near else {
+            return Err(cmd("solids take `near`, not `param`"));
+        };
+        let point = vclay_solids::tools::nearest(self.solid.data_points(), &v3(*near)).unwrap_or(0);
+        let id = self.add_tool(Tool::PointForce {
+            point,
+            force: v3(*force),
+        })?;
+        Ok((id, format!("on data point {point}")))
+    }
+    fn attach_field(&mut self, field: Tool) -> Result<usize, SessionError> {
+        self.add_tool(field)
+    }
+    fn replace_field(&mut self, handle: usize, field: Tool) -> Result<usize, SessionError> {
+        let id = self.add_tool(field)?;
+        let _ = self.solid.remove_tool(ToolId(handle));
+        Ok(id)
+    }
+    fn move_cursor(&mut self, handle: usize, to: V3) -> Result<(), SessionError> {
+        self.solid
+            .move_cursor(ToolId(handle), v3(to))
+            .map_err(SessionError::command_from)
+    }
+    fn detach(&mut self, handle: usize) {
+        let _ = self.solid.remove_tool(ToolId(handle));
+    }
+}
+
 impl crate::model::Stateful for SolidModel {
     type State = SolidSnap;
     fn take_state(&self) -> SolidSnap {
-        self.snap()
+        SolidSnap {
+            state: self.solid.state(),
+            tools: self.tools.clone(),
+            params: *self.solid.params(),
+            material: self.solid.material().clone(),
+            rest: {
+                let (c, d) = self.solid.rest_shape();
+                (c.to_vec(), d.to_vec())
+            },
+        }
     }
-    fn put_state(&mut self, state: &SolidSnap) -> Result<(), SessionError> {
-        self.put(state)
+    fn put_state(&mut self, s: &SolidSnap) -> Result<(), SessionError> {
+        if self.solid.material() != &s.material {
+            self.solid
+                .set_material(s.material.clone())
+                .map_err(kernel)?;
+        }
+        self.solid.set_params(s.params).map_err(kernel)?;
+        self.solid.set_state(&s.state).map_err(kernel)?;
+        self.solid
+            .set_rest_shape(&s.rest.0, &s.rest.1)
+            .map_err(kernel)?;
+        self.tools = s.tools.clone();
+        self.revision += 1;
+        Ok(())
     }
-    fn apply_inverse(&mut self, edit: &Edit) -> Result<(), SessionError> {
-        self.apply_edit(edit).map(drop)
+    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
+        let before = self.take_state();
+        match edit {
+            _ if crate::tools::is_tool_edit(edit) => self.apply_field_edit(edit, before),
+            Edit::RegionForce { .. } | Edit::Gravity { .. } | Edit::Inflate { .. } => {
+                self.apply_field_edit(edit, before)
+            }
+            Edit::Fix { .. }
+            | Edit::Free { .. }
+            | Edit::Material { .. }
+            | Edit::Extrude { .. }
+            | Edit::DeleteCell { .. } => self.apply_shape_edit(edit, before),
+            _ => self.apply_state_edit(edit, before),
+        }
     }
 }
 
@@ -1073,15 +952,7 @@ impl Model for SolidModel {
         )
     }
 
-    fn time(&self) -> f64 {
-        self.solid.time()
-    }
-    fn dt(&self) -> f64 {
-        self.solid.params().dt
-    }
-    fn steps(&self) -> u64 {
-        self.solid.steps()
-    }
+    crate::model::clock_methods!(self => self.solid.time(), self.solid.params().dt, self.solid.steps());
 
     fn step(&mut self) -> Result<StepReport, SessionError> {
         let t = self.solid.time();
@@ -1159,12 +1030,9 @@ impl Model for SolidModel {
     fn display_lines(&self) -> Vec<LineSet> {
         let mut out = vec![self.control_net()];
         let p = self.solid.control_points();
-        let mut fixed = LineSet::new(LineRole::Fixed);
-        fixed.points = (0..p.len())
-            .filter(|&i| self.solid.is_fixed(i))
-            .map(|i| p[i])
-            .collect();
-        out.push(fixed);
+        out.push(LineSet::markers(LineRole::Fixed, p, |i| {
+            self.solid.is_fixed(i)
+        }));
         let d = self.solid.data_points();
         if d.len() <= 20_000 {
             let mut dp = LineSet::new(LineRole::DataPoints);
@@ -1198,13 +1066,7 @@ impl Model for SolidModel {
     }
 
     fn pick(&self, ray: &Ray, tolerance: f64) -> Option<Hit> {
-        let p = self.solid.control_points();
-        let cp = crate::pick::ray_points(ray, p, tolerance).map(|(i, s)| Hit {
-            distance: s,
-            point: p[i],
-            element: Element::ControlPoint { index: i },
-            extra: [None, None],
-        });
+        let cp = crate::pick::control_point(ray, self.solid.control_points(), tolerance);
         let mesh = self.boundary_mesh();
         let surf = crate::pick::ray_mesh(ray, &mesh).map(|(s, _, _)| {
             let x = ray.origin + ray.direction * s;
@@ -1233,13 +1095,7 @@ impl Model for SolidModel {
     fn params(&self) -> Vec<Param> {
         let p = self.solid.params();
         let m = self.solid.material().cell(0);
-        let par = |name: &str, value: f64, min: f64, max: f64, doc: &str| Param {
-            name: name.into(),
-            value,
-            min,
-            max,
-            doc: doc.into(),
-        };
+        let par = Param::new;
         vec![
             par("dt", p.dt, 1e-5, 0.05, "time step (s)"),
             par(
@@ -1286,10 +1142,6 @@ impl Model for SolidModel {
                 "implicit: CG iteration cap",
             ),
         ]
-    }
-
-    fn apply(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        self.apply_edit(edit)
     }
 
     crate::model::stateful_methods!();
