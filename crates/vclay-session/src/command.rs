@@ -179,6 +179,18 @@ pub enum Edit {
     Fix(Selection),
     /// Free control points (the same selections as [`Edit::Fix`]).
     Free(Selection),
+    /// The smooth brush: one umbrella (Laplacian) step of the **rest** shape at the control
+    /// points within `radius` of `near` (current positions; fixed points stay), and the clay
+    /// settles towards it by its own dynamics (`crate::smooth`).
+    Smooth {
+        /// Brush centre.
+        near: V3,
+        /// Brush radius (0: the one control point nearest `near`).
+        radius: f64,
+        /// Share of the step towards the neighbours' mean, in `(0, 1]` (default 0.5).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        strength: Option<f64>,
+    },
     /// Change the material: solids per control cell (`cells`, or those whose centroid is in
     /// `min`/`max`, else all), D-NURBS everywhere.
     Material {
@@ -475,6 +487,7 @@ impl Edit {
             Edit::Data { .. } => "data",
             Edit::Release { .. } => "release",
             Edit::Fix(_) => "fix",
+            Edit::Smooth { .. } => "smooth",
             Edit::Free(_) => "free",
             Edit::Material { .. } => "material",
             Edit::Extrude { .. } => "extrude",
@@ -510,6 +523,7 @@ impl Edit {
             | Edit::Stop => self.validate_tool(at),
             Edit::Fix(_)
             | Edit::Free(_)
+            | Edit::Smooth { .. }
             | Edit::Material { .. }
             | Edit::Extrude { .. }
             | Edit::DeleteCell { .. }
@@ -625,6 +639,22 @@ impl Edit {
     fn validate_net(&self) -> Result<(), EditError> {
         match self {
             Edit::Fix(sel) | Edit::Free(sel) => sel.validate()?,
+            Edit::Smooth {
+                near,
+                radius,
+                strength,
+            } => {
+                fin("near", near)?;
+                pos("radius", Some(*radius), true)?;
+                if let Some(s) = strength
+                    && !(*s > 0.0 && *s <= 1.0)
+                {
+                    return Err(EditError::new(
+                        "strength",
+                        format!("`strength` = {s}: must be in (0, 1]"),
+                    ));
+                }
+            }
             Edit::Material { .. } => MaterialRequest::of(self).expect("a material").validate()?,
             Edit::Extrude { face, near, factor } => {
                 opt3("near", near)?;

@@ -140,11 +140,18 @@ const SELECTION: &[KeySpec] = &[
     key("radius", "number", "length", 0.0, INF, false, "with `near`: every point within it, current positions (a brush)"),
 ];
 
+#[rustfmt::skip]
+const SMOOTH_KEYS: &[KeySpec] = &[
+    key("near", "vec3", "length", -INF, INF, true, "brush centre (current positions)"),
+    key("radius", "number", "length", 0.0, INF, true, "brush radius (0: the nearest point)"),
+    key("strength", "number", "", 0.0, 1.0, false, "share of the step to the neighbours' mean (0.5)"),
+];
+
 /// Every action, in the order of `docs/formats.md` section 9.
 #[rustfmt::skip]
-pub const ACTIONS: [&str; 24] = [
+pub const ACTIONS: [&str; 25] = [
     "rope", "move-rope", "force", "region-force", "gravity", "inflate", "repel", "data",
-    "release", "fix", "free", "material", "extrude", "delete-cell", "plastic-reset", "stop",
+    "release", "fix", "free", "smooth", "material", "extrude", "delete-cell", "plastic-reset", "stop",
     "move-point", "set-weight", "ffd-move", "pde-set", "pde-local", "set", "integrator",
     "constraint",
 ];
@@ -335,6 +342,7 @@ pub fn tool(action: &str) -> Option<ToolSpec> {
         "data" => (Whole, DATA_KEYS, "data points, each pulling the nearest model point (fitting)"),
         "release" => (Named, RELEASE_KEYS, "removes a tool, constraint or local deformation"),
         "fix" => (ControlPoints, SELECTION, "fixes control points"),
+        "smooth" => (ControlPoints, SMOOTH_KEYS, "smooths the rest shape under a brush; the clay settles to it"),
         "free" => (ControlPoints, SELECTION, "frees control points"),
         "material" => (Whole, MATERIAL_KEYS, "changes the material (solids: per control cell)"),
         "extrude" => (Face, EXTRUDE_KEYS, "extrudes a boundary face into a new cell"),
@@ -363,7 +371,7 @@ pub fn tool(action: &str) -> Option<ToolSpec> {
 #[rustfmt::skip]
 const SUBDIVISION: &[&str] = &[
     "rope", "move-rope", "force", "region-force", "gravity", "inflate", "release", "fix",
-    "free", "material", "extrude", "delete-cell", "plastic-reset", "stop", "move-point", "set",
+    "free", "smooth", "material", "extrude", "delete-cell", "plastic-reset", "stop", "move-point", "set",
     "integrator",
 ];
 /// What a D-NURBS surface takes; a curve takes the same but for inflation (it has no inside).

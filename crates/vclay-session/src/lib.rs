@@ -28,6 +28,7 @@ pub mod pick;
 pub mod run;
 pub mod scenario;
 pub mod session;
+mod smooth;
 pub mod tools;
 
 pub use command::{Command, Edit, PointMove, Selection};

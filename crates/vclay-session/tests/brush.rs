@@ -99,3 +99,69 @@ fn an_unknown_falloff_is_refused_and_files_keep_a_known_one() {
     let e = file::parse(&bad, "b.session").unwrap_err().to_string();
     assert!(e.contains("unknown falloff \"soft\""), "{e}");
 }
+
+/// Highest data point of the model.
+fn top(s: &Session) -> f64 {
+    s.model(None)
+        .unwrap()
+        .data_points()
+        .iter()
+        .map(|p| p.z)
+        .fold(f64::MIN, f64::max)
+}
+
+#[test]
+fn the_smooth_brush_flattens_a_sculpted_bump_through_the_physics() {
+    // A bump pulled up from the top and kept (plastic reset), then smoothed where it is.
+    let mut s = cube();
+    let rope: Edit = serde_json::from_value(serde_json::json!({
+        "action": "rope", "name": "r", "from": [0.5, 0.5, 1.0], "to": [0.5, 0.5, 1.5],
+        "stiffness": 300.0
+    }))
+    .unwrap();
+    s.apply(Command::new(Edit::Fix(vclay_session::Selection::rest_box(
+        [-0.1, -0.1, -0.1],
+        [1.1, 1.1, 0.1],
+    ))))
+    .unwrap();
+    s.apply(Command::new(rope)).unwrap();
+    s.run(300).unwrap();
+    s.apply(Command::new(Edit::Release { name: "r".into() }))
+        .unwrap();
+    s.apply(Command::new(Edit::Stop)).unwrap();
+    s.apply(Command::new(Edit::PlasticReset)).unwrap();
+    s.run(50).unwrap();
+    let bump = top(&s);
+    assert!(bump > 1.1, "the bump: {bump}");
+    let before = file::to_value(&s, None).unwrap();
+    let smooth = Edit::Smooth {
+        near: [0.5, 0.5, bump],
+        radius: 0.5,
+        strength: Some(1.0),
+    };
+    let msg = s.apply(Command::new(smooth.clone())).unwrap();
+    assert!(msg.contains("smoothed the rest shape at"), "{msg}");
+    s.run(400).unwrap();
+    let smoothed = top(&s);
+    assert!(
+        smoothed < bump - 0.3 * (bump - 1.0),
+        "the clay settled lower: {smoothed} from {bump}"
+    );
+    // Undo puts the rest shape back (the stroke and the steps after it).
+    s.undo().unwrap();
+    let now = file::to_value(&s, None).unwrap();
+    assert_same(
+        &now["models"][0]["state"]["rest"],
+        &before["models"][0]["state"]["rest"],
+        "undo of the smooth brush",
+    );
+    let e = s
+        .apply(Command::new(Edit::Smooth {
+            near: [0.5, 0.5, 1.0],
+            radius: 0.2,
+            strength: Some(1.5),
+        }))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("strength"), "{e}");
+}

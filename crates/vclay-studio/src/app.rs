@@ -47,6 +47,8 @@ pub enum Tool {
     Fix,
     /// Free the control point nearest the click.
     Free,
+    /// The smooth brush: fairs the rest shape under the brush; the clay settles to it.
+    Smooth,
     /// Extrude the face under the click.
     Extrude,
     /// Delete the cell under the click.
@@ -70,6 +72,7 @@ impl Tool {
             Tool::Force => "Force brush",
             Tool::Fix => "Fix",
             Tool::Free => "Free",
+            Tool::Smooth => "Smooth",
             Tool::Extrude => "Extrude face",
             Tool::DeleteCell => "Delete cell",
             Tool::Paint => "Paint material",
@@ -80,9 +83,10 @@ impl Tool {
     }
 
     /// Every tool in palette order (the default of a model is the first it takes).
-    pub const ALL: [Tool; 11] = [
+    pub const ALL: [Tool; 12] = [
         Tool::Rope,
         Tool::Force,
+        Tool::Smooth,
         Tool::Fix,
         Tool::Free,
         Tool::Extrude,
@@ -105,6 +109,7 @@ impl Tool {
             Tool::Force => takes("region-force") || takes("force"),
             Tool::Fix => takes("fix"),
             Tool::Free => takes("free"),
+            Tool::Smooth => takes("smooth"),
             Tool::Extrude => takes("extrude"),
             Tool::DeleteCell => takes("delete-cell"),
             Tool::Paint => tools
@@ -154,6 +159,8 @@ pub struct ToolOptions {
     /// Brush half-size of fix, free and material painting, relative to the model size (0: one
     /// point or cell per click).
     pub brush: f64,
+    /// Smooth brush strength: the share of each dab's step towards the neighbours' mean.
+    pub smooth: f64,
     /// Weight that Ctrl+click sets on a control point (control point tool).
     pub weight: f64,
     /// PDE local deformation: half-widths of the region along u (of [0, 1]) and v.
@@ -193,6 +200,7 @@ impl Default for ToolOptions {
             falloff: "smooth",
             paint: [1.0, 2.0, 400.0],
             brush: 0.08,
+            smooth: 0.5,
             weight: 1.0,
             local: [0.15, 0.5],
             integrator: 0,
@@ -1153,6 +1161,11 @@ impl Studio {
                 );
                 ui.small("Drag a control point to move it; Ctrl+click one to give it this weight.");
             }
+            Tool::Smooth => {
+                ui.add(egui::Slider::new(&mut o.brush, 0.0..=0.5).text("brush (x size; 0: click)"));
+                ui.add(egui::Slider::new(&mut o.smooth, 0.05..=1.0).text("strength"));
+                ui.small("Drag over bumps: the rest shape under the brush is faired and the clay settles to it while it runs.");
+            }
             Tool::Fix | Tool::Free => {
                 ui.add(egui::Slider::new(&mut o.brush, 0.0..=0.5).text("brush (x size; 0: click)"));
                 ui.small("With a brush, drag to fix or free every control point it passes.");
@@ -1564,6 +1577,10 @@ impl Studio {
             },
             Tool::Free => Grab::Free {
                 brush: o.brush * self.model_size(),
+            },
+            Tool::Smooth => Grab::Smooth {
+                brush: o.brush * self.model_size(),
+                strength: o.smooth,
             },
             Tool::Extrude => Grab::Extrude,
             Tool::DeleteCell => Grab::DeleteCell,

@@ -17,6 +17,7 @@ pub fn tool_key(t: Tool) -> Key {
         Tool::Force => Key::G,
         Tool::Fix => Key::H,
         Tool::Free => Key::U,
+        Tool::Smooth => Key::S,
         Tool::Extrude => Key::E,
         Tool::DeleteCell => Key::D,
         Tool::Paint => Key::P,

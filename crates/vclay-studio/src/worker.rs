@@ -127,6 +127,14 @@ pub enum Grab {
         /// Brush half-size (0: the one point nearest the click).
         brush: f64,
     },
+    /// The smooth brush (`Edit::Smooth`): the rest shape under a brush of radius `brush` is
+    /// faired by `strength`, again along the stroke; the clay settles to it as it runs.
+    Smooth {
+        /// Brush radius (0: the control point nearest the press).
+        brush: f64,
+        /// Share of each dab's step, in (0, 1].
+        strength: f64,
+    },
     /// Free control points (as [`Grab::Fix`]).
     Free {
         /// Brush half-size (0: the one point nearest the click).
@@ -937,6 +945,9 @@ impl State {
         match &mut e {
             // The points under the brush where they are now (not where they rested).
             Edit::Fix(sel) | Edit::Free(sel) => *sel = Selection::brush([at.x, at.y, at.z], radius),
+            Edit::Smooth {
+                near, radius: r, ..
+            } => (*near, *r) = ([at.x, at.y, at.z], radius),
             Edit::Material {
                 cells,
                 min: a,
@@ -958,6 +969,7 @@ impl State {
                 | Grab::Force { .. }
                 | Grab::Fix { .. }
                 | Grab::Free { .. }
+                | Grab::Smooth { .. }
                 | Grab::PaintMaterial { .. }
         )
     }
@@ -966,9 +978,10 @@ impl State {
     fn spacing(grab: &Grab) -> f64 {
         match grab {
             Grab::Force { radius, .. } => radius * STROKE_SPACING,
-            Grab::Fix { brush } | Grab::Free { brush } | Grab::PaintMaterial { brush, .. } => {
-                brush * STROKE_SPACING
-            }
+            Grab::Fix { brush }
+            | Grab::Free { brush }
+            | Grab::Smooth { brush, .. }
+            | Grab::PaintMaterial { brush, .. } => brush * STROKE_SPACING,
             _ => 0.0,
         }
     }
@@ -1156,6 +1169,20 @@ impl State {
             ),
             Grab::Fix { brush } | Grab::Free { brush } => {
                 self.start_fix(model, hit, matches!(grab, Grab::Fix { .. }), *brush)
+            }
+            Grab::Smooth { brush, strength } => {
+                let template = Edit::Smooth {
+                    near: [0.0; 3],
+                    radius: *brush,
+                    strength: Some(*strength),
+                };
+                let edit = self.stroke_edit(model, &template, hit.point, None, *brush, None);
+                self.apply(Command::to(model, edit));
+                (*brush > 0.0).then(|| Active::Brush {
+                    edit: Box::new(template),
+                    radius: *brush,
+                    duration: None,
+                })
             }
             Grab::Extrude => {
                 let face = hit.extra.iter().find_map(|e| match e {

@@ -617,3 +617,56 @@ fn files_opened_come_back_under_open_recent() {
     });
     assert_eq!(h.state().recent()[0], egg_abs);
 }
+
+#[test]
+fn the_smooth_brush_strokes_smooth_edits_along_the_drag_in_one_undo_step() {
+    let session = builtin(builtin_named("cube").unwrap()).unwrap();
+    let w = Worker::start(session, false);
+    w.send(Request::Grab {
+        ray: down_at(0.3, 0.5),
+        tolerance: 0.0,
+        grab: Grab::Smooth {
+            brush: 0.2,
+            strength: 0.5,
+        },
+    });
+    for k in 1..=6 {
+        w.send(Request::Stroke {
+            ray: down_at(0.3 + 0.07 * k as f64, 0.5),
+            tolerance: 0.0,
+        });
+        std::thread::sleep(Duration::from_millis(60));
+    }
+    w.send(Request::Drop);
+    let log: Vec<Edit> = w
+        .query(|s| s.log().iter().map(|l| l.command.edit.clone()).collect())
+        .unwrap();
+    let dabs: Vec<[f64; 3]> = log
+        .iter()
+        .filter_map(|e| match e {
+            Edit::Smooth {
+                near,
+                radius,
+                strength,
+            } => {
+                assert_eq!((*radius, *strength), (0.2, Some(0.5)));
+                Some(*near)
+            }
+            _ => None,
+        })
+        .collect();
+    assert!(dabs.len() >= 2, "the brush acts along the stroke: {log:?}");
+    assert!(
+        dabs.iter().all(|p| (p[2] - 1.0).abs() < 0.1),
+        "on the top: {dabs:?}"
+    );
+    assert!(dabs.last().unwrap()[0] > dabs[0][0] + 0.1, "{dabs:?}");
+    // No plastic reset: smoothing is not a pull (the clay settles to the faired rest shape).
+    assert!(
+        !log.iter().any(|e| matches!(e, Edit::PlasticReset)),
+        "{log:?}"
+    );
+    w.send(Request::Undo);
+    let left = w.query(|s| s.log().len()).unwrap();
+    assert_eq!(left, 0, "one undo step");
+}

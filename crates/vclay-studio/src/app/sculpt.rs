@@ -50,7 +50,7 @@ impl Studio {
     pub fn is_brush(&self) -> bool {
         matches!(
             self.tool,
-            Tool::Force | Tool::Fix | Tool::Free | Tool::Paint
+            Tool::Force | Tool::Fix | Tool::Free | Tool::Smooth | Tool::Paint
         )
     }
 
@@ -58,7 +58,7 @@ impl Studio {
     pub fn brush_radius(&self) -> Option<f64> {
         match self.tool {
             Tool::Force => Some(self.options.radius),
-            Tool::Fix | Tool::Free | Tool::Paint => Some(self.options.brush),
+            Tool::Fix | Tool::Free | Tool::Smooth | Tool::Paint => Some(self.options.brush),
             _ => None,
         }
     }
@@ -68,7 +68,9 @@ impl Studio {
     pub fn scale_brush(&mut self, factor: f64) {
         let (r, (lo, hi)) = match self.tool {
             Tool::Force => (&mut self.options.radius, RADIUS_RANGE[0]),
-            Tool::Fix | Tool::Free | Tool::Paint => (&mut self.options.brush, RADIUS_RANGE[1]),
+            Tool::Fix | Tool::Free | Tool::Smooth | Tool::Paint => {
+                (&mut self.options.brush, RADIUS_RANGE[1])
+            }
             _ => return,
         };
         let next = if *r <= 0.0 && factor > 1.0 {
