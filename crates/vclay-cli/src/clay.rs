@@ -22,10 +22,10 @@ pub struct ClayArgs {
     /// .glb together).
     pub mesh: PathBuf,
     /// About how many hexahedral cells the lattice gets (at most 200,000).
-    #[arg(long, value_name = "N", default_value_t = DEFAULT_CELLS)]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::limits::parse_count, value_name = "N", default_value_t = DEFAULT_CELLS)]
     pub cells: usize,
     /// Subdivision level whose boundary surface is fitted to the mesh (at most 4).
-    #[arg(long, value_name = "L", default_value_t = DEFAULT_LEVELS)]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::limits::parse_count, value_name = "L", default_value_t = DEFAULT_LEVELS)]
     pub levels: usize,
     /// Boundary rule of the solid: smooth (Catmull-Clark boundary) or sharp (creases where the
     /// lattice's boundary bends).

@@ -37,7 +37,7 @@ pub struct ConvertArgs {
     /// Output file (.json, .geomdl.json, .step/.stp, .igs/.iges, .obj, .stl, .ply, .glb).
     pub output: PathBuf,
     /// Tessellation samples per parametric axis when a model becomes a mesh.
-    #[arg(long, default_value_t = 48)]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::limits::parse_count, default_value_t = 48)]
     pub samples: usize,
     /// STEP and IGES: write loose surfaces and curves (a GEOMETRIC_SET; IGES 126/128) instead of
     /// B-rep solids and shells.

@@ -34,7 +34,7 @@ pub struct FfdArgs {
     #[arg(long, value_name = "AxBxC", default_value = "4x4x4")]
     pub lattice: String,
     /// B-spline degree along every axis (at most control points - 1).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::limits::parse_count, default_value_t = 3)]
     pub degree: usize,
     /// Lattice box xmin,ymin,zmin,xmax,ymax,zmax (default: the mesh's bounding box grown by 5%
     /// per side). Vertices outside the box stay put.

@@ -26,10 +26,15 @@ pub struct FitArgs {
     /// Scan: .xyz (.pts, .txt, .csv: x y z per line) or the vertices of a .ply, .obj or .stl.
     pub scan: PathBuf,
     /// Control points per direction, NUxNV (or N for NxN).
-    #[arg(long, value_name = "NUxNV", default_value = "32x32")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        value_name = "NUxNV",
+        default_value = "32x32"
+    )]
     pub grid: String,
     /// B-spline degree in both directions.
-    #[arg(long, default_value_t = vclay::fit::DEFAULT_DEGREE)]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::limits::parse_count, default_value_t = vclay::fit::DEFAULT_DEGREE)]
     pub degree: usize,
     /// Fairness: tension alpha and rigidity beta of the D-NURBS thin plate under tension
     /// (d-nurbs.txt eq 17), dimensionless (docs/formats.md); default 0,1e-9.
@@ -42,7 +47,7 @@ pub struct FitArgs {
     #[arg(long, value_name = "LOSS", num_args = 0..=1, default_missing_value = "tukey")]
     pub robust: Option<Robust>,
     /// Parameter-correction rounds (closest points, then refit).
-    #[arg(long, default_value_t = vclay::fit::DEFAULT_CORRECTIONS)]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::limits::parse_count, default_value_t = vclay::fit::DEFAULT_CORRECTIONS)]
     pub corrections: usize,
     /// Output surface: .json (vclay model), .step/.stp or .igs/.iges.
     #[arg(long, value_name = "FILE")]
@@ -62,9 +67,15 @@ fn ext_of(path: &Path) -> String {
 fn parse_grid(s: &str) -> Result<[usize; 2]> {
     let parts: Vec<&str> = s.split(['x', 'X']).collect();
     let num = |t: &str| -> Result<usize> {
-        t.trim()
-            .parse::<usize>()
-            .with_context(|| format!("--grid {s}: {t:?} is not a whole number"))
+        match t.trim().parse::<usize>() {
+            Ok(n) => Ok(n),
+            Err(_) if t.trim().parse::<f64>().is_ok() => {
+                bail!(
+                    "--grid {s}: {t:?}: sizes are whole numbers of at least the degree + 1 (e.g. 32x32)"
+                )
+            }
+            Err(_) => bail!("--grid {s}: {t:?} is not a whole number (e.g. 32x32)"),
+        }
     };
     match parts.as_slice() {
         [n] => {

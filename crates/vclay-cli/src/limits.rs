@@ -84,6 +84,24 @@ pub fn check_frames(option: &str, count: usize) -> Result<()> {
     Ok(())
 }
 
+/// Parses a count given on the command line (steps, levels, samples, frames, ...): a whole
+/// number >= 0. clap's own parser says "invalid digit found in string" for `-5` or `ten`.
+pub fn parse_count(text: &str) -> Result<usize, String> {
+    parse_count_u64(text)
+        .and_then(|n| usize::try_from(n).map_err(|_| format!("{n} is too large for this machine")))
+}
+
+/// [`parse_count`] as `u64`.
+pub fn parse_count_u64(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    if t.starts_with('-') && t[1..].parse::<f64>().is_ok() {
+        return Err(format!("{t} is negative; give a whole number >= 0"));
+    }
+    t.replace('_', "")
+        .parse::<u64>()
+        .map_err(|_| format!("{t:?} is not a whole number >= 0 (digits only, e.g. 100 or 1_000)"))
+}
+
 /// Parses `--max-memory`: bytes, or a number with a unit `K`, `M`, `G`, `T` (powers of 1024,
 /// optionally followed by `B` or `iB`): `4G`, `512MiB`, `1.5GB`, `1000000`.
 pub fn parse_bytes(text: &str) -> Result<u64, String> {

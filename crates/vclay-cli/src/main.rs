@@ -28,7 +28,7 @@ mod subdivide;
 
 /// vclay: physics-based free-form modeling (virtual clay).
 #[derive(Debug, Parser)]
-#[command(name = "vclay", version, about, long_about = None)]
+#[command(name = "vclay", version, about, long_about = None, disable_help_subcommand = true)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -65,20 +65,21 @@ enum Command {
     /// Convert between file formats, chosen by extension (model, geomdl, STEP, meshes, glTF).
     Convert(convert::ConvertArgs),
     /// Evaluate a NURBS model file at parameters; prints {"points": [...], "derivatives": [...]}.
+    #[command(group(clap::ArgGroup::new("where").required(true).args(["params", "at"])))]
     Eval {
         /// Model file (JSON, see docs/formats.md).
         model: PathBuf,
         /// JSON file with an array of parameter tuples ([u], [u,v] or [u,v,w]).
-        #[arg(long, required_unless_present = "at", conflicts_with = "at")]
+        #[arg(long, conflicts_with = "at")]
         params: Option<PathBuf>,
         /// Parameters inline instead of --params: U, U,V or U,V,W (repeat for several).
         #[arg(long, value_name = "U[,V[,W]]", allow_hyphen_values = true)]
         at: Vec<String>,
         /// Also print partial derivatives up to this total order.
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true, value_parser = crate::limits::parse_count)]
         derivatives: Option<usize>,
         /// Which entity of the file to evaluate (0-based).
-        #[arg(long, default_value_t = 0)]
+        #[arg(long, allow_hyphen_values = true, value_parser = crate::limits::parse_count, default_value_t = 0)]
         entity: usize,
         /// Lattice (.ovm) only: the subdivision solid's boundary rule; --params holds
         /// [cell, u, v, w] tuples (--at CELL,U,V,W).
@@ -121,7 +122,7 @@ enum Command {
         /// Scenario (.toml) or session file.
         file: PathBuf,
         /// Steps to run (default: to the scenario's end).
-        #[arg(long, conflicts_with = "until")]
+        #[arg(long, allow_hyphen_values = true, value_parser = crate::limits::parse_count_u64, conflicts_with = "until")]
         steps: Option<u64>,
         /// Run until the first model's clock reaches this time (s).
         #[arg(long)]
@@ -152,6 +153,37 @@ enum Command {
         /// A subcommand (default: the page of `vclay` itself).
         command: Option<String>,
     },
+    /// Print the help of vclay or of a subcommand (`vclay help run` is `vclay run --help`).
+    Help {
+        /// A subcommand (default: vclay itself).
+        command: Option<String>,
+    },
+}
+
+/// `vclay help [COMMAND]` (clap's own help subcommand refused `vclay help --help`).
+fn help(command: Option<&str>) -> anyhow::Result<()> {
+    use clap::CommandFactory;
+    let mut cli = Cli::command();
+    // Built, the subcommands' usage lines say `vclay run`, not `run`.
+    cli.build();
+    let printed = match command {
+        None => cli.print_long_help(),
+        Some(name) => {
+            let names: Vec<String> = cli
+                .get_subcommands()
+                .map(|c| c.get_name().to_string())
+                .collect();
+            let Some(sub) = cli.find_subcommand_mut(name) else {
+                anyhow::bail!("no command `{name}`; the commands: {}", names.join(", "));
+            };
+            sub.print_long_help()
+        }
+    };
+    match printed {
+        // `vclay help | head`: a closed pipe is not an error.
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        r => Ok(r?),
+    }
 }
 
 fn main() -> ExitCode {
@@ -204,6 +236,7 @@ fn main() -> ExitCode {
         }),
         Command::Studio { args } => studio::run(&args),
         Command::Completions { shell } => manual::completions(shell),
+        Command::Help { command } => help(command.as_deref()),
         Command::Man { command } => manual::man(command.as_deref()),
     };
     match result {

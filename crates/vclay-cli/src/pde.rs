@@ -20,7 +20,12 @@ pub struct PdeArgs {
     #[arg(long, requires = "out", allow_negative_numbers = true)]
     pub t: Option<f64>,
     /// Tessellation grid per patch, NUxNV samples (u along the PDE direction).
-    #[arg(long, default_value = "64x64", value_name = "NUxNV")]
+    #[arg(
+        allow_hyphen_values = true,
+        long,
+        default_value = "64x64",
+        value_name = "NUxNV"
+    )]
     pub grid: String,
     /// Output mesh for --t: .obj, .ply or .stl.
     #[arg(long, value_name = "FILE")]

@@ -37,7 +37,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub wireframe: bool,
     /// Number of frames: of the turntable for a .gif, or of a scenario's animation.
-    #[arg(long, default_value_t = 36)]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::limits::parse_count, default_value_t = 36)]
     pub frames: usize,
     /// Orthographic instead of perspective projection.
     #[arg(long)]

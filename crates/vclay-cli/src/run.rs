@@ -76,10 +76,12 @@ pub fn run(args: &RunArgs) -> Result<()> {
         (None, None) if has_length => info.end_step.saturating_sub(now),
         (None, None) => {
             let n = steps_for_duration(DEFAULT_DURATION, first.dt()).map_err(anyhow::Error::msg)?;
-            eprintln!(
-                "{name}: the file gives no run length; running {DEFAULT_DURATION} s ({n} steps; \
-                 --steps or --until for more)"
-            );
+            if !args.quiet {
+                eprintln!(
+                    "{name}: the file gives no run length; running {DEFAULT_DURATION} s ({n} steps; \
+                     --steps or --until for more)"
+                );
+            }
             n
         }
     };
@@ -87,23 +89,35 @@ pub fn run(args: &RunArgs) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| default_out_dir(&info.name));
-    for n in session.model_names() {
-        let m = session.model(Some(n))?;
-        eprintln!("{name}: model `{n}` ({}): {}", m.kind(), m.summary());
+    if !args.quiet {
+        for n in session.model_names() {
+            let m = session.model(Some(n))?;
+            eprintln!("{name}: model `{n}` ({}): {}", m.kind(), m.summary());
+        }
+        eprintln!(
+            "{name}: opened in {:.2} s; {steps} steps from step {now} (t = {:.4}) into {}",
+            t0.elapsed().as_secs_f64(),
+            first.time(),
+            dir.display()
+        );
     }
-    eprintln!(
-        "{name}: opened in {:.2} s; {steps} steps from step {now} (t = {:.4}) into {}",
-        t0.elapsed().as_secs_f64(),
-        first.time(),
-        dir.display()
-    );
     // The bar is for a person at a terminal: off with --quiet and when stderr is a file or pipe.
     let quiet = args.quiet || !std::io::IsTerminal::is_terminal(&std::io::stderr());
     let mut last = Instant::now() - Duration::from_secs(1);
+    let mut bar_shown = false;
     let mut bar = |p: Progress| {
+        // Timeline events as they happen (stdout), above the bar.
+        for l in &p.events {
+            if bar_shown {
+                eprint!("\r\x1b[2K");
+                bar_shown = false;
+            }
+            println!("  {l}");
+        }
         if quiet || (last.elapsed() < Duration::from_millis(100) && p.step != p.steps) {
             return;
         }
+        bar_shown = p.step != p.steps;
         last = Instant::now();
         let width = 30;
         let done = (p.step * width)
@@ -136,7 +150,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
             return Err(e).with_context(|| format!("running {name}"));
         }
     };
-    print_summary(&s);
+    print_summary(&s, &dir);
     if let Some(p) = &args.save {
         file::save(p, &session, Some(&info))?;
         println!("  session saved -> {}", p.display());
@@ -144,10 +158,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
     Ok(())
 }
 
-fn print_summary(s: &RunSummary) {
-    for l in &s.log {
-        println!("  {l}");
-    }
+/// The summary on stdout: the figures, the models, and the files written: all of them with
+/// `--verbose`, else the folder, the counts and the first and last frame (a long run writes
+/// hundreds). The timeline's events were printed as they happened.
+fn print_summary(s: &RunSummary, dir: &Path) {
     let energies: Vec<String> = s
         .final_energy
         .iter()
@@ -164,12 +178,30 @@ fn print_summary(s: &RunSummary) {
         println!("  model {m}");
     }
     println!(
-        "  {} files written: {} frames, {} other",
+        "  {} files written to {}: {} frames, {} other",
         s.frames.len() + s.files.len(),
+        dir.display(),
         s.frames.len(),
         s.files.len()
     );
-    for f in s.frames.iter().chain(&s.files) {
+    if crate::verbose() || s.frames.len() <= 4 {
+        for f in s.frames.iter().chain(&s.files) {
+            println!("  -> {}", f.display());
+        }
+        return;
+    }
+    let name = |p: &PathBuf| {
+        p.file_name()
+            .map_or(String::new(), |n| n.to_string_lossy().into_owned())
+    };
+    if let (Some(a), Some(b)) = (s.frames.first(), s.frames.last()) {
+        println!(
+            "  -> frames {} .. {} (--verbose lists them)",
+            name(a),
+            name(b)
+        );
+    }
+    for f in &s.files {
         println!("  -> {}", f.display());
     }
 }

@@ -26,7 +26,7 @@ pub struct SubdivideArgs {
     #[arg(long, value_name = "NAME[:ARGS]")]
     pub primitive: Option<String>,
     /// Number of subdivision levels (0 keeps the control lattice).
-    #[arg(long, value_name = "N")]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::limits::parse_count, value_name = "N")]
     pub levels: usize,
     /// Boundary rule: volumetric rules everywhere (interior), Catmull-Clark boundary surface
     /// (smooth), or smooth plus automatic creases and corners (sharp).

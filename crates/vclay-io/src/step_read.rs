@@ -1043,17 +1043,15 @@ pub fn parse_step(text: &str) -> Result<CadImport, IoError> {
              missing from their loops"
         ));
     }
-    if edge_curves + curves_2d > 0 {
-        warnings.push(format!(
-            "{edge_curves} B-spline edge or surface-definition curve(s) and {curves_2d} \
-             parameter-space (2D) curve(s) not imported as separate curves: edges and pcurves \
-             are kept in the faces' trimming loops"
-        ));
-    }
+    // Edge curves, pcurves and surface-definition curves are kept (in the faces' trimming loops
+    // and the surfaces they define): nothing is dropped, so no warning (issue 29: reading our
+    // own files is silent).
+    let _ = (edge_curves, curves_2d);
     let mut not_read: HashMap<String, usize> = HashMap::new();
     for inst in all.values() {
-        if !rd.used.contains(&inst.id) {
-            *not_read.entry(inst.type_name()).or_default() += 1;
+        let name = inst.type_name();
+        if !rd.used.contains(&inst.id) && !is_structure(&name) {
+            *not_read.entry(name).or_default() += 1;
         }
     }
     if !not_read.is_empty() {
@@ -1061,7 +1059,7 @@ pub fn parse_step(text: &str) -> Result<CadImport, IoError> {
         v.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
         let list: Vec<String> = v.iter().map(|(t, n)| format!("{n} {t}")).collect();
         warnings.push(format!(
-            "entities not read (count per type): {}",
+            "geometry not read (count per type): {}",
             list.join(", ")
         ));
     }
@@ -1087,6 +1085,63 @@ pub fn read_step(path: impl AsRef<Path>) -> Result<CadImport, IoError> {
     let path = path.as_ref();
     let bytes = std::fs::read(path).map_err(|e| IoError::file(path, e))?;
     parse_step(&String::from_utf8_lossy(&bytes)).map_err(|e| e.in_file(path))
+}
+
+/// Whether a STEP entity type is file structure rather than geometry: product data, contexts,
+/// units, representations, shells and solids that hold faces, presentation (colours, styles),
+/// assembly links. Such entities carry no shape of their own, so leaving them unread drops
+/// nothing and is not warned about (the warning names only geometry that is dropped).
+fn is_structure(type_name: &str) -> bool {
+    // Complex instances list their parts in parentheses: structure when every part is.
+    if type_name.starts_with('(') {
+        return type_name
+            .trim_matches(['(', ')'])
+            .split_whitespace()
+            .all(is_structure);
+    }
+    const PREFIXES: [&str; 12] = [
+        "PRODUCT",
+        "APPLICATION_",
+        "SHAPE_",
+        "PRESENTATION_",
+        "SURFACE_STYLE",
+        "CURVE_STYLE",
+        "FILL_AREA",
+        "MECHANICAL_DESIGN",
+        "PROPERTY_DEFINITION",
+        "DESCRIPTIVE_REPRESENTATION",
+        "NEXT_ASSEMBLY",
+        "DRAUGHTING_",
+    ];
+    const SUFFIXES: [&str; 6] = [
+        "_CONTEXT",
+        "_UNIT",
+        "_REPRESENTATION",
+        "_SHELL",
+        "_STYLE",
+        "_ASSIGNMENT",
+    ];
+    const NAMES: [&str; 16] = [
+        "REPRESENTATION",
+        "SI_UNIT",
+        "NAMED_UNIT",
+        "DIMENSIONAL_EXPONENTS",
+        "UNCERTAINTY_MEASURE_WITH_UNIT",
+        "MANIFOLD_SOLID_BREP",
+        "BREP_WITH_VOIDS",
+        "SHELL_BASED_SURFACE_MODEL",
+        "STYLED_ITEM",
+        "OVER_RIDING_STYLED_ITEM",
+        "COLOUR_RGB",
+        "DRAUGHTING_PRE_DEFINED_COLOUR",
+        "ITEM_DEFINED_TRANSFORMATION",
+        "CONTEXT_DEPENDENT_SHAPE_REPRESENTATION",
+        "REPRESENTATION_RELATIONSHIP",
+        "REPRESENTATION_RELATIONSHIP_WITH_TRANSFORMATION",
+    ];
+    NAMES.contains(&type_name)
+        || PREFIXES.iter().any(|p| type_name.starts_with(p))
+        || SUFFIXES.iter().any(|x| type_name.ends_with(x))
 }
 
 #[cfg(test)]

@@ -219,6 +219,10 @@ pub fn identify_bytes(path: &Path, head: &[u8], len: u64) -> Result<FileKind, Se
     if ext == "toml" || looks_like_toml(t) {
         return Ok(FileKind::Scenario);
     }
+    // A JSON file by its name that is not JSON (a damaged or truncated save): say so.
+    if matches!(ext.as_str(), "session" | "json") {
+        return identify_json(path);
+    }
     Err(SessionError::io(
         path,
         "not a file vclay reads (scenarios .toml, sessions, model/PDE JSON, STEP, IGES, \
@@ -272,7 +276,13 @@ fn looks_like_toml(t: &str) -> bool {
 fn identify_json(path: &Path) -> Result<FileKind, SessionError> {
     let text = std::fs::read_to_string(path).map_err(|e| SessionError::io(path, e))?;
     let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
-        SessionError::io(path, format!("line {}: invalid JSON: {e}", e.line().max(1)))
+        let what = if path.extension().is_some_and(|x| x == "session") {
+            "a .session file is JSON (docs/formats.md section 10); this one is damaged or \
+             not a session"
+        } else {
+            "invalid JSON"
+        };
+        SessionError::io(path, format!("line {}: {what}: {e}", e.line().max(1)))
     })?;
     let has = |k: &str| v.get(k).is_some();
     let entity_type = |v: &serde_json::Value| {

@@ -10,7 +10,7 @@ use crate::scenario::OutputSpec;
 use crate::session::Session;
 
 /// Progress after a step.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Progress {
     /// Steps done in this run.
     pub step: u64,
@@ -20,6 +20,9 @@ pub struct Progress {
     pub time: f64,
     /// Total energy of the first model (kinetic + elastic) at the start of the step.
     pub energy: f64,
+    /// The log lines of the scheduled commands this step applied (a front end shows them as
+    /// they happen; [`RunSummary::log`] has them all).
+    pub events: Vec<String>,
 }
 
 /// What a run did.
@@ -101,7 +104,7 @@ pub fn run(
         let ms = t0.elapsed().as_secs_f64() * 1e3;
         sum_ms += ms;
         max_ms = max_ms.max(ms);
-        summary.log.extend(lines);
+        summary.log.extend(lines.iter().cloned());
         for ((name, r), (step, time)) in names.iter().zip(&reports).zip(&starts) {
             let _ = writeln!(
                 csv,
@@ -120,6 +123,7 @@ pub fn run(
             steps,
             time: session.model(None)?.time(),
             energy: reports.first().map_or(0.0, |r| r.energy.total()),
+            events: lines,
         });
         let done = session.model(None)?.steps();
         if done % output.every == 0 || k + 1 == steps {

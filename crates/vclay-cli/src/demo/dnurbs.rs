@@ -34,7 +34,7 @@ pub fn hemisphere_fit(out: &Path) -> Result<(String, Vec<String>)> {
     let steps = 300;
     for k in 0..steps {
         d.step(Integrator::Implicit { dt: p.dt })?;
-        if k % 100 == 99 {
+        if k % 100 == 99 && !crate::quiet() {
             eprintln!("    fitting: step {}/{steps}", k + 1);
         }
     }

@@ -121,11 +121,15 @@ pub fn run(out: &Path) -> Result<()> {
     let total = steps.len();
     let mut records = Vec::with_capacity(total);
     for (k, s) in steps.into_iter().enumerate() {
-        eprintln!("[{}/{total}] {} ...", k + 1, s.name);
+        if !crate::quiet() {
+            eprintln!("[{}/{total}] {} ...", k + 1, s.name);
+        }
         let t0 = Instant::now();
         let (what, files) = (s.run)(out).with_context(|| format!("demo step '{}'", s.name))?;
         let millis = t0.elapsed().as_secs_f64() * 1e3;
-        eprintln!("[{}/{total}] {}: {what} ({millis:.1} ms)", k + 1, s.name);
+        if !crate::quiet() {
+            eprintln!("[{}/{total}] {}: {what} ({millis:.1} ms)", k + 1, s.name);
+        }
         records.push(Record {
             name: s.name,
             reproduces: s.reproduces,
@@ -147,7 +151,9 @@ pub fn run(out: &Path) -> Result<()> {
     )
     .with_context(|| format!("cannot write {}", summary_path.display()))?;
     let (pictures, index_ms) = index::write_index(out, &records).context("demo index page")?;
-    eprintln!("index.html: {pictures} pictures rendered ({index_ms:.1} ms)");
+    if !crate::quiet() {
+        eprintln!("index.html: {pictures} pictures rendered ({index_ms:.1} ms)");
+    }
     println!("vclay demo: results in {}/", out.display());
     for r in &records {
         println!("  {:<24} {:>9.1} ms  {}", r.name, r.millis, r.what);

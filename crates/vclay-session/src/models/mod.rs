@@ -76,6 +76,7 @@ pub fn typed<T: DeserializeOwned>(table: &str, t: &toml::Table) -> Result<T, Spe
             .filter(|_| msg.starts_with("unknown field") || msg.starts_with("missing field"))
             .or(first)
             .unwrap_or_else(|| table.to_string());
+        let msg = plain_types(&msg);
         let what = if path.is_empty() || path == "." || msg.contains(&path) {
             msg
         } else {
@@ -87,6 +88,34 @@ pub fn typed<T: DeserializeOwned>(table: &str, t: &toml::Table) -> Result<T, Spe
             what,
         }
     })
+}
+
+/// serde's Rust type names in a message as a scenario's author reads them: `expected usize`
+/// becomes `expected a whole number >= 0`, `expected f64` `expected a number`, and so on.
+fn plain_types(msg: &str) -> String {
+    const NAMES: [(&str, &str); 12] = [
+        ("expected usize", "expected a whole number >= 0"),
+        ("expected u64", "expected a whole number >= 0"),
+        ("expected u32", "expected a whole number >= 0"),
+        ("expected u8", "expected a whole number from 0 to 255"),
+        ("expected i64", "expected a whole number"),
+        ("expected i32", "expected a whole number"),
+        ("expected f64", "expected a number"),
+        ("expected f32", "expected a number"),
+        ("expected a boolean", "expected true or false"),
+        ("expected a string", "expected a text in quotes"),
+        ("expected a sequence", "expected a list [a, b, ...]"),
+        ("expected a borrowed string", "expected a text in quotes"),
+    ];
+    let mut out = msg.to_string();
+    for (rust, plain) in NAMES {
+        if let Some(i) = out.find(rust)
+            && !out[i + rust.len()..].starts_with(|c: char| c.is_alphanumeric())
+        {
+            out.replace_range(i..i + rust.len(), plain);
+        }
+    }
+    out
 }
 
 /// A model as a typed value: its kind and the keys of its `[model]`, `[material]` and
