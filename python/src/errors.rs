@@ -7,14 +7,18 @@
 //! ├── GeometryError    invalid geometry or parameters: knots, weights, lattices, FFD solves
 //! ├── PdeError         PDE surface specs and solves
 //! ├── RenderError      pictures
-//! └── SessionError     sessions: unknown model, nothing to undo
-//!     ├── CommandError a command that cannot apply (the session is unchanged)
-//!     └── DivergedError the simulation diverged (the model keeps its last good state)
+//! ├── SessionError     sessions: unknown model, nothing to undo
+//! │   ├── CommandError a command that cannot apply (the session is unchanged)
+//! │   └── DivergedError the simulation diverged (the model keeps its last good state)
+//! └── MemoryLimitError work over the memory limit (`set_max_memory`), raised before any
+//!                      allocation; also a `MemoryError`, as numpy raises for such sizes
 //! ```
 
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
+use pyo3::types::{PyDict, PyTuple, PyType};
 
 create_exception!(
     vclay,
@@ -75,7 +79,46 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SessionError", py.get_type::<SessionError>())?;
     m.add("CommandError", py.get_type::<CommandError>())?;
     m.add("DivergedError", py.get_type::<DivergedError>())?;
+    m.add("MemoryLimitError", memory_limit_error(py)?)?;
     Ok(())
+}
+
+static MEMORY_LIMIT_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+
+/// `MemoryLimitError(VclayError, MemoryError)`: a class with two bases, which
+/// `create_exception!` cannot make, so it is made by `type(name, bases, dict)` once.
+fn memory_limit_error(py: Python<'_>) -> PyResult<&Bound<'_, PyType>> {
+    let ty = MEMORY_LIMIT_ERROR.get_or_try_init(py, || {
+        let bases = PyTuple::new(
+            py,
+            [
+                py.get_type::<VclayError>().into_any(),
+                py.get_type::<pyo3::exceptions::PyMemoryError>().into_any(),
+            ],
+        )?;
+        let dict = PyDict::new(py);
+        dict.set_item("__module__", "vclay")?;
+        dict.set_item(
+            "__doc__",
+            "Work over the memory limit (`vclay.set_max_memory`, default 4 GiB), raised before \
+             anything is allocated; the message names the argument and the estimate. Also a \
+             `MemoryError`, as numpy raises for sizes it cannot allocate.",
+        )?;
+        let t = py
+            .get_type::<PyType>()
+            .call1(("MemoryLimitError", bases, dict))?
+            .cast_into::<PyType>()?;
+        Ok::<_, PyErr>(t.unbind())
+    })?;
+    Ok(ty.bind(py))
+}
+
+/// A `MemoryLimitError` with `msg`.
+pub fn memory_limit(py: Python<'_>, msg: String) -> PyErr {
+    match memory_limit_error(py) {
+        Ok(t) => PyErr::from_type(t.clone(), msg),
+        Err(e) => e,
+    }
 }
 
 /// Kernel errors as Python exceptions.

@@ -24,14 +24,38 @@ pub struct Ffd {
     lattice: FfdLattice,
 }
 
-fn spec(degree: usize, control_points: &Bound<'_, PyAny>) -> PyResult<LatticeSpec> {
-    let cp: [usize; 3] = if let Ok(n) = control_points.extract::<usize>() {
-        [n; 3]
-    } else {
-        control_points.extract().map_err(|_| {
-            PyValueError::new_err("control_points: an integer or three integers (per axis)")
-        })?
+/// The lattice spec of `degree` and `control_points` (one count or three), its size checked
+/// against the memory limit (`vclay ffd --lattice`'s estimate) before anything is built.
+fn spec(
+    py: Python<'_>,
+    degree: usize,
+    control_points: Option<&Bound<'_, PyAny>>,
+) -> PyResult<LatticeSpec> {
+    let bad = || {
+        PyValueError::new_err(
+            "control_points: expected a non-negative integer or three (one per axis)",
+        )
     };
+    let cp: [usize; 3] = match control_points {
+        None => [vclay_ffd::DEFAULT_CONTROL_POINTS.max(degree + 1); 3],
+        Some(c) => {
+            let v: Vec<i128> = if let Ok(n) = c.extract::<i128>() {
+                vec![n; 3]
+            } else {
+                c.extract().map_err(|_| bad())?
+            };
+            let v: Vec<usize> = v
+                .into_iter()
+                .map(|n| usize::try_from(n).map_err(|_| bad()))
+                .collect::<PyResult<_>>()?;
+            v.try_into().map_err(|_| bad())?
+        }
+    };
+    crate::limits::check(
+        py,
+        || format!("control_points={cp:?}"),
+        vclay_session::limits::ffd_bytes(cp),
+    )?;
     Ok(LatticeSpec {
         degree: [degree; 3],
         control_points: cp,
@@ -45,19 +69,15 @@ impl Ffd {
     #[new]
     #[pyo3(signature = (lo, hi, degree = vclay_ffd::DEFAULT_DEGREE, control_points = None))]
     fn new(
+        py: Python<'_>,
         lo: &Bound<'_, PyAny>,
         hi: &Bound<'_, PyAny>,
         degree: usize,
         control_points: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let s = match control_points {
-            Some(c) => spec(degree, c)?,
-            None => LatticeSpec {
-                degree: [degree; 3],
-                control_points: [vclay_ffd::DEFAULT_CONTROL_POINTS.max(degree + 1); 3],
-            },
-        };
-        let lattice = FfdLattice::new(s, util::vec3(lo, "lo")?, util::vec3(hi, "hi")?).py()?;
+        let s = spec(py, degree, control_points)?;
+        let (lo, hi) = (util::vec3(lo, "lo")?, util::vec3(hi, "hi")?);
+        let lattice = py.detach(|| FfdLattice::new(s, lo, hi)).py()?;
         Ok(Self { lattice })
     }
 
@@ -66,19 +86,14 @@ impl Ffd {
     #[staticmethod]
     #[pyo3(signature = (points, degree = vclay_ffd::DEFAULT_DEGREE, control_points = None, margin = vclay_ffd::DEFAULT_MARGIN))]
     fn enclosing(
+        py: Python<'_>,
         points: &Bound<'_, PyAny>,
         degree: usize,
         control_points: Option<&Bound<'_, PyAny>>,
         margin: f64,
     ) -> PyResult<Self> {
+        let s = spec(py, degree, control_points)?;
         let pts = util::points(points, "points")?;
-        let s = match control_points {
-            Some(c) => spec(degree, c)?,
-            None => LatticeSpec {
-                degree: [degree; 3],
-                control_points: [vclay_ffd::DEFAULT_CONTROL_POINTS.max(degree + 1); 3],
-            },
-        };
         let lattice = FfdLattice::enclosing(&pts, s, margin).py()?;
         Ok(Self { lattice })
     }

@@ -47,6 +47,12 @@ fn fit_surface<'py>(
         rational: weights,
         ..FitOptions::default()
     };
+    // `vclay fit`'s estimate, against the memory limit.
+    crate::limits::check(
+        py,
+        || format!("grid={grid:?} with {} points", pts.len()),
+        vclay_fit::memory_estimate(pts.len(), &opts, rayon::current_num_threads()) as f64,
+    )?;
     let fit = py
         .detach(|| vclay_fit::fit_surface(&pts, &opts))
         .map_err(|e| GeometryError::new_err(e.to_string()))?;

@@ -82,6 +82,12 @@ impl Lattice {
                 "{levels} levels would give about {predicted} cells (more than {MAX_PREDICTED_CELLS}); use fewer levels"
             )));
         }
+        // `vclay subdivide --levels`'s estimate, against the memory limit.
+        crate::limits::check(
+            py,
+            || format!("levels={levels} ({predicted} cells)"),
+            vclay_session::limits::subdivision_bytes(self.lattice.num_cells(), levels),
+        )?;
         let start = &self.lattice;
         let out = py.detach(|| {
             let mut lat = start.clone();

@@ -27,6 +27,7 @@ mod errors;
 mod ffd;
 mod fit;
 mod lattice;
+mod limits;
 mod nurbs;
 mod pde;
 mod render;
@@ -51,6 +52,7 @@ pub const PAR_MIN: usize = 2048;
 fn vclay_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     errors::register(m)?;
+    limits::register(m)?;
     nurbs::register(m)?;
     ffd::register(m)?;
     fit::register(m)?;

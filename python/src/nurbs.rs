@@ -100,7 +100,7 @@ fn net(
     weights: Option<&Bound<'_, PyAny>>,
     dims: usize,
 ) -> PyResult<(Vec<Vec3>, Vec<f64>, Vec<usize>)> {
-    let (data, shape) = util::flat(points)?;
+    let (data, shape) = util::flat(points, "control_points")?;
     if shape.len() != dims + 1 || shape[dims] != 3 {
         let want = ["(n, 3)", "(nu, nv, 3)", "(nu, nv, nw, 3)"][dims - 1];
         return Err(PyValueError::new_err(format!(
@@ -116,7 +116,7 @@ fn net(
         None => vec![1.0; pts.len()],
         Some(w) if w.is_none() => vec![1.0; pts.len()],
         Some(w) => {
-            let (wd, ws) = util::flat(w)?;
+            let (wd, ws) = util::flat(w, "weights")?;
             if ws != net_shape {
                 return Err(PyValueError::new_err(format!(
                     "weights: expected shape {net_shape:?} (the control net's), got {ws:?}"
@@ -423,6 +423,7 @@ impl Entity {
     ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
         let d = self.dims();
         let (t, n) = util::rows(params, d, "params")?;
+        crate::limits::check_f64s(py, || format!("evaluate: {n} points"), 3.0 * n as f64)?;
         let mut out = vec![0.0; n * 3];
         let e = &self.entity;
         let work = |out: &mut [f64]| {
@@ -484,6 +485,11 @@ impl Entity {
         let (t, n) = util::rows(params, d, "params")?;
         let o = order + 1;
         let per = o.pow(d as u32) * 3;
+        crate::limits::check_f64s(
+            py,
+            || format!("derivatives: order={order} at {n} points"),
+            n as f64 * per as f64,
+        )?;
         let mut out = vec![0.0; n * per];
         let e = &self.entity;
         let r = py.detach(|| {
@@ -561,6 +567,11 @@ impl Entity {
         let (vs, nv) = util::rows(v, 1, "v")?;
         let par = vclay_core::Parallelism::Auto;
         let Some(out) = out else {
+            crate::limits::check_f64s(
+                py,
+                || format!("evaluate_grid: u ({nu} values) x v ({nv} values)"),
+                3.0 * nu as f64 * nv as f64,
+            )?;
             let mut flat = vec![0.0; 3 * nu * nv];
             py.detach(|| s.eval_grid_into_flat(&us, &vs, &mut flat, par))
                 .py()?;
@@ -630,7 +641,9 @@ impl Entity {
     /// normals (n, 3))`, `samples` per parametric axis.
     #[pyo3(signature = (samples = 32))]
     fn tessellate<'py>(&self, py: Python<'py>, samples: usize) -> PyResult<Bound<'py, PyAny>> {
-        let mesh = tessellate_one(&self.entity, samples)?;
+        check_tessellation(py, &[self.dims()], samples)?;
+        let e = &self.entity;
+        let mesh = py.detach(|| tessellate_one(e, samples))?;
         util::mesh_arrays(py, &mesh)
     }
 
@@ -662,6 +675,24 @@ impl Entity {
             }
         )
     }
+}
+
+/// Checks a tessellation of `entities` at `samples` per axis against the memory limit
+/// (`vclay convert --samples`'s estimate).
+/// `dims`: the entities' parameter counts (1 curve, 2 surface, 3 volume).
+fn check_tessellation(py: Python<'_>, dims: &[usize], samples: usize) -> PyResult<()> {
+    let count = |d: usize| dims.iter().filter(|&&k| k == d).count();
+    let (surfaces, volumes) = (count(2), count(3));
+    crate::limits::check(
+        py,
+        || {
+            format!(
+                "samples={samples} ({surfaces} surfaces, {volumes} volumes: about {:.3e} vertices)",
+                (samples as f64).powi(2) * (surfaces as f64 + 6.0 * volumes as f64)
+            )
+        },
+        vclay_session::limits::tessellation_bytes(samples, surfaces, volumes),
+    )
 }
 
 fn tessellate_one(e: &IoEntity, samples: usize) -> PyResult<TriMesh> {
@@ -728,6 +759,9 @@ fn mesh_of(loaded: &Loaded, samples: usize) -> PyResult<TriMesh> {
     let mut all = TriMesh::new();
     match loaded {
         Loaded::Entities(es) => {
+            let dims: Vec<usize> = es.iter().map(|e| e.entity.param_dims()).collect();
+            // Called without the GIL (inside `detach`): take it for the check's exception.
+            Python::attach(|py| check_tessellation(py, &dims, samples))?;
             for e in es {
                 if !matches!(e.entity, IoEntity::Curve(_)) {
                     all.append(&tessellate_one(&e.entity, samples)?);

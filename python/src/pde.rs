@@ -34,7 +34,7 @@ impl PdeSurface {
     /// `PdeSurface(spec)`: `spec` a dict (or JSON text) in the spec format of `vclay pde`.
     #[new]
     fn new(spec: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let v = util::py_to_json(spec)?;
+        let v = util::py_to_json(spec, "spec", crate::errors::PdeError::new_err)?;
         let text = serde_json::to_string(&v).map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok(Self {
             model: PdeModel::from_json(&text, "spec").py()?,
@@ -100,6 +100,12 @@ impl PdeSurface {
         if grid.0 < 2 || grid.1 < 2 {
             return Err(PyValueError::new_err("grid: at least 2 x 2 samples"));
         }
+        // `vclay pde --grid`'s estimate, against the memory limit.
+        crate::limits::check(
+            py,
+            || format!("grid={grid:?} ({} patches)", self.model.patches.len()),
+            vclay_session::limits::grid_mesh_bytes(grid.0, grid.1, self.model.patches.len()),
+        )?;
         let sol = self.solve_at(py, t)?;
         let m = &self.model;
         let mesh = py.detach(|| {

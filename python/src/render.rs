@@ -107,6 +107,13 @@ fn render(
     wireframe: bool,
     ortho: bool,
 ) -> PyResult<()> {
+    // `vclay render --size`'s estimate (one frame), against the memory limit, first.
+    let supersample = RenderOptions::sized(1, 1).supersample;
+    crate::limits::check(
+        py,
+        || format!("size={size:?}"),
+        vclay_session::limits::render_bytes(size.0, size.1, supersample, 1, 1),
+    )?;
     let view = View::parse(view).ok_or_else(|| {
         PyValueError::new_err(format!("view '{view}': expected iso, front, top or side"))
     })?;

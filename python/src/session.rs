@@ -16,7 +16,7 @@ use vclay_session::file::{self, RunInfo};
 use vclay_session::scenario::{OutputSpec, Scenario};
 use vclay_session::{Command, Model, ModelSpec, Session as KSession};
 
-use crate::errors::{PyResultExt, SessionError};
+use crate::errors::{CommandError, PyResultExt, SessionError};
 use crate::util;
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -75,8 +75,7 @@ fn dnurbs_surface(
     use vclay_session::models::{KindSpec, dnurbs};
     let surface = crate::nurbs::surface_of(points, degree, weights, knots)?;
     let material: dnurbs::MaterialKeys = match material {
-        Some(d) => serde_json::from_value(util::py_to_json(d.as_any())?)
-            .map_err(|e| PyValueError::new_err(format!("material: {e}")))?,
+        Some(d) => util::from_py(d.as_any(), "material", PyValueError::new_err)?,
         None => Default::default(),
     };
     let spec = ModelSpec::DnurbsSurface(KindSpec {
@@ -241,18 +240,15 @@ impl Session {
     /// "edge_stiffness", "value": 80}`, optionally with `"model": name`. Returns the log line.
     /// A command that cannot apply raises `CommandError` and leaves the session unchanged.
     fn apply(&mut self, py: Python<'_>, command: &Bound<'_, PyAny>) -> PyResult<String> {
-        let v = util::py_to_json(command)?;
-        let c: Command = serde_json::from_value(v)
-            .map_err(|e| crate::errors::CommandError::new_err(format!("command: {e}")))?;
+        let c: Command = util::from_py(command, "command", CommandError::new_err)?;
         let s = &mut self.session;
         py.detach(|| s.apply(c)).py()
     }
 
     /// Schedules commands (dicts with `"at"`: seconds) like a scenario's timeline.
     fn schedule(&mut self, commands: &Bound<'_, PyAny>) -> PyResult<()> {
-        let v = util::py_to_json(commands)?;
-        let timed: Vec<vclay_session::Timed> = serde_json::from_value(v)
-            .map_err(|e| crate::errors::CommandError::new_err(format!("schedule: {e}")))?;
+        let timed: Vec<vclay_session::Timed> =
+            util::from_py(commands, "schedule", CommandError::new_err)?;
         self.session.schedule_commands(timed).py()
     }
 
