@@ -18,8 +18,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// A trivariate NURBS lattice over a box, the identity at rest: `Q(u, v, w)` with control
 /// points at the Greville abscissae. Moving points of space (direct manipulation) moves the
 /// control points by the least-norm displacement field (eqs 7, 12); `deform` maps points.
-#[pyclass(module = "vclay")]
-#[derive(Debug)]
+#[pyclass(module = "vclay", eq)]
+#[derive(Debug, PartialEq)]
 pub struct Ffd {
     lattice: FfdLattice,
 }
@@ -232,6 +232,34 @@ impl Ffd {
     /// The lattice as a `Volume` (current control points and weights).
     fn volume(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
         crate::nurbs::wrap(py, IoEntity::Volume(self.lattice.volume().clone()), None)
+    }
+
+    /// Pickling and `copy`: the constructor's arguments (`lo, hi, degree, control_points`)
+    /// and, as the state, the current control points and weights (exact to the bit).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        let py = slf.py();
+        let f = slf.borrow();
+        let (lo, hi) = f.bounds();
+        let d = f.lattice.dims();
+        let w = util::array_dyn(py, f.lattice.weights().to_vec(), &[d[0], d[1], d[2]]);
+        let args = (lo, hi, f.lattice.degree()[0], d);
+        (slf.get_type(), args, (f.control_points(py), w))
+            .into_pyobject(py)
+            .map(|t| t.into_any())
+    }
+
+    /// Restores the control points and weights saved by `__reduce__`.
+    fn __setstate__(&mut self, state: (Bound<'_, PyAny>, Bound<'_, PyAny>)) -> PyResult<()> {
+        let (data, shape) = util::flat(&state.1, "weights")?;
+        if data.len() != self.lattice.control_point_count() {
+            return Err(PyValueError::new_err(format!(
+                "weights: expected the lattice's shape {:?}, got {shape:?}",
+                self.lattice.dims()
+            )));
+        }
+        self.lattice.set_weights(data).py()?;
+        let pts = util::points(&state.0.call_method1("reshape", (-1, 3))?, "control_points")?;
+        self.lattice.set_control_points(pts).py()
     }
 
     fn __repr__(&self) -> String {

@@ -65,9 +65,32 @@ impl Lattice {
         py.detach(|| f.write(&self.lattice, &path)).py()
     }
 
-    /// The lattice as `.ovm` text.
+    /// The lattice as `.ovm` text (points written exactly: `from_ovm` reads the same bits).
     fn to_ovm(&self) -> String {
         ovm::to_string(&self.lattice)
+    }
+
+    /// `Lattice.from_ovm(text)`: a lattice from `.ovm` text (errors name the line).
+    #[staticmethod]
+    fn from_ovm(py: Python<'_>, text: &str) -> PyResult<Self> {
+        let lattice = py.detach(|| ovm::parse(text, "<ovm text>")).py()?;
+        Ok(Self { lattice })
+    }
+
+    /// Pickling and `copy`: `Lattice.from_ovm(self.to_ovm())`, exact to the bit.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        let py = slf.py();
+        let from = slf.get_type().getattr("from_ovm")?;
+        (from, (slf.get().to_ovm(),))
+            .into_pyobject(py)
+            .map(|t| t.into_any())
+    }
+
+    /// Whether two lattices have the same points, edges, faces and cells, in the same order.
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other
+            .cast::<Self>()
+            .is_ok_and(|o| ovm::to_string(&o.get().lattice) == ovm::to_string(&self.lattice))
     }
 
     /// `levels` MacCracken-Joy subdivision steps with the boundary rule `"interior"`,

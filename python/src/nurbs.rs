@@ -43,8 +43,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 ///
 /// Arrays: control points `(n, 3)`, `(nu, nv, 3)` or `(nu, nv, nw, 3)` (last parametric index
 /// fastest), weights of the same shape without the last axis, one knot array per axis.
-#[pyclass(subclass, module = "vclay", frozen)]
-#[derive(Clone, Debug)]
+#[pyclass(subclass, module = "vclay", frozen, eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Entity {
     pub(crate) entity: IoEntity,
     name: Option<String>,
@@ -233,62 +233,55 @@ pub(crate) fn surface_of(
 
 #[pymethods]
 impl Curve {
-    /// `Curve(degree, knots, control_points, weights=None)`: knots `(n + degree + 1,)`,
-    /// control points `(n, 3)`, weights `(n,)` (all 1 when omitted).
+    /// `Curve(degree, knots, control_points, weights=None, name=None)`: knots
+    /// `(n + degree + 1,)`, control points `(n, 3)`, weights `(n,)` (all 1 when omitted).
     #[new]
-    #[pyo3(signature = (degree, knots, control_points, weights = None))]
+    #[pyo3(signature = (degree, knots, control_points, weights = None, name = None))]
     fn new(
         degree: &Bound<'_, PyAny>,
         knots: &Bound<'_, PyAny>,
         control_points: &Bound<'_, PyAny>,
         weights: Option<&Bound<'_, PyAny>>,
+        name: Option<String>,
     ) -> PyResult<PyClassInitializer<Self>> {
         let e = build(1, degree, knots, control_points, weights)?;
-        Ok(PyClassInitializer::from(Entity {
-            entity: e,
-            name: None,
-        })
-        .add_subclass(Curve))
+        Ok(PyClassInitializer::from(Entity { entity: e, name }).add_subclass(Curve))
     }
 }
 
 #[pymethods]
 impl Surface {
-    /// `Surface((p, q), (knots_u, knots_v), control_points (nu, nv, 3), weights (nu, nv) = None)`.
+    /// `Surface((p, q), (knots_u, knots_v), control_points (nu, nv, 3), weights (nu, nv) = None,
+    /// name=None)`.
     #[new]
-    #[pyo3(signature = (degree, knots, control_points, weights = None))]
+    #[pyo3(signature = (degree, knots, control_points, weights = None, name = None))]
     fn new(
         degree: &Bound<'_, PyAny>,
         knots: &Bound<'_, PyAny>,
         control_points: &Bound<'_, PyAny>,
         weights: Option<&Bound<'_, PyAny>>,
+        name: Option<String>,
     ) -> PyResult<PyClassInitializer<Self>> {
         let e = build(2, degree, knots, control_points, weights)?;
-        Ok(PyClassInitializer::from(Entity {
-            entity: e,
-            name: None,
-        })
-        .add_subclass(Surface))
+        Ok(PyClassInitializer::from(Entity { entity: e, name }).add_subclass(Surface))
     }
 }
 
 #[pymethods]
 impl Volume {
-    /// `Volume((p, q, r), (ku, kv, kw), control_points (nu, nv, nw, 3), weights (nu, nv, nw) = None)`.
+    /// `Volume((p, q, r), (ku, kv, kw), control_points (nu, nv, nw, 3), weights (nu, nv, nw) =
+    /// None, name=None)`.
     #[new]
-    #[pyo3(signature = (degree, knots, control_points, weights = None))]
+    #[pyo3(signature = (degree, knots, control_points, weights = None, name = None))]
     fn new(
         degree: &Bound<'_, PyAny>,
         knots: &Bound<'_, PyAny>,
         control_points: &Bound<'_, PyAny>,
         weights: Option<&Bound<'_, PyAny>>,
+        name: Option<String>,
     ) -> PyResult<PyClassInitializer<Self>> {
         let e = build(3, degree, knots, control_points, weights)?;
-        Ok(PyClassInitializer::from(Entity {
-            entity: e,
-            name: None,
-        })
-        .add_subclass(Volume))
+        Ok(PyClassInitializer::from(Entity { entity: e, name }).add_subclass(Volume))
     }
 }
 
@@ -645,6 +638,29 @@ impl Entity {
         let e = &self.entity;
         let mesh = py.detach(|| tessellate_one(e, samples))?;
         util::mesh_arrays(py, &mesh)
+    }
+
+    /// Pickling and `copy`: the constructor's arguments (`degree, knots, control_points,
+    /// weights, name`) as arrays, so the copy is exact to the bit.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        let py = slf.py();
+        let e = slf.get();
+        let knots = e.knots(py);
+        let knots: Bound<'py, PyAny> = if e.dims() == 1 {
+            knots[0].clone().into_any()
+        } else {
+            pyo3::types::PyTuple::new(py, knots)?.into_any()
+        };
+        let args = (
+            e.degree(),
+            knots,
+            e.control_points(py),
+            e.weights(py),
+            e.name.clone(),
+        );
+        (slf.get_type(), args)
+            .into_pyobject(py)
+            .map(|t| t.into_any())
     }
 
     /// The entity as a dict of the vclay model JSON format (`docs/formats.md`).

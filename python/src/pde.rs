@@ -20,9 +20,24 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 #[derive(Debug)]
 pub struct PdeSurface {
     model: PdeModel,
+    /// The spec text and whether it is TOML (else JSON): what pickling saves.
+    source: (String, bool),
 }
 
 impl PdeSurface {
+    fn from_source(text: String, toml: bool) -> PyResult<Self> {
+        let model = if toml {
+            PdeModel::from_toml(&text, "spec")
+        } else {
+            PdeModel::from_json(&text, "spec")
+        }
+        .py()?;
+        Ok(Self {
+            model,
+            source: (text, toml),
+        })
+    }
+
     fn solve_at(&self, py: Python<'_>, t: f64) -> PyResult<ModelSolution> {
         let m = &self.model;
         py.detach(|| m.solve(t)).py()
@@ -36,17 +51,41 @@ impl PdeSurface {
     fn new(spec: &Bound<'_, PyAny>) -> PyResult<Self> {
         let v = util::py_to_json(spec, "spec", crate::errors::PdeError::new_err)?;
         let text = serde_json::to_string(&v).map_err(|e| PyValueError::new_err(e.to_string()))?;
-        Ok(Self {
-            model: PdeModel::from_json(&text, "spec").py()?,
-        })
+        Self::from_source(text, false)
     }
 
     /// `PdeSurface.read(path)`: a spec file (JSON, or TOML by extension).
     #[staticmethod]
     fn read(path: std::path::PathBuf) -> PyResult<Self> {
+        let model = PdeModel::read(&path).py()?;
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| crate::errors::FileError::new_err(format!("{}: {e}", path.display())))?;
+        let toml = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
         Ok(Self {
-            model: PdeModel::read(&path).py()?,
+            model,
+            source: (text, toml),
         })
+    }
+
+    /// `PdeSurface.from_toml(text)`: a spec given as TOML text (the fields of the JSON spec).
+    #[staticmethod]
+    fn from_toml(text: String) -> PyResult<Self> {
+        Self::from_source(text, true)
+    }
+
+    /// Pickling and `copy`: the spec text, compiled again on loading.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        let py = slf.py();
+        let (text, toml) = &slf.get().source;
+        let args = (text.clone(),);
+        let ctor = if *toml {
+            slf.get_type().getattr("from_toml")?
+        } else {
+            slf.get_type().into_any()
+        };
+        (ctor, args).into_pyobject(py).map(|t| t.into_any())
     }
 
     /// Patch names, in order.

@@ -27,6 +27,11 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 }
 
 impl Session {
+    fn from_state_text(py: Python<'_>, text: &str, name: &str) -> PyResult<Self> {
+        let (session, run) = py.detach(|| file::parse(text, name)).py()?;
+        Ok(Self { session, run })
+    }
+
     fn from_scenario(sc: Scenario) -> Self {
         Self {
             session: sc.session,
@@ -193,6 +198,39 @@ impl Session {
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let v = file::to_value(&self.session, self.run.as_ref()).py()?;
         util::json_to_py(py, &v)
+    }
+
+    /// `Session.from_dict(d)`: a session from the dict `to_dict` gives (the session file's
+    /// content); it continues bit for bit as the saved session would have.
+    #[staticmethod]
+    fn from_dict(py: Python<'_>, d: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let v = util::py_to_json(d, "from_dict", crate::errors::FileError::new_err)?;
+        let text = serde_json::to_string(&v).map_err(|e| SessionError::new_err(e.to_string()))?;
+        Self::from_state_text(py, &text, "<from_dict>")
+    }
+
+    /// Pickling, `copy.deepcopy` and Dask: the session file's bytes (every model's full
+    /// state, the schedule, the log and the run), loaded by `file::parse`: the copy continues
+    /// bit for bit. The undo history is not kept (as in session files).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        let py = slf.py();
+        let bytes = {
+            let me = slf.borrow();
+            let v = file::to_value(&me.session, me.run.as_ref()).py()?;
+            serde_json::to_vec(&v).map_err(|e| SessionError::new_err(e.to_string()))?
+        };
+        let ctor = slf.get_type().getattr("_from_state")?;
+        (ctor, (pyo3::types::PyBytes::new(py, &bytes),))
+            .into_pyobject(py)
+            .map(|t| t.into_any())
+    }
+
+    /// The session of `__reduce__`'s bytes.
+    #[staticmethod]
+    fn _from_state(py: Python<'_>, state: &[u8]) -> PyResult<Self> {
+        let text = std::str::from_utf8(state)
+            .map_err(|e| crate::errors::FileError::new_err(format!("<pickle>: {e}")))?;
+        Self::from_state_text(py, text, "<pickle>")
     }
 
     /// Model names, in order.
