@@ -70,10 +70,15 @@ class Volume(Entity):
     def __init__(self, degree: Sequence[int], knots: Sequence[ArrayLike], control_points: ArrayLike, weights: Optional[ArrayLike] = None, name: Optional[str] = None) -> None: ...
 
 def load(path: Path) -> list[Entity]:
-    """The entities of a model file (vclay or geomdl JSON)."""
+    """The entities of a model file, recognized by content: vclay or geomdl JSON, STEP, IGES,
+    or a lattice .ovm (its boundary limit surface as bicubic patches)."""
 def save(path: Path, entities: Sequence[Entity], samples: int = 48) -> None: ...
-def convert(input: Path, output: Path, samples: int = 48) -> None: ...
-def read_mesh(path: Path) -> Mesh: ...
+def convert(input: Path, output: Path, samples: int = 48) -> None:
+    """Like `vclay convert`: reads what load and read_mesh read (STEP faces trimmed) and writes
+    the format the output's extension names (.json, .geomdl.json, .step, .igs, .obj, .stl,
+    .ply, .glb)."""
+def read_mesh(path: Path) -> Mesh:
+    """An OBJ/STL/PLY/glb mesh, a .vtu lattice's boundary or a triangular NURBS file (meshed)."""
 def write_mesh(path: Path, vertices: ArrayLike, triangles: ArrayLike) -> None: ...
 def fit_surface(points: ArrayLike, grid: Tuple[int, int] = (32, 32), degree: int = 3, fairness: Tuple[float, float] = (0.0, 1e-9), robust: Optional[str] = None, weights: bool = False, corrections: int = 2) -> Tuple["Surface", dict]:
     """A surface fitted to an (n, 3) point cloud (D-NURBS fairness); (surface, report)."""

@@ -12,12 +12,13 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyList;
 use vclay_core::{TriMesh, Vec3};
-use vclay_io::geomdl::{is_geomdl, parse_geomdl, write_geomdl};
+use vclay_io::geomdl::{parse_geomdl, write_geomdl};
 use vclay_io::gltf::{GlbMesh, read_glb, write_glb};
 use vclay_io::iges::write_iges;
 use vclay_io::mesh::{read_mesh, write_mesh};
-use vclay_io::model::{Entity as IoEntity, NamedEntity, parse_named_model, write_named_model};
+use vclay_io::model::{Entity as IoEntity, NamedEntity, write_named_model};
 use vclay_io::step::write_step;
+use vclay_io::step_read::{TrimmedFace, tessellate_trimmed};
 use vclay_spline::{
     KnotVector, NurbsCurve, NurbsSurface, NurbsVolume, ParametricCurve, ParametricSurface,
     ParametricVolume, SplineError, tessellate_surface, tessellate_volume_boundary,
@@ -744,48 +745,160 @@ pub fn ext_of(path: &Path) -> String {
 
 /// What a file held.
 pub enum Loaded {
-    Entities(Vec<NamedEntity>),
+    /// Exact geometry; with STEP B-rep faces, their trimming loops (applied when meshing).
+    Entities(Vec<NamedEntity>, Vec<TrimmedFace>),
+    /// Triangle meshes.
     Meshes(Vec<TriMesh>),
 }
 
-/// Reads a model (vclay or geomdl JSON) or mesh file (.obj, .stl, .ply, .glb).
+/// Domain-triangle subdivision level of a triangular NURBS file when it is meshed (`level^2`
+/// triangles per domain triangle; `vclay convert`'s `TRIANGULAR_TESSELLATION_LEVEL`).
+pub const TRIANGULAR_TESSELLATION_LEVEL: usize = 8;
+
+fn file_err(path: &Path, e: impl std::fmt::Display) -> PyErr {
+    FileError::new_err(format!("{}: {e}", path.display()))
+}
+
+/// Reads any file the command line's `convert`/`eval`/`render` read, recognized by content
+/// through the session layer's one way in (`vclay_session::open::identify`): model JSON,
+/// geomdl JSON, STEP and IGES (`vclay_io::model::import_model`; STEP faces keep their
+/// trimming loops), triangular NURBS (meshed), lattices (`.ovm`: the boundary limit surface
+/// as bicubic patches; `.vtu`: the boundary faces), meshes (OBJ, STL, PLY, glb). Scenarios,
+/// sessions, PDE specs and point clouds raise `FileError` naming what opens them. Without the
+/// GIL.
 pub fn read_any(path: &Path) -> PyResult<Loaded> {
-    match ext_of(path).as_str() {
-        "json" | "geomdl.json" => {
-            let text = std::fs::read_to_string(path)
-                .map_err(|e| FileError::new_err(format!("{}: {e}", path.display())))?;
-            let ents = if is_geomdl(&text) {
-                parse_geomdl(&text)
-            } else {
-                parse_named_model(&text)
+    use vclay_session::FileKind as K;
+    let kind = vclay_session::open::identify(path).py()?;
+    let ext = ext_of(path);
+    let wrong_ext = |allowed: &str| {
+        file_err(
+            path,
+            format!(
+                "holds {} but its extension .{ext} is not one of {allowed}; rename it",
+                kind.describe()
+            ),
+        )
+    };
+    match kind {
+        K::ModelJson | K::Step | K::Iges => {
+            let want = match kind {
+                K::Step => ["step", "stp", "p21"].as_slice(),
+                K::Iges => ["igs", "iges"].as_slice(),
+                _ => ["json", "geomdl.json"].as_slice(),
+            };
+            if !want.contains(&ext.as_str()) {
+                return Err(wrong_ext(&format!(".{}", want.join(", ."))));
             }
-            .map_err(|e| FileError::new_err(format!("{}: {e}", path.display())))?;
-            Ok(Loaded::Entities(ents))
+            let m = vclay_io::model::import_model(path).py()?;
+            Ok(Loaded::Entities(m.entities, m.faces))
         }
-        "glb" => Ok(Loaded::Meshes(read_glb(path).py()?)),
-        "obj" | "stl" | "ply" => Ok(Loaded::Meshes(vec![read_mesh(path).py()?])),
-        other => Err(FileError::new_err(format!(
-            "{}: unknown input format \".{other}\"; expected .json (vclay or geomdl model), .obj, .stl, .ply or .glb",
-            path.display()
-        ))),
+        K::Geomdl => {
+            let text = std::fs::read_to_string(path).map_err(|e| file_err(path, e))?;
+            let ents = parse_geomdl(&text).map_err(|e| file_err(path, e))?;
+            Ok(Loaded::Entities(ents, Vec::new()))
+        }
+        K::Triangular => {
+            let t = vclay_io::triangular::read_triangular(path).py()?;
+            let mut mesh = TriMesh::new();
+            t.surface
+                .tessellate(TRIANGULAR_TESSELLATION_LEVEL, &mut mesh)
+                .map_err(|e| file_err(path, e))?;
+            Ok(Loaded::Meshes(vec![mesh]))
+        }
+        K::Lattice if ext == "ovm" => Ok(Loaded::Entities(lattice_patches(path)?, Vec::new())),
+        K::Lattice if ext == "vtu" => {
+            let lattice = vclay_lattice::formats::vtu::read(path).py()?;
+            let mut mesh = vclay_lattice::boundary_mesh(&lattice);
+            if mesh.triangles.is_empty() {
+                return Err(file_err(path, "the lattice has no boundary faces"));
+            }
+            mesh.compute_normals();
+            Ok(Loaded::Meshes(vec![mesh]))
+        }
+        K::Lattice => Err(wrong_ext(".ovm, .vtu")),
+        K::Mesh => match ext.as_str() {
+            "glb" => Ok(Loaded::Meshes(read_glb(path).py()?)),
+            "obj" | "stl" | "ply" => Ok(Loaded::Meshes(vec![read_mesh(path).py()?])),
+            _ => Err(wrong_ext(".obj, .stl, .ply, .glb")),
+        },
+        K::Scenario | K::Session | K::PdeSpec | K::PointCloud => Err(file_err(
+            path,
+            format!(
+                "{}, not a model or mesh file: {} (in Python: {})",
+                kind.describe(),
+                kind.commands(),
+                match kind {
+                    K::PdeSpec => "vclay.PdeSurface.read, vclay.open",
+                    K::PointCloud => "vclay.fit_surface",
+                    _ => "vclay.open",
+                }
+            ),
+        )),
     }
 }
 
-fn mesh_of(loaded: &Loaded, samples: usize) -> PyResult<TriMesh> {
+/// The boundary limit surface of the subdivision solid whose control lattice is the `.ovm`
+/// file `path` (smooth boundary rule) as bicubic patches (`vclay_lattice::boundary_patches`,
+/// as `vclay convert LATTICE.ovm` reads it), its memory checked first (`vclay convert`'s
+/// estimate: the solid sampled at the patch levels).
+fn lattice_patches(path: &Path) -> PyResult<Vec<NamedEntity>> {
+    use vclay_lattice::limit_surface::DEFAULT_PATCH_SAMPLE_LEVELS as LEVELS;
+    use vclay_lattice::{BoundaryRule, Features, SubdivisionRules, boundary_patches};
+    let lattice = vclay_lattice::formats::ovm::read(path).py()?;
+    Python::attach(|py| {
+        crate::limits::check(
+            py,
+            || format!("{}: limit patches ({LEVELS} sample levels)", path.display()),
+            vclay_session::limits::subdivision_bytes(lattice.num_cells(), LEVELS + 1),
+        )
+    })?;
+    let p = boundary_patches(
+        &lattice,
+        &Features::none(&lattice),
+        SubdivisionRules::new(BoundaryRule::Smooth),
+        LEVELS,
+    )
+    .map_err(|e| file_err(path, format!("boundary limit patches: {e}")))?;
+    Ok(p.patches
+        .into_iter()
+        .zip(p.exact)
+        .zip(p.faces)
+        .map(|((s, exact), f)| NamedEntity {
+            name: Some(format!(
+                "limit patch of boundary {f} ({})",
+                if exact { "exact" } else { "fitted" }
+            )),
+            entity: IoEntity::Surface(s),
+        })
+        .collect())
+}
+
+pub fn mesh_of(loaded: &Loaded, samples: usize) -> PyResult<TriMesh> {
     let mut all = TriMesh::new();
     match loaded {
-        Loaded::Entities(es) => {
+        Loaded::Entities(es, faces) => {
             let dims: Vec<usize> = es.iter().map(|e| e.entity.param_dims()).collect();
             // Called without the GIL (inside `detach`): take it for the check's exception.
             Python::attach(|py| check_tessellation(py, &dims, samples))?;
-            for e in es {
-                if !matches!(e.entity, IoEntity::Curve(_)) {
+            let on_face: std::collections::HashSet<usize> =
+                faces.iter().map(|f| f.entity).collect();
+            for (i, e) in es.iter().enumerate() {
+                if !on_face.contains(&i) && !matches!(e.entity, IoEntity::Curve(_)) {
                     all.append(&tessellate_one(&e.entity, samples)?);
                 }
             }
+            // STEP faces: their surfaces with the trimming loops applied.
+            for f in faces {
+                let Some(IoEntity::Surface(s)) = es.get(f.entity).map(|e| &e.entity) else {
+                    continue;
+                };
+                let m = tessellate_trimmed(f, s, [samples; 2])
+                    .map_err(|e| GeometryError::new_err(format!("face #{}: {e}", f.step_id)))?;
+                all.append(&m);
+            }
             if all.triangles.is_empty() {
                 return Err(GeometryError::new_err(
-                    "the model holds only curves: nothing to tessellate into a mesh",
+                    "the model holds only curves (or faces trimmed to nothing): nothing to tessellate into a mesh",
                 ));
             }
         }
@@ -801,7 +914,7 @@ fn mesh_of(loaded: &Loaded, samples: usize) -> PyResult<TriMesh> {
 /// Writes `loaded` to `out` in the format its extension names.
 pub fn write_any(loaded: &Loaded, out: &Path, samples: usize, stem: &str) -> PyResult<()> {
     let exact = || match loaded {
-        Loaded::Entities(e) => Ok(e),
+        Loaded::Entities(e, _) => Ok(e),
         Loaded::Meshes(_) => Err(FileError::new_err(format!(
             "{}: a mesh cannot be converted to exact NURBS geometry",
             out.display()
@@ -821,16 +934,17 @@ pub fn write_any(loaded: &Loaded, out: &Path, samples: usize, stem: &str) -> PyR
     }
 }
 
-/// `load(path)`: the entities of a model file (vclay model JSON or geomdl JSON, told apart by
-/// content) as a list of `Curve`/`Surface`/`Volume`. Errors name the file and the place
-/// (`FileError`, e.g. `m.json: entities[0].knots[1]: ...`).
+/// `load(path)`: the entities of a model file as a list of `Curve`/`Surface`/`Volume`: vclay
+/// model JSON, geomdl JSON, STEP, IGES (recognized by content, as `vclay.open` and the command
+/// line do), or a lattice `.ovm` (its boundary limit surface as bicubic patches). Errors name
+/// the file and the place (`FileError`, e.g. `m.json: entities[0].knots[1]: ...`).
 #[pyfunction]
 fn load(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyList>> {
     let ents = match py.detach(|| read_any(&path))? {
-        Loaded::Entities(e) => e,
+        Loaded::Entities(e, _) => e,
         Loaded::Meshes(_) => {
             return Err(FileError::new_err(format!(
-                "{}: a mesh file holds no NURBS entities (use read_mesh)",
+                "{}: a mesh or a triangular NURBS file holds no tensor-product NURBS entities (use read_mesh for its triangles, vclay.open for a session)",
                 path.display()
             )));
         }
@@ -870,12 +984,14 @@ fn save(path: PathBuf, entities: &Bound<'_, PyAny>, samples: usize) -> PyResult<
         .map_or("vclay".into(), |s| s.to_string_lossy().into_owned());
     entities
         .py()
-        .detach(|| write_any(&Loaded::Entities(ents), &path, samples, &stem))
+        .detach(|| write_any(&Loaded::Entities(ents, Vec::new()), &path, samples, &stem))
 }
 
-/// `convert(input, output, samples=48)`: like `vclay convert`, between model JSON, geomdl JSON,
-/// STEP, IGES and meshes (OBJ, STL, PLY, glb), by extension. A mesh cannot become exact
-/// geometry.
+/// `convert(input, output, samples=48)`: like `vclay convert`: reads what `load` and
+/// `read_mesh` read (model JSON, geomdl JSON, STEP with its trimmed faces, IGES, triangular
+/// NURBS, lattices `.ovm`/`.vtu`, meshes OBJ, STL, PLY, glb; by content) and writes the format
+/// the output's extension names (model JSON, geomdl JSON, STEP, IGES, OBJ, STL, PLY, glb;
+/// `samples` per parametric axis for meshes). A mesh cannot become exact geometry.
 #[pyfunction]
 #[pyo3(signature = (input, output, samples = 48))]
 fn convert(py: Python<'_>, input: PathBuf, output: PathBuf, samples: usize) -> PyResult<()> {
@@ -891,7 +1007,8 @@ fn convert(py: Python<'_>, input: PathBuf, output: PathBuf, samples: usize) -> P
     })
 }
 
-/// `read_mesh(path)`: an OBJ/STL/PLY/glb mesh as `(vertices, triangles, normals)` arrays.
+/// `read_mesh(path)`: an OBJ/STL/PLY/glb mesh, a `.vtu` lattice's boundary or a triangular
+/// NURBS file (meshed) as `(vertices, triangles, normals)` arrays.
 #[pyfunction]
 #[pyo3(name = "read_mesh")]
 fn read_mesh_py(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAny>> {
@@ -903,7 +1020,7 @@ fn read_mesh_py(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAny>> {
             }
             all
         }
-        Loaded::Entities(_) => {
+        Loaded::Entities(..) => {
             return Err(FileError::new_err(format!(
                 "{}: a model file, not a mesh (use load)",
                 path.display()

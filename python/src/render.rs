@@ -119,9 +119,14 @@ fn render(
     })?;
     let scene = if let Ok(path) = source.extract::<PathBuf>() {
         match py.detach(|| read_any(&path))? {
-            Loaded::Entities(e) => {
+            Loaded::Entities(e, faces) if faces.is_empty() => {
                 let ents: Vec<IoEntity> = e.into_iter().map(|n| n.entity).collect();
                 py.detach(|| scene_from_entities(&ents, wireframe))?
+            }
+            // STEP B-reps: their faces trimmed, as `vclay render` draws them.
+            trimmed @ Loaded::Entities(..) => {
+                let mesh = py.detach(|| crate::nurbs::mesh_of(&trimmed, 48))?;
+                scene_from_mesh(mesh, wireframe)
             }
             Loaded::Meshes(ms) => {
                 let mut all = TriMesh::new();
