@@ -1,7 +1,7 @@
 """Type stubs of the vclay extension module (python/src/*.rs)."""
 
 from os import PathLike
-from typing import Any, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -43,9 +43,16 @@ class Entity:
     @property
     def knots(self) -> list[F64]: ...
     @property
-    def control_points(self) -> F64: ...
+    def control_points(self) -> F64:
+        """Control points (n, 3), (nu, nv, 3) or (nu, nv, nw, 3) (a copy); assign an array of
+        the same shape (finite) to replace them."""
+    @control_points.setter
+    def control_points(self, value: ArrayLike) -> None: ...
     @property
-    def weights(self) -> F64: ...
+    def weights(self) -> F64:
+        """Weights, the control net's shape (a copy); assign positive finite ones to replace."""
+    @weights.setter
+    def weights(self, value: ArrayLike) -> None: ...
     @property
     def domain(self) -> list[Tuple[float, float]]: ...
     def evaluate(self, params: ArrayLike) -> F64:
@@ -93,7 +100,15 @@ class Ffd:
     @property
     def bounds(self) -> Tuple[list[float], list[float]]: ...
     @property
-    def control_points(self) -> F64: ...
+    def control_points(self) -> F64:
+        """Current control points (nu, nv, nw, 3); assignable."""
+    @control_points.setter
+    def control_points(self, value: ArrayLike) -> None: ...
+    @property
+    def weights(self) -> F64:
+        """Weights (nu, nv, nw); assignable (positive, finite)."""
+    @weights.setter
+    def weights(self, value: ArrayLike) -> None: ...
     def parameters(self, points: ArrayLike) -> F64: ...
     def deform(self, points: ArrayLike) -> F64: ...
     def move_point(self, source: Sequence[float], target: Sequence[float]) -> None: ...
@@ -164,7 +179,10 @@ class Session:
     def can_undo(self) -> bool: ...
     @property
     def can_redo(self) -> bool: ...
-    def step(self, n: int = 1) -> list[str]: ...
+    def step(self, n: int = 1, *, progress: Optional[Callable[[int, int], Any]] = None) -> list[str]:
+        """Advances every model n steps without the GIL, in chunks of about 20 ms: Ctrl-C
+        raises KeyboardInterrupt between chunks (steps done stay done), progress(done, n) is
+        called at most every 0.1 s and at the end."""
     def advance_to(self, t: float) -> list[str]: ...
     def run(self, out_dir: Path, steps: Optional[int] = None) -> dict[str, Any]: ...
     def energy(self, model: Optional[str] = None) -> dict[str, float]: ...
@@ -172,7 +190,20 @@ class Session:
     @property
     def log(self) -> list[dict[str, Any]]: ...
     def state(self, model: Optional[str] = None) -> dict[str, Any]: ...
-    def control_points(self, model: Optional[str] = None) -> F64: ...
+    def control_points(self, model: Optional[str] = None) -> F64:
+        """Control points in the net's shape, as Entity.control_points ((nu, nv, 3) for a
+        D-NURBS surface, (nu, nv, nw, 3) for FFD and B-spline solids); (n, 3) for subdivision
+        lattices."""
+    def weights(self, model: Optional[str] = None) -> F64:
+        """NURBS weights in the net's shape (SessionError for kinds without them)."""
+    def set_control_points(self, points: ArrayLike, model: Optional[str] = None) -> int:
+        """Moves the control points (one undoable group of move-point edits); returns how many moved."""
+    def set_weights(self, weights: ArrayLike, model: Optional[str] = None) -> int:
+        """Sets the weights (one undoable group of set-weight edits); returns how many changed."""
+    def surface(self, model: Optional[str] = None) -> Surface:
+        """The model's current geometry as a Surface (D-NURBS surfaces)."""
+    def entities(self, model: Optional[str] = None) -> list[Entity]:
+        """The model's current exact geometry (empty for kinds without tensor-product NURBS)."""
     def data_points(self, model: Optional[str] = None) -> F64: ...
     def mesh(self, model: Optional[str] = None) -> Mesh: ...
     def export(self, path: Path, model: Optional[str] = None) -> None: ...
@@ -186,3 +217,7 @@ def dnurbs_surface(points: Union[ArrayLike, Surface], degree: Tuple[int, int] = 
     """A D-NURBS surface session from a control net (nu, nv, 3) or a Surface. material: preset,
     mu, gamma, alpha, beta; dt (or the preset's); engine "generalized" | "frozen"; reference
     "rest" | "absolute". Fit points with session.apply({"action": "data", "points": ...})."""
+
+def clay(mesh: Union[Path, Tuple[ArrayLike, ArrayLike]], cells: int = 500, level: int = 2, *, dt: Optional[float] = None, name: Optional[str] = None) -> Session:
+    """A closed mesh (file or (vertices, triangles)) as a dynamic subdivision solid session
+    (virtual clay): about `cells` control cells, boundary fitted at level `level`."""

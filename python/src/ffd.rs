@@ -124,6 +124,45 @@ impl Ffd {
         util::array_dyn(py, v, &[d[0], d[1], d[2], 3])
     }
 
+    /// Replaces the control points: a `(nu, nv, nw, 3)` array of finite numbers (the
+    /// deformation follows; `reset` goes back to the rest lattice).
+    #[setter]
+    fn set_control_points(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        let d = self.lattice.dims();
+        let (data, shape) = util::flat(value, "control_points")?;
+        if shape != [d[0], d[1], d[2], 3] {
+            return Err(PyValueError::new_err(format!(
+                "control_points: expected shape [{}, {}, {}, 3], got {shape:?}",
+                d[0], d[1], d[2]
+            )));
+        }
+        let pts = data
+            .chunks_exact(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect();
+        self.lattice.set_control_points(pts).py()
+    }
+
+    /// Weights `(nu, nv, nw)` (a copy; 1 at rest).
+    #[getter]
+    fn weights<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArrayDyn<f64>> {
+        let d = self.lattice.dims();
+        util::array_dyn(py, self.lattice.weights().to_vec(), &[d[0], d[1], d[2]])
+    }
+
+    /// Replaces the weights: a `(nu, nv, nw)` array, positive and finite.
+    #[setter]
+    fn set_weights(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        let d = self.lattice.dims();
+        let (data, shape) = util::flat(value, "weights")?;
+        if shape != d {
+            return Err(PyValueError::new_err(format!(
+                "weights: expected shape {d:?}, got {shape:?}"
+            )));
+        }
+        self.lattice.set_weights(data).py()
+    }
+
     /// Parameters `(n, 3)` in `[0, 1]^3` of rest-space points `(n, 3)` (the linear map of
     /// section 2); a point outside the box raises `GeometryError`.
     fn parameters<'py>(
@@ -241,7 +280,7 @@ impl Ffd {
         let f = slf.borrow();
         let (lo, hi) = f.bounds();
         let d = f.lattice.dims();
-        let w = util::array_dyn(py, f.lattice.weights().to_vec(), &[d[0], d[1], d[2]]);
+        let w = f.weights(py);
         let args = (lo, hi, f.lattice.degree()[0], d);
         (slf.get_type(), args, (f.control_points(py), w))
             .into_pyobject(py)
@@ -250,16 +289,8 @@ impl Ffd {
 
     /// Restores the control points and weights saved by `__reduce__`.
     fn __setstate__(&mut self, state: (Bound<'_, PyAny>, Bound<'_, PyAny>)) -> PyResult<()> {
-        let (data, shape) = util::flat(&state.1, "weights")?;
-        if data.len() != self.lattice.control_point_count() {
-            return Err(PyValueError::new_err(format!(
-                "weights: expected the lattice's shape {:?}, got {shape:?}",
-                self.lattice.dims()
-            )));
-        }
-        self.lattice.set_weights(data).py()?;
-        let pts = util::points(&state.0.call_method1("reshape", (-1, 3))?, "control_points")?;
-        self.lattice.set_control_points(pts).py()
+        self.set_weights(&state.1)?;
+        self.set_control_points(&state.0)
     }
 
     fn __repr__(&self) -> String {

@@ -44,7 +44,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 ///
 /// Arrays: control points `(n, 3)`, `(nu, nv, 3)` or `(nu, nv, nw, 3)` (last parametric index
 /// fastest), weights of the same shape without the last axis, one knot array per axis.
-#[pyclass(subclass, module = "vclay", frozen, eq)]
+#[pyclass(subclass, module = "vclay", eq)]
 #[derive(Clone, Debug, PartialEq)]
 pub struct Entity {
     pub(crate) entity: IoEntity,
@@ -52,17 +52,17 @@ pub struct Entity {
 }
 
 /// A NURBS curve `C(u) = sum N_i,p(u) w_i P_i / sum N_i,p(u) w_i` (`d-nurbs.txt` eq 1).
-#[pyclass(extends = Entity, module = "vclay", frozen)]
+#[pyclass(extends = Entity, module = "vclay")]
 #[derive(Debug)]
 pub struct Curve;
 
 /// A tensor-product NURBS surface `S(u, v)`.
-#[pyclass(extends = Entity, module = "vclay", frozen)]
+#[pyclass(extends = Entity, module = "vclay")]
 #[derive(Debug)]
 pub struct Surface;
 
 /// A trivariate NURBS volume `V(u, v, w)` (FFD lattices and B-spline solids are volumes).
-#[pyclass(extends = Entity, module = "vclay", frozen)]
+#[pyclass(extends = Entity, module = "vclay")]
 #[derive(Debug)]
 pub struct Volume;
 
@@ -197,7 +197,7 @@ pub(crate) fn surface_of(
     knots: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<NurbsSurface> {
     if let Ok(e) = net_or_surface.cast::<Entity>() {
-        return match &e.get().entity {
+        return match &e.borrow().entity {
             IoEntity::Surface(s) => Ok(s.clone()),
             other => Err(PyValueError::new_err(format!(
                 "expected a Surface or a control net (nu, nv, 3), got a {}",
@@ -393,6 +393,59 @@ impl Entity {
     fn weights<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArrayDyn<f64>> {
         let (_, w) = self.control_slice();
         util::array_dyn(py, w.to_vec(), &self.net_shape())
+    }
+
+    /// Replaces the control points: an array of the shape the getter gives (`(n, 3)`,
+    /// `(nu, nv, 3)`, `(nu, nv, nw, 3)`), finite; the knots and weights stay.
+    #[setter]
+    fn set_control_points(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        let mut want = self.net_shape();
+        want.push(3);
+        let (data, shape) = util::flat(value, "control_points")?;
+        if shape != want {
+            return Err(PyValueError::new_err(format!(
+                "control_points: expected shape {want:?} (the control net's), got {shape:?}"
+            )));
+        }
+        if let Some(k) = data.iter().position(|x| !x.is_finite()) {
+            return Err(PyValueError::new_err(format!(
+                "control_points: value {k} (flat) is not finite"
+            )));
+        }
+        let pts: Vec<Vec3> = data
+            .chunks_exact(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect();
+        match &mut self.entity {
+            IoEntity::Curve(c) => c.set_control_points(pts),
+            IoEntity::Surface(s) => s.set_control_points(pts),
+            IoEntity::Volume(v) => v.set_control_points(pts),
+        }
+        .py()
+    }
+
+    /// Replaces the weights: an array of the control net's shape, positive and finite.
+    #[setter]
+    fn set_weights(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        let want = self.net_shape();
+        let (w, shape) = util::flat(value, "weights")?;
+        if shape != want {
+            return Err(PyValueError::new_err(format!(
+                "weights: expected shape {want:?} (the control net's), got {shape:?}"
+            )));
+        }
+        if let Some(k) = w.iter().position(|x| !(x.is_finite() && *x > 0.0)) {
+            return Err(PyValueError::new_err(format!(
+                "weights: value {k} (flat) = {} is not positive and finite",
+                w[k]
+            )));
+        }
+        match &mut self.entity {
+            IoEntity::Curve(c) => c.set_weights(w),
+            IoEntity::Surface(s) => s.set_weights(w),
+            IoEntity::Volume(v) => v.set_weights(w),
+        }
+        .py()
     }
 
     /// Parameter domain per axis: a list of `(min, max)`.
@@ -645,7 +698,7 @@ impl Entity {
     /// weights, name`) as arrays, so the copy is exact to the bit.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
         let py = slf.py();
-        let e = slf.get();
+        let e = slf.borrow();
         let knots = e.knots(py);
         let knots: Bound<'py, PyAny> = if e.dims() == 1 {
             knots[0].clone().into_any()
@@ -963,7 +1016,7 @@ fn named(entities: &Bound<'_, PyAny>) -> PyResult<Vec<NamedEntity>> {
         let e = item.cast::<Entity>().map_err(|_| {
             PyValueError::new_err("save: expected a list of vclay Curve/Surface/Volume")
         })?;
-        let e = e.get();
+        let e = e.borrow();
         out.push(NamedEntity {
             name: e.name.clone(),
             entity: e.entity.clone(),

@@ -149,7 +149,7 @@ fn render(
                     "render: source must be a path, a list of entities or (vertices, triangles)",
                 )
             })?;
-            ents.push(e.get().entity.clone());
+            ents.push(e.borrow().entity.clone());
         }
         py.detach(|| scene_from_entities(&ents, wireframe))?
     };

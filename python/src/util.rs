@@ -396,3 +396,11 @@ pub fn fill<E: Send>(
         .enumerate()
         .try_for_each(|(k, c)| f(k * CHUNK, c))
 }
+
+/// A count argument (`i64` so that a negative value reaches us) as `usize`: a negative one is
+/// a `ValueError` naming the argument.
+pub fn count(n: i64, what: &str) -> PyResult<usize> {
+    usize::try_from(n).map_err(|_| {
+        PyValueError::new_err(format!("{what} = {n}: expected a non-negative integer"))
+    })
+}
