@@ -142,7 +142,7 @@ fn clay(
         } else {
             e.what
         };
-        PyValueError::new_err(format!("clay: {key}: {what}"))
+        crate::errors::argument(format!("clay: {key}: {what}"))
     })?;
     Ok(Session::wrap(
         KSession::with_model(&name, model).py()?,
@@ -238,8 +238,8 @@ impl Session {
 /// A D-NURBS surface session built from arrays (no scenario file): `points` is a control net
 /// `(nu, nv, 3)` (or a `Surface`), with `degree`, `weights (nu, nv)` (default 1) and `knots`
 /// (default uniform, clamped). `material`: a dict of `preset` (a Table 1 name), `per`, `mu`,
-/// `gamma`, `alpha`, `beta` (defaults: the scenario defaults); `dt`: the time step (or the
-/// preset's); `engine`: "generalized" (default) or "frozen"; `dynamic_weights`: weights as
+/// `gamma`, `alpha`, `beta` (defaults: the scenario defaults); `dt`: the time step (default:
+/// the preset's, else 0.01 as for a model file opened by `vclay.open`); `engine`: "generalized" (default) or "frozen"; `dynamic_weights`: weights as
 /// generalized coordinates (default: True with the generalized engine); `reference`: "rest"
 /// (default) or "absolute" elastic reference; `fix`: control point ids held fixed; `name`: the
 /// model name.
@@ -248,6 +248,9 @@ impl Session {
 /// `[simulation]`) as a typed `ModelSpec`, with the surface itself as a value. Forces, data
 /// points to fit, material changes: `session.apply({"action": "data", "points": ...})`,
 /// `{"action": "material", "mu": ...}`; then `session.step(n)`.
+///
+/// A bad value raises `ArgumentError` (a `ValueError`) naming the argument:
+/// `dnurbs_surface: material["mu"]: -1 must be finite and non-negative`.
 #[pyfunction]
 #[pyo3(signature = (points, degree = (3, 3), weights = None, knots = None, *, material = None,
     dt = None, engine = None, dynamic_weights = None, reference = None, fix = None, name = None),
@@ -271,9 +274,17 @@ fn dnurbs_surface(
     use vclay_session::models::{KindSpec, dnurbs};
     let surface = crate::nurbs::surface_of(points, degree, weights, knots)?;
     let material: dnurbs::MaterialKeys = match material {
-        Some(d) => util::from_py(d.as_any(), "material", PyValueError::new_err)?,
+        Some(d) => util::from_py(d.as_any(), "material", crate::errors::argument)?,
         None => Default::default(),
     };
+    // Without a time step or a preset naming one, the time step of a D-NURBS opened from a
+    // model file (`vclay.open`): `dt=None` always works.
+    let dt = dt.or_else(|| {
+        material
+            .preset
+            .is_none()
+            .then_some(vclay_session::open::MODEL_FILE_DT)
+    });
     let spec = ModelSpec::DnurbsSurface(KindSpec {
         model: dnurbs::ModelKeys {
             surface: Some(surface),
@@ -290,18 +301,21 @@ fn dnurbs_surface(
         },
     });
     let name = name.unwrap_or_else(|| "dnurbs-surface".into());
-    let session = py.detach(|| {
-        let model = spec
-            .build(Path::new("."))
-            .map_err(|e| vclay_session::SessionError::File {
-                file: "<dnurbs_surface>".into(),
-                line: 0,
-                key: e.key,
-                what: e.what,
-            })?;
-        KSession::with_model(&name, model)
-    });
-    Ok(Session::wrap(session.py()?, None))
+    let model = py.detach(|| spec.build(Path::new("."))).map_err(|e| {
+        // The spec's keys are this function's arguments: name the argument, not a file.
+        let arg = match e.key.as_str() {
+            "weights" => "dynamic_weights".to_string(),
+            k @ ("preset" | "per" | "mu" | "gamma" | "alpha" | "beta") => {
+                format!("material[{k:?}]")
+            }
+            k => k.to_string(),
+        };
+        crate::errors::argument(format!("dnurbs_surface: {arg}: {}", e.what))
+    })?;
+    Ok(Session::wrap(
+        KSession::with_model(&name, model).py()?,
+        None,
+    ))
 }
 
 /// `vclay.open(path)`: any file vclay reads, recognized by its content, as a `Session`: a

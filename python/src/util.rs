@@ -401,6 +401,6 @@ pub fn fill<E: Send>(
 /// a `ValueError` naming the argument.
 pub fn count(n: i64, what: &str) -> PyResult<usize> {
     usize::try_from(n).map_err(|_| {
-        PyValueError::new_err(format!("{what} = {n}: expected a non-negative integer"))
+        crate::errors::argument(format!("{what} = {n}: expected a non-negative integer"))
     })
 }
