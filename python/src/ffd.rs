@@ -67,15 +67,16 @@ impl Ffd {
     /// `Ffd(lo, hi, degree=3, control_points=4)`: a lattice over the box `[lo, hi]`;
     /// `control_points` is one count or three (per axis), each at least `degree + 1`.
     #[new]
-    #[pyo3(signature = (lo, hi, degree = vclay_ffd::DEFAULT_DEGREE, control_points = None))]
+    #[pyo3(signature = (lo, hi, degree = vclay_ffd::DEFAULT_DEGREE as i64, control_points = None),
+        text_signature = "(lo, hi, degree=3, control_points=None)")]
     fn new(
         py: Python<'_>,
         lo: &Bound<'_, PyAny>,
         hi: &Bound<'_, PyAny>,
-        degree: usize,
+        degree: i64,
         control_points: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let s = spec(py, degree, control_points)?;
+        let s = spec(py, util::count(degree, "degree")?, control_points)?;
         let (lo, hi) = (util::vec3(lo, "lo")?, util::vec3(hi, "hi")?);
         let lattice = py.detach(|| FfdLattice::new(s, lo, hi)).py()?;
         Ok(Self { lattice })
@@ -84,15 +85,16 @@ impl Ffd {
     /// `Ffd.enclosing(points, degree=3, control_points=4, margin=0.05)`: a lattice around the
     /// bounding box of an `(n, 3)` array, grown by `margin` times its extent.
     #[staticmethod]
-    #[pyo3(signature = (points, degree = vclay_ffd::DEFAULT_DEGREE, control_points = None, margin = vclay_ffd::DEFAULT_MARGIN))]
+    #[pyo3(signature = (points, degree = vclay_ffd::DEFAULT_DEGREE as i64, control_points = None, margin = vclay_ffd::DEFAULT_MARGIN),
+        text_signature = "(points, degree=3, control_points=None, margin=0.05)")]
     fn enclosing(
         py: Python<'_>,
         points: &Bound<'_, PyAny>,
-        degree: usize,
+        degree: i64,
         control_points: Option<&Bound<'_, PyAny>>,
         margin: f64,
     ) -> PyResult<Self> {
-        let s = spec(py, degree, control_points)?;
+        let s = spec(py, util::count(degree, "degree")?, control_points)?;
         let pts = util::points(points, "points")?;
         let lattice = FfdLattice::enclosing(&pts, s, margin).py()?;
         Ok(Self { lattice })

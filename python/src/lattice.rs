@@ -96,7 +96,8 @@ impl Lattice {
     /// `levels` MacCracken-Joy subdivision steps with the boundary rule `"interior"`,
     /// `"smooth"` or `"sharp"`: a new lattice. Refused above 50 million predicted cells.
     #[pyo3(signature = (levels = 1, boundary = "sharp"))]
-    fn subdivide(&self, py: Python<'_>, levels: usize, boundary: &str) -> PyResult<Self> {
+    fn subdivide(&self, py: Python<'_>, levels: i64, boundary: &str) -> PyResult<Self> {
+        let levels = util::count(levels, "levels")?;
         let rules = SubdivisionRules::new(boundary_rule(boundary)?);
         let predicted = (self.lattice.num_cells() as u128)
             .saturating_mul(8u128.saturating_pow(levels.min(64) as u32));
@@ -173,16 +174,25 @@ impl Lattice {
         Ok(Self { lattice })
     }
 
-    /// Edges as a `(m, 2)` array of point indices.
+    /// Edges as a `(m, 2)` int64 array of point indices (numpy's index type, as
+    /// `np.argsort` gives).
     #[getter]
-    fn edges<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray2<f64>> {
-        let v: Vec<f64> = self
+    fn edges<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray2<i64>> {
+        use numpy::IntoPyArray;
+        let v: Vec<i64> = self
             .lattice
             .edges()
             .iter()
-            .flat_map(|e| [e[0].index() as f64, e[1].index() as f64])
+            .flat_map(|e| [e[0].index() as i64, e[1].index() as i64])
             .collect();
-        util::array2(py, v, self.lattice.num_edges(), 2)
+        numpy::ndarray::Array2::from_shape_vec((self.lattice.num_edges(), 2), v)
+            .expect("shape matches the data")
+            .into_pyarray(py)
+    }
+
+    /// Number of cells.
+    fn __len__(&self) -> usize {
+        self.lattice.num_cells()
     }
 
     /// The outward boundary surface: `(vertices, triangles, normals)`.

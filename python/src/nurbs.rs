@@ -520,8 +520,22 @@ impl Entity {
         &self,
         py: Python<'py>,
         params: &Bound<'py, PyAny>,
-        order: usize,
+        order: i64,
     ) -> PyResult<Bound<'py, numpy::PyArrayDyn<f64>>> {
+        let order = util::count(order, "order")?;
+        if order == 0 {
+            // The points alone: `evaluate`'s loop (no derivative tables), reshaped.
+            let mut shape = vec![0isize];
+            let d = self.dims();
+            shape[0] = -1;
+            shape.extend(std::iter::repeat_n(1isize, d));
+            shape.push(3);
+            let pts = self.evaluate(py, params)?;
+            return pts
+                .call_method1("reshape", (shape,))?
+                .cast_into()
+                .map_err(Into::into);
+        }
         if order > vclay_spline::MAX_DEGREE {
             return Err(PyValueError::new_err(format!(
                 "order {order} is larger than {}",
@@ -659,9 +673,10 @@ impl Entity {
         &self,
         py: Python<'_>,
         value: f64,
-        times: usize,
-        axis: usize,
+        times: i64,
+        axis: i64,
     ) -> PyResult<Py<PyAny>> {
+        let (times, axis) = (util::count(times, "times")?, util::count(axis, "axis")?);
         self.check_axis(axis)?;
         let e = match &self.entity {
             IoEntity::Curve(c) => IoEntity::Curve(c.insert_knot(value, times).py()?),
@@ -674,7 +689,8 @@ impl Entity {
     /// A new entity with the degree along `axis` raised by `times` (Piegl & Tiller A5.9); the
     /// shape is unchanged.
     #[pyo3(signature = (times = 1, axis = 0))]
-    fn elevate_degree(&self, py: Python<'_>, times: usize, axis: usize) -> PyResult<Py<PyAny>> {
+    fn elevate_degree(&self, py: Python<'_>, times: i64, axis: i64) -> PyResult<Py<PyAny>> {
+        let (times, axis) = (util::count(times, "times")?, util::count(axis, "axis")?);
         self.check_axis(axis)?;
         let e = match &self.entity {
             IoEntity::Curve(c) => IoEntity::Curve(c.elevate_degree(times).py()?),
@@ -687,7 +703,8 @@ impl Entity {
     /// Surfaces and volume boundaries as triangles: `(vertices (n, 3), triangles (m, 3) uint32,
     /// normals (n, 3))`, `samples` per parametric axis.
     #[pyo3(signature = (samples = 32))]
-    fn tessellate<'py>(&self, py: Python<'py>, samples: usize) -> PyResult<Bound<'py, PyAny>> {
+    fn tessellate<'py>(&self, py: Python<'py>, samples: i64) -> PyResult<Bound<'py, PyAny>> {
+        let samples = util::count(samples, "samples")?;
         check_tessellation(py, &[self.dims()], samples)?;
         let e = &self.entity;
         let mesh = py.detach(|| tessellate_one(e, samples))?;
@@ -1030,7 +1047,8 @@ fn named(entities: &Bound<'_, PyAny>) -> PyResult<Vec<NamedEntity>> {
 /// (`.obj`, `.stl`, `.ply`, `.glb`; curves left out). Writes are atomic.
 #[pyfunction]
 #[pyo3(signature = (path, entities, samples = 48))]
-fn save(path: PathBuf, entities: &Bound<'_, PyAny>, samples: usize) -> PyResult<()> {
+fn save(path: PathBuf, entities: &Bound<'_, PyAny>, samples: i64) -> PyResult<()> {
+    let samples = util::count(samples, "samples")?;
     let ents = named(entities)?;
     let stem = path
         .file_stem()
@@ -1047,7 +1065,8 @@ fn save(path: PathBuf, entities: &Bound<'_, PyAny>, samples: usize) -> PyResult<
 /// `samples` per parametric axis for meshes). A mesh cannot become exact geometry.
 #[pyfunction]
 #[pyo3(signature = (input, output, samples = 48))]
-fn convert(py: Python<'_>, input: PathBuf, output: PathBuf, samples: usize) -> PyResult<()> {
+fn convert(py: Python<'_>, input: PathBuf, output: PathBuf, samples: i64) -> PyResult<()> {
+    let samples = util::count(samples, "samples")?;
     if samples < 2 {
         return Err(PyValueError::new_err("samples must be at least 2"));
     }

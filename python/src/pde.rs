@@ -101,8 +101,9 @@ impl PdeSurface {
         py: Python<'py>,
         params: &Bound<'py, PyAny>,
         t: f64,
-        patch: usize,
+        patch: i64,
     ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+        let patch = util::count(patch, "patch")?;
         let p = self.model.patches.get(patch).ok_or_else(|| {
             PyValueError::new_err(format!(
                 "patch {patch}: the model has {} patches",
@@ -129,13 +130,12 @@ impl PdeSurface {
 
     /// Every patch at time `t` tessellated on `grid = (nu, nv)` samples: `(vertices, triangles,
     /// normals)`.
-    #[pyo3(signature = (t = 0.0, grid = (64, 64)))]
-    fn mesh<'py>(
-        &self,
-        py: Python<'py>,
-        t: f64,
-        grid: (usize, usize),
-    ) -> PyResult<Bound<'py, PyAny>> {
+    #[pyo3(signature = (t = 0.0, grid = (64, 64)), text_signature = "(self, /, t=0.0, grid=(64, 64))")]
+    fn mesh<'py>(&self, py: Python<'py>, t: f64, grid: (i64, i64)) -> PyResult<Bound<'py, PyAny>> {
+        let grid = (
+            util::count(grid.0, "grid[0]")?,
+            util::count(grid.1, "grid[1]")?,
+        );
         if grid.0 < 2 || grid.1 < 2 {
             return Err(PyValueError::new_err("grid: at least 2 x 2 samples"));
         }
@@ -159,6 +159,11 @@ impl PdeSurface {
     #[pyo3(signature = (t = 0.0))]
     fn residual(&self, py: Python<'_>, t: f64) -> PyResult<f64> {
         Ok(self.solve_at(py, t)?.residual_rms())
+    }
+
+    /// Number of patches.
+    fn __len__(&self) -> usize {
+        self.model.patches.len()
     }
 
     fn __repr__(&self) -> String {

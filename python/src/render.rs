@@ -97,16 +97,26 @@ fn scene_from_mesh(mut mesh: TriMesh, wireframe: bool) -> Scene {
 /// triangles)` pair. `view` is `iso`, `front`, `top` or `side`; `wireframe` adds control nets
 /// (meshes: triangle edges).
 #[pyfunction]
-#[pyo3(signature = (source, out, size = (640, 480), view = "iso", wireframe = false, ortho = false))]
+#[pyo3(signature = (source, out, size = (640, 480), view = "iso", wireframe = false, ortho = false),
+    text_signature = "(source, out, size=(640, 480), view='iso', wireframe=False, ortho=False)")]
 fn render(
     py: Python<'_>,
     source: &Bound<'_, PyAny>,
     out: PathBuf,
-    size: (u32, u32),
+    size: (i64, i64),
     view: &str,
     wireframe: bool,
     ortho: bool,
 ) -> PyResult<()> {
+    let side = |v: i64, what: &str| {
+        u32::try_from(v).map_err(|_| {
+            crate::errors::argument(format!(
+                "{what} = {v}: expected a size in pixels (0 to {})",
+                u32::MAX
+            ))
+        })
+    };
+    let size = (side(size.0, "size[0]")?, side(size.1, "size[1]")?);
     // `vclay render --size`'s estimate (one frame), against the memory limit, first.
     let supersample = RenderOptions::sized(1, 1).supersample;
     crate::limits::check(
