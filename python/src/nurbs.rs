@@ -838,6 +838,9 @@ fn file_err(path: &Path, e: impl std::fmt::Display) -> PyErr {
 /// GIL.
 pub fn read_any(path: &Path) -> PyResult<Loaded> {
     use vclay_session::FileKind as K;
+    if ext_of(path) == "gltf" {
+        return Ok(Loaded::Meshes(read_gltf(path)?));
+    }
     let kind = vclay_session::open::identify(path).py()?;
     let ext = ext_of(path);
     let wrong_ext = |allowed: &str| {
@@ -905,6 +908,94 @@ pub fn read_any(path: &Path) -> PyResult<Loaded> {
             ),
         )),
     }
+}
+
+/// A `.gltf` file (JSON with one buffer, embedded as a `data:` URI or in a file beside it)
+/// read by vclay-io's glb reader (`decode_glb`): the JSON and the buffer are packed into the
+/// binary container glb is, so both forms share one reader (meshes' triangles, y-up to z-up).
+fn read_gltf(path: &Path) -> PyResult<Vec<TriMesh>> {
+    let text = std::fs::read_to_string(path).map_err(|e| file_err(path, e))?;
+    let mut json: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| file_err(path, format!("invalid JSON: {e}")))?;
+    let buffers = json.get_mut("buffers").and_then(|b| b.as_array_mut());
+    let bin = match buffers {
+        None => Vec::new(),
+        Some(b) if b.len() > 1 => {
+            return Err(file_err(
+                path,
+                format!(
+                    "{} buffers: vclay reads glTF files with one buffer",
+                    b.len()
+                ),
+            ));
+        }
+        Some(b) if b.is_empty() => Vec::new(),
+        Some(b) => {
+            let buf = b[0]
+                .as_object_mut()
+                .ok_or_else(|| file_err(path, "buffers[0] is not an object"))?;
+            let uri = buf
+                .remove("uri")
+                .and_then(|u| u.as_str().map(str::to_string))
+                .ok_or_else(|| file_err(path, "buffers[0] has no uri"))?;
+            if let Some(data) = uri.strip_prefix("data:") {
+                let (_, b64) = data
+                    .split_once(";base64,")
+                    .ok_or_else(|| file_err(path, "buffers[0].uri: a data URI without ;base64,"))?;
+                base64(b64).ok_or_else(|| file_err(path, "buffers[0].uri: invalid base64"))?
+            } else {
+                let file = path.parent().unwrap_or(Path::new(".")).join(&uri);
+                std::fs::read(&file).map_err(|e| file_err(path, format!("buffer {uri}: {e}")))?
+            }
+        }
+    };
+    let mut head = serde_json::to_vec(&json).map_err(|e| file_err(path, e))?;
+    while head.len() % 4 != 0 {
+        head.push(b' ');
+    }
+    let mut body = bin;
+    while body.len() % 4 != 0 {
+        body.push(0);
+    }
+    let total = 12 + 8 + head.len() + if body.is_empty() { 0 } else { 8 + body.len() };
+    let mut glb = Vec::with_capacity(total);
+    glb.extend_from_slice(b"glTF");
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&(total as u32).to_le_bytes());
+    glb.extend_from_slice(&(head.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"JSON");
+    glb.extend_from_slice(&head);
+    if !body.is_empty() {
+        glb.extend_from_slice(&(body.len() as u32).to_le_bytes());
+        glb.extend_from_slice(b"BIN\0");
+        glb.extend_from_slice(&body);
+    }
+    vclay_io::gltf::decode_glb(&glb).map_err(|e| file_err(path, e))
+}
+
+/// Standard base64 (RFC 4648, padding optional) to bytes; `None` on a character outside it.
+fn base64(text: &str) -> Option<Vec<u8>> {
+    let mut out = Vec::with_capacity(text.len() / 4 * 3);
+    let (mut acc, mut bits) = (0u32, 0u32);
+    for c in text.bytes().filter(|c| !c.is_ascii_whitespace()) {
+        let v = match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' => 62,
+            b'/' => 63,
+            b'=' => break,
+            _ => return None,
+        };
+        acc = (acc << 6) | u32::from(v);
+        bits += 6;
+        if bits >= 8 {
+            bits -= 8;
+            out.push((acc >> bits) as u8);
+            acc &= (1 << bits) - 1;
+        }
+    }
+    Some(out)
 }
 
 /// The boundary limit surface of the subdivision solid whose control lattice is the `.ovm`

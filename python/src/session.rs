@@ -677,12 +677,35 @@ impl Session {
         Ok(lines)
     }
 
-    /// Steps each model until its clock reaches `t` (within half a step).
+    /// Steps each model until its clock reaches `t` (within half a step), in chunks as `step`
+    /// does: Ctrl-C raises `KeyboardInterrupt` between chunks (the steps done stay done).
     fn advance_to(&self, py: Python<'_>, t: f64) -> PyResult<Vec<String>> {
-        let mut guard = self.lock(py)?;
-        let me = &mut *guard;
-        let s = &mut me.session;
-        py.detach(|| s.advance_to(t)).py()
+        let chunk = std::time::Duration::from_millis(STEP_CHUNK_MS);
+        let mut lines = Vec::new();
+        loop {
+            let finished = {
+                let mut guard = self.lock(py)?;
+                let s = &mut guard.session;
+                let r = py.detach(|| {
+                    let start = std::time::Instant::now();
+                    let mut more = Vec::new();
+                    while start.elapsed() < chunk {
+                        match s.advance_step(t)? {
+                            Some(l) => more.extend(l),
+                            None => return Ok::<_, vclay_session::SessionError>((true, more)),
+                        }
+                    }
+                    Ok((false, more))
+                });
+                let (finished, more) = r.py()?;
+                lines.extend(more);
+                finished
+            };
+            if finished {
+                return Ok(lines);
+            }
+            py.check_signals()?;
+        }
     }
 
     /// Runs `steps` steps (default: the rest of the scenario) writing the scenario's

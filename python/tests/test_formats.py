@@ -58,3 +58,37 @@ def test_files_that_are_not_models_say_what_opens_them(root, tmp_path):
     wrong.write_bytes((root / CAD / "brep_torus.step").read_bytes())
     with pytest.raises(vclay.FileError, match="rename it"):
         vclay.load(wrong)
+
+
+def glb_to_gltf(glb_path, gltf_path, embed):
+    """The JSON and BIN chunks of a .glb as a .gltf (buffer embedded or beside it)."""
+    import base64
+    import json
+    import struct
+
+    b = glb_path.read_bytes()
+    n = struct.unpack_from("<I", b, 12)[0]
+    doc = json.loads(b[20:20 + n])
+    m = struct.unpack_from("<I", b, 20 + n)[0]
+    binary = b[28 + n:28 + n + m]
+    if embed:
+        doc["buffers"][0]["uri"] = ("data:application/octet-stream;base64,"
+                                    + base64.b64encode(binary).decode())
+    else:
+        (gltf_path.parent / "mesh.bin").write_bytes(binary)
+        doc["buffers"][0]["uri"] = "mesh.bin"
+    gltf_path.write_text(json.dumps(doc))
+
+
+def test_gltf_reads_like_glb(root, tmp_path):
+    surf = vclay.load(root / CAD / "brep_torus.step")
+    vclay.save(tmp_path / "t.glb", surf, samples=6)
+    v0, t0, _ = vclay.read_mesh(tmp_path / "t.glb")
+    for embed in (True, False):
+        p = tmp_path / f"t{int(embed)}.gltf"
+        glb_to_gltf(tmp_path / "t.glb", p, embed)
+        v, t, _ = vclay.read_mesh(p)
+        np.testing.assert_array_equal(v, v0)
+        np.testing.assert_array_equal(t, t0)
+    vclay.convert(tmp_path / "t1.gltf", tmp_path / "t.obj")
+    assert len(vclay.read_mesh(tmp_path / "t.obj")[1]) == len(t0)

@@ -77,3 +77,27 @@ def test_other_threads_wait_for_a_running_step(root):
     t.join()
     assert not errors and energies
     assert s.steps() == 1500
+
+
+def test_advance_to_is_chunked_and_exact(root):
+    a = vclay.Session.load(root / SCENARIO)
+    b = vclay.Session.load(root / SCENARIO)
+    dt = {p["name"]: p["value"] for p in a.params()}["dt"]
+    a.advance_to(40 * dt)
+    b.step(40)
+    assert a.steps() == 40
+    np.testing.assert_array_equal(a.data_points(), b.data_points())
+    sent = []
+
+    def interrupt():
+        time.sleep(0.3)
+        sent.append(time.perf_counter())
+        os.kill(os.getpid(), signal.SIGINT)
+
+    t = threading.Thread(target=interrupt)
+    t.start()
+    with pytest.raises(KeyboardInterrupt):
+        a.advance_to(1e6)
+    late = time.perf_counter() - sent[0]
+    t.join()
+    assert late < 0.1, late
