@@ -98,15 +98,14 @@ def test_derivatives_of_order_zero_cost_what_evaluate_costs():
     assert d.shape == (200000, 1, 1, 3)
     np.testing.assert_array_equal(d[:, 0, 0], s.evaluate(uv))
 
-    def best(f):
-        times = []
-        for _ in range(3):
+    d0, ev = [], []
+    for _ in range(5):  # interleaved, best of five: robust to a loaded machine
+        for f, out in ((lambda: s.derivatives(uv, 0), d0), (lambda: s.evaluate(uv), ev)):
             t = time.perf_counter()
             f()
-            times.append(time.perf_counter() - t)
-        return min(times)
-
-    assert best(lambda: s.derivatives(uv, 0)) < 1.5 * best(lambda: s.evaluate(uv))
+            out.append(time.perf_counter() - t)
+    # The derivative tables made it 4x before (issue 32).
+    assert min(d0) < 1.5 * min(ev), (min(d0), min(ev))
 
 
 def test_module_docstring_states_the_naming_scheme():

@@ -16,22 +16,29 @@ import vclay
 SCENARIO = "examples/scenarios/fig07_rope_cube.toml"
 
 
-def test_sigint_stops_a_long_step(root):
-    s = vclay.Session.load(root / SCENARIO)
+def interrupted_after(call, delay):
+    """Seconds from a SIGINT sent `delay` s into `call()` to its KeyboardInterrupt."""
     sent = []
 
     def interrupt():
-        time.sleep(0.5)
+        time.sleep(delay)
         sent.append(time.perf_counter())
         os.kill(os.getpid(), signal.SIGINT)
 
     t = threading.Thread(target=interrupt)
     t.start()
     with pytest.raises(KeyboardInterrupt):
-        s.step(10**7)
+        call()
     late = time.perf_counter() - sent[0]
     t.join()
-    assert late < 0.1, late
+    return late
+
+
+def test_sigint_stops_a_long_step(root):
+    s = vclay.Session.load(root / SCENARIO)
+    # The median of three tries: one try can be descheduled on a loaded machine.
+    lates = sorted(interrupted_after(lambda: s.step(10**7), 0.2) for _ in range(3))
+    assert lates[1] < 0.1, lates
     done = s.steps()
     assert 0 < done < 10**7
     s.step(3)  # the session is usable afterwards
@@ -87,17 +94,5 @@ def test_advance_to_is_chunked_and_exact(root):
     b.step(40)
     assert a.steps() == 40
     np.testing.assert_array_equal(a.data_points(), b.data_points())
-    sent = []
-
-    def interrupt():
-        time.sleep(0.3)
-        sent.append(time.perf_counter())
-        os.kill(os.getpid(), signal.SIGINT)
-
-    t = threading.Thread(target=interrupt)
-    t.start()
-    with pytest.raises(KeyboardInterrupt):
-        a.advance_to(1e6)
-    late = time.perf_counter() - sent[0]
-    t.join()
-    assert late < 0.1, late
+    lates = sorted(interrupted_after(lambda: a.advance_to(1e6), 0.2) for _ in range(3))
+    assert lates[1] < 0.1, lates
