@@ -45,11 +45,28 @@ impl Lattice {
     /// --primitive` names: `box[:AxBxC]`, `cylinder[:SxLxR]`, `torus`, `torus:SxC`, `gear`,
     /// `cube-with-holes`, `tetrahedron-with-holes[:HOLE]`, `tetrahedron-with-holes-paper[:HOLE]`,
     /// `soccer-player`, `cactus`, `spiked-object`, `holed-object`, `l[:AxW]`, `t[:AxW]`.
+    ///
+    /// Sizes: the numbers of the spec bound its cell count (`box:AxBxC` has `(A-1)(B-1)(C-1)`
+    /// cells); their product is checked against the memory limit with `vclay subdivide`'s
+    /// estimate per cell (`BYTES_PER_CELL`) before the lattice is built.
     #[staticmethod]
-    fn primitive(spec: &str) -> PyResult<Self> {
-        Ok(Self {
-            lattice: primitive(spec).py()?,
-        })
+    fn primitive(py: Python<'_>, spec: &str) -> PyResult<Self> {
+        let cells: f64 = spec
+            .split_once(':')
+            .map(|(_, args)| {
+                args.split(['x', 'X'])
+                    .filter_map(|t| t.trim().parse::<f64>().ok())
+                    .map(|x| x.max(1.0))
+                    .product()
+            })
+            .unwrap_or(1.0);
+        crate::limits::check(
+            py,
+            || format!("primitive {spec:?} (up to {cells:.3e} cells)"),
+            cells * vclay_lattice::command::BYTES_PER_CELL as f64,
+        )?;
+        let lattice = py.detach(|| primitive(spec)).py()?;
+        Ok(Self { lattice })
     }
 
     /// `Lattice.read(path)`: an OpenVolumeMesh `.ovm` file (errors name the line).

@@ -283,6 +283,13 @@ fn dnurbs_surface(
         .map(|(i, id)| util::count(id, &format!("fix[{i}]")))
         .collect::<PyResult<Vec<usize>>>()?;
     let surface = crate::nurbs::surface_of(points, degree, weights, knots)?;
+    // The session layer's bound on a sheet's size along each direction.
+    let max = vclay_session::models::dnurbs::MAX_SHEET_SIZE;
+    if let Some(n) = surface.dims().iter().find(|&&n| n > max) {
+        return Err(crate::errors::argument(format!(
+            "points: {n} control points along a direction; a D-NURBS sheet takes at most {max}"
+        )));
+    }
     let material: dnurbs::MaterialKeys = match material {
         Some(d) => util::from_py(d.as_any(), "material", crate::errors::argument)?,
         None => Default::default(),

@@ -76,3 +76,13 @@ def test_the_limit_is_settable():
         vclay.set_max_memory(None)
     with pytest.raises(ValueError, match="nbytes"):
         vclay.set_max_memory(-1)
+
+
+def test_primitives_and_dnurbs_nets_too_large_raise():
+    with pytest.raises(MemoryError, match='primitive "box:1000x1000x1000"'):
+        vclay.Lattice.primitive("box:1000x1000x1000")
+    with pytest.raises(MemoryError, match="box:200x200x200"):
+        vclay.Lattice.primitive("box:200x200x200")
+    assert len(vclay.Lattice.primitive("box:5x5x5")) == 64
+    with pytest.raises(vclay.ArgumentError, match="points: 2000 control points along a direction"):
+        vclay.dnurbs_surface(np.zeros((2000, 4, 3)))
