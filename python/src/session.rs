@@ -1,11 +1,17 @@
-//! `Session`: the session layer (`vclay_session`) from Python: load a scenario (`.toml`) or a
-//! saved session (`.json`), apply commands given as dicts (the same values as a scenario's
-//! timeline entries and the session file's log), undo and redo, step with the GIL released,
-//! read state as numpy arrays, save bit for bit.
+//! `Session`: the session layer (`vclay_session`) from Python: open any file (`vclay.open`),
+//! build models from arrays (`dnurbs_surface`, `clay`), apply commands given as Python objects
+//! (dicts, lists, numbers, numpy arrays and scalars, turned into the typed `Command` in Rust),
+//! undo and redo, step with the GIL released, read state as numpy arrays, save, pickle and copy
+//! bit for bit.
 //!
-//! Arrays of a model come from its [`Model::save`] JSON (control and data points) or its
-//! display geometry (`mesh`); the session layer has no direct array accessor yet, so reading
-//! points serializes the model's state once per call.
+//! Threads and signals: the session sits behind a mutex (the pyclass is frozen, so pyo3 keeps
+//! no borrow flag); a call waits for another thread's call without holding the GIL. `step` and
+//! `advance_to` run in chunks of [`STEP_CHUNK_MS`] with `check_signals` (Ctrl-C) between them.
+//!
+//! Arrays: control and data points come from [`Model::control_points`] and
+//! [`Model::data_points`]; the control net's shape, weights and `surface()` from the model's
+//! model-JSON export (the `Model` trait has no accessor for them), written to a temporary file
+//! and read back (the shape is kept per model while its point count is unchanged).
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
