@@ -7,14 +7,20 @@
 //! ├── GeometryError    invalid geometry or parameters: knots, weights, lattices, FFD solves
 //! ├── PdeError         PDE surface specs and solves
 //! ├── RenderError      pictures
-//! └── SessionError     sessions: unknown model, nothing to undo
-//!     ├── CommandError a command that cannot apply (the session is unchanged)
-//!     └── DivergedError the simulation diverged (the model keeps its last good state)
+//! ├── SessionError     sessions: unknown model, nothing to undo
+//! │   ├── CommandError a command that cannot apply (the session is unchanged)
+//! │   └── DivergedError the simulation diverged (the model keeps its last good state)
+//! ├── ArgumentError    an argument's value out of range or unknown, naming the argument;
+//! │                    also a `ValueError`
+//! └── MemoryLimitError work over the memory limit (`set_max_memory`), raised before any
+//!                      allocation; also a `MemoryError`, as numpy raises for such sizes
 //! ```
 
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
+use pyo3::types::{PyDict, PyTuple, PyType};
 
 create_exception!(
     vclay,
@@ -75,7 +81,77 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SessionError", py.get_type::<SessionError>())?;
     m.add("CommandError", py.get_type::<CommandError>())?;
     m.add("DivergedError", py.get_type::<DivergedError>())?;
+    m.add("MemoryLimitError", memory_limit_error(py)?)?;
+    m.add("ArgumentError", argument_error(py)?)?;
     Ok(())
+}
+
+static MEMORY_LIMIT_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+static ARGUMENT_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+
+/// A class `name(VclayError, builtin)` with two bases, which `create_exception!` cannot make,
+/// so it is made by `type(name, bases, dict)` once and kept in `cell`.
+fn two_base<'py>(
+    py: Python<'py>,
+    cell: &'static PyOnceLock<Py<PyType>>,
+    name: &str,
+    builtin: Bound<'py, PyType>,
+    doc: &str,
+) -> PyResult<&'py Bound<'py, PyType>> {
+    let ty = cell.get_or_try_init(py, || {
+        let bases = PyTuple::new(py, [py.get_type::<VclayError>(), builtin])?;
+        let dict = PyDict::new(py);
+        dict.set_item("__module__", "vclay")?;
+        dict.set_item("__doc__", doc)?;
+        let t = py
+            .get_type::<PyType>()
+            .call1((name, bases, dict))?
+            .cast_into::<PyType>()?;
+        Ok::<_, PyErr>(t.unbind())
+    })?;
+    Ok(ty.bind(py))
+}
+
+/// `MemoryLimitError(VclayError, MemoryError)`.
+fn memory_limit_error(py: Python<'_>) -> PyResult<&Bound<'_, PyType>> {
+    two_base(
+        py,
+        &MEMORY_LIMIT_ERROR,
+        "MemoryLimitError",
+        py.get_type::<pyo3::exceptions::PyMemoryError>(),
+        "Work over the memory limit (`vclay.set_max_memory`, default 4 GiB), raised before \
+         anything is allocated; the message names the argument and the estimate. Also a \
+         `MemoryError`, as numpy raises for sizes it cannot allocate.",
+    )
+}
+
+/// `ArgumentError(VclayError, ValueError)`.
+fn argument_error(py: Python<'_>) -> PyResult<&Bound<'_, PyType>> {
+    two_base(
+        py,
+        &ARGUMENT_ERROR,
+        "ArgumentError",
+        py.get_type::<pyo3::exceptions::PyValueError>(),
+        "An argument's value is out of range or unknown (a negative count, an unknown engine \
+         or preset, a negative stiffness); the message names the argument. Also a \
+         `ValueError`, as Python and numpy raise for bad values.",
+    )
+}
+
+/// A `MemoryLimitError` with `msg`.
+pub fn memory_limit(py: Python<'_>, msg: String) -> PyErr {
+    match memory_limit_error(py) {
+        Ok(t) => PyErr::from_type(t.clone(), msg),
+        Err(e) => e,
+    }
+}
+
+/// An `ArgumentError` with `msg` (callable without the GIL: it takes it).
+pub fn argument(msg: String) -> PyErr {
+    Python::attach(|py| match argument_error(py) {
+        Ok(t) => PyErr::from_type(t.clone(), msg),
+        Err(e) => e,
+    })
 }
 
 /// Kernel errors as Python exceptions.

@@ -18,20 +18,44 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// A trivariate NURBS lattice over a box, the identity at rest: `Q(u, v, w)` with control
 /// points at the Greville abscissae. Moving points of space (direct manipulation) moves the
 /// control points by the least-norm displacement field (eqs 7, 12); `deform` maps points.
-#[pyclass(module = "vclay")]
-#[derive(Debug)]
+#[pyclass(module = "vclay", eq)]
+#[derive(Debug, PartialEq)]
 pub struct Ffd {
     lattice: FfdLattice,
 }
 
-fn spec(degree: usize, control_points: &Bound<'_, PyAny>) -> PyResult<LatticeSpec> {
-    let cp: [usize; 3] = if let Ok(n) = control_points.extract::<usize>() {
-        [n; 3]
-    } else {
-        control_points.extract().map_err(|_| {
-            PyValueError::new_err("control_points: an integer or three integers (per axis)")
-        })?
+/// The lattice spec of `degree` and `control_points` (one count or three), its size checked
+/// against the memory limit (`vclay ffd --lattice`'s estimate) before anything is built.
+fn spec(
+    py: Python<'_>,
+    degree: usize,
+    control_points: Option<&Bound<'_, PyAny>>,
+) -> PyResult<LatticeSpec> {
+    let bad = || {
+        PyValueError::new_err(
+            "control_points: expected a non-negative integer or three (one per axis)",
+        )
     };
+    let cp: [usize; 3] = match control_points {
+        None => [vclay_ffd::DEFAULT_CONTROL_POINTS.max(degree + 1); 3],
+        Some(c) => {
+            let v: Vec<i128> = if let Ok(n) = c.extract::<i128>() {
+                vec![n; 3]
+            } else {
+                c.extract().map_err(|_| bad())?
+            };
+            let v: Vec<usize> = v
+                .into_iter()
+                .map(|n| usize::try_from(n).map_err(|_| bad()))
+                .collect::<PyResult<_>>()?;
+            v.try_into().map_err(|_| bad())?
+        }
+    };
+    crate::limits::check(
+        py,
+        || format!("control_points={cp:?}"),
+        vclay_session::limits::ffd_bytes(cp),
+    )?;
     Ok(LatticeSpec {
         degree: [degree; 3],
         control_points: cp,
@@ -43,42 +67,35 @@ impl Ffd {
     /// `Ffd(lo, hi, degree=3, control_points=4)`: a lattice over the box `[lo, hi]`;
     /// `control_points` is one count or three (per axis), each at least `degree + 1`.
     #[new]
-    #[pyo3(signature = (lo, hi, degree = vclay_ffd::DEFAULT_DEGREE, control_points = None))]
+    #[pyo3(signature = (lo, hi, degree = vclay_ffd::DEFAULT_DEGREE as i64, control_points = None),
+        text_signature = "(lo, hi, degree=3, control_points=None)")]
     fn new(
+        py: Python<'_>,
         lo: &Bound<'_, PyAny>,
         hi: &Bound<'_, PyAny>,
-        degree: usize,
+        degree: i64,
         control_points: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let s = match control_points {
-            Some(c) => spec(degree, c)?,
-            None => LatticeSpec {
-                degree: [degree; 3],
-                control_points: [vclay_ffd::DEFAULT_CONTROL_POINTS.max(degree + 1); 3],
-            },
-        };
-        let lattice = FfdLattice::new(s, util::vec3(lo, "lo")?, util::vec3(hi, "hi")?).py()?;
+        let s = spec(py, util::count(degree, "degree")?, control_points)?;
+        let (lo, hi) = (util::vec3(lo, "lo")?, util::vec3(hi, "hi")?);
+        let lattice = py.detach(|| FfdLattice::new(s, lo, hi)).py()?;
         Ok(Self { lattice })
     }
 
     /// `Ffd.enclosing(points, degree=3, control_points=4, margin=0.05)`: a lattice around the
     /// bounding box of an `(n, 3)` array, grown by `margin` times its extent.
     #[staticmethod]
-    #[pyo3(signature = (points, degree = vclay_ffd::DEFAULT_DEGREE, control_points = None, margin = vclay_ffd::DEFAULT_MARGIN))]
+    #[pyo3(signature = (points, degree = vclay_ffd::DEFAULT_DEGREE as i64, control_points = None, margin = vclay_ffd::DEFAULT_MARGIN),
+        text_signature = "(points, degree=3, control_points=None, margin=0.05)")]
     fn enclosing(
+        py: Python<'_>,
         points: &Bound<'_, PyAny>,
-        degree: usize,
+        degree: i64,
         control_points: Option<&Bound<'_, PyAny>>,
         margin: f64,
     ) -> PyResult<Self> {
+        let s = spec(py, util::count(degree, "degree")?, control_points)?;
         let pts = util::points(points, "points")?;
-        let s = match control_points {
-            Some(c) => spec(degree, c)?,
-            None => LatticeSpec {
-                degree: [degree; 3],
-                control_points: [vclay_ffd::DEFAULT_CONTROL_POINTS.max(degree + 1); 3],
-            },
-        };
         let lattice = FfdLattice::enclosing(&pts, s, margin).py()?;
         Ok(Self { lattice })
     }
@@ -107,6 +124,45 @@ impl Ffd {
             .flat_map(|p| [p.x, p.y, p.z])
             .collect();
         util::array_dyn(py, v, &[d[0], d[1], d[2], 3])
+    }
+
+    /// Replaces the control points: a `(nu, nv, nw, 3)` array of finite numbers (the
+    /// deformation follows; `reset` goes back to the rest lattice).
+    #[setter]
+    fn set_control_points(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        let d = self.lattice.dims();
+        let (data, shape) = util::flat(value, "control_points")?;
+        if shape != [d[0], d[1], d[2], 3] {
+            return Err(PyValueError::new_err(format!(
+                "control_points: expected shape [{}, {}, {}, 3], got {shape:?}",
+                d[0], d[1], d[2]
+            )));
+        }
+        let pts = data
+            .chunks_exact(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect();
+        self.lattice.set_control_points(pts).py()
+    }
+
+    /// Weights `(nu, nv, nw)` (a copy; 1 at rest).
+    #[getter]
+    fn weights<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArrayDyn<f64>> {
+        let d = self.lattice.dims();
+        util::array_dyn(py, self.lattice.weights().to_vec(), &[d[0], d[1], d[2]])
+    }
+
+    /// Replaces the weights: a `(nu, nv, nw)` array, positive and finite.
+    #[setter]
+    fn set_weights(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        let d = self.lattice.dims();
+        let (data, shape) = util::flat(value, "weights")?;
+        if shape != d {
+            return Err(PyValueError::new_err(format!(
+                "weights: expected shape {d:?}, got {shape:?}"
+            )));
+        }
+        self.lattice.set_weights(data).py()
     }
 
     /// Parameters `(n, 3)` in `[0, 1]^3` of rest-space points `(n, 3)` (the linear map of
@@ -217,6 +273,26 @@ impl Ffd {
     /// The lattice as a `Volume` (current control points and weights).
     fn volume(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
         crate::nurbs::wrap(py, IoEntity::Volume(self.lattice.volume().clone()), None)
+    }
+
+    /// Pickling and `copy`: the constructor's arguments (`lo, hi, degree, control_points`)
+    /// and, as the state, the current control points and weights (exact to the bit).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        let py = slf.py();
+        let f = slf.borrow();
+        let (lo, hi) = f.bounds();
+        let d = f.lattice.dims();
+        let w = f.weights(py);
+        let args = (lo, hi, f.lattice.degree()[0], d);
+        (slf.get_type(), args, (f.control_points(py), w))
+            .into_pyobject(py)
+            .map(|t| t.into_any())
+    }
+
+    /// Restores the control points and weights saved by `__reduce__`.
+    fn __setstate__(&mut self, state: (Bound<'_, PyAny>, Bound<'_, PyAny>)) -> PyResult<()> {
+        self.set_weights(&state.1)?;
+        self.set_control_points(&state.0)
     }
 
     fn __repr__(&self) -> String {

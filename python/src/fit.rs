@@ -20,18 +20,25 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// section 11: `rms`, `max` closest-point distances, `fairness_energy`, `timings`, ...).
 /// Bad clouds and options raise `GeometryError` with the located message.
 #[pyfunction]
-#[pyo3(signature = (points, grid=(32, 32), degree=3, fairness=(0.0, 1e-9), robust=None, weights=false, corrections=2))]
+#[pyo3(signature = (points, grid=(32, 32), degree=3, fairness=(0.0, 1e-9), robust=None, weights=false, corrections=2),
+    text_signature = "(points, grid=(32, 32), degree=3, fairness=(0.0, 1e-9), robust=None, weights=False, corrections=2)")]
 #[allow(clippy::type_complexity)]
 fn fit_surface<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
-    grid: (usize, usize),
-    degree: usize,
+    grid: (i64, i64),
+    degree: i64,
     fairness: (f64, f64),
     robust: Option<String>,
     weights: bool,
-    corrections: usize,
+    corrections: i64,
 ) -> PyResult<(Py<PyAny>, Bound<'py, PyAny>)> {
+    let grid = (
+        util::count(grid.0, "grid[0]")?,
+        util::count(grid.1, "grid[1]")?,
+    );
+    let degree = util::count(degree, "degree")?;
+    let corrections = util::count(corrections, "corrections")?;
     let pts = util::points(points, "points")?;
     let robust = robust
         .map(|s| s.parse::<Robust>())
@@ -47,6 +54,12 @@ fn fit_surface<'py>(
         rational: weights,
         ..FitOptions::default()
     };
+    // `vclay fit`'s estimate, against the memory limit.
+    crate::limits::check(
+        py,
+        || format!("grid={grid:?} with {} points", pts.len()),
+        vclay_fit::memory_estimate(pts.len(), &opts, rayon::current_num_threads()) as f64,
+    )?;
     let fit = py
         .detach(|| vclay_fit::fit_surface(&pts, &opts))
         .map_err(|e| GeometryError::new_err(e.to_string()))?;

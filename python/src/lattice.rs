@@ -45,11 +45,28 @@ impl Lattice {
     /// --primitive` names: `box[:AxBxC]`, `cylinder[:SxLxR]`, `torus`, `torus:SxC`, `gear`,
     /// `cube-with-holes`, `tetrahedron-with-holes[:HOLE]`, `tetrahedron-with-holes-paper[:HOLE]`,
     /// `soccer-player`, `cactus`, `spiked-object`, `holed-object`, `l[:AxW]`, `t[:AxW]`.
+    ///
+    /// Sizes: the numbers of the spec bound its cell count (`box:AxBxC` has `(A-1)(B-1)(C-1)`
+    /// cells); their product is checked against the memory limit with `vclay subdivide`'s
+    /// estimate per cell (`BYTES_PER_CELL`) before the lattice is built.
     #[staticmethod]
-    fn primitive(spec: &str) -> PyResult<Self> {
-        Ok(Self {
-            lattice: primitive(spec).py()?,
-        })
+    fn primitive(py: Python<'_>, spec: &str) -> PyResult<Self> {
+        let cells: f64 = spec
+            .split_once(':')
+            .map(|(_, args)| {
+                args.split(['x', 'X'])
+                    .filter_map(|t| t.trim().parse::<f64>().ok())
+                    .map(|x| x.max(1.0))
+                    .product()
+            })
+            .unwrap_or(1.0);
+        crate::limits::check(
+            py,
+            || format!("primitive {spec:?} (up to {cells:.3e} cells)"),
+            cells * vclay_lattice::command::BYTES_PER_CELL as f64,
+        )?;
+        let lattice = py.detach(|| primitive(spec)).py()?;
+        Ok(Self { lattice })
     }
 
     /// `Lattice.read(path)`: an OpenVolumeMesh `.ovm` file (errors name the line).
@@ -65,15 +82,39 @@ impl Lattice {
         py.detach(|| f.write(&self.lattice, &path)).py()
     }
 
-    /// The lattice as `.ovm` text.
+    /// The lattice as `.ovm` text (points written exactly: `from_ovm` reads the same bits).
     fn to_ovm(&self) -> String {
         ovm::to_string(&self.lattice)
+    }
+
+    /// `Lattice.from_ovm(text)`: a lattice from `.ovm` text (errors name the line).
+    #[staticmethod]
+    fn from_ovm(py: Python<'_>, text: &str) -> PyResult<Self> {
+        let lattice = py.detach(|| ovm::parse(text, "<ovm text>")).py()?;
+        Ok(Self { lattice })
+    }
+
+    /// Pickling and `copy`: `Lattice.from_ovm(self.to_ovm())`, exact to the bit.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        let py = slf.py();
+        let from = slf.get_type().getattr("from_ovm")?;
+        (from, (slf.get().to_ovm(),))
+            .into_pyobject(py)
+            .map(|t| t.into_any())
+    }
+
+    /// Whether two lattices have the same points, edges, faces and cells, in the same order.
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other
+            .cast::<Self>()
+            .is_ok_and(|o| ovm::to_string(&o.get().lattice) == ovm::to_string(&self.lattice))
     }
 
     /// `levels` MacCracken-Joy subdivision steps with the boundary rule `"interior"`,
     /// `"smooth"` or `"sharp"`: a new lattice. Refused above 50 million predicted cells.
     #[pyo3(signature = (levels = 1, boundary = "sharp"))]
-    fn subdivide(&self, py: Python<'_>, levels: usize, boundary: &str) -> PyResult<Self> {
+    fn subdivide(&self, py: Python<'_>, levels: i64, boundary: &str) -> PyResult<Self> {
+        let levels = util::count(levels, "levels")?;
         let rules = SubdivisionRules::new(boundary_rule(boundary)?);
         let predicted = (self.lattice.num_cells() as u128)
             .saturating_mul(8u128.saturating_pow(levels.min(64) as u32));
@@ -82,6 +123,12 @@ impl Lattice {
                 "{levels} levels would give about {predicted} cells (more than {MAX_PREDICTED_CELLS}); use fewer levels"
             )));
         }
+        // `vclay subdivide --levels`'s estimate, against the memory limit.
+        crate::limits::check(
+            py,
+            || format!("levels={levels} ({predicted} cells)"),
+            vclay_session::limits::subdivision_bytes(self.lattice.num_cells(), levels),
+        )?;
         let start = &self.lattice;
         let out = py.detach(|| {
             let mut lat = start.clone();
@@ -144,16 +191,25 @@ impl Lattice {
         Ok(Self { lattice })
     }
 
-    /// Edges as a `(m, 2)` array of point indices.
+    /// Edges as a `(m, 2)` int64 array of point indices (numpy's index type, as
+    /// `np.argsort` gives).
     #[getter]
-    fn edges<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray2<f64>> {
-        let v: Vec<f64> = self
+    fn edges<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray2<i64>> {
+        use numpy::IntoPyArray;
+        let v: Vec<i64> = self
             .lattice
             .edges()
             .iter()
-            .flat_map(|e| [e[0].index() as f64, e[1].index() as f64])
+            .flat_map(|e| [e[0].index() as i64, e[1].index() as i64])
             .collect();
-        util::array2(py, v, self.lattice.num_edges(), 2)
+        numpy::ndarray::Array2::from_shape_vec((self.lattice.num_edges(), 2), v)
+            .expect("shape matches the data")
+            .into_pyarray(py)
+    }
+
+    /// Number of cells.
+    fn __len__(&self) -> usize {
+        self.lattice.num_cells()
     }
 
     /// The outward boundary surface: `(vertices, triangles, normals)`.

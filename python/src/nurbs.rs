@@ -12,12 +12,13 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyList;
 use vclay_core::{TriMesh, Vec3};
-use vclay_io::geomdl::{is_geomdl, parse_geomdl, write_geomdl};
+use vclay_io::geomdl::{parse_geomdl, write_geomdl};
 use vclay_io::gltf::{GlbMesh, read_glb, write_glb};
 use vclay_io::iges::write_iges;
 use vclay_io::mesh::{read_mesh, write_mesh};
-use vclay_io::model::{Entity as IoEntity, NamedEntity, parse_named_model, write_named_model};
+use vclay_io::model::{Entity as IoEntity, NamedEntity, write_named_model};
 use vclay_io::step::write_step;
+use vclay_io::step_read::{TrimmedFace, tessellate_trimmed};
 use vclay_spline::{
     KnotVector, NurbsCurve, NurbsSurface, NurbsVolume, ParametricCurve, ParametricSurface,
     ParametricVolume, SplineError, tessellate_surface, tessellate_volume_boundary,
@@ -43,25 +44,25 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 ///
 /// Arrays: control points `(n, 3)`, `(nu, nv, 3)` or `(nu, nv, nw, 3)` (last parametric index
 /// fastest), weights of the same shape without the last axis, one knot array per axis.
-#[pyclass(subclass, module = "vclay", frozen)]
-#[derive(Clone, Debug)]
+#[pyclass(subclass, module = "vclay", eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Entity {
     pub(crate) entity: IoEntity,
     name: Option<String>,
 }
 
 /// A NURBS curve `C(u) = sum N_i,p(u) w_i P_i / sum N_i,p(u) w_i` (`d-nurbs.txt` eq 1).
-#[pyclass(extends = Entity, module = "vclay", frozen)]
+#[pyclass(extends = Entity, module = "vclay")]
 #[derive(Debug)]
 pub struct Curve;
 
 /// A tensor-product NURBS surface `S(u, v)`.
-#[pyclass(extends = Entity, module = "vclay", frozen)]
+#[pyclass(extends = Entity, module = "vclay")]
 #[derive(Debug)]
 pub struct Surface;
 
 /// A trivariate NURBS volume `V(u, v, w)` (FFD lattices and B-spline solids are volumes).
-#[pyclass(extends = Entity, module = "vclay", frozen)]
+#[pyclass(extends = Entity, module = "vclay")]
 #[derive(Debug)]
 pub struct Volume;
 
@@ -100,7 +101,7 @@ fn net(
     weights: Option<&Bound<'_, PyAny>>,
     dims: usize,
 ) -> PyResult<(Vec<Vec3>, Vec<f64>, Vec<usize>)> {
-    let (data, shape) = util::flat(points)?;
+    let (data, shape) = util::flat(points, "control_points")?;
     if shape.len() != dims + 1 || shape[dims] != 3 {
         let want = ["(n, 3)", "(nu, nv, 3)", "(nu, nv, nw, 3)"][dims - 1];
         return Err(PyValueError::new_err(format!(
@@ -116,7 +117,7 @@ fn net(
         None => vec![1.0; pts.len()],
         Some(w) if w.is_none() => vec![1.0; pts.len()],
         Some(w) => {
-            let (wd, ws) = util::flat(w)?;
+            let (wd, ws) = util::flat(w, "weights")?;
             if ws != net_shape {
                 return Err(PyValueError::new_err(format!(
                     "weights: expected shape {net_shape:?} (the control net's), got {ws:?}"
@@ -196,7 +197,7 @@ pub(crate) fn surface_of(
     knots: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<NurbsSurface> {
     if let Ok(e) = net_or_surface.cast::<Entity>() {
-        return match &e.get().entity {
+        return match &e.borrow().entity {
             IoEntity::Surface(s) => Ok(s.clone()),
             other => Err(PyValueError::new_err(format!(
                 "expected a Surface or a control net (nu, nv, 3), got a {}",
@@ -233,62 +234,55 @@ pub(crate) fn surface_of(
 
 #[pymethods]
 impl Curve {
-    /// `Curve(degree, knots, control_points, weights=None)`: knots `(n + degree + 1,)`,
-    /// control points `(n, 3)`, weights `(n,)` (all 1 when omitted).
+    /// `Curve(degree, knots, control_points, weights=None, name=None)`: knots
+    /// `(n + degree + 1,)`, control points `(n, 3)`, weights `(n,)` (all 1 when omitted).
     #[new]
-    #[pyo3(signature = (degree, knots, control_points, weights = None))]
+    #[pyo3(signature = (degree, knots, control_points, weights = None, name = None))]
     fn new(
         degree: &Bound<'_, PyAny>,
         knots: &Bound<'_, PyAny>,
         control_points: &Bound<'_, PyAny>,
         weights: Option<&Bound<'_, PyAny>>,
+        name: Option<String>,
     ) -> PyResult<PyClassInitializer<Self>> {
         let e = build(1, degree, knots, control_points, weights)?;
-        Ok(PyClassInitializer::from(Entity {
-            entity: e,
-            name: None,
-        })
-        .add_subclass(Curve))
+        Ok(PyClassInitializer::from(Entity { entity: e, name }).add_subclass(Curve))
     }
 }
 
 #[pymethods]
 impl Surface {
-    /// `Surface((p, q), (knots_u, knots_v), control_points (nu, nv, 3), weights (nu, nv) = None)`.
+    /// `Surface((p, q), (knots_u, knots_v), control_points (nu, nv, 3), weights (nu, nv) = None,
+    /// name=None)`.
     #[new]
-    #[pyo3(signature = (degree, knots, control_points, weights = None))]
+    #[pyo3(signature = (degree, knots, control_points, weights = None, name = None))]
     fn new(
         degree: &Bound<'_, PyAny>,
         knots: &Bound<'_, PyAny>,
         control_points: &Bound<'_, PyAny>,
         weights: Option<&Bound<'_, PyAny>>,
+        name: Option<String>,
     ) -> PyResult<PyClassInitializer<Self>> {
         let e = build(2, degree, knots, control_points, weights)?;
-        Ok(PyClassInitializer::from(Entity {
-            entity: e,
-            name: None,
-        })
-        .add_subclass(Surface))
+        Ok(PyClassInitializer::from(Entity { entity: e, name }).add_subclass(Surface))
     }
 }
 
 #[pymethods]
 impl Volume {
-    /// `Volume((p, q, r), (ku, kv, kw), control_points (nu, nv, nw, 3), weights (nu, nv, nw) = None)`.
+    /// `Volume((p, q, r), (ku, kv, kw), control_points (nu, nv, nw, 3), weights (nu, nv, nw) =
+    /// None, name=None)`.
     #[new]
-    #[pyo3(signature = (degree, knots, control_points, weights = None))]
+    #[pyo3(signature = (degree, knots, control_points, weights = None, name = None))]
     fn new(
         degree: &Bound<'_, PyAny>,
         knots: &Bound<'_, PyAny>,
         control_points: &Bound<'_, PyAny>,
         weights: Option<&Bound<'_, PyAny>>,
+        name: Option<String>,
     ) -> PyResult<PyClassInitializer<Self>> {
         let e = build(3, degree, knots, control_points, weights)?;
-        Ok(PyClassInitializer::from(Entity {
-            entity: e,
-            name: None,
-        })
-        .add_subclass(Volume))
+        Ok(PyClassInitializer::from(Entity { entity: e, name }).add_subclass(Volume))
     }
 }
 
@@ -401,6 +395,59 @@ impl Entity {
         util::array_dyn(py, w.to_vec(), &self.net_shape())
     }
 
+    /// Replaces the control points: an array of the shape the getter gives (`(n, 3)`,
+    /// `(nu, nv, 3)`, `(nu, nv, nw, 3)`), finite; the knots and weights stay.
+    #[setter]
+    fn set_control_points(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        let mut want = self.net_shape();
+        want.push(3);
+        let (data, shape) = util::flat(value, "control_points")?;
+        if shape != want {
+            return Err(PyValueError::new_err(format!(
+                "control_points: expected shape {want:?} (the control net's), got {shape:?}"
+            )));
+        }
+        if let Some(k) = data.iter().position(|x| !x.is_finite()) {
+            return Err(PyValueError::new_err(format!(
+                "control_points: value {k} (flat) is not finite"
+            )));
+        }
+        let pts: Vec<Vec3> = data
+            .chunks_exact(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect();
+        match &mut self.entity {
+            IoEntity::Curve(c) => c.set_control_points(pts),
+            IoEntity::Surface(s) => s.set_control_points(pts),
+            IoEntity::Volume(v) => v.set_control_points(pts),
+        }
+        .py()
+    }
+
+    /// Replaces the weights: an array of the control net's shape, positive and finite.
+    #[setter]
+    fn set_weights(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        let want = self.net_shape();
+        let (w, shape) = util::flat(value, "weights")?;
+        if shape != want {
+            return Err(PyValueError::new_err(format!(
+                "weights: expected shape {want:?} (the control net's), got {shape:?}"
+            )));
+        }
+        if let Some(k) = w.iter().position(|x| !(x.is_finite() && *x > 0.0)) {
+            return Err(PyValueError::new_err(format!(
+                "weights: value {k} (flat) = {} is not positive and finite",
+                w[k]
+            )));
+        }
+        match &mut self.entity {
+            IoEntity::Curve(c) => c.set_weights(w),
+            IoEntity::Surface(s) => s.set_weights(w),
+            IoEntity::Volume(v) => v.set_weights(w),
+        }
+        .py()
+    }
+
     /// Parameter domain per axis: a list of `(min, max)`.
     #[getter]
     fn domain(&self) -> Vec<(f64, f64)> {
@@ -423,6 +470,7 @@ impl Entity {
     ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
         let d = self.dims();
         let (t, n) = util::rows(params, d, "params")?;
+        crate::limits::check_f64s(py, || format!("evaluate: {n} points"), 3.0 * n as f64)?;
         let mut out = vec![0.0; n * 3];
         let e = &self.entity;
         let work = |out: &mut [f64]| {
@@ -472,8 +520,22 @@ impl Entity {
         &self,
         py: Python<'py>,
         params: &Bound<'py, PyAny>,
-        order: usize,
+        order: i64,
     ) -> PyResult<Bound<'py, numpy::PyArrayDyn<f64>>> {
+        let order = util::count(order, "order")?;
+        if order == 0 {
+            // The points alone: `evaluate`'s loop (no derivative tables), reshaped.
+            let mut shape = vec![0isize];
+            let d = self.dims();
+            shape[0] = -1;
+            shape.extend(std::iter::repeat_n(1isize, d));
+            shape.push(3);
+            let pts = self.evaluate(py, params)?;
+            return pts
+                .call_method1("reshape", (shape,))?
+                .cast_into()
+                .map_err(Into::into);
+        }
         if order > vclay_spline::MAX_DEGREE {
             return Err(PyValueError::new_err(format!(
                 "order {order} is larger than {}",
@@ -484,6 +546,11 @@ impl Entity {
         let (t, n) = util::rows(params, d, "params")?;
         let o = order + 1;
         let per = o.pow(d as u32) * 3;
+        crate::limits::check_f64s(
+            py,
+            || format!("derivatives: order={order} at {n} points"),
+            n as f64 * per as f64,
+        )?;
         let mut out = vec![0.0; n * per];
         let e = &self.entity;
         let r = py.detach(|| {
@@ -561,6 +628,11 @@ impl Entity {
         let (vs, nv) = util::rows(v, 1, "v")?;
         let par = vclay_core::Parallelism::Auto;
         let Some(out) = out else {
+            crate::limits::check_f64s(
+                py,
+                || format!("evaluate_grid: u ({nu} values) x v ({nv} values)"),
+                3.0 * nu as f64 * nv as f64,
+            )?;
             let mut flat = vec![0.0; 3 * nu * nv];
             py.detach(|| s.eval_grid_into_flat(&us, &vs, &mut flat, par))
                 .py()?;
@@ -601,9 +673,10 @@ impl Entity {
         &self,
         py: Python<'_>,
         value: f64,
-        times: usize,
-        axis: usize,
+        times: i64,
+        axis: i64,
     ) -> PyResult<Py<PyAny>> {
+        let (times, axis) = (util::count(times, "times")?, util::count(axis, "axis")?);
         self.check_axis(axis)?;
         let e = match &self.entity {
             IoEntity::Curve(c) => IoEntity::Curve(c.insert_knot(value, times).py()?),
@@ -616,7 +689,8 @@ impl Entity {
     /// A new entity with the degree along `axis` raised by `times` (Piegl & Tiller A5.9); the
     /// shape is unchanged.
     #[pyo3(signature = (times = 1, axis = 0))]
-    fn elevate_degree(&self, py: Python<'_>, times: usize, axis: usize) -> PyResult<Py<PyAny>> {
+    fn elevate_degree(&self, py: Python<'_>, times: i64, axis: i64) -> PyResult<Py<PyAny>> {
+        let (times, axis) = (util::count(times, "times")?, util::count(axis, "axis")?);
         self.check_axis(axis)?;
         let e = match &self.entity {
             IoEntity::Curve(c) => IoEntity::Curve(c.elevate_degree(times).py()?),
@@ -629,9 +703,35 @@ impl Entity {
     /// Surfaces and volume boundaries as triangles: `(vertices (n, 3), triangles (m, 3) uint32,
     /// normals (n, 3))`, `samples` per parametric axis.
     #[pyo3(signature = (samples = 32))]
-    fn tessellate<'py>(&self, py: Python<'py>, samples: usize) -> PyResult<Bound<'py, PyAny>> {
-        let mesh = tessellate_one(&self.entity, samples)?;
+    fn tessellate<'py>(&self, py: Python<'py>, samples: i64) -> PyResult<Bound<'py, PyAny>> {
+        let samples = util::count(samples, "samples")?;
+        check_tessellation(py, &[self.dims()], samples)?;
+        let e = &self.entity;
+        let mesh = py.detach(|| tessellate_one(e, samples))?;
         util::mesh_arrays(py, &mesh)
+    }
+
+    /// Pickling and `copy`: the constructor's arguments (`degree, knots, control_points,
+    /// weights, name`) as arrays, so the copy is exact to the bit.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        let py = slf.py();
+        let e = slf.borrow();
+        let knots = e.knots(py);
+        let knots: Bound<'py, PyAny> = if e.dims() == 1 {
+            knots[0].clone().into_any()
+        } else {
+            pyo3::types::PyTuple::new(py, knots)?.into_any()
+        };
+        let args = (
+            e.degree(),
+            knots,
+            e.control_points(py),
+            e.weights(py),
+            e.name.clone(),
+        );
+        (slf.get_type(), args)
+            .into_pyobject(py)
+            .map(|t| t.into_any())
     }
 
     /// The entity as a dict of the vclay model JSON format (`docs/formats.md`).
@@ -662,6 +762,24 @@ impl Entity {
             }
         )
     }
+}
+
+/// Checks a tessellation of `entities` at `samples` per axis against the memory limit
+/// (`vclay convert --samples`'s estimate).
+/// `dims`: the entities' parameter counts (1 curve, 2 surface, 3 volume).
+fn check_tessellation(py: Python<'_>, dims: &[usize], samples: usize) -> PyResult<()> {
+    let count = |d: usize| dims.iter().filter(|&&k| k == d).count();
+    let (surfaces, volumes) = (count(2), count(3));
+    crate::limits::check(
+        py,
+        || {
+            format!(
+                "samples={samples} ({surfaces} surfaces, {volumes} volumes: about {:.3e} vertices)",
+                (samples as f64).powi(2) * (surfaces as f64 + 6.0 * volumes as f64)
+            )
+        },
+        vclay_session::limits::tessellation_bytes(samples, surfaces, volumes),
+    )
 }
 
 fn tessellate_one(e: &IoEntity, samples: usize) -> PyResult<TriMesh> {
@@ -697,45 +815,251 @@ pub fn ext_of(path: &Path) -> String {
 
 /// What a file held.
 pub enum Loaded {
-    Entities(Vec<NamedEntity>),
+    /// Exact geometry; with STEP B-rep faces, their trimming loops (applied when meshing).
+    Entities(Vec<NamedEntity>, Vec<TrimmedFace>),
+    /// Triangle meshes.
     Meshes(Vec<TriMesh>),
 }
 
-/// Reads a model (vclay or geomdl JSON) or mesh file (.obj, .stl, .ply, .glb).
+/// Domain-triangle subdivision level of a triangular NURBS file when it is meshed (`level^2`
+/// triangles per domain triangle; `vclay convert`'s `TRIANGULAR_TESSELLATION_LEVEL`).
+pub const TRIANGULAR_TESSELLATION_LEVEL: usize = 8;
+
+fn file_err(path: &Path, e: impl std::fmt::Display) -> PyErr {
+    FileError::new_err(format!("{}: {e}", path.display()))
+}
+
+/// Reads any file the command line's `convert`/`eval`/`render` read, recognized by content
+/// through the session layer's one way in (`vclay_session::open::identify`): model JSON,
+/// geomdl JSON, STEP and IGES (`vclay_io::model::import_model`; STEP faces keep their
+/// trimming loops), triangular NURBS (meshed), lattices (`.ovm`: the boundary limit surface
+/// as bicubic patches; `.vtu`: the boundary faces), meshes (OBJ, STL, PLY, glb). Scenarios,
+/// sessions, PDE specs and point clouds raise `FileError` naming what opens them. Without the
+/// GIL.
 pub fn read_any(path: &Path) -> PyResult<Loaded> {
-    match ext_of(path).as_str() {
-        "json" | "geomdl.json" => {
-            let text = std::fs::read_to_string(path)
-                .map_err(|e| FileError::new_err(format!("{}: {e}", path.display())))?;
-            let ents = if is_geomdl(&text) {
-                parse_geomdl(&text)
-            } else {
-                parse_named_model(&text)
+    use vclay_session::FileKind as K;
+    if ext_of(path) == "gltf" {
+        return Ok(Loaded::Meshes(read_gltf(path)?));
+    }
+    let kind = vclay_session::open::identify(path).py()?;
+    let ext = ext_of(path);
+    let wrong_ext = |allowed: &str| {
+        file_err(
+            path,
+            format!(
+                "holds {} but its extension .{ext} is not one of {allowed}; rename it",
+                kind.describe()
+            ),
+        )
+    };
+    match kind {
+        K::ModelJson | K::Step | K::Iges => {
+            let want = match kind {
+                K::Step => ["step", "stp", "p21"].as_slice(),
+                K::Iges => ["igs", "iges"].as_slice(),
+                _ => ["json", "geomdl.json"].as_slice(),
+            };
+            if !want.contains(&ext.as_str()) {
+                return Err(wrong_ext(&format!(".{}", want.join(", ."))));
             }
-            .map_err(|e| FileError::new_err(format!("{}: {e}", path.display())))?;
-            Ok(Loaded::Entities(ents))
+            let m = vclay_io::model::import_model(path).py()?;
+            Ok(Loaded::Entities(m.entities, m.faces))
         }
-        "glb" => Ok(Loaded::Meshes(read_glb(path).py()?)),
-        "obj" | "stl" | "ply" => Ok(Loaded::Meshes(vec![read_mesh(path).py()?])),
-        other => Err(FileError::new_err(format!(
-            "{}: unknown input format \".{other}\"; expected .json (vclay or geomdl model), .obj, .stl, .ply or .glb",
-            path.display()
-        ))),
+        K::Geomdl => {
+            let text = std::fs::read_to_string(path).map_err(|e| file_err(path, e))?;
+            let ents = parse_geomdl(&text).map_err(|e| file_err(path, e))?;
+            Ok(Loaded::Entities(ents, Vec::new()))
+        }
+        K::Triangular => {
+            let t = vclay_io::triangular::read_triangular(path).py()?;
+            let mut mesh = TriMesh::new();
+            t.surface
+                .tessellate(TRIANGULAR_TESSELLATION_LEVEL, &mut mesh)
+                .map_err(|e| file_err(path, e))?;
+            Ok(Loaded::Meshes(vec![mesh]))
+        }
+        K::Lattice if ext == "ovm" => Ok(Loaded::Entities(lattice_patches(path)?, Vec::new())),
+        K::Lattice if ext == "vtu" => {
+            let lattice = vclay_lattice::formats::vtu::read(path).py()?;
+            let mut mesh = vclay_lattice::boundary_mesh(&lattice);
+            if mesh.triangles.is_empty() {
+                return Err(file_err(path, "the lattice has no boundary faces"));
+            }
+            mesh.compute_normals();
+            Ok(Loaded::Meshes(vec![mesh]))
+        }
+        K::Lattice => Err(wrong_ext(".ovm, .vtu")),
+        K::Mesh => match ext.as_str() {
+            "glb" => Ok(Loaded::Meshes(read_glb(path).py()?)),
+            "obj" | "stl" | "ply" => Ok(Loaded::Meshes(vec![read_mesh(path).py()?])),
+            _ => Err(wrong_ext(".obj, .stl, .ply, .glb")),
+        },
+        K::Scenario | K::Session | K::PdeSpec | K::PointCloud => Err(file_err(
+            path,
+            format!(
+                "{}, not a model or mesh file: {} (in Python: {})",
+                kind.describe(),
+                kind.commands(),
+                match kind {
+                    K::PdeSpec => "vclay.PdeSurface.read, vclay.open",
+                    K::PointCloud => "vclay.fit_surface",
+                    _ => "vclay.open",
+                }
+            ),
+        )),
     }
 }
 
-fn mesh_of(loaded: &Loaded, samples: usize) -> PyResult<TriMesh> {
+/// A `.gltf` file (JSON with one buffer, embedded as a `data:` URI or in a file beside it)
+/// read by vclay-io's glb reader (`decode_glb`): the JSON and the buffer are packed into the
+/// binary container glb is, so both forms share one reader (meshes' triangles, y-up to z-up).
+fn read_gltf(path: &Path) -> PyResult<Vec<TriMesh>> {
+    let text = std::fs::read_to_string(path).map_err(|e| file_err(path, e))?;
+    let mut json: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| file_err(path, format!("invalid JSON: {e}")))?;
+    let buffers = json.get_mut("buffers").and_then(|b| b.as_array_mut());
+    let bin = match buffers {
+        None => Vec::new(),
+        Some(b) if b.len() > 1 => {
+            return Err(file_err(
+                path,
+                format!(
+                    "{} buffers: vclay reads glTF files with one buffer",
+                    b.len()
+                ),
+            ));
+        }
+        Some(b) if b.is_empty() => Vec::new(),
+        Some(b) => {
+            let buf = b[0]
+                .as_object_mut()
+                .ok_or_else(|| file_err(path, "buffers[0] is not an object"))?;
+            let uri = buf
+                .remove("uri")
+                .and_then(|u| u.as_str().map(str::to_string))
+                .ok_or_else(|| file_err(path, "buffers[0] has no uri"))?;
+            if let Some(data) = uri.strip_prefix("data:") {
+                let (_, b64) = data
+                    .split_once(";base64,")
+                    .ok_or_else(|| file_err(path, "buffers[0].uri: a data URI without ;base64,"))?;
+                base64(b64).ok_or_else(|| file_err(path, "buffers[0].uri: invalid base64"))?
+            } else {
+                let file = path.parent().unwrap_or(Path::new(".")).join(&uri);
+                std::fs::read(&file).map_err(|e| file_err(path, format!("buffer {uri}: {e}")))?
+            }
+        }
+    };
+    let mut head = serde_json::to_vec(&json).map_err(|e| file_err(path, e))?;
+    while head.len() % 4 != 0 {
+        head.push(b' ');
+    }
+    let mut body = bin;
+    while body.len() % 4 != 0 {
+        body.push(0);
+    }
+    let total = 12 + 8 + head.len() + if body.is_empty() { 0 } else { 8 + body.len() };
+    let mut glb = Vec::with_capacity(total);
+    glb.extend_from_slice(b"glTF");
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&(total as u32).to_le_bytes());
+    glb.extend_from_slice(&(head.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"JSON");
+    glb.extend_from_slice(&head);
+    if !body.is_empty() {
+        glb.extend_from_slice(&(body.len() as u32).to_le_bytes());
+        glb.extend_from_slice(b"BIN\0");
+        glb.extend_from_slice(&body);
+    }
+    vclay_io::gltf::decode_glb(&glb).map_err(|e| file_err(path, e))
+}
+
+/// Standard base64 (RFC 4648, padding optional) to bytes; `None` on a character outside it.
+fn base64(text: &str) -> Option<Vec<u8>> {
+    let mut out = Vec::with_capacity(text.len() / 4 * 3);
+    let (mut acc, mut bits) = (0u32, 0u32);
+    for c in text.bytes().filter(|c| !c.is_ascii_whitespace()) {
+        let v = match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' => 62,
+            b'/' => 63,
+            b'=' => break,
+            _ => return None,
+        };
+        acc = (acc << 6) | u32::from(v);
+        bits += 6;
+        if bits >= 8 {
+            bits -= 8;
+            out.push((acc >> bits) as u8);
+            acc &= (1 << bits) - 1;
+        }
+    }
+    Some(out)
+}
+
+/// The boundary limit surface of the subdivision solid whose control lattice is the `.ovm`
+/// file `path` (smooth boundary rule) as bicubic patches (`vclay_lattice::boundary_patches`,
+/// as `vclay convert LATTICE.ovm` reads it), its memory checked first (`vclay convert`'s
+/// estimate: the solid sampled at the patch levels).
+fn lattice_patches(path: &Path) -> PyResult<Vec<NamedEntity>> {
+    use vclay_lattice::limit_surface::DEFAULT_PATCH_SAMPLE_LEVELS as LEVELS;
+    use vclay_lattice::{BoundaryRule, Features, SubdivisionRules, boundary_patches};
+    let lattice = vclay_lattice::formats::ovm::read(path).py()?;
+    Python::attach(|py| {
+        crate::limits::check(
+            py,
+            || format!("{}: limit patches ({LEVELS} sample levels)", path.display()),
+            vclay_session::limits::subdivision_bytes(lattice.num_cells(), LEVELS + 1),
+        )
+    })?;
+    let p = boundary_patches(
+        &lattice,
+        &Features::none(&lattice),
+        SubdivisionRules::new(BoundaryRule::Smooth),
+        LEVELS,
+    )
+    .map_err(|e| file_err(path, format!("boundary limit patches: {e}")))?;
+    Ok(p.patches
+        .into_iter()
+        .zip(p.exact)
+        .zip(p.faces)
+        .map(|((s, exact), f)| NamedEntity {
+            name: Some(format!(
+                "limit patch of boundary {f} ({})",
+                if exact { "exact" } else { "fitted" }
+            )),
+            entity: IoEntity::Surface(s),
+        })
+        .collect())
+}
+
+pub fn mesh_of(loaded: &Loaded, samples: usize) -> PyResult<TriMesh> {
     let mut all = TriMesh::new();
     match loaded {
-        Loaded::Entities(es) => {
-            for e in es {
-                if !matches!(e.entity, IoEntity::Curve(_)) {
+        Loaded::Entities(es, faces) => {
+            let dims: Vec<usize> = es.iter().map(|e| e.entity.param_dims()).collect();
+            // Called without the GIL (inside `detach`): take it for the check's exception.
+            Python::attach(|py| check_tessellation(py, &dims, samples))?;
+            let on_face: std::collections::HashSet<usize> =
+                faces.iter().map(|f| f.entity).collect();
+            for (i, e) in es.iter().enumerate() {
+                if !on_face.contains(&i) && !matches!(e.entity, IoEntity::Curve(_)) {
                     all.append(&tessellate_one(&e.entity, samples)?);
                 }
             }
+            // STEP faces: their surfaces with the trimming loops applied.
+            for f in faces {
+                let Some(IoEntity::Surface(s)) = es.get(f.entity).map(|e| &e.entity) else {
+                    continue;
+                };
+                let m = tessellate_trimmed(f, s, [samples; 2])
+                    .map_err(|e| GeometryError::new_err(format!("face #{}: {e}", f.step_id)))?;
+                all.append(&m);
+            }
             if all.triangles.is_empty() {
                 return Err(GeometryError::new_err(
-                    "the model holds only curves: nothing to tessellate into a mesh",
+                    "the model holds only curves (or faces trimmed to nothing): nothing to tessellate into a mesh",
                 ));
             }
         }
@@ -751,7 +1075,7 @@ fn mesh_of(loaded: &Loaded, samples: usize) -> PyResult<TriMesh> {
 /// Writes `loaded` to `out` in the format its extension names.
 pub fn write_any(loaded: &Loaded, out: &Path, samples: usize, stem: &str) -> PyResult<()> {
     let exact = || match loaded {
-        Loaded::Entities(e) => Ok(e),
+        Loaded::Entities(e, _) => Ok(e),
         Loaded::Meshes(_) => Err(FileError::new_err(format!(
             "{}: a mesh cannot be converted to exact NURBS geometry",
             out.display()
@@ -771,16 +1095,17 @@ pub fn write_any(loaded: &Loaded, out: &Path, samples: usize, stem: &str) -> PyR
     }
 }
 
-/// `load(path)`: the entities of a model file (vclay model JSON or geomdl JSON, told apart by
-/// content) as a list of `Curve`/`Surface`/`Volume`. Errors name the file and the place
-/// (`FileError`, e.g. `m.json: entities[0].knots[1]: ...`).
+/// `load(path)`: the entities of a model file as a list of `Curve`/`Surface`/`Volume`: vclay
+/// model JSON, geomdl JSON, STEP, IGES (recognized by content, as `vclay.open` and the command
+/// line do), or a lattice `.ovm` (its boundary limit surface as bicubic patches). Errors name
+/// the file and the place (`FileError`, e.g. `m.json: entities[0].knots[1]: ...`).
 #[pyfunction]
 fn load(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyList>> {
     let ents = match py.detach(|| read_any(&path))? {
-        Loaded::Entities(e) => e,
+        Loaded::Entities(e, _) => e,
         Loaded::Meshes(_) => {
             return Err(FileError::new_err(format!(
-                "{}: a mesh file holds no NURBS entities (use read_mesh)",
+                "{}: a mesh or a triangular NURBS file holds no tensor-product NURBS entities (use read_mesh for its triangles, vclay.open for a session)",
                 path.display()
             )));
         }
@@ -799,7 +1124,7 @@ fn named(entities: &Bound<'_, PyAny>) -> PyResult<Vec<NamedEntity>> {
         let e = item.cast::<Entity>().map_err(|_| {
             PyValueError::new_err("save: expected a list of vclay Curve/Surface/Volume")
         })?;
-        let e = e.get();
+        let e = e.borrow();
         out.push(NamedEntity {
             name: e.name.clone(),
             entity: e.entity.clone(),
@@ -813,22 +1138,26 @@ fn named(entities: &Bound<'_, PyAny>) -> PyResult<Vec<NamedEntity>> {
 /// (`.obj`, `.stl`, `.ply`, `.glb`; curves left out). Writes are atomic.
 #[pyfunction]
 #[pyo3(signature = (path, entities, samples = 48))]
-fn save(path: PathBuf, entities: &Bound<'_, PyAny>, samples: usize) -> PyResult<()> {
+fn save(path: PathBuf, entities: &Bound<'_, PyAny>, samples: i64) -> PyResult<()> {
+    let samples = util::count(samples, "samples")?;
     let ents = named(entities)?;
     let stem = path
         .file_stem()
         .map_or("vclay".into(), |s| s.to_string_lossy().into_owned());
     entities
         .py()
-        .detach(|| write_any(&Loaded::Entities(ents), &path, samples, &stem))
+        .detach(|| write_any(&Loaded::Entities(ents, Vec::new()), &path, samples, &stem))
 }
 
-/// `convert(input, output, samples=48)`: like `vclay convert`, between model JSON, geomdl JSON,
-/// STEP, IGES and meshes (OBJ, STL, PLY, glb), by extension. A mesh cannot become exact
-/// geometry.
+/// `convert(input, output, samples=48)`: like `vclay convert`: reads what `load` and
+/// `read_mesh` read (model JSON, geomdl JSON, STEP with its trimmed faces, IGES, triangular
+/// NURBS, lattices `.ovm`/`.vtu`, meshes OBJ, STL, PLY, glb; by content) and writes the format
+/// the output's extension names (model JSON, geomdl JSON, STEP, IGES, OBJ, STL, PLY, glb;
+/// `samples` per parametric axis for meshes). A mesh cannot become exact geometry.
 #[pyfunction]
 #[pyo3(signature = (input, output, samples = 48))]
-fn convert(py: Python<'_>, input: PathBuf, output: PathBuf, samples: usize) -> PyResult<()> {
+fn convert(py: Python<'_>, input: PathBuf, output: PathBuf, samples: i64) -> PyResult<()> {
+    let samples = util::count(samples, "samples")?;
     if samples < 2 {
         return Err(PyValueError::new_err("samples must be at least 2"));
     }
@@ -841,7 +1170,8 @@ fn convert(py: Python<'_>, input: PathBuf, output: PathBuf, samples: usize) -> P
     })
 }
 
-/// `read_mesh(path)`: an OBJ/STL/PLY/glb mesh as `(vertices, triangles, normals)` arrays.
+/// `read_mesh(path)`: an OBJ/STL/PLY/glb mesh, a `.vtu` lattice's boundary or a triangular
+/// NURBS file (meshed) as `(vertices, triangles, normals)` arrays.
 #[pyfunction]
 #[pyo3(name = "read_mesh")]
 fn read_mesh_py(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAny>> {
@@ -853,7 +1183,7 @@ fn read_mesh_py(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAny>> {
             }
             all
         }
-        Loaded::Entities(_) => {
+        Loaded::Entities(..) => {
             return Err(FileError::new_err(format!(
                 "{}: a model file, not a mesh (use load)",
                 path.display()

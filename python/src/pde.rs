@@ -20,9 +20,24 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 #[derive(Debug)]
 pub struct PdeSurface {
     model: PdeModel,
+    /// The spec text and whether it is TOML (else JSON): what pickling saves.
+    source: (String, bool),
 }
 
 impl PdeSurface {
+    fn from_source(text: String, toml: bool) -> PyResult<Self> {
+        let model = if toml {
+            PdeModel::from_toml(&text, "spec")
+        } else {
+            PdeModel::from_json(&text, "spec")
+        }
+        .py()?;
+        Ok(Self {
+            model,
+            source: (text, toml),
+        })
+    }
+
     fn solve_at(&self, py: Python<'_>, t: f64) -> PyResult<ModelSolution> {
         let m = &self.model;
         py.detach(|| m.solve(t)).py()
@@ -34,19 +49,43 @@ impl PdeSurface {
     /// `PdeSurface(spec)`: `spec` a dict (or JSON text) in the spec format of `vclay pde`.
     #[new]
     fn new(spec: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let v = util::py_to_json(spec)?;
+        let v = util::py_to_json(spec, "spec", crate::errors::PdeError::new_err)?;
         let text = serde_json::to_string(&v).map_err(|e| PyValueError::new_err(e.to_string()))?;
-        Ok(Self {
-            model: PdeModel::from_json(&text, "spec").py()?,
-        })
+        Self::from_source(text, false)
     }
 
     /// `PdeSurface.read(path)`: a spec file (JSON, or TOML by extension).
     #[staticmethod]
     fn read(path: std::path::PathBuf) -> PyResult<Self> {
+        let model = PdeModel::read(&path).py()?;
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| crate::errors::FileError::new_err(format!("{}: {e}", path.display())))?;
+        let toml = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
         Ok(Self {
-            model: PdeModel::read(&path).py()?,
+            model,
+            source: (text, toml),
         })
+    }
+
+    /// `PdeSurface.from_toml(text)`: a spec given as TOML text (the fields of the JSON spec).
+    #[staticmethod]
+    fn from_toml(text: String) -> PyResult<Self> {
+        Self::from_source(text, true)
+    }
+
+    /// Pickling and `copy`: the spec text, compiled again on loading.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        let py = slf.py();
+        let (text, toml) = &slf.get().source;
+        let args = (text.clone(),);
+        let ctor = if *toml {
+            slf.get_type().getattr("from_toml")?
+        } else {
+            slf.get_type().into_any()
+        };
+        (ctor, args).into_pyobject(py).map(|t| t.into_any())
     }
 
     /// Patch names, in order.
@@ -62,8 +101,9 @@ impl PdeSurface {
         py: Python<'py>,
         params: &Bound<'py, PyAny>,
         t: f64,
-        patch: usize,
+        patch: i64,
     ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+        let patch = util::count(patch, "patch")?;
         let p = self.model.patches.get(patch).ok_or_else(|| {
             PyValueError::new_err(format!(
                 "patch {patch}: the model has {} patches",
@@ -90,16 +130,21 @@ impl PdeSurface {
 
     /// Every patch at time `t` tessellated on `grid = (nu, nv)` samples: `(vertices, triangles,
     /// normals)`.
-    #[pyo3(signature = (t = 0.0, grid = (64, 64)))]
-    fn mesh<'py>(
-        &self,
-        py: Python<'py>,
-        t: f64,
-        grid: (usize, usize),
-    ) -> PyResult<Bound<'py, PyAny>> {
+    #[pyo3(signature = (t = 0.0, grid = (64, 64)), text_signature = "(self, /, t=0.0, grid=(64, 64))")]
+    fn mesh<'py>(&self, py: Python<'py>, t: f64, grid: (i64, i64)) -> PyResult<Bound<'py, PyAny>> {
+        let grid = (
+            util::count(grid.0, "grid[0]")?,
+            util::count(grid.1, "grid[1]")?,
+        );
         if grid.0 < 2 || grid.1 < 2 {
             return Err(PyValueError::new_err("grid: at least 2 x 2 samples"));
         }
+        // `vclay pde --grid`'s estimate, against the memory limit.
+        crate::limits::check(
+            py,
+            || format!("grid={grid:?} ({} patches)", self.model.patches.len()),
+            vclay_session::limits::grid_mesh_bytes(grid.0, grid.1, self.model.patches.len()),
+        )?;
         let sol = self.solve_at(py, t)?;
         let m = &self.model;
         let mesh = py.detach(|| {
@@ -114,6 +159,11 @@ impl PdeSurface {
     #[pyo3(signature = (t = 0.0))]
     fn residual(&self, py: Python<'_>, t: f64) -> PyResult<f64> {
         Ok(self.solve_at(py, t)?.residual_rms())
+    }
+
+    /// Number of patches.
+    fn __len__(&self) -> usize {
+        self.model.patches.len()
     }
 
     fn __repr__(&self) -> String {

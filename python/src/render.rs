@@ -97,24 +97,46 @@ fn scene_from_mesh(mut mesh: TriMesh, wireframe: bool) -> Scene {
 /// triangles)` pair. `view` is `iso`, `front`, `top` or `side`; `wireframe` adds control nets
 /// (meshes: triangle edges).
 #[pyfunction]
-#[pyo3(signature = (source, out, size = (640, 480), view = "iso", wireframe = false, ortho = false))]
+#[pyo3(signature = (source, out, size = (640, 480), view = "iso", wireframe = false, ortho = false),
+    text_signature = "(source, out, size=(640, 480), view='iso', wireframe=False, ortho=False)")]
 fn render(
     py: Python<'_>,
     source: &Bound<'_, PyAny>,
     out: PathBuf,
-    size: (u32, u32),
+    size: (i64, i64),
     view: &str,
     wireframe: bool,
     ortho: bool,
 ) -> PyResult<()> {
+    let side = |v: i64, what: &str| {
+        u32::try_from(v).map_err(|_| {
+            crate::errors::argument(format!(
+                "{what} = {v}: expected a size in pixels (0 to {})",
+                u32::MAX
+            ))
+        })
+    };
+    let size = (side(size.0, "size[0]")?, side(size.1, "size[1]")?);
+    // `vclay render --size`'s estimate (one frame), against the memory limit, first.
+    let supersample = RenderOptions::sized(1, 1).supersample;
+    crate::limits::check(
+        py,
+        || format!("size={size:?}"),
+        vclay_session::limits::render_bytes(size.0, size.1, supersample, 1, 1),
+    )?;
     let view = View::parse(view).ok_or_else(|| {
         PyValueError::new_err(format!("view '{view}': expected iso, front, top or side"))
     })?;
     let scene = if let Ok(path) = source.extract::<PathBuf>() {
         match py.detach(|| read_any(&path))? {
-            Loaded::Entities(e) => {
+            Loaded::Entities(e, faces) if faces.is_empty() => {
                 let ents: Vec<IoEntity> = e.into_iter().map(|n| n.entity).collect();
                 py.detach(|| scene_from_entities(&ents, wireframe))?
+            }
+            // STEP B-reps: their faces trimmed, as `vclay render` draws them.
+            trimmed @ Loaded::Entities(..) => {
+                let mesh = py.detach(|| crate::nurbs::mesh_of(&trimmed, 48))?;
+                scene_from_mesh(mesh, wireframe)
             }
             Loaded::Meshes(ms) => {
                 let mut all = TriMesh::new();
@@ -137,7 +159,7 @@ fn render(
                     "render: source must be a path, a list of entities or (vertices, triangles)",
                 )
             })?;
-            ents.push(e.get().entity.clone());
+            ents.push(e.borrow().entity.clone());
         }
         py.detach(|| scene_from_entities(&ents, wireframe))?
     };

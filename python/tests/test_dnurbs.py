@@ -35,8 +35,8 @@ def test_fit_a_sheet_to_a_paraboloid():
                              material={"preset": "Hemisphere fitting"})
     assert s.kind() == "dnurbs-surface"
     cp0 = s.control_points()
-    assert cp0.shape == (64, 3)
-    np.testing.assert_array_equal(cp0, flat_sheet().reshape(-1, 3))
+    assert cp0.shape == (8, 8, 3)  # the net's shape, as Surface.control_points
+    np.testing.assert_array_equal(cp0, flat_sheet())
     pts = paraboloid_points()
     before = rms_to_mesh(s, pts)
     s.apply({"action": "data", "points": pts.tolist()})
@@ -44,7 +44,7 @@ def test_fit_a_sheet_to_a_paraboloid():
     after = rms_to_mesh(s, pts)
     assert after < before / 5, (before, after)
     # The net rose towards the paraboloid (z = 0.5 (x^2 + y^2) >= 0 over the data).
-    assert s.control_points()[:, 2].mean() > 0.1
+    assert s.control_points()[..., 2].mean() > 0.1
     # The data points are a tool of the model, saved with it.
     assert s.state()["tools"]["tools"][0]["action"] == "data"
 
@@ -63,7 +63,7 @@ def test_material_and_step(tmp_path):
     s.step(20)
     assert s.steps() == 20  # steps of dt (the engine may halve some inside)
     assert s.energy()["kinetic"] > 0.0
-    assert s.control_points()[:, 2].mean() < 0.0
+    assert s.control_points()[..., 2].mean() < 0.0
     path = tmp_path / "sheet.json"
     s.save(path)
     again = vclay.Session.load(path)
@@ -84,7 +84,7 @@ def test_from_toml_and_its_errors(root, tmp_path):
     s = vclay.Session.from_toml(
         '[model]\nkind = "dnurbs-surface"\nfile = "net.json"\n[simulation]\ndt = 0.01\n',
         base=tmp_path)
-    assert s.control_points().shape == (9, 3)
+    assert s.control_points().shape == (3, 3, 3)
     with pytest.raises(vclay.VclayError):
         vclay.dnurbs_surface(flat_sheet(), material={"mu": -1.0}, dt=0.01)
     with pytest.raises(ValueError):

@@ -53,7 +53,7 @@ def test_run_writes_the_scenario_outputs(root, tmp_path):
     out = s.run(tmp_path / "run", steps=5)
     assert out["steps"] == 5
     assert any(str(f).endswith("energy.csv") for f in out["files"])
-    assert s.control_points().shape == (64, 3)
+    assert s.control_points().shape == (4, 4, 4, 3)  # a B-spline solid's net
 
 
 def test_open_recognizes_every_file_kind(root, tmp_path):

@@ -21,6 +21,7 @@ pub mod command;
 pub mod describe;
 pub mod error;
 pub mod file;
+pub mod limits;
 pub mod model;
 pub mod models;
 pub mod open;

@@ -559,6 +559,21 @@ impl Session {
         Ok(lines)
     }
 
+    /// One step of [`Session::advance_to`]: a step of the first model whose clock is more
+    /// than half a step before `t`, with the log lines of the scheduled commands it applied;
+    /// `None` when every model has reached `t`. Calling it until `None` is `advance_to(t)`
+    /// step for step, so a front end can stop in between (the Python module checks Ctrl-C).
+    pub fn advance_step(&mut self, t: f64) -> Result<Option<Vec<String>>, SessionError> {
+        let Some(i) = (0..self.models.len())
+            .find(|&i| self.models[i].model.time() + 0.5 * self.models[i].model.dt() < t)
+        else {
+            return Ok(None);
+        };
+        let mut lines = Vec::new();
+        self.step_model(i, &mut lines)?;
+        Ok(Some(lines))
+    }
+
     /// The nearest hit of `ray` on any model within `tolerance`: `(model name, hit)`.
     pub fn pick(&self, ray: &Ray, tolerance: f64) -> Option<(String, Hit)> {
         if !(crate::pick::valid_ray(ray) && tolerance.is_finite() && tolerance >= 0.0) {

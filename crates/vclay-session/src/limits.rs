@@ -1,0 +1,144 @@
+//! Memory estimates shared by the front ends (`docs/limits.md`, "Memory estimates"): the
+//! bytes a piece of work takes, computed from its sizes before anything is allocated, and the
+//! one check against a limit (`vclay --max-memory`, `vclay.set_max_memory` in Python).
+//!
+//! The formulas are those of the command line's `--max-memory` checks (`vclay-cli`
+//! `limits.rs`, `convert.rs`, `ffd.rs`, `render.rs`, `subdivide.rs`); they live here so that
+//! the Python module and the CLI judge a size the same way. Estimates are `f64`, so sizes such
+//! as `usize::MAX` cannot overflow.
+//!
+//! Limitations: the CLI still computes the same numbers with its own private copies of these
+//! constants (to be switched to this module).
+
+use std::fmt;
+
+/// Default memory limit: 4 GiB, what a laptop can spare (`vclay --max-memory`'s default).
+pub const DEFAULT_MAX_MEMORY: u64 = 4 << 30;
+
+/// Bytes per vertex of a tessellated mesh: position and normal (48 B), two triangles (24 B),
+/// the grid evaluation's samples and the writer's buffers; measured about 120 B, rounded up.
+pub const BYTES_PER_MESH_VERTEX: f64 = 160.0;
+
+/// Bytes per control point of an FFD lattice: control and rest points, weights and the
+/// solve's rows (`vclay ffd --lattice 1000x1000x1000` asked for 24 GB at once).
+pub const BYTES_PER_FFD_CONTROL_POINT: f64 = 128.0;
+
+/// Bytes per sample of a picture being drawn: supersampled colour and depth.
+pub const BYTES_PER_RENDER_SAMPLE: f64 = 16.0;
+
+/// Bytes of a tessellation of `surfaces` surfaces and `volumes` volume boundaries at `samples`
+/// per parametric axis: `samples^2` vertices per surface, `6 samples^2` per volume, each
+/// [`BYTES_PER_MESH_VERTEX`] (`vclay convert --samples`).
+pub fn tessellation_bytes(samples: usize, surfaces: usize, volumes: usize) -> f64 {
+    let s2 = (samples as f64).powi(2);
+    (surfaces as f64 + 6.0 * volumes as f64) * s2 * BYTES_PER_MESH_VERTEX
+}
+
+/// Bytes of a grid of `nu x nv` samples on each of `patches` patches, tessellated
+/// (`vclay pde --grid`).
+pub fn grid_mesh_bytes(nu: usize, nv: usize, patches: usize) -> f64 {
+    nu as f64 * nv as f64 * patches as f64 * BYTES_PER_MESH_VERTEX
+}
+
+/// Bytes of an FFD lattice of `dims` control points (`vclay ffd --lattice`).
+pub fn ffd_bytes(dims: [usize; 3]) -> f64 {
+    dims.iter().map(|&n| n as f64).product::<f64>() * BYTES_PER_FFD_CONTROL_POINT
+}
+
+/// Bytes of `frames` pictures of `width x height` pixels at `supersample` samples per pixel
+/// side, `at_once` drawn at the same time (one per thread): the supersampled buffers drawn at
+/// once and 3 bytes per pixel of every frame kept (`vclay render --size --frames`).
+pub fn render_bytes(
+    width: u32,
+    height: u32,
+    supersample: u32,
+    frames: usize,
+    at_once: usize,
+) -> f64 {
+    let pixels = f64::from(width) * f64::from(height);
+    let ss = f64::from(supersample.clamp(1, 8));
+    pixels * (ss * ss * BYTES_PER_RENDER_SAMPLE * at_once as f64 + 3.0 * frames as f64)
+}
+
+/// Bytes of `levels` subdivision levels of a lattice of `cells` cells:
+/// `vclay_lattice::command::BYTES_PER_CELL` per cell of the finest level (`vclay subdivide`).
+pub fn subdivision_bytes(cells: usize, levels: usize) -> f64 {
+    cells as f64
+        * 8f64.powi(levels.min(1024) as i32)
+        * vclay_lattice::command::BYTES_PER_CELL as f64
+}
+
+/// Bytes of `count` `f64` values (an array the caller asked for).
+pub fn f64_bytes(count: f64) -> f64 {
+    count * 8.0
+}
+
+/// Bytes as a short human number: `4.3 GB`, `512 MB`, `12 kB`.
+pub fn human(bytes: f64) -> String {
+    if bytes >= 1e15 {
+        format!("{bytes:.1e} B")
+    } else if bytes >= 1e9 {
+        format!("{:.1} GB", bytes / 1e9)
+    } else if bytes >= 1e6 {
+        format!("{:.0} MB", bytes / 1e6)
+    } else {
+        format!("{:.0} kB", (bytes / 1e3).max(1.0))
+    }
+}
+
+/// Work over the memory limit: what was asked (an argument and its value), the estimate and
+/// the limit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OverLimit {
+    /// The argument and its value, e.g. `--samples 20000` or `samples=100000`.
+    pub what: String,
+    /// Estimated bytes.
+    pub bytes: f64,
+    /// The limit in bytes.
+    pub max: u64,
+}
+
+impl fmt::Display for OverLimit {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} needs about {} of memory, more than the limit of {}",
+            self.what,
+            human(self.bytes),
+            human(self.max as f64)
+        )
+    }
+}
+
+impl std::error::Error for OverLimit {}
+
+/// Fails when the work described by `what` needs about `bytes`, more than `max` (a NaN
+/// estimate fails too).
+pub fn check(what: impl FnOnce() -> String, bytes: f64, max: u64) -> Result<(), OverLimit> {
+    if bytes.is_nan() || bytes > max as f64 {
+        return Err(OverLimit {
+            what: what(),
+            bytes,
+            max,
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn estimates_match_the_command_line() {
+        // docs/limits.md: `--samples 20000` on one surface is about 64 GB.
+        assert_eq!(human(tessellation_bytes(20000, 1, 0)), "64.0 GB");
+        assert_eq!(ffd_bytes([1000; 3]), 1.28e11);
+        assert_eq!(subdivision_bytes(1, 6), 262144.0 * 760.0);
+        assert!(check(|| "x".into(), f64::NAN, 1).is_err());
+        assert!(check(|| "x".into(), 1e6, DEFAULT_MAX_MEMORY).is_ok());
+        let e = check(|| "samples=99".into(), 1e30, DEFAULT_MAX_MEMORY).unwrap_err();
+        assert!(e.to_string().starts_with("samples=99 needs about"), "{e}");
+        assert!(tessellation_bytes(usize::MAX, 1, 1).is_finite());
+    }
+}
