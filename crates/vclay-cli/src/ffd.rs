@@ -71,11 +71,11 @@ pub fn run(a: &FfdArgs) -> Result<()> {
     // Everything that can be checked without reading the mesh first.
     MeshFormat::from_path(&a.out).context("--out")?;
     let dims = args::triple_usize(&a.lattice, "--lattice")?;
-    // Control points, rest points, weights and the solve's rows: about 128 bytes per control
-    // point (1000x1000x1000 asked for 24 GB at once).
+    // Control points, rest points, weights and the solve's rows (1000x1000x1000 asked for
+    // 24 GB at once).
     crate::limits::check_memory(
         &format!("--lattice {}", crate::limits::quote(&a.lattice)),
-        dims.iter().map(|&n| n as f64).product::<f64>() * 128.0,
+        crate::limits::ffd_bytes(dims),
     )?;
     let spec = LatticeSpec {
         degree: [a.degree; 3],

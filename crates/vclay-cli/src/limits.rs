@@ -11,17 +11,19 @@
 use anyhow::{Result, bail};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// Default of `--max-memory`: 4 GiB, what a laptop can spare.
-pub const DEFAULT_MAX_MEMORY: u64 = 4 << 30;
+/// Default of `--max-memory`: 4 GiB, what a laptop can spare (the session layer's, shared
+/// with the Python module).
+pub use vclay::session::limits::DEFAULT_MAX_MEMORY;
 
 /// Most animation frames `vclay pde --frames` and `vclay render --frames` accept: each frame is
 /// a solve and a file or a picture; 10,000 frames are minutes of animation at 60 frames per
 /// second.
 pub const MAX_FRAMES: usize = 10_000;
 
-/// Bytes per vertex of a tessellated mesh: position and normal (48 B), two triangles (24 B),
-/// the grid evaluation's samples and the writer's buffers; measured about 120 B, rounded up.
-pub const BYTES_PER_MESH_VERTEX: f64 = 160.0;
+/// The memory estimates (bytes per mesh vertex, per FFD control point, of a picture, of a
+/// subdivision) are the session layer's, so the command line and the Python module judge a
+/// size the same way.
+pub use vclay::session::limits::{BYTES_PER_MESH_VERTEX, ffd_bytes, human, render_bytes};
 
 static MAX_MEMORY: AtomicU64 = AtomicU64::new(DEFAULT_MAX_MEMORY);
 
@@ -35,32 +37,11 @@ pub fn max_memory() -> u64 {
     MAX_MEMORY.load(Ordering::Relaxed)
 }
 
-/// Bytes as a short human number: `4.3 GB`, `512 MB`, `12 kB`.
-pub fn human(bytes: f64) -> String {
-    if bytes >= 1e15 {
-        format!("{bytes:.1e} B")
-    } else if bytes >= 1e9 {
-        format!("{:.1} GB", bytes / 1e9)
-    } else if bytes >= 1e6 {
-        format!("{:.0} MB", bytes / 1e6)
-    } else {
-        format!("{:.0} kB", (bytes / 1e3).max(1.0))
-    }
-}
-
 /// Fails when the work described by `what` (an option and its value, e.g.
 /// `--samples 20000`) needs about `bytes` of memory, more than `--max-memory`.
 pub fn check_memory(what: &str, bytes: f64) -> Result<()> {
-    let max = max_memory();
-    if bytes.is_nan() || bytes > max as f64 {
-        bail!(
-            "{what} needs about {} of memory, more than the limit of {} \
-             (lower it, or raise --max-memory)",
-            human(bytes),
-            human(max as f64)
-        );
-    }
-    Ok(())
+    vclay::session::limits::check(|| what.to_string(), bytes, max_memory())
+        .map_err(|e| anyhow::anyhow!("{e} (lower it, or raise --max-memory)"))
 }
 
 /// At most [`QUOTE_CHARS`] characters of a user's text, for error messages (`...` marks the cut).

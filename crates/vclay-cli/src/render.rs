@@ -190,16 +190,15 @@ fn pick_evenly<T: Clone>(items: &[T], n: usize) -> Vec<T> {
 /// once (one per thread) a supersampled colour and depth buffer of 16 bytes per sample, and
 /// 3 bytes per pixel for every frame kept until the file is written.
 fn check_render_memory(args: &RenderArgs, opts: &RenderOptions) -> Result<()> {
-    let pixels = f64::from(opts.width) * f64::from(opts.height);
-    let ss = f64::from(opts.supersample.clamp(1, 8));
     let single = !is_scenario(&args.input)
         && args
             .out
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("png"));
     let frames = if single { 1 } else { args.frames };
-    let at_once = frames.min(rayon_threads()) as f64;
-    let bytes = pixels * (ss * ss * 16.0 * at_once + 3.0 * frames as f64);
+    let at_once = frames.min(rayon_threads());
+    let bytes =
+        crate::limits::render_bytes(opts.width, opts.height, opts.supersample, frames, at_once);
     crate::limits::check_memory(
         &format!("--size {} with --frames {frames}", args.size),
         bytes,

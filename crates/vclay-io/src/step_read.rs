@@ -1121,8 +1121,10 @@ fn is_structure(type_name: &str) -> bool {
         "_STYLE",
         "_ASSIGNMENT",
     ];
-    const NAMES: [&str; 16] = [
+    const NAMES: [&str; 18] = [
         "REPRESENTATION",
+        "GEOMETRIC_CURVE_SET",
+        "GEOMETRIC_SET",
         "SI_UNIT",
         "NAMED_UNIT",
         "DIMENSIONAL_EXPONENTS",

@@ -2,13 +2,10 @@
 //! bytes a piece of work takes, computed from its sizes before anything is allocated, and the
 //! one check against a limit (`vclay --max-memory`, `vclay.set_max_memory` in Python).
 //!
-//! The formulas are those of the command line's `--max-memory` checks (`vclay-cli`
-//! `limits.rs`, `convert.rs`, `ffd.rs`, `render.rs`, `subdivide.rs`); they live here so that
-//! the Python module and the CLI judge a size the same way. Estimates are `f64`, so sizes such
-//! as `usize::MAX` cannot overflow.
-//!
-//! Limitations: the CLI still computes the same numbers with its own private copies of these
-//! constants (to be switched to this module).
+//! The formulas of the command line's `--max-memory` checks (`vclay-cli` `limits.rs`,
+//! `convert.rs`, `ffd.rs`, `render.rs`, `pde.rs`) live here, and the CLI uses them, so that the
+//! Python module and the CLI judge a size the same way. Estimates are `f64`, so sizes such as
+//! `usize::MAX` cannot overflow.
 
 use std::fmt;
 
