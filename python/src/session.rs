@@ -723,7 +723,9 @@ impl Session {
 
     /// Runs `steps` steps (default: the rest of the scenario) writing the scenario's
     /// `[output]` (frames, final files, energy table) into `out_dir`, like `vclay run`.
-    /// Returns a dict: steps, mean_step_ms, frames, files, log.
+    /// Returns a dict: steps, mean_step_ms, frames, files, log. Ctrl-C raises
+    /// `KeyboardInterrupt` within about 20 ms; the steps done stay done and their energy table
+    /// is written.
     #[pyo3(signature = (out_dir, steps = None))]
     fn run<'py>(
         &self,
@@ -751,9 +753,31 @@ impl Session {
             }
         };
         let s = &mut me.session;
+        // Ctrl-C: the callback takes the GIL about every STEP_CHUNK_MS to look for a signal, and
+        // stops the run (the steps done stay done); the error is raised once the run returns.
+        let mut interrupted: Option<PyErr> = None;
+        let mut last = std::time::Instant::now();
+        let chunk = std::time::Duration::from_millis(STEP_CHUNK_MS);
         let summary = py
-            .detach(|| vclay_session::run::run(s, steps, &out_dir, &output, &mut |_| {}))
+            .detach(|| {
+                vclay_session::run::run_stoppable(s, steps, &out_dir, &output, &mut |_| {
+                    if last.elapsed() < chunk {
+                        return std::ops::ControlFlow::Continue(());
+                    }
+                    last = std::time::Instant::now();
+                    match Python::attach(|py| py.check_signals()) {
+                        Ok(()) => std::ops::ControlFlow::Continue(()),
+                        Err(e) => {
+                            interrupted = Some(e);
+                            std::ops::ControlFlow::Break(())
+                        }
+                    }
+                })
+            })
             .py()?;
+        if let Some(e) = interrupted {
+            return Err(e);
+        }
         let d = PyDict::new(py);
         d.set_item("steps", summary.steps)?;
         d.set_item("mean_step_ms", summary.mean_step_ms)?;

@@ -96,3 +96,18 @@ def test_advance_to_is_chunked_and_exact(root):
     np.testing.assert_array_equal(a.data_points(), b.data_points())
     lates = sorted(interrupted_after(lambda: a.advance_to(1e6), 0.2) for _ in range(3))
     assert lates[1] < 0.1, lates
+
+
+def test_sigint_stops_a_run_and_keeps_its_energy_table(root, tmp_path):
+    s = vclay.Session.load(root / SCENARIO)
+    out = tmp_path / "run"
+    lates = sorted(
+        interrupted_after(lambda: s.run(str(out), steps=10**7), 0.3) for _ in range(3)
+    )
+    assert lates[1] < 0.1, lates
+    done = s.steps()
+    assert 0 < done < 3 * 10**7
+    # The steps done stay done, and their energy table was written.
+    assert (out / "energy.csv").exists()
+    s.step(2)
+    assert s.steps() == done + 2

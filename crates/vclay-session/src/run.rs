@@ -44,6 +44,9 @@ pub struct RunSummary {
     pub frames: Vec<PathBuf>,
     /// Other files written (final models, energy table).
     pub files: Vec<PathBuf>,
+    /// The progress callback stopped the run before its end ([`run_stoppable`]): the final
+    /// models were not written.
+    pub stopped: bool,
 }
 
 /// Runs `steps` session steps into `dir` writing `output`. On divergence the energy table of
@@ -54,6 +57,22 @@ pub fn run(
     dir: &Path,
     output: &OutputSpec,
     progress: &mut dyn FnMut(Progress),
+) -> Result<RunSummary, SessionError> {
+    run_stoppable(session, steps, dir, output, &mut |p| {
+        progress(p);
+        std::ops::ControlFlow::Continue(())
+    })
+}
+
+/// [`run`] whose `progress` may stop it (`ControlFlow::Break`, e.g. Ctrl-C in Python): the
+/// steps done stay done, the energy table of those steps is written (as on divergence), the
+/// final models are not, and the summary says [`RunSummary::stopped`].
+pub fn run_stoppable(
+    session: &mut Session,
+    steps: u64,
+    dir: &Path,
+    output: &OutputSpec,
+    progress: &mut dyn FnMut(Progress) -> std::ops::ControlFlow<()>,
 ) -> Result<RunSummary, SessionError> {
     std::fs::create_dir_all(dir).map_err(|e| SessionError::io(dir, e))?;
     let names: Vec<String> = session
@@ -118,13 +137,17 @@ pub fn run(
             );
         }
         summary.steps = k + 1;
-        progress(Progress {
+        let flow = progress(Progress {
             step: k + 1,
             steps,
             time: session.model(None)?.time(),
             energy: reports.first().map_or(0.0, |r| r.energy.total()),
             events: lines,
         });
+        if flow.is_break() {
+            summary.stopped = true;
+            break;
+        }
         let done = session.model(None)?.steps();
         if done % output.every == 0 || k + 1 == steps {
             write_frames(session, &mut summary.frames)?;
@@ -137,6 +160,11 @@ pub fn run(
         summary.files.push(p);
     }
     result?;
+    if summary.stopped {
+        summary.mean_step_ms = sum_ms / summary.steps.max(1) as f64;
+        summary.max_step_ms = max_ms;
+        return Ok(summary);
+    }
     for name in &names {
         let m = session.model(Some(name))?;
         for f in &output.final_files {
