@@ -52,6 +52,7 @@ use vclay_dynamics::{DnurbsCurve, DnurbsSurface};
 use vclay_io::model::Entity;
 use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
 
+use super::generalized::bbox_diagonal;
 use super::{SpecError, misrouted};
 use crate::command::{Edit, V3};
 use crate::command::{MaterialRequest, RopeRequest};
@@ -80,6 +81,8 @@ pub const DEFAULT_MATERIAL: [f64; 4] = [1.0, 2.0, 1.0, 0.1];
 // Engines
 // ---------------------------------------------------------------------------------------
 
+/// The engine of a model: generalized (every coordinate dynamic) over a rational curve or
+/// surface or a swung surface, or frozen-weight over a surface or a curve.
 #[derive(Clone, Debug)]
 enum Engine {
     Rational(GeneralizedDnurbs<RationalGeometry>),
@@ -688,19 +691,6 @@ pub(crate) struct Edited {
 pub(crate) struct Snap {
     state: EngineState,
     edited: Edited,
-}
-
-fn bbox_diagonal(pts: &[Vec3]) -> f64 {
-    let mut lo = Vec3::repeat(f64::INFINITY);
-    let mut hi = Vec3::repeat(f64::NEG_INFINITY);
-    for p in pts {
-        lo = lo.inf(p);
-        hi = hi.sup(p);
-    }
-    if pts.is_empty() {
-        return 1.0;
-    }
-    (hi - lo).norm().max(f64::MIN_POSITIVE)
 }
 
 impl DnurbsModel {

@@ -38,7 +38,8 @@ use vclay_spline::{NurbsSurface, ParametricSurface};
 
 use super::SpecError;
 use super::generalized::{
-    GeneralizedKind, GeneralizedModel, check_material_and_dt, constant_material, table_one,
+    GeneralizedKind, GeneralizedModel, bbox_diagonal, check_material_and_dt, constant_material,
+    table_one,
 };
 use super::saved::SavedState;
 use crate::command::Edit;
@@ -188,12 +189,7 @@ impl PatchesModel {
             );
         }
         // Size: the bounding-box diagonal of all initial control points.
-        let (mut lo, mut hi) = (Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY));
-        for p in surfaces.iter().flat_map(|s| s.control_points()) {
-            lo = lo.inf(p);
-            hi = hi.sup(p);
-        }
-        let size = (hi - lo).norm().max(f64::MIN_POSITIVE);
+        let size = bbox_diagonal(surfaces.iter().flat_map(|s| s.control_points()));
         let material =
             constant_material(settings.mu, settings.gamma, &settings.alpha, &settings.beta);
         let mut engine = GeneralizedDnurbs::new(geometry, material).map_err(|e| e.to_string())?;

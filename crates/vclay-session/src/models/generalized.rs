@@ -186,6 +186,23 @@ pub(crate) fn check_material_and_dt(material: &[(&str, f64)], dt: f64) -> Result
     Ok(())
 }
 
+/// The diagonal of the bounding box of `pts` (a model's size, which scales tolerances); 1 for
+/// no points, and never below the smallest positive number.
+pub(crate) fn bbox_diagonal<'a>(pts: impl IntoIterator<Item = &'a Vec3>) -> f64 {
+    let mut lo = Vec3::repeat(f64::INFINITY);
+    let mut hi = Vec3::repeat(f64::NEG_INFINITY);
+    let mut empty = true;
+    for p in pts {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+        empty = false;
+    }
+    if empty {
+        return 1.0;
+    }
+    (hi - lo).norm().max(f64::MIN_POSITIVE)
+}
+
 /// The elastic reference of a saved flag (`absolute`).
 pub(crate) fn reference(absolute: bool) -> ElasticReference {
     if absolute {
