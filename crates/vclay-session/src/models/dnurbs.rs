@@ -2146,16 +2146,7 @@ impl Model for DnurbsModel {
         let r = self.engine.step(self.ed.dt).map_err(dyn_err)?;
         self.ed.kinetic = r.kinetic_energy;
         self.ed.steps += 1;
-        Ok(StepReport {
-            time: r.time,
-            energy: Energy {
-                kinetic: r.kinetic_energy,
-                elastic: r.elastic_energy,
-                tools: 0.0,
-            },
-            iterations: r.solver.iterations,
-            seconds: t0.elapsed().as_secs_f64(),
-        })
+        Ok(super::saved::step_report(&r, t0))
     }
 
     fn plastic_flow(&mut self, fraction: f64, yield_distance: f64) -> Result<usize, SessionError> {
