@@ -377,44 +377,40 @@ pub fn open(path: &Path) -> Result<Opened, SessionError> {
             check_extension(path, kind, &["json", "step", "stp", "p21", "igs", "iges"])?;
             with_model(model_file_spec(&abs)?)
         }
-        FileKind::Triangular => with_model(ModelSpec::DnurbsTriangular(models::KindSpec {
-            model: models::dnurbs_tri::ModelKeys {
+        FileKind::Triangular => with_model(ModelSpec::DnurbsTriangular(
+            models::KindSpec::of_model(models::dnurbs_tri::ModelKeys {
                 file: Some(abs.clone()),
                 ..Default::default()
-            },
-            ..Default::default()
-        })),
-        FileKind::PdeSpec => with_model(ModelSpec::PdeSurface(models::KindSpec {
-            model: models::pde::ModelKeys {
+            }),
+        )),
+        FileKind::PdeSpec => with_model(ModelSpec::PdeSurface(models::KindSpec::of_model(
+            models::pde::ModelKeys {
                 spec: Some(abs.clone()),
                 ..Default::default()
             },
-            ..Default::default()
-        })),
+        ))),
         FileKind::Lattice => {
             check_extension(path, kind, &["ovm", "vtu"])?;
-            with_model(ModelSpec::SubdivisionSolid(models::KindSpec {
-                model: models::solid::ModelKeys {
-                    file: Some(abs.clone()),
-                    level: Some(LATTICE_LEVEL),
-                    ..Default::default()
-                },
-                material: Default::default(),
-                simulation: models::solid::SimKeys {
+            let spec = models::KindSpec::of_model(models::solid::ModelKeys {
+                file: Some(abs.clone()),
+                level: Some(LATTICE_LEVEL),
+                ..Default::default()
+            });
+            with_model(ModelSpec::SubdivisionSolid(spec.with_simulation(
+                models::solid::SimKeys {
                     dt: Some(LATTICE_DT),
                     ..Default::default()
                 },
-            }))
+            )))
         }
         FileKind::Mesh => {
             check_extension(path, kind, &["obj", "ply", "stl", "glb"])?;
-            with_model(ModelSpec::Ffd(models::KindSpec {
-                model: models::ffd::ModelKeys {
+            with_model(ModelSpec::Ffd(models::KindSpec::of_model(
+                models::ffd::ModelKeys {
                     mesh: Some(abs.clone()),
                     ..Default::default()
                 },
-                ..Default::default()
-            }))
+            )))
         }
         FileKind::PointCloud => Err(not_a_session(path, kind, "")),
         FileKind::Geomdl => Err(not_a_session(path, kind, "")),
@@ -456,17 +452,16 @@ fn check_extension(path: &Path, kind: FileKind, allowed: &[&str]) -> Result<(), 
 fn model_file_spec(abs: &Path) -> Result<ModelSpec, SessionError> {
     let entities = vclay_io::model::read_model(abs).map_err(|e| SessionError::io(abs, e))?;
     let first = |dims: usize| entities.iter().position(|e| e.param_dims() == dims);
-    let dnurbs = |entity: usize| models::KindSpec {
-        model: models::dnurbs::ModelKeys {
+    let dnurbs = |entity: usize| {
+        models::KindSpec::of_model(models::dnurbs::ModelKeys {
             file: Some(PathBuf::from(abs)),
             entity: Some(entity),
             ..Default::default()
-        },
-        material: Default::default(),
-        simulation: models::dnurbs::SimKeys {
+        })
+        .with_simulation(models::dnurbs::SimKeys {
             dt: Some(MODEL_FILE_DT),
             ..Default::default()
-        },
+        })
     };
     if let Some(i) = first(2) {
         return Ok(ModelSpec::DnurbsSurface(dnurbs(i)));
@@ -475,14 +470,13 @@ fn model_file_spec(abs: &Path) -> Result<ModelSpec, SessionError> {
         return Ok(ModelSpec::DnurbsCurve(dnurbs(i)));
     }
     if let Some(i) = first(3) {
-        return Ok(ModelSpec::BsplineSolid(models::KindSpec {
-            model: models::solid::ModelKeys {
+        return Ok(ModelSpec::BsplineSolid(models::KindSpec::of_model(
+            models::solid::ModelKeys {
                 file: Some(PathBuf::from(abs)),
                 entity: Some(i),
                 ..Default::default()
             },
-            ..Default::default()
-        }));
+        )));
     }
     Err(SessionError::io(
         abs,

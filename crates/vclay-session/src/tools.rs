@@ -341,15 +341,15 @@ pub(crate) fn is_tool_edit(edit: &crate::Edit) -> bool {
     )
 }
 
-/// The [`ToolHost`] accessors of a kind whose [`ToolTable`] is the field named: inside
-/// `impl ToolHost for Kind`.
+/// The [`ToolHost`] accessors of a kind whose [`ToolTable`] is the field named (a path of
+/// fields: `tools`, `ed.tools`): inside `impl ToolHost for Kind`.
 macro_rules! tool_table {
-    ($field:ident) => {
+    ($($field:ident).+) => {
         fn table(&self) -> &$crate::tools::ToolTable {
-            &self.$field
+            &self.$($field).+
         }
         fn table_mut(&mut self) -> &mut $crate::tools::ToolTable {
-            &mut self.$field
+            &mut self.$($field).+
         }
     };
 }

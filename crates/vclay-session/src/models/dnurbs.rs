@@ -17,10 +17,17 @@
 //! `velocity` is the same `Target::Moving` closure the old runner made, and a session file
 //! rebuilds it from its description.
 //!
+//! One model, four engines: the engine enum's two generalized variants (`RationalGeometry`,
+//! `SwungGeometry`) go through one generic path (each match arm is written once for both,
+//! monomorphized per geometry), and so do the two frozen-weight ones; the rest of the model
+//! (slots, tool table, constraints, display, pick, exports, session files) does not look at
+//! the engine. The triangular and multi-patch kinds are [`super::generalized::GeneralizedModel`]
+//! kinds (see there why this model is not one).
+//!
 //! Undo: every edit but fix/free restores a snapshot of the engine state (the engines'
-//! `state()`/`set_state()`), the slots, constraints, material and time step; fix/free apply
-//! the exact inverse (free exactly the control points that the fix fixed) and restore the
-//! snapshot.
+//! `state()`/`set_state()`) and of what edits change besides it (`Edited`: the slots,
+//! constraints, tool table, material, time step); fix/free apply the exact inverse (free
+//! exactly the control points that the fix fixed) and restore the snapshot.
 //!
 //! Limitations: materials are uniform (constant densities); a material change on the frozen
 //! engine integrates its element matrices again (the state is kept). Swung surfaces: control
@@ -45,6 +52,7 @@ use vclay_dynamics::{DnurbsCurve, DnurbsSurface};
 use vclay_io::model::Entity;
 use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
 
+use super::generalized::bbox_diagonal;
 use super::{SpecError, misrouted};
 use crate::command::{Edit, V3};
 use crate::command::{MaterialRequest, RopeRequest};
@@ -73,6 +81,8 @@ pub const DEFAULT_MATERIAL: [f64; 4] = [1.0, 2.0, 1.0, 0.1];
 // Engines
 // ---------------------------------------------------------------------------------------
 
+/// The engine of a model: generalized (every coordinate dynamic) over a rational curve or
+/// surface or a swung surface, or frozen-weight over a surface or a curve.
 #[derive(Clone, Debug)]
 enum Engine {
     Rational(GeneralizedDnurbs<RationalGeometry>),
@@ -81,7 +91,10 @@ enum Engine {
     FrozenCurve(DnurbsCurve),
 }
 
-/// Dispatches an expression over the two generalized engines and the two frozen ones.
+/// Dispatches an expression over the engines: `$a` is written once for both generalized
+/// engines (`GeneralizedDnurbs<G>`, `G` = `RationalGeometry` or `SwungGeometry`: one generic
+/// path), `$b` once for both frozen-weight ones (`Dnurbs<G>`, `G` = `NurbsSurface` or
+/// `NurbsCurve`). With `frozen => $b` the frozen engines are not bound.
 macro_rules! each {
     ($e:expr, gen $g:ident => $a:expr, frozen $f:ident => $b:expr) => {
         match $e {
@@ -89,6 +102,13 @@ macro_rules! each {
             Engine::Swung($g) => $a,
             Engine::FrozenSurface($f) => $b,
             Engine::FrozenCurve($f) => $b,
+        }
+    };
+    ($e:expr, gen $g:ident => $a:expr, frozen => $b:expr) => {
+        match $e {
+            Engine::Rational($g) => $a,
+            Engine::Swung($g) => $a,
+            Engine::FrozenSurface(_) | Engine::FrozenCurve(_) => $b,
         }
     };
 }
@@ -105,6 +125,14 @@ fn dyn_err(e: DynamicsError) -> SessionError {
 
 fn cmd(reason: impl std::fmt::Display) -> SessionError {
     SessionError::command("", "", reason)
+}
+
+/// Why a frozen-weight engine refuses a constraint.
+const NO_FROZEN_CONSTRAINTS: &str = "the frozen-weight engine has no constraints (section 6.2 needs the generalized engine: `engine = \"generalized\"`)";
+
+/// The point of a frozen-weight engine's geometry at `param` (its first `G::DIM` entries).
+fn frozen_point<G: DnurbsGeometry>(d: &Dnurbs<G>, param: [f64; 2]) -> Result<Vec3, DynamicsError> {
+    Ok(d.geometry().basis_at(&param[..G::DIM])?.2)
 }
 
 fn gen_point<G: GeneralizedGeometry>(g: &G, param: [f64; 2]) -> Result<Vec3, DynamicsError> {
@@ -172,7 +200,7 @@ impl Engine {
             )
         };
         each!(self, gen d => d.plastic_flow(fraction, yield_distance).map_err(dyn_err),
-            frozen _d => Err(frozen()))
+            frozen => Err(frozen()))
     }
     fn elastic_energy(&self) -> f64 {
         each!(self, gen d => d.elastic_energy().unwrap_or(f64::NAN), frozen d => d.elastic_energy())
@@ -182,59 +210,34 @@ impl Engine {
             frozen d => d.geometry().nearest_param(x))
     }
     fn point_at(&self, param: [f64; 2]) -> Result<Vec3, DynamicsError> {
-        match self {
-            Engine::Rational(d) => gen_point(d.geometry(), param),
-            Engine::Swung(d) => gen_point(d.geometry(), param),
-            Engine::FrozenSurface(d) => Ok(d.geometry().basis_at(&param[..2])?.2),
-            Engine::FrozenCurve(d) => Ok(d.geometry().basis_at(&param[..1])?.2),
-        }
+        each!(self, gen d => gen_point(d.geometry(), param),
+            frozen d => frozen_point(d, param))
     }
     /// Coordinate ranges of the control points (x, y, z, w) of a generalized engine.
     fn groups(&self) -> Vec<Range<usize>> {
-        let g = match self {
-            Engine::Rational(d) => d.geometry().coordinate_groups(),
-            Engine::Swung(d) => d.geometry().coordinate_groups(),
-            _ => return Vec::new(),
-        };
+        let g = each!(self, gen d => d.geometry().coordinate_groups(), frozen => return Vec::new());
         g.into_iter().filter(|g| g.len() == 4).collect()
     }
     fn default_fixed(&self) -> Vec<usize> {
-        match self {
-            Engine::Rational(d) => d.geometry().default_fixed_coordinates(),
-            Engine::Swung(d) => d.geometry().default_fixed_coordinates(),
-            _ => Vec::new(),
-        }
+        each!(self, gen d => d.geometry().default_fixed_coordinates(), frozen => Vec::new())
     }
     /// Control points (current, or rest) as the fix/free/move-point indices count them.
     fn control_points(&self, rest: bool) -> Vec<Vec3> {
-        let from = |q: &[f64], groups: Vec<Range<usize>>| {
-            groups
-                .iter()
-                .map(|g| Vec3::new(q[g.start], q[g.start + 1], q[g.start + 2]))
-                .collect()
-        };
-        match self {
-            Engine::Rational(d) => {
-                let q = if rest {
-                    d.state().rest_coordinates
-                } else {
-                    d.geometry().coordinates().to_vec()
-                };
-                from(&q, self.groups())
-            }
-            Engine::Swung(d) => {
-                let q = if rest {
-                    d.state().rest_coordinates
-                } else {
-                    d.geometry().coordinates().to_vec()
-                };
-                from(&q, self.groups())
-            }
-            Engine::FrozenSurface(d) if rest => d.rest_shape().to_vec(),
-            Engine::FrozenCurve(d) if rest => d.rest_shape().to_vec(),
-            Engine::FrozenSurface(d) => d.geometry().points().to_vec(),
-            Engine::FrozenCurve(d) => d.geometry().points().to_vec(),
-        }
+        let q = each!(self,
+        gen d => if rest {
+            d.state().rest_coordinates
+        } else {
+            d.geometry().coordinates().to_vec()
+        },
+        frozen d => return if rest {
+            d.rest_shape().to_vec()
+        } else {
+            d.geometry().points().to_vec()
+        });
+        self.groups()
+            .iter()
+            .map(|g| Vec3::new(q[g.start], q[g.start + 1], q[g.start + 2]))
+            .collect()
     }
     /// The x, y, z coordinates of control point `i` that fix/free act on (a generalized
     /// geometry's default-held coordinates stay held).
@@ -251,31 +254,18 @@ impl Engine {
             .unwrap_or_default()
     }
     fn is_point_fixed(&self, i: usize) -> bool {
-        match self {
-            Engine::Rational(d) => self
+        each!(self, gen d => self
                 .point_coords(i)
                 .first()
                 .is_some_and(|&c| d.is_fixed_coordinate(c)),
-            Engine::Swung(d) => self
-                .point_coords(i)
-                .first()
-                .is_some_and(|&c| d.is_fixed_coordinate(c)),
-            Engine::FrozenSurface(d) => d.is_fixed(i),
-            Engine::FrozenCurve(d) => d.is_fixed(i),
-        }
+            frozen d => d.is_fixed(i))
     }
     fn set_point_fixed(&mut self, i: usize, fixed: bool) -> Result<(), DynamicsError> {
         let coords = self.point_coords(i);
-        match self {
-            Engine::Rational(d) => coords
+        each!(self, gen d => coords
                 .iter()
                 .try_for_each(|&c| d.set_fixed_coordinate(c, fixed)),
-            Engine::Swung(d) => coords
-                .iter()
-                .try_for_each(|&c| d.set_fixed_coordinate(c, fixed)),
-            Engine::FrozenSurface(d) => d.set_fixed(i, fixed),
-            Engine::FrozenCurve(d) => d.set_fixed(i, fixed),
-        }
+            frozen d => d.set_fixed(i, fixed))
     }
     fn surface(&self) -> Result<Option<NurbsSurface>, DynamicsError> {
         Ok(match self {
@@ -308,14 +298,11 @@ impl Engine {
             }
             Ok(())
         }
-        match self {
-            Engine::Rational(d) => put(d, cs),
-            Engine::Swung(d) => put(d, cs),
-            _ if cs.is_empty() => Ok(()),
-            _ => Err(cmd(
-                "the frozen-weight engine has no constraints (section 6.2 needs the generalized engine: `engine = \"generalized\"`)",
-            )),
-        }
+        each!(self, gen d => put(d, cs), frozen => if cs.is_empty() {
+            Ok(())
+        } else {
+            Err(cmd(NO_FROZEN_CONSTRAINTS))
+        })
     }
 }
 
@@ -674,10 +661,22 @@ pub struct DnurbsModel {
     kind: ModelKind,
     engine: Engine,
     source: Source,
-    material: Mat,
-    dt: f64,
+    /// What edits and steps change besides the engine state.
+    ed: Edited,
     default_k: f64,
     size: f64,
+    revision: u64,
+    /// Forces of a wrapped engine that have no description (closures): they come first in the
+    /// engine's force list, and a model holding them cannot be saved.
+    external: Vec<Force>,
+}
+
+/// What edits and steps change besides the engine state: kept whole in undo snapshots.
+#[derive(Clone, Debug)]
+pub(crate) struct Edited {
+    material: Mat,
+    dt: f64,
+    /// The force slots, in the order of the engine's force list.
     slots: Vec<Slot>,
     next_handle: usize,
     constraints: Vec<NamedConstraint>,
@@ -685,36 +684,13 @@ pub struct DnurbsModel {
     kinetic: f64,
     /// Steps of `dt` taken (the engines count their adaptive sub-steps too).
     steps: u64,
-    revision: u64,
-    /// Forces of a wrapped engine that have no description (closures): they come first in the
-    /// engine's force list, and a model holding them cannot be saved.
-    external: Vec<Force>,
 }
 
+/// An undo snapshot: the engine state and [`Edited`].
 #[derive(Clone, Debug)]
 pub(crate) struct Snap {
     state: EngineState,
-    material: Mat,
-    dt: f64,
-    slots: Vec<Slot>,
-    next_handle: usize,
-    constraints: Vec<NamedConstraint>,
-    tools: ToolTable,
-    kinetic: f64,
-    steps: u64,
-}
-
-fn bbox_diagonal(pts: &[Vec3]) -> f64 {
-    let mut lo = Vec3::repeat(f64::INFINITY);
-    let mut hi = Vec3::repeat(f64::NEG_INFINITY);
-    for p in pts {
-        lo = lo.inf(p);
-        hi = hi.sup(p);
-    }
-    if pts.is_empty() {
-        return 1.0;
-    }
-    (hi - lo).norm().max(f64::MIN_POSITIVE)
+    edited: Edited,
 }
 
 impl DnurbsModel {
@@ -736,16 +712,18 @@ impl DnurbsModel {
             kind,
             engine,
             source,
-            material,
-            dt,
+            ed: Edited {
+                material,
+                dt,
+                slots: Vec::new(),
+                next_handle: 0,
+                constraints: Vec::new(),
+                tools: ToolTable::default(),
+                kinetic: 0.0,
+                steps: 0,
+            },
             default_k: DEFAULT_ROPE_STIFFNESS,
             size,
-            slots: Vec::new(),
-            next_handle: 0,
-            constraints: Vec::new(),
-            tools: ToolTable::default(),
-            kinetic: 0.0,
-            steps: 0,
             revision: 1,
             external: Vec::new(),
         })
@@ -766,16 +744,13 @@ impl DnurbsModel {
     pub fn frozen_surface(d: DnurbsSurface, dt: f64) -> Result<Self, SessionError> {
         let mat = Self::constants(d.material())?;
         let source = Source::of_surface(d.geometry());
-        let forces = d.forces().to_vec();
-        let mut m = Self::new(
+        Self::wrap(
             ModelKind::DnurbsSurface,
             Engine::FrozenSurface(d),
             source,
             mat,
             dt,
-        )?;
-        m.adopt_forces(&forces)?;
-        Ok(m)
+        )
     }
 
     /// Wraps a frozen-weight curve (`Dnurbs<NurbsCurve>`); see [`DnurbsModel::frozen_surface`].
@@ -784,16 +759,13 @@ impl DnurbsModel {
         let source = Source::Curve {
             curve: CurveData::of(d.geometry()),
         };
-        let forces = d.forces().to_vec();
-        let mut m = Self::new(
+        Self::wrap(
             ModelKind::DnurbsCurve,
             Engine::FrozenCurve(d),
             source,
             mat,
             dt,
-        )?;
-        m.adopt_forces(&forces)?;
-        Ok(m)
+        )
     }
 
     /// Wraps a generalized curve or surface (`GeneralizedDnurbs<RationalGeometry>`) that has
@@ -823,7 +795,7 @@ impl DnurbsModel {
         } else {
             ModelKind::DnurbsSurface
         };
-        Self::wrap_generalized(kind, Engine::Rational(d), source, mat, dt)
+        Self::wrap(kind, Engine::Rational(d), source, mat, dt)
     }
 
     /// Wraps a swung surface (`GeneralizedDnurbs<SwungGeometry>`) that has not stepped yet;
@@ -841,25 +813,25 @@ impl DnurbsModel {
             trajectory: CurveData::of(&g.trajectory().map_err(dyn_err)?),
             alpha: g.alpha(),
         };
-        Self::wrap_generalized(ModelKind::DnurbsSwung, Engine::Swung(d), source, mat, dt)
+        Self::wrap(ModelKind::DnurbsSwung, Engine::Swung(d), source, mat, dt)
     }
 
-    fn wrap_generalized(
+    /// A model over an engine built elsewhere: its forces become the slot `forces0`, its
+    /// constraints (generalized engines) `constraint<N>`.
+    fn wrap(
         kind: ModelKind,
         engine: Engine,
         source: Source,
         mat: Mat,
         dt: f64,
     ) -> Result<Self, SessionError> {
-        let (forces, constraints) = match &engine {
-            Engine::Rational(d) => (d.forces().to_vec(), d.constraints().to_vec()),
-            Engine::Swung(d) => (d.forces().to_vec(), d.constraints().to_vec()),
-            _ => unreachable!("generalized"),
-        };
+        let (forces, constraints) = each!(&engine,
+            gen d => (d.forces().to_vec(), d.constraints().to_vec()),
+            frozen d => (d.forces().to_vec(), Vec::new()));
         let mut m = Self::new(kind, engine, source, mat, dt)?;
         m.adopt_forces(&forces)?;
         for (k, c) in constraints.iter().enumerate() {
-            m.constraints.push(NamedConstraint {
+            m.ed.constraints.push(NamedConstraint {
                 name: format!("constraint{k}"),
                 constraint: match c {
                     Constraint::Point { param, target } => ConstraintDesc::Point {
@@ -937,7 +909,7 @@ impl DnurbsModel {
 
     /// The named tools.
     pub fn tools(&self) -> &ToolTable {
-        &self.tools
+        &self.ed.tools
     }
 
     /// Current control points (the indices fix/free/move-point use; see the module docs for
@@ -949,12 +921,8 @@ impl DnurbsModel {
     /// The generalized coordinates (generalized engine) or the control point coordinates
     /// x, y, z (frozen engine), flat: for exact comparisons.
     pub fn coordinates(&self) -> Vec<f64> {
-        match &self.engine {
-            Engine::Rational(d) => d.geometry().coordinates().to_vec(),
-            Engine::Swung(d) => d.geometry().coordinates().to_vec(),
-            Engine::FrozenSurface(d) => d.geometry().points().iter().flat_map(a3).collect(),
-            Engine::FrozenCurve(d) => d.geometry().points().iter().flat_map(a3).collect(),
-        }
+        each!(&self.engine, gen d => d.geometry().coordinates().to_vec(),
+            frozen d => d.geometry().points().iter().flat_map(a3).collect())
     }
 
     fn sync_forces(&mut self) {
@@ -963,7 +931,8 @@ impl DnurbsModel {
             .iter()
             .cloned()
             .chain(
-                self.slots
+                self.ed
+                    .slots
                     .iter()
                     .flat_map(|s| s.forces.iter().map(ForceDesc::to_force)),
             )
@@ -972,20 +941,20 @@ impl DnurbsModel {
     }
 
     fn add_slot(&mut self, forces: Vec<ForceDesc>) -> usize {
-        let h = self.next_handle;
-        self.next_handle += 1;
-        self.slots.push(Slot { handle: h, forces });
+        let h = self.ed.next_handle;
+        self.ed.next_handle += 1;
+        self.ed.slots.push(Slot { handle: h, forces });
         self.sync_forces();
         h
     }
 
     fn remove_slot(&mut self, h: usize) {
-        self.slots.retain(|s| s.handle != h);
+        self.ed.slots.retain(|s| s.handle != h);
         self.sync_forces();
     }
 
     fn slot_mut(&mut self, h: usize) -> Option<&mut Slot> {
-        self.slots.iter_mut().find(|s| s.handle == h)
+        self.ed.slots.iter_mut().find(|s| s.handle == h)
     }
 
     /// Adds a slot under a new name; on a taken name nothing changes.
@@ -995,9 +964,10 @@ impl DnurbsModel {
         what: &str,
         forces: Vec<ForceDesc>,
     ) -> Result<String, SessionError> {
-        let label = ToolHost::label(self, name.as_deref(), what, self.next_handle).map_err(cmd)?;
+        let label =
+            ToolHost::label(self, name.as_deref(), what, self.ed.next_handle).map_err(cmd)?;
         let h = self.add_slot(forces);
-        self.tools.track(&label, what, h, None, None);
+        self.ed.tools.track(&label, what, h, None, None);
         Ok(label)
     }
 
@@ -1033,7 +1003,7 @@ impl DnurbsModel {
         alpha: Option<f64>,
         beta: Option<f64>,
     ) -> Result<(), SessionError> {
-        let mut m = self.material.clone();
+        let mut m = self.ed.material.clone();
         for (key, v) in [
             ("mu", mu),
             ("gamma", gamma),
@@ -1057,7 +1027,7 @@ impl DnurbsModel {
         self.engine
             .set_material(m.to_material())
             .map_err(SessionError::command_from)?;
-        self.material = m;
+        self.ed.material = m;
         Ok(())
     }
 
@@ -1224,7 +1194,7 @@ impl DnurbsModel {
             }
             Edit::Stop => {
                 self.engine.stop();
-                self.kinetic = 0.0;
+                self.ed.kinetic = 0.0;
                 "stopped all motion".to_string()
             }
             Edit::MovePoint { index, to } => {
@@ -1258,9 +1228,9 @@ impl DnurbsModel {
                     )));
                 }
                 if let Some(dt) = dt {
-                    self.dt = *dt;
+                    self.ed.dt = *dt;
                 }
-                format!("integrator implicit (eq 18), dt {}", self.dt)
+                format!("integrator implicit (eq 18), dt {}", self.ed.dt)
             }
             _ => return Err(misrouted()),
         };
@@ -1282,9 +1252,7 @@ impl DnurbsModel {
                 normal,
             } => {
                 if self.engine.is_frozen() {
-                    return Err(cmd(
-                        "the frozen-weight engine has no constraints (section 6.2 needs the generalized engine: `engine = \"generalized\"`)",
-                    ));
+                    return Err(cmd(NO_FROZEN_CONSTRAINTS));
                 }
                 let c = match (kind.as_str(), target, normal) {
                     ("point", Some(t), _) => ConstraintDesc::Point {
@@ -1302,10 +1270,10 @@ impl DnurbsModel {
                     }
                 };
                 let label = match name {
-                    Some(n) if self.tools.get(n).is_some() => {
+                    Some(n) if self.ed.tools.get(n).is_some() => {
                         return Err(cmd(format!("a tool named `{n}` is active")));
                     }
-                    Some(n) if self.constraints.iter().any(|c| &c.name == n) => {
+                    Some(n) if self.ed.constraints.iter().any(|c| &c.name == n) => {
                         return Err(cmd(format!(
                             "a constraint named `{n}` is active (release it first)"
                         )));
@@ -1313,11 +1281,11 @@ impl DnurbsModel {
                     Some(n) if n.is_empty() => return Err(cmd("a name must not be empty")),
                     Some(n) => n.clone(),
                     None => {
-                        let mut k = self.constraints.len();
+                        let mut k = self.ed.constraints.len();
                         loop {
                             let l = format!("constraint{k}");
-                            if self.tools.get(&l).is_none()
-                                && !self.constraints.iter().any(|c| c.name == l)
+                            if self.ed.tools.get(&l).is_none()
+                                && !self.ed.constraints.iter().any(|c| c.name == l)
                             {
                                 break l;
                             }
@@ -1325,16 +1293,16 @@ impl DnurbsModel {
                         }
                     }
                 };
-                let mut cs = self.constraints.clone();
+                let mut cs = self.ed.constraints.clone();
                 cs.push(NamedConstraint {
                     name: label.clone(),
                     constraint: c,
                 });
                 if let Err(e) = self.engine.sync_constraints(&cs) {
-                    self.engine.sync_constraints(&self.constraints)?;
+                    self.engine.sync_constraints(&self.ed.constraints)?;
                     return Err(e);
                 }
-                self.constraints = cs;
+                self.ed.constraints = cs;
                 format!("{kind} constraint `{label}` at {param:?}")
             }
             Edit::RegionForce { .. }
@@ -1358,21 +1326,15 @@ impl DnurbsModel {
                 if !(value.is_finite() && value > 0.0) {
                     return Err(cmd(format!("dt = {value} must be positive")));
                 }
-                self.dt = value;
+                self.ed.dt = value;
             }
-            "weight_penalty" => match &mut self.engine {
-                Engine::Rational(d) => d
-                    .set_weight_penalty(value)
-                    .map_err(SessionError::command_from)?,
-                Engine::Swung(d) => d
-                    .set_weight_penalty(value)
-                    .map_err(SessionError::command_from)?,
-                _ => {
-                    return Err(cmd(
-                        "the frozen-weight engine has no weight penalty (its weights are held)",
-                    ));
-                }
-            },
+            "weight_penalty" => each!(&mut self.engine,
+            gen d => d
+                .set_weight_penalty(value)
+                .map_err(SessionError::command_from)?,
+            frozen => return Err(cmd(
+                "the frozen-weight engine has no weight penalty (its weights are held)",
+            ))),
             _ => {
                 return Err(cmd(format!(
                     "no parameter `{name}`; a {} model has {}",
@@ -1556,26 +1518,16 @@ impl DnurbsModel {
         {
             model.default_k = p.k;
         }
-        match &mut model.engine {
-            Engine::Rational(d) => {
-                setup(d, reference, penalty, dynamic_weights, &m.fix)?;
-                d.set_quadrature_rule(quadrature.rule())
-                    .map_err(|e| err("simulation", "quadrature", e.to_string()))?;
-            }
-            Engine::Swung(d) => {
-                setup(d, reference, penalty, dynamic_weights, &m.fix)?;
-                d.set_quadrature_rule(quadrature.rule())
-                    .map_err(|e| err("simulation", "quadrature", e.to_string()))?;
-            }
-            Engine::FrozenSurface(d) => {
-                d.set_elastic_reference(reference);
-                fix_frozen(d, &m.fix)?;
-            }
-            Engine::FrozenCurve(d) => {
-                d.set_elastic_reference(reference);
-                fix_frozen(d, &m.fix)?;
-            }
-        }
+        each!(&mut model.engine,
+        gen d => {
+            setup(d, reference, penalty, dynamic_weights, &m.fix)?;
+            d.set_quadrature_rule(quadrature.rule())
+                .map_err(|e| err("simulation", "quadrature", e.to_string()))?;
+        },
+        frozen d => {
+            d.set_elastic_reference(reference);
+            fix_frozen(d, &m.fix)?;
+        });
         Ok(model)
     }
 
@@ -1590,11 +1542,8 @@ impl DnurbsModel {
         let engine = s.source.engine(frozen, s.material.to_material())?;
         let mut m = Self::new(kind, engine, s.source, s.material, s.dt)?;
         if let Some(q) = s.quadrature {
-            match &mut m.engine {
-                Engine::Rational(d) => d.set_quadrature_rule(q.rule()).map_err(dyn_err)?,
-                Engine::Swung(d) => d.set_quadrature_rule(q.rule()).map_err(dyn_err)?,
-                _ => {}
-            }
+            each!(&mut m.engine, gen d => d.set_quadrature_rule(q.rule()).map_err(dyn_err)?,
+                frozen => {});
         }
         if m.engine.is_curve() != (kind == ModelKind::DnurbsCurve) {
             return Err(SessionError::model(format!(
@@ -1638,14 +1587,16 @@ impl DnurbsModel {
         };
         let snap = Snap {
             state,
-            material: m.material.clone(),
-            dt: s.dt,
-            slots: s.slots,
-            next_handle: s.next_handle,
-            constraints: s.constraints,
-            tools: s.tools,
-            kinetic: s.kinetic,
-            steps: s.steps,
+            edited: Edited {
+                material: m.ed.material.clone(),
+                dt: s.dt,
+                slots: s.slots,
+                next_handle: s.next_handle,
+                constraints: s.constraints,
+                tools: s.tools,
+                kinetic: s.kinetic,
+                steps: s.steps,
+            },
         };
         m.put_state(&snap)?;
         m.revision = 1;
@@ -1968,10 +1919,10 @@ fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, S
 /// force descriptions (the engine's force list is rebuilt from the slots).
 impl ToolHost for DnurbsModel {
     type Field = ForceDesc;
-    crate::tools::tool_table!(tools);
+    crate::tools::tool_table!(ed.tools);
     /// [`ToolTable::label`], refusing a constraint's name (an unnamed tool skips them).
     fn label(&self, name: Option<&str>, what: &str, handle: usize) -> Result<String, String> {
-        let taken = |n: &str| self.constraints.iter().any(|c| c.name == n);
+        let taken = |n: &str| self.ed.constraints.iter().any(|c| c.name == n);
         if let Some(n) = name
             && taken(n)
         {
@@ -1979,7 +1930,7 @@ impl ToolHost for DnurbsModel {
                 "a constraint named `{n}` is active (release it first)"
             ));
         }
-        let mut l = self.tools.label(name, what, handle)?;
+        let mut l = self.ed.tools.label(name, what, handle)?;
         let mut k = 1;
         while taken(&l) {
             l = format!("{what}{handle}_c{k}");
@@ -2055,17 +2006,17 @@ impl ToolHost for DnurbsModel {
     /// The slot just added goes, and its handle is free again.
     fn take_back(&mut self, handle: usize) {
         self.remove_slot(handle);
-        self.next_handle = handle;
+        self.ed.next_handle = handle;
     }
     /// A constraint (section 6.2) of that name.
     fn release_other(&mut self, name: &str) -> Result<(), SessionError> {
-        let Some(i) = self.constraints.iter().position(|c| c.name == name) else {
+        let Some(i) = self.ed.constraints.iter().position(|c| c.name == name) else {
             return Err(cmd(format!("no active tool or constraint named `{name}`")));
         };
-        let mut cs = self.constraints.clone();
+        let mut cs = self.ed.constraints.clone();
         cs.remove(i);
         self.engine.sync_constraints(&cs)?;
-        self.constraints = cs;
+        self.ed.constraints = cs;
         Ok(())
     }
 }
@@ -2099,33 +2050,20 @@ impl crate::model::Stateful for DnurbsModel {
     fn take_state(&self) -> Snap {
         Snap {
             state: self.engine.state(),
-            material: self.material.clone(),
-            dt: self.dt,
-            slots: self.slots.clone(),
-            next_handle: self.next_handle,
-            constraints: self.constraints.clone(),
-            tools: self.tools.clone(),
-            kinetic: self.kinetic,
-            steps: self.steps,
+            edited: self.ed.clone(),
         }
     }
     fn put_state(&mut self, s: &Snap) -> Result<(), SessionError> {
-        if self.material != s.material {
+        if self.ed.material != s.edited.material {
             self.engine
-                .set_material(s.material.to_material())
+                .set_material(s.edited.material.to_material())
                 .map_err(dyn_err)?;
-            self.material = s.material.clone();
+            self.ed.material = s.edited.material.clone();
         }
         self.engine.set_state(&s.state).map_err(dyn_err)?;
-        self.slots = s.slots.clone();
+        self.ed = s.edited.clone();
         self.sync_forces();
-        self.constraints = s.constraints.clone();
-        self.engine.sync_constraints(&self.constraints)?;
-        self.dt = s.dt;
-        self.next_handle = s.next_handle;
-        self.tools = s.tools.clone();
-        self.kinetic = s.kinetic;
-        self.steps = s.steps;
+        self.engine.sync_constraints(&self.ed.constraints)?;
         self.revision += 1;
         Ok(())
     }
@@ -2162,17 +2100,12 @@ impl Model for DnurbsModel {
             self.kind,
             self.engine_name(),
             self.engine.control_points(false).len(),
-            self.tools.tools.len(),
-            self.constraints.len()
+            self.ed.tools.tools.len(),
+            self.ed.constraints.len()
         );
         // Fitting (d-nurbs.txt section 7.3, Figs 6-7): the distances of the data points to the
         // nearest points of the model.
-        let d = match &self.engine {
-            Engine::Rational(e) => e.data_distances(),
-            Engine::Swung(e) => e.data_distances(),
-            Engine::FrozenSurface(e) => e.data_distances(),
-            Engine::FrozenCurve(e) => e.data_distances(),
-        };
+        let d = each!(&self.engine, gen e => e.data_distances(), frozen e => e.data_distances());
         if let Ok(d) = d
             && !d.is_empty()
         {
@@ -2186,13 +2119,13 @@ impl Model for DnurbsModel {
         s
     }
 
-    crate::model::clock_methods!(self => self.engine.time(), self.dt, self.steps);
+    crate::model::clock_methods!(self => self.engine.time(), self.ed.dt, self.ed.steps);
 
     fn step(&mut self) -> Result<StepReport, SessionError> {
-        let due = self.tools.due(self.engine.time(), self.dt);
+        let due = self.ed.tools.due(self.engine.time(), self.ed.dt);
         let mut changed = !due.expired.is_empty();
         for e in &due.expired {
-            self.slots.retain(|s| s.handle != e.handle);
+            self.ed.slots.retain(|s| s.handle != e.handle);
         }
         for (h, c) in &due.cursors {
             if let Some(ForceDesc::Spring {
@@ -2210,19 +2143,10 @@ impl Model for DnurbsModel {
         }
         self.revision += 1;
         let t0 = std::time::Instant::now();
-        let r = self.engine.step(self.dt).map_err(dyn_err)?;
-        self.kinetic = r.kinetic_energy;
-        self.steps += 1;
-        Ok(StepReport {
-            time: r.time,
-            energy: Energy {
-                kinetic: r.kinetic_energy,
-                elastic: r.elastic_energy,
-                tools: 0.0,
-            },
-            iterations: r.solver.iterations,
-            seconds: t0.elapsed().as_secs_f64(),
-        })
+        let r = self.engine.step(self.ed.dt).map_err(dyn_err)?;
+        self.ed.kinetic = r.kinetic_energy;
+        self.ed.steps += 1;
+        Ok(super::saved::step_report(&r, t0))
     }
 
     fn plastic_flow(&mut self, fraction: f64, yield_distance: f64) -> Result<usize, SessionError> {
@@ -2231,7 +2155,7 @@ impl Model for DnurbsModel {
 
     fn energy(&self) -> Energy {
         Energy {
-            kinetic: self.kinetic,
+            kinetic: self.ed.kinetic,
             elastic: self.engine.elastic_energy(),
             tools: 0.0,
         }
@@ -2276,7 +2200,7 @@ impl Model for DnurbsModel {
                 set.segment(at, at + f / n * (0.2 * size));
             }
         };
-        for s in &self.slots {
+        for s in &self.ed.slots {
             for f in &s.forces {
                 match f {
                     ForceDesc::Spring {
@@ -2303,7 +2227,7 @@ impl Model for DnurbsModel {
             }
         }
         let mut cons = LineSet::new(LineRole::Constraints);
-        for c in &self.constraints {
+        for c in &self.ed.constraints {
             match &c.constraint {
                 ConstraintDesc::Point { target, .. } => cons.points.push(v3(*target)),
                 ConstraintDesc::Normal { param, normal } => {
@@ -2369,7 +2293,7 @@ impl Model for DnurbsModel {
 
     fn params(&self) -> Vec<Param> {
         let par = Param::new;
-        let m = &self.material;
+        let m = &self.ed.material;
         let mut v = vec![
             par("mu", m.mu, 0.0, 100.0, "mass density (eq 16)"),
             par("gamma", m.gamma, 0.0, 100.0, "damping density (eq 16)"),
@@ -2387,13 +2311,9 @@ impl Model for DnurbsModel {
                 1000.0,
                 "rigidity (eq 17; first pair shown, set applies to all)",
             ),
-            par("dt", self.dt, 1e-5, 0.1, "time step of eq 18 (s)"),
+            par("dt", self.ed.dt, 1e-5, 0.1, "time step of eq 18 (s)"),
         ];
-        let penalty = match &self.engine {
-            Engine::Rational(d) => Some(d.weight_penalty()),
-            Engine::Swung(d) => Some(d.weight_penalty()),
-            _ => None,
-        };
+        let penalty = each!(&self.engine, gen d => Some(d.weight_penalty()), frozen => None);
         if let Some(c) = penalty {
             v.push(par(
                 "weight_penalty",
@@ -2487,22 +2407,19 @@ impl Model for DnurbsModel {
         let saved = Saved {
             engine: self.engine_name().to_string(),
             source: self.source.clone(),
-            material: self.material.clone(),
-            dt: self.dt,
+            material: self.ed.material.clone(),
+            dt: self.ed.dt,
             default_k: self.default_k,
             size: self.size,
             state,
-            slots: self.slots.clone(),
-            next_handle: self.next_handle,
-            constraints: self.constraints.clone(),
-            tools: self.tools.clone(),
-            kinetic: self.kinetic,
-            steps: self.steps,
-            quadrature: match &self.engine {
-                Engine::Rational(d) => Some(Quad::of(d.quadrature_rule())),
-                Engine::Swung(d) => Some(Quad::of(d.quadrature_rule())),
-                _ => None,
-            },
+            slots: self.ed.slots.clone(),
+            next_handle: self.ed.next_handle,
+            constraints: self.ed.constraints.clone(),
+            tools: self.ed.tools.clone(),
+            kinetic: self.ed.kinetic,
+            steps: self.ed.steps,
+            quadrature: each!(&self.engine, gen d => Some(Quad::of(d.quadrature_rule())),
+                frozen => None),
         };
         serde_json::to_value(saved).map_err(SessionError::kernel)
     }
@@ -2515,64 +2432,58 @@ impl Model for DnurbsModel {
 /// The typed spec of a D-NURBS curve, surface or swung surface ([`super::ModelSpec`]).
 pub type DnurbsSpec = super::KindSpec<ModelKeys, MaterialKeys, SimKeys>;
 
-/// The `[model]` keys of a `dnurbs-*` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct ModelKeys {
-    /// The surface itself, given as a value by a front end (the Python module's
-    /// `dnurbs_surface`); not a scenario key.
-    #[serde(skip)]
-    pub surface: Option<vclay_spline::NurbsSurface>,
-    #[serde(default)]
-    pub engine: Option<String>,
-    #[serde(default)]
-    pub primitive: Option<String>,
-    #[serde(default)]
-    pub file: Option<std::path::PathBuf>,
-    #[serde(default)]
-    pub entity: Option<usize>,
-    #[serde(default)]
-    pub size: Option<Vec<usize>>,
-    #[serde(default)]
-    pub degree: Option<Vec<usize>>,
-    #[serde(default)]
-    pub extent: Option<f64>,
-    #[serde(default)]
-    pub weights: Option<String>,
-    #[serde(default)]
-    pub fix: Vec<usize>,
+scenario_keys! {
+    /// The `[model]` keys of a `dnurbs-*` model.
+    pub struct ModelKeys {
+        /// The surface itself, given as a value by a front end (the Python module's
+        /// `dnurbs_surface`); not a scenario key.
+        #[serde(skip)]
+        pub surface: Option<vclay_spline::NurbsSurface>,
+        #[serde(default)]
+        pub engine: Option<String>,
+        #[serde(default)]
+        pub primitive: Option<String>,
+        #[serde(default)]
+        pub file: Option<std::path::PathBuf>,
+        #[serde(default)]
+        pub entity: Option<usize>,
+        #[serde(default)]
+        pub size: Option<Vec<usize>>,
+        #[serde(default)]
+        pub degree: Option<Vec<usize>>,
+        #[serde(default)]
+        pub extent: Option<f64>,
+        #[serde(default)]
+        pub weights: Option<String>,
+        #[serde(default)]
+        pub fix: Vec<usize>,
+    }
 }
 
-/// The `[material]` keys of a `dnurbs-*` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct MaterialKeys {
-    pub preset: Option<String>,
-    /// `"knot-span"` or `"parameter"` (issue 18).
-    pub per: Option<String>,
-    pub mu: Option<f64>,
-    pub gamma: Option<f64>,
-    pub alpha: Option<f64>,
-    pub beta: Option<f64>,
+scenario_keys! {
+    /// The `[material]` keys of a `dnurbs-*` model.
+    pub struct MaterialKeys {
+        pub preset: Option<String>,
+        /// `"knot-span"` or `"parameter"` (issue 18).
+        pub per: Option<String>,
+        pub mu: Option<f64>,
+        pub gamma: Option<f64>,
+        pub alpha: Option<f64>,
+        pub beta: Option<f64>,
+    }
 }
 
-/// The `[simulation]` keys of a `dnurbs-*` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct SimKeys {
-    pub dt: Option<f64>,
-    pub reference: Option<String>,
-    pub weight_penalty: Option<f64>,
-    /// `"weight-aware"` (default) or `"fixed"` (the paper's rule), issue 18.
-    pub quadrature: Option<String>,
-    /// Relative accuracy of the weight-aware rule.
-    pub quadrature_tolerance: Option<f64>,
+scenario_keys! {
+    /// The `[simulation]` keys of a `dnurbs-*` model.
+    pub struct SimKeys {
+        pub dt: Option<f64>,
+        pub reference: Option<String>,
+        pub weight_penalty: Option<f64>,
+        /// `"weight-aware"` (default) or `"fixed"` (the paper's rule), issue 18.
+        pub quadrature: Option<String>,
+        /// Relative accuracy of the weight-aware rule.
+        pub quadrature_tolerance: Option<f64>,
+    }
 }
 
 /// The quadrature rule of a saved or specified model (see

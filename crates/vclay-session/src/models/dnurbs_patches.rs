@@ -38,7 +38,8 @@ use vclay_spline::{NurbsSurface, ParametricSurface};
 
 use super::SpecError;
 use super::generalized::{
-    GeneralizedKind, GeneralizedModel, check_material_and_dt, constant_material, table_one,
+    GeneralizedKind, GeneralizedModel, bbox_diagonal, check_material_and_dt, constant_material,
+    table_one,
 };
 use super::saved::SavedState;
 use crate::command::Edit;
@@ -188,12 +189,7 @@ impl PatchesModel {
             );
         }
         // Size: the bounding-box diagonal of all initial control points.
-        let (mut lo, mut hi) = (Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY));
-        for p in surfaces.iter().flat_map(|s| s.control_points()) {
-            lo = lo.inf(p);
-            hi = hi.sup(p);
-        }
-        let size = (hi - lo).norm().max(f64::MIN_POSITIVE);
+        let size = bbox_diagonal(surfaces.iter().flat_map(|s| s.control_points()));
         let material =
             constant_material(settings.mu, settings.gamma, &settings.alpha, &settings.beta);
         let mut engine = GeneralizedDnurbs::new(geometry, material).map_err(|e| e.to_string())?;
@@ -613,30 +609,26 @@ impl GeneralizedKind for Patches {
 /// The typed spec of a multi-patch D-NURBS ([`super::ModelSpec`]).
 pub type PatchesSpec = super::KindSpec<ModelKeys, MaterialKeys, SimKeys>;
 
-/// The `[model]` keys of a `dnurbs-patches` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct ModelKeys {
-    #[serde(default)]
-    pub patch: Vec<PatchKeys>,
-    #[serde(default)]
-    pub join: Vec<JoinKeys>,
-    pub tessellation: Option<usize>,
+scenario_keys! {
+    /// The `[model]` keys of a `dnurbs-patches` model.
+    pub struct ModelKeys {
+        #[serde(default)]
+        pub patch: Vec<PatchKeys>,
+        #[serde(default)]
+        pub join: Vec<JoinKeys>,
+        pub tessellation: Option<usize>,
+    }
 }
 
-/// The entry keys of a `dnurbs-patches` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct PatchKeys {
-    pub origin: Option<[f64; 3]>,
-    pub size: Option<[f64; 2]>,
-    pub controls: Option<[usize; 2]>,
-    pub degree: Option<[usize; 2]>,
-    pub file: Option<PathBuf>,
+scenario_keys! {
+    /// The entry keys of a `dnurbs-patches` model.
+    pub struct PatchKeys {
+        pub origin: Option<[f64; 3]>,
+        pub size: Option<[f64; 2]>,
+        pub controls: Option<[usize; 2]>,
+        pub degree: Option<[usize; 2]>,
+        pub file: Option<PathBuf>,
+    }
 }
 
 impl PatchKeys {
@@ -705,28 +697,24 @@ impl PatchKeys {
     }
 }
 
-/// The entry keys of a `dnurbs-patches` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Deserialize, Clone, Default, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct JoinKeys {
-    pub a: usize,
-    pub b: usize,
-    pub continuity: String,
+scenario_keys! {
+    /// The entry keys of a `dnurbs-patches` model.
+    pub struct JoinKeys {
+        pub a: usize,
+        pub b: usize,
+        pub continuity: String,
+    }
 }
 
-/// The `[material]` keys of a `dnurbs-patches` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct MaterialKeys {
-    pub preset: Option<String>,
-    pub mu: Option<f64>,
-    pub gamma: Option<f64>,
-    pub alpha: Option<[f64; 2]>,
-    pub beta: Option<[f64; 3]>,
+scenario_keys! {
+    /// The `[material]` keys of a `dnurbs-patches` model.
+    pub struct MaterialKeys {
+        pub preset: Option<String>,
+        pub mu: Option<f64>,
+        pub gamma: Option<f64>,
+        pub alpha: Option<[f64; 2]>,
+        pub beta: Option<[f64; 3]>,
+    }
 }
 
 /// The `[simulation]` keys of this kind: only the clock's step `dt` (absent: the preset's).

@@ -394,32 +394,28 @@ impl GeneralizedKind for Triangular {
 /// The typed spec of a triangular D-NURBS ([`super::ModelSpec`]).
 pub type TriangularSpec = super::KindSpec<ModelKeys, MaterialKeys, SimKeys>;
 
-/// The `[model]` keys of a `dnurbs-triangular` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct ModelKeys {
-    pub rounding: Option<String>,
-    pub file: Option<PathBuf>,
-    pub quadrature: Option<String>,
-    pub quadrature_points: Option<usize>,
-    pub tessellation: Option<usize>,
+scenario_keys! {
+    /// The `[model]` keys of a `dnurbs-triangular` model.
+    pub struct ModelKeys {
+        pub rounding: Option<String>,
+        pub file: Option<PathBuf>,
+        pub quadrature: Option<String>,
+        pub quadrature_points: Option<usize>,
+        pub tessellation: Option<usize>,
+    }
 }
 
-/// The `[material]` keys of a `dnurbs-triangular` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct MaterialKeys {
-    pub preset: Option<String>,
-    pub mu: Option<f64>,
-    pub gamma: Option<f64>,
-    pub alpha: Option<[f64; 2]>,
-    pub beta: Option<[f64; 3]>,
-    pub reference: Option<String>,
-    pub weight_penalty: Option<f64>,
+scenario_keys! {
+    /// The `[material]` keys of a `dnurbs-triangular` model.
+    pub struct MaterialKeys {
+        pub preset: Option<String>,
+        pub mu: Option<f64>,
+        pub gamma: Option<f64>,
+        pub alpha: Option<[f64; 2]>,
+        pub beta: Option<[f64; 3]>,
+        pub reference: Option<String>,
+        pub weight_penalty: Option<f64>,
+    }
 }
 
 /// The `[simulation]` keys of this kind: only the clock's step `dt` (absent: the preset's).

@@ -890,20 +890,18 @@ impl OneOrThree {
     }
 }
 
-/// The `[model]` keys of a `ffd` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct ModelKeys {
-    pub mesh: Option<PathBuf>,
-    pub primitive: Option<String>,
-    pub degree: Option<OneOrThree>,
-    pub control: Option<OneOrThree>,
-    pub margin: Option<f64>,
-    pub min: Option<V3>,
-    pub max: Option<V3>,
-    pub mode: Option<String>,
+scenario_keys! {
+    /// The `[model]` keys of a `ffd` model.
+    pub struct ModelKeys {
+        pub mesh: Option<PathBuf>,
+        pub primitive: Option<String>,
+        pub degree: Option<OneOrThree>,
+        pub control: Option<OneOrThree>,
+        pub margin: Option<f64>,
+        pub min: Option<V3>,
+        pub max: Option<V3>,
+        pub mode: Option<String>,
+    }
 }
 
 #[derive(Debug, Serialize, Deserialize)]

@@ -7,9 +7,16 @@
 //! the edits it takes besides `set dt`, the JSON export and the saved settings).
 //!
 //! Kinds: `dnurbs-triangular` ([`super::dnurbs_tri::Triangular`]) and `dnurbs-patches`
-//! ([`super::dnurbs_patches::Patches`]). Limitation: `dnurbs-curve`, `-surface` and `-swung`
-//! ([`super::dnurbs::DnurbsModel`]) keep their own model, which also runs the frozen-weight
-//! engine and names its tools through the shared [`crate::tools::ToolTable`].
+//! ([`super::dnurbs_patches::Patches`]). `dnurbs-curve`, `-surface` and `-swung` are the other
+//! model over the same engine, [`super::dnurbs::DnurbsModel`]: one model over an engine enum
+//! whose two generalized variants (`GeneralizedDnurbs<RationalGeometry>`,
+//! `GeneralizedDnurbs<SwungGeometry>`) share every line of code, beside the frozen-weight
+//! engine (`d-nurbs.txt` footnote 2) that the same kinds run with the same tools, force slots,
+//! saved form and display. It is not a [`GeneralizedKind`] because nearly every answer
+//! [`GeneralizedModel`] gives the same way it gives differently (steps counted by the model,
+//! the elastic energy read live, control points picked before the surface, material
+//! parameters, STEP/IGES and curve exports, fix/free undone by their inverse edit), and the
+//! frozen engine would have to leave the model.
 
 use std::path::Path;
 
@@ -177,6 +184,23 @@ pub(crate) fn check_material_and_dt(material: &[(&str, f64)], dt: f64) -> Result
         ));
     }
     Ok(())
+}
+
+/// The diagonal of the bounding box of `pts` (a model's size, which scales tolerances); 1 for
+/// no points, and never below the smallest positive number.
+pub(crate) fn bbox_diagonal<'a>(pts: impl IntoIterator<Item = &'a Vec3>) -> f64 {
+    let mut lo = Vec3::repeat(f64::INFINITY);
+    let mut hi = Vec3::repeat(f64::NEG_INFINITY);
+    let mut empty = true;
+    for p in pts {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+        empty = false;
+    }
+    if empty {
+        return 1.0;
+    }
+    (hi - lo).norm().max(f64::MIN_POSITIVE)
 }
 
 /// The elastic reference of a saved flag (`absolute`).

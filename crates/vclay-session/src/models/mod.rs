@@ -1,6 +1,22 @@
 //! The model kinds behind [`crate::Model`]: how each is built from a scenario's tables and
 //! rebuilt from a session file.
 
+/// A scenario table's keys as a typed value: serde with unknown keys refused, `Default` (every
+/// key absent), documented once here: each field is the key of the same name in
+/// `docs/formats.md` section 8 (absent: the documented default).
+macro_rules! scenario_keys {
+    ($(#[$meta:meta])* pub struct $name:ident { $($body:tt)* }) => {
+        $(#[$meta])*
+        ///
+        /// Each field is the key of the same name in `docs/formats.md` section 8 (absent: the
+        /// documented default).
+        #[allow(missing_docs)]
+        #[derive(Debug, Default, serde::Deserialize, Clone, PartialEq, serde::Serialize)]
+        #[serde(deny_unknown_fields)]
+        pub struct $name { $($body)* }
+    };
+}
+
 pub mod dnurbs;
 pub mod dnurbs_patches;
 pub mod dnurbs_tri;
@@ -162,6 +178,22 @@ pub struct KindSpec<M, A, S> {
     /// `[simulation]` without `steps` and `duration` (the run length is the scenario's).
     #[serde(default)]
     pub simulation: S,
+}
+
+impl<M, A: Default, S: Default> KindSpec<M, A, S> {
+    /// The spec of `model` with the default material and simulation.
+    pub fn of_model(model: M) -> Self {
+        Self {
+            model,
+            material: A::default(),
+            simulation: S::default(),
+        }
+    }
+
+    /// This spec with `simulation` instead.
+    pub fn with_simulation(self, simulation: S) -> Self {
+        Self { simulation, ..self }
+    }
 }
 
 impl<M: DeserializeOwned + Default, A: DeserializeOwned + Default, S: DeserializeOwned + Default>

@@ -741,17 +741,15 @@ impl Model for PdeSurfaceModel {
 /// The typed spec of a PDE surface ([`super::ModelSpec`]).
 pub type PdeSpec = super::KindSpec<ModelKeys, super::NoMaterial, super::ClockKeys>;
 
-/// The `[model]` keys of a `pde-surface` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct ModelKeys {
-    pub spec: Option<PathBuf>,
-    pub builtin: Option<String>,
-    pub grid: Option<[usize; 2]>,
-    #[serde(default)]
-    pub params: BTreeMap<String, f64>,
+scenario_keys! {
+    /// The `[model]` keys of a `pde-surface` model.
+    pub struct ModelKeys {
+        pub spec: Option<PathBuf>,
+        pub builtin: Option<String>,
+        pub grid: Option<[usize; 2]>,
+        #[serde(default)]
+        pub params: BTreeMap<String, f64>,
+    }
 }
 
 #[derive(Debug, Serialize, Deserialize)]

@@ -1,6 +1,7 @@
 //! What the kinds that wrap [`GeneralizedDnurbs`] directly (`dnurbs-triangular`,
-//! `dnurbs-patches`) share: one implicit step as the session reports it, and the engine's state
-//! as session files save it.
+//! `dnurbs-patches`) share: one implicit step as the session reports it (the report also
+//! serves `dnurbs-curve`, `-surface` and `-swung`), and the engine's state as session files
+//! save it.
 
 use serde::{Deserialize, Serialize};
 use vclay_dynamics::dnurbs::generalized::{
@@ -22,17 +23,24 @@ pub(crate) fn step_implicit<G: GeneralizedGeometry>(
     let r = engine
         .step(Integrator::Implicit { dt })
         .map_err(SessionError::from)?;
-    *energy = Energy {
-        kinetic: r.kinetic_energy,
-        elastic: r.elastic_energy,
-        tools: 0.0,
-    };
-    Ok(StepReport {
+    let report = step_report(&r, t0);
+    *energy = report.energy;
+    Ok(report)
+}
+
+/// The session's report of a D-NURBS engine's step (either engine) begun at `t0`: its time,
+/// kinetic and elastic energy (tools: 0, D-NURBS report no tool energy) and solver iterations.
+pub(crate) fn step_report(r: &vclay_dynamics::StepReport, t0: std::time::Instant) -> StepReport {
+    StepReport {
         time: r.time,
-        energy: *energy,
+        energy: Energy {
+            kinetic: r.kinetic_energy,
+            elastic: r.elastic_energy,
+            tools: 0.0,
+        },
         iterations: r.solver.iterations,
         seconds: t0.elapsed().as_secs_f64(),
-    })
+    }
 }
 
 /// [`GeneralizedState`] as saved (every number in shortest exact form: a restored session
