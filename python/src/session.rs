@@ -793,10 +793,9 @@ impl Session {
     /// under tension energy of D-NURBS), `tools` (energy stored in tools: the springs of ropes
     /// and data points), and `total` = kinetic + elastic + tools, so the parts add up to it.
     ///
-    /// Limitation: D-NURBS models do not report their tools' energy yet (`tools` is 0.0 with a
-    /// rope or data points attached; the session layer's D-NURBS model does not compute it);
-    /// solids do. The command line's energy table (`vclay run`) has `total` = kinetic +
-    /// elastic, without the tools.
+    /// D-NURBS count a rope's spring at its material point and a data point's at the nearest
+    /// point (`vclay_dynamics::dnurbs::spring_energy`). The command line's energy table
+    /// (`vclay run`, per step) keeps D-NURBS `tools` at 0 and `total` = kinetic + elastic.
     #[pyo3(signature = (model = None))]
     fn energy<'py>(&self, py: Python<'py>, model: Option<&str>) -> PyResult<Bound<'py, PyDict>> {
         let mut guard = self.lock(py)?;

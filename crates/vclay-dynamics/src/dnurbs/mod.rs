@@ -317,6 +317,40 @@ pub enum Force {
     },
 }
 
+/// The energy stored in the springs among `forces` at time `t` (what `StepReport`'s elastic
+/// energy leaves out): `1/2 k |s(u0) - d0(t)|^2` for each spring of eq (19) (a Gaussian-kernel
+/// spring is counted at its centre `u0`), and `1/2 k |s(u*) - d|^2` for each data point with
+/// `u*` its nearest material point (section 7.3). Constant forces, gravity, inflation and
+/// repulsion store none here (their work is not a spring's). `point_at` evaluates `s`,
+/// `nearest` finds `u*`.
+///
+/// # Errors
+/// The first evaluation that fails.
+pub fn spring_energy(
+    forces: &[Force],
+    t: f64,
+    point_at: &dyn Fn([f64; 2]) -> Result<Vec3, DynamicsError>,
+    nearest: &dyn Fn(&Vec3) -> Result<[f64; 2], DynamicsError>,
+) -> Result<f64, DynamicsError> {
+    let mut e = 0.0;
+    for f in forces {
+        match f {
+            Force::Spring {
+                param,
+                target,
+                stiffness,
+                ..
+            } => e += 0.5 * stiffness * (point_at(*param)? - target.at(t)).norm_squared(),
+            Force::DataPoint { point, stiffness } => {
+                let u = nearest(point)?;
+                e += 0.5 * stiffness * (point_at(u)? - point).norm_squared();
+            }
+            _ => {}
+        }
+    }
+    Ok(e)
+}
+
 /// The repulsion density `k d / (|d|^2 + c^2)^(3/2)`, `d = x - center`, of
 /// [`Force::Repulsion`] (per unit length or area).
 pub fn repulsion_density(x: Vec3, center: Vec3, strength: f64, core: f64) -> Vec3 {

@@ -162,6 +162,15 @@ impl Engine {
     fn set_forces(&mut self, f: Vec<Force>) {
         each!(self, gen d => *d.forces_mut() = f, frozen d => *d.forces_mut() = f)
     }
+    /// The energy stored in the ropes' and data points' springs
+    /// (`vclay_dynamics::dnurbs::spring_energy`).
+    fn tool_energy(&self) -> f64 {
+        let forces = each!(self, gen d => d.forces(), frozen d => d.forces());
+        vclay_dynamics::dnurbs::spring_energy(forces, self.time(), &|u| self.point_at(u), &|x| {
+            self.nearest_param(x)
+        })
+        .unwrap_or(f64::NAN)
+    }
     fn state(&self) -> EngineState {
         each!(self, gen d => EngineState::Generalized(d.state()),
             frozen d => EngineState::Frozen(d.state()))
@@ -2157,7 +2166,7 @@ impl Model for DnurbsModel {
         Energy {
             kinetic: self.ed.kinetic,
             elastic: self.engine.elastic_energy(),
-            tools: 0.0,
+            tools: self.engine.tool_energy(),
         }
     }
 
