@@ -378,7 +378,7 @@ const SUBDIVISION: &[&str] = &[
 #[rustfmt::skip]
 const DNURBS_SURFACE: &[&str] = &[
     "rope", "move-rope", "force", "gravity", "inflate", "repel", "data", "release", "fix",
-    "free", "material", "plastic-reset", "stop", "move-point", "set-weight", "set",
+    "free", "smooth", "material", "plastic-reset", "stop", "move-point", "set-weight", "set",
     "integrator", "constraint",
 ];
 
@@ -392,7 +392,9 @@ pub fn actions(kind: ModelKind) -> Vec<&'static str> {
     match kind {
         ModelKind::SubdivisionSolid => SUBDIVISION.to_vec(),
         ModelKind::BsplineSolid => but(SUBDIVISION, &["extrude", "delete-cell"]),
-        ModelKind::DnurbsSurface | ModelKind::DnurbsSwung => DNURBS_SURFACE.to_vec(),
+        ModelKind::DnurbsSurface => DNURBS_SURFACE.to_vec(),
+        // A swung surface's coordinates are its two curves' (eq 7), not the net it shows.
+        ModelKind::DnurbsSwung => but(DNURBS_SURFACE, &["smooth"]),
         ModelKind::DnurbsCurve => but(DNURBS_SURFACE, &["inflate"]),
         ModelKind::Ffd => vec!["ffd-move", "move-point", "set-weight", "set"],
         ModelKind::PdeSurface => vec!["pde-set", "pde-local", "release", "set"],
@@ -400,6 +402,7 @@ pub fn actions(kind: ModelKind) -> Vec<&'static str> {
         ModelKind::DnurbsPatches => but(
             DNURBS_SURFACE,
             &[
+                "smooth",
                 "gravity",
                 "inflate",
                 "repel",

@@ -165,3 +165,79 @@ fn the_smooth_brush_flattens_a_sculpted_bump_through_the_physics() {
         .to_string();
     assert!(e.contains("strength"), "{e}");
 }
+
+/// Highest control point of the model.
+fn top_control(s: &Session) -> f64 {
+    s.model(None)
+        .unwrap()
+        .control_points()
+        .iter()
+        .map(|p| p.z)
+        .fold(f64::MIN, f64::max)
+}
+
+#[test]
+fn the_smooth_brush_fairs_a_dnurbs_bump_and_the_frozen_engine_refuses() {
+    let sheet = |engine: &str| {
+        let text = format!(
+            "[model]\nkind = \"dnurbs-surface\"\nsize = [8, 8]\nengine = \"{engine}\"\n\
+             [simulation]\ndt = 0.01\nsteps = 10\n"
+        );
+        Scenario::parse(&text, "s.toml", "s", Path::new("."))
+            .unwrap()
+            .session
+    };
+    let mut s = sheet("generalized");
+    // The sheet's border held, so the rope raises a bump instead of lifting the sheet.
+    for (lo, hi) in [
+        ([-0.1, -0.1, -1.0], [1.1, 0.05, 1.0]),
+        ([-0.1, 0.95, -1.0], [1.1, 1.1, 1.0]),
+        ([-0.1, -0.1, -1.0], [0.05, 1.1, 1.0]),
+        ([0.95, -0.1, -1.0], [1.1, 1.1, 1.0]),
+    ] {
+        s.apply(Command::new(Edit::Fix(vclay_session::Selection::rest_box(
+            lo, hi,
+        ))))
+        .unwrap();
+    }
+    let rope: Edit = serde_json::from_value(serde_json::json!({
+        "action": "rope", "name": "r", "from": [0.5, 0.5, 0.0], "to": [0.5, 0.5, 0.5],
+        "stiffness": 200.0
+    }))
+    .unwrap();
+    s.apply(Command::new(rope)).unwrap();
+    s.run(60).unwrap();
+    for e in [
+        Edit::Release { name: "r".into() },
+        Edit::Stop,
+        Edit::PlasticReset,
+    ] {
+        s.apply(Command::new(e)).unwrap();
+    }
+    let bump = top_control(&s);
+    assert!(bump > 0.1, "the bump: {bump}");
+    let msg = s
+        .apply(Command::new(Edit::Smooth {
+            near: [0.5, 0.5, bump],
+            radius: 0.4,
+            strength: Some(1.0),
+        }))
+        .unwrap();
+    assert!(msg.contains("smoothed the rest shape at"), "{msg}");
+    s.run(100).unwrap();
+    let after = top_control(&s);
+    assert!(
+        after < 0.8 * bump,
+        "the surface settled lower: {after} from {bump}"
+    );
+    let mut f = sheet("frozen");
+    let e = f
+        .apply(Command::new(Edit::Smooth {
+            near: [0.5, 0.5, 0.0],
+            radius: 0.3,
+            strength: None,
+        }))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("frozen"), "{e}");
+}

@@ -222,6 +222,28 @@ impl Engine {
         each!(self, gen d => gen_point(d.geometry(), param),
             frozen d => frozen_point(d, param))
     }
+    /// Puts `points` (one per control point, as [`Self::control_points`] counts them) into the
+    /// rest coordinates of a generalized engine (weights and default-held coordinates stay);
+    /// frozen-weight engines have no rest coordinates in their undo state and refuse.
+    fn set_rest_points(&mut self, points: &[Vec3]) -> Result<(), SessionError> {
+        let groups = self.groups();
+        let held = self.default_fixed();
+        each!(self, gen d => {
+            let mut q0 = d.rest_coordinates().to_vec();
+            for (g, p) in groups.iter().zip(points) {
+                for k in 0..3 {
+                    if !held.contains(&(g.start + k)) {
+                        q0[g.start + k] = p[k];
+                    }
+                }
+            }
+            d.set_rest_coordinates(&q0).map_err(dyn_err)
+        },
+        frozen _d => Err(cmd(
+            "the smooth brush changes the rest shape, which a D-NURBS with frozen weights \
+             (engine = \"frozen\") keeps in its elements; use the generalized engine"
+        )))
+    }
     /// Coordinate ranges of the control points (x, y, z, w) of a generalized engine.
     fn groups(&self) -> Vec<Range<usize>> {
         let g = each!(self, gen d => d.geometry().coordinate_groups(), frozen => return Vec::new());
@@ -2087,6 +2109,7 @@ impl crate::model::Stateful for DnurbsModel {
             Edit::Fix { .. } | Edit::Free { .. } | Edit::Material { .. } => {
                 self.apply_net_edit(edit, before)
             }
+            Edit::Smooth { .. } => self.apply_smooth(edit, before),
             Edit::PlasticReset
             | Edit::Stop
             | Edit::MovePoint { .. }
@@ -2582,5 +2605,43 @@ mod tests {
         assert_eq!(serde_json::to_string(&s).unwrap(), text);
         let extra = text.replace("\"steps\":3", "\"steps\":3,\"extra\":1");
         assert!(serde_json::from_str::<SavedState>(&extra).is_err());
+    }
+}
+
+impl DnurbsModel {
+    /// [`Edit::Smooth`]: one umbrella step of the rest control points under the brush
+    /// (`crate::smooth`, neighbours along the control net); eq (17)'s rest values follow and
+    /// the surface settles towards the smoothed rest shape as it steps. Undone with the state
+    /// (the engine state holds the rest coordinates).
+    fn apply_smooth(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
+        let Edit::Smooth {
+            near,
+            radius,
+            strength,
+        } = edit
+        else {
+            return Err(misrouted());
+        };
+        let sel = if *radius > 0.0 {
+            crate::command::Selection::brush(*near, *radius)
+        } else {
+            crate::command::Selection::nearest(*near)
+        };
+        let selected: Vec<usize> = crate::tools::select_points(&NetOf(self), &sel)
+            .map_err(cmd)?
+            .into_iter()
+            .filter(|&i| !self.engine.is_point_fixed(i))
+            .collect();
+        let rest = self.engine.control_points(true);
+        let nb = crate::smooth::neighbours(&[self.control_net()], rest.len());
+        let smoothed = crate::smooth::smooth_rest(&rest, &nb, &selected, strength.unwrap_or(0.5));
+        self.engine.set_rest_points(&smoothed)?;
+        self.edited(
+            format!(
+                "smoothed the rest shape at {} control points",
+                selected.len()
+            ),
+            before,
+        )
     }
 }
