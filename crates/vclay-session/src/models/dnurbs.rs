@@ -2590,24 +2590,6 @@ enum SavedState {
     },
 }
 
-#[cfg(test)]
-mod tests {
-    use super::SavedState;
-
-    /// The generalized state keeps the layout session files have had since the session layer
-    /// (the `type` tag beside the engine's fields): such a file loads, writes back the same,
-    /// and an unknown key is still refused.
-    #[test]
-    fn generalized_state_keeps_its_file_layout() {
-        let text = r#"{"type":"generalized","coordinates":[0.0,1.5],"velocity":[0.0,0.25],"rest_coordinates":[0.0,1.0],"fixed":[true,false],"weight_targets":[1.0],"weight_penalty":0.5,"absolute":true,"time":0.125,"steps":3,"substeps":1,"weight_projections":2}"#;
-        let s: SavedState = serde_json::from_str(text).unwrap();
-        assert!(matches!(s, SavedState::Generalized(_)));
-        assert_eq!(serde_json::to_string(&s).unwrap(), text);
-        let extra = text.replace("\"steps\":3", "\"steps\":3,\"extra\":1");
-        assert!(serde_json::from_str::<SavedState>(&extra).is_err());
-    }
-}
-
 impl DnurbsModel {
     /// [`Edit::Smooth`]: one umbrella step of the rest control points under the brush
     /// (`crate::smooth`, neighbours along the control net); eq (17)'s rest values follow and
@@ -2643,5 +2625,23 @@ impl DnurbsModel {
             ),
             before,
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::SavedState;
+
+    /// The generalized state keeps the layout session files have had since the session layer
+    /// (the `type` tag beside the engine's fields): such a file loads, writes back the same,
+    /// and an unknown key is still refused.
+    #[test]
+    fn generalized_state_keeps_its_file_layout() {
+        let text = r#"{"type":"generalized","coordinates":[0.0,1.5],"velocity":[0.0,0.25],"rest_coordinates":[0.0,1.0],"fixed":[true,false],"weight_targets":[1.0],"weight_penalty":0.5,"absolute":true,"time":0.125,"steps":3,"substeps":1,"weight_projections":2}"#;
+        let s: SavedState = serde_json::from_str(text).unwrap();
+        assert!(matches!(s, SavedState::Generalized(_)));
+        assert_eq!(serde_json::to_string(&s).unwrap(), text);
+        let extra = text.replace("\"steps\":3", "\"steps\":3,\"extra\":1");
+        assert!(serde_json::from_str::<SavedState>(&extra).is_err());
     }
 }
