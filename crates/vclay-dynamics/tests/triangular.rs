@@ -6,7 +6,9 @@ mod common;
 
 use vclay_dynamics::dnurbs::generalized::GeneralizedGeometry;
 use vclay_dynamics::dnurbs::rounding::{RoundingKind, RoundingModel, normal_jump};
-use vclay_dynamics::dnurbs::{Integrator, TriangleQuadrature, TriangularGeometry};
+use vclay_dynamics::dnurbs::{
+    Density, Integrator, Material, TriangleQuadrature, TriangularGeometry,
+};
 
 /// `sum_e integral_e f(N)` over all elements with the geometry's quadrature of `k` points.
 fn integrate(g: &TriangularGeometry, k: usize, f: impl Fn(&[[f64; 6]]) -> f64) -> f64 {
@@ -290,4 +292,184 @@ fn profile_corner_steps() {
     common::profile_steps(|| {
         m.step(Integrator::Implicit { dt: r.dt() }).unwrap();
     });
+}
+
+/// The wrong-way share ([`Turning::wrong_way`]) of a rounding model's surface after `steps`
+/// implicit steps with `material` (default quadrature, the scenarios' rule); writes the final
+/// mesh as OBJ into `$VCLAY_ROUNDING_OBJ` when that is set (to look at it).
+fn wrong_way_after(kind: RoundingKind, material: Material, steps: usize, tag: &str) -> f64 {
+    use vclay_dynamics::dnurbs::rounding::mesh_turning;
+    let r = RoundingModel::new(kind).unwrap();
+    let mut m = r
+        .dynamics_with_material(TriangleQuadrature::default(), material)
+        .unwrap();
+    m.run(r.dt(), steps).unwrap();
+    let mut mesh = vclay_core::TriMesh::new();
+    m.geometry().surface().tessellate(8, &mut mesh).unwrap();
+    if let Ok(dir) = std::env::var("VCLAY_ROUNDING_OBJ") {
+        let mut obj = String::new();
+        for p in &mesh.positions {
+            obj += &format!("v {} {} {}\n", p.x, p.y, p.z);
+        }
+        for t in &mesh.triangles {
+            obj += &format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+        }
+        std::fs::write(format!("{dir}/{kind:?}_{tag}.obj"), obj).unwrap();
+    }
+    let t = mesh_turning(&mesh);
+    eprintln!(
+        "{kind:?} {tag} after {steps} steps: turning +{:.4} -{:.4}, wrong way {:.2} %",
+        t.positive,
+        t.negative,
+        100.0 * t.wrong_way()
+    );
+    t.wrong_way()
+}
+
+/// Issue 28, the root cause of the wrong-way turning of the Fig 8 fillets, measured on the
+/// edge model: the thin plate under tension with the Table 1 "Edge rounding" densities
+/// (`a11 = 1000`, `b11 = 1` over unit domain spans) is tension-dominated, and its discrete
+/// equilibrium next to a held boundary alternates from span to span (see the module docs of
+/// `rounding.rs`): about a quarter of the turning folds the wrong way (the issue measured
+/// 24-30 % on the shipped scenarios). The same model with `a11 <= 6 b11` per span turns much
+/// less the wrong way. Asserts the measured directions, so a fix shows here first.
+#[test]
+fn issue_28_tension_dominated_rounding_folds_the_wrong_way() {
+    let table1 = RoundingKind::Edge.preset().surface_material();
+    let shipped = wrong_way_after(RoundingKind::Edge, table1.clone(), 100, "table1");
+    let balanced = wrong_way_after(
+        RoundingKind::Edge,
+        RoundingKind::Edge.material(),
+        100,
+        "a11_6",
+    );
+    // The corner and the bevel with bending raised to a = 6 b (bevel: b = a / 6), printed
+    // for the record (issue 28's report).
+    for kind in [RoundingKind::Corner, RoundingKind::Bevel] {
+        let mut m = kind.preset().surface_material();
+        let a = kind.preset().alpha[0];
+        m.beta = vec![Density::Constant(a / 6.0); 3];
+        wrong_way_after(kind, m, 100, "b_a_over_6");
+    }
+    assert!(shipped > 0.1, "Table 1 edge: wrong-way share {shipped}");
+    assert!(balanced < 0.02, "a11 = 6: {balanced} against {shipped}");
+}
+
+/// Issue 28, Fig 8a2 (d-nurbs.txt section 7.3): the edge relaxes into a convex fillet tangent
+/// to both faces, with the densities of `RoundingKind::material` (Table 1 read over the span
+/// `RoundingKind::span`). As in the paper the patch covers the region to be rounded and its
+/// far boundaries are held to the faces in position and normal; the faces themselves lie
+/// outside it. Checks, after the scenario's 100 steps:
+/// - convex: under 2 % of the turning the wrong way. The tension-dominated reading gives 30 %;
+///   this reading leaves a residual of 1.0-1.6 % (measured for a11 from 1 to 6, 100 to 300
+///   steps, with and without the damping rescaled), whose source is not located yet, so the
+///   tolerance bounds it rather than explains it;
+/// - tangent to the faces: the normal along the held boundaries is the face normal;
+/// - rounded: the middle of the old edge moved into the solid (to about 0.5 from each face).
+#[test]
+fn issue_28_edge_rounding_makes_a_convex_fillet_tangent_to_the_faces() {
+    use vclay_dynamics::dnurbs::rounding::mesh_turning;
+    let r = RoundingModel::new(RoundingKind::Edge).unwrap();
+    let mut m = r.dynamics(TriangleQuadrature::default()).unwrap();
+    m.run(r.dt(), 100).unwrap();
+    let s = m.geometry().surface();
+    let mut mesh = vclay_core::TriMesh::new();
+    s.tessellate(8, &mut mesh).unwrap();
+    let w = mesh_turning(&mesh).wrong_way();
+    // Strips next to the held boundaries: how far they leave the face planes z = 0 and x = 1.5
+    // (printed: the fillet starts at the boundary, tangentially).
+    let (mut off_a, mut off_b) = (0.0f64, 0.0f64);
+    for i in 0..=10 {
+        for j in 0..=10 {
+            let (u, v) = (0.05 * i as f64, 0.1 * j as f64);
+            off_a = off_a.max(s.point([u, v]).unwrap().z.abs());
+            off_b = off_b.max((s.point([3.0 - u, v]).unwrap().x - 1.5).abs());
+        }
+    }
+    // Normals at the held boundaries against the face normals (radians).
+    let mut tilt = 0.0f64;
+    for j in 0..=10 {
+        let v = 0.1 * j as f64;
+        for (u, face) in [(0.0, vclay_core::Vec3::z()), (3.0, vclay_core::Vec3::x())] {
+            let d = s.derivatives([u, v]).unwrap();
+            let n = d[1].cross(&d[2]).normalize();
+            tilt = tilt.max(n.dot(&face).abs().clamp(0.0, 1.0).acos());
+        }
+    }
+    let x = s.point([1.5, 0.5]).unwrap();
+    eprintln!(
+        "edge: wrong way {:.2} %, face strips off their planes {off_a:.2e} / {off_b:.2e}, \
+         boundary normal tilt {tilt:.2e} rad, old edge middle at {x:?}",
+        100.0 * w
+    );
+    assert!(w < 0.02, "{:.2} % folds the wrong way", 100.0 * w);
+    assert!(tilt < 1e-9, "the boundary normals tilt by {tilt}");
+    assert!(x.x < 1.4 && x.z < -0.1, "the edge is not rounded: {x:?}");
+}
+
+/// Issue 28, the paper's property (Fig 8a2-c2): each fillet is convex, turning one way only
+/// (wrong-way share under 1e-3: a convex control polygon of a quadratic spline gives 0 in
+/// exact arithmetic; the tessellation's planar parts add only rounding noise). Fails today for
+/// the reason `issue_28_tension_dominated_rounding_folds_the_wrong_way` measures.
+#[test]
+#[ignore = "issue 28: open, the Table 1 rounding densities are tension-dominated (rounding.rs docs)"]
+fn issue_28_fillets_are_convex() {
+    let w: Vec<_> = [
+        RoundingKind::Edge,
+        RoundingKind::Corner,
+        RoundingKind::Bevel,
+    ]
+    .into_iter()
+    .map(|kind| {
+        let w = wrong_way_after(kind, kind.preset().surface_material(), 100, "paper");
+        (kind, w)
+    })
+    .collect();
+    assert!(w.iter().all(|x| x.1 < 1e-3), "wrong-way shares {w:?}");
+}
+
+/// [`mesh_turning`] on known surfaces: a quarter cylinder turns one way only, an S-shaped
+/// sheet (two opposite quarter cylinders) half each way, a plane not at all.
+#[test]
+fn mesh_turning_measures_convexity() {
+    use vclay_dynamics::dnurbs::rounding::mesh_turning;
+    let sheet = |profile: &dyn Fn(f64) -> (f64, f64)| {
+        let (nu, nv) = (32, 4);
+        let mut m = vclay_core::TriMesh::new();
+        for i in 0..=nu {
+            let (x, z) = profile(i as f64 / nu as f64);
+            for j in 0..=nv {
+                m.positions
+                    .push(vclay_core::Vec3::new(x, j as f64 / nv as f64, z));
+            }
+        }
+        let id = |i: usize, j: usize| (i * (nv + 1) + j) as u32;
+        for i in 0..nu {
+            for j in 0..nv {
+                m.triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                m.triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        mesh_turning(&m)
+    };
+    let h = std::f64::consts::FRAC_PI_2;
+    let quarter = sheet(&|s| ((s * h).sin(), (s * h).cos()));
+    assert_eq!(quarter.wrong_way(), 0.0);
+    // 31 interior creases of pi/64 each, 1 long (the quads are planar: their diagonals turn 0).
+    assert!(
+        (quarter.positive - 31.0 * h / 32.0).abs() < 1e-12,
+        "{quarter:?}"
+    );
+    let s_shape = sheet(&|s| {
+        if s < 0.5 {
+            ((2.0 * s * h).sin(), (2.0 * s * h).cos())
+        } else {
+            (
+                2.0 - (2.0 * (1.0 - s) * h).sin(),
+                -(2.0 * (1.0 - s) * h).cos(),
+            )
+        }
+    });
+    assert!((s_shape.wrong_way() - 0.5).abs() < 1e-6, "{s_shape:?}");
+    assert_eq!(sheet(&|s| (s, 0.0)).wrong_way(), 0.0);
 }

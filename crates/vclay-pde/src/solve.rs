@@ -45,9 +45,17 @@ pub struct SolveStats {
     /// Root mean square residual over all components and collocation points.
     pub residual_rms: f64,
     /// Per component: `|B_i P_i + C_i| / |C_i|`, the fraction of the residual of the Hermite
-    /// part alone (all p = 0) that the trial terms leave (0 when C_i = 0).
+    /// part alone (all p = 0) that the trial terms leave (0 when C_i = 0). It exceeds 1 when
+    /// side conditions (eqs 33-37) fix the trial constants instead of the least squares (11):
+    /// on the aircraft's three-sided caps (nose and tail cap patches) the side conditions fix
+    /// all 6 constants of the y and z components, nothing is left to minimise, and the
+    /// Hermite part alone nearly solves the PDE there (`|C|` 6e-7 to 6e-6) while the
+    /// side-fixed terms leave 1e-3 to 1e-2, a ratio of about 1,600 to 2,500 (issue 28,
+    /// measured on `tests/aircraft.rs`). Read it with `residual_norm`, not alone.
     pub residual_relative: [f64; 3],
-    /// Largest condition estimate of the equilibrated collocation matrices.
+    /// Largest condition estimate of the equilibrated collocation matrices; 1.0 for a
+    /// component whose constants the side conditions fix completely (no least-squares system
+    /// is solved, as on the aircraft's caps) or that has no constants.
     pub condition: f64,
     /// Collocation points M.
     pub points: usize,

@@ -1,5 +1,5 @@
 //! Demo step of the dynamic solids layer: the rope on the 4^3 cube
-//! (`subdivision-solids-journal.txt` Fig 7 / Fig 12), run from the shipped scenario file
+//! (`subdivision-solids-conference.txt` Fig 7; the journal has no such figure), run from the shipped scenario file
 //! through the session layer.
 
 use anyhow::Result;
