@@ -1121,10 +1121,17 @@ fn is_structure(type_name: &str) -> bool {
         "_STYLE",
         "_ASSIGNMENT",
     ];
-    const NAMES: [&str; 18] = [
+    // Placements (a representation's frame: an axis placement, its directions and origin) are
+    // coordinate frames, not shape; an unused one is the product's own frame.
+    const NAMES: [&str; 23] = [
         "REPRESENTATION",
         "GEOMETRIC_CURVE_SET",
         "GEOMETRIC_SET",
+        "AXIS2_PLACEMENT_3D",
+        "AXIS2_PLACEMENT_2D",
+        "AXIS1_PLACEMENT",
+        "DIRECTION",
+        "CARTESIAN_POINT",
         "SI_UNIT",
         "NAMED_UNIT",
         "DIMENSIONAL_EXPONENTS",
