@@ -16,7 +16,48 @@
 
 use vclay_core::Vec3;
 
+use crate::SessionError;
+use crate::command::{Edit, Selection};
 use crate::model::{LineRole, LineSet};
+use crate::tools::ControlNet;
+
+/// What an [`Edit::Smooth`] does to `net`, whose edges are the `control_net` line set: the rest
+/// control points after one umbrella step of the edit's strength (default 0.5) at the unfixed
+/// points under its brush (current positions; radius 0: the nearest point), and how many
+/// points were smoothed. The kinds put the result into their rest shape.
+pub(crate) fn smoothed_rest<N: ControlNet + ?Sized>(
+    net: &N,
+    control_net: LineSet,
+    edit: &Edit,
+) -> Result<(Vec<Vec3>, usize), SessionError> {
+    let Edit::Smooth {
+        near,
+        radius,
+        strength,
+    } = edit
+    else {
+        return Err(SessionError::model("not a smooth edit"));
+    };
+    let sel = if *radius > 0.0 {
+        Selection::brush(*near, *radius)
+    } else {
+        Selection::nearest(*near)
+    };
+    let selected: Vec<usize> = crate::tools::select_points(net, &sel)
+        .map_err(|e| SessionError::command("", "", e))?
+        .into_iter()
+        .filter(|&i| !net.is_fixed(i))
+        .collect();
+    let rest = net.rest_points();
+    let nb = neighbours(&[control_net], rest.len());
+    let smoothed = smooth_rest(&rest, &nb, &selected, strength.unwrap_or(0.5));
+    Ok((smoothed, selected.len()))
+}
+
+/// The log line of a smooth edit that smoothed `n` control points.
+pub(crate) fn message(n: usize) -> String {
+    format!("smoothed the rest shape at {n} control points")
+}
 
 /// The control net's neighbours of each of `n` points, from the segments of the model's
 /// [`LineRole::ControlNet`] line sets (duplicates removed).

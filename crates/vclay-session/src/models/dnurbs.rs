@@ -2596,35 +2596,10 @@ impl DnurbsModel {
     /// the surface settles towards the smoothed rest shape as it steps. Undone with the state
     /// (the engine state holds the rest coordinates).
     fn apply_smooth(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
-        let Edit::Smooth {
-            near,
-            radius,
-            strength,
-        } = edit
-        else {
-            return Err(misrouted());
-        };
-        let sel = if *radius > 0.0 {
-            crate::command::Selection::brush(*near, *radius)
-        } else {
-            crate::command::Selection::nearest(*near)
-        };
-        let selected: Vec<usize> = crate::tools::select_points(&NetOf(self), &sel)
-            .map_err(cmd)?
-            .into_iter()
-            .filter(|&i| !self.engine.is_point_fixed(i))
-            .collect();
-        let rest = self.engine.control_points(true);
-        let nb = crate::smooth::neighbours(&[self.control_net()], rest.len());
-        let smoothed = crate::smooth::smooth_rest(&rest, &nb, &selected, strength.unwrap_or(0.5));
+        let net = self.control_net();
+        let (smoothed, n) = crate::smooth::smoothed_rest(&NetOf(self), net, edit)?;
         self.engine.set_rest_points(&smoothed)?;
-        self.edited(
-            format!(
-                "smoothed the rest shape at {} control points",
-                selected.len()
-            ),
-            before,
-        )
+        self.edited(crate::smooth::message(n), before)
     }
 }
 

@@ -2069,37 +2069,11 @@ impl SolidModel {
     /// (`crate::smooth`); the springs' rest lengths follow (`A p0`, eq 3) and the clay settles
     /// towards the smoothed rest shape as it steps. Undone with the state, rest shape included.
     fn apply_smooth(&mut self, edit: &Edit, before: SolidSnap) -> Result<Applied, SessionError> {
-        let Edit::Smooth {
-            near,
-            radius,
-            strength,
-        } = edit
-        else {
-            return Err(misrouted());
-        };
-        let sel = if *radius > 0.0 {
-            crate::command::Selection::brush(*near, *radius)
-        } else {
-            crate::command::Selection::nearest(*near)
-        };
-        let selected: Vec<usize> = crate::tools::select_points(&self.solid, &sel)
-            .map_err(cmd)?
-            .into_iter()
-            .filter(|&i| !self.solid.is_fixed(i))
-            .collect();
-        let rest = self.solid.rest_shape().0.to_vec();
-        let nb = crate::smooth::neighbours(&[self.control_net()], rest.len());
-        let smoothed = crate::smooth::smooth_rest(&rest, &nb, &selected, strength.unwrap_or(0.5));
+        let (smoothed, n) = crate::smooth::smoothed_rest(&self.solid, self.control_net(), edit)?;
         self.solid
             .set_rest_control_points(&smoothed)
             .map_err(kernel)?;
         self.revision += 1;
-        Ok(Applied::by_state(
-            format!(
-                "smoothed the rest shape at {} control points",
-                selected.len()
-            ),
-            before,
-        ))
+        Ok(Applied::by_state(crate::smooth::message(n), before))
     }
 }
