@@ -20,41 +20,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
-for tool in Xvfb xdotool import convert python3; do
-  if ! command -v "$tool" >/dev/null 2>&1; then
-    echo "check_designer: SKIPPED: $tool not installed (apt-get install xvfb xdotool imagemagick libgl1-mesa-dri)"
-    exit 0
-  fi
-done
-target=${CARGO_TARGET_DIR:-$root/target}
-studio=${VCLAY_STUDIO:-}
-if [ -z "$studio" ]; then
-  cargo build -q -p vclay-studio
-  studio=$target/debug/vclay-studio
-fi
+name=check_designer
 work=$root/target/check-designer
-rm -rf "$work"; mkdir -p "$work"
-# A display no other X server holds.
-n=80
-while [ -e "/tmp/.X$n-lock" ] && [ "$n" -lt 99 ]; do n=$((n + 1)); done
-display=:$n
-Xvfb "$display" -screen 0 1280x800x24 -nolisten tcp -noreset >"$work/xvfb.log" 2>&1 &
-xvfb=$!
-studio_pid=
-cleanup() {
-  [ -n "$studio_pid" ] && kill "$studio_pid" 2>/dev/null || true
-  kill "$xvfb" 2>/dev/null || true
-}
-trap cleanup EXIT
-export DISPLAY=$display LIBGL_ALWAYS_SOFTWARE=1 VCLAY_NO_NATIVE_DIALOGS=1
-ready=
-for _ in $(seq 100); do
-  if command -v xdpyinfo >/dev/null 2>&1; then xdpyinfo >/dev/null 2>&1 && { ready=1; break; }
-  else sleep 2; ready=1; break; fi
-  kill -0 "$xvfb" 2>/dev/null || break
-  sleep 0.1
-done
-[ -n "$ready" ] || { cat "$work/xvfb.log"; echo "check_designer: FAILED: Xvfb did not start"; exit 1; }
+# shellcheck source=bench/studio_window.sh
+source bench/studio_window.sh
 
 win=
 start() { # FILE: starts the studio on FILE and waits for its window

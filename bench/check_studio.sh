@@ -12,31 +12,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
-for tool in Xvfb xdotool import convert python3; do
-  if ! command -v "$tool" >/dev/null 2>&1; then
-    echo "check_studio: SKIPPED: $tool not installed (apt-get install xvfb xdotool imagemagick libgl1-mesa-dri)"
-    exit 0
-  fi
-done
-target=${CARGO_TARGET_DIR:-$root/target}
-studio=${VCLAY_STUDIO:-}
-if [ -z "$studio" ]; then
-  cargo build -q -p vclay-studio
-  studio=$target/debug/vclay-studio
-fi
+name=check_studio
 work=$root/target/check-studio
-rm -rf "$work"; mkdir -p "$work"
-display=:$((90 + RANDOM % 9))
-Xvfb "$display" -screen 0 1280x800x24 -nolisten tcp >"$work/xvfb.log" 2>&1 &
-xvfb=$!
-studio_pid=
-cleanup() {
-  [ -n "$studio_pid" ] && kill "$studio_pid" 2>/dev/null || true
-  kill "$xvfb" 2>/dev/null || true
-}
-trap cleanup EXIT
-export DISPLAY=$display LIBGL_ALWAYS_SOFTWARE=1 VCLAY_NO_NATIVE_DIALOGS=1
-for _ in $(seq 50); do xdpyinfo >/dev/null 2>&1 && break; sleep 0.1; done 2>/dev/null || sleep 2
+# shellcheck source=bench/studio_window.sh
+source bench/studio_window.sh
 
 "$studio" examples/scenarios/fig07_rope_cube.toml --autosave "$work/autosave.session" \
   --no-recovery >"$work/studio.log" 2>&1 &
