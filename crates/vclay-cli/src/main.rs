@@ -91,6 +91,10 @@ enum Command {
         /// Output folder.
         #[arg(long, default_value = "vclay-demo")]
         out: PathBuf,
+        /// Run only these steps (comma-separated: torus, sheet, volume, batch, fit, egg,
+        /// rounding, subdivision, ffd, pde, exchange, rope, studio); default all.
+        #[arg(long, value_delimiter = ',', value_name = "STEPS")]
+        only: Vec<String>,
     },
     /// Time spline evaluation (and with --physics the simulations' speed goals) as JSON.
     Bench {
@@ -207,7 +211,7 @@ fn main() -> ExitCode {
             };
             eval::run(&model, &params, derivatives, entity, boundary.into())
         }
-        Command::Demo { out } => demo::run(&out),
+        Command::Demo { out, only } => demo::run(&out, &only),
         Command::Bench {
             seconds,
             physics,

@@ -200,10 +200,13 @@ fn bad_inputs_exit_2_and_name_the_place() {
 
 #[test]
 fn demo_writes_its_files() {
-    // Run as the README says: `demo` in the current folder writes ./vclay-demo.
+    // Run as the README says: `demo` in the current folder writes ./vclay-demo. The whole demo
+    // takes a minute and a half in a debug build; the spline steps show the folder, the files
+    // and the summary, and CI runs the whole demo in release and checks every file its summary
+    // lists (.ci/run).
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().join("vclay-demo");
-    let out = vclay_in(dir.path(), &["demo"]);
+    let out = vclay_in(dir.path(), &["demo", "--only", "torus,sheet,volume"]);
     assert!(
         out.status.success(),
         "{}",
@@ -248,4 +251,23 @@ fn demo_writes_its_files() {
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["points"].as_array().unwrap().len(), 1, "{v}");
     assert!(v["derivatives"].is_array(), "{v}");
+
+    // The summary says which steps ran and that the demo was partial.
+    let summary: Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["complete"], false);
+    let names: Vec<&str> = summary["steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["exact torus", "refined sheet", "twisted volume"]);
+    // An unknown step is named, with the list of steps, before anything is written.
+    let other = dir.path().join("other");
+    let out = vclay_in(dir.path(), &["demo", "--only", "torus,teapot", "--out", "other"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("`teapot`") && err.contains("rope"), "{err}");
+    assert!(!other.exists());
 }

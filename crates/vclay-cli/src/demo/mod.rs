@@ -28,6 +28,8 @@ pub type StepOutput = (String, Vec<String>);
 pub struct Step {
     /// Short name shown in the summary.
     pub name: &'static str,
+    /// One word that selects the step with `vclay demo --only` (e.g. `torus`, `ffd`).
+    pub id: &'static str,
     /// The paper and figure it reproduces, e.g. "d-nurbs.txt Fig 6" (empty if none).
     pub reproduces: &'static str,
     /// Runs the step, writing into the output folder.
@@ -39,66 +41,79 @@ fn steps() -> Vec<Step> {
     vec![
         Step {
             name: "exact torus",
+            id: "torus",
             reproduces: "",
             run: spline::torus,
         },
         Step {
             name: "refined sheet",
+            id: "sheet",
             reproduces: "",
             run: spline::refined_sheet,
         },
         Step {
             name: "twisted volume",
+            id: "volume",
             reproduces: "",
             run: spline::twisted_volume,
         },
         Step {
             name: "batched evaluation",
+            id: "batch",
             reproduces: "",
             run: spline::batched_evaluation,
         },
         Step {
             name: "d-nurbs hemisphere fit",
+            id: "fit",
             reproduces: "d-nurbs.txt Fig 7a",
             run: dnurbs::hemisphere_fit,
         },
         Step {
             name: "d-nurbs swung egg",
+            id: "egg",
             reproduces: "d-nurbs.txt Fig 9a",
             run: dnurbs::swung_egg,
         },
         Step {
             name: "d-nurbs rounding",
+            id: "rounding",
             reproduces: "d-nurbs.txt Fig 8",
             run: rounding::rounding,
         },
         Step {
             name: "subdivision solids",
+            id: "subdivision",
             reproduces: "subdivision-solids-conference.txt Table 1, Fig 1; journal Table 2",
             run: lattice::subdivided_solids,
         },
         Step {
             name: "ffd bottle",
+            id: "ffd",
             reproduces: "ffd-direct-manipulation.txt Fig 3",
             run: ffd::bottle,
         },
         Step {
             name: "pde glass animation",
+            id: "pde",
             reproduces: "dynamic-pde-surfaces.txt Fig 2",
             run: pde::glass,
         },
         Step {
             name: "pictures and exchange",
+            id: "exchange",
             reproduces: "",
             run: exchange::pictures_and_exchange,
         },
         Step {
             name: "rope on a dynamic cube",
+            id: "rope",
             reproduces: "subdivision-solids-journal.txt Fig 7, Fig 12",
             run: solids::rope_cube,
         },
         Step {
             name: "studio",
+            id: "studio",
             reproduces: "",
             run: studio::screenshot,
         },
@@ -114,10 +129,30 @@ struct Record {
     millis: f64,
 }
 
-/// Runs the demo into `out`.
-pub fn run(out: &Path) -> Result<()> {
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+/// The steps that `only` names (every step when `only` is empty), in the demo's order; an
+/// unknown name is an error that lists the names there are.
+fn selected(only: &[String]) -> Result<Vec<Step>> {
     let steps = steps();
+    if only.is_empty() {
+        return Ok(steps);
+    }
+    let ids: Vec<&str> = steps.iter().map(|s| s.id).collect();
+    if let Some(bad) = only.iter().find(|o| !ids.contains(&o.as_str())) {
+        anyhow::bail!(
+            "--only: no demo step `{bad}`; the steps are {}",
+            ids.join(", ")
+        );
+    }
+    Ok(steps
+        .into_iter()
+        .filter(|s| only.iter().any(|o| o == s.id))
+        .collect())
+}
+
+/// Runs the demo into `out`: every step, or the steps `only` names (`vclay demo --only`).
+pub fn run(out: &Path, only: &[String]) -> Result<()> {
+    let steps = selected(only)?;
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let total = steps.len();
     let mut records = Vec::with_capacity(total);
     for (k, s) in steps.into_iter().enumerate() {
@@ -139,6 +174,7 @@ pub fn run(out: &Path) -> Result<()> {
         });
     }
     let summary = json!({
+        "complete": only.is_empty(),
         "steps": records.iter().map(|r| json!({
             "name": r.name, "reproduces": r.reproduces, "result": r.what,
             "files": r.files, "milliseconds": r.millis
