@@ -265,7 +265,10 @@ fn demo_writes_its_files() {
     assert_eq!(names, ["exact torus", "refined sheet", "twisted volume"]);
     // An unknown step is named, with the list of steps, before anything is written.
     let other = dir.path().join("other");
-    let out = vclay_in(dir.path(), &["demo", "--only", "torus,teapot", "--out", "other"]);
+    let out = vclay_in(
+        dir.path(),
+        &["demo", "--only", "torus,teapot", "--out", "other"],
+    );
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("`teapot`") && err.contains("rope"), "{err}");

@@ -2,7 +2,7 @@
 //! Jacobian columns and the inertial term against finite differences, s = J p (eq 4), exact
 //! swung primitives, agreement with the frozen-weight model, energy decay, weight positivity,
 //! constraints.
-mod common;
+use crate::common;
 
 use vclay_core::Vec3;
 use vclay_dynamics::dnurbs::rational::MULTI_INDICES;

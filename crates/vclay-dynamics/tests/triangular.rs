@@ -2,7 +2,7 @@
 //! (subdivided along knot lines against the paper's one-rule-per-triangle), and the rounding
 //! models of section 7.3 (Fig 8): constraints hold, the fillet is smooth.
 
-mod common;
+use crate::common;
 
 use vclay_dynamics::dnurbs::generalized::GeneralizedGeometry;
 use vclay_dynamics::dnurbs::rounding::{RoundingKind, RoundingModel, normal_jump};

@@ -1,7 +1,7 @@
 //! Tests of `decompose` (section 6 of `ffd-direct-manipulation.txt`, eqs 13-19): h single-point
 //! steps reproduce the h-point manipulation.
 
-mod common;
+use crate::common;
 
 use common::{Lcg, jiggle, lattice, specs};
 use vclay_core::Vec3;

@@ -2,7 +2,7 @@
 //! outside the lattice untouched, incremental update equal to full recomputation, parallel equal
 //! to sequential.
 
-mod common;
+use crate::common;
 
 use common::{Lcg, jiggle, lattice, specs, test_box};
 use vclay_core::{Parallelism, TriMesh, Vec3};

@@ -1,7 +1,7 @@
 //! Tests of `FfdLattice`: identity at rest, linear parameters, validation, basis, rational
 //! evaluation against the spline layer.
 
-mod common;
+use crate::common;
 
 use common::{Lcg, jiggle, lattice, rest_point, specs, test_box};
 use vclay_core::Vec3;

@@ -1,7 +1,7 @@
 //! Tests of `Manipulation`: single-point direct manipulation (eq 7), locality, least norm, and the
 //! commutative group laws of section 4 of `ffd-direct-manipulation.txt`.
 
-mod common;
+use crate::common;
 
 use common::{Lcg, dense_pinv_solution, dense_r, jiggle, lattice, rest_point, specs};
 use vclay_core::Vec3;

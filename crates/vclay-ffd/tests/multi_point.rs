@@ -2,7 +2,7 @@
 //! least norm against a dense pseudo-inverse, locality, conflicting constraints named,
 //! least-squares mode.
 
-mod common;
+use crate::common;
 
 use common::{
     Lcg, dense_normal_equations_solution, dense_pinv_solution, dense_r, jiggle, lattice, specs,

@@ -1,7 +1,7 @@
 //! Tests of `WeightChange`: direct manipulation through the weights (section 3, last paragraph of
 //! `ffd-direct-manipulation.txt`; derivation in `src/weights.rs`).
 
-mod common;
+use crate::common;
 
 use common::{Lcg, lattice, specs};
 use nalgebra::{DMatrix, DVector};

@@ -1,7 +1,7 @@
 //! The fairness energy: the separable exact Gram assembly equals the D-NURBS engine's element
 //! stiffness (d-nurbs.txt eq 17) on polynomial surfaces.
 
-mod common;
+use crate::common;
 
 use vclay_core::Vec3;
 use vclay_fit::energy;

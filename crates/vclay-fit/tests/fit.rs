@@ -1,7 +1,7 @@
 //! Fits of synthetic scans with known surfaces (issue 20): noise, outliers, holes, parameter
 //! correction, fairness, dynamic weights, and the located errors of bad clouds.
 
-mod common;
+use crate::common;
 
 use common::*;
 use vclay_core::Vec3;

@@ -1,6 +1,6 @@
 //! Boundary treatment (`BoundaryRule`) and user-tagged creases and corners.
 
-mod common;
+use crate::common;
 
 use common::{perturb, solid};
 use vclay_core::Vec3;

@@ -5,7 +5,7 @@
 //! across it, face points `(1,1)/2 x (1,1)/2 x (1,6,1)/8`, cell points `(1,1)/2` cubed. The
 //! boundary surface under `Smooth` is bicubic (Catmull-Clark) refinement of the boundary net.
 
-mod common;
+use crate::common;
 
 use std::collections::HashMap;
 

@@ -3,7 +3,7 @@
 //! Table 1's "Cube (3^3)" is the lattice of 3 x 3 x 3 *points* (its control row reads 27 points,
 //! 54 edges, 36 faces, 8 cells), "Cube (4^3)" that of 4 x 4 x 4 points (64, 144, 108, 27).
 
-mod common;
+use crate::common;
 
 use common::solid;
 use vclay_core::Vec3;

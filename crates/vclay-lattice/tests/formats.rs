@@ -1,7 +1,7 @@
 //! File formats: OVM round trips and malformed input, VTU structure, surface writers, atomic
 //! writes, and the `subdivide` command logic.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -2,7 +2,7 @@
 //! `subdivision-solids-conference.txt` Table 1 / Fig. 1, the spiked and holed objects of
 //! `subdivision-solids-journal.txt` Table 2, and valid cells for every primitive.
 
-mod common;
+use crate::common;
 
 use common::solid;
 use vclay_core::Vec3;

@@ -1,6 +1,6 @@
 //! Construction, validation errors and adjacency of `Lattice`.
 
-mod common;
+use crate::common;
 
 use vclay_core::Vec3;
 use vclay_lattice::{

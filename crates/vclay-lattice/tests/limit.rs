@@ -3,7 +3,7 @@
 //! vertices, the boundary) the points of further subdivision levels converge to the evaluated
 //! limit; derivatives agree with finite differences; bad queries are located errors.
 
-mod common;
+use crate::common;
 
 use common::{Rng, perturb, solid};
 use vclay_core::Vec3;

@@ -2,7 +2,7 @@
 //! agree with the volume limit evaluator on the boundary; exact patches of regular regions equal
 //! the Catmull-Clark limit; fitted patches report a small error; normals point outward.
 
-mod common;
+use crate::common;
 
 use common::{perturb, solid};
 use vclay_core::{TriMesh, Vec3};

@@ -1,7 +1,7 @@
 //! Level operators `A^(j)` and their chain `A = A^(n) ... A^(1)`
 //! (`subdivision-solids-journal.txt` section 4.2, eq 4).
 
-mod common;
+use crate::common;
 
 use common::{Rng, perturb, solid};
 use vclay_core::{Parallelism, Vec3};

@@ -1,6 +1,6 @@
 //! Primitive lattices and boundary surface extraction.
 
-mod common;
+use crate::common;
 
 use std::collections::HashMap;
 

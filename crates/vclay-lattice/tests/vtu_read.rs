@@ -2,7 +2,7 @@
 //! cells as the same point sets and faces), malformed files are located errors, and hostile
 //! byte mutations give `Ok` or `Err`, never a panic or a hang.
 
-mod common;
+use crate::common;
 
 use std::time::{Duration, Instant};
 use vclay_core::Vec3;

@@ -1,7 +1,7 @@
 //! `dynamic-pde-surfaces.txt` section III: the collocation solution (18) against the
 //! closed-form solution (14)-(17) of the static problem (13), Fig 1(a)-(b).
 
-mod support;
+use crate::support;
 
 use support::closed_form::{ClosedForm, Section3};
 use vclay_pde::spec::{CollocationSpec, SpecFile};

@@ -1,7 +1,7 @@
 //! The Fourier-series and pseudospectral solvers (`dynamic-pde-surfaces.txt` section III,
 //! eq 19-23, Fig 1(c)-(e)) and the comparison the paper reports (issue 22).
 
-mod support;
+use crate::support;
 
 use support::closed_form::{ClosedForm, Section3};
 use vclay_pde::spec::SpecFile;

@@ -1,6 +1,6 @@
 //! The region force's falloff (a sculpting brush's profile, `vclay_solids::Falloff`) through the
 //! session layer: a smooth brush dents the centre deeper than the paper's equal shares; an unknown falloff is refused naming the key; session files keep it.
-mod common;
+use crate::common;
 use common::assert_same;
 
 use std::path::Path;

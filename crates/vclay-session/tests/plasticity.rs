@@ -1,7 +1,7 @@
 //! Plastic flow through the session layer (`Session::set_plasticity`, docs/sculpting.md): the
 //! rest shape follows a pull, undoing the pull puts the rest shape back, session files keep the
 //! setting and continue bit for bit, and kinds without a rest shape refuse it.
-mod common;
+use crate::common;
 use common::assert_same;
 
 use std::path::Path;

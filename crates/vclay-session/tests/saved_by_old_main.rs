@@ -8,7 +8,7 @@
 //!   `bump` over u = [0.2, 0.6], v = [0.5, 2.0] with p = [0.1, 0, 0.2] at t = 0.
 
 #[allow(dead_code)]
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -1,7 +1,7 @@
 //! Sessions: several models, history rules, and session files (versioned, located errors,
 //! atomic save, bitwise continuation with a pending timeline).
 
-mod common;
+use crate::common;
 use common::assert_same;
 
 use std::path::Path;

@@ -1,6 +1,6 @@
 //! NurbsCurve: exact circle, partition of unity, affine invariance, derivatives vs finite
 //! differences, Bezier vs de Casteljau, bad input.
-mod common;
+use crate::common;
 use common::*;
 use vclay_core::Vec3;
 use vclay_spline::{KnotError, KnotVector, NurbsCurve, ParametricCurve, SplineError};

@@ -1,6 +1,6 @@
 //! D-NURBS Jacobians (d-nurbs.txt eqs 3-6): s = J p, and J against finite differences of the
 //! point with respect to each control point and weight.
-mod common;
+use crate::common;
 use common::*;
 use vclay_core::Vec3;
 use vclay_spline::{ParametricCurve, ParametricSurface, ParametricVolume, generalized_coordinates};

@@ -1,5 +1,5 @@
 //! Knot insertion, clamping and degree elevation leave the shape unchanged.
-mod common;
+use crate::common;
 use common::*;
 use vclay_core::Vec3;
 use vclay_spline::{

@@ -1,6 +1,6 @@
 //! NurbsSurface and NurbsVolume: exact primitives, partition of unity (via constant
 //! reproduction), affine invariance, mixed partial derivatives vs finite differences, grids.
-mod common;
+use crate::common;
 use common::*;
 use vclay_core::{Parallelism, Vec3};
 use vclay_spline::{NurbsSurface, NurbsVolume, ParametricSurface, ParametricVolume, SplineError};

@@ -1,7 +1,7 @@
 //! Painted material as a colour map (`Model::display_fields`): choosing the paint tool colours
 //! the cube by edge stiffness; a uniform cube keeps the clay colour, a painted one shows the
 //! map's cool and warm ends; View > Colour goes back to clay.
-mod common;
+use crate::common;
 
 use egui::Key;
 use egui::accesskit::Role;

@@ -20,7 +20,7 @@ use vclay_studio::load::{builtin, builtin_named};
 use vclay_studio::worker::{Frame, Grab, Notice, Request, Worker};
 use vclay_studio::{Options, Studio, Tool};
 
-mod common;
+use crate::common;
 use common::{click, harness, quiet, wait_for};
 
 /// Steps the UI until `done` holds (at most 30 s of wall time).

@@ -1,7 +1,7 @@
 //! The desktop's file chooser (`vclay_studio::native`): File > Open asks the chooser program,
 //! opens what it answers, and falls back to the typed-path dialog when the program fails. The
 //! chooser here is a stand-in script that answers like `zenity --file-selection`.
-mod common;
+use crate::common;
 
 use std::os::unix::fs::PermissionsExt;
 use std::path::{Path, PathBuf};

@@ -19,7 +19,7 @@ use vclay_studio::symmetry::Symmetry;
 use vclay_studio::worker::{Flow, Grab, Request, Worker};
 use vclay_studio::{Options, Studio, Tool};
 
-mod common;
+use crate::common;
 use common::{click, harness, quiet, wait_for};
 
 /// The paused cube from the start page.
