@@ -11,8 +11,8 @@
 //! # How
 //! One run ([`run`]) on the calling thread: 16 passes over a 256 KiB array (fits in L2) that
 //! mix a streaming multiply-add, a strided gather and a square root and a division per
-//! element, the operations the simulation kernels spend their time in, about 1 ms on the
-//! 2-core development VM when it is idle (0.6 ms on a fast phase). [`measure`] takes the
+//! element, the operations the simulation kernels spend their time in: 1.4-2.0 ms on the
+//! 2-core development VM under a load average of 4-8 (issue 31's runs). [`measure`] takes the
 //! median of repeated runs ([`Yardstick::ms`]). [`YARDSTICK_VERSION`] changes whenever the
 //! workload does (it must not, save for a defect), so recorded yardsticks state which one they
 //! are.

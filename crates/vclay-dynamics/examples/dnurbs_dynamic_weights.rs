@@ -1,7 +1,8 @@
 //! Steps per second of a D-NURBS surface with dynamic weights (`d-nurbs.txt` sections 4.2, 5.3):
 //! `cargo run --release -p vclay-dynamics --example dnurbs_dynamic_weights [N]` for an N x N
 //! cubic surface (default 16; issue goal: 60 steps/s on 2 cores; optional second argument: CG
-//! relative tolerance; `--cg`: block-Jacobi CG instead of the default sparse Cholesky), pulled
+//! relative tolerance; `--cg`: block-Jacobi CG instead of the default sparse Cholesky;
+//! `--uniform`: unit initial weights, `benchmarks::uniform_dynamic_sheet`), pulled
 //! by a moving spring, one edge fixed (`vclay_dynamics::dnurbs::benchmarks::dynamic_sheet`).
 //! Every step recomputes the element matrices (they depend on the weights). Prints the wall and
 //! process CPU time per step and the same run's yardstick (`vclay_core::yardstick`, before and
@@ -14,10 +15,18 @@ use vclay_dynamics::dnurbs::{GeneralizedGeometry, benchmarks};
 
 fn main() {
     let cg = std::env::args().any(|a| a == "--cg");
-    let args: Vec<String> = std::env::args().filter(|a| a != "--cg").collect();
+    let uniform = std::env::args().any(|a| a == "--uniform");
+    let args: Vec<String> = std::env::args()
+        .filter(|a| a != "--cg" && a != "--uniform")
+        .collect();
     let n: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(16);
     let t0 = Instant::now();
-    let mut d = benchmarks::dynamic_sheet(n).expect("model");
+    let mut d = if uniform {
+        benchmarks::uniform_dynamic_sheet(n)
+    } else {
+        benchmarks::dynamic_sheet(n)
+    }
+    .expect("model");
     let setup = t0.elapsed().as_secs_f64();
     if let Some(tol) = args.get(2).and_then(|a| a.parse().ok()) {
         d.tolerance = tol;

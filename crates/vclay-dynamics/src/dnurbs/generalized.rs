@@ -278,29 +278,17 @@ impl Gram {
     fn add(&mut self, lj: &LocalJacobian, coef: &[f64; 6]) {
         let (nb, nv) = (self.nb, self.nv);
         debug_assert_eq!((lj.blocks.len(), lj.vectors.len()), (nb, nv));
-        let ld = self.ld();
         for (m, &c) in coef.iter().enumerate() {
             if c == 0.0 {
                 continue;
             }
-            // One row of `X` and of `C X`, written in place (the padding stays zero).
             let at = self.x.len();
-            self.x.resize(at + ld, 0.0);
-            self.cx.resize(at + ld, 0.0);
-            let (x, cx) = (&mut self.x[at..], &mut self.cx[at..]);
-            let (xb, xv) = x.split_at_mut(nb);
-            let (cb, cv) = cx.split_at_mut(nb);
-            for ((x, cx), (_, r)) in xb.iter_mut().zip(cb.iter_mut()).zip(&lj.blocks) {
-                *x = r[m];
-                *cx = c * r[m];
+            self.x.extend(lj.blocks.iter().map(|(_, r)| r[m]));
+            for k in 0..3 {
+                self.x.extend(lj.vectors.iter().map(|(_, g)| g[m][k]));
             }
-            for (j, (_, g)) in lj.vectors.iter().enumerate() {
-                for k in 0..3 {
-                    let v = g[m][k];
-                    xv[k * nv + j] = v;
-                    cv[k * nv + j] = c * v;
-                }
-            }
+            self.x.extend([0.0; GEMM_PAD]);
+            self.cx.extend(self.x[at..].iter().map(|v| c * v));
         }
     }
 
