@@ -483,7 +483,7 @@ impl RationalGeometry {
         &self,
         axis: usize,
         ts: impl Iterator<Item = f64>,
-    ) -> Option<(Vec<(f64, usize)>, Vec<f64>)> {
+    ) -> Option<DirectionTables> {
         let kv = &self.knots[axis];
         let k = kv.degree() + 1;
         let mut ws = vclay_spline::BasisWorkspace::new(kv.degree());
@@ -505,6 +505,10 @@ impl RationalGeometry {
         Some((params, values))
     }
 }
+
+/// One direction's tables: the distinct parameters with their first local controls, and their
+/// basis values and derivatives (`3 (degree + 1)` each).
+type DirectionTables = (Vec<(f64, usize)>, Vec<f64>);
 
 /// The basis tables of a [`RationalGeometry`] element at its quadrature points
 /// ([`GeneralizedGeometry::element_tables`]): per distinct parameter of each direction, its
