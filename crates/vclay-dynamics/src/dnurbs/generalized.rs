@@ -899,7 +899,7 @@ pub enum QuadratureRule {
     /// Weight-aware (vclay's default): per element and direction, the fixed rule's order or
     /// `p + ceil(ln(1/tolerance) / (2 ln r))` points, whichever is larger (at most
     /// [`MAX_WEIGHT_AWARE_POINTS`]), with `r` from the spread of the weights acting on the element
-    /// ([`GeneralizedGeometry::element_denominators`] samples) as in the type docs. The orders are a
+    /// ([`GeneralizedGeometry::element_denominators`]) as in the type docs. The orders are a
     /// function of the current weights only: they are chosen again before every step (elements
     /// whose order changes get their rule and rest values rebuilt), so a saved and restored model
     /// continues bit for bit. Uniform weights keep the fixed rule exactly.
