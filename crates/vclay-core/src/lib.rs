@@ -16,6 +16,7 @@ pub mod team;
 pub mod text;
 pub mod tolerance;
 pub mod triangle_rule;
+pub mod yardstick;
 
 pub use math::{Interval, Vec3, Vec4};
 pub use mesh::{MeshError, MeshSink, TriMesh};

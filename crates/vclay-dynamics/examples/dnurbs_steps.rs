@@ -6,6 +6,8 @@ use vclay_dynamics::Integrator;
 use vclay_dynamics::dnurbs::benchmarks;
 
 fn main() {
+    // The same run's reference workload (issue 31), at the start and at the end.
+    let yard_start = vclay_core::yardstick::measure(0.3);
     let n: usize = std::env::args()
         .nth(1)
         .and_then(|a| a.parse().ok())
@@ -36,5 +38,17 @@ fn main() {
         first * 1e3,
         steps as f64 / secs,
         iters as f64 / steps as f64
+    );
+    print_yardstick(yard_start);
+}
+
+/// Prints the yardstick of the run's start and one taken now (`vclay_core::yardstick`).
+fn print_yardstick(start: vclay_core::yardstick::Yardstick) {
+    let end = vclay_core::yardstick::measure(0.3);
+    println!(
+        "yardstick v{}: {:.3} ms at the start, {:.3} ms at the end (one thread; divide a figure by it to compare runs)",
+        vclay_core::yardstick::YARDSTICK_VERSION,
+        start.ms,
+        end.ms
     );
 }

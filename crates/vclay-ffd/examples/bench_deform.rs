@@ -71,6 +71,8 @@ fn best_cpu_of<F: FnMut()>(runs: usize, mut f: F) -> f64 {
 }
 
 fn main() {
+    // The same run's reference workload (issue 31), at the start and at the end.
+    let yard_start = vclay_core::yardstick::measure(0.3);
     let n: usize = std::env::args()
         .nth(1)
         .and_then(|s| s.parse().ok())
@@ -141,4 +143,16 @@ fn main() {
             "cubic {cps}^3: embed {embed_ms:7.1} ms | full deform: 1 thread {seq:6.1} ms, rayon {par:6.1} ms (per-vertex kernel: {seq_scalar:6.1}, {par_scalar:6.1}) | 1-thread CPU time: blocked {seq_cpu:6.1} ms, per-vertex {seq_scalar_cpu:6.1} ms | normals {normals:6.1} ms | incremental {inc:6.1} ms ({count} vertices)"
         );
     }
+    print_yardstick(yard_start);
+}
+
+/// Prints the yardstick of the run's start and one taken now (`vclay_core::yardstick`).
+fn print_yardstick(start: vclay_core::yardstick::Yardstick) {
+    let end = vclay_core::yardstick::measure(0.3);
+    println!(
+        "yardstick v{}: {:.3} ms at the start, {:.3} ms at the end (one thread; divide a figure by it to compare runs)",
+        vclay_core::yardstick::YARDSTICK_VERSION,
+        start.ms,
+        end.ms
+    );
 }

@@ -45,6 +45,8 @@ fn cloud(n: usize, seed: u64) -> Vec<Vec3> {
 }
 
 fn main() {
+    // The same run's reference workload (issue 31), at the start and at the end.
+    let yard_start = vclay_core::yardstick::measure(0.3);
     let sizes: Vec<usize> = std::env::args()
         .skip(1)
         .filter_map(|a| a.parse().ok())
@@ -81,4 +83,16 @@ fn main() {
             serde_json::to_string(&r.timings).expect("json")
         );
     }
+    print_yardstick(yard_start);
+}
+
+/// Prints the yardstick of the run's start and one taken now (`vclay_core::yardstick`).
+fn print_yardstick(start: vclay_core::yardstick::Yardstick) {
+    let end = vclay_core::yardstick::measure(0.3);
+    println!(
+        "yardstick v{}: {:.3} ms at the start, {:.3} ms at the end (one thread; divide a figure by it to compare runs)",
+        vclay_core::yardstick::YARDSTICK_VERSION,
+        start.ms,
+        end.ms
+    );
 }

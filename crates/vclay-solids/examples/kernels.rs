@@ -14,6 +14,8 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 fn main() {
+    // The same run's reference workload (issue 31), at the start and at the end.
+    let yard_start = vclay_core::yardstick::measure(0.3);
     let args: Vec<String> = std::env::args().collect();
     let level: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(4);
     let reps: usize = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(20);
@@ -87,4 +89,16 @@ fn main() {
         })
         .collect();
     println!("level {level}: whole step: {:.3} ms", median(t));
+    print_yardstick(yard_start);
+}
+
+/// Prints the yardstick of the run's start and one taken now (`vclay_core::yardstick`).
+fn print_yardstick(start: vclay_core::yardstick::Yardstick) {
+    let end = vclay_core::yardstick::measure(0.3);
+    println!(
+        "yardstick v{}: {:.3} ms at the start, {:.3} ms at the end (one thread; divide a figure by it to compare runs)",
+        vclay_core::yardstick::YARDSTICK_VERSION,
+        start.ms,
+        end.ms
+    );
 }

@@ -422,17 +422,24 @@ fn gemm_tn(
                 j0 += TJ;
                 continue;
             }
+            // Whole rows as chunks (no bounds check inside the loop), the tile's columns
+            // copied out of them: the accumulators stay in registers (indexing each row with
+            // a checked range kept them on the stack, one store per row and accumulator).
+            let (lo, ro) = (lc.start + a0, rc.start + j0);
             let mut acc = [[0.0; TJ]; TA];
-            for row in 0..rows {
-                let lr: &[f64; TA] = l[row * ld + lc.start + a0..][..TA]
+            for (lrow, rrow) in l[..rows * ld]
+                .chunks_exact(ld)
+                .zip(r[..rows * ld].chunks_exact(ld))
+            {
+                let lr: [f64; TA] = lrow[lo..lo + TA]
                     .try_into()
                     .expect("TA columns (padded rows)");
-                let rr: &[f64; TJ] = r[row * ld + rc.start + j0..][..TJ]
+                let rr: [f64; TJ] = rrow[ro..ro + TJ]
                     .try_into()
                     .expect("TJ columns (padded rows)");
-                for (acc_a, &p) in acc.iter_mut().zip(lr) {
+                for a in 0..TA {
                     for jj in 0..TJ {
-                        acc_a[jj] += p * rr[jj];
+                        acc[a][jj] += lr[a] * rr[jj];
                     }
                 }
             }
@@ -575,6 +582,45 @@ pub trait GeneralizedGeometry: Clone + Send + Sync + std::fmt::Debug {
     /// `(J p', J' p')`: the first and second directional derivatives of `s` along the
     /// coordinate velocity `qdot` (global coordinates).
     fn velocity_terms(&self, param: [f64; 2], qdot: &[f64]) -> Result<(Vec3, Vec3), DynamicsError>;
+    /// What a geometry precomputes for the quadrature points of one element (for
+    /// [`RationalGeometry`](super::RationalGeometry): the spans and basis function values and
+    /// derivatives, which depend on the knots and the points only, not on the coordinates).
+    /// The engine builds them with [`Self::element_tables`] whenever an element's rule is chosen
+    /// and keeps them while the rule stays; `()` for geometries that precompute nothing.
+    type ElementTables: Clone + std::fmt::Debug + Default + Send + Sync;
+    /// The tables of element `element` for its quadrature points `params`. Default: empty.
+    fn element_tables(&self, element: usize, params: &[[f64; 2]]) -> Self::ElementTables {
+        let _ = (element, params);
+        Self::ElementTables::default()
+    }
+    /// [`Self::element_jacobian_at`] at the quadrature point `point` (an index into the
+    /// `params` that `tables` were built for; `param` is that point), reading what `tables`
+    /// hold. Must give the same values, bit for bit. Default: [`Self::element_jacobian_at`].
+    fn element_jacobian_tabled(
+        &self,
+        element: usize,
+        point: usize,
+        param: [f64; 2],
+        tables: &Self::ElementTables,
+        out: &mut LocalJacobian,
+    ) -> Result<(), DynamicsError> {
+        let _ = (point, tables);
+        self.element_jacobian_at(element, param, out)
+    }
+    /// [`Self::velocity_terms`] at the parameter `lj` was just evaluated at (by
+    /// [`Self::element_jacobian_tabled`] or [`Self::element_jacobian_at`]; the engine may have
+    /// dropped columns since, [`LocalJacobian`]'s evaluation buffers are untouched), so a
+    /// geometry may reuse that evaluation's basis values and local coordinates. Same values,
+    /// bit for bit. Default: [`Self::velocity_terms`].
+    fn velocity_terms_after(
+        &self,
+        param: [f64; 2],
+        qdot: &[f64],
+        lj: &LocalJacobian,
+    ) -> Result<(Vec3, Vec3), DynamicsError> {
+        let _ = lj;
+        self.velocity_terms(param, qdot)
+    }
     /// Parameter of the point of the geometry nearest to `x`.
     fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError>;
     /// The solver [`GeneralizedDnurbs::new`] picks for this geometry. Default
@@ -654,6 +700,17 @@ fn rest_values<G: GeneralizedGeometry>(
                 .map(|&p| g.jacobian_at(p, &mut lj).map(|_| lj.s))
                 .collect::<Result<Vec<_>, _>>()
         })
+        .collect()
+}
+
+/// Each element's [`GeneralizedGeometry::element_tables`] for its quadrature points.
+fn element_tables<G: GeneralizedGeometry>(
+    g: &G,
+    quad: &[Quadrature],
+) -> Vec<Arc<G::ElementTables>> {
+    quad.par_iter()
+        .enumerate()
+        .map(|(e, q)| Arc::new(g.element_tables(e, &q.params)))
         .collect()
 }
 
@@ -842,7 +899,7 @@ pub enum QuadratureRule {
     /// Weight-aware (vclay's default): per element and direction, the fixed rule's order or
     /// `p + ceil(ln(1/tolerance) / (2 ln r))` points, whichever is larger (at most
     /// [`MAX_WEIGHT_AWARE_POINTS`]), with `r` from the spread of the weights acting on the element
-    /// ([`GeneralizedGeometry::element_weight_spread`]) as in the type docs. The orders are a
+    /// ([`GeneralizedGeometry::element_denominators`]) as in the type docs. The orders are a
     /// function of the current weights only: they are chosen again before every step (elements
     /// whose order changes get their rule and rest values rebuilt), so a saved and restored model
     /// continues bit for bit. Uniform weights keep the fixed rule exactly.
@@ -1040,6 +1097,9 @@ pub struct GeneralizedDnurbs<G: GeneralizedGeometry> {
     geometry: G,
     material: Material,
     quad: Vec<Quadrature>,
+    /// Per element, the geometry's tables for the points of `quad`
+    /// ([`GeneralizedGeometry::element_tables`]), rebuilt with the element's rule.
+    tables: Vec<Arc<G::ElementTables>>,
     /// The elements (parameter rectangles), as [`GeneralizedGeometry::elements`].
     elements: Vec<[(f64, f64); 2]>,
     quadrature: QuadratureRule,
@@ -1112,6 +1172,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                 Quadrature::for_element(&geometry, i, e, element_order(&geometry, rule, e), dim)
             })
             .collect::<Result<_, _>>()?;
+        let tables = element_tables(&geometry, &quad);
         let mut fixed = vec![false; n];
         for i in geometry.default_fixed_coordinates() {
             fixed[i] = true;
@@ -1126,6 +1187,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             geometry,
             material,
             quad,
+            tables,
             elements,
             quadrature: rule,
             pattern: None,
@@ -1211,6 +1273,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         for &(e, order) in &changed {
             let q = Quadrature::for_element(&self.geometry, e, &self.elements[e], order, dim)?;
             let rest = rest_values(&rest_geometry, std::slice::from_ref(&q))?;
+            self.tables[e] = Arc::new(self.geometry.element_tables(e, &q.params));
             self.quad[e] = q;
             if let Some(r) = rest.into_iter().next() {
                 self.rest[e] = r;
@@ -2086,11 +2149,13 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             &[]
         };
         let fixed_hint: Arc<[bool]> = Arc::from(fixed);
+        let tables = &self.tables;
         self.quad
             .par_iter()
             .zip(works.par_iter_mut())
             .enumerate()
             .try_for_each(|(e, (q, w))| {
+                let tables = &*tables[e];
                 // Per-thread scratch that outlives the step (rayon would re-create per-job
                 // state for every split, and freeing those buffers each step churns the heap).
                 with_scratch(|ElementScratch { lj, gram, vl }| {
@@ -2101,7 +2166,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                     // columns of the step matrix are never used (the solve is on the free
                     // coordinates), so the products skip them. The velocity term and the lumped
                     // mass (the weights' inertia) still see every column.
-                    g.element_jacobian_at(e, q.params[0], lj)?;
+                    g.element_jacobian_tabled(e, 0, q.params[0], tables, lj)?;
                     lj.dofs_into(&mut w.all_dofs);
                     w.mass_diag.clear();
                     w.mass_diag.resize(w.all_dofs.len(), 0.0);
@@ -2117,7 +2182,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                     gram.reset_shape(shape);
                     for (k, (&p, &qw)) in q.params.iter().zip(&q.weights).enumerate() {
                         if k > 0 {
-                            g.element_jacobian_at(e, p, lj)?;
+                            g.element_jacobian_tabled(e, k, p, tables, lj)?;
                         }
                         let c = coef_fn(e, p);
                         let mu = mat.mu.eval(e, p);
@@ -2154,7 +2219,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                             w.kinetic += 0.5 * qw * mu * jv.norm_squared() / (dt * dt);
                             if self.inertial_force && mu != 0.0 && moving {
                                 // 2 dt^2 g_p with p' = v / dt: -2 mu J^T (J' v).
-                                let (_, acc) = g.velocity_terms(p, v)?;
+                                let (_, acc) = g.velocity_terms_after(p, v, lj)?;
                                 y[0] -= acc * (2.0 * qw * mu);
                             }
                         }

@@ -292,7 +292,7 @@ pub enum Force {
     /// Inflation: pressure along the surface normal, `f = P s_u x s_v` (surfaces only).
     Inflation(f64),
     /// Repulsion from a point (`d-nurbs.txt` section 6 names repulsion forces beside springs,
-    /// gravity and inflation; the form of its ref. [34]): the force density per unit length
+    /// gravity and inflation; the form of its ref. \[34\]): the force density per unit length
     /// (curves) or area (surfaces) `f = k d / (|d|^2 + c^2)^(3/2)` with `d = s - center`, an
     /// inverse-square push away from `center` softened within the core radius `c`. Evaluated at
     /// the start of each step (explicit), integrated over the elements with `|s_u|` or

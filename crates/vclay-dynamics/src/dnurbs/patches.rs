@@ -223,6 +223,7 @@ impl PatchesGeometry {
 }
 
 impl GeneralizedGeometry for PatchesGeometry {
+    type ElementTables = ();
     fn parametric_dimension(&self) -> usize {
         2
     }

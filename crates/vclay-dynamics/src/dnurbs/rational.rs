@@ -101,22 +101,42 @@ pub(crate) fn rational_point(
     let n = ku * kv;
     out.r.resize(n, [0.0; 6]);
     out.g.resize(n, [Vec3::zeros(); 6]);
-    let mut nal = [[0.0; 6]; 64];
-    let mut nal_heap;
-    let nal: &mut [[f64; 6]] = if n <= 64 {
-        &mut nal[..n]
-    } else {
-        nal_heap = vec![[0.0; 6]; n];
-        &mut nal_heap
+    let (r, g) = (&mut out.r, &mut out.g);
+    out.s = rational_columns(bu, ku, bv, kv, w, p, |c, rc, gc| {
+        r[c] = rc;
+        g[c] = gc;
+    });
+}
+
+/// [`rational_point`]'s values `s^a` (returned) and columns `R_c^a`, `g_c^a`, handed to `emit`
+/// per local control point `c` as they are computed (so that a caller stores them where it
+/// needs them, without an intermediate copy).
+#[inline(always)]
+fn rational_columns(
+    bu: &[f64],
+    ku: usize,
+    bv: &[f64],
+    kv: usize,
+    w: &[f64],
+    p: &[Vec3],
+    mut emit: impl FnMut(usize, [f64; 6], [Vec3; 6]),
+) -> [Vec3; 6] {
+    // The tensor-product basis derivative `N^a` of local control point `(a, b)`; evaluated
+    // again in the column loop (the same products, so the same values) instead of stored.
+    let basis = |a: usize, b: usize| -> [f64; 6] {
+        std::array::from_fn(|m| {
+            let (i, j) = MULTI_INDICES[m];
+            bu[i * ku + a] * bv[j * kv + b]
+        })
     };
     let mut wa = [0.0; 6];
     let mut aa = [Vec3::zeros(); 6];
     for a in 0..ku {
         for b in 0..kv {
             let c = a * kv + b;
-            for (m, &(i, j)) in MULTI_INDICES.iter().enumerate() {
-                let v = bu[i * ku + a] * bv[j * kv + b];
-                nal[c][m] = v;
+            let nal = basis(a, b);
+            for m in 0..6 {
+                let v = nal[m];
                 wa[m] += v * w[c];
                 aa[m] += p[c] * (v * w[c]);
             }
@@ -125,37 +145,48 @@ pub(crate) fn rational_point(
     // One division; the columns below multiply by `1 / W` (their recurrences chain through
     // `r[b]`, `g[b]`, so divisions there would serialize on the divider's latency).
     let inv_w0 = 1.0 / wa[0];
+    let mut s = [Vec3::zeros(); 6];
     for m in 0..6 {
         let mut acc = aa[m];
         for &(b, d, coef) in LOWER[m] {
-            acc -= out.s[b] * (coef * wa[d]);
+            acc -= s[b] * (coef * wa[d]);
         }
-        out.s[m] = acc * inv_w0;
+        s[m] = acc * inv_w0;
     }
     // The column recurrences of the module docs with the Leibniz terms of `LOWER` written out
     // (multi-indices 0..6 = s, u, v, uu, uv, vv), so that they stay in registers.
-    let s = out.s;
     let [w1, w2, w3, w4, w5] = [wa[1], wa[2], wa[3], wa[4], wa[5]];
-    for c in 0..n {
-        let [n0, n1, n2, n3, n4, n5] = nal[c];
-        let (wc, pc) = (w[c], p[c]);
-        let r0 = n0 * wc * inv_w0;
-        let r1 = (n1 * wc - w1 * r0) * inv_w0;
-        let r2 = (n2 * wc - w2 * r0) * inv_w0;
-        let r3 = (n3 * wc - w3 * r0 - 2.0 * w1 * r1) * inv_w0;
-        let r4 = (n4 * wc - w4 * r0 - w2 * r1 - w1 * r2) * inv_w0;
-        let r5 = (n5 * wc - w5 * r0 - 2.0 * w2 * r2) * inv_w0;
-        out.r[c] = [r0, r1, r2, r3, r4, r5];
-        let g0 = (pc - s[0]) * (n0 * inv_w0);
-        let g1 = (pc * n1 - s[1] * n0 - s[0] * n1 - g0 * w1) * inv_w0;
-        let g2 = (pc * n2 - s[2] * n0 - s[0] * n2 - g0 * w2) * inv_w0;
-        let g3 = (pc * n3 - s[3] * n0 - s[0] * n3 - g0 * w3 - (s[1] * n1 + g1 * w1) * 2.0) * inv_w0;
-        let g4 =
-            (pc * n4 - s[4] * n0 - s[0] * n4 - g0 * w4 - s[1] * n2 - g1 * w2 - s[2] * n1 - g2 * w1)
+    for a in 0..ku {
+        for b in 0..kv {
+            let c = a * kv + b;
+            let [n0, n1, n2, n3, n4, n5] = basis(a, b);
+            let (wc, pc) = (w[c], p[c]);
+            let r0 = n0 * wc * inv_w0;
+            let r1 = (n1 * wc - w1 * r0) * inv_w0;
+            let r2 = (n2 * wc - w2 * r0) * inv_w0;
+            let r3 = (n3 * wc - w3 * r0 - 2.0 * w1 * r1) * inv_w0;
+            let r4 = (n4 * wc - w4 * r0 - w2 * r1 - w1 * r2) * inv_w0;
+            let r5 = (n5 * wc - w5 * r0 - 2.0 * w2 * r2) * inv_w0;
+            let g0 = (pc - s[0]) * (n0 * inv_w0);
+            let g1 = (pc * n1 - s[1] * n0 - s[0] * n1 - g0 * w1) * inv_w0;
+            let g2 = (pc * n2 - s[2] * n0 - s[0] * n2 - g0 * w2) * inv_w0;
+            let g3 =
+                (pc * n3 - s[3] * n0 - s[0] * n3 - g0 * w3 - (s[1] * n1 + g1 * w1) * 2.0) * inv_w0;
+            let g4 = (pc * n4
+                - s[4] * n0
+                - s[0] * n4
+                - g0 * w4
+                - s[1] * n2
+                - g1 * w2
+                - s[2] * n1
+                - g2 * w1)
                 * inv_w0;
-        let g5 = (pc * n5 - s[5] * n0 - s[0] * n5 - g0 * w5 - (s[2] * n2 + g2 * w2) * 2.0) * inv_w0;
-        out.g[c] = [g0, g1, g2, g3, g4, g5];
+            let g5 =
+                (pc * n5 - s[5] * n0 - s[0] * n5 - g0 * w5 - (s[2] * n2 + g2 * w2) * 2.0) * inv_w0;
+            emit(c, [r0, r1, r2, r3, r4, r5], [g0, g1, g2, g3, g4, g5]);
+        }
     }
+    s
 }
 
 /// First and second directional derivatives `(s', d^2 s[p', p'])` of a rational point along
@@ -305,6 +336,7 @@ impl RationalGeometry {
 
     /// The denominator `W = sum N_i w_i` at a parameter (1 where it cannot be evaluated:
     /// the caller only estimates quadrature orders with it).
+    #[cfg(test)]
     fn denominator(&self, param: [f64; 2]) -> f64 {
         match self.local(param) {
             Ok(l) => {
@@ -318,6 +350,45 @@ impl RationalGeometry {
             }
             Err(_) => 1.0,
         }
+    }
+
+    /// [`Self::denominator`] at every `(u, v)` of `us x vs` (rows: `u`), the same sums with
+    /// the basis values of each `u` and each `v` evaluated once (a curve's `v` is ignored).
+    fn denominator_grid(&self, us: &[f64], vs: &[f64]) -> Vec<Vec<f64>> {
+        let basis = |axis: usize, t: f64| -> Option<(usize, Vec<f64>)> {
+            let kv = &self.knots[axis];
+            check_param(kv, t, axis).ok()?;
+            let span = kv.find_span(t);
+            let mut values = vec![0.0; kv.degree() + 1];
+            let mut ws = vclay_spline::BasisWorkspace::new(kv.degree());
+            kv.basis_derivatives(span, t, 0, &mut values, &mut ws);
+            Some((span - kv.degree(), values))
+        };
+        let bu: Vec<_> = us.iter().map(|&u| basis(0, u)).collect();
+        let bv: Vec<_> = vs
+            .iter()
+            .map(|&v| basis(1, if self.surface { v } else { 0.5 }))
+            .collect();
+        bu.iter()
+            .map(|u| {
+                bv.iter()
+                    .map(|v| match (u, v) {
+                        (Some((fu, bu)), Some((fv, bv))) => {
+                            let mut w = 0.0;
+                            for (a, &nu) in bu.iter().enumerate() {
+                                for (b, &nv) in bv.iter().enumerate() {
+                                    let c = (fu + a) * self.dims[1] + (fv + b);
+                                    w += nu * nv * self.coords[4 * c + 3];
+                                }
+                            }
+                            w
+                        }
+                        // As `denominator`: 1 where it cannot be evaluated.
+                        _ => 1.0,
+                    })
+                    .collect()
+            })
+            .collect()
     }
 
     /// Local evaluation: spans, basis tables and local control indices.
@@ -342,10 +413,17 @@ impl RationalGeometry {
         l.bv.resize(3 * l.kv, 0.0);
         self.knots[0].basis_derivatives(su, param[0], 2, &mut l.bu, &mut l.ws);
         self.knots[1].basis_derivatives(sv, v, 2, &mut l.bv, &mut l.ws);
+        self.gather(su - p, sv - q, l);
+        Ok(())
+    }
+
+    /// The local control indices, weights and points of the `ku x kv` block from control
+    /// `(first_u, first_v)` into `l` (`l.ku`, `l.kv` set).
+    fn gather(&self, first_u: usize, first_v: usize, l: &mut Local) {
         l.idx.clear();
         for a in 0..l.ku {
             for b in 0..l.kv {
-                l.idx.push((su - p + a) * self.dims[1] + (sv - q + b));
+                l.idx.push((first_u + a) * self.dims[1] + (first_v + b));
             }
         }
         l.w.clear();
@@ -355,13 +433,102 @@ impl RationalGeometry {
             l.w.push(x[3]);
             l.p.push(Vec3::new(x[0], x[1], x[2]));
         }
-        Ok(())
     }
+
+    /// The values and columns of the local data in `out.scratch` (filled by
+    /// [`Self::local_into`] or from tables) into `out`.
+    fn columns_from_local(out: &mut LocalJacobian) {
+        let LocalJacobian {
+            s,
+            blocks,
+            vectors,
+            scratch: l,
+            ..
+        } = out;
+        let n = l.idx.len();
+        blocks.resize(n, (0, [0.0; 6]));
+        vectors.resize(n, (0, [Vec3::zeros(); 6]));
+        let idx = &l.idx;
+        *s = rational_columns(&l.bu, l.ku, &l.bv, l.kv, &l.w, &l.p, |c, r, g| {
+            blocks[c] = (4 * idx[c], r);
+            vectors[c] = (4 * idx[c] + 3, g);
+        });
+    }
+
+    /// [`GeneralizedGeometry::velocity_terms`] from the local data of an evaluation at the
+    /// parameter (basis tables, local indices, weights and points).
+    fn velocity_from_local(l: &Local, qdot: &[f64], b: &mut VelocityBuffers) -> (Vec3, Vec3) {
+        let VelocityBuffers { basis, pd, wd } = b;
+        basis.clear();
+        basis.extend(
+            (0..l.ku)
+                .flat_map(|a| (0..l.kv).map(move |b| (a, b)))
+                .map(|(a, b)| l.bu[a] * l.bv[b]),
+        );
+        pd.clear();
+        pd.extend(
+            l.idx
+                .iter()
+                .map(|&c| Vec3::new(qdot[4 * c], qdot[4 * c + 1], qdot[4 * c + 2])),
+        );
+        wd.clear();
+        wd.extend(l.idx.iter().map(|&c| qdot[4 * c + 3]));
+        rational_velocity(basis, &l.w, &l.p, pd, wd)
+    }
+
+    /// The basis tables of one parameter direction `axis` at the parameters `ts`, distinct
+    /// values once: `(parameters and first local controls, 3 (degree + 1) values each)`, or
+    /// `None` for a parameter outside the domain.
+    fn direction_tables(
+        &self,
+        axis: usize,
+        ts: impl Iterator<Item = f64>,
+    ) -> Option<DirectionTables> {
+        let kv = &self.knots[axis];
+        let k = kv.degree() + 1;
+        let mut ws = vclay_spline::BasisWorkspace::new(kv.degree());
+        let (mut params, mut values) = (Vec::new(), Vec::new());
+        for t in ts {
+            if params
+                .iter()
+                .any(|&(u, _): &(f64, usize)| u.to_bits() == t.to_bits())
+            {
+                continue;
+            }
+            check_param(kv, t, axis).ok()?;
+            let span = kv.find_span(t);
+            let at = values.len();
+            values.resize(at + 3 * k, 0.0);
+            kv.basis_derivatives(span, t, 2, &mut values[at..], &mut ws);
+            params.push((t, span - kv.degree()));
+        }
+        Some((params, values))
+    }
+}
+
+/// One direction's tables: the distinct parameters with their first local controls, and their
+/// basis values and derivatives (`3 (degree + 1)` each).
+type DirectionTables = (Vec<(f64, usize)>, Vec<f64>);
+
+/// The basis tables of a [`RationalGeometry`] element at its quadrature points
+/// ([`GeneralizedGeometry::element_tables`]): per distinct parameter of each direction, its
+/// first local control and the values, first and second derivatives of the `degree + 1` basis
+/// functions there (what [`KnotVector::basis_derivatives`] gives); per point, which `u` and `v`
+/// entry. A tensor rule of `n_u x n_v` points keeps `n_u + n_v` entries.
+#[derive(Clone, Debug, Default)]
+pub struct RationalTables {
+    ku: usize,
+    kv: usize,
+    u: Vec<(f64, usize)>,
+    bu: Vec<f64>,
+    v: Vec<(f64, usize)>,
+    bv: Vec<f64>,
+    points: Vec<[usize; 2]>,
 }
 
 /// Local evaluation data at one parameter, reused between evaluations (see
 /// [`LocalJacobian`]'s scratch): basis tables (`3 x ku`, `3 x kv`; orders above the degree are
-/// zero), local control indices, weights and points, and the rational point.
+/// zero), local control indices, weights and points.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Local {
     bu: Vec<f64>,
@@ -372,13 +539,18 @@ pub(crate) struct Local {
     w: Vec<f64>,
     p: Vec<Vec3>,
     ws: vclay_spline::BasisWorkspace,
-    rp: RationalPoint,
 }
 
 /// Buffers of [`RationalGeometry`]'s `velocity_terms`, one set per thread.
 #[derive(Default)]
 struct VelocityScratch {
     local: Local,
+    buffers: VelocityBuffers,
+}
+
+/// The tensor-product basis values and the local velocities of one point.
+#[derive(Default)]
+struct VelocityBuffers {
     basis: Vec<f64>,
     pd: Vec<Vec3>,
     wd: Vec<f64>,
@@ -466,22 +638,17 @@ impl GeneralizedGeometry for RationalGeometry {
     }
     fn element_denominators(&self, element: &[(f64, f64); 2], nodes: &[f64]) -> [Vec<Vec<f64>>; 2] {
         let map = |(a, b): (f64, f64), t: f64| 0.5 * (a + b) + 0.5 * (b - a) * t;
+        let us: Vec<f64> = nodes.iter().map(|&t| map(element[0], t)).collect();
         if !self.surface {
-            let slice = nodes
-                .iter()
-                .map(|&t| self.denominator([map(element[0], t), 0.5]))
+            let slice = self
+                .denominator_grid(&us, &[0.5])
+                .into_iter()
+                .map(|row| row[0])
                 .collect();
             return [vec![slice], Vec::new()];
         }
-        let grid: Vec<Vec<f64>> = nodes
-            .iter()
-            .map(|&t| {
-                nodes
-                    .iter()
-                    .map(|&s| self.denominator([map(element[0], t), map(element[1], s)]))
-                    .collect()
-            })
-            .collect();
+        let vs: Vec<f64> = nodes.iter().map(|&s| map(element[1], s)).collect();
+        let grid = self.denominator_grid(&us, &vs);
         let along_u = (0..nodes.len())
             .map(|j| grid.iter().map(|row| row[j]).collect())
             .collect();
@@ -491,44 +658,86 @@ impl GeneralizedGeometry for RationalGeometry {
         self.scale
     }
     fn jacobian_at(&self, param: [f64; 2], out: &mut LocalJacobian) -> Result<(), DynamicsError> {
-        let l = &mut out.scratch;
-        self.local_into(param, l)?;
-        rational_point(&l.bu, l.ku, &l.bv, l.kv, &l.w, &l.p, &mut l.rp);
-        out.s = l.rp.s;
-        out.blocks.clear();
-        out.vectors.clear();
-        for (k, &c) in l.idx.iter().enumerate() {
-            out.blocks.push((4 * c, l.rp.r[k]));
-            out.vectors.push((4 * c + 3, l.rp.g[k]));
-        }
+        self.local_into(param, &mut out.scratch)?;
+        Self::columns_from_local(out);
         Ok(())
+    }
+    type ElementTables = RationalTables;
+    fn element_tables(&self, _element: usize, params: &[[f64; 2]]) -> RationalTables {
+        let v_of = |p: &[f64; 2]| if self.surface { p[1] } else { 0.5 };
+        let (Some((u, bu)), Some((v, bv))) = (
+            self.direction_tables(0, params.iter().map(|p| p[0])),
+            self.direction_tables(1, params.iter().map(v_of)),
+        ) else {
+            // A point outside the domain: no tables, every evaluation reports it.
+            return RationalTables::default();
+        };
+        let find = |list: &[(f64, usize)], t: f64| {
+            list.iter()
+                .position(|&(x, _)| x.to_bits() == t.to_bits())
+                .expect("every parameter has an entry")
+        };
+        let points = params
+            .iter()
+            .map(|p| [find(&u, p[0]), find(&v, v_of(p))])
+            .collect();
+        RationalTables {
+            ku: self.knots[0].degree() + 1,
+            kv: self.knots[1].degree() + 1,
+            u,
+            bu,
+            v,
+            bv,
+            points,
+        }
+    }
+    fn element_jacobian_tabled(
+        &self,
+        _element: usize,
+        point: usize,
+        param: [f64; 2],
+        t: &RationalTables,
+        out: &mut LocalJacobian,
+    ) -> Result<(), DynamicsError> {
+        let v = if self.surface { param[1] } else { 0.5 };
+        let entry = t.points.get(point).filter(|&&[iu, iv]| {
+            t.u[iu].0.to_bits() == param[0].to_bits() && t.v[iv].0.to_bits() == v.to_bits()
+        });
+        let Some(&[iu, iv]) = entry else {
+            // Tables of other points (or none): evaluate directly.
+            return self.jacobian_at(param, out);
+        };
+        let l = &mut out.scratch;
+        (l.ku, l.kv) = (t.ku, t.kv);
+        l.bu.clear();
+        l.bu.extend_from_slice(&t.bu[3 * t.ku * iu..3 * t.ku * (iu + 1)]);
+        l.bv.clear();
+        l.bv.extend_from_slice(&t.bv[3 * t.kv * iv..3 * t.kv * (iv + 1)]);
+        self.gather(t.u[iu].1, t.v[iv].1, l);
+        Self::columns_from_local(out);
+        Ok(())
+    }
+    fn velocity_terms_after(
+        &self,
+        _param: [f64; 2],
+        qdot: &[f64],
+        lj: &LocalJacobian,
+    ) -> Result<(Vec3, Vec3), DynamicsError> {
+        super::generalized::with_thread_buffer(&VELOCITY, |sc| {
+            Ok(Self::velocity_from_local(
+                &lj.scratch,
+                qdot,
+                &mut sc.buffers,
+            ))
+        })
     }
     fn velocity_terms(&self, param: [f64; 2], qdot: &[f64]) -> Result<(Vec3, Vec3), DynamicsError> {
         // Called at every quadrature point of a moving model: reused per-thread buffers
         // instead of five allocations a point.
         super::generalized::with_thread_buffer(&VELOCITY, |sc| {
-            let VelocityScratch {
-                local: l,
-                basis,
-                pd,
-                wd,
-            } = sc;
-            self.local_into(param, l)?;
-            basis.clear();
-            basis.extend(
-                (0..l.ku)
-                    .flat_map(|a| (0..l.kv).map(move |b| (a, b)))
-                    .map(|(a, b)| l.bu[a] * l.bv[b]),
-            );
-            pd.clear();
-            pd.extend(
-                l.idx
-                    .iter()
-                    .map(|&c| Vec3::new(qdot[4 * c], qdot[4 * c + 1], qdot[4 * c + 2])),
-            );
-            wd.clear();
-            wd.extend(l.idx.iter().map(|&c| qdot[4 * c + 3]));
-            Ok(rational_velocity(basis, &l.w, &l.p, pd, wd))
+            let VelocityScratch { local, buffers } = sc;
+            self.local_into(param, local)?;
+            Ok(Self::velocity_from_local(local, qdot, buffers))
         })
     }
     fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
@@ -698,6 +907,7 @@ fn swung_column(curve: impl Fn(usize) -> Vec3, map: impl Fn(Vec3, usize) -> Vec3
 const CURVE_SLOT: [usize; 3] = [0, 1, 3];
 
 impl GeneralizedGeometry for SwungGeometry {
+    type ElementTables = ();
     /// Conjugate gradients: the swung parametrization has nearly redundant directions (the
     /// trajectory's scale against `alpha`, for one), so the step matrix is badly conditioned;
     /// with the exact (direct) solve the sphere-to-egg test of `tests/generalized.rs` loses its
@@ -1089,5 +1299,116 @@ impl SwungGeometry {
             &profiles::circle7(1.0)?,
             1.0,
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dnurbs::benchmarks::unit_sheet;
+
+    /// A 6 x 7 bicubic/biquadratic sheet with uneven weights and a curve.
+    fn geometries() -> Vec<RationalGeometry> {
+        let mut pts = Vec::new();
+        let mut w = Vec::new();
+        for i in 0..6 {
+            for j in 0..7 {
+                let (x, y) = (i as f64 / 5.0, j as f64 / 6.0);
+                pts.push(Vec3::new(x, y, 0.3 * (3.0 * x).sin() * y));
+                w.push(0.7 + 0.13 * ((3 * i + 5 * j) % 7) as f64);
+            }
+        }
+        let mut s = NurbsSurface::clamped_uniform([3, 2], [6, 7], pts).unwrap();
+        s.set_weights(w).unwrap();
+        let cpts: Vec<Vec3> = (0..8)
+            .map(|i| Vec3::new(i as f64, (i as f64).cos(), 0.1 * i as f64))
+            .collect();
+        let mut c = NurbsCurve::clamped_uniform(3, cpts).unwrap();
+        c.set_weights((0..8).map(|i| 1.0 + 0.2 * (i % 3) as f64).collect())
+            .unwrap();
+        vec![
+            RationalGeometry::from_surface(&s),
+            RationalGeometry::from_curve(&c),
+            RationalGeometry::from_surface(&unit_sheet(5, true).unwrap()),
+        ]
+    }
+
+    fn bits(v: &[Vec3]) -> Vec<u64> {
+        v.iter()
+            .flat_map(|p| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
+            .collect()
+    }
+
+    /// The tabled Jacobians and the velocity terms after them equal the direct evaluations
+    /// bit for bit at every Gauss point of every element (issue 31 caches the basis values
+    /// per quadrature point; the trajectories must not move by a bit).
+    #[test]
+    fn tabled_evaluation_equals_direct_evaluation_bit_for_bit() {
+        for g in geometries() {
+            let qdot: Vec<f64> = (0..g.coordinates().len())
+                .map(|i| ((i * 7919) % 13) as f64 * 0.01 - 0.06)
+                .collect();
+            let (mut direct, mut tabled) = (LocalJacobian::default(), LocalJacobian::default());
+            for (e, el) in g.elements().iter().enumerate() {
+                let gl = vclay_core::GaussLegendre::new(5).unwrap();
+                let us: Vec<f64> = gl.on_interval(el[0].0, el[0].1).map(|x| x.0).collect();
+                let vs: Vec<f64> = if g.surface {
+                    gl.on_interval(el[1].0, el[1].1).map(|x| x.0).collect()
+                } else {
+                    vec![el[1].0]
+                };
+                let params: Vec<[f64; 2]> = us
+                    .iter()
+                    .flat_map(|&u| vs.iter().map(move |&v| [u, v]))
+                    .collect();
+                let t = g.element_tables(e, &params);
+                assert_eq!(t.points.len(), params.len());
+                assert_eq!(t.u.len() + t.v.len(), us.len() + vs.len());
+                for (k, &p) in params.iter().enumerate() {
+                    g.jacobian_at(p, &mut direct).unwrap();
+                    g.element_jacobian_tabled(e, k, p, &t, &mut tabled).unwrap();
+                    assert_eq!(bits(&direct.s), bits(&tabled.s));
+                    assert_eq!(direct.blocks.len(), tabled.blocks.len());
+                    for (a, b) in direct.blocks.iter().zip(&tabled.blocks) {
+                        assert_eq!(a.0, b.0);
+                        assert!(
+                            a.1.iter()
+                                .zip(&b.1)
+                                .all(|(x, y)| x.to_bits() == y.to_bits())
+                        );
+                    }
+                    for (a, b) in direct.vectors.iter().zip(&tabled.vectors) {
+                        assert_eq!((a.0, bits(&a.1)), (b.0, bits(&b.1)));
+                    }
+                    let (d1, d2) = g.velocity_terms(p, &qdot).unwrap();
+                    let (t1, t2) = g.velocity_terms_after(p, &qdot, &tabled).unwrap();
+                    assert_eq!(bits(&[d1, d2]), bits(&[t1, t2]));
+                }
+                // Tables of other points fall back to the direct evaluation.
+                let off = [0.5 * (el[0].0 + el[0].1), vs[0]];
+                g.element_jacobian_tabled(e, 0, off, &t, &mut tabled)
+                    .unwrap();
+                g.jacobian_at(off, &mut direct).unwrap();
+                assert_eq!(bits(&direct.s), bits(&tabled.s));
+                // The denominator samples of the weight-aware rule, grid against points.
+                let nodes = [-0.9, -0.3, 0.2, 0.8];
+                let [along_u, grid] = g.element_denominators(el, &nodes);
+                let map = |(a, b): (f64, f64), t: f64| 0.5 * (a + b) + 0.5 * (b - a) * t;
+                if g.surface {
+                    for (i, &t) in nodes.iter().enumerate() {
+                        for (j, &s) in nodes.iter().enumerate() {
+                            let w = g.denominator([map(el[0], t), map(el[1], s)]);
+                            assert_eq!(grid[i][j].to_bits(), w.to_bits());
+                            assert_eq!(along_u[j][i].to_bits(), w.to_bits());
+                        }
+                    }
+                } else {
+                    for (i, &t) in nodes.iter().enumerate() {
+                        let w = g.denominator([map(el[0], t), 0.5]);
+                        assert_eq!(along_u[0][i].to_bits(), w.to_bits());
+                    }
+                }
+            }
+        }
     }
 }

@@ -416,6 +416,7 @@ fn rational_columns(
 }
 
 impl GeneralizedGeometry for TriangularGeometry {
+    type ElementTables = ();
     fn parametric_dimension(&self) -> usize {
         2
     }
