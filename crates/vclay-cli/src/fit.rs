@@ -149,6 +149,11 @@ pub fn run(args: &FitArgs) -> Result<()> {
     )?;
     let fit =
         fit_surface(&points, &opts).map_err(|e| anyhow::anyhow!("{}: {e}", args.scan.display()))?;
+    if !crate::quiet() {
+        for w in &fit.report.warnings {
+            eprintln!("vclay: warning: {}: {w}", args.scan.display());
+        }
+    }
     let t = Instant::now();
     let name = args
         .scan

@@ -83,6 +83,17 @@ pub fn human(bytes: f64) -> String {
     }
 }
 
+/// A limit as the user gives it: a whole number of `K`, `M`, `G` or `T` (powers of 1024, as
+/// `--max-memory` reads them) when it is one (`4G` for the default, `512M`), else [`human`].
+pub fn human_limit(bytes: u64) -> String {
+    for (unit, shift) in [("T", 40), ("G", 30), ("M", 20), ("K", 10)] {
+        if bytes >= 1 << shift && bytes % (1 << shift) == 0 {
+            return format!("{}{unit}", bytes >> shift);
+        }
+    }
+    human(bytes as f64)
+}
+
 /// Work over the memory limit: what was asked (an argument and its value), the estimate and
 /// the limit.
 #[derive(Clone, Debug, PartialEq)]
@@ -102,7 +113,7 @@ impl fmt::Display for OverLimit {
             "{} needs about {} of memory, more than the limit of {}",
             self.what,
             human(self.bytes),
-            human(self.max as f64)
+            human_limit(self.max)
         )
     }
 }
@@ -137,5 +148,10 @@ mod tests {
         let e = check(|| "samples=99".into(), 1e30, DEFAULT_MAX_MEMORY).unwrap_err();
         assert!(e.to_string().starts_with("samples=99 needs about"), "{e}");
         assert!(tessellation_bytes(usize::MAX, 1, 1).is_finite());
+        // Issue 29 item 3: the default limit reads as given (4G), not as 4.3 GB.
+        assert!(e.to_string().ends_with("the limit of 4G"), "{e}");
+        assert_eq!(human_limit(512 << 20), "512M");
+        assert_eq!(human_limit(1000), "1 kB");
+        assert_eq!(human_limit(3 << 29), "1536M");
     }
 }
