@@ -223,7 +223,10 @@ impl IntoPy for vclay_session::SessionError {
             E::Diverged { .. } => DivergedError::new_err(msg),
             E::File { .. } | E::Io { .. } | E::NotASession { .. } => FileError::new_err(msg),
             E::OverLimit(_) => Python::attach(|py| {
-                memory_limit(py, format!("{msg} (lower it, or raise vclay.set_max_memory)"))
+                memory_limit(
+                    py,
+                    format!("{msg} (lower it, or raise vclay.set_max_memory)"),
+                )
             }),
             _ => SessionError::new_err(msg),
         }

@@ -144,17 +144,11 @@ pub fn run(args: &RunArgs) -> Result<()> {
         max_output: args.max_output,
         max_memory: Some(crate::limits::max_memory()),
     };
-    let result = vclay::session::run::run_with(
-        &mut session,
-        steps,
-        &dir,
-        &info.output,
-        &limits,
-        &mut |p| {
+    let result =
+        vclay::session::run::run_with(&mut session, steps, &dir, &info.output, &limits, &mut |p| {
             bar(p);
             std::ops::ControlFlow::Continue(())
-        },
-    );
+        });
     let s = match result {
         Ok(s) => s,
         Err(e) => {

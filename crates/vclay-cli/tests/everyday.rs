@@ -153,12 +153,26 @@ fn lattice_patch_estimate_follows_the_sample_level() {
     let dir = tempfile::tempdir().unwrap();
     let made = vclay(
         dir.path(),
-        &["subdivide", "--primitive", "torus", "--levels", "0", "--out", "t.ovm"],
+        &[
+            "subdivide",
+            "--primitive",
+            "torus",
+            "--levels",
+            "0",
+            "--out",
+            "t.ovm",
+        ],
     );
     assert!(made.status.success(), "{}", text(&made.stderr));
-    let ok = vclay(dir.path(), &["--max-memory", "200M", "convert", "t.ovm", "t.step"]);
+    let ok = vclay(
+        dir.path(),
+        &["--max-memory", "200M", "convert", "t.ovm", "t.step"],
+    );
     assert!(ok.status.success(), "{}", text(&ok.stderr));
-    let refused = vclay(dir.path(), &["--max-memory", "50M", "convert", "t.ovm", "u.step"]);
+    let refused = vclay(
+        dir.path(),
+        &["--max-memory", "50M", "convert", "t.ovm", "u.step"],
+    );
     assert_eq!(refused.status.code(), Some(2));
     let err = text(&refused.stderr);
     assert!(

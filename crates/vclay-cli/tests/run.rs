@@ -192,14 +192,37 @@ fn a_run_checks_its_output_before_the_first_step() {
     };
     // 201 frames of some kB each: more than 100 kB.
     fails(
-        &["run", sc, "--steps", "1000", "--max-output", "100K", "--out", o],
+        &[
+            "run",
+            sc,
+            "--steps",
+            "1000",
+            "--max-output",
+            "100K",
+            "--out",
+            o,
+        ],
         &["1000 steps would write about", "201 frames", "output limit"],
     );
     assert_eq!(std::fs::read_dir(&out).unwrap().count(), 0, "nothing left");
     // The energy table of 10^6 steps is held in memory: 160 MB.
     fails(
-        &["--max-memory", "10M", "run", sc, "--steps", "1000000", "--out", o],
-        &["1000000 steps", "energy table", "limit of 10M", "raise --max-memory"],
+        &[
+            "--max-memory",
+            "10M",
+            "run",
+            sc,
+            "--steps",
+            "1000000",
+            "--out",
+            o,
+        ],
+        &[
+            "1000000 steps",
+            "energy table",
+            "limit of 10M",
+            "raise --max-memory",
+        ],
     );
     // An existing folder the process cannot write to (Linux's /sys, even as root).
     if std::fs::write("/sys/vclay-probe", "").is_err() && Path::new("/sys").is_dir() {

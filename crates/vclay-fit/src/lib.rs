@@ -24,10 +24,13 @@
 //!    it lowers the robust objective (Tukey's loss of the distances plus the fairness energy,
 //!    [`robust`]): on a scan with outliers, corrections that move the outliers' parameters
 //!    toward their foot points pull the surface to them, and such a round is thrown away, so
-//!    the default fit is never less accurate than plain least squares (`corrections = 0`).
+//!    corrections never make a fit worse, by that objective, than its first solve
+//!    (`corrections = 0`).
 //! 4. Optionally robust: the weights `w_k` are re-estimated from the distances after each
-//!    round (IRLS with Huber or Tukey weights, [`robust`]), for `robust_rounds` extra rounds,
-//!    and the base rectangle is trimmed to where the inliers are ([`plane`]).
+//!    round (IRLS with Huber or Tukey weights, [`robust`]), for `robust_rounds` extra rounds.
+//!    Robust or not, the base rectangle is trimmed to where the inliers are when the fringe
+//!    it leaves out holds mostly outliers (points beyond `4.685 sigma`, [`plane`]); the
+//!    points outside get weight 0, and a new domain gets a round of its own.
 //! 5. Optionally rational (`rational = true`, D-NURBS's dynamic weights, `d-nurbs.txt` eqs 3-6):
 //!    a few damped Gauss-Newton iterations on the control points *and* weights ([`rational`]).
 //! 6. Report: closest-point distances (Newton to convergence), RMS and maximum, the fairness
@@ -257,8 +260,8 @@ pub struct FitReport {
     pub max: f64,
     /// Mean closest-point distance.
     pub mean: f64,
-    /// RMS over the points whose final robust weight is positive (all points without
-    /// `robust`).
+    /// RMS over the points whose final weight is positive (without `robust`: all points in
+    /// the domain).
     pub rms_inliers: f64,
     /// Points farther than Tukey's rejection distance `4.685 sigma` from the surface (0
     /// without `robust`).
@@ -271,10 +274,10 @@ pub struct FitReport {
     /// Rounds that were computed and thrown away because they raised the robust objective
     /// ([`robust`] module docs; the fit stops at the first).
     pub rejected_rounds: usize,
-    /// Times a robust fit trimmed its domain to the inliers ([`plane`] module docs).
+    /// Times the fit trimmed its domain to the inliers ([`plane`] module docs).
     pub domain_updates: usize,
-    /// Points outside the final (trimmed) rectangle, fitted at its boundary (0 unless the
-    /// domain was trimmed).
+    /// Points outside the final (trimmed) rectangle, left out of the fit (weight 0; 0 unless
+    /// the domain was trimmed).
     pub outside: usize,
     /// The cell of a [`REGION_CELLS`] x [`REGION_CELLS`] partition of the domain with the
     /// largest RMS distance of its points.
@@ -298,6 +301,9 @@ pub struct FitReport {
     /// Time per phase.
     pub timings: Timings,
 }
+
+/// Most rounds added to a fit because its domain was trimmed in its last round.
+pub const MAX_EXTRA_ROUNDS: usize = 2;
 
 /// Robust weight below which a point counts as down-weighted in the report.
 pub const DOWNWEIGHTED: f64 = 0.5;
@@ -346,10 +352,18 @@ fn worst_region(surface: &NurbsSurface, params: &[[f64; 2]], d: &[f64], cut: f64
         .unwrap_or((0, &(0, 0, 0.0, 0.0)));
     let (i, j) = (k / m, k % m);
     let h = 1.0 / m as f64;
-    let (u, v) = ([i as f64 * h, (i + 1) as f64 * h], [j as f64 * h, (j + 1) as f64 * h]);
+    let (u, v) = (
+        [i as f64 * h, (i + 1) as f64 * h],
+        [j as f64 * h, (j + 1) as f64 * h],
+    );
     let ev = project::Evaluator::new(surface);
     let c = ev
-        .eval_order(0.5 * (u[0] + u[1]), 0.5 * (v[0] + v[1]), 1, &mut ev.scratch())
+        .eval_order(
+            0.5 * (u[0] + u[1]),
+            0.5 * (v[0] + v[1]),
+            1,
+            &mut ev.scratch(),
+        )
         .s;
     Region {
         u,
@@ -447,7 +461,9 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
     };
     let n = opts.grid[0] * opts.grid[1];
     let bw = (2 * p + 1) * (2 * p + 1);
-    let stiffness_on = |extents: [f64; 2]| -> Result<(Vec<f64>, [f64; 2], [f64; 3]), FitError> {
+    // The stiffness band and eq 17's densities on a base rectangle.
+    type Fairness = (Vec<f64>, [f64; 2], [f64; 3]);
+    let stiffness_on = |extents: [f64; 2]| -> Result<Fairness, FitError> {
         let (alpha, beta) = energy::densities(opts.tension, opts.rigidity, extents);
         let mut k = vec![0.0; n * bw];
         energy::add_separable(&mut k, &knots, alpha, beta)?;
@@ -462,7 +478,7 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
     let mut cand_distances = vec![0.0; points.len()];
     let mut history = Vec::new();
     let mut sigma = 0.0;
-    let rounds = 1
+    let mut rounds = 1
         + opts.corrections
         + if opts.robust.is_some() {
             opts.robust_rounds
@@ -475,9 +491,12 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
     let (mut best_sigma, mut best_energy) = (0.0, 0.0);
     let mut judge = false;
     let (mut rejected_rounds, mut domain_updates) = (0usize, 0usize);
-    for round in 0..rounds {
+    // Whether each point lies outside the (trimmed) domain; rounds added for a new domain.
+    let mut outside = vec![false; points.len()];
+    let (mut round, mut extra_rounds) = (0usize, 0usize);
+    while round < rounds {
         let t = Instant::now();
-        let use_w = opts.robust.is_some() && round > 0;
+        let use_w = (opts.robust.is_some() && round > 0) || domain_updates > 0;
         let mut normal =
             system::assemble(&knots, points, &params, use_w.then_some(&weights[..]), par);
         timings.assemble += t.elapsed().as_secs_f64();
@@ -515,7 +534,7 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
             let c = robust::TUKEY_C * cand_sigma.min(best_sigma);
             let new = robust::objective(&cand_distances, c) + cand_energy;
             let old = robust::objective(&distances, c) + best_energy;
-            if !(new < old) {
+            if new.is_nan() || new >= old {
                 rejected_rounds += 1;
                 timings.correct += t.elapsed().as_secs_f64();
                 break;
@@ -530,32 +549,59 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
         if let Some(loss) = opts.robust {
             sigma = cand_sigma;
             robust::weights(loss, &distances, sigma, &mut weights);
-            // The domain comes from the inliers (plane module docs).
-            let cut = robust::TUKEY_C * sigma;
-            if let Some(rect) = base.dense_rect(points, |k| distances[k] <= cut) {
-                let [lu, lv] = base.extents();
-                let old = base.rect;
-                let moved = [
-                    (rect[0] - old[0]) / lu,
-                    (old[1] - rect[1]) / lu,
-                    (rect[2] - old[2]) / lv,
-                    (old[3] - rect[3]) / lv,
-                ]
-                .into_iter()
-                .fold(0.0f64, f64::max);
-                if moved > plane::DOMAIN_TOL && round + 1 < rounds {
-                    base.rect = rect;
-                    for uv in params.iter_mut() {
-                        *uv = base.remap(&old, *uv);
+        }
+        // The domain comes from the inliers (plane module docs): it shrinks to drop a fringe
+        // where most points are outliers (beyond Tukey's cut of this round's scale), never
+        // one of inliers (a sharp corner of a clean scan).
+        let cut = robust::TUKEY_C * cand_sigma;
+        if let Some(rect) = base.dense_rect(points, |k| distances[k] <= cut) {
+            let [lu, lv] = base.extents();
+            let old = base.rect;
+            let moved = [
+                (rect[0] - old[0]) / lu,
+                (old[1] - rect[1]) / lu,
+                (rect[2] - old[2]) / lv,
+                (old[3] - rect[3]) / lv,
+            ]
+            .into_iter()
+            .fold(0.0f64, f64::max);
+            let (mut dropped, mut far) = (0usize, 0usize);
+            if moved > plane::DOMAIN_TOL {
+                for (x, d) in points.iter().zip(&distances) {
+                    if !plane::inside(&rect, base.project(x)) {
+                        dropped += 1;
+                        far += usize::from(*d > cut);
                     }
-                    (stiffness, alpha, beta) = stiffness_on(base.extents())?;
-                    // A new domain is a new problem: its first round is not judged against
-                    // the old one.
-                    judge = false;
-                    domain_updates += 1;
+                }
+            }
+            if moved > plane::DOMAIN_TOL && 2 * far > dropped && extra_rounds < MAX_EXTRA_ROUNDS {
+                base.rect = rect;
+                for uv in params.iter_mut() {
+                    *uv = base.remap(&old, *uv);
+                }
+                for (o, x) in outside.iter_mut().zip(points) {
+                    *o = !plane::inside(&rect, base.project(x));
+                }
+                (stiffness, alpha, beta) = stiffness_on(base.extents())?;
+                // A new domain is a new problem: its first round is not judged against the
+                // old one, and it gets a round of its own when it came last.
+                judge = false;
+                domain_updates += 1;
+                if round + 1 == rounds {
+                    rounds += 1;
+                    extra_rounds += 1;
                 }
             }
         }
+        if domain_updates > 0 {
+            // Points outside the domain are not fitted.
+            for (w, &o) in weights.iter_mut().zip(&outside) {
+                if o {
+                    *w = 0.0;
+                }
+            }
+        }
+        round += 1;
         timings.correct += t.elapsed().as_secs_f64();
     }
     drop((cand_params, cand_distances));
@@ -613,19 +659,7 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
     } else {
         0
     };
-    let outside = if domain_updates > 0 {
-        let r = base.rect;
-        let tol = 1e-12 * size;
-        points
-            .iter()
-            .filter(|x| {
-                let [a, b] = base.project(x);
-                a < r[0] - tol || a > r[1] + tol || b < r[2] - tol || b > r[3] + tol
-            })
-            .count()
-    } else {
-        0
-    };
+    let outside = outside.iter().filter(|&&o| o).count();
     let cut = if opts.robust.is_some() {
         robust::TUKEY_C * sigma
     } else {

@@ -18,9 +18,10 @@
 //! trimmed rectangle keeps, along each axis, the inliers from the first to the last window of
 //! width `1 / DOMAIN_WINDOWS` of the extent that holds at least `DOMAIN_DENSITY` times the
 //! mean number of inliers per window: sparse fringes (outliers that came close to the wall,
-//! stray points) fall outside and are clamped to the boundary. A round scan's tip keeps its
-//! extent (its last window holds several times the threshold); a sharp corner (a triangle's
-//! tip) may lose up to one window.
+//! stray points) fall outside. The fit ([`crate::fit_surface`], robust or not) takes the
+//! trimmed rectangle only when most points it leaves out are outliers, and then gives them
+//! weight 0. A round scan's tip keeps its extent (its last window holds several times the
+//! threshold); a clean sharp corner (a triangle's tip), whose points are inliers, too.
 //!
 //! Degenerate clouds are errors: all points within `DEGENERATE_RATIO` of one point, or on a
 //! line (second principal extent below `DEGENERATE_RATIO` times the first).
@@ -127,6 +128,11 @@ impl BasePlane {
             ((b - self.rect[2]) / lv).clamp(0.0, 1.0),
         ]
     }
+}
+
+/// Whether in-plane coordinates `(a, b)` lie in `rect` (`[a_min, a_max, b_min, b_max]`).
+pub fn inside(rect: &[f64; 4], [a, b]: [f64; 2]) -> bool {
+    a >= rect[0] && a <= rect[1] && b >= rect[2] && b <= rect[3]
 }
 
 /// The range of the values from the first to the last window of width `extent /

@@ -351,7 +351,10 @@ fn robust_domain_comes_from_the_inliers() {
     let robust = fit_surface(&pts, &o(Some(Robust::Tukey))).unwrap();
     let r = &robust.report;
     let (max_dev, dev) = deviation(&robust.surface, wave, 60, |_, _| true);
-    assert!(dev < 0.5 * sigma && max_dev < 3.0 * sigma, "{dev} {max_dev} {r:?}");
+    assert!(
+        dev < 0.5 * sigma && max_dev < 3.0 * sigma,
+        "{dev} {max_dev} {r:?}"
+    );
     // The rectangle spans the inliers' projections (their extent is 2 along x and y, a bit
     // more across the tilted plane), not the outliers' (which reach 1.12 along -v).
     let [lu, lv] = r.base.extents();
@@ -363,7 +366,10 @@ fn robust_domain_comes_from_the_inliers() {
     assert!((200..=210).contains(&r.outliers), "{r:?}");
     // Down-weighted below 1/2: the outliers and the inliers beyond about 2.5 sigma (about
     // 1.5 % of them for Gaussian noise).
-    assert!(r.downweighted >= r.outliers && r.downweighted < 400, "{r:?}");
+    assert!(
+        r.downweighted >= r.outliers && r.downweighted < 400,
+        "{r:?}"
+    );
     assert!((r.rms_inliers - sigma).abs() < 0.1 * sigma, "{r:?}");
     // Plain least squares on the same points is far off (the test can fail).
     let plain = fit_surface(&pts, &o(None)).unwrap();
@@ -390,7 +396,10 @@ fn corrections_never_make_a_fit_worse() {
     let default = fit_surface(&pts, &FitOptions::default()).unwrap();
     let (_, dev_none) = deviation(&none.surface, wave, 60, |_, _| true);
     let (_, dev_default) = deviation(&default.surface, wave, 60, |_, _| true);
-    assert!(dev_default <= dev_none * 1.000_001, "{dev_default} vs {dev_none}");
+    assert!(
+        dev_default <= dev_none * 1.000_001,
+        "{dev_default} vs {dev_none}"
+    );
     assert_eq!(default.report.rejected_rounds, 1, "{:?}", default.report);
     assert_eq!(default.report.history_rms.len(), 1);
     // On clean data every correction is kept and helps.
@@ -414,7 +423,10 @@ fn report_shows_the_worst_region() {
     let w = &fit.report.worst_region;
     let c = Vec3::new(w.center[0], w.center[1], w.center[2]);
     assert!(corner(&c), "{w:?}");
-    assert!(w.points > 10 && w.rms > 10.0 * 0.001 && w.max >= w.rms, "{w:?}");
+    assert!(
+        w.points > 10 && w.rms > 10.0 * 0.001 && w.max >= w.rms,
+        "{w:?}"
+    );
     assert_eq!(w.outliers, 0);
     assert!((w.u[1] - w.u[0] - 0.125).abs() < 1e-12);
 }
@@ -427,7 +439,34 @@ fn too_few_points_for_the_net_warn() {
     let fit = fit_surface(&few, &FitOptions::default()).unwrap();
     let w = &fit.report.warnings;
     assert_eq!(w.len(), 1, "{w:?}");
-    assert!(w[0].contains("5 points") && w[0].contains("1024 points"), "{w:?}");
+    assert!(
+        w[0].contains("5 points") && w[0].contains("1024 points"),
+        "{w:?}"
+    );
     let enough = scan(wave, 200, 0.0, 1, |_, _| false);
-    assert!(fit_surface(&enough, &opts(8)).unwrap().report.warnings.is_empty());
+    assert!(
+        fit_surface(&enough, &opts(8))
+            .unwrap()
+            .report
+            .warnings
+            .is_empty()
+    );
+}
+
+/// The domain is trimmed only where most of the points it leaves out are outliers: a clean
+/// triangular scan keeps its sharp corners under `robust` (its sparse tips are inliers).
+#[test]
+fn a_clean_sharp_corner_keeps_its_domain() {
+    let pts = scan(wave, 4000, 0.002, 23, |x, y| y > x);
+    let fit = fit_surface(
+        &pts,
+        &FitOptions {
+            robust: Some(Robust::Tukey),
+            ..opts(12)
+        },
+    )
+    .unwrap();
+    let r = &fit.report;
+    assert_eq!((r.domain_updates, r.outside), (0, 0), "{r:?}");
+    assert!((r.rms_inliers - 0.002).abs() < 0.0003, "{r:?}");
 }

@@ -112,7 +112,10 @@ pub fn stage(
 
 /// Why a file could not be created in `dir`, in words, without the temporary file's name.
 fn unwritable(dir: &Path, kind: std::io::ErrorKind) -> String {
-    format!("cannot create a file in the folder {} ({kind})", dir.display())
+    format!(
+        "cannot create a file in the folder {} ({kind})",
+        dir.display()
+    )
 }
 
 /// Removes our temporary files of dead processes or older than [`STALE_TEMP_AGE`] from `dir`

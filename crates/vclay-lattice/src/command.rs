@@ -120,7 +120,7 @@ pub const BYTES_PER_CELL: u64 = 760;
 /// `512M`; bytes when it is no whole number of K, M, G or T.
 fn limit_as_given(bytes: u64) -> String {
     for (unit, shift) in [("T", 40), ("G", 30), ("M", 20), ("K", 10)] {
-        if bytes >= 1 << shift && bytes % (1 << shift) == 0 {
+        if bytes >= 1 << shift && bytes.is_multiple_of(1 << shift) {
             return format!("{}{unit}", bytes >> shift);
         }
     }

@@ -109,7 +109,7 @@ pub fn human(bytes: f64) -> String {
 /// `--max-memory` reads them) when it is one (`4G` for the default, `512M`), else [`human`].
 pub fn human_limit(bytes: u64) -> String {
     for (unit, shift) in [("T", 40), ("G", 30), ("M", 20), ("K", 10)] {
-        if bytes >= 1 << shift && bytes % (1 << shift) == 0 {
+        if bytes >= 1 << shift && bytes.is_multiple_of(1 << shift) {
             return format!("{}{unit}", bytes >> shift);
         }
     }

@@ -99,7 +99,7 @@ pub fn frames_written(now: u64, steps: u64, every: u64) -> u64 {
     if steps == 0 {
         return 1;
     }
-    1 + (end / every - now / every) + u64::from(end % every != 0)
+    1 + (end / every - now / every) + u64::from(!end.is_multiple_of(every))
 }
 
 /// Free bytes for this user on the file system of `dir` (`None` where unknown).
@@ -197,7 +197,11 @@ pub fn check_output(
     {
         return Err(SessionError::io(
             dir,
-            format!("{}, more than the output limit of {}; {advice}", what(), human_limit(max)),
+            format!(
+                "{}, more than the output limit of {}; {advice}",
+                what(),
+                human_limit(max)
+            ),
         ));
     }
     if let Some(free) = plan.available
@@ -205,12 +209,20 @@ pub fn check_output(
     {
         return Err(SessionError::io(
             dir,
-            format!("{}, more than the {} free there; {advice}", what(), human(free as f64)),
+            format!(
+                "{}, more than the {} free there; {advice}",
+                what(),
+                human(free as f64)
+            ),
         ));
     }
     if let Some(max) = limits.max_memory {
         crate::limits::check(
-            || format!("{steps} steps (the energy table and the list of {frame_files} frame files)"),
+            || {
+                format!(
+                    "{steps} steps (the energy table and the list of {frame_files} frame files)"
+                )
+            },
             memory,
             max,
         )?;
@@ -228,10 +240,17 @@ pub fn run(
     output: &OutputSpec,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<RunSummary, SessionError> {
-    run_with(session, steps, dir, output, &RunLimits::default(), &mut |p| {
-        progress(p);
-        std::ops::ControlFlow::Continue(())
-    })
+    run_with(
+        session,
+        steps,
+        dir,
+        output,
+        &RunLimits::default(),
+        &mut |p| {
+            progress(p);
+            std::ops::ControlFlow::Continue(())
+        },
+    )
 }
 
 /// [`run`] whose `progress` may stop it (`ControlFlow::Break`, e.g. Ctrl-C in Python): the
