@@ -565,13 +565,29 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
             ]
             .into_iter()
             .fold(0.0f64, f64::max);
+            // A point left out is an outlier when its height over the surface's new edge
+            // (along the plane's normal, at the nearest point of the new rectangle) exceeds
+            // the cut plus its in-plane distance to the rectangle: a slope up to 1 continues
+            // the surface (a clean corner), a jump does not (a stray return displaced along
+            // the scanner's axis). Distances alone cannot tell: a plain fit passes through
+            // the outliers of a fringe.
             let (mut dropped, mut far) = (0usize, 0usize);
             if moved > plane::DOMAIN_TOL {
-                for (x, d) in points.iter().zip(&distances) {
-                    if !plane::inside(&rect, base.project(x)) {
-                        dropped += 1;
-                        far += usize::from(*d > cut);
+                let surface = polynomial(&knots, ctrl.clone())?;
+                let ev = project::Evaluator::new(&surface);
+                let mut sc = ev.scratch();
+                let e3 = Vec3::from(base.axes[2]);
+                for x in points {
+                    let ab = base.project(x);
+                    if plane::inside(&rect, ab) {
+                        continue;
                     }
+                    dropped += 1;
+                    let ca = [ab[0].clamp(rect[0], rect[1]), ab[1].clamp(rect[2], rect[3])];
+                    let delta = (ab[0] - ca[0]).hypot(ab[1] - ca[1]);
+                    let uv = [(ca[0] - old[0]) / lu, (ca[1] - old[2]) / lv];
+                    let edge = ev.eval_order(uv[0], uv[1], 1, &mut sc).s;
+                    far += usize::from((x - edge).dot(&e3).abs() > cut + delta);
                 }
             }
             if moved > plane::DOMAIN_TOL && 2 * far > dropped && extra_rounds < MAX_EXTRA_ROUNDS {

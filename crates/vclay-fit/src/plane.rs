@@ -20,7 +20,9 @@
 //! mean number of inliers per window: sparse fringes (outliers that came close to the wall,
 //! stray points) fall outside. The fit ([`crate::fit_surface`], robust or not) takes the
 //! trimmed rectangle only when most points it leaves out are outliers, and then gives them
-//! weight 0. A round scan's tip keeps its extent (its last window holds several times the
+//! weight 0: points whose height over the surface at the new edge (along the normal `e3`)
+//! exceeds Tukey's cut `4.685 sigma` plus their in-plane distance to the rectangle (a slope
+//! above 1: a jump, not the surface continued). A round scan's tip keeps its extent (its last window holds several times the
 //! threshold); a clean sharp corner (a triangle's tip), whose points are inliers, too.
 //!
 //! Degenerate clouds are errors: all points within `DEGENERATE_RATIO` of one point, or on a

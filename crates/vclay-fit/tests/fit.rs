@@ -380,7 +380,8 @@ fn robust_domain_comes_from_the_inliers() {
 /// Issue 29 item 1: with 1 % outliers the default fit (2 parameter corrections) was less
 /// accurate than plain least squares (`corrections = 0`): the corrections moved the outliers'
 /// parameters to their foot points and pulled the surface to them. A round is now kept only
-/// when it lowers the robust objective.
+/// when it lowers the robust objective, and the fringe of outliers beyond the scan's edge is
+/// left out.
 #[test]
 fn corrections_never_make_a_fit_worse() {
     let mut pts = scan(wave, 10_000, 0.002, 11, |_, _| false);
@@ -400,8 +401,14 @@ fn corrections_never_make_a_fit_worse() {
         dev_default <= dev_none * 1.000_001,
         "{dev_default} vs {dev_none}"
     );
-    assert_eq!(default.report.rejected_rounds, 1, "{:?}", default.report);
-    assert_eq!(default.report.history_rms.len(), 1);
+    // The fringe beyond the scan's edge where only outliers lie is left out: the domain is
+    // the inliers' (extents about 2, not 2.1), as for a robust fit. (What is left is plain
+    // least squares' pull toward the outliers inside the domain: with 10 points per knot
+    // cell and the default rigidity, 0.11 RMS off the true wave.)
+    let r = &default.report;
+    let [lu, lv] = r.base.extents();
+    assert!(r.domain_updates >= 1 && r.outside > 0, "{r:?}");
+    assert!(lu < 2.03 && lv < 2.03, "{:?}", r.base.rect);
     // On clean data every correction is kept and helps.
     let clean = scan(wave, 4000, 0.002, 11, |_, _| false);
     let fit = fit_surface(&clean, &opts(12)).unwrap();
