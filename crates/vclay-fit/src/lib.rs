@@ -100,8 +100,9 @@ pub const MAX_FIT_DEGREE: usize = 7;
 /// Bytes per data point held during a fit: the point (24 B), its parameter, distance and
 /// weight (32 B), the candidate round's parameter and distance (24 B), and scratch (a robust
 /// fit's in-plane coordinates and the median's copy, 24 B). Measured peak resident size
-/// (release, `/usr/bin/time -v`, 1,000,000 points, 32 x 32 net, less the process's 6 MB):
-/// 96 B per point, 108 B with `--robust`; rounded up.
+/// (release, `/usr/bin/time -v`, 1,000,000 points with 2 % outliers, 32 x 32 net, less the
+/// process's 6 MB): 111 B per point, with or without `--robust` (the estimate reads 0.98 of
+/// the peak).
 pub const BYTES_PER_POINT: usize = 112;
 
 /// Options of a fit; each default is the named constant.
