@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Scan fitting against SciPy (FITPACK LSQBivariateSpline) and geomdl (approximate_surface) on
 # the same clouds, in one run (issue 20): bench/get_scan.py makes the clouds (the Jacksboro
-# fault DEM that matplotlib ships, and seeded synthetic waves of 100k and 1M points),
+# fault DEM that matplotlib ships, and seeded synthetic waves of 100k and 1M points, also with
+# 1 % and 2 % one-sided gross outliers: issue 29),
 # bench/compare_fit.py fits them with all three at 32 x 32 bicubic and prints errors and times.
 # Installs numpy, scipy, geomdl and matplotlib into a venv under target/ when pip can
 # (VCLAY_NO_INSTALL=1 forbids it); says SKIPPED and exits 0 otherwise. Takes about a minute

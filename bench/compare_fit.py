@@ -58,17 +58,40 @@ def read_ply(path):
         return np.frombuffer(f.read(24 * n), dtype="<f8").reshape(n, 3).copy()
 
 
-def run_vclay(vclay, path, extra=()):
+def wave_truth(x, y):
+    return 0.15 * np.sin(2 * x) * np.cos(1.5 * y)
+
+
+def truth_rms(xyz):
+    """RMS vertical deviation from the true wave of surface points inside the scanned region
+    (away from the edge and the hole): the accuracy on scans with outliers, where distances to
+    the data mean little."""
+    x, y, z = xyz[:, 0], xyz[:, 1], xyz[:, 2]
+    keep = (np.abs(x) < 0.95) & (np.abs(y) < 0.95) & ((x - 0.2) ** 2 + (y + 0.1) ** 2 > 0.3**2)
+    return float(np.sqrt(((z[keep] - wave_truth(x[keep], y[keep])) ** 2).mean()))
+
+
+def run_vclay(vclay, path, extra=(), truth=False):
     with tempfile.TemporaryDirectory() as tmp:
         rep = os.path.join(tmp, "r.json")
-        cmd = [vclay, "fit", path, "--grid", f"{GRID}x{GRID}", "--out",
-               os.path.join(tmp, "s.json"), "--report", rep, *extra]
+        surf = os.path.join(tmp, "s.json")
+        cmd = [vclay, "fit", path, "--grid", f"{GRID}x{GRID}", "--out", surf, "--report", rep,
+               *extra]
         t = time.perf_counter()
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
         wall = time.perf_counter() - t
         r = json.load(open(rep))
-    return {"rms": r["rms"], "max": r["max"], "time": r["timings"]["total"], "wall": wall,
-            "read": r["timings"]["read"]}
+        out = {"rms": r["rms"], "max": r["max"], "time": r["timings"]["total"], "wall": wall,
+               "read": r["timings"]["read"]}
+        if truth:
+            g = np.linspace(0, 1, 101)
+            uv = [[float(a), float(b)] for a in g for b in g]
+            params = os.path.join(tmp, "p.json")
+            json.dump(uv, open(params, "w"))
+            ev = subprocess.run([vclay, "eval", surf, "--params", params], check=True,
+                                capture_output=True)
+            out["truth_rms"] = truth_rms(np.array(json.loads(ev.stdout)["points"]))
+    return out
 
 
 def run_scipy(pts):
@@ -84,7 +107,12 @@ def run_scipy(pts):
     el = time.perf_counter() - t
     f = lambda u, v: np.column_stack([u, v, spl.ev(u, v)])
     d = closest(f, x.copy(), y.copy(), pts, lo, hi)
-    return {**stats(d), "time": el, "vertical_rms": float(np.sqrt(((spl.ev(x, y) - z) ** 2).mean()))}
+    g = np.linspace(-1, 1, 101)
+    gx, gy = np.meshgrid(g, g)
+    gx, gy = gx.ravel(), gy.ravel()
+    grid = np.column_stack([gx, gy, spl.ev(gx, gy)])
+    return {**stats(d), "time": el, "vertical_rms": float(np.sqrt(((spl.ev(x, y) - z) ** 2).mean())),
+            "truth_rms": truth_rms(grid)}
 
 
 def run_geomdl(grid):
@@ -122,10 +150,15 @@ def run_geomdl(grid):
 def main():
     vclay, data = sys.argv[1], sys.argv[2]
     rows = []
-    for name, grid in [("jacksboro.ply", "jacksboro_grid.npy"), ("wave100k.ply", None), ("wave1m.ply", None)]:
+    clouds = [("jacksboro.ply", "jacksboro_grid.npy"), ("wave100k.ply", None), ("wave1m.ply", None),
+              ("wave100k_outliers.ply", None), ("wave1m_outliers.ply", None)]
+    for name, grid in clouds:
         path = os.path.join(data, name)
         pts = read_ply(path)
-        row = {"cloud": name, "points": len(pts), "vclay": run_vclay(vclay, path)}
+        wave = name.startswith("wave")
+        row = {"cloud": name, "points": len(pts), "vclay": run_vclay(vclay, path, truth=wave)}
+        if "outliers" in name:
+            row["vclay --robust"] = run_vclay(vclay, path, ["--robust"], truth=True)
         if len(pts) <= 200_000:
             row["scipy"] = run_scipy(pts)
             if grid:
@@ -133,13 +166,14 @@ def main():
         rows.append(row)
         print(json.dumps(row), flush=True)
     print()
-    print(f"| cloud | points | method | RMS distance | max distance | fit time (s) |")
-    print("| --- | --- | --- | --- | --- | --- |")
+    print("| cloud | points | method | RMS distance | max distance | RMS off the true wave | fit time (s) |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
     for r in rows:
-        for m in ("vclay", "scipy", "geomdl"):
+        for m in ("vclay", "vclay --robust", "scipy", "geomdl"):
             if m in r:
                 x = r[m]
-                print(f"| {r['cloud']} | {r['points']} | {m} | {x['rms']:.4g} | {x['max']:.4g} | {x['time']:.3f} |")
+                t = f"{x['truth_rms']:.3g}" if "truth_rms" in x else ""
+                print(f"| {r['cloud']} | {r['points']} | {m} | {x['rms']:.4g} | {x['max']:.4g} | {t} | {x['time']:.3f} |")
     for r in rows:
         if "scipy" in r:
             v, s = r["vclay"], r["scipy"]

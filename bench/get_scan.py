@@ -10,7 +10,8 @@ jacksboro.ply (138,632 points, height field with about 700 m of relief over 30 x
 
 Synthetic scans with a seeded generator: wave100k.ply (100,000 points of
 z = 0.15 sin(2x) cos(1.5y) on [-1, 1]^2, normal noise 0.002, a round hole), wave1m.ply
-(1,000,000 points, same), and, for SciPy and geomdl which want grid data, the same clouds'
+(1,000,000 points, same), wave100k_outliers.ply and wave1m_outliers.ply (the same with 1 % and
+2 % one-sided gross outliers, +0.3 to +1.0: issue 29), and, for SciPy and geomdl which want grid data, the same clouds'
 grid forms where needed by bench/compare_fit.py.
 
 Usage: get_scan.py OUT_DIR   (needs numpy and matplotlib; bench/check_fit.sh installs them into
@@ -53,7 +54,9 @@ def jacksboro():
     return np.column_stack([e.ravel(), n.ravel(), z.ravel()]), (ny, nx)
 
 
-def wave(n, seed):
+def wave(n, seed, outliers=0.0):
+    """`n` points of the wave with a round hole; a fraction `outliers` of them (seeded) is moved
+    up by 0.3 to 1.0, one-sided gross outliers as a scanner's stray returns give (issue 29)."""
     rng = np.random.default_rng(seed)
     pts = []
     got = 0
@@ -66,7 +69,11 @@ def wave(n, seed):
         z = 0.15 * np.sin(2 * x) * np.cos(1.5 * y) + rng.normal(0, 0.002, len(x))
         pts.append(np.column_stack([x, y, z]))
         got += len(x)
-    return np.vstack(pts)
+    pts = np.vstack(pts)
+    if outliers > 0:
+        k = rng.random(len(pts)) < outliers
+        pts[k, 2] += rng.uniform(0.3, 1.0, int(k.sum()))
+    return pts
 
 
 def main():
@@ -77,7 +84,10 @@ def main():
     np.save(os.path.join(out, "jacksboro_grid.npy"), pts.reshape(shape[0], shape[1], 3))
     write_ply(os.path.join(out, "wave100k.ply"), wave(100_000, 1))
     write_ply(os.path.join(out, "wave1m.ply"), wave(1_000_000, 2))
-    print(f"get_scan: wrote jacksboro.ply ({len(pts)} points), wave100k.ply, wave1m.ply to {out}")
+    write_ply(os.path.join(out, "wave100k_outliers.ply"), wave(100_000, 3, outliers=0.01))
+    write_ply(os.path.join(out, "wave1m_outliers.ply"), wave(1_000_000, 4, outliers=0.02))
+    print(f"get_scan: wrote jacksboro.ply ({len(pts)} points), wave100k.ply, wave1m.ply, "
+          f"wave100k_outliers.ply (1 % outliers), wave1m_outliers.ply (2 %) to {out}")
 
 
 if __name__ == "__main__":

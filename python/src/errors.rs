@@ -222,6 +222,12 @@ impl IntoPy for vclay_session::SessionError {
             E::Command { .. } => CommandError::new_err(msg),
             E::Diverged { .. } => DivergedError::new_err(msg),
             E::File { .. } | E::Io { .. } | E::NotASession { .. } => FileError::new_err(msg),
+            E::OverLimit(_) => Python::attach(|py| {
+                memory_limit(
+                    py,
+                    format!("{msg} (lower it, or raise vclay.set_max_memory)"),
+                )
+            }),
             _ => SessionError::new_err(msg),
         }
     }

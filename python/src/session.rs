@@ -760,7 +760,11 @@ impl Session {
         let chunk = std::time::Duration::from_millis(STEP_CHUNK_MS);
         let summary = py
             .detach(|| {
-                vclay_session::run::run_stoppable(s, steps, &out_dir, &output, &mut |_| {
+                let limits = vclay_session::run::RunLimits {
+                    max_output: None,
+                    max_memory: Some(crate::limits::max()),
+                };
+                vclay_session::run::run_with(s, steps, &out_dir, &output, &limits, &mut |_| {
                     if last.elapsed() < chunk {
                         return std::ops::ControlFlow::Continue(());
                     }

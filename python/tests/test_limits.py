@@ -26,7 +26,7 @@ def test_grids_and_tessellations_too_large_raise_before_allocating():
     big = np.linspace(0, 1, 100000)
     with pytest.raises(MemoryError, match=r"evaluate_grid: u \(100000 values\) x v \(100000 values\) needs about 240.0 GB"):
         s.evaluate_grid(big, big)
-    with pytest.raises(vclay.MemoryLimitError, match=r"samples=100000 .* needs about 1600.0 GB"):
+    with pytest.raises(vclay.MemoryLimitError, match=r"samples=100000 .* needs about 2560.0 GB"):
         s.tessellate(100000)
     with pytest.raises(MemoryError, match="derivatives: order=31"):
         s.derivatives(np.zeros((10**6, 2)), 31)

@@ -142,14 +142,23 @@ pub fn lattice_patches(path: &Path) -> Result<Vec<NamedEntity>> {
     use vclay::lattice::limit_surface::DEFAULT_PATCH_SAMPLE_LEVELS as LEVELS;
     use vclay::lattice::{BoundaryRule, Features, SubdivisionRules, boundary_patches};
     let lattice = vclay::lattice::formats::ovm::read(path)?;
-    // The patches subdivide the whole solid to the sample level (plus one for non-quad faces).
-    let cells = lattice.num_cells() as f64 * 8f64.powi(LEVELS as i32 + 1);
+    // The patches subdivide the whole solid to the sample level, one more when a boundary face
+    // is not a quad (as `boundary_patches` decides).
+    lattice.build_adjacency();
+    let levels = LEVELS
+        + usize::from(
+            lattice
+                .boundary_faces()
+                .any(|f| lattice.face_vertices(f).len() != 4),
+        );
+    let cells = lattice.num_cells() as f64 * 8f64.powi(levels as i32);
     crate::limits::check_memory(
         &format!(
-            "{}: limit patches ({LEVELS} sample levels, up to {cells:.3e} cells)",
-            path.display()
+            "{}: limit patches of {} cells ({levels} sample levels, {cells:.3e} cells)",
+            path.display(),
+            lattice.num_cells()
         ),
-        cells * vclay::lattice::command::BYTES_PER_CELL as f64,
+        vclay::session::limits::limit_patch_bytes(lattice.num_cells(), levels),
     )?;
     let features = Features::none(&lattice);
     let p = boundary_patches(

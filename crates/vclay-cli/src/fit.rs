@@ -15,10 +15,35 @@ use anyhow::{Context, Result, bail};
 use vclay::fit::{FitOptions, Robust, fit_surface, memory_estimate};
 use vclay::io::model::{Entity, NamedEntity};
 
-/// Smallest bytes per point of any cloud file (`0 0 0\n` in `.xyz`).
+/// Smallest bytes per point of any cloud file (`0 0 0\n` in `.xyz`): the bound on the points
+/// of a mesh file before it is read.
 const MIN_BYTES_PER_POINT: f64 = 6.0;
-/// Bytes per point while reading (the point, the growing vector's slack, parser state).
+/// Bytes per point while reading, besides the file's bytes (`.xyz` is read whole): the point
+/// (24 B) and the growing vector's slack (up to twice that while it is moved).
 const READ_BYTES_PER_POINT: f64 = 56.0;
+
+/// The most points `path` can hold: its lines for `.xyz` text (one point per line, counted in
+/// one pass over the file), else its size over [`MIN_BYTES_PER_POINT`].
+fn point_bound(path: &Path, size: f64) -> Result<f64> {
+    let ext = ext_of(path);
+    if !vclay::io::cloud::XYZ_EXTENSIONS.contains(&ext.as_str()) {
+        return Ok(size / MIN_BYTES_PER_POINT);
+    }
+    use std::io::Read as _;
+    let mut f = std::fs::File::open(path).with_context(|| format!("{}", path.display()))?;
+    let mut buf = vec![0u8; 1 << 16];
+    let mut lines = 1u64;
+    loop {
+        let n = f
+            .read(&mut buf)
+            .with_context(|| format!("{}", path.display()))?;
+        if n == 0 {
+            break;
+        }
+        lines += buf[..n].iter().filter(|&&b| b == b'\n').count() as u64;
+    }
+    Ok(lines as f64)
+}
 
 /// Fit a surface to a point cloud; print the report as JSON.
 #[derive(Debug, clap::Args)]
@@ -131,14 +156,14 @@ pub fn run(args: &FitArgs) -> Result<()> {
     let size = std::fs::metadata(&args.scan)
         .with_context(|| format!("{}", args.scan.display()))?
         .len() as f64;
+    let bound = point_bound(&args.scan, size)?;
     crate::limits::check_memory(
         &format!(
-            "reading {} ({} bytes, up to {:.0} points)",
+            "reading {} ({} bytes, up to {bound:.0} points)",
             args.scan.display(),
             size,
-            size / MIN_BYTES_PER_POINT
         ),
-        size + size / MIN_BYTES_PER_POINT * READ_BYTES_PER_POINT,
+        size + bound * READ_BYTES_PER_POINT,
     )?;
     let points = vclay::io::cloud::read_point_cloud(&args.scan)?;
     let read_s = t0.elapsed().as_secs_f64();
@@ -149,6 +174,11 @@ pub fn run(args: &FitArgs) -> Result<()> {
     )?;
     let fit =
         fit_surface(&points, &opts).map_err(|e| anyhow::anyhow!("{}: {e}", args.scan.display()))?;
+    if !crate::quiet() {
+        for w in &fit.report.warnings {
+            eprintln!("vclay: warning: {}: {w}", args.scan.display());
+        }
+    }
     let t = Instant::now();
     let name = args
         .scan

@@ -137,6 +137,10 @@ enum Command {
         /// Output folder.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Most bytes the run may write (frames and energy table: 500M, 2G); it is checked,
+        /// with the free space, before the first step (default: the free space only).
+        #[arg(long, value_name = "SIZE", value_parser = crate::limits::parse_bytes)]
+        max_output: Option<u64>,
     },
     /// Start the interactive studio (the `vclay-studio` binary): `vclay studio [FILE]
     /// [--autosave PATH]`; build it with `cargo build --release -p vclay-studio`.
@@ -230,12 +234,14 @@ fn main() -> ExitCode {
             until,
             save,
             out,
+            max_output,
         } => run::run(&run::RunArgs {
             file,
             steps,
             until,
             save,
             out,
+            max_output,
             quiet,
         }),
         Command::Studio { args } => studio::run(&args),

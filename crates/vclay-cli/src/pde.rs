@@ -170,7 +170,7 @@ pub fn run(args: &PdeArgs) -> Result<()> {
     let model = PdeModel::read(&args.spec)?;
     crate::limits::check_memory(
         &format!("--grid {nu}x{nv} for {} patch(es)", model.patches.len()),
-        (nu * nv * model.patches.len()) as f64 * crate::limits::BYTES_PER_MESH_VERTEX,
+        vclay::session::limits::grid_mesh_bytes(nu, nv, model.patches.len()),
     )?;
     let mut anim = Animator::new(&model);
     if let Some(t) = args.t {

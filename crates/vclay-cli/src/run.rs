@@ -9,7 +9,7 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use vclay::session::file::{self, RunInfo};
-use vclay::session::run::{Progress, RunSummary};
+use vclay::session::run::{Progress, RunLimits, RunSummary};
 use vclay::session::scenario::{
     DEFAULT_DURATION, OutputSpec, check_steps, default_out_dir, steps_for_duration,
 };
@@ -28,6 +28,8 @@ pub struct RunArgs {
     pub save: Option<PathBuf>,
     /// Output folder.
     pub out: Option<PathBuf>,
+    /// Most bytes the run may write (`--max-output`).
+    pub max_output: Option<u64>,
     /// No progress bar.
     pub quiet: bool,
 }
@@ -138,7 +140,15 @@ pub fn run(args: &RunArgs) -> Result<()> {
             eprintln!();
         }
     };
-    let result = vclay::session::run::run(&mut session, steps, &dir, &info.output, &mut bar);
+    let limits = RunLimits {
+        max_output: args.max_output,
+        max_memory: Some(crate::limits::max_memory()),
+    };
+    let result =
+        vclay::session::run::run_with(&mut session, steps, &dir, &info.output, &limits, &mut |p| {
+            bar(p);
+            std::ops::ControlFlow::Continue(())
+        });
     let s = match result {
         Ok(s) => s,
         Err(e) => {
@@ -146,6 +156,9 @@ pub fn run(args: &RunArgs) -> Result<()> {
                 && matches!(e, SessionError::Diverged { .. })
             {
                 eprintln!("(not saving {}: the run diverged)", p.display());
+            }
+            if let SessionError::OverLimit(o) = &e {
+                bail!("{name}: {o} (lower --steps, or raise --max-memory)");
             }
             return Err(e).with_context(|| format!("running {name}"));
         }

@@ -231,6 +231,21 @@ fn bad_clouds_and_options_are_located_errors() {
         ]),
         &["100 points are too few", "1024 control points"],
     );
+    // Issue 29 item 1: a net the points cannot determine is fitted with a warning that says
+    // how many points it needs (the fairness term shapes the rest), and -q silences it.
+    let out = vclay(&["fit", &d("few.xyz"), "--out", &d("few.json")]);
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("warning") && err.contains("100 points") && err.contains("1024 points"),
+        "{err}"
+    );
+    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(r["warnings"].as_array().unwrap().len(), 1);
+    assert!(r["worst_region"]["rms"].as_f64().is_some(), "{r}");
+    let out = vclay(&["-q", "fit", &d("few.xyz"), "--out", &d("few.json")]);
+    assert!(out.status.success() && out.stderr.is_empty());
+    std::fs::remove_file(d("few.json")).unwrap();
     assert_error(
         &vclay(&["fit", &d("few.xyz"), "--grid", "3x8", "--out", &d("o.json")]),
         &["grid = 3x8"],

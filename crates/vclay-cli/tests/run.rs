@@ -1,5 +1,6 @@
 //! `vclay run`: a small run, located errors, sessions continued exactly, the output rule.
 
+use std::path::Path;
 use std::process::Command;
 
 const SMALL: &str = r#"
@@ -165,4 +166,72 @@ fn the_default_output_folder_is_under_the_current_folder() {
     assert!(cwd.path().join("vclay-run/tiny/final.ovm").exists());
     let beside: Vec<_> = std::fs::read_dir(src.path()).unwrap().collect();
     assert_eq!(beside.len(), 1, "nothing written beside the scenario");
+}
+
+/// Issue 29 item 2: a run checks its output before the first step: an unwritable folder, more
+/// output than `--max-output`, an energy table over `--max-memory` are errors at once (a run of
+/// 10^8 steps would take hours), and never name an internal temporary file.
+#[test]
+fn a_run_checks_its_output_before_the_first_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let sc = dir.path().join("s.toml");
+    std::fs::write(&sc, SMALL).unwrap();
+    let sc = sc.to_str().unwrap();
+    let out = dir.path().join("out");
+    let o = out.to_str().unwrap();
+    let fails = |args: &[&str], needles: &[&str]| {
+        let t = std::time::Instant::now();
+        let r = vclay(args);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{args:?}: {err:?} lacks {n:?}");
+        }
+        assert!(!err.contains(".vclay-"), "{err}");
+        assert!(t.elapsed().as_secs_f64() < 20.0, "{args:?} ran");
+    };
+    // 201 frames of some kB each: more than 100 kB.
+    fails(
+        &[
+            "run",
+            sc,
+            "--steps",
+            "1000",
+            "--max-output",
+            "100K",
+            "--out",
+            o,
+        ],
+        &["1000 steps would write about", "201 frames", "output limit"],
+    );
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 0, "nothing left");
+    // The energy table of 10^6 steps is held in memory: 160 MB.
+    fails(
+        &[
+            "--max-memory",
+            "10M",
+            "run",
+            sc,
+            "--steps",
+            "1000000",
+            "--out",
+            o,
+        ],
+        &[
+            "1000000 steps",
+            "energy table",
+            "limit of 10M",
+            "raise --max-memory",
+        ],
+    );
+    // An existing folder the process cannot write to (Linux's /sys, even as root).
+    if std::fs::write("/sys/vclay-probe", "").is_err() && Path::new("/sys").is_dir() {
+        fails(
+            &["run", sc, "--steps", "100000000", "--out", "/sys"],
+            &["/sys", "not writable"],
+        );
+    }
+    // Within the limits it runs.
+    let r = vclay(&["run", sc, "--max-output", "10M", "--out", o]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
 }

@@ -12,6 +12,19 @@
 //! This is the classical first guess for height-field-like scans (Hoschek's parameter
 //! correction then improves it, see [`crate::project`]).
 //!
+//! **The domain of a robust fit** comes from the inliers ([`BasePlane::dense_rect`]): outliers
+//! displaced across a tilted plane project beyond the scan's edge, and a rectangle stretched to
+//! them leaves a strip where only outliers lie, which the surface follows up as a wall. The
+//! trimmed rectangle keeps, along each axis, the inliers from the first to the last window of
+//! width `1 / DOMAIN_WINDOWS` of the extent that holds at least `DOMAIN_DENSITY` times the
+//! mean number of inliers per window: sparse fringes (outliers that came close to the wall,
+//! stray points) fall outside. The fit ([`crate::fit_surface`], robust or not) takes the
+//! trimmed rectangle only when most points it leaves out are outliers, and then gives them
+//! weight 0: points whose height over the surface at the new edge (along the normal `e3`)
+//! exceeds Tukey's cut `4.685 sigma` plus their in-plane distance to the rectangle (a slope
+//! above 1: a jump, not the surface continued). A round scan's tip keeps its extent (its last window holds several times the
+//! threshold); a clean sharp corner (a triangle's tip), whose points are inliers, too.
+//!
 //! Degenerate clouds are errors: all points within `DEGENERATE_RATIO` of one point, or on a
 //! line (second principal extent below `DEGENERATE_RATIO` times the first).
 
@@ -26,6 +39,13 @@ use vclay_core::{Parallelism, Vec3};
 pub const DEGENERATE_RATIO: f64 = 1e-9;
 /// Points (evenly strided) used to choose the rectangle's rotation.
 pub const ROTATION_SAMPLES: usize = 8192;
+/// Windows per axis of the inlier-density test of a robust fit's domain (module docs).
+pub const DOMAIN_WINDOWS: usize = 64;
+/// Smallest inlier density at the domain's edge, relative to the mean (module docs).
+pub const DOMAIN_DENSITY: f64 = 0.05;
+/// Smallest move of an edge of the domain, relative to its extent, for which a robust fit
+/// trims its rectangle (smaller changes keep the current one).
+pub const DOMAIN_TOL: f64 = 1e-3;
 
 /// The base plane of a cloud and the rectangle its points project into.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -61,6 +81,76 @@ impl BasePlane {
             (dot(&self.axes[1]) - self.rect[2]) / lv,
         ]
     }
+}
+
+impl BasePlane {
+    /// In-plane coordinates `(a, b)` of a point.
+    pub fn project(&self, x: &Vec3) -> [f64; 2] {
+        let d = [
+            x[0] - self.origin[0],
+            x[1] - self.origin[1],
+            x[2] - self.origin[2],
+        ];
+        let dot = |e: &[f64; 3]| d[0] * e[0] + d[1] * e[1] + d[2] * e[2];
+        [dot(&self.axes[0]), dot(&self.axes[1])]
+    }
+
+    /// The rectangle of the points `k` with `inlier(k)`, trimmed to where they are dense
+    /// (module docs), within the current rectangle. `None` when fewer than
+    /// `DOMAIN_WINDOWS` inliers are left or the trimmed rectangle would be empty.
+    pub fn dense_rect(&self, points: &[Vec3], inlier: impl Fn(usize) -> bool) -> Option<[f64; 4]> {
+        let mut a = Vec::new();
+        let mut b = Vec::new();
+        for (k, x) in points.iter().enumerate() {
+            if inlier(k) {
+                let [pa, pb] = self.project(x);
+                a.push(pa);
+                b.push(pb);
+            }
+        }
+        if a.len() < DOMAIN_WINDOWS {
+            return None;
+        }
+        let [lu, lv] = self.extents();
+        let [a0, a1] = dense_range(&mut a, lu)?;
+        let [b0, b1] = dense_range(&mut b, lv)?;
+        let r = self.rect;
+        let rect = [a0.max(r[0]), a1.min(r[1]), b0.max(r[2]), b1.min(r[3])];
+        (rect[1] > rect[0] && rect[3] > rect[2]).then_some(rect)
+    }
+
+    /// Parameters on this plane's rectangle of a point whose parameters on `old` (a rectangle
+    /// of the same plane) are `uv`, clamped to the unit square.
+    pub fn remap(&self, old: &[f64; 4], uv: [f64; 2]) -> [f64; 2] {
+        let [lu, lv] = self.extents();
+        let a = old[0] + uv[0] * (old[1] - old[0]);
+        let b = old[2] + uv[1] * (old[3] - old[2]);
+        [
+            ((a - self.rect[0]) / lu).clamp(0.0, 1.0),
+            ((b - self.rect[2]) / lv).clamp(0.0, 1.0),
+        ]
+    }
+}
+
+/// Whether in-plane coordinates `(a, b)` lie in `rect` (`[a_min, a_max, b_min, b_max]`).
+pub fn inside(rect: &[f64; 4], [a, b]: [f64; 2]) -> bool {
+    a >= rect[0] && a <= rect[1] && b >= rect[2] && b <= rect[3]
+}
+
+/// The range of the values from the first to the last window of width `extent /
+/// DOMAIN_WINDOWS` holding at least `DOMAIN_DENSITY` times the mean count per window.
+fn dense_range(x: &mut [f64], extent: f64) -> Option<[f64; 2]> {
+    if x.len() >= 65_536 {
+        x.par_sort_unstable_by(f64::total_cmp);
+    } else {
+        x.sort_unstable_by(f64::total_cmp);
+    }
+    let n = x.len();
+    let h = extent / DOMAIN_WINDOWS as f64;
+    let t = ((DOMAIN_DENSITY * n as f64 / DOMAIN_WINDOWS as f64).ceil() as usize).clamp(1, n - 1);
+    let lo = (0..n - t).find(|&i| x[i + t] - x[i] <= h)?;
+    let hi = (t..n).rev().find(|&j| x[j] - x[j - t] <= h)?;
+    (hi > lo).then(|| [x[lo], x[hi]])
 }
 
 /// The base plane of `points` (already checked finite and non-empty).

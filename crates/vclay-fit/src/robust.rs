@@ -11,6 +11,17 @@
 //! (Huber 1981, *Robust Statistics*; Holland & Welsch 1977 for the tuning constants.)
 //! `sigma` is floored at [`SIGMA_FLOOR`] times the model size, so an exact fit does not divide
 //! by zero.
+//!
+//! **The objective that judges rounds.** Every fit (robust or not) accepts a solve-and-correct
+//! round only when it lowers the robust objective
+//! ```text
+//! J = 1/N sum_k rho(d_k) + U,    rho(d) = c^2/6 (1 - (1 - (d/c)^2)^3) for d < c, else c^2/6,
+//! ```
+//! Tukey's biweight loss with `c = 4.685 sigma` ([`objective`]) plus the fairness energy `U`.
+//! For small distances `rho(d) ~ d^2 / 2`, so on clean data `J` is the fit's own least-squares
+//! objective; far points add a constant and cannot make a round look good. Two rounds are
+//! compared with one common scale (the smaller of their two `sigma`), so a shrinking scale
+//! cannot fake progress.
 
 use serde::Serialize;
 
@@ -51,6 +62,23 @@ pub fn scale(distances: &[f64], size: f64) -> f64 {
     let mid = d.len() / 2;
     let (_, m, _) = d.select_nth_unstable_by(mid, f64::total_cmp);
     (1.4826 * *m).max(SIGMA_FLOOR * size)
+}
+
+/// Tukey's biweight loss `rho(d)` with cut-off `c` (module docs; `c^2 / 6` beyond `c`).
+pub fn tukey_rho(d: f64, c: f64) -> f64 {
+    let c2 = c * c;
+    if d < c {
+        let t = 1.0 - d * d / c2;
+        c2 / 6.0 * (1.0 - t * t * t)
+    } else {
+        c2 / 6.0
+    }
+}
+
+/// Mean Tukey loss `1/N sum_k rho(d_k)` with cut-off `c` (the data part of the objective that
+/// judges rounds, module docs).
+pub fn objective(distances: &[f64], c: f64) -> f64 {
+    distances.iter().map(|&d| tukey_rho(d, c)).sum::<f64>() / distances.len().max(1) as f64
 }
 
 /// Writes the weights of `loss` for `distances` with scale `sigma` into `out`.

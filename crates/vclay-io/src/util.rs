@@ -94,7 +94,10 @@ pub fn stage(
     };
     #[cfg(unix)]
     builder.permissions(perms);
-    let mut tmp = builder.tempfile_in(dir).map_err(err)?;
+    // tempfile's error names its random temporary file; the user knows only the target.
+    let mut tmp = builder
+        .tempfile_in(dir)
+        .map_err(|e| err(std::io::Error::new(e.kind(), unwritable(dir, e.kind()))))?;
     {
         let mut w = std::io::BufWriter::new(tmp.as_file_mut());
         fill(&mut w).map_err(err)?;
@@ -105,6 +108,14 @@ pub fn stage(
         tmp,
         path: path.to_path_buf(),
     })
+}
+
+/// Why a file could not be created in `dir`, in words, without the temporary file's name.
+fn unwritable(dir: &Path, kind: std::io::ErrorKind) -> String {
+    format!(
+        "cannot create a file in the folder {} ({kind})",
+        dir.display()
+    )
 }
 
 /// Removes our temporary files of dead processes or older than [`STALE_TEMP_AGE`] from `dir`

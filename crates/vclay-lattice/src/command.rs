@@ -116,6 +116,17 @@ pub const MAX_PREDICTED_CELLS: u128 = 50_000_000;
 /// level 5 (884,736 cells, 641 MB) and 661 B at level 6 (7,077,888 cells, 4.7 GB); rounded up.
 pub const BYTES_PER_CELL: u64 = 760;
 
+/// A memory limit as the user gives it (`--max-memory`: powers of 1024): `4G` for the default,
+/// `512M`; bytes when it is no whole number of K, M, G or T.
+fn limit_as_given(bytes: u64) -> String {
+    for (unit, shift) in [("T", 40), ("G", 30), ("M", 20), ("K", 10)] {
+        if bytes >= 1 << shift && bytes.is_multiple_of(1 << shift) {
+            return format!("{}{unit}", bytes >> shift);
+        }
+    }
+    format!("{bytes} bytes")
+}
+
 /// Default of [`SubdivideOptions::max_memory`]: 4 GiB, what a laptop can spare.
 pub const DEFAULT_MAX_MEMORY: u64 = 4 << 30;
 
@@ -173,9 +184,9 @@ pub enum CommandError {
     /// Subdivision would need more memory than [`SubdivideOptions::max_memory`].
     #[error(
         "{levels} levels would give about {predicted} cells and need about {:.1} GB of memory, \
-         more than the limit of {:.1} GB; use fewer levels",
+         more than the limit of {}; use fewer levels",
         *bytes as f64 / 1e9,
-        *max as f64 / 1e9
+        limit_as_given(*max)
     )]
     TooMuchMemory {
         /// Levels asked for.

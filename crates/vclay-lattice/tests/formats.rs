@@ -608,7 +608,12 @@ fn command_subdivides_primitives_and_files_and_writes_every_format() {
         ),
         "{err}"
     );
-    assert!(err.to_string().contains("GB of memory"), "{err}");
+    // Issue 29 item 3: the default limit reads as given, 4G (not "4.3 GB").
+    assert!(
+        err.to_string()
+            .contains("GB of memory, more than the limit of 4G"),
+        "{err}"
+    );
     let mut small = opts(LatticeSource::Primitive("box".into()), 2, None);
     small.max_memory = 1 << 20;
     let err = subdivide_command(&small).unwrap_err();

@@ -62,6 +62,10 @@ pub enum SessionError {
         /// What is wrong.
         what: String,
     },
+    /// Work over a limit, refused before it started (a run's energy table and frame list
+    /// over the memory limit).
+    #[error("{0}")]
+    OverLimit(#[from] crate::limits::OverLimit),
     /// Reading or writing a file failed.
     #[error("{path}: {what}")]
     Io {
