@@ -23,8 +23,9 @@ use vclay::io::geomdl::{is_geomdl, parse_geomdl, write_geomdl};
 use vclay::io::gltf::{GlbMesh, read_glb, write_glb};
 use vclay::io::iges::{IgesLayout, write_iges_as};
 use vclay::io::mesh::{read_mesh, write_mesh};
-use vclay::io::model::{Entity, NamedEntity, import_model, parse_named_model, write_named_model};
-use vclay::io::step::{StepLayout, write_step_as};
+use vclay::io::brep::Shell;
+use vclay::io::model::{Entity, NamedEntity, import_model, parse_trimmed_model, write_trimmed_model};
+use vclay::io::step::{StepLayout, write_step_trimmed};
 use vclay::io::step_read::{TrimmedFace, tessellate_trimmed};
 use vclay::spline::{tessellate_surface, tessellate_volume_boundary};
 
@@ -56,9 +57,10 @@ pub enum Loaded {
     Entities(Vec<NamedEntity>),
     /// Triangle meshes.
     Meshes(Vec<TriMesh>),
-    /// A STEP B-rep: its surfaces (exact, whole) and its faces' trimming loops, applied when it
-    /// is tessellated ([`trimmed_mesh`], issue 20).
-    Trimmed(Vec<NamedEntity>, Vec<TrimmedFace>),
+    /// A B-rep of trimmed faces: its surfaces (exact, whole), a STEP file's faces' trimming
+    /// loops as read (applied when it is tessellated, [`trimmed_mesh`], issue 20) and the
+    /// trimmed shells (issue 30: written back to STEP and JSON with their trims).
+    Trimmed(Vec<NamedEntity>, Vec<TrimmedFace>, Vec<Shell>),
 }
 
 fn ext_of(path: &Path) -> String {
@@ -98,13 +100,17 @@ pub fn read_any(path: &Path) -> Result<Loaded> {
             if vclay::io::triangular::is_triangular(&text) {
                 return Ok(Loaded::Meshes(vec![triangular_mesh(path, &text)?]));
             }
-            let ents = if is_geomdl(&text) {
-                parse_geomdl(&text)
+            let (ents, shells) = if is_geomdl(&text) {
+                parse_geomdl(&text).map(|e| (e, Vec::new()))
             } else {
-                parse_named_model(&text)
+                parse_trimmed_model(&text)
             }
             .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-            Ok(Loaded::Entities(ents))
+            if shells.is_empty() {
+                Ok(Loaded::Entities(ents))
+            } else {
+                Ok(Loaded::Trimmed(ents, Vec::new(), shells))
+            }
         }
         "step" | "stp" | "p21" | "igs" | "iges" => {
             let imported = import_model(path)?;
@@ -113,10 +119,14 @@ pub fn read_any(path: &Path) -> Result<Loaded> {
                     eprintln!("vclay: warning: {}: {w}", path.display());
                 }
             }
-            if imported.faces.is_empty() {
+            if imported.faces.is_empty() && imported.shells.is_empty() {
                 Ok(Loaded::Entities(imported.entities))
             } else {
-                Ok(Loaded::Trimmed(imported.entities, imported.faces))
+                Ok(Loaded::Trimmed(
+                    imported.entities,
+                    imported.faces,
+                    imported.shells,
+                ))
             }
         }
         "ovm" => Ok(Loaded::Entities(lattice_patches(path)?)),
@@ -276,6 +286,14 @@ pub fn tessellate_entities(ents: &[NamedEntity], samples: usize) -> Result<TriMe
     Ok(mesh)
 }
 
+/// The trimmed shells of what was read (none but for a B-rep of trimmed faces).
+fn shells_of(input: &Loaded) -> &[Shell] {
+    match input {
+        Loaded::Trimmed(_, _, s) => s,
+        _ => &[],
+    }
+}
+
 /// Runs `vclay convert`.
 pub fn run(args: &ConvertArgs) -> Result<()> {
     if args.samples < 2 {
@@ -287,7 +305,7 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
     let mesh_of = |input: &Loaded| -> Result<TriMesh> {
         match input {
             Loaded::Entities(e) => tessellate_entities(e, args.samples),
-            Loaded::Trimmed(e, f) => trimmed_mesh(e, f, args.samples),
+            Loaded::Trimmed(e, f, _) => trimmed_mesh(e, f, args.samples),
             Loaded::Meshes(ms) => {
                 let mut all = TriMesh::new();
                 for m in ms {
@@ -299,7 +317,7 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
     };
     let exact = |input: &Loaded| -> Result<Vec<NamedEntity>> {
         match input {
-            Loaded::Entities(e) | Loaded::Trimmed(e, _) => Ok(e.clone()),
+            Loaded::Entities(e) | Loaded::Trimmed(e, _, _) => Ok(e.clone()),
             Loaded::Meshes(_) => bail!(
                 "{} is a mesh; it cannot be converted to exact NURBS geometry ({})",
                 args.input.display(),
@@ -309,9 +327,14 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
     };
     match ext.as_str() {
         "geomdl.json" => write_geomdl(out, &exact(&input)?)?,
-        "json" => write_named_model(out, &exact(&input)?)?,
+        "json" => write_trimmed_model(out, &exact(&input)?, shells_of(&input))?,
         "step" | "stp" | "igs" | "iges" => {
             let entities = exact(&input)?;
+            let trimmed = if args.loose || args.join {
+                &[][..]
+            } else {
+                shells_of(&input)
+            };
             let iges = matches!(ext.as_str(), "igs" | "iges");
             // The limit patches of a lattice form one surface: joined into one shell.
             let join = !args.loose && (args.join || ext_of(&args.input) == "ovm");
@@ -321,16 +344,45 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
                 (false, false) => (StepLayout::Brep, IgesLayout::Brep),
             };
             if iges {
+                if !trimmed.is_empty() && !crate::quiet() {
+                    eprintln!(
+                        "vclay: warning: IGES output of trimmed faces is not written yet (issue \
+                         30): the faces' surfaces are written whole"
+                    );
+                }
                 write_iges_as(out, &entities, igs)?;
             } else {
-                write_step_as(out, &entities, step)?;
+                write_step_trimmed(out, &entities, trimmed, step)?;
             }
             if !args.loose && !crate::quiet() {
-                let b = if join {
-                    BrepSummary::joined(&entities)?
+                let on_face: std::collections::HashSet<usize> = if iges {
+                    Default::default()
                 } else {
-                    BrepSummary::of(&entities)?
+                    trimmed
+                        .iter()
+                        .flat_map(|s| s.faces.iter().filter_map(|f| f.entity))
+                        .collect()
                 };
+                let rest: Vec<NamedEntity> = entities
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, _)| !on_face.contains(i))
+                    .map(|(_, e)| e.clone())
+                    .collect();
+                let mut b = if join {
+                    BrepSummary::joined(&rest)?
+                } else {
+                    BrepSummary::of(&rest)?
+                };
+                if !iges {
+                    for s in trimmed {
+                        if s.closed {
+                            b.solids += 1;
+                        } else {
+                            b.open_shells += 1;
+                        }
+                    }
+                }
                 eprintln!(
                     "vclay convert: {} solid(s), {} open shell(s), {} curve(s)",
                     b.solids, b.open_shells, b.curves

@@ -236,7 +236,7 @@ fn shell_items(items: &mut Vec<Item>, shell: &crate::brep::Shell, label: &str) {
         let edges: Vec<(usize, bool)> = bound
             .iter()
             .filter_map(|item| match *item {
-                LoopItem::Edge { edge, forward } => Some((edge, forward == f.same_sense)),
+                LoopItem::Edge { edge, forward, .. } => Some((edge, forward == f.same_sense)),
                 LoopItem::Pole { .. } => None,
             })
             .collect();

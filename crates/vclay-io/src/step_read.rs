@@ -70,10 +70,15 @@ pub struct CadImport {
     pub entities: Vec<NamedEntity>,
     /// What was not read or was simplified, one sentence each (empty when everything was read).
     pub warnings: Vec<String>,
-    /// The faces of a STEP B-rep: the entity each lies on and its trimming loops, kept as data
-    /// (the surfaces in `entities` are whole; [`tessellate_trimmed`] applies the loops when
-    /// meshing). Empty for IGES and JSON.
+    /// The faces of a STEP B-rep: the entity each lies on and its trimming loops as read, in
+    /// the file's parameters ([`tessellate_trimmed`] applies them when meshing). Empty for IGES
+    /// and JSON.
     pub faces: Vec<TrimmedFace>,
+    /// The trimmed B-rep ([`crate::trimmed`]): shells of faces whose surfaces are among
+    /// `entities`, with shared edges and vertices, loops and pcurves in the surfaces' NURBS
+    /// parameters; built from `faces` for STEP, read from `"shells"` for a JSON model. Empty
+    /// when the file has none.
+    pub shells: Vec<crate::brep::Shell>,
 }
 
 /// A parameter of a Part 21 instance.
@@ -1012,20 +1017,6 @@ pub fn parse_step(text: &str) -> Result<CadImport, IoError> {
         }
     }
     let mut warnings = Vec::new();
-    if !faces.is_empty() {
-        let edges: usize = faces
-            .iter()
-            .flat_map(|f| &f.loops)
-            .map(|l| l.edges.len())
-            .sum();
-        warnings.push(format!(
-            "{} face(s) of a B-rep: their surfaces are imported whole (untrimmed); the trimming \
-             loops ({edges} edge(s) with their 3D curves and pcurves) are kept in the import's \
-             face data and applied only when meshing (vclay convert to a mesh, vclay render); \
-             the model file (JSON), STEP/IGES output and sessions get the untrimmed surfaces",
-            faces.len()
-        ));
-    }
     if elementary > 0 {
         warnings.push(format!(
             "{elementary} elementary or swept surface(s) converted exactly to NURBS; unbounded \
@@ -1073,11 +1064,22 @@ pub fn parse_step(text: &str) -> Result<CadImport, IoError> {
             ),
         ));
     }
-    Ok(CadImport {
+    let mut import = CadImport {
         entities,
         warnings,
         faces,
-    })
+        shells: Vec::new(),
+    };
+    if !import.faces.is_empty() {
+        match crate::trimmed::shells_of_import(&import) {
+            Ok(shells) => import.shells = shells,
+            Err(e) => import.warnings.push(format!(
+                "the faces' trims could not be made a B-rep ({e}): the faces' surfaces are \
+                 imported whole, their loops kept only for meshing"
+            )),
+        }
+    }
+    Ok(import)
 }
 
 /// Reads a STEP file (`.step`, `.stp`). Errors name the file.

@@ -166,6 +166,9 @@ pub struct TrimEdge {
     /// Whether going round the loop follows the curve's direction (the `ORIENTED_EDGE`'s
     /// orientation combined with the `EDGE_CURVE`'s same_sense).
     pub forward: bool,
+    /// The `VERTEX_POINT`s (STEP id and point) at the start and the end of the edge's part of
+    /// `curve`, in the curve's direction (equal for a closed edge).
+    pub vertices: [(usize, Vec3); 2],
 }
 
 /// A trimming loop of a face (`EDGE_LOOP` of a `FACE_BOUND`).
@@ -1123,6 +1126,11 @@ impl<'a> Reader<'a> {
             pcurve_axis,
             seam_pcurve,
             forward: orientation == same_sense,
+            vertices: if same_sense {
+                [(v1, p1), (v2, p2)]
+            } else {
+                [(v2, p2), (v1, p1)]
+            },
         }))
     }
 
