@@ -269,9 +269,6 @@ fn entity_shell(e: &Entity, i: usize) -> Result<Option<Shell>, IoError> {
     }
 }
 
-/// Whether trimmed faces' pcurves are written (`SURFACE_CURVE`s with `PCURVE`s).
-const WRITE_PCURVES: bool = false;
-
 /// Writes a 2D curve (a pcurve, points `(u, v, 0)`) as a B-spline with 2D points.
 fn write_curve_2d(d: &mut Data, c: &NurbsCurve) -> usize {
     let ids: Vec<usize> = c
@@ -513,7 +510,7 @@ pub fn to_step_string_trimmed(
     // Representation items by kind: loose curves, loose surfaces, solids, open shells.
     let (mut curves, mut surfaces, mut solids, mut open) = (vec![], vec![], vec![], vec![]);
     for (k, sh) in trimmed.iter().enumerate() {
-        let item = write_shell(&mut d, &format!("shell {k}"), sh, WRITE_PCURVES);
+        let item = write_shell(&mut d, &format!("shell {k}"), sh, true);
         if sh.closed {
             solids.push(item);
         } else {
