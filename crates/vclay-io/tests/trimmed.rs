@@ -204,3 +204,27 @@ fn curve_part_is_exact() {
     }
     assert!(curve_part(&c, 0.6, 0.2).is_err());
 }
+
+/// The worked example of docs/formats.md ("Trimmed B-rep shells"): a square with a square
+/// hole, an open shell; written to STEP as a face with an outer and an inner bound.
+#[test]
+fn formats_example_square_with_hole() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/square_with_hole.json");
+    let imp = import_model(&path).unwrap();
+    assert_eq!(imp.shells.len(), 1);
+    let sh = &imp.shells[0];
+    assert!(!sh.closed);
+    assert_eq!(sh.faces[0].holes.len(), 1);
+    assert!(sh.edge_uses().iter().all(|&u| u == (1, 0)));
+    let t = Topology::of(sh);
+    assert_eq!((t.vertices, t.edges, t.faces, t.loops), (8, 8, 1, 2));
+    let text =
+        to_step_string_trimmed(&imp.entities, &imp.shells, "sq.step", StepLayout::Brep).unwrap();
+    assert_eq!(text.matches("FACE_OUTER_BOUND").count(), 1);
+    assert_eq!(text.matches("FACE_BOUND(").count(), 1);
+    assert_eq!(text.matches("OPEN_SHELL").count(), 1);
+    let back = parse_step(&text).unwrap();
+    assert_eq!(back.shells.len(), 1);
+    assert_eq!(Topology::of(&back.shells[0]), t);
+    assert_eq!(back.shells[0].faces[0].holes.len(), 1);
+}
