@@ -9,7 +9,10 @@
 //! {"type": "nurbs-volume",  "degree": [p, q, r], "knots": [U, V, W], "control_points": [[[P_ijk]]], "weights": [[[w_ijk]]]}
 //! ```
 //!
-//! with points `[x, y, z]`, the first index running along the first parameter (`u`), optional
+//! and `{"entities": [...], "shells": [...]}` adds the trimmed B-rep of CAD parts whose faces lie
+//! on the surfaces ([`crate::trimmed`], [`parse_trimmed_model`], [`trimmed_to_json`]).
+//!
+//! Entities have points `[x, y, z]`, the first index running along the first parameter (`u`), optional
 //! weights (all 1 when absent) of the same nesting, and an optional `"name"` string. The format is
 //! documented with examples in `docs/formats.md`.
 //!

@@ -37,9 +37,14 @@
 //! OpenCASCADE by `bench/check_step.sh` (points to 1e-9; solids valid by BRepCheck, volume to
 //! 1e-6, faces oriented outward).
 //!
-//! **Limitations.** Faces are whole (untrimmed) surfaces: no trimming curves. Edges carry no
-//! parameter-space curves (`PCURVE`s; readers project the edge curves, which are exact
-//! iso-boundaries). Boundaries that close up only with a different parametrization are not
+//! - **Trimmed B-rep** ([`to_step_string_trimmed`], issue 30): the shells of a trimmed model
+//!   ([`crate::trimmed`]) as solids (or open shells) of trimmed faces: outer `FACE_OUTER_BOUND`,
+//!   holes as `FACE_BOUND`s, shared edges whose geometry is a `SURFACE_CURVE` (a `SEAM_CURVE`
+//!   for a seam) with a `PCURVE` per use, 2D B-splines in the surfaces' NURBS parameters.
+//!   Checked by `bench/check_trimmed.py` (valid solid, face count, volume and area to 1e-6).
+//!
+//! **Limitations.** Faces of whole surfaces carry no parameter-space curves (`PCURVE`s; readers
+//! project the edge curves, which are exact iso-boundaries). Boundaries that close up only with a different parametrization are not
 //! merged (an open shell; see [`crate::brep`]). Names are reduced to printable ASCII.
 
 use crate::brep::{LoopItem, Shell};

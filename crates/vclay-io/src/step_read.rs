@@ -13,10 +13,11 @@
 //! of a `GEOMETRIC_SET`, the basis of a trimmed or offset surface, and the `FACE_SURFACE`
 //! geometry of the `ADVANCED_FACE`s of a B-rep. The faces' trimming loops (`FACE_BOUND` ->
 //! `EDGE_LOOP` -> `ORIENTED_EDGE` -> `EDGE_CURVE` with its 3D curve and its `PCURVE`s) are kept in
-//! [`CadImport::faces`] ([`TrimmedFace`]); the surfaces are imported **whole** (the JSON model
-//! does not store trims, sessions sculpt whole surfaces) and the loops are applied only by
-//! [`tessellate_trimmed`] (used by `vclay convert` to meshes and `vclay render`); a warning says
-//! so. A B-spline curve is imported
+//! [`CadImport::faces`] ([`TrimmedFace`], in the file's parameters; applied when meshing by
+//! [`tessellate_trimmed`], used by `vclay convert` to meshes and `vclay render`), and made the
+//! trimmed B-rep of [`CadImport::shells`] ([`crate::trimmed`]: shared edges and vertices,
+//! pcurves in the NURBS parameters; written back to STEP and JSON with the trims); the
+//! surfaces themselves are entities, whole. A B-spline curve is imported
 //! unless it is part of a B-rep's topology or of a surface definition (referenced by
 //! `EDGE_CURVE`, `PCURVE`, `SURFACE_CURVE`, `SEAM_CURVE`, `DEFINITIONAL_REPRESENTATION` or a
 //! swept surface) or lies in a 2D parameter space; a `TRIMMED_CURVE`'s basis is imported whole.
@@ -30,17 +31,17 @@
 //! nets are lists of rows along u, as vclay stores them, so nothing is reordered.
 //!
 //! **Warnings.** [`CadImport::warnings`] lists, per type with counts, every entity instance that
-//! was not read (topology above the faces, units and product data are not needed), says that
-//! faces are imported untrimmed with their loops kept as data, and counts edges whose curves are
-//! of a type not read. Nothing is dropped silently.
+//! was not read (units and product data are not needed), says when the faces could not be made
+//! a trimmed B-rep, and counts edges whose curves are of a type not read. Nothing is dropped
+//! silently.
 //!
 //! **Errors.** A malformed file is an [`IoError::Cad`] naming the line and the entity:
 //! `STEP line 41, entity #17: B_SPLINE_CURVE_WITH_KNOTS: knot multiplicities and knots differ
 //! in length (4 and 3)`.
 //!
-//! **Limitations.** Trimming loops are applied only when meshing, up to the grid spacing
-//! (triangles kept by their parameter centroid; no exact trimmed boundary); no solids as such
-//! (the faces of a shell come in as separate surfaces); free lines and conics (outside a face's
+//! **Limitations.** Meshing applies the trimming loops up to the grid spacing (triangles kept by
+//! their parameter centroid; no exact trimmed boundary); shells are rebuilt from the faces'
+//! shared edges (the file's `CLOSED_SHELL`s are not read as such); free lines and conics (outside a face's
 //! loop or a swept surface) are listed as not read; `OFFSET_SURFACE`,
 //! `RECTANGULAR_TRIMMED_SURFACE` and `CURVE_BOUNDED_SURFACE` are not read (their B-spline basis
 //! is). `UNIFORM_*`, `QUASI_UNIFORM_*` and `BEZIER_*` subtypes (knots implied rather than given)

@@ -37,8 +37,8 @@
 //! surface when the file gives one (2D `LINE`, `CIRCLE`, `ELLIPSE` or B-spline in the surface's
 //! file parameters, over the part between the vertices' surface parameters, or on swept surfaces
 //! over the 3D curve's range). `VERTEX_LOOP`s (the poles of a sphere) carry no curve and are
-//! skipped; `POLY_LOOP`s are listed as not read. Surfaces are imported whole (the JSON model has
-//! no trimming, so `vclay convert in.step out.json` writes the untrimmed surfaces); the loops are
+//! skipped; `POLY_LOOP`s are listed as not read. Surfaces are imported whole; the loops become
+//! the trimmed B-rep of [`crate::trimmed`] (kept by `vclay convert` to STEP and JSON) and are
 //! applied when meshing by [`tessellate_trimmed`]: grid triangles whose parameter centroid lies
 //! inside the loops' pcurve polygons (even-odd rule, whole turns tried on periodic directions)
 //! are kept, so trimmed edges are exact only up to the grid spacing.
