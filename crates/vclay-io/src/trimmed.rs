@@ -44,6 +44,10 @@
 //! a surface's parameter box is the whole converted surface. Pcurves on angle-parametrized
 //! surfaces that are not iso-lines are polylines (see above).
 
+pub mod mesh;
+
+pub use mesh::{MAX_SHELL_SAMPLES, tessellate_shell};
+
 use crate::brep::{Edge, Face, LoopItem, Shell, Vertex, closure_tolerance};
 use crate::error::IoError;
 use crate::step_read::{CadImport, ParamAxis, TrimEdge, TrimmedFace};
@@ -149,6 +153,38 @@ fn pcurve_in_nurbs_params(
         let q = pc.point(t).map_err(|e| e.to_string())?;
         let [u, v] = face.to_nurbs_params(q.x, q.y);
         pts.push(Vec3::new(u, v, 0.0));
+    }
+    // `to_nurbs` wraps each point into the turn: make the curve continuous again (from its
+    // middle point), then bring it into the turn as far as it goes.
+    for (axis, a) in face.axes.iter().enumerate() {
+        if let ParamAxis::Angle {
+            start,
+            end,
+            periodic: true,
+            ..
+        } = *a
+        {
+            let period = end - start;
+            let mid = n / 2;
+            for k in (0..mid).rev().chain(mid + 1..n) {
+                let near = if k < mid { pts[k + 1][axis] } else { pts[k - 1][axis] };
+                pts[k][axis] += ((near - pts[k][axis]) / period).round() * period;
+            }
+            let (lo, hi) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |m, p| {
+                (m.0.min(p[axis]), m.1.max(p[axis]))
+            });
+            let eps = 1e-12 * period;
+            let shift = if lo < start - eps {
+                period
+            } else if hi > end + eps {
+                -period
+            } else {
+                0.0
+            };
+            if shift != 0.0 && lo + shift >= start - eps && hi + shift <= end + eps {
+                pts.iter_mut().for_each(|p| p[axis] += shift);
+            }
+        }
     }
     let scale = pts
         .iter()

@@ -228,3 +228,45 @@ fn formats_example_square_with_hole() {
     assert_eq!(Topology::of(&back.shells[0]), t);
     assert_eq!(back.shells[0].faces[0].holes.len(), 1);
 }
+
+/// Issue 30: a closed trimmed shell meshes into a closed mesh (every mesh edge used by two
+/// triangles in opposite directions: shared edges sampled once, seams and poles closed) whose
+/// enclosed volume and area approach OpenCASCADE's (bench/gen_trimmed_parts.py).
+#[test]
+fn closed_shells_mesh_without_cracks() {
+    use std::collections::HashMap;
+    for (f, volume, area) in [
+        ("trimmed_plate.step", 8578.1121379234, 3472.9557126861723),
+        ("trimmed_cut_sphere.step", 3284.0115205525294, 1143.5397259066845),
+    ] {
+        let imp = import_model(data(f)).unwrap();
+        let mesh = vclay_io::trimmed::tessellate_shell(&imp.shells[0], 20).unwrap();
+        let mut uses: HashMap<(u32, u32), i32> = HashMap::new();
+        for t in &mesh.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                *uses.entry((a.min(b), a.max(b))).or_default() += if a < b { 1 } else { -1 };
+            }
+        }
+        let mut count: HashMap<(u32, u32), usize> = HashMap::new();
+        for t in &mesh.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                *count.entry((a.min(b), a.max(b))).or_default() += 1;
+            }
+        }
+        let open = count.values().filter(|&&c| c != 2).count();
+        let unbalanced = uses.values().filter(|&&c| c != 0).count();
+        assert_eq!((open, unbalanced), (0, 0), "{f}: open or misoriented mesh edges");
+        let p = &mesh.positions;
+        let (mut v, mut a) = (0.0, 0.0);
+        for t in &mesh.triangles {
+            let [x, y, z] = t.map(|i| p[i as usize]);
+            v += x.dot(&y.cross(&z)) / 6.0;
+            a += (y - x).cross(&(z - x)).norm() / 2.0;
+        }
+        assert!((v - volume).abs() < 0.01 * volume, "{f}: volume {v} vs {volume}");
+        assert!((a - area).abs() < 0.01 * area, "{f}: area {a} vs {area}");
+        eprintln!("{f}: {} triangles, volume {v} ({volume}), area {a} ({area})", mesh.triangles.len());
+    }
+}
