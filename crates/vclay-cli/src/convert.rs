@@ -212,11 +212,42 @@ pub fn vtu_boundary(path: &Path) -> Result<TriMesh> {
 /// `samples x samples` through `step_read::tessellate_trimmed` (triangles outside the face's
 /// loops dropped), the other entities as [`tessellate_entities`] does. The mesh's size is
 /// checked against `--max-memory` first.
+///
+/// When the model has trimmed shells (issue 30), they are meshed instead by
+/// `trimmed::tessellate_shell` (each edge sampled once, so a solid gives a closed mesh; spacing
+/// `size / min(samples, 64)`: its triangulation is quadratic in the points of a face).
 pub fn trimmed_mesh(
     entities: &[NamedEntity],
     faces: &[TrimmedFace],
+    shells: &[Shell],
     samples: usize,
 ) -> Result<TriMesh> {
+    if !shells.is_empty() {
+        let on_face: std::collections::HashSet<usize> = shells
+            .iter()
+            .flat_map(|s| s.faces.iter().filter_map(|f| f.entity))
+            .collect();
+        let rest: Vec<NamedEntity> = entities
+            .iter()
+            .enumerate()
+            .filter(|(i, e)| !on_face.contains(i) && !matches!(e.entity, Entity::Curve(_)))
+            .map(|(_, e)| e.clone())
+            .collect();
+        let mut mesh = if rest.is_empty() {
+            TriMesh::new()
+        } else {
+            tessellate_entities(&rest, samples)?
+        };
+        for (k, sh) in shells.iter().enumerate() {
+            let m = vclay::io::trimmed::tessellate_shell(sh, samples.min(64))
+                .map_err(|e| anyhow::anyhow!("shell {k}: {e}"))?;
+            mesh.append(&m);
+        }
+        if mesh.triangles.is_empty() {
+            bail!("the trimmed faces have no triangles");
+        }
+        return Ok(mesh);
+    }
     let on_face: std::collections::HashSet<usize> = faces.iter().map(|f| f.entity).collect();
     let vertices = (samples as f64).powi(2) * faces.len() as f64;
     crate::limits::check_memory(
@@ -305,7 +336,7 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
     let mesh_of = |input: &Loaded| -> Result<TriMesh> {
         match input {
             Loaded::Entities(e) => tessellate_entities(e, args.samples),
-            Loaded::Trimmed(e, f, _) => trimmed_mesh(e, f, args.samples),
+            Loaded::Trimmed(e, f, s) => trimmed_mesh(e, f, s, args.samples),
             Loaded::Meshes(ms) => {
                 let mut all = TriMesh::new();
                 for m in ms {
