@@ -19,12 +19,14 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 use vclay::TriMesh;
 use vclay::io::brep::BrepSummary;
+use vclay::io::brep::Shell;
 use vclay::io::geomdl::{is_geomdl, parse_geomdl, write_geomdl};
 use vclay::io::gltf::{GlbMesh, read_glb, write_glb};
 use vclay::io::iges::{IgesLayout, write_iges_as};
 use vclay::io::mesh::{read_mesh, write_mesh};
-use vclay::io::brep::Shell;
-use vclay::io::model::{Entity, NamedEntity, import_model, parse_trimmed_model, write_trimmed_model};
+use vclay::io::model::{
+    Entity, NamedEntity, import_model, parse_trimmed_model, write_trimmed_model,
+};
 use vclay::io::step::{StepLayout, write_step_trimmed};
 use vclay::io::step_read::{TrimmedFace, tessellate_trimmed};
 use vclay::spline::{tessellate_surface, tessellate_volume_boundary};

@@ -367,10 +367,7 @@ fn write_shell(d: &mut Data, name: &str, shell: &Shell, pcurves: bool) -> usize 
                     .collect();
                 let seam = u.len() == 2 && u[0].0 == u[1].0;
                 let kind = if seam { "SEAM_CURVE" } else { "SURFACE_CURVE" };
-                d.add(&format!(
-                    "{kind}('',#{cid},({}),.PCURVE_S1.)",
-                    refs(&pcs)
-                ))
+                d.add(&format!("{kind}('',#{cid},({}),.PCURVE_S1.)", refs(&pcs)))
             } else {
                 cid
             };

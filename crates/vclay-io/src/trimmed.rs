@@ -106,7 +106,10 @@ pub fn curve_part(c: &NurbsCurve, a: f64, b: f64) -> Result<NurbsCurve, String> 
     let u = c.knots().as_slice();
     // C(a) = P[s - p] with s the last index of a knot equal to a; C(b) = P[r - 1] with r the
     // first index of a knot equal to b.
-    let s = u.iter().rposition(|&k| k == a).ok_or("start knot not found")?;
+    let s = u
+        .iter()
+        .rposition(|&k| k == a)
+        .ok_or("start knot not found")?;
     let r = u.iter().position(|&k| k == b).ok_or("end knot not found")?;
     if s < p || r < s + 1 || r < 1 {
         return Err("inconsistent knots after insertion".into());
@@ -167,7 +170,11 @@ fn pcurve_in_nurbs_params(
             let period = end - start;
             let mid = n / 2;
             for k in (0..mid).rev().chain(mid + 1..n) {
-                let near = if k < mid { pts[k + 1][axis] } else { pts[k - 1][axis] };
+                let near = if k < mid {
+                    pts[k + 1][axis]
+                } else {
+                    pts[k - 1][axis]
+                };
                 pts[k][axis] += ((near - pts[k][axis]) / period).round() * period;
             }
             let (lo, hi) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |m, p| {
@@ -189,7 +196,10 @@ fn pcurve_in_nurbs_params(
     let scale = pts
         .iter()
         .fold(1.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
-    let iso = |k: usize| pts.iter().all(|p| (p[k] - pts[0][k]).abs() <= 1e-12 * scale);
+    let iso = |k: usize| {
+        pts.iter()
+            .all(|p| (p[k] - pts[0][k]).abs() <= 1e-12 * scale)
+    };
     let pts = if iso(0) || iso(1) {
         vec![pts[0], pts[n - 1]]
     } else {
@@ -325,8 +335,8 @@ fn shell_of_faces(import: &CadImport, faces: &[&TrimmedFace]) -> Result<Shell, I
                 let edge = match emap.get(&e.step_id) {
                     Some(&i) => i,
                     None => {
-                        let curve = edge_curve(e)
-                            .map_err(|m| at(format!("edge #{}: {m}", e.step_id)))?;
+                        let curve =
+                            edge_curve(e).map_err(|m| at(format!("edge #{}: {m}", e.step_id)))?;
                         edges.push(Edge {
                             curve,
                             start: vid[0],
@@ -371,7 +381,10 @@ fn shell_of_faces(import: &CadImport, faces: &[&TrimmedFace]) -> Result<Shell, I
             let area = |items: &[LoopItem]| {
                 let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
                 for it in items {
-                    if let LoopItem::Edge { pcurve: Some(k), .. } = it {
+                    if let LoopItem::Edge {
+                        pcurve: Some(k), ..
+                    } = it
+                    {
                         for p in pcurves[*k].control_points() {
                             for a in 0..2 {
                                 lo[a] = lo[a].min(p[a]);
@@ -611,10 +624,7 @@ pub fn validate_shell(shell: &Shell) -> Result<(), ShellError> {
                     }
                     let s = f
                         .surface
-                        .point(
-                            u.clamp(sd[0].min, sd[0].max),
-                            w.clamp(sd[1].min, sd[1].max),
-                        )
+                        .point(u.clamp(sd[0].min, sd[0].max), w.clamp(sd[1].min, sd[1].max))
                         .map_err(|x| at(x.to_string()))?;
                     let gap = (s - shell.vertices[v].point).norm();
                     if gap > tol {
@@ -881,10 +891,9 @@ pub(crate) fn shells_from_json(
                     let uo = object(uv, &up, "an edge use object", &USE_FIELDS)?;
                     let edge = json::integer(field(uo, "edge", &up)?, &up.key("edge"))?;
                     if edge >= edges.len() {
-                        return Err(up.key("edge").error(format!(
-                            "edge {edge} out of range ({} edges)",
-                            edges.len()
-                        )));
+                        return Err(up
+                            .key("edge")
+                            .error(format!("edge {edge} out of range ({} edges)", edges.len())));
                     }
                     let forward = boolean(field(uo, "forward", &up)?, &up.key("forward"))?;
                     let pcurve = match uo.get("pcurve") {

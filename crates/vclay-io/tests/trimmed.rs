@@ -127,7 +127,10 @@ fn step_write_and_read_back_keeps_the_topology() {
         let text =
             to_step_string_trimmed(&imp.entities, &imp.shells, "t.step", StepLayout::Brep).unwrap();
         assert_eq!(text.matches("MANIFOLD_SOLID_BREP").count(), 1, "{f}");
-        assert!(text.contains("PCURVE") && text.contains("SURFACE_CURVE"), "{f}");
+        assert!(
+            text.contains("PCURVE") && text.contains("SURFACE_CURVE"),
+            "{f}"
+        );
         let back = parse_step(&text).unwrap();
         let (a, b) = (
             one_closed_shell(&imp.shells),
@@ -173,7 +176,10 @@ fn bad_shells_are_located_errors() {
     );
     // A vertex moved away from its edges' ends.
     let e = edit(&|w| w["shells"][0]["vertices"][0][2] = 100.0.into());
-    assert!(e.contains("shells[0].edges") && e.contains("from vertex 0"), "{e}");
+    assert!(
+        e.contains("shells[0].edges") && e.contains("from vertex 0"),
+        "{e}"
+    );
     let e = edit(&|w| w["shells"][0]["colour"] = "red".into());
     assert!(e.contains("unknown field \"colour\""), "{e}");
 }
@@ -209,7 +215,8 @@ fn curve_part_is_exact() {
 /// hole, an open shell; written to STEP as a face with an outer and an inner bound.
 #[test]
 fn formats_example_square_with_hole() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/square_with_hole.json");
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/square_with_hole.json");
     let imp = import_model(&path).unwrap();
     assert_eq!(imp.shells.len(), 1);
     let sh = &imp.shells[0];
@@ -237,7 +244,11 @@ fn closed_shells_mesh_without_cracks() {
     use std::collections::HashMap;
     for (f, volume, area) in [
         ("trimmed_plate.step", 8578.1121379234, 3472.9557126861723),
-        ("trimmed_cut_sphere.step", 3284.0115205525294, 1143.5397259066845),
+        (
+            "trimmed_cut_sphere.step",
+            3284.0115205525294,
+            1143.5397259066845,
+        ),
     ] {
         let imp = import_model(data(f)).unwrap();
         let mesh = vclay_io::trimmed::tessellate_shell(&imp.shells[0], 20).unwrap();
@@ -257,7 +268,11 @@ fn closed_shells_mesh_without_cracks() {
         }
         let open = count.values().filter(|&&c| c != 2).count();
         let unbalanced = uses.values().filter(|&&c| c != 0).count();
-        assert_eq!((open, unbalanced), (0, 0), "{f}: open or misoriented mesh edges");
+        assert_eq!(
+            (open, unbalanced),
+            (0, 0),
+            "{f}: open or misoriented mesh edges"
+        );
         let p = &mesh.positions;
         let (mut v, mut a) = (0.0, 0.0);
         for t in &mesh.triangles {
@@ -265,8 +280,14 @@ fn closed_shells_mesh_without_cracks() {
             v += x.dot(&y.cross(&z)) / 6.0;
             a += (y - x).cross(&(z - x)).norm() / 2.0;
         }
-        assert!((v - volume).abs() < 0.01 * volume, "{f}: volume {v} vs {volume}");
+        assert!(
+            (v - volume).abs() < 0.01 * volume,
+            "{f}: volume {v} vs {volume}"
+        );
         assert!((a - area).abs() < 0.01 * area, "{f}: area {a} vs {area}");
-        eprintln!("{f}: {} triangles, volume {v} ({volume}), area {a} ({area})", mesh.triangles.len());
+        eprintln!(
+            "{f}: {} triangles, volume {v} ({volume}), area {a} ({area})",
+            mesh.triangles.len()
+        );
     }
 }

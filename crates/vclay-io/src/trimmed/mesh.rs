@@ -89,7 +89,10 @@ pub fn tessellate_shell(shell: &Shell, samples: usize) -> Result<TriMesh, String
         let mut len = 0.0;
         let mut prev = e.curve.point(d.min).map_err(|x| format!("edge {k}: {x}"))?;
         for i in 1..=64 {
-            let p = e.curve.point(at(i, 64)).map_err(|x| format!("edge {k}: {x}"))?;
+            let p = e
+                .curve
+                .point(at(i, 64))
+                .map_err(|x| format!("edge {k}: {x}"))?;
             len += (p - prev).norm();
             prev = p;
         }
@@ -274,7 +277,9 @@ fn face_mesh(
     let nx = ((hi[0] - lo[0]) / h).ceil() as usize;
     let ny = ((hi[1] - lo[1]) / h).ceil() as usize;
     if (nx as f64) * (ny as f64) > 4e6 {
-        return Err(format!("{nx} x {ny} interior points: too many (lower samples)"));
+        return Err(format!(
+            "{nx} x {ny} interior points: too many (lower samples)"
+        ));
     }
     for i in 1..nx {
         for j in 1..ny {
