@@ -22,7 +22,7 @@ use vclay::io::brep::BrepSummary;
 use vclay::io::brep::Shell;
 use vclay::io::geomdl::{is_geomdl, parse_geomdl, write_geomdl};
 use vclay::io::gltf::{GlbMesh, read_glb, write_glb};
-use vclay::io::iges::{IgesLayout, write_iges_as};
+use vclay::io::iges::{IgesLayout, write_iges_trimmed};
 use vclay::io::mesh::{read_mesh, write_mesh};
 use vclay::io::model::{
     Entity, NamedEntity, import_model, parse_trimmed_model, write_trimmed_model,
@@ -377,25 +377,15 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
                 (false, false) => (StepLayout::Brep, IgesLayout::Brep),
             };
             if iges {
-                if !trimmed.is_empty() && !crate::quiet() {
-                    eprintln!(
-                        "vclay: warning: IGES output of trimmed faces is not written yet (issue \
-                         30): the faces' surfaces are written whole"
-                    );
-                }
-                write_iges_as(out, &entities, igs)?;
+                write_iges_trimmed(out, &entities, trimmed, igs)?;
             } else {
                 write_step_trimmed(out, &entities, trimmed, step)?;
             }
             if !args.loose && !crate::quiet() {
-                let on_face: std::collections::HashSet<usize> = if iges {
-                    Default::default()
-                } else {
-                    trimmed
-                        .iter()
-                        .flat_map(|s| s.faces.iter().filter_map(|f| f.entity))
-                        .collect()
-                };
+                let on_face: std::collections::HashSet<usize> = trimmed
+                    .iter()
+                    .flat_map(|s| s.faces.iter().filter_map(|f| f.entity))
+                    .collect();
                 let rest: Vec<NamedEntity> = entities
                     .iter()
                     .enumerate()
@@ -407,13 +397,11 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
                 } else {
                     BrepSummary::of(&rest)?
                 };
-                if !iges {
-                    for s in trimmed {
-                        if s.closed {
-                            b.solids += 1;
-                        } else {
-                            b.open_shells += 1;
-                        }
+                for s in trimmed {
+                    if s.closed {
+                        b.solids += 1;
+                    } else {
+                        b.open_shells += 1;
                     }
                 }
                 eprintln!(
