@@ -9,7 +9,8 @@ part.json -> out.step`), reads the results back with STEPControl_Reader and chec
 - BRepCheck_Analyzer finds the shape valid;
 - it is exactly one solid with the original face count;
 - its volume and area (BRepGProp, adaptive to 1e-10) match the original part's within 1e-6
-  relative.
+  relative (the IGES route, `part.step -> part.igs`, read with IGESControl_Reader: 1e-5, see
+  RTOL_IGES).
 
 Prints one line per part and route with the relative volume and area errors.
 Usage: python check_trimmed.py VCLAY_BINARY WORK_DIR
@@ -24,11 +25,16 @@ from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepGProp import BRepGProp
 from OCP.GProp import GProp_GProps
 from OCP.IFSelect import IFSelect_RetDone
+from OCP.IGESControl import IGESControl_Reader
 from OCP.STEPControl import STEPControl_Reader
 from OCP.TopAbs import TopAbs_FACE, TopAbs_SOLID
 from OCP.TopExp import TopExp_Explorer
 
 RTOL = 1e-6
+# IGES output: OpenCASCADE's IGES reader brings the plate back with volume and area errors of
+# about 1.2e-6 (its own projection of the fillets' edges; the cut sphere comes back to 2e-10):
+# checked to 1e-5 until that is understood (issue 30).
+RTOL_IGES = 1e-5
 
 
 def count(shape, kind):
@@ -47,7 +53,7 @@ def props(shape):
 
 
 def read(path):
-    r = STEPControl_Reader()
+    r = IGESControl_Reader() if str(path).endswith(".igs") else STEPControl_Reader()
     if r.ReadFile(str(path)) != IFSelect_RetDone:
         raise SystemExit(f"check_trimmed: OpenCASCADE cannot read {path}")
     r.TransferRoots()
@@ -68,15 +74,18 @@ def main():
         v0, a0 = props(ref)
         direct, model, back = work / f"{name}_vclay.step", work / f"{name}.json", \
             work / f"{name}_json.step"
-        for args in ([src, direct], [src, model], [model, back]):
+        igs = work / f"{name}_vclay.igs"
+        for args in ([src, direct], [src, model], [model, back], [src, igs]):
             subprocess.run([vclay, "convert", *map(str, args), "-q"], check=True)
-        for route, path in (("step->step", direct), ("step->json->step", back)):
+        for route, path in (("step->step", direct), ("step->json->step", back),
+                            ("step->iges", igs)):
+            rtol = RTOL_IGES if route.endswith("iges") else RTOL
             s = read(path)
             valid = BRepCheck_Analyzer(s).IsValid()
             solids, faces = count(s, TopAbs_SOLID), count(s, TopAbs_FACE)
             v, a = props(s)
             ev, ea = abs(v - v0) / abs(v0), abs(a - a0) / abs(a0)
-            ok = valid and solids == 1 and faces == want["faces"] and ev < RTOL and ea < RTOL
+            ok = valid and solids == 1 and faces == want["faces"] and ev < rtol and ea < rtol
             failures += not ok
             print(f"check_trimmed: {name} {route}: valid {valid}, {solids} solid(s), "
                   f"{faces}/{want['faces']} faces, volume {v:.10g} (error {ev:.2e}), "
