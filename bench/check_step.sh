@@ -3,7 +3,8 @@
 # and compares points with `vclay eval` to 1e-9 (bench/check_step.py); then checks the B-rep
 # export (bench/check_brep.py): closed models (sphere, torus, a periodic closed surface, the
 # D-NURBS swung sphere, B-spline volumes) come back as one valid closed solid whose volume matches
-# vclay's to 1e-6, open ones as open shells.
+# vclay's to 1e-6, open ones as open shells; and the trimmed B-rep round trip of OpenCASCADE's
+# own parts (bench/check_trimmed.py: a plate with a hole and fillets, a cut sphere).
 # Uses target/venv-ocp; creates it and installs cadquery-ocp-novtk when pip can (set
 # VCLAY_NO_INSTALL=1 to forbid installing). Says SKIPPED and exits 0 when OpenCASCADE is absent.
 set -euo pipefail
@@ -57,3 +58,7 @@ for fmt in step iges; do
     "$models/box.ovm:solid" "$models/cylinder.ovm:solid" "$models/torus.ovm:solid" \
     "$models/gear.ovm:solid"
 done
+# Trimmed B-reps (issue 30): OpenCASCADE's plate with a hole and fillets and its cut sphere,
+# converted by vclay to STEP directly and through the model JSON, come back as one valid solid
+# with the original face count, volume and area to 1e-6 (bench/check_trimmed.py).
+"$py" bench/check_trimmed.py "$vclay" "$work/trimmed"

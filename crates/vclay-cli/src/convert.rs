@@ -19,12 +19,15 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 use vclay::TriMesh;
 use vclay::io::brep::BrepSummary;
+use vclay::io::brep::Shell;
 use vclay::io::geomdl::{is_geomdl, parse_geomdl, write_geomdl};
 use vclay::io::gltf::{GlbMesh, read_glb, write_glb};
-use vclay::io::iges::{IgesLayout, write_iges_as};
+use vclay::io::iges::{IgesLayout, write_iges_trimmed};
 use vclay::io::mesh::{read_mesh, write_mesh};
-use vclay::io::model::{Entity, NamedEntity, import_model, parse_named_model, write_named_model};
-use vclay::io::step::{StepLayout, write_step_as};
+use vclay::io::model::{
+    Entity, NamedEntity, import_model, parse_trimmed_model, write_trimmed_model,
+};
+use vclay::io::step::{StepLayout, write_step_trimmed};
 use vclay::io::step_read::{TrimmedFace, tessellate_trimmed};
 use vclay::spline::{tessellate_surface, tessellate_volume_boundary};
 
@@ -56,9 +59,10 @@ pub enum Loaded {
     Entities(Vec<NamedEntity>),
     /// Triangle meshes.
     Meshes(Vec<TriMesh>),
-    /// A STEP B-rep: its surfaces (exact, whole) and its faces' trimming loops, applied when it
-    /// is tessellated ([`trimmed_mesh`], issue 20).
-    Trimmed(Vec<NamedEntity>, Vec<TrimmedFace>),
+    /// A B-rep of trimmed faces: its surfaces (exact, whole), a STEP file's faces' trimming
+    /// loops as read (applied when it is tessellated, [`trimmed_mesh`], issue 20) and the
+    /// trimmed shells (issue 30: written back to STEP and JSON with their trims).
+    Trimmed(Vec<NamedEntity>, Vec<TrimmedFace>, Vec<Shell>),
 }
 
 fn ext_of(path: &Path) -> String {
@@ -98,13 +102,17 @@ pub fn read_any(path: &Path) -> Result<Loaded> {
             if vclay::io::triangular::is_triangular(&text) {
                 return Ok(Loaded::Meshes(vec![triangular_mesh(path, &text)?]));
             }
-            let ents = if is_geomdl(&text) {
-                parse_geomdl(&text)
+            let (ents, shells) = if is_geomdl(&text) {
+                parse_geomdl(&text).map(|e| (e, Vec::new()))
             } else {
-                parse_named_model(&text)
+                parse_trimmed_model(&text)
             }
             .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-            Ok(Loaded::Entities(ents))
+            if shells.is_empty() {
+                Ok(Loaded::Entities(ents))
+            } else {
+                Ok(Loaded::Trimmed(ents, Vec::new(), shells))
+            }
         }
         "step" | "stp" | "p21" | "igs" | "iges" => {
             let imported = import_model(path)?;
@@ -113,10 +121,14 @@ pub fn read_any(path: &Path) -> Result<Loaded> {
                     eprintln!("vclay: warning: {}: {w}", path.display());
                 }
             }
-            if imported.faces.is_empty() {
+            if imported.faces.is_empty() && imported.shells.is_empty() {
                 Ok(Loaded::Entities(imported.entities))
             } else {
-                Ok(Loaded::Trimmed(imported.entities, imported.faces))
+                Ok(Loaded::Trimmed(
+                    imported.entities,
+                    imported.faces,
+                    imported.shells,
+                ))
             }
         }
         "ovm" => Ok(Loaded::Entities(lattice_patches(path)?)),
@@ -211,11 +223,42 @@ pub fn vtu_boundary(path: &Path) -> Result<TriMesh> {
 /// `samples x samples` through `step_read::tessellate_trimmed` (triangles outside the face's
 /// loops dropped), the other entities as [`tessellate_entities`] does. The mesh's size is
 /// checked against `--max-memory` first.
+///
+/// When the model has trimmed shells (issue 30), they are meshed instead by
+/// `trimmed::tessellate_shell` (each edge sampled once, so a solid gives a closed mesh; spacing
+/// `size / min(samples, 64)`: its triangulation is quadratic in the points of a face).
 pub fn trimmed_mesh(
     entities: &[NamedEntity],
     faces: &[TrimmedFace],
+    shells: &[Shell],
     samples: usize,
 ) -> Result<TriMesh> {
+    if !shells.is_empty() {
+        let on_face: std::collections::HashSet<usize> = shells
+            .iter()
+            .flat_map(|s| s.faces.iter().filter_map(|f| f.entity))
+            .collect();
+        let rest: Vec<NamedEntity> = entities
+            .iter()
+            .enumerate()
+            .filter(|(i, e)| !on_face.contains(i) && !matches!(e.entity, Entity::Curve(_)))
+            .map(|(_, e)| e.clone())
+            .collect();
+        let mut mesh = if rest.is_empty() {
+            TriMesh::new()
+        } else {
+            tessellate_entities(&rest, samples)?
+        };
+        for (k, sh) in shells.iter().enumerate() {
+            let m = vclay::io::trimmed::tessellate_shell(sh, samples.min(64))
+                .map_err(|e| anyhow::anyhow!("shell {k}: {e}"))?;
+            mesh.append(&m);
+        }
+        if mesh.triangles.is_empty() {
+            bail!("the trimmed faces have no triangles");
+        }
+        return Ok(mesh);
+    }
     let on_face: std::collections::HashSet<usize> = faces.iter().map(|f| f.entity).collect();
     let vertices = (samples as f64).powi(2) * faces.len() as f64;
     crate::limits::check_memory(
@@ -285,6 +328,14 @@ pub fn tessellate_entities(ents: &[NamedEntity], samples: usize) -> Result<TriMe
     Ok(mesh)
 }
 
+/// The trimmed shells of what was read (none but for a B-rep of trimmed faces).
+fn shells_of(input: &Loaded) -> &[Shell] {
+    match input {
+        Loaded::Trimmed(_, _, s) => s,
+        _ => &[],
+    }
+}
+
 /// Runs `vclay convert`.
 pub fn run(args: &ConvertArgs) -> Result<()> {
     if args.samples < 2 {
@@ -296,7 +347,7 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
     let mesh_of = |input: &Loaded| -> Result<TriMesh> {
         match input {
             Loaded::Entities(e) => tessellate_entities(e, args.samples),
-            Loaded::Trimmed(e, f) => trimmed_mesh(e, f, args.samples),
+            Loaded::Trimmed(e, f, s) => trimmed_mesh(e, f, s, args.samples),
             Loaded::Meshes(ms) => {
                 let mut all = TriMesh::new();
                 for m in ms {
@@ -308,7 +359,7 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
     };
     let exact = |input: &Loaded| -> Result<Vec<NamedEntity>> {
         match input {
-            Loaded::Entities(e) | Loaded::Trimmed(e, _) => Ok(e.clone()),
+            Loaded::Entities(e) | Loaded::Trimmed(e, _, _) => Ok(e.clone()),
             Loaded::Meshes(_) => bail!(
                 "{} is a mesh; it cannot be converted to exact NURBS geometry ({})",
                 args.input.display(),
@@ -318,9 +369,14 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
     };
     match ext.as_str() {
         "geomdl.json" => write_geomdl(out, &exact(&input)?)?,
-        "json" => write_named_model(out, &exact(&input)?)?,
+        "json" => write_trimmed_model(out, &exact(&input)?, shells_of(&input))?,
         "step" | "stp" | "igs" | "iges" => {
             let entities = exact(&input)?;
+            let trimmed = if args.loose || args.join {
+                &[][..]
+            } else {
+                shells_of(&input)
+            };
             let iges = matches!(ext.as_str(), "igs" | "iges");
             // The limit patches of a lattice form one surface: joined into one shell.
             let join = !args.loose && (args.join || ext_of(&args.input) == "ovm");
@@ -330,16 +386,33 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
                 (false, false) => (StepLayout::Brep, IgesLayout::Brep),
             };
             if iges {
-                write_iges_as(out, &entities, igs)?;
+                write_iges_trimmed(out, &entities, trimmed, igs)?;
             } else {
-                write_step_as(out, &entities, step)?;
+                write_step_trimmed(out, &entities, trimmed, step)?;
             }
             if !args.loose && !crate::quiet() {
-                let b = if join {
-                    BrepSummary::joined(&entities)?
+                let on_face: std::collections::HashSet<usize> = trimmed
+                    .iter()
+                    .flat_map(|s| s.faces.iter().filter_map(|f| f.entity))
+                    .collect();
+                let rest: Vec<NamedEntity> = entities
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, _)| !on_face.contains(i))
+                    .map(|(_, e)| e.clone())
+                    .collect();
+                let mut b = if join {
+                    BrepSummary::joined(&rest)?
                 } else {
-                    BrepSummary::of(&entities)?
+                    BrepSummary::of(&rest)?
                 };
+                for s in trimmed {
+                    if s.closed {
+                        b.solids += 1;
+                    } else {
+                        b.open_shells += 1;
+                    }
+                }
                 eprintln!(
                     "vclay convert: {} solid(s), {} open shell(s), {} curve(s)",
                     b.solids, b.open_shells, b.curves

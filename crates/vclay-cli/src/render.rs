@@ -128,9 +128,10 @@ pub fn scene_from_file(path: &Path, wireframe: bool) -> Result<Scene> {
             let ents: Vec<Entity> = e.into_iter().map(|n| n.entity).collect();
             scene_from_entities(&ents, wireframe)
         }
-        crate::convert::Loaded::Trimmed(e, faces) => {
-            // Faces cut to their trimming loops (issue 20), 96 samples a side; curves as lines.
-            let mesh = crate::convert::trimmed_mesh(&e, &faces, 96)?;
+        crate::convert::Loaded::Trimmed(e, faces, shells) => {
+            // Faces cut to their trimming loops (issue 20), 96 samples a side; trimmed shells
+            // with shared edges (issue 30); curves as lines.
+            let mesh = crate::convert::trimmed_mesh(&e, &faces, &shells, 96)?;
             let mut scene = scene_from_mesh(mesh, wireframe);
             let curves: Vec<Entity> = e
                 .into_iter()

@@ -97,6 +97,9 @@ pub enum LoopItem {
         edge: usize,
         /// Whether the loop runs along the edge's curve direction.
         forward: bool,
+        /// Index in [`Face::pcurves`] of the edge's curve in the face's parameter space, if
+        /// known (trimmed faces; the boundary of a whole surface needs none).
+        pcurve: Option<usize>,
     },
     /// A boundary side of the parameter square that collapses to vertex `vertex` (a pole).
     Pole {
@@ -105,16 +108,34 @@ pub enum LoopItem {
     },
 }
 
-/// A face: a whole (untrimmed) NURBS surface bounded by its loop.
+/// A face: a NURBS surface bounded by its outer loop and, for a trimmed face, inner loops
+/// (holes); see [`crate::trimmed`] for trimmed faces.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Face {
     /// The face's surface, with clamped knot vectors.
     pub surface: NurbsSurface,
     /// Whether the face's outward normal is the surface normal `S_u x S_v` (`false`: reversed).
     pub same_sense: bool,
-    /// The loop, oriented counter-clockwise about the face's normal (the surface's parameter
-    /// square run counter-clockwise when `same_sense`, clockwise otherwise).
+    /// The outer loop, oriented counter-clockwise about the face's normal (for a whole surface
+    /// the parameter square run counter-clockwise when `same_sense`, clockwise otherwise).
     pub bound: Vec<LoopItem>,
+    /// The inner loops (holes), clockwise about the face's normal; empty for a whole surface.
+    pub holes: Vec<Vec<LoopItem>>,
+    /// The curves in the surface's parameter space (points `(u, v, 0)`) that
+    /// [`LoopItem::Edge::pcurve`] refers to, each running in its edge's curve direction over
+    /// the same parameter interval as the edge's 3D curve (a trimmed face); empty otherwise.
+    pub pcurves: Vec<NurbsCurve>,
+    /// The index of the face's surface among the model's entities, when the face is a
+    /// trimmed face of a model ([`crate::trimmed`]); `None` for shells built from whole
+    /// surfaces.
+    pub entity: Option<usize>,
+}
+
+impl Face {
+    /// The outer loop then the holes.
+    pub fn loops(&self) -> impl Iterator<Item = &Vec<LoopItem>> {
+        std::iter::once(&self.bound).chain(&self.holes)
+    }
 }
 
 /// A connected set of faces sharing edges and vertices.
@@ -456,12 +477,16 @@ impl Builder {
             bound.push(LoopItem::Edge {
                 edge,
                 forward: side.forward == same,
+                pcurve: None,
             });
         }
         self.faces.push(Face {
             surface: s,
             same_sense: true,
             bound,
+            holes: Vec::new(),
+            pcurves: Vec::new(),
+            entity: None,
         });
         Ok(())
     }
@@ -471,7 +496,7 @@ impl Builder {
         let mut uses: Vec<Vec<EdgeUse>> = vec![Vec::new(); self.edges.len()];
         for (f, face) in self.faces.iter().enumerate() {
             for item in &face.bound {
-                if let LoopItem::Edge { edge, forward } = *item {
+                if let LoopItem::Edge { edge, forward, .. } = *item {
                     uses[edge].push((f, forward));
                 }
             }
@@ -624,7 +649,7 @@ impl Shell {
 
     /// The enclosed volume `1/3 sum_f s_f int int S . (S_u x S_v) du dv` with `n`-point
     /// Gauss-Legendre quadrature per knot span (positive for a closed shell, whose faces are
-    /// oriented outward); meaningful only for a closed shell.
+    /// oriented outward); meaningful only for a closed shell of whole (untrimmed) faces.
     pub fn volume(&self, n: usize) -> f64 {
         self.faces
             .iter()
@@ -640,8 +665,8 @@ impl Shell {
     pub fn edge_uses(&self) -> Vec<(usize, usize)> {
         let mut u = vec![(0, 0); self.edges.len()];
         for f in &self.faces {
-            for item in &f.bound {
-                if let LoopItem::Edge { edge, forward } = *item {
+            for item in f.loops().flatten() {
+                if let LoopItem::Edge { edge, forward, .. } = *item {
                     if forward {
                         u[edge].0 += 1;
                     } else {

@@ -73,6 +73,8 @@ struct Item {
     form: u32,
     /// Whether another entity owns this one (status "01": physically dependent).
     dependent: bool,
+    /// A curve in a surface's parameter space (entity use flag "05": 2D parametric).
+    parametric: bool,
 }
 
 impl Item {
@@ -83,6 +85,7 @@ impl Item {
             params,
             form: 0,
             dependent: false,
+            parametric: false,
         }
     }
 }
@@ -228,35 +231,60 @@ fn shell_items(items: &mut Vec<Item>, shell: &crate::brep::Shell, label: &str) {
     for (k, f) in shell.faces.iter().enumerate() {
         let surf = first_surface + k;
         // IGES loops run counter-clockwise about the surface normal whatever the face's
-        // orientation in the shell: undo the reversal of a face with `same_sense == false`.
-        let mut bound = f.bound.clone();
-        if !f.same_sense {
-            bound.reverse();
+        // orientation in the shell (holes clockwise): undo the reversal of a face with
+        // `same_sense == false`. A trimmed face (issue 30) has its holes as more loops.
+        let mut loop_ids = Vec::new();
+        for l in f.loops() {
+            let mut bound = l.clone();
+            if !f.same_sense {
+                bound.reverse();
+            }
+            let edges: Vec<(usize, bool, Option<usize>)> = bound
+                .iter()
+                .filter_map(|item| match *item {
+                    LoopItem::Edge {
+                        edge,
+                        forward,
+                        pcurve,
+                    } => Some((edge, forward == f.same_sense, pcurve)),
+                    LoopItem::Pole { .. } => None,
+                })
+                .collect();
+            // Each use's pcurve (trimmed faces) as a 2D parametric 126 curve, when every pcurve
+            // of the face is exact (OpenCASCADE's IGES reader trusts them; a polyline standing
+            // for a curve on an angle direction is left for the reader to project).
+            let with_pcurves =
+                edges.iter().all(|e| e.2.is_some()) && crate::trimmed::pcurves_exact(f);
+            let mut pc_ids = Vec::new();
+            if with_pcurves {
+                for &(_, _, k) in &edges {
+                    let mut it = curve_item(&f.pcurves[k.unwrap_or(0)], label);
+                    it.dependent = true;
+                    it.parametric = true;
+                    pc_ids.push(items.len());
+                    items.push(it);
+                }
+            }
+            let mut lp = vec![edges.len().to_string()];
+            for (n, (edge, forward, _)) in edges.into_iter().enumerate() {
+                lp.extend([
+                    "0".into(),
+                    de(elist),
+                    (edge + 1).to_string(),
+                    u8::from(forward).to_string(),
+                ]);
+                match pc_ids.get(n) {
+                    Some(&c) => lp.extend(["1".into(), "0".into(), de(c)]),
+                    None => lp.push("0".into()),
+                }
+            }
+            loop_ids.push(items.len());
+            items.push(dep(Item::new(508, label, lp), 1));
         }
-        let edges: Vec<(usize, bool)> = bound
-            .iter()
-            .filter_map(|item| match *item {
-                LoopItem::Edge { edge, forward } => Some((edge, forward == f.same_sense)),
-                LoopItem::Pole { .. } => None,
-            })
-            .collect();
-        let mut lp = vec![edges.len().to_string()];
-        for (edge, forward) in edges {
-            lp.extend([
-                "0".into(),
-                de(elist),
-                (edge + 1).to_string(),
-                u8::from(forward).to_string(),
-                "0".into(),
-            ]);
-        }
-        let lid = items.len();
-        items.push(dep(Item::new(508, label, lp), 1));
         let fid = items.len();
-        items.push(dep(
-            Item::new(510, label, vec![de(surf), "1".into(), "1".into(), de(lid)]),
-            1,
-        ));
+        let mut fp = vec![de(surf), loop_ids.len().to_string(), "1".into()];
+        fp.extend(loop_ids.iter().map(|&l| de(l)));
+        items.push(dep(Item::new(510, label, fp), 1));
         faces.push((fid, f.same_sense));
     }
     // Shell (514): n, then face and orientation (1: the face normal is the surface normal).
@@ -290,11 +318,39 @@ pub fn to_iges_string_as(
     file_name: &str,
     layout: IgesLayout,
 ) -> Result<String, IoError> {
+    to_iges_string_trimmed(entities, &[], file_name, layout)
+}
+
+/// Formats a trimmed model ([`crate::trimmed`]) as an IGES 5.3 file: each shell of `shells` as
+/// a 186 solid (closed) or 514 shell of 510 faces with their outer and inner 508 loops, each
+/// edge use with its pcurve as a 2D parametric 126 curve, the entities that are no face's
+/// surface as `layout` says.
+pub fn to_iges_string_trimmed(
+    entities: &[NamedEntity],
+    shells: &[crate::brep::Shell],
+    file_name: &str,
+    layout: IgesLayout,
+) -> Result<String, IoError> {
     if entities.is_empty() {
         return Err(IoError::EmptyModel);
     }
+    let on_face: std::collections::HashSet<usize> = shells
+        .iter()
+        .flat_map(|s| s.faces.iter().filter_map(|f| f.entity))
+        .collect();
+    let rest: Vec<NamedEntity> = entities
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !on_face.contains(i))
+        .map(|(_, e)| e.clone())
+        .collect();
+    let entities = &rest[..];
     let mut items = Vec::new();
     let mut tolerance: f64 = 1e-7;
+    for (k, shell) in shells.iter().enumerate() {
+        tolerance = tolerance.max(10.0 * shell.tolerance);
+        shell_items(&mut items, shell, &format!("SHELL{k}"));
+    }
     let joined = match layout {
         IgesLayout::JoinedBrep => crate::brep::joined_shell(entities)?,
         _ => None,
@@ -408,7 +464,11 @@ pub fn to_iges_string_as(
                 0,
                 0,
                 0,
-                if it.dependent { "00010000" } else { "00000000" }
+                match (it.dependent, it.parametric) {
+                    (_, true) => "00010500",
+                    (true, false) => "00010000",
+                    (false, false) => "00000000",
+                }
             ),
             'D',
             de,
@@ -461,6 +521,18 @@ pub fn write_iges_as(
 ) -> Result<(), IoError> {
     crate::util::write_named_text(path.as_ref(), |name| {
         to_iges_string_as(entities, name, layout)
+    })
+}
+
+/// Writes a trimmed model as an IGES 5.3 file, atomically ([`to_iges_string_trimmed`]).
+pub fn write_iges_trimmed(
+    path: impl AsRef<Path>,
+    entities: &[NamedEntity],
+    shells: &[crate::brep::Shell],
+    layout: IgesLayout,
+) -> Result<(), IoError> {
+    crate::util::write_named_text(path.as_ref(), |name| {
+        to_iges_string_trimmed(entities, shells, name, layout)
     })
 }
 

@@ -972,6 +972,7 @@ pub fn parse_iges(text: &str) -> Result<CadImport, IoError> {
         entities,
         warnings,
         faces: Vec::new(),
+        shells: Vec::new(),
     })
 }
 

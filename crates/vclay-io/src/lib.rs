@@ -40,6 +40,7 @@ pub mod params;
 pub mod step;
 pub mod step_read;
 pub mod triangular;
+pub mod trimmed;
 mod util;
 
 pub use error::{IoError, MeshLocation};

@@ -9,7 +9,10 @@
 //! {"type": "nurbs-volume",  "degree": [p, q, r], "knots": [U, V, W], "control_points": [[[P_ijk]]], "weights": [[[w_ijk]]]}
 //! ```
 //!
-//! with points `[x, y, z]`, the first index running along the first parameter (`u`), optional
+//! and `{"entities": [...], "shells": [...]}` adds the trimmed B-rep of CAD parts whose faces lie
+//! on the surfaces ([`crate::trimmed`], [`parse_trimmed_model`], [`trimmed_to_json`]).
+//!
+//! Entities have points `[x, y, z]`, the first index running along the first parameter (`u`), optional
 //! weights (all 1 when absent) of the same nesting, and an optional `"name"` string. The format is
 //! documented with examples in `docs/formats.md`.
 //!
@@ -113,19 +116,31 @@ pub fn parse_model(text: &str) -> Result<Vec<Entity>, IoError> {
         .collect())
 }
 
-/// Parses a model from JSON text, keeping each entity's `"name"`.
+/// Parses a model from JSON text, keeping each entity's `"name"` (the trimmed B-rep shells of
+/// `"shells"` are checked and dropped; see [`parse_trimmed_model`]).
 pub fn parse_named_model(text: &str) -> Result<Vec<NamedEntity>, IoError> {
+    Ok(parse_trimmed_model(text)?.0)
+}
+
+/// Parses a model from JSON text with its trimmed B-rep shells (`{"entities": [...],
+/// "shells": [...]}`, [`crate::trimmed`]); each shell is validated
+/// ([`crate::trimmed::validate_shell`]), errors name the shell, face, loop and use.
+pub fn parse_trimmed_model(
+    text: &str,
+) -> Result<(Vec<NamedEntity>, Vec<crate::brep::Shell>), IoError> {
     let root = json::parse(text)?;
     let top = JsonPath::default();
+    let mut shells_json = None;
     let items: Vec<&Value> = match &root {
         Value::Array(a) => a.iter().collect(),
         Value::Object(o) if o.contains_key("entities") => {
-            if let Some(k) = o.keys().find(|k| *k != "entities") {
+            if let Some(k) = o.keys().find(|k| *k != "entities" && *k != "shells") {
                 return Err(top.error(format!(
-                    "unknown field {} next to \"entities\" (only \"entities\" is allowed)",
+                    "unknown field {} next to \"entities\" (allowed: \"entities\", \"shells\")",
                     quote(k)
                 )));
             }
+            shells_json = o.get("shells");
             let path = top.key("entities");
             json::array(&o["entities"], &path, "an array of entities")?
                 .iter()
@@ -142,11 +157,16 @@ pub fn parse_named_model(text: &str) -> Result<Vec<NamedEntity>, IoError> {
     if items.is_empty() {
         return Err(IoError::EmptyModel);
     }
-    items
+    let entities = items
         .into_iter()
         .enumerate()
         .map(|(i, v)| parse_entity(v, i))
-        .collect()
+        .collect::<Result<Vec<_>, _>>()?;
+    let shells = match shells_json {
+        None => Vec::new(),
+        Some(v) => crate::trimmed::shells_from_json(v, &top.key("shells"), &entities)?,
+    };
+    Ok((entities, shells))
 }
 
 /// Reads a model file (names dropped; see [`read_named_model`]). Errors name the file.
@@ -190,10 +210,12 @@ pub fn import_model(path: impl AsRef<Path>) -> Result<crate::CadImport, IoError>
         Some(_) => crate::iges_read::read_iges(path),
         None => {
             let text = std::fs::read_to_string(path).map_err(|e| IoError::file(path, e))?;
+            let (entities, shells) = parse_trimmed_model(&text).map_err(|e| e.in_file(path))?;
             Ok(crate::CadImport {
-                entities: parse_named_model(&text).map_err(|e| e.in_file(path))?,
+                entities,
                 warnings: Vec::new(),
                 faces: Vec::new(),
+                shells,
             })
         }
     }
@@ -212,6 +234,30 @@ pub fn named_to_json(entities: &[NamedEntity]) -> Value {
         .map(|e| entity_to_json(&e.entity, e.name.as_deref()))
         .collect();
     wrap(list)
+}
+
+/// The model with its trimmed B-rep shells as JSON: `{"entities": [...], "shells": [...]}`
+/// (no `"shells"` when there are none).
+pub fn trimmed_to_json(entities: &[NamedEntity], shells: &[crate::brep::Shell]) -> Value {
+    let mut v = named_to_json(entities);
+    if !shells.is_empty()
+        && let Value::Object(m) = &mut v
+    {
+        m.insert(
+            "shells".into(),
+            Value::Array(shells.iter().map(crate::trimmed::shell_to_json).collect()),
+        );
+    }
+    v
+}
+
+/// Writes a model file with its trimmed B-rep shells, atomically ([`trimmed_to_json`]).
+pub fn write_trimmed_model(
+    path: impl AsRef<Path>,
+    entities: &[NamedEntity],
+    shells: &[crate::brep::Shell],
+) -> Result<(), IoError> {
+    write_json(path.as_ref(), &trimmed_to_json(entities, shells))
 }
 
 /// Writes a model file (indented, one control point per line), atomically: a failed write never
@@ -364,7 +410,7 @@ fn knot_vectors<const N: usize>(v: &Value, path: &JsonPath) -> Result<[Vec<f64>;
 }
 
 /// An array of finite numbers.
-fn numbers(v: &Value, path: &JsonPath) -> Result<Vec<f64>, IoError> {
+pub(crate) fn numbers(v: &Value, path: &JsonPath) -> Result<Vec<f64>, IoError> {
     json::array(v, path, "an array of numbers")?
         .iter()
         .enumerate()
@@ -373,7 +419,7 @@ fn numbers(v: &Value, path: &JsonPath) -> Result<Vec<f64>, IoError> {
 }
 
 /// A point `[x, y, z]`.
-fn point(v: &Value, path: &JsonPath) -> Result<Vec3, IoError> {
+pub(crate) fn point(v: &Value, path: &JsonPath) -> Result<Vec3, IoError> {
     const WHAT: &str = "an array of 3 numbers";
     match v.as_array() {
         Some(a) if a.len() == 3 => Ok(Vec3::new(
@@ -386,7 +432,7 @@ fn point(v: &Value, path: &JsonPath) -> Result<Vec3, IoError> {
 }
 
 /// An array of points.
-fn points1(v: &Value, path: &JsonPath) -> Result<Vec<Vec3>, IoError> {
+pub(crate) fn points1(v: &Value, path: &JsonPath) -> Result<Vec<Vec3>, IoError> {
     json::array(v, path, "an array of points [x, y, z]")?
         .iter()
         .enumerate()
@@ -410,12 +456,12 @@ fn nested<T>(
 // ---------------------------------------------------------------------------------------------
 // Writing
 
-fn num(x: f64) -> Value {
+pub(crate) fn num(x: f64) -> Value {
     // Entities are validated, so every number is finite and `from_f64` succeeds.
     serde_json::Number::from_f64(x).map_or(Value::Null, Value::Number)
 }
 
-fn nums(xs: &[f64]) -> Value {
+pub(crate) fn nums(xs: &[f64]) -> Value {
     Value::Array(xs.iter().map(|&x| num(x)).collect())
 }
 
@@ -437,7 +483,7 @@ fn nest<T>(flat: &[T], dims: &[usize], leaf: &impl Fn(&T) -> Value) -> Value {
     }
 }
 
-fn entity_to_json(e: &Entity, name: Option<&str>) -> Value {
+pub(crate) fn entity_to_json(e: &Entity, name: Option<&str>) -> Value {
     let mut m = Map::new();
     m.insert("type".into(), Value::String(e.type_name().into()));
     if let Some(n) = name {

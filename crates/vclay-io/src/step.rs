@@ -37,9 +37,14 @@
 //! OpenCASCADE by `bench/check_step.sh` (points to 1e-9; solids valid by BRepCheck, volume to
 //! 1e-6, faces oriented outward).
 //!
-//! **Limitations.** Faces are whole (untrimmed) surfaces: no trimming curves. Edges carry no
-//! parameter-space curves (`PCURVE`s; readers project the edge curves, which are exact
-//! iso-boundaries). Boundaries that close up only with a different parametrization are not
+//! - **Trimmed B-rep** ([`to_step_string_trimmed`], issue 30): the shells of a trimmed model
+//!   ([`crate::trimmed`]) as solids (or open shells) of trimmed faces: outer `FACE_OUTER_BOUND`,
+//!   holes as `FACE_BOUND`s, shared edges whose geometry is a `SURFACE_CURVE` (a `SEAM_CURVE`
+//!   for a seam) with a `PCURVE` per use, 2D B-splines in the surfaces' NURBS parameters.
+//!   Checked by `bench/check_trimmed.py` (valid solid, face count, volume and area to 1e-6).
+//!
+//! **Limitations.** Faces of whole surfaces carry no parameter-space curves (`PCURVE`s; readers
+//! project the edge curves, which are exact iso-boundaries). Boundaries that close up only with a different parametrization are not
 //! merged (an open shell; see [`crate::brep`]). Names are reduced to printable ASCII.
 
 use crate::brep::{LoopItem, Shell};
@@ -48,7 +53,7 @@ use crate::model::{Entity, NamedEntity};
 use std::fmt::Write as _;
 use std::path::Path;
 use vclay_core::Vec3;
-use vclay_spline::{KnotVector, NurbsSurface, NurbsVolume};
+use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface, NurbsVolume};
 
 /// A real in STEP syntax: shortest round-trip digits, always with a decimal point.
 pub fn step_real(x: f64) -> String {
@@ -269,9 +274,42 @@ fn entity_shell(e: &Entity, i: usize) -> Result<Option<Shell>, IoError> {
     }
 }
 
+/// Writes a 2D curve (a pcurve, points `(u, v, 0)`) as a B-spline with 2D points.
+fn write_curve_2d(d: &mut Data, c: &NurbsCurve) -> usize {
+    let ids: Vec<usize> = c
+        .control_points()
+        .iter()
+        .map(|p| {
+            d.add(&format!(
+                "CARTESIAN_POINT('',({},{}))",
+                step_real(p.x),
+                step_real(p.y)
+            ))
+        })
+        .collect();
+    let (m, k) = knot_lists(c.knots());
+    let cps = refs(&ids);
+    let degree = c.degree();
+    if c.weights().iter().all(|&x| x == 1.0) {
+        d.add(&format!(
+            "B_SPLINE_CURVE_WITH_KNOTS('',{degree},({cps}),.UNSPECIFIED.,.F.,.F.,{m},{k},.UNSPECIFIED.)"
+        ))
+    } else {
+        d.add(&format!(
+            "( BOUNDED_CURVE() B_SPLINE_CURVE({degree},({cps}),.UNSPECIFIED.,.F.,.F.) \
+             B_SPLINE_CURVE_WITH_KNOTS({m},{k},.UNSPECIFIED.) CURVE() GEOMETRIC_REPRESENTATION_ITEM() \
+             RATIONAL_B_SPLINE_CURVE(({})) REPRESENTATION_ITEM('') )",
+            reals(c.weights())
+        ))
+    }
+}
+
 /// Writes a shell's vertices, edges and faces; returns the `MANIFOLD_SOLID_BREP` (closed) or
-/// `SHELL_BASED_SURFACE_MODEL` (open).
-fn write_shell(d: &mut Data, name: &str, shell: &Shell) -> usize {
+/// `SHELL_BASED_SURFACE_MODEL` (open). Trimmed faces ([`crate::trimmed`]) get their holes as
+/// `FACE_BOUND`s and, when every use of an edge has a pcurve (`pcurves`), the edge's
+/// geometry is a `SURFACE_CURVE` (a `SEAM_CURVE` when both uses are on one face) with a
+/// `PCURVE` per use.
+fn write_shell(d: &mut Data, name: &str, shell: &Shell, pcurves: bool) -> usize {
     let vids: Vec<usize> = shell
         .vertices
         .iter()
@@ -280,6 +318,22 @@ fn write_shell(d: &mut Data, name: &str, shell: &Shell) -> usize {
             d.add(&format!("VERTEX_POINT('',#{p})"))
         })
         .collect();
+    let sids: Vec<usize> = shell
+        .faces
+        .iter()
+        .enumerate()
+        .map(|(k, f)| write_surface(d, &format!("{name} face {k}"), &f.surface))
+        .collect();
+    // The uses of each edge: (face, pcurve) in loop order.
+    let mut uses: Vec<Vec<(usize, Option<usize>)>> = vec![Vec::new(); shell.edges.len()];
+    for (fi, f) in shell.faces.iter().enumerate() {
+        for item in f.loops().flatten() {
+            if let LoopItem::Edge { edge, pcurve, .. } = *item {
+                uses[edge].push((fi, pcurve));
+            }
+        }
+    }
+    let mut ctx2d = None;
     let eids: Vec<usize> = shell
         .edges
         .iter()
@@ -294,34 +348,65 @@ fn write_shell(d: &mut Data, name: &str, shell: &Shell) -> usize {
                 c.control_points(),
                 c.weights(),
             );
+            let u = &uses[k];
+            let geometry = if pcurves && !u.is_empty() && u.iter().all(|x| x.1.is_some()) {
+                let ctx = *ctx2d.get_or_insert_with(|| {
+                    d.add(
+                        "( GEOMETRIC_REPRESENTATION_CONTEXT(2) PARAMETRIC_REPRESENTATION_CONTEXT() \
+                         REPRESENTATION_CONTEXT('2D SPACE','') )",
+                    )
+                });
+                let pcs: Vec<usize> = u
+                    .iter()
+                    .map(|&(fi, pk)| {
+                        let pc = &shell.faces[fi].pcurves[pk.unwrap_or(0)];
+                        let c2 = write_curve_2d(d, pc);
+                        let dr = d.add(&format!("DEFINITIONAL_REPRESENTATION('',(#{c2}),#{ctx})"));
+                        d.add(&format!("PCURVE('',#{},#{dr})", sids[fi]))
+                    })
+                    .collect();
+                let seam = u.len() == 2 && u[0].0 == u[1].0;
+                let kind = if seam { "SEAM_CURVE" } else { "SURFACE_CURVE" };
+                d.add(&format!("{kind}('',#{cid},({}),.PCURVE_S1.)", refs(&pcs)))
+            } else {
+                cid
+            };
             d.add(&format!(
-                "EDGE_CURVE('',#{},#{},#{cid},.T.)",
+                "EDGE_CURVE('',#{},#{},#{geometry},.T.)",
                 vids[e.start], vids[e.end]
             ))
         })
         .collect();
     let mut faces = Vec::with_capacity(shell.faces.len());
     for (k, f) in shell.faces.iter().enumerate() {
-        let sid = write_surface(d, &format!("{name} face {k}"), &f.surface);
-        let oes: Vec<usize> = f
-            .bound
-            .iter()
-            .filter_map(|item| match *item {
-                LoopItem::Edge { edge, forward } => Some(d.add(&format!(
-                    "ORIENTED_EDGE('',*,*,#{},{})",
-                    eids[edge],
-                    logical(forward)
-                ))),
-                // A pole is no edge: the loop passes through its vertex, which the
-                // neighbouring edges share (OpenCASCADE adds its degenerated edge on reading).
-                LoopItem::Pole { .. } => None,
-            })
-            .collect();
-        let lp = d.add(&format!("EDGE_LOOP('',({}))", refs(&oes)));
-        let fb = d.add(&format!("FACE_OUTER_BOUND('',#{lp},.T.)"));
+        let sid = sids[k];
+        let mut bounds = Vec::new();
+        for (li, l) in f.loops().enumerate() {
+            let oes: Vec<usize> = l
+                .iter()
+                .filter_map(|item| match *item {
+                    LoopItem::Edge { edge, forward, .. } => Some(d.add(&format!(
+                        "ORIENTED_EDGE('',*,*,#{},{})",
+                        eids[edge],
+                        logical(forward)
+                    ))),
+                    // A pole is no edge: the loop passes through its vertex, which the
+                    // neighbouring edges share (OpenCASCADE adds its degenerated edge on reading).
+                    LoopItem::Pole { .. } => None,
+                })
+                .collect();
+            let lp = d.add(&format!("EDGE_LOOP('',({}))", refs(&oes)));
+            let kind = if li == 0 {
+                "FACE_OUTER_BOUND"
+            } else {
+                "FACE_BOUND"
+            };
+            bounds.push(d.add(&format!("{kind}('',#{lp},.T.)")));
+        }
         faces.push(d.add(&format!(
-            "ADVANCED_FACE({},(#{fb}),#{sid},{})",
+            "ADVANCED_FACE({},({}),#{sid},{})",
             step_string(&format!("{name} face {k}")),
+            refs(&bounds),
             logical(f.same_sense)
         )));
     }
@@ -347,9 +432,33 @@ pub fn to_step_string_as(
     file_name: &str,
     layout: StepLayout,
 ) -> Result<String, IoError> {
+    to_step_string_trimmed(entities, &[], file_name, layout)
+}
+
+/// Formats a trimmed model ([`crate::trimmed`]) as a STEP AP214 file: each shell of `shells`
+/// as a `MANIFOLD_SOLID_BREP` (closed) or `SHELL_BASED_SURFACE_MODEL` (open) of trimmed
+/// `ADVANCED_FACE`s with shared edges and vertices and their pcurves; the entities that are
+/// no face's surface as `layout` says. `file_name` goes into the header.
+pub fn to_step_string_trimmed(
+    entities: &[NamedEntity],
+    trimmed: &[Shell],
+    file_name: &str,
+    layout: StepLayout,
+) -> Result<String, IoError> {
     if entities.is_empty() {
         return Err(IoError::EmptyModel);
     }
+    let on_face: std::collections::HashSet<usize> = trimmed
+        .iter()
+        .flat_map(|s| s.faces.iter().filter_map(|f| f.entity))
+        .collect();
+    let rest: Vec<NamedEntity> = entities
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !on_face.contains(i))
+        .map(|(_, e)| e.clone())
+        .collect();
+    let entities = &rest[..];
     let shells: Vec<Option<Shell>> = match layout {
         StepLayout::Brep => entities
             .iter()
@@ -367,6 +476,7 @@ pub fn to_step_string_as(
         .iter()
         .flatten()
         .chain(&joined)
+        .chain(trimmed)
         .map(|s| 10.0 * s.tolerance)
         .fold(1e-7, f64::max);
     let mut d = Data {
@@ -401,8 +511,16 @@ pub fn to_step_string_as(
     ));
     // Representation items by kind: loose curves, loose surfaces, solids, open shells.
     let (mut curves, mut surfaces, mut solids, mut open) = (vec![], vec![], vec![], vec![]);
+    for (k, sh) in trimmed.iter().enumerate() {
+        let item = write_shell(&mut d, &format!("shell {k}"), sh, true);
+        if sh.closed {
+            solids.push(item);
+        } else {
+            open.push(item);
+        }
+    }
     if let Some(sh) = &joined {
-        let item = write_shell(&mut d, "vclay shell", sh);
+        let item = write_shell(&mut d, "vclay shell", sh, false);
         if sh.closed {
             solids.push(item);
         } else {
@@ -416,7 +534,7 @@ pub fn to_step_string_as(
         }
         match (&e.entity, shell) {
             (_, Some(sh)) => {
-                let item = write_shell(&mut d, &name, sh);
+                let item = write_shell(&mut d, &name, sh, false);
                 if sh.closed {
                     solids.push(item);
                 } else {
@@ -511,6 +629,18 @@ pub fn to_step_string_as(
 /// closed surfaces and volumes as solids, open surfaces as open shells.
 pub fn write_step(path: impl AsRef<Path>, entities: &[NamedEntity]) -> Result<(), IoError> {
     write_step_as(path, entities, StepLayout::Brep)
+}
+
+/// Writes a trimmed model as a STEP AP214 file, atomically ([`to_step_string_trimmed`]).
+pub fn write_step_trimmed(
+    path: impl AsRef<Path>,
+    entities: &[NamedEntity],
+    shells: &[Shell],
+    layout: StepLayout,
+) -> Result<(), IoError> {
+    crate::util::write_named_text(path.as_ref(), |name| {
+        to_step_string_trimmed(entities, shells, name, layout)
+    })
 }
 
 /// Writes entities as a STEP AP214 file in the given layout, atomically.

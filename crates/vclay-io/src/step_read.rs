@@ -13,10 +13,11 @@
 //! of a `GEOMETRIC_SET`, the basis of a trimmed or offset surface, and the `FACE_SURFACE`
 //! geometry of the `ADVANCED_FACE`s of a B-rep. The faces' trimming loops (`FACE_BOUND` ->
 //! `EDGE_LOOP` -> `ORIENTED_EDGE` -> `EDGE_CURVE` with its 3D curve and its `PCURVE`s) are kept in
-//! [`CadImport::faces`] ([`TrimmedFace`]); the surfaces are imported **whole** (the JSON model
-//! does not store trims, sessions sculpt whole surfaces) and the loops are applied only by
-//! [`tessellate_trimmed`] (used by `vclay convert` to meshes and `vclay render`); a warning says
-//! so. A B-spline curve is imported
+//! [`CadImport::faces`] ([`TrimmedFace`], in the file's parameters; applied when meshing by
+//! [`tessellate_trimmed`], used by `vclay convert` to meshes and `vclay render`), and made the
+//! trimmed B-rep of [`CadImport::shells`] ([`crate::trimmed`]: shared edges and vertices,
+//! pcurves in the NURBS parameters; written back to STEP and JSON with the trims); the
+//! surfaces themselves are entities, whole. A B-spline curve is imported
 //! unless it is part of a B-rep's topology or of a surface definition (referenced by
 //! `EDGE_CURVE`, `PCURVE`, `SURFACE_CURVE`, `SEAM_CURVE`, `DEFINITIONAL_REPRESENTATION` or a
 //! swept surface) or lies in a 2D parameter space; a `TRIMMED_CURVE`'s basis is imported whole.
@@ -30,17 +31,17 @@
 //! nets are lists of rows along u, as vclay stores them, so nothing is reordered.
 //!
 //! **Warnings.** [`CadImport::warnings`] lists, per type with counts, every entity instance that
-//! was not read (topology above the faces, units and product data are not needed), says that
-//! faces are imported untrimmed with their loops kept as data, and counts edges whose curves are
-//! of a type not read. Nothing is dropped silently.
+//! was not read (units and product data are not needed), says when the faces could not be made
+//! a trimmed B-rep, and counts edges whose curves are of a type not read. Nothing is dropped
+//! silently.
 //!
 //! **Errors.** A malformed file is an [`IoError::Cad`] naming the line and the entity:
 //! `STEP line 41, entity #17: B_SPLINE_CURVE_WITH_KNOTS: knot multiplicities and knots differ
 //! in length (4 and 3)`.
 //!
-//! **Limitations.** Trimming loops are applied only when meshing, up to the grid spacing
-//! (triangles kept by their parameter centroid; no exact trimmed boundary); no solids as such
-//! (the faces of a shell come in as separate surfaces); free lines and conics (outside a face's
+//! **Limitations.** Meshing applies the trimming loops up to the grid spacing (triangles kept by
+//! their parameter centroid; no exact trimmed boundary); shells are rebuilt from the faces'
+//! shared edges (the file's `CLOSED_SHELL`s are not read as such); free lines and conics (outside a face's
 //! loop or a swept surface) are listed as not read; `OFFSET_SURFACE`,
 //! `RECTANGULAR_TRIMMED_SURFACE` and `CURVE_BOUNDED_SURFACE` are not read (their B-spline basis
 //! is). `UNIFORM_*`, `QUASI_UNIFORM_*` and `BEZIER_*` subtypes (knots implied rather than given)
@@ -70,10 +71,15 @@ pub struct CadImport {
     pub entities: Vec<NamedEntity>,
     /// What was not read or was simplified, one sentence each (empty when everything was read).
     pub warnings: Vec<String>,
-    /// The faces of a STEP B-rep: the entity each lies on and its trimming loops, kept as data
-    /// (the surfaces in `entities` are whole; [`tessellate_trimmed`] applies the loops when
-    /// meshing). Empty for IGES and JSON.
+    /// The faces of a STEP B-rep: the entity each lies on and its trimming loops as read, in
+    /// the file's parameters ([`tessellate_trimmed`] applies them when meshing). Empty for IGES
+    /// and JSON.
     pub faces: Vec<TrimmedFace>,
+    /// The trimmed B-rep ([`crate::trimmed`]): shells of faces whose surfaces are among
+    /// `entities`, with shared edges and vertices, loops and pcurves in the surfaces' NURBS
+    /// parameters; built from `faces` for STEP, read from `"shells"` for a JSON model. Empty
+    /// when the file has none.
+    pub shells: Vec<crate::brep::Shell>,
 }
 
 /// A parameter of a Part 21 instance.
@@ -338,11 +344,14 @@ impl Parser {
     }
 
     fn next(&mut self) -> Result<Tok, IoError> {
+        // Each token is consumed once: moved out rather than cloned (issue 30: 10,000-face
+        // files).
+        let line = self.line();
         let t = self
             .toks
-            .get(self.pos)
-            .map(|t| t.0.clone())
-            .ok_or_else(|| err(self.line(), self.entity, "unexpected end of file"))?;
+            .get_mut(self.pos)
+            .map(|t| std::mem::replace(&mut t.0, Tok::Comma))
+            .ok_or_else(|| err(line, self.entity, "unexpected end of file"))?;
         self.pos += 1;
         Ok(t)
     }
@@ -1012,20 +1021,6 @@ pub fn parse_step(text: &str) -> Result<CadImport, IoError> {
         }
     }
     let mut warnings = Vec::new();
-    if !faces.is_empty() {
-        let edges: usize = faces
-            .iter()
-            .flat_map(|f| &f.loops)
-            .map(|l| l.edges.len())
-            .sum();
-        warnings.push(format!(
-            "{} face(s) of a B-rep: their surfaces are imported whole (untrimmed); the trimming \
-             loops ({edges} edge(s) with their 3D curves and pcurves) are kept in the import's \
-             face data and applied only when meshing (vclay convert to a mesh, vclay render); \
-             the model file (JSON), STEP/IGES output and sessions get the untrimmed surfaces",
-            faces.len()
-        ));
-    }
     if elementary > 0 {
         warnings.push(format!(
             "{elementary} elementary or swept surface(s) converted exactly to NURBS; unbounded \
@@ -1073,11 +1068,22 @@ pub fn parse_step(text: &str) -> Result<CadImport, IoError> {
             ),
         ));
     }
-    Ok(CadImport {
+    let mut import = CadImport {
         entities,
         warnings,
         faces,
-    })
+        shells: Vec::new(),
+    };
+    if !import.faces.is_empty() {
+        match crate::trimmed::shells_of_import(&import) {
+            Ok(shells) => import.shells = shells,
+            Err(e) => import.warnings.push(format!(
+                "the faces' trims could not be made a B-rep ({e}): the faces' surfaces are \
+                 imported whole, their loops kept only for meshing"
+            )),
+        }
+    }
+    Ok(import)
 }
 
 /// Reads a STEP file (`.step`, `.stp`). Errors name the file.

@@ -102,10 +102,10 @@ fn brep_files_warn_about_what_is_dropped() {
             .all(|e| matches!(e.entity, Entity::Surface(_)))
     );
     let w = s.warnings.join("\n");
-    assert!(
-        w.contains("3 face(s) of a B-rep") && w.contains("applied only when meshing"),
-        "{w}"
-    );
+    // Issue 30: the faces are kept with their trims as a closed shell: not warned about.
+    assert!(!w.contains("untrimmed") && !w.contains("B-rep"), "{w}");
+    assert_eq!(s.shells.len(), 1);
+    assert!(s.shells[0].closed);
     // Faces, loops, edges and pcurves are read into the face data, not listed as dropped.
     assert!(
         !w.contains("ADVANCED_FACE") && !w.contains("EDGE_CURVE") && !w.contains("PCURVE"),

@@ -37,8 +37,8 @@
 //! surface when the file gives one (2D `LINE`, `CIRCLE`, `ELLIPSE` or B-spline in the surface's
 //! file parameters, over the part between the vertices' surface parameters, or on swept surfaces
 //! over the 3D curve's range). `VERTEX_LOOP`s (the poles of a sphere) carry no curve and are
-//! skipped; `POLY_LOOP`s are listed as not read. Surfaces are imported whole (the JSON model has
-//! no trimming, so `vclay convert in.step out.json` writes the untrimmed surfaces); the loops are
+//! skipped; `POLY_LOOP`s are listed as not read. Surfaces are imported whole; the loops become
+//! the trimmed B-rep of [`crate::trimmed`] (kept by `vclay convert` to STEP and JSON) and are
 //! applied when meshing by [`tessellate_trimmed`]: grid triangles whose parameter centroid lies
 //! inside the loops' pcurve polygons (even-odd rule, whole turns tried on periodic directions)
 //! are kept, so trimmed edges are exact only up to the grid spacing.
@@ -166,6 +166,9 @@ pub struct TrimEdge {
     /// Whether going round the loop follows the curve's direction (the `ORIENTED_EDGE`'s
     /// orientation combined with the `EDGE_CURVE`'s same_sense).
     pub forward: bool,
+    /// The `VERTEX_POINT`s (STEP id and point) at the start and the end of the edge's part of
+    /// `curve`, in the curve's direction (equal for a closed edge).
+    pub vertices: [(usize, Vec3); 2],
 }
 
 /// A trimming loop of a face (`EDGE_LOOP` of a `FACE_BOUND`).
@@ -589,6 +592,14 @@ impl Geom {
             Geom::Trimmed(b, _, _) => b.param_of(q),
             Geom::Spline(c) => {
                 let d = c.domain();
+                // Most vertices are a curve's ends: checked first (1e-9 of the curve's size),
+                // which spares the sampling below (issue 30: 10,000-face files).
+                let tol = crate::brep::closure_tolerance(c.control_points());
+                for t in [d.min, d.max] {
+                    if c.point(t).is_ok_and(|p| (p - q).norm() <= tol) {
+                        return t;
+                    }
+                }
                 let n = 64 * c.control_points().len().clamp(1, 64);
                 let mut best = (f64::INFINITY, d.min);
                 for i in 0..=n {
@@ -1123,6 +1134,11 @@ impl<'a> Reader<'a> {
             pcurve_axis,
             seam_pcurve,
             forward: orientation == same_sense,
+            vertices: if same_sense {
+                [(v1, p1), (v2, p2)]
+            } else {
+                [(v2, p2), (v1, p1)]
+            },
         }))
     }
 
