@@ -9,6 +9,7 @@ mod hostile;
 mod mesh;
 mod model;
 mod params;
+mod trimmed;
 
 /// A new file in `tests/` is not built unless it is listed above: this fails until it is.
 #[test]
