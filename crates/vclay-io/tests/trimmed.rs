@@ -296,7 +296,7 @@ fn closed_shells_mesh_without_cracks() {
 /// bilinear patches on a wavy sheet written by vclay (10,000 `ADVANCED_FACE`s, 14 MB) is read
 /// with its trimmed B-rep (one open shell of 10,000 faces) in under 2 s. Ignored by default (a
 /// debug build takes about 10 s); run with
-/// `cargo test --release -p vclay-io --test trimmed -- --ignored` (measured in
+/// `cargo test --release -p vclay-io --test all trimmed:: -- --ignored` (measured in
 /// docs/performance.md).
 #[test]
 #[ignore]
