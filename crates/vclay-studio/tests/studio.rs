@@ -14,7 +14,7 @@ use vclay_studio::{Options, Studio, Tool};
 fn harness(opts: Options) -> Harness<'static, Studio> {
     Harness::builder()
         .with_size(Vec2::new(1280.0, 800.0))
-        .with_max_steps(100_000)
+        .with_max_steps(100) // see common::harness
         .build_ui_state(|ui, s: &mut Studio| s.show(ui), Studio::new(opts))
 }
 

@@ -14,7 +14,10 @@ use vclay_studio::{Options, Studio};
 pub fn harness(opts: Options) -> Harness<'static, Studio> {
     Harness::builder()
         .with_size(Vec2::new(1280.0, 800.0))
-        .with_max_steps(100_000)
+        // The builder runs frames until the UI settles, at most this many: a running
+        // simulation never settles, and 100,000 frames of a debug UI with a full energy plot
+        // took minutes. Tests wait for what they need with `wait_for`.
+        .with_max_steps(100)
         .build_ui_state(|ui, s: &mut Studio| s.show(ui), Studio::new(opts))
 }
 
