@@ -13,6 +13,7 @@ pub mod par;
 pub mod plasticity;
 pub mod quadrature;
 pub mod team;
+pub mod testing;
 pub mod text;
 pub mod tolerance;
 pub mod triangle_rule;
