@@ -12,6 +12,10 @@ part.json -> out.step`), reads the results back with STEPControl_Reader and chec
   relative (the IGES route, `part.step -> part.igs`, read with IGESControl_Reader: 1e-5, see
   RTOL_IGES).
 
+The same is checked for OpenCASCADE's IGES files of the parts in both forms (trimmed surfaces
+144 and the B-rep 186, gen_trimmed_parts.py) converted by vclay to STEP directly and, for the
+B-rep form, through the model JSON.
+
 Prints one line per part and route with the relative volume and area errors.
 Usage: python check_trimmed.py VCLAY_BINARY WORK_DIR
 Run through bench/check_step.sh, which finds or installs cadquery-ocp and says when it skips.
@@ -75,10 +79,17 @@ def main():
         direct, model, back = work / f"{name}_vclay.step", work / f"{name}.json", \
             work / f"{name}_json.step"
         igs = work / f"{name}_vclay.igs"
-        for args in ([src, direct], [src, model], [model, back], [src, igs]):
+        # OpenCASCADE's IGES of the part, both forms, read by vclay (issue 30).
+        faces_igs, brep_igs = work / f"{name}_faces.igs", work / f"{name}_brep.igs"
+        from_faces, from_brep = work / f"{name}_faces_vclay.step", work / f"{name}_brep_vclay.step"
+        brep_json, brep_back = work / f"{name}_brep.json", work / f"{name}_brep_json.step"
+        for args in ([src, direct], [src, model], [model, back], [src, igs],
+                     [faces_igs, from_faces], [brep_igs, from_brep], [brep_igs, brep_json],
+                     [brep_json, brep_back]):
             subprocess.run([vclay, "convert", *map(str, args), "-q"], check=True)
         for route, path in (("step->step", direct), ("step->json->step", back),
-                            ("step->iges", igs)):
+                            ("step->iges", igs), ("iges(144)->step", from_faces),
+                            ("iges(186)->step", from_brep), ("iges(186)->json->step", brep_back)):
             rtol = RTOL_IGES if route.endswith("iges") else RTOL
             s = read(path)
             valid = BRepCheck_Analyzer(s).IsValid()

@@ -3,7 +3,10 @@
 - plate.step: a 40 x 30 x 8 box with a through hole of radius 6 and its four top edges filleted
   with radius 2 (11 faces: planes with a hole, a cylinder, four fillet cylinders);
 - cut_sphere.step: a sphere of radius 10 cut by the plane z = 4 (2 faces: the spherical cap
-  face with its seam and pole, and a disc on the plane).
+  face with its seam and pole, and a disc on the plane);
+- the same parts as IGES in both of OpenCASCADE's forms: NAME_faces.igs (trimmed surfaces 144
+  with 142 boundaries, no topology) and NAME_brep.igs (a manifold solid B-rep 186 over the
+  analytic surfaces 190-196, with 502-514 topology),
 
 and prints, per part, OpenCASCADE's face count, volume and area (GProp), which
 bench/check_trimmed.py compares with what comes back from vclay.
@@ -19,6 +22,8 @@ from OCP.BRepGProp import BRepGProp
 from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox, BRepPrimAPI_MakeCylinder, BRepPrimAPI_MakeSphere
 from OCP.GProp import GProp_GProps
 from OCP.IFSelect import IFSelect_RetDone
+from OCP.IGESControl import IGESControl_Writer
+from OCP.Interface import Interface_Static
 from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
 from OCP.TopExp import TopExp_Explorer
@@ -69,5 +74,11 @@ for name, shape in [("plate", plate()), ("cut_sphere", cut_sphere())]:
     w = STEPControl_Writer()
     w.Transfer(shape, STEPControl_AsIs)
     assert w.Write(f"{out}/{name}.step") == IFSelect_RetDone
+    for mode, form in ((0, "faces"), (1, "brep")):
+        Interface_Static.SetIVal_s("write.iges.brep.mode", mode)
+        wi = IGESControl_Writer("MM", mode)
+        wi.AddShape(shape)
+        wi.ComputeModel()
+        assert wi.Write(f"{out}/{name}_{form}.igs")
     summary[name] = props(shape)
 print(json.dumps(summary, indent=1))

@@ -1,9 +1,11 @@
 //! IGES (5.3 and earlier, fixed 80-column ASCII) import of curves (126 rational B-spline, 110
-//! line, 100 circular arc) and surfaces (128 rational B-spline, 120 surface of revolution, 122
-//! tabulated cylinder, 108 plane).
+//! line, 100 circular arc, 104 elliptic arc) and surfaces (128 rational B-spline, 120 surface
+//! of revolution, 122 tabulated cylinder, 108 plane; the analytic 190-198 of B-rep files), with
+//! the trims of trimmed surfaces (144) and manifold solid B-reps (186) read into shells
+//! ([`trims`]).
 //!
 //! **What.** Every surface is imported, including the basis surfaces of trimmed surfaces (144)
-//! and faces (510), untrimmed, with a warning. A curve is imported when it is independent:
+//! and faces (510); their loops become [`CadImport::shells`] ([`trims`]). A curve is imported when it is independent:
 //! curves that are physically dependent (subordinate switch 01 or 03: trimming curves, parts of
 //! composite curves, generatrices) or 2D parametric (use flag 05) belong to a dropped topology
 //! or to a surface and are counted in a warning. Knots, weights and control points are taken as
@@ -42,10 +44,10 @@
 //! entries that do not exist, an axis that is not a line, angles out of order, zero-length
 //! lines and zero-radius arcs are named the same way.
 //!
-//! **Limitations.** No compressed ASCII or binary IGES; conics (104), parametric splines (112,
-//! 114), ruled and offset surfaces (118, 140) and the unbounded analytic surfaces of IGES
-//! B-rep files (190-198) are listed as not read; trimming and B-rep topology dropped; units not
-//! applied; a plane sized by a trimmed surface's boundary ignores a matrix on the 144 itself.
+//! **Limitations.** No compressed ASCII or binary IGES; conics (104) other than ellipses in
+//! standard position, parametric splines (112, 114), ruled and offset surfaces (118, 140) are
+//! listed as not read; units not applied; a plane sized by a trimmed surface's boundary ignores
+//! a matrix on the 144 itself.
 
 use crate::error::IoError;
 use crate::model::{Entity, NamedEntity};
@@ -58,6 +60,8 @@ use std::f64::consts::TAU;
 use std::path::Path;
 use vclay_core::Vec3;
 use vclay_spline::{NurbsCurve, NurbsSurface};
+
+pub mod trims;
 
 fn err(line: usize, de: Option<usize>, message: impl Into<String>) -> IoError {
     IoError::Cad {
@@ -382,7 +386,7 @@ impl Reader<'_> {
                 format!("curves nested deeper than {MAX_DEPTH} (a cycle?)"),
             ));
         }
-        if !matches!(dir.kind, 100 | 110 | 126) {
+        if !matches!(dir.kind, 100 | 104 | 110 | 126) {
             return Ok(Err(dir.kind));
         }
         let ps = self.params(dir)?;
@@ -395,6 +399,35 @@ impl Reader<'_> {
                     return Err(ps.err(1, "line of zero length"));
                 }
                 NurbsCurve::new(1, vec![0.0, 0.0, 1.0, 1.0], p, None).map_err(|e| ps.err(0, e))?
+            }
+            104 => {
+                // Conic arc in the plane z = ZT, counter-clockwise from start to end: ellipses
+                // in standard position (A x^2 + C y^2 + F = 0) are read, exactly.
+                ps.need(12)?;
+                let v = ps.reals(1, 11, "conic coefficient")?;
+                let (a, b, c, d, e, f, zt) = (v[0], v[1], v[2], v[3], v[4], v[5], v[6]);
+                let scale = a.abs().max(c.abs()).max(f.abs());
+                let off = b.abs().max(d.abs()).max(e.abs());
+                if !(off <= 1e-12 * scale && a * f < 0.0 && c * f < 0.0) {
+                    // A parabola, a hyperbola or a conic not in standard position.
+                    return Ok(Err(104));
+                }
+                let (rx, ry) = ((-f / a).sqrt(), (-f / c).sqrt());
+                let t0 = (v[8] / ry).atan2(v[7] / rx);
+                let mut t1 = (v[10] / ry).atan2(v[9] / rx);
+                while t1 <= t0 + 1e-12 {
+                    t1 += TAU;
+                }
+                let (knots, pts, w) = arc(
+                    Vec3::new(0.0, 0.0, zt),
+                    Vec3::x(),
+                    Vec3::y(),
+                    rx,
+                    ry,
+                    t0,
+                    t1,
+                );
+                NurbsCurve::new(2, knots, pts, Some(w)).map_err(|e| ps.err(0, e))?
             }
             _ => {
                 // 100: in the plane z = ZT, centre, start and end, counter-clockwise.
@@ -888,15 +921,25 @@ pub fn parse_iges(text: &str) -> Result<CadImport, IoError> {
             )),
         }
     }
+    // Trimmed surfaces and B-rep faces (their loops) and the extents of the unbounded analytic
+    // surfaces of B-rep files.
+    let (raw_faces, hulls, used, mut trim_warnings) = trims::gather(&r)?;
+    let used: std::collections::HashSet<usize> = used.into_iter().collect();
+    let mut surface_index: std::collections::HashMap<usize, usize> = Default::default();
     for dir in &dirs {
-        if matches!(dir.kind, 143 | 144 | 510) {
+        if matches!(dir.kind, 143 | 144 | 510) && !used.contains(&dir.de) {
             trimmed += 1;
         }
-        let curve = matches!(dir.kind, 100 | 110 | 126);
-        let surface = matches!(dir.kind, 108 | 120 | 122 | 128);
+        let curve = matches!(dir.kind, 100 | 104 | 110 | 126);
+        let surface = matches!(
+            dir.kind,
+            108 | 120 | 122 | 128 | 190 | 192 | 194 | 196 | 198
+        );
         if !curve && !surface {
-            // Transformation matrices are applied to the entities that name them.
-            if dir.kind != 124 {
+            // Transformation matrices are applied to the entities that name them; the trims'
+            // entities are read into the B-rep.
+            // Associativities, properties and colours (402, 406, 314) carry no geometry.
+            if !matches!(dir.kind, 124 | 314 | 402 | 406) && !used.contains(&dir.de) {
                 *not_read.entry(dir.kind).or_default() += 1;
             }
             continue;
@@ -906,7 +949,9 @@ pub fn parse_iges(text: &str) -> Result<CadImport, IoError> {
         let sub = dir.status.get(2..4).unwrap_or("");
         let use_flag = dir.status.get(4..6).unwrap_or("");
         if curve && (matches!(sub, "01" | "03") || use_flag == "05") {
-            dependent += 1;
+            if !used.contains(&dir.de) {
+                dependent += 1;
+            }
             continue;
         }
         let name = (!dir.label.is_empty()).then(|| dir.label.clone());
@@ -918,12 +963,21 @@ pub fn parse_iges(text: &str) -> Result<CadImport, IoError> {
                     continue;
                 }
             }
+        } else if dir.kind >= 190 {
+            let hull = hulls.get(&dir.de).map_or(&[][..], |h| h.as_slice());
+            match r.analytic_surface(dir, hull, &mut Vec::new(), &mut warnings)? {
+                Some(s) => Entity::Surface(s),
+                None => continue,
+            }
         } else {
             match r.surface(dir, &plane_bounds, &mut warnings)? {
                 Some(s) => Entity::Surface(s),
                 None => continue,
             }
         };
+        if surface {
+            surface_index.insert(dir.de, entities.len());
+        }
         entities.push(NamedEntity { name, entity });
     }
     warnings.append(&mut r.warnings.borrow_mut());
@@ -968,12 +1022,29 @@ pub fn parse_iges(text: &str) -> Result<CadImport, IoError> {
             ),
         ));
     }
-    Ok(CadImport {
+    let faces = trims::read(&r, raw_faces, &surface_index, &entities, &mut trim_warnings)?;
+    warnings.append(&mut trim_warnings);
+    let mut import = CadImport {
         entities,
         warnings,
-        faces: Vec::new(),
+        faces,
         shells: Vec::new(),
-    })
+    };
+    if !import.faces.is_empty() {
+        match crate::trimmed::shells_of_import(&import) {
+            Ok(mut shells) => {
+                for sh in &mut shells {
+                    trims::orient(sh);
+                }
+                import.shells = shells;
+            }
+            Err(e) => import.warnings.push(format!(
+                "the faces' trims could not be made a B-rep ({e}): the faces' surfaces are \
+                 imported whole, their loops kept only for meshing"
+            )),
+        }
+    }
+    Ok(import)
 }
 
 /// Reads an IGES file (`.igs`, `.iges`). Errors name the file.

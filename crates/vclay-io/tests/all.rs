@@ -6,6 +6,7 @@
 mod cad_brep;
 mod cad_read;
 mod hostile;
+mod iges_trims;
 mod mesh;
 mod model;
 mod params;

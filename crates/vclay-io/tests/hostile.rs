@@ -209,6 +209,9 @@ fn step_and_iges() {
             read("iges_cylinder_moved.igs"),
             read("iges_sphere.igs"),
             read("iges_extruded_bspline.igs"),
+            // Trimmed surfaces (144/142/102) and a B-rep (186, 502-514, 190-196), issue 30.
+            read("trimmed_cut_sphere_faces.igs"),
+            read("trimmed_cut_sphere_brep.igs"),
         ],
         |b| vclay_io::iges_read::parse_iges(&text(b)).is_ok(),
     );
