@@ -13,8 +13,7 @@ part.json -> out.step`), reads the results back with STEPControl_Reader and chec
   RTOL_IGES).
 
 The same is checked for OpenCASCADE's IGES files of the parts in both forms (trimmed surfaces
-144 and the B-rep 186, gen_trimmed_parts.py) converted by vclay to STEP directly and, for the
-B-rep form, through the model JSON.
+144 and the B-rep 186, gen_trimmed_parts.py) converted by vclay to STEP directly and through the model JSON.
 
 Prints one line per part and route with the relative volume and area errors.
 Usage: python check_trimmed.py VCLAY_BINARY WORK_DIR
@@ -83,12 +82,14 @@ def main():
         faces_igs, brep_igs = work / f"{name}_faces.igs", work / f"{name}_brep.igs"
         from_faces, from_brep = work / f"{name}_faces_vclay.step", work / f"{name}_brep_vclay.step"
         brep_json, brep_back = work / f"{name}_brep.json", work / f"{name}_brep_json.step"
+        faces_json, faces_back = work / f"{name}_faces.json", work / f"{name}_faces_json.step"
         for args in ([src, direct], [src, model], [model, back], [src, igs],
-                     [faces_igs, from_faces], [brep_igs, from_brep], [brep_igs, brep_json],
-                     [brep_json, brep_back]):
+                     [faces_igs, from_faces], [faces_igs, faces_json], [faces_json, faces_back],
+                     [brep_igs, from_brep], [brep_igs, brep_json], [brep_json, brep_back]):
             subprocess.run([vclay, "convert", *map(str, args), "-q"], check=True)
         for route, path in (("step->step", direct), ("step->json->step", back),
                             ("step->iges", igs), ("iges(144)->step", from_faces),
+                            ("iges(144)->json->step", faces_back),
                             ("iges(186)->step", from_brep), ("iges(186)->json->step", brep_back)):
             rtol = RTOL_IGES if route.endswith("iges") else RTOL
             s = read(path)
