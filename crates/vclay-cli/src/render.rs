@@ -121,6 +121,11 @@ pub fn scene_from_mesh(mesh: TriMesh, wireframe: bool) -> Scene {
     scene
 }
 
+/// Angle between adjacent triangles above which a rendered CAD part's mesh is shaded with a
+/// sharp edge ([`TriMesh::with_creases`]), in degrees: smooth faces tessellated at 96 samples a
+/// side turn by far less between triangles, fillets join their faces tangentially.
+pub const CREASE_ANGLE_DEG: f64 = 30.0;
+
 /// Reads a model or mesh file into a scene, choosing by extension (and, for .json, content).
 pub fn scene_from_file(path: &Path, wireframe: bool) -> Result<Scene> {
     match crate::convert::read_any(path)? {
@@ -131,7 +136,10 @@ pub fn scene_from_file(path: &Path, wireframe: bool) -> Result<Scene> {
         crate::convert::Loaded::Trimmed(e, faces, shells) => {
             // Faces cut to their trimming loops (issue 20), 96 samples a side; trimmed shells
             // with shared edges (issue 30); curves as lines.
-            let mesh = crate::convert::trimmed_mesh(&e, &faces, &shells, 96)?;
+            // Sharp edges between faces (a hole's rim, a box's edges) shaded sharp: the
+            // crack-free mesh shares their vertices, whose averaged normals would smear them.
+            let mesh = crate::convert::trimmed_mesh(&e, &faces, &shells, 96)?
+                .with_creases(CREASE_ANGLE_DEG.to_radians());
             let mut scene = scene_from_mesh(mesh, wireframe);
             let curves: Vec<Entity> = e
                 .into_iter()

@@ -163,6 +163,85 @@ impl TriMesh {
         self.normals = acc;
     }
 
+    /// A copy for display with sharp edges kept sharp (what Blender calls auto smooth): at
+    /// each vertex, the adjacent triangles are grouped so that a triangle joins a group whose
+    /// average normal is within `crease` radians of its own, each group gets its own copy of
+    /// the vertex, and each copy the area-weighted average normal of its group. Smooth
+    /// regions keep shared vertices and smooth normals; across an edge where the surface
+    /// turns by more than `crease` (a box's edges, a hole's rim) the two sides are shaded
+    /// apart. The copy is not watertight by index: use it to draw, not to measure or export
+    /// as a solid. Degenerate triangles join the first group.
+    pub fn with_creases(&self, crease: f64) -> TriMesh {
+        let cos = crease.cos();
+        let n = self.positions.len();
+        let face_n: Vec<Vec3> = self
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| self.positions[i as usize]);
+                (b - a).cross(&(c - a))
+            })
+            .collect();
+        // Triangles around each vertex (CSR layout).
+        let mut start = vec![0usize; n + 1];
+        for t in &self.triangles {
+            for &i in t {
+                start[i as usize + 1] += 1;
+            }
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut around = vec![(0usize, 0usize); start[n]];
+        for (ti, t) in self.triangles.iter().enumerate() {
+            for (corner, &i) in t.iter().enumerate() {
+                around[fill[i as usize]] = (ti, corner);
+                fill[i as usize] += 1;
+            }
+        }
+        let mut out = TriMesh {
+            positions: Vec::with_capacity(n),
+            normals: Vec::with_capacity(n),
+            triangles: self.triangles.clone(),
+        };
+        let unit = |v: Vec3| {
+            let l = v.norm();
+            if l > 0.0 { v / l } else { v }
+        };
+        let mut groups: Vec<(Vec3, u32)> = Vec::new();
+        for v in 0..n {
+            groups.clear();
+            for &(ti, corner) in &around[start[v]..start[v + 1]] {
+                let fnrm = face_n[ti];
+                let dir = unit(fnrm);
+                let g = groups
+                    .iter()
+                    .position(|(sum, _)| dir.norm() == 0.0 || unit(*sum).dot(&dir) >= cos);
+                let g = match g {
+                    Some(g) => g,
+                    None => {
+                        out.positions.push(self.positions[v]);
+                        out.normals.push(Vec3::zeros());
+                        groups.push((Vec3::zeros(), (out.positions.len() - 1) as u32));
+                        groups.len() - 1
+                    }
+                };
+                groups[g].0 += fnrm;
+                out.triangles[ti][corner] = groups[g].1;
+            }
+            for (sum, id) in &groups {
+                out.normals[*id as usize] = unit(*sum);
+            }
+            if groups.is_empty() {
+                // A vertex no triangle uses: kept, with a zero normal.
+                out.positions.push(self.positions[v]);
+                out.normals.push(Vec3::zeros());
+            }
+        }
+        out
+    }
+
     /// Axis-aligned bounding box `(min, max)`, or `None` for an empty mesh.
     pub fn bounding_box(&self) -> Option<(Vec3, Vec3)> {
         let first = *self.positions.first()?;
@@ -214,6 +293,41 @@ impl MeshSink for TriMesh {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn creases_split_a_cube_corner_and_keep_a_smooth_fan() {
+        // Two triangles of the plane z = 0 and one of the plane x = 0 meeting at edge a-b.
+        let mut m = TriMesh::new();
+        m.positions = vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(0.0, 0.0, 1.0),
+        ];
+        m.triangles = vec![[0, 2, 1], [2, 3, 1], [0, 1, 4]];
+        let c = m.with_creases(30f64.to_radians());
+        // Vertices 0 and 1 are on the 90-degree edge: two copies each; 2, 3, 4 one.
+        assert_eq!(c.positions.len(), 7);
+        assert_eq!(c.triangles.len(), 3);
+        for (t, tri) in c.triangles.iter().enumerate() {
+            let [a, b, d] = tri.map(|i| c.positions[i as usize]);
+            let face = (b - a).cross(&(d - a)).normalize();
+            for &i in tri {
+                assert!(
+                    (c.normals[i as usize] - face).norm() < 1e-12,
+                    "triangle {t}"
+                );
+                assert_eq!(
+                    c.positions[i as usize],
+                    m.positions[m.triangles[t][tri.iter().position(|&x| x == i).unwrap()] as usize]
+                );
+            }
+        }
+        // With a crease of 100 degrees nothing splits.
+        assert_eq!(m.with_creases(100f64.to_radians()).positions.len(), 5);
+    }
+
     use super::*;
 
     #[test]
