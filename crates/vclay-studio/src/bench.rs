@@ -116,6 +116,7 @@ pub fn run(case: &Case, frames: usize) -> std::result::Result<Result, String> {
         }))
         .map_err(|e| e.to_string())?;
     let layers = Layers::default();
+    let mut clock = crate::worker::EnergyClock::default();
     let (mut steps, mut display, mut buffers, mut max) = (0.0, 0.0, 0.0, 0.0_f64);
     let (mut tris, mut bytes) = (0, 0);
     let start = Instant::now();
@@ -140,7 +141,13 @@ pub fn run(case: &Case, frames: usize) -> std::result::Result<Result, String> {
             session.step().map_err(|e| e.to_string())?;
         }
         let t1 = Instant::now();
-        let (models, energy) = model_views(&session, None);
+        // As the worker does while the simulation runs: energies at most every
+        // `ENERGY_REFRESH`.
+        let known = clock.reuse(true);
+        let (models, energy) = model_views(&session, None, known);
+        if known.is_none() {
+            clock.evaluated(energy);
+        }
         let frame = Frame {
             revision: session.revision(),
             models,

@@ -547,6 +547,8 @@ struct State {
     samples: Vec<[f64; 3]>,
     step_times: std::collections::VecDeque<(Instant, f64)>,
     shown_revision: Option<u64>,
+    /// When the published frames last evaluated the energies.
+    energy_clock: EnergyClock,
     saved_revision: u64,
     autosave: Option<(PathBuf, Duration)>,
     autosaved: (Instant, u64),
@@ -588,6 +590,7 @@ impl State {
             samples: Vec::new(),
             step_times: Default::default(),
             shown_revision: None,
+            energy_clock: EnergyClock::default(),
             saved_revision: rev,
             autosave: None,
             autosaved: (Instant::now(), rev),
@@ -1607,7 +1610,11 @@ impl State {
             return;
         }
         let t0 = Instant::now();
-        let (models, energy) = model_views(&self.session, self.colour_by.as_deref());
+        let known = self.energy_clock.reuse(self.running);
+        let (models, energy) = model_views(&self.session, self.colour_by.as_deref(), known);
+        if known.is_none() {
+            self.energy_clock.evaluated(energy);
+        }
         let n = self.step_times.len().max(1) as f64;
         let step_seconds = self.step_times.iter().map(|s| s.1).sum::<f64>() / n;
         let steps = self
@@ -1665,17 +1672,27 @@ impl State {
 /// The display data of every model of `session` and their summed energies (what a frame
 /// carries; the benchmark times exactly this); `colour_by` names the field to colour meshes by
 /// (see [`Request::ColourBy`]).
-pub fn model_views(session: &Session, colour_by: Option<&str>) -> (Vec<ModelView>, Energy) {
+///
+/// `known`: the energies to report instead of asking every model (the worker's
+/// [`EnergyClock`] while a simulation runs); `None` evaluates them (for a D-NURBS with dynamic
+/// weights, a pass over every quadrature point: about a third of a step).
+pub fn model_views(
+    session: &Session,
+    colour_by: Option<&str>,
+    known: Option<Energy>,
+) -> (Vec<ModelView>, Energy) {
     let mut models = Vec::new();
     let mut energy = Energy::default();
     for name in session.model_names() {
         let Ok(m) = session.model(Some(name)) else {
             continue;
         };
-        let e = m.energy();
-        energy.kinetic += e.kinetic;
-        energy.elastic += e.elastic;
-        energy.tools += e.tools;
+        if known.is_none() {
+            let e = m.energy();
+            energy.kinetic += e.kinetic;
+            energy.elastic += e.elastic;
+            energy.tools += e.tools;
+        }
         models.push(ModelView {
             name: name.to_string(),
             tools: m.tools(),
@@ -1690,5 +1707,32 @@ pub fn model_views(session: &Session, colour_by: Option<&str>) -> (Vec<ModelView
             field: colour_by.and_then(|f| m.display_field(f)).map(Arc::new),
         });
     }
-    (models, energy)
+    (models, known.unwrap_or(energy))
+}
+
+/// How often the frames of a running simulation evaluate the models' energies for the
+/// readout under the energy plot. The plot's samples come from the steps' own reports, so
+/// only the readout waits; a paused model's frames always evaluate them.
+pub const ENERGY_REFRESH: Duration = Duration::from_millis(100);
+
+/// When the frames last evaluated the energies, and what they were ([`ENERGY_REFRESH`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct EnergyClock {
+    last: Option<(Instant, Energy)>,
+}
+
+impl EnergyClock {
+    /// The energies to reuse for this frame (`None`: evaluate them). `running`: whether the
+    /// simulation runs.
+    pub fn reuse(&self, running: bool) -> Option<Energy> {
+        match self.last {
+            Some((t, e)) if running && t.elapsed() < ENERGY_REFRESH => Some(e),
+            _ => None,
+        }
+    }
+
+    /// Records energies just evaluated.
+    pub fn evaluated(&mut self, e: Energy) {
+        self.last = Some((Instant::now(), e));
+    }
 }

@@ -8,6 +8,7 @@ mod common;
 mod brush;
 mod colour;
 mod defects;
+mod energy;
 mod native_dialogs;
 mod sculpt;
 mod studio;
