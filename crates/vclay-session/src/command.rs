@@ -612,18 +612,8 @@ impl Edit {
             Edit::Data {
                 points, stiffness, ..
             } => {
-                if points.is_empty() {
-                    return Err(EditError::new("points", "`points`: no data points"));
-                }
-                if points.len() > MAX_DATA_POINTS {
-                    return Err(EditError::new(
-                        "points",
-                        format!(
-                            "`points`: {} data points; at most {MAX_DATA_POINTS} (each is matched to the nearest model point every step)",
-                            points.len()
-                        ),
-                    ));
-                }
+                let why = " (each is matched to the nearest model point every step)";
+                count("points", points.len(), MAX_DATA_POINTS, "data points", why)?;
                 for p in points {
                     fin("points", p)?;
                 }
@@ -672,18 +662,7 @@ impl Edit {
             Edit::MovePoint { to, .. } => fin("to", to)?,
             Edit::SetWeight { weight, .. } => pos("weight", Some(*weight), false)?,
             Edit::FfdMove { moves } => {
-                if moves.is_empty() {
-                    return Err(EditError::new("moves", "`moves`: no point moves"));
-                }
-                if moves.len() > MAX_FFD_MOVES {
-                    return Err(EditError::new(
-                        "moves",
-                        format!(
-                            "`moves`: {} point moves; at most {MAX_FFD_MOVES}",
-                            moves.len()
-                        ),
-                    ));
-                }
+                count("moves", moves.len(), MAX_FFD_MOVES, "point moves", "")?;
                 for m in moves {
                     fin("moves.from", &m.from)?;
                     fin("moves.to", &m.to)?;
@@ -795,6 +774,21 @@ impl Edit {
         }
         Ok(())
     }
+}
+
+/// The length `n` of list `key` of `what`: at least one, at most `max` (`why`: the reason
+/// for the bound, or nothing).
+fn count(key: &'static str, n: usize, max: usize, what: &str, why: &str) -> Result<(), EditError> {
+    if n == 0 {
+        return Err(EditError::new(key, format!("`{key}`: no {what}")));
+    }
+    if n > max {
+        return Err(EditError::new(
+            key,
+            format!("`{key}`: {n} {what}; at most {max}{why}"),
+        ));
+    }
+    Ok(())
 }
 
 fn fin(key: &'static str, v: &[f64]) -> Result<(), EditError> {
