@@ -570,9 +570,7 @@ impl Edit {
             } => {
                 fin("force", force)?;
                 opt3("near", near)?;
-                if near.is_some() == param.is_some() {
-                    return Err(EditError::new("near", "give one of `near` and `param`"));
-                }
+                one_of(("near", near.is_some()), ("param", param.is_some()))?;
                 after("until", *until, at)?;
             }
             Edit::RegionForce {
@@ -648,16 +646,12 @@ impl Edit {
             Edit::Material { .. } => MaterialRequest::of(self).expect("a material").validate()?,
             Edit::Extrude { face, near, factor } => {
                 opt3("near", near)?;
-                if face.is_some() == near.is_some() {
-                    return Err(EditError::new("face", "give one of `face` and `near`"));
-                }
+                one_of(("face", face.is_some()), ("near", near.is_some()))?;
                 pos("factor", *factor, false)?;
             }
             Edit::DeleteCell { cell, near } => {
                 opt3("near", near)?;
-                if cell.is_some() == near.is_some() {
-                    return Err(EditError::new("cell", "give one of `cell` and `near`"));
-                }
+                one_of(("cell", cell.is_some()), ("near", near.is_some()))?;
             }
             Edit::MovePoint { to, .. } => fin("to", to)?,
             Edit::SetWeight { weight, .. } => pos("weight", Some(*weight), false)?,
@@ -774,6 +768,17 @@ impl Edit {
         }
         Ok(())
     }
+}
+
+/// Exactly one of two keys given (each with whether it is); the error names the first.
+fn one_of(a: (&'static str, bool), b: (&'static str, bool)) -> Result<(), EditError> {
+    if a.1 == b.1 {
+        return Err(EditError::new(
+            a.0,
+            format!("give one of `{}` and `{}`", a.0, b.0),
+        ));
+    }
+    Ok(())
 }
 
 /// The length `n` of list `key` of `what`: at least one, at most `max` (`why`: the reason

@@ -1674,13 +1674,7 @@ impl Studio {
         let modal = egui::Modal::new(egui::Id::unique("vclay-studio-dialog"));
         let (d, keep, next) = match d {
             Dialog::Error(msg) => {
-                let a = modal
-                    .show(ctx, |ui| {
-                        ui.heading("Error");
-                        ui.add(egui::Label::new(&msg).wrap());
-                        buttons(ui, "OK", None)
-                    })
-                    .inner;
+                let a = prompt(ctx, modal, "Error", &msg, "OK", None);
                 (Dialog::Error(msg), a.is_none(), None)
             }
             Dialog::Open(path) => self.path_step(ctx, modal, PathPurpose::Open, path),
@@ -1739,13 +1733,14 @@ impl Studio {
         typed: String,
     ) -> (Dialog, bool, Option<Dialog>) {
         let got = answer.try_recv();
-        let a = modal
-            .show(ctx, |ui| {
-                ui.heading(purpose.title());
-                ui.label("Choose the file in the system's file dialog.");
-                buttons(ui, "Type the path instead", None)
-            })
-            .inner;
+        let a = prompt(
+            ctx,
+            modal,
+            purpose.title(),
+            "Choose the file in the system's file dialog.",
+            "Type the path instead",
+            None,
+        );
         let mut keep = false;
         let mut next = None;
         match (got, a) {
@@ -1787,19 +1782,11 @@ impl Studio {
         modal: egui::Modal,
         path: PathBuf,
     ) -> (Dialog, bool, Option<Dialog>) {
-        let a = modal
-            .show(ctx, |ui| {
-                ui.heading("Recover?");
-                ui.add(
-                    egui::Label::new(format!(
-                        "An autosaved session newer than the file exists:\n{}",
-                        path.display()
-                    ))
-                    .wrap(),
-                );
-                buttons(ui, "Recover", Some("Discard"))
-            })
-            .inner;
+        let text = format!(
+            "An autosaved session newer than the file exists:\n{}",
+            path.display()
+        );
+        let a = prompt(ctx, modal, "Recover?", &text, "Recover", Some("Discard"));
         let mut next = None;
         if a == Some(Answer::Submit) {
             match load::open(&path) {
@@ -1822,17 +1809,12 @@ impl Studio {
         modal: egui::Modal,
         then: Then,
     ) -> (Dialog, bool, Option<Dialog>) {
-        let a = modal
-            .show(ctx, |ui| {
-                ui.heading("Unsaved changes");
-                ui.label("The session has changes that are not saved.");
-                let other = match then {
-                    Then::Quit => "Discard and quit",
-                    _ => "Discard",
-                };
-                buttons(ui, "Save", Some(other))
-            })
-            .inner;
+        let other = match then {
+            Then::Quit => "Discard and quit",
+            _ => "Discard",
+        };
+        let text = "The session has changes that are not saved.";
+        let a = prompt(ctx, modal, "Unsaved changes", text, "Save", Some(other));
         match a {
             Some(Answer::Submit) => {
                 // Saved (perhaps after a save-as dialog), the worker's notice goes on.
@@ -1844,6 +1826,25 @@ impl Studio {
         }
         (Dialog::Unsaved(then), a.is_none(), None)
     }
+}
+
+/// A prompt in `modal`: `heading`, the wrapped `text`, then [`buttons`] (`ok`, `other`,
+/// Cancel); `None` while none was pressed.
+fn prompt(
+    ctx: &egui::Context,
+    modal: egui::Modal,
+    heading: &str,
+    text: &str,
+    ok: &str,
+    other: Option<&str>,
+) -> Option<Answer> {
+    modal
+        .show(ctx, |ui| {
+            ui.heading(heading);
+            ui.add(egui::Label::new(text).wrap());
+            buttons(ui, ok, other)
+        })
+        .inner
 }
 
 /// The dialog's buttons: `ok` (also Enter), `other` if any, and Cancel (also Esc); `None`

@@ -1194,25 +1194,6 @@ impl DnurbsModel {
         Ok(format!("weight of control point {index} = {weight}"))
     }
 
-    /// [`Edit::Integrator`]: eq 18 is the one integrator; `dt` the time step.
-    fn set_integrator(
-        &mut self,
-        integrator: Option<&str>,
-        dt: Option<f64>,
-    ) -> Result<String, SessionError> {
-        if let Some(i) = integrator
-            && i != "implicit"
-        {
-            return Err(cmd(format!(
-                "unknown integrator \"{i}\": D-NURBS integrate by eq 18 (\"implicit\") only"
-            )));
-        }
-        if let Some(dt) = dt {
-            self.ed.dt = dt;
-        }
-        Ok(format!("integrator implicit (eq 18), dt {}", self.ed.dt))
-    }
-
     /// [`Edit::Constraint`] (section 6.2, generalized engines): a point or normal constraint
     /// at `param` under a new name.
     fn constraint(&mut self, edit: &Edit) -> Result<String, SessionError> {
@@ -2068,7 +2049,18 @@ impl crate::model::Stateful for DnurbsModel {
             Edit::SetWeight { index, weight } => Done::State(self.set_weight(*index, *weight)?),
             Edit::Set { name, value } => Done::State(self.set_param(name, *value)?),
             Edit::Integrator { integrator, dt } => {
-                Done::State(self.set_integrator(integrator.as_deref(), *dt)?)
+                // Eq 18 is the one integrator; `dt` the time step.
+                if let Some(i) = integrator
+                    && i != "implicit"
+                {
+                    return Err(cmd(format!(
+                        "unknown integrator \"{i}\": D-NURBS integrate by eq 18 (\"implicit\") only"
+                    )));
+                }
+                if let Some(dt) = dt {
+                    self.ed.dt = *dt;
+                }
+                Done::State(format!("integrator implicit (eq 18), dt {}", self.ed.dt))
             }
             Edit::Constraint { .. } => Done::State(self.constraint(edit)?),
             Edit::RegionForce { .. }

@@ -16,7 +16,8 @@
 //! [`GeneralizedModel`] gives the same way it gives differently (steps counted by the model,
 //! the elastic energy read live, control points picked before the surface, material
 //! parameters, STEP/IGES and curve exports, fix/free undone by their inverse edit), and the
-//! frozen engine would have to leave the model.
+//! frozen engine would have to leave the model. `docs/architecture.md` (vclay-session) says
+//! precisely what a merge would take.
 
 use std::path::Path;
 
