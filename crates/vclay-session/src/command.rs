@@ -570,9 +570,7 @@ impl Edit {
             } => {
                 fin("force", force)?;
                 opt3("near", near)?;
-                if near.is_some() == param.is_some() {
-                    return Err(EditError::new("near", "give one of `near` and `param`"));
-                }
+                one_of(("near", near.is_some()), ("param", param.is_some()))?;
                 after("until", *until, at)?;
             }
             Edit::RegionForce {
@@ -612,18 +610,8 @@ impl Edit {
             Edit::Data {
                 points, stiffness, ..
             } => {
-                if points.is_empty() {
-                    return Err(EditError::new("points", "`points`: no data points"));
-                }
-                if points.len() > MAX_DATA_POINTS {
-                    return Err(EditError::new(
-                        "points",
-                        format!(
-                            "`points`: {} data points; at most {MAX_DATA_POINTS} (each is matched to the nearest model point every step)",
-                            points.len()
-                        ),
-                    ));
-                }
+                let why = " (each is matched to the nearest model point every step)";
+                count("points", points.len(), MAX_DATA_POINTS, "data points", why)?;
                 for p in points {
                     fin("points", p)?;
                 }
@@ -658,32 +646,17 @@ impl Edit {
             Edit::Material { .. } => MaterialRequest::of(self).expect("a material").validate()?,
             Edit::Extrude { face, near, factor } => {
                 opt3("near", near)?;
-                if face.is_some() == near.is_some() {
-                    return Err(EditError::new("face", "give one of `face` and `near`"));
-                }
+                one_of(("face", face.is_some()), ("near", near.is_some()))?;
                 pos("factor", *factor, false)?;
             }
             Edit::DeleteCell { cell, near } => {
                 opt3("near", near)?;
-                if cell.is_some() == near.is_some() {
-                    return Err(EditError::new("cell", "give one of `cell` and `near`"));
-                }
+                one_of(("cell", cell.is_some()), ("near", near.is_some()))?;
             }
             Edit::MovePoint { to, .. } => fin("to", to)?,
             Edit::SetWeight { weight, .. } => pos("weight", Some(*weight), false)?,
             Edit::FfdMove { moves } => {
-                if moves.is_empty() {
-                    return Err(EditError::new("moves", "`moves`: no point moves"));
-                }
-                if moves.len() > MAX_FFD_MOVES {
-                    return Err(EditError::new(
-                        "moves",
-                        format!(
-                            "`moves`: {} point moves; at most {MAX_FFD_MOVES}",
-                            moves.len()
-                        ),
-                    ));
-                }
+                count("moves", moves.len(), MAX_FFD_MOVES, "point moves", "")?;
                 for m in moves {
                     fin("moves.from", &m.from)?;
                     fin("moves.to", &m.to)?;
@@ -795,6 +768,32 @@ impl Edit {
         }
         Ok(())
     }
+}
+
+/// Exactly one of two keys given (each with whether it is); the error names the first.
+fn one_of(a: (&'static str, bool), b: (&'static str, bool)) -> Result<(), EditError> {
+    if a.1 == b.1 {
+        return Err(EditError::new(
+            a.0,
+            format!("give one of `{}` and `{}`", a.0, b.0),
+        ));
+    }
+    Ok(())
+}
+
+/// The length `n` of list `key` of `what`: at least one, at most `max` (`why`: the reason
+/// for the bound, or nothing).
+fn count(key: &'static str, n: usize, max: usize, what: &str, why: &str) -> Result<(), EditError> {
+    if n == 0 {
+        return Err(EditError::new(key, format!("`{key}`: no {what}")));
+    }
+    if n > max {
+        return Err(EditError::new(
+            key,
+            format!("`{key}`: {n} {what}; at most {max}{why}"),
+        ));
+    }
+    Ok(())
 }
 
 fn fin(key: &'static str, v: &[f64]) -> Result<(), EditError> {

@@ -334,12 +334,28 @@ impl Snapshot {
 pub(crate) trait Stateful {
     /// The snapshot of the evolving state.
     type State: Clone + Any + Send + Sync;
+    /// Whether an applied edit is a new revision (kinds whose edits change what is drawn);
+    /// otherwise only undo and restore are.
+    const EDITS_REDRAW: bool = true;
+    /// The model's revision counter ([`Model::revision`]).
+    fn revision_mut(&mut self) -> &mut u64;
     /// Takes a snapshot.
     fn take_state(&self) -> Self::State;
-    /// Puts a snapshot back (bit for bit).
+    /// Puts a snapshot back (bit for bit); the callers count the new revision.
     fn put_state(&mut self, state: &Self::State) -> Result<(), SessionError>;
-    /// Applies an edit, or fails leaving the model unchanged ([`Model::apply`]).
-    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError>;
+    /// Applies an edit, or fails leaving the model unchanged (`before` is the state taken
+    /// just before, for kinds that put it back after a partial failure); says what it did.
+    fn edit(&mut self, edit: &Edit, before: &Self::State) -> Result<Done, SessionError>;
+    /// Applies an edit ([`Model::apply`]): the state before it, [`Stateful::edit`], a new
+    /// revision (see [`Stateful::EDITS_REDRAW`]), the undo record.
+    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
+        let before = self.take_state();
+        let done = self.edit(edit, &before)?;
+        if Self::EDITS_REDRAW {
+            *self.revision_mut() += 1;
+        }
+        Ok(done.applied(before))
+    }
     /// Whether [`Stateful::apply_inverse`] ignores a failure of the inverse edit: kinds whose
     /// snapshot, put back after it, is the exact state either way (FFD and PDE surfaces: the
     /// inverse can fail where the forward edit did not, e.g. FFD's inversion of `Q` at the
@@ -369,16 +385,20 @@ impl Snapshot {
 /// [`Model::undo`] for a [`Stateful`] kind: the inverse edit (if any), then the snapshot.
 pub(crate) fn undo_by_state<M: Stateful>(model: &mut M, undo: Undo) -> Result<(), SessionError> {
     match undo {
-        Undo::State(s) => model.put_state(&s.take::<M::State>()?),
+        Undo::State(s) => model.put_state(&s.take::<M::State>()?)?,
         Undo::Inverse { edit, state } => {
             let s = state.take::<M::State>()?;
             model.apply_inverse(&edit)?;
-            model.put_state(&s)
+            model.put_state(&s)?;
         }
-        Undo::Model(_) => Err(SessionError::model(
-            "a whole-model undo record is the session's to apply",
-        )),
+        Undo::Model(_) => {
+            return Err(SessionError::model(
+                "a whole-model undo record is the session's to apply",
+            ));
+        }
     }
+    *model.revision_mut() += 1;
+    Ok(())
 }
 
 /// [`Model::snapshot`] for a [`Stateful`] kind.
@@ -391,7 +411,9 @@ pub(crate) fn restore_state<M: Stateful>(
     model: &mut M,
     snapshot: &Snapshot,
 ) -> Result<(), SessionError> {
-    model.put_state(&snapshot.take::<M::State>()?)
+    model.put_state(&snapshot.take::<M::State>()?)?;
+    *model.revision_mut() += 1;
+    Ok(())
 }
 
 /// The [`Model`] methods every [`Stateful`] kind implements the same way: `apply` by
@@ -459,6 +481,97 @@ pub enum Undo {
     },
     /// Replace the whole model by the copy taken before the edit (topology edits).
     Model(Box<dyn Model>),
+}
+
+/// A time step given to `set dt`, checked: positive and finite.
+pub(crate) fn positive_dt(dt: f64) -> Result<f64, SessionError> {
+    if dt.is_finite() && dt > 0.0 {
+        Ok(dt)
+    } else {
+        Err(SessionError::command(
+            "",
+            "",
+            format!("dt = {dt}: must be positive"),
+        ))
+    }
+}
+
+/// The clock of a kind with no dynamics of its own (FFD, PDE surfaces): each step advances
+/// the time by `dt`. Part of the kind's undo state and of its session file.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Clock {
+    /// The time (s).
+    pub(crate) time: f64,
+    /// The time step (s), positive and finite.
+    pub(crate) dt: f64,
+    /// The steps taken.
+    pub(crate) steps: u64,
+}
+
+impl Clock {
+    /// A clock at time 0 that steps by `dt`.
+    pub(crate) fn new(dt: f64) -> Self {
+        Self {
+            time: 0.0,
+            dt,
+            steps: 0,
+        }
+    }
+
+    /// A saved clock, or `None` unless `time` is finite and `dt` positive and finite.
+    pub(crate) fn saved(time: f64, dt: f64, steps: u64) -> Option<Self> {
+        (dt > 0.0 && dt.is_finite() && time.is_finite()).then_some(Self { time, dt, steps })
+    }
+
+    /// `set dt`: the new time step (positive and finite); returns the old one.
+    pub(crate) fn set_dt(&mut self, dt: f64) -> Result<f64, SessionError> {
+        Ok(std::mem::replace(&mut self.dt, positive_dt(dt)?))
+    }
+
+    /// One step: `work` brings the model to the time `time + dt`, then the clock advances;
+    /// the report of a model without energy. Nothing advances when `work` fails.
+    pub(crate) fn step(
+        &mut self,
+        work: impl FnOnce(f64) -> Result<(), SessionError>,
+    ) -> Result<StepReport, SessionError> {
+        let t0 = std::time::Instant::now();
+        let time = self.time + self.dt;
+        work(time)?;
+        self.time = time;
+        self.steps += 1;
+        Ok(StepReport {
+            time,
+            energy: Energy::default(),
+            iterations: 0,
+            seconds: t0.elapsed().as_secs_f64(),
+        })
+    }
+}
+
+/// What an edit did and how it is undone, before the kind pairs it with the state it took
+/// just before the edit: every kind's `apply_edit` ends in one [`Done::applied`].
+#[allow(clippy::large_enum_variant)] // one per applied edit, moved into the undo record at once
+pub(crate) enum Done {
+    /// Undone by putting back the state ([`Undo::State`]); the log's message.
+    State(String),
+    /// Undone by this exact inverse edit, then the state ([`Undo::Inverse`]).
+    Inverse(String, Edit),
+    /// Undone by this full copy of the model taken before the edit ([`Undo::Model`]).
+    Model(String, Box<dyn Model>),
+}
+
+impl Done {
+    /// The [`Applied`] record with `before`, the state taken just before the edit.
+    pub(crate) fn applied<S: Any + Send + Sync>(self, before: S) -> Applied {
+        match self {
+            Done::State(message) => Applied::by_state(message, before),
+            Done::Inverse(message, inverse) => Applied::by_inverse(message, inverse, before),
+            Done::Model(message, copy) => Applied {
+                message,
+                undo: Undo::Model(copy),
+            },
+        }
+    }
 }
 
 /// What applying an edit did.

@@ -192,28 +192,22 @@ pub fn check_output(
         w
     };
     let advice = "write frames less often ([output] every), fewer formats, or run fewer steps";
-    if let Some(max) = limits.max_output
-        && total > max as f64
+    // The output limit first, then the free space: the first one `total` exceeds is the error.
+    let bounds = [
+        limits
+            .max_output
+            .map(|max| (max, format!("the output limit of {}", human_limit(max)))),
+        plan.available
+            .map(|free| (free, format!("the {} free there", human(free as f64)))),
+    ];
+    if let Some((_, bound)) = bounds
+        .into_iter()
+        .flatten()
+        .find(|(b, _)| total > *b as f64)
     {
         return Err(SessionError::io(
             dir,
-            format!(
-                "{}, more than the output limit of {}; {advice}",
-                what(),
-                human_limit(max)
-            ),
-        ));
-    }
-    if let Some(free) = plan.available
-        && total > free as f64
-    {
-        return Err(SessionError::io(
-            dir,
-            format!(
-                "{}, more than the {} free there; {advice}",
-                what(),
-                human(free as f64)
-            ),
+            format!("{}, more than {bound}; {advice}", what()),
         ));
     }
     if let Some(max) = limits.max_memory {

@@ -1667,157 +1667,28 @@ impl Studio {
         }
     }
 
+    /// Shows the open dialog, if any, and acts on its answer: the dialog stays while it is
+    /// unanswered, or the one that follows takes its place.
     fn dialogs(&mut self, ctx: &egui::Context) {
         let Some(d) = self.dialog.take() else { return };
-        let mut keep: bool;
-        let mut next: Option<Dialog> = None;
         let modal = egui::Modal::new(egui::Id::unique("vclay-studio-dialog"));
-        let d = match d {
+        let (d, keep, next) = match d {
             Dialog::Error(msg) => {
-                let a = modal
-                    .show(ctx, |ui| {
-                        ui.heading("Error");
-                        ui.add(egui::Label::new(&msg).wrap());
-                        buttons(ui, "OK", None)
-                    })
-                    .inner;
-                keep = a.is_none();
-                Dialog::Error(msg)
+                let a = prompt(ctx, modal, "Error", &msg, "OK", None);
+                (Dialog::Error(msg), a.is_none(), None)
             }
-            Dialog::Open(mut path) => {
-                let a = path_dialog(ctx, modal, "Open", None, &mut path, "Open");
-                next = self.path_answered(ctx, PathPurpose::Open, a, &path);
-                keep = a.is_none();
-                Dialog::Open(path)
-            }
-            Dialog::SaveAs(mut path) => {
-                let a = path_dialog(ctx, modal, "Save session as", None, &mut path, "Save");
-                next = self.path_answered(ctx, PathPurpose::SaveAs, a, &path);
-                keep = a.is_none();
-                Dialog::SaveAs(path)
-            }
-            Dialog::Export(mut path) => {
-                let exts = format!(
-                    "By extension: {}",
-                    vclay_session::model::EXPORT_EXTENSIONS.join(", ")
-                );
-                let a = path_dialog(
-                    ctx,
-                    modal,
-                    "Export the model",
-                    Some(&exts),
-                    &mut path,
-                    "Export",
-                );
-                next = self.path_answered(ctx, PathPurpose::Export, a, &path);
-                keep = a.is_none();
-                Dialog::Export(path)
-            }
-            Dialog::Screenshot(mut path) => {
-                let a = path_dialog(ctx, modal, "Screenshot (PNG)", None, &mut path, "Take");
-                next = self.path_answered(ctx, PathPurpose::Screenshot, a, &path);
-                keep = a.is_none();
-                Dialog::Screenshot(path)
-            }
+            Dialog::Open(path) => self.path_step(ctx, modal, PathPurpose::Open, path),
+            Dialog::SaveAs(path) => self.path_step(ctx, modal, PathPurpose::SaveAs, path),
+            Dialog::Export(path) => self.path_step(ctx, modal, PathPurpose::Export, path),
+            Dialog::Screenshot(path) => self.path_step(ctx, modal, PathPurpose::Screenshot, path),
             Dialog::Native {
                 purpose,
                 answer,
                 typed,
-            } => {
-                let got = answer.try_recv();
-                let a = modal
-                    .show(ctx, |ui| {
-                        ui.heading(purpose.title());
-                        ui.label("Choose the file in the system's file dialog.");
-                        buttons(ui, "Type the path instead", None)
-                    })
-                    .inner;
-                keep = false;
-                match (got, a) {
-                    (Ok(Ok(Some(path))), _) => {
-                        let path = path.display().to_string();
-                        next = self.path_answered(ctx, purpose, Some(Answer::Submit), &path);
-                    }
-                    (Ok(Ok(None)), _) | (_, Some(Answer::Cancel)) => {
-                        next = self.path_answered(ctx, purpose, Some(Answer::Cancel), "");
-                    }
-                    (Ok(Err(why)), _) => {
-                        // The chooser is broken here: type paths from now on.
-                        self.push_log(format!("file dialog: {why}; type the path instead"));
-                        self.opts.chooser = None;
-                        next = Some(purpose.typed(typed.clone()));
-                    }
-                    (Err(std::sync::mpsc::TryRecvError::Disconnected), _) => {
-                        next = Some(purpose.typed(typed.clone()));
-                    }
-                    (_, Some(_)) => next = Some(purpose.typed(typed.clone())),
-                    (Err(_), None) => {
-                        keep = true;
-                        ctx.request_repaint_after(std::time::Duration::from_millis(100));
-                    }
-                }
-                Dialog::Native {
-                    purpose,
-                    answer,
-                    typed,
-                }
-            }
-            Dialog::Recover(path) => {
-                let a = modal
-                    .show(ctx, |ui| {
-                        ui.heading("Recover?");
-                        ui.add(
-                            egui::Label::new(format!(
-                                "An autosaved session newer than the file exists:\n{}",
-                                path.display()
-                            ))
-                            .wrap(),
-                        );
-                        buttons(ui, "Recover", Some("Discard"))
-                    })
-                    .inner;
-                keep = a.is_none();
-                if a == Some(Answer::Submit) {
-                    match load::open(&path) {
-                        Ok(o) => {
-                            let f = self.file.clone();
-                            self.set_opened(o, f);
-                            // Not in the file yet: modified, and autosaved again.
-                            self.send(Request::MarkModified);
-                        }
-                        Err(e) => next = Some(Dialog::Error(e)),
-                    }
-                }
-                Dialog::Recover(path)
-            }
-            Dialog::Help => {
-                keep = self.help_dialog(ctx, modal);
-                Dialog::Help
-            }
-            Dialog::Unsaved(then) => {
-                let a = modal
-                    .show(ctx, |ui| {
-                        ui.heading("Unsaved changes");
-                        ui.label("The session has changes that are not saved.");
-                        let other = match then {
-                            Then::Quit => "Discard and quit",
-                            _ => "Discard",
-                        };
-                        buttons(ui, "Save", Some(other))
-                    })
-                    .inner;
-                keep = a.is_none();
-                match a {
-                    Some(Answer::Submit) => {
-                        // Saved (perhaps after a save-as dialog), the worker's notice goes on.
-                        self.after_save = Some(then);
-                        self.save();
-                    }
-                    Some(Answer::Other) => self.proceed(ctx, then),
-                    _ => {}
-                }
-                Dialog::Unsaved(then)
-            }
+            } => self.native_step(ctx, modal, purpose, answer, typed),
+            Dialog::Recover(path) => self.recover_step(ctx, modal, path),
+            Dialog::Help => (Dialog::Help, self.help_dialog(ctx, modal), None),
+            Dialog::Unsaved(then) => self.unsaved_step(ctx, modal, then),
         };
         if next.is_some() {
             self.dialog = next;
@@ -1825,6 +1696,155 @@ impl Studio {
             self.dialog = Some(d);
         }
     }
+
+    /// One frame of the typed-path dialog for `purpose`: the dialog, whether it stays, and
+    /// the dialog that follows it.
+    fn path_step(
+        &mut self,
+        ctx: &egui::Context,
+        modal: egui::Modal,
+        purpose: PathPurpose,
+        mut path: String,
+    ) -> (Dialog, bool, Option<Dialog>) {
+        let (note, ok) = match purpose {
+            PathPurpose::Open => (None, "Open"),
+            PathPurpose::SaveAs => (None, "Save"),
+            PathPurpose::Export => (
+                Some(format!(
+                    "By extension: {}",
+                    vclay_session::model::EXPORT_EXTENSIONS.join(", ")
+                )),
+                "Export",
+            ),
+            PathPurpose::Screenshot => (None, "Take"),
+        };
+        let a = path_dialog(ctx, modal, purpose.title(), note.as_deref(), &mut path, ok);
+        let next = self.path_answered(ctx, purpose, a, &path);
+        (purpose.typed(path), a.is_none(), next)
+    }
+
+    /// One frame of waiting for the desktop's file chooser (see [`Studio::path_step`]).
+    fn native_step(
+        &mut self,
+        ctx: &egui::Context,
+        modal: egui::Modal,
+        purpose: PathPurpose,
+        answer: std::sync::mpsc::Receiver<crate::native::Answer>,
+        typed: String,
+    ) -> (Dialog, bool, Option<Dialog>) {
+        let got = answer.try_recv();
+        let a = prompt(
+            ctx,
+            modal,
+            purpose.title(),
+            "Choose the file in the system's file dialog.",
+            "Type the path instead",
+            None,
+        );
+        let mut keep = false;
+        let mut next = None;
+        match (got, a) {
+            (Ok(Ok(Some(path))), _) => {
+                let path = path.display().to_string();
+                next = self.path_answered(ctx, purpose, Some(Answer::Submit), &path);
+            }
+            (Ok(Ok(None)), _) | (_, Some(Answer::Cancel)) => {
+                next = self.path_answered(ctx, purpose, Some(Answer::Cancel), "");
+            }
+            (Ok(Err(why)), _) => {
+                // The chooser is broken here: type paths from now on.
+                self.push_log(format!("file dialog: {why}; type the path instead"));
+                self.opts.chooser = None;
+                next = Some(purpose.typed(typed.clone()));
+            }
+            (Err(std::sync::mpsc::TryRecvError::Disconnected), _) => {
+                next = Some(purpose.typed(typed.clone()));
+            }
+            (_, Some(_)) => next = Some(purpose.typed(typed.clone())),
+            (Err(_), None) => {
+                keep = true;
+                ctx.request_repaint_after(std::time::Duration::from_millis(100));
+            }
+        }
+        let d = Dialog::Native {
+            purpose,
+            answer,
+            typed,
+        };
+        (d, keep, next)
+    }
+
+    /// One frame of the offer to recover an autosaved session newer than its file (see
+    /// [`Studio::path_step`]).
+    fn recover_step(
+        &mut self,
+        ctx: &egui::Context,
+        modal: egui::Modal,
+        path: PathBuf,
+    ) -> (Dialog, bool, Option<Dialog>) {
+        let text = format!(
+            "An autosaved session newer than the file exists:\n{}",
+            path.display()
+        );
+        let a = prompt(ctx, modal, "Recover?", &text, "Recover", Some("Discard"));
+        let mut next = None;
+        if a == Some(Answer::Submit) {
+            match load::open(&path) {
+                Ok(o) => {
+                    let f = self.file.clone();
+                    self.set_opened(o, f);
+                    // Not in the file yet: modified, and autosaved again.
+                    self.send(Request::MarkModified);
+                }
+                Err(e) => next = Some(Dialog::Error(e)),
+            }
+        }
+        (Dialog::Recover(path), a.is_none(), next)
+    }
+
+    /// One frame of the unsaved-changes prompt before `then` (see [`Studio::path_step`]).
+    fn unsaved_step(
+        &mut self,
+        ctx: &egui::Context,
+        modal: egui::Modal,
+        then: Then,
+    ) -> (Dialog, bool, Option<Dialog>) {
+        let other = match then {
+            Then::Quit => "Discard and quit",
+            _ => "Discard",
+        };
+        let text = "The session has changes that are not saved.";
+        let a = prompt(ctx, modal, "Unsaved changes", text, "Save", Some(other));
+        match a {
+            Some(Answer::Submit) => {
+                // Saved (perhaps after a save-as dialog), the worker's notice goes on.
+                self.after_save = Some(then);
+                self.save();
+            }
+            Some(Answer::Other) => self.proceed(ctx, then),
+            _ => {}
+        }
+        (Dialog::Unsaved(then), a.is_none(), None)
+    }
+}
+
+/// A prompt in `modal`: `heading`, the wrapped `text`, then [`buttons`] (`ok`, `other`,
+/// Cancel); `None` while none was pressed.
+fn prompt(
+    ctx: &egui::Context,
+    modal: egui::Modal,
+    heading: &str,
+    text: &str,
+    ok: &str,
+    other: Option<&str>,
+) -> Option<Answer> {
+    modal
+        .show(ctx, |ui| {
+            ui.heading(heading);
+            ui.add(egui::Label::new(text).wrap());
+            buttons(ui, ok, other)
+        })
+        .inner
 }
 
 /// The dialog's buttons: `ok` (also Enter), `other` if any, and Cancel (also Esc); `None`

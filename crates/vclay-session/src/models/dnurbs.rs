@@ -57,10 +57,11 @@ use super::{SpecError, misrouted};
 use crate::command::{Edit, V3};
 use crate::command::{MaterialRequest, RopeRequest};
 use crate::error::SessionError;
+use crate::model::Done;
 use crate::model::Stateful;
 use crate::model::{
-    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, StepReport,
-    extension, unsupported_export,
+    Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, StepReport, extension,
+    unsupported_export,
 };
 use crate::tools::{CursorPath, ToolHost, ToolTable, a3, field_tool, v3};
 
@@ -621,17 +622,7 @@ impl Source {
         else {
             return Ok(None);
         };
-        let mut kv = Vec::new();
-        for a in 0..2 {
-            let n = knots[a].len().checked_sub(degree[a] + 1).ok_or_else(|| {
-                SessionError::model(format!(
-                    "knot vector {a}: too short for degree {}",
-                    degree[a]
-                ))
-            })?;
-            kv.push(KnotVector::new(knots[a].clone(), degree[a], n).map_err(SessionError::kernel)?);
-        }
-        let kv: [KnotVector; 2] = kv.try_into().expect("two axes");
+        let kv = super::saved::knot_vectors(knots, degree)?;
         NurbsSurface::from_flat(kv, points.iter().map(|p| v3(*p)).collect(), weights.clone())
             .map(Some)
             .map_err(SessionError::kernel)
@@ -1062,14 +1053,6 @@ impl DnurbsModel {
         Ok(())
     }
 
-    fn unsupported(&self, edit: &Edit) -> SessionError {
-        cmd(format!(
-            "`{}` does not apply to a {} model",
-            edit.action(),
-            self.kind
-        ))
-    }
-
     /// Sets x, y, z (and zeroes their velocity) or the weight of control point `i` of a
     /// generalized engine through its state.
     fn edit_coords(&mut self, i: usize, values: &[(usize, f64)]) -> Result<(), SessionError> {
@@ -1092,21 +1075,11 @@ impl DnurbsModel {
             .map_err(SessionError::command_from)
     }
 
-    /// The end of an edit whose undo is the state before it: a new revision, the message.
-    fn edited(&mut self, message: String, before: Snap) -> Result<Applied, SessionError> {
-        self.revision += 1;
-        Ok(Applied::by_state(message, before))
-    }
-
-    /// [`Self::apply_edit`] for the shared tool edits (`Rope`, `MoveRope`, `Force`, `Release`)
-    /// and `Gravity`, `Inflate`, `Repel`, `Data`.
-    fn apply_field_edit(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
+    /// [`Edit::Inflate`], [`Edit::Repel`] and [`Edit::Data`]: the field tools that depend on
+    /// the geometry or the engine.
+    fn field_edit(&mut self, edit: &Edit) -> Result<String, SessionError> {
         let surface = !self.engine.is_curve();
-        let message = match edit {
-            _ if crate::tools::is_tool_edit(edit) => crate::tools::tool_edit(self, edit)?,
-            Edit::Gravity { name, g, until } => {
-                field_tool(self, name, "gravity", ForceDesc::Gravity { g: *g }, *until)?
-            }
+        match edit {
             Edit::Inflate {
                 name,
                 pressure,
@@ -1115,15 +1088,10 @@ impl DnurbsModel {
                 if !surface {
                     return Err(cmd("inflation needs a surface (s_u x s_v), not a curve"));
                 }
-                field_tool(
-                    self,
-                    name,
-                    "inflate",
-                    ForceDesc::Inflation {
-                        pressure: *pressure,
-                    },
-                    *until,
-                )?
+                let inflation = ForceDesc::Inflation {
+                    pressure: *pressure,
+                };
+                field_tool(self, name, "inflate", inflation, *until)
             }
             Edit::Repel {
                 name,
@@ -1138,17 +1106,12 @@ impl DnurbsModel {
                         "the frozen-weight engine repels surfaces only (use engine = \"generalized\")",
                     ));
                 }
-                field_tool(
-                    self,
-                    name,
-                    "repel",
-                    ForceDesc::Repulsion {
-                        center: *center,
-                        strength: *strength,
-                        core,
-                    },
-                    *until,
-                )?
+                let repulsion = ForceDesc::Repulsion {
+                    center: *center,
+                    strength: *strength,
+                    core,
+                };
+                field_tool(self, name, "repel", repulsion, *until)
             }
             Edit::Data {
                 name,
@@ -1164,187 +1127,142 @@ impl DnurbsModel {
                     })
                     .collect();
                 let label = self.add_tool(name, "data", f)?;
-                format!("data `{label}`: {} points", points.len())
+                Ok(format!("data `{label}`: {} points", points.len()))
             }
-            _ => return Err(misrouted()),
-        };
-        self.edited(message, before)
+            _ => Err(misrouted()),
+        }
     }
 
-    /// [`Self::apply_edit`] for `Fix`, `Material`.
-    fn apply_net_edit(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
-        let message = match edit {
-            Edit::Fix { .. } | Edit::Free { .. } => {
-                let r = match crate::tools::fix_or_free(&mut NetOf(self), edit) {
-                    Ok(r) => r,
-                    Err(e) => {
-                        self.put_state(&before)?;
-                        return Err(e);
-                    }
-                };
-                self.revision += 1;
-                return Ok(Applied::by_inverse(
-                    crate::tools::fixed_message(edit, &r),
-                    r.inverse,
-                    before,
+    /// [`Edit::Fix`] and [`Edit::Free`], undone by their exact inverse; a failure puts back
+    /// `before`.
+    fn fix_or_free(&mut self, edit: &Edit, before: &Snap) -> Result<Done, SessionError> {
+        match crate::tools::fix_or_free(&mut NetOf(self), edit) {
+            Ok(r) => Ok(Done::Inverse(
+                crate::tools::fixed_message(edit, &r),
+                r.inverse,
+            )),
+            Err(e) => {
+                self.put_state(before)?;
+                Err(e)
+            }
+        }
+    }
+
+    /// [`Edit::Material`]: the uniform D-NURBS material (`mu`, `gamma`, `alpha`, `beta`).
+    fn material(&mut self, edit: &Edit) -> Result<String, SessionError> {
+        let m = MaterialRequest::of(edit).ok_or_else(misrouted)?;
+        if m.solid_given() {
+            return Err(cmd(
+                "`density`, `damping`, `edge_stiffness`, `virtual_stiffness`, `anisotropy` are solid materials; D-NURBS take mu, gamma, alpha, beta",
+            ));
+        }
+        if m.region_given() {
+            return Err(cmd(
+                "a D-NURBS material is uniform: `cells`, `min` and `max` do not apply",
+            ));
+        }
+        if !m.dnurbs_given() {
+            return Err(cmd("give at least one of mu, gamma, alpha, beta"));
+        }
+        let [mu, gamma, alpha, beta] = m.dnurbs;
+        self.set_material_values(mu, gamma, alpha, beta)?;
+        Ok("material changed".to_string())
+    }
+
+    /// [`Edit::MovePoint`]: control point `index` to `to`, at rest.
+    fn move_point(&mut self, index: usize, to: &V3) -> Result<String, SessionError> {
+        match &mut self.engine {
+            Engine::FrozenSurface(d) => d
+                .move_control_point(index, v3(*to))
+                .map_err(SessionError::command_from)?,
+            Engine::FrozenCurve(d) => d
+                .move_control_point(index, v3(*to))
+                .map_err(SessionError::command_from)?,
+            _ => self.edit_coords(index, &[(0, to[0]), (1, to[1]), (2, to[2])])?,
+        }
+        Ok(format!("moved control point {index} to {to:?}"))
+    }
+
+    /// [`Edit::SetWeight`] (generalized engines).
+    fn set_weight(&mut self, index: usize, weight: f64) -> Result<String, SessionError> {
+        if self.engine.is_frozen() {
+            return Err(cmd(
+                "the frozen-weight engine holds its weights (footnote 2 of d-nurbs.txt); use `engine = \"generalized\"`",
+            ));
+        }
+        self.edit_coords(index, &[(3, weight)])?;
+        Ok(format!("weight of control point {index} = {weight}"))
+    }
+
+    /// [`Edit::Constraint`] (section 6.2, generalized engines): a point or normal constraint
+    /// at `param` under a new name.
+    fn constraint(&mut self, edit: &Edit) -> Result<String, SessionError> {
+        let Edit::Constraint {
+            name,
+            kind,
+            param,
+            target,
+            normal,
+        } = edit
+        else {
+            return Err(misrouted());
+        };
+        if self.engine.is_frozen() {
+            return Err(cmd(NO_FROZEN_CONSTRAINTS));
+        }
+        let c = match (kind.as_str(), target, normal) {
+            ("point", Some(t), _) => ConstraintDesc::Point {
+                param: *param,
+                target: *t,
+            },
+            ("normal", _, Some(n)) => ConstraintDesc::Normal {
+                param: *param,
+                normal: *n,
+            },
+            _ => {
+                return Err(cmd(
+                    "a point constraint takes `target`, a normal one `normal`",
                 ));
             }
-            Edit::Material { .. } => {
-                let m = MaterialRequest::of(edit).ok_or_else(misrouted)?;
-                if m.solid_given() {
-                    return Err(cmd(
-                        "`density`, `damping`, `edge_stiffness`, `virtual_stiffness`, `anisotropy` are solid materials; D-NURBS take mu, gamma, alpha, beta",
-                    ));
-                }
-                if m.region_given() {
-                    return Err(cmd(
-                        "a D-NURBS material is uniform: `cells`, `min` and `max` do not apply",
-                    ));
-                }
-                if !m.dnurbs_given() {
-                    return Err(cmd("give at least one of mu, gamma, alpha, beta"));
-                }
-                let [mu, gamma, alpha, beta] = m.dnurbs;
-                self.set_material_values(mu, gamma, alpha, beta)?;
-                "material changed".to_string()
-            }
-            _ => return Err(misrouted()),
         };
-        self.edited(message, before)
+        let label = self.constraint_label(name.as_deref())?;
+        let mut cs = self.ed.constraints.clone();
+        cs.push(NamedConstraint {
+            name: label.clone(),
+            constraint: c,
+        });
+        if let Err(e) = self.engine.sync_constraints(&cs) {
+            self.engine.sync_constraints(&self.ed.constraints)?;
+            return Err(e);
+        }
+        self.ed.constraints = cs;
+        Ok(format!("{kind} constraint `{label}` at {param:?}"))
     }
 
-    /// [`Self::apply_edit`] for `PlasticReset`, `Stop`, `MovePoint`, `SetWeight`, `Set`, `Integrator`.
-    fn apply_state_edit(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
-        let message = match edit {
-            Edit::PlasticReset => {
-                let e = self.engine.elastic_energy();
-                self.engine
-                    .plastic_reset()
-                    .map_err(SessionError::command_from)?;
-                format!("plastic reset (elastic energy {e:.4e} -> 0)")
+    /// The name of a new constraint: `name` when no tool or constraint has it, else the first
+    /// free `constraintK`.
+    fn constraint_label(&self, name: Option<&str>) -> Result<String, SessionError> {
+        let taken = |l: &str| self.ed.constraints.iter().any(|c| c.name == l);
+        match name {
+            Some(n) if self.ed.tools.get(n).is_some() => {
+                Err(cmd(format!("a tool named `{n}` is active")))
             }
-            Edit::Stop => {
-                self.engine.stop();
-                self.ed.kinetic = 0.0;
-                "stopped all motion".to_string()
-            }
-            Edit::MovePoint { index, to } => {
-                match &mut self.engine {
-                    Engine::FrozenSurface(d) => d
-                        .move_control_point(*index, v3(*to))
-                        .map_err(SessionError::command_from)?,
-                    Engine::FrozenCurve(d) => d
-                        .move_control_point(*index, v3(*to))
-                        .map_err(SessionError::command_from)?,
-                    _ => self.edit_coords(*index, &[(0, to[0]), (1, to[1]), (2, to[2])])?,
-                }
-                format!("moved control point {index} to {to:?}")
-            }
-            Edit::SetWeight { index, weight } => {
-                if self.engine.is_frozen() {
-                    return Err(cmd(
-                        "the frozen-weight engine holds its weights (footnote 2 of d-nurbs.txt); use `engine = \"generalized\"`",
-                    ));
-                }
-                self.edit_coords(*index, &[(3, *weight)])?;
-                format!("weight of control point {index} = {weight}")
-            }
-            Edit::Set { name, value } => self.set_param(name, *value)?,
-            Edit::Integrator { integrator, dt } => {
-                if let Some(i) = integrator
-                    && i != "implicit"
-                {
-                    return Err(cmd(format!(
-                        "unknown integrator \"{i}\": D-NURBS integrate by eq 18 (\"implicit\") only"
-                    )));
-                }
-                if let Some(dt) = dt {
-                    self.ed.dt = *dt;
-                }
-                format!("integrator implicit (eq 18), dt {}", self.ed.dt)
-            }
-            _ => return Err(misrouted()),
-        };
-        self.edited(message, before)
-    }
-
-    /// [`Self::apply_edit`] for `Constraint`, `RegionForce`, `Extrude`, `DeleteCell`, `FfdMove`, `PdeSet`, `PdeLocal`.
-    fn apply_constraint_edit(
-        &mut self,
-        edit: &Edit,
-        before: Snap,
-    ) -> Result<Applied, SessionError> {
-        let message = match edit {
-            Edit::Constraint {
-                name,
-                kind,
-                param,
-                target,
-                normal,
-            } => {
-                if self.engine.is_frozen() {
-                    return Err(cmd(NO_FROZEN_CONSTRAINTS));
-                }
-                let c = match (kind.as_str(), target, normal) {
-                    ("point", Some(t), _) => ConstraintDesc::Point {
-                        param: *param,
-                        target: *t,
-                    },
-                    ("normal", _, Some(n)) => ConstraintDesc::Normal {
-                        param: *param,
-                        normal: *n,
-                    },
-                    _ => {
-                        return Err(cmd(
-                            "a point constraint takes `target`, a normal one `normal`",
-                        ));
+            Some(n) if taken(n) => Err(cmd(format!(
+                "a constraint named `{n}` is active (release it first)"
+            ))),
+            Some("") => Err(cmd("a name must not be empty")),
+            Some(n) => Ok(n.to_string()),
+            None => {
+                let mut k = self.ed.constraints.len();
+                loop {
+                    let l = format!("constraint{k}");
+                    if self.ed.tools.get(&l).is_none() && !taken(&l) {
+                        break Ok(l);
                     }
-                };
-                let label = match name {
-                    Some(n) if self.ed.tools.get(n).is_some() => {
-                        return Err(cmd(format!("a tool named `{n}` is active")));
-                    }
-                    Some(n) if self.ed.constraints.iter().any(|c| &c.name == n) => {
-                        return Err(cmd(format!(
-                            "a constraint named `{n}` is active (release it first)"
-                        )));
-                    }
-                    Some(n) if n.is_empty() => return Err(cmd("a name must not be empty")),
-                    Some(n) => n.clone(),
-                    None => {
-                        let mut k = self.ed.constraints.len();
-                        loop {
-                            let l = format!("constraint{k}");
-                            if self.ed.tools.get(&l).is_none()
-                                && !self.ed.constraints.iter().any(|c| c.name == l)
-                            {
-                                break l;
-                            }
-                            k += 1;
-                        }
-                    }
-                };
-                let mut cs = self.ed.constraints.clone();
-                cs.push(NamedConstraint {
-                    name: label.clone(),
-                    constraint: c,
-                });
-                if let Err(e) = self.engine.sync_constraints(&cs) {
-                    self.engine.sync_constraints(&self.ed.constraints)?;
-                    return Err(e);
+                    k += 1;
                 }
-                self.ed.constraints = cs;
-                format!("{kind} constraint `{label}` at {param:?}")
             }
-            Edit::RegionForce { .. }
-            | Edit::Extrude { .. }
-            | Edit::DeleteCell { .. }
-            | Edit::FfdMove { .. }
-            | Edit::PdeSet { .. }
-            | Edit::PdeLocal { .. } => return Err(self.unsupported(edit)),
-            _ => return Err(misrouted()),
-        };
-        self.edited(message, before)
+        }
     }
 
     fn set_param(&mut self, name: &str, value: f64) -> Result<String, SessionError> {
@@ -2095,29 +2013,64 @@ impl crate::model::Stateful for DnurbsModel {
         self.ed = s.edited.clone();
         self.sync_forces();
         self.engine.sync_constraints(&self.ed.constraints)?;
-        self.revision += 1;
         Ok(())
     }
-    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        let before = self.take_state();
-        match edit {
-            _ if crate::tools::is_tool_edit(edit) => self.apply_field_edit(edit, before),
-            Edit::Gravity { .. }
-            | Edit::Inflate { .. }
-            | Edit::Repel { .. }
-            | Edit::Data { .. } => self.apply_field_edit(edit, before),
-            Edit::Fix { .. } | Edit::Free { .. } | Edit::Material { .. } => {
-                self.apply_net_edit(edit, before)
+    fn revision_mut(&mut self) -> &mut u64 {
+        &mut self.revision
+    }
+    fn edit(&mut self, edit: &Edit, before: &Snap) -> Result<Done, SessionError> {
+        Ok(match edit {
+            _ if crate::tools::is_tool_edit(edit) => {
+                Done::State(crate::tools::tool_edit(self, edit)?)
             }
-            Edit::Smooth { .. } => self.apply_smooth(edit, before),
-            Edit::PlasticReset
-            | Edit::Stop
-            | Edit::MovePoint { .. }
-            | Edit::SetWeight { .. }
-            | Edit::Set { .. }
-            | Edit::Integrator { .. } => self.apply_state_edit(edit, before),
-            _ => self.apply_constraint_edit(edit, before),
-        }
+            Edit::Gravity { name, g, until } => {
+                let gravity = ForceDesc::Gravity { g: *g };
+                Done::State(field_tool(self, name, "gravity", gravity, *until)?)
+            }
+            Edit::Inflate { .. } | Edit::Repel { .. } | Edit::Data { .. } => {
+                Done::State(self.field_edit(edit)?)
+            }
+            Edit::Fix { .. } | Edit::Free { .. } => self.fix_or_free(edit, before)?,
+            Edit::Material { .. } => Done::State(self.material(edit)?),
+            Edit::Smooth { .. } => Done::State(self.smooth(edit)?),
+            Edit::PlasticReset => {
+                let e = self.engine.elastic_energy();
+                self.engine
+                    .plastic_reset()
+                    .map_err(SessionError::command_from)?;
+                Done::State(format!("plastic reset (elastic energy {e:.4e} -> 0)"))
+            }
+            Edit::Stop => {
+                self.engine.stop();
+                self.ed.kinetic = 0.0;
+                Done::State("stopped all motion".to_string())
+            }
+            Edit::MovePoint { index, to } => Done::State(self.move_point(*index, to)?),
+            Edit::SetWeight { index, weight } => Done::State(self.set_weight(*index, *weight)?),
+            Edit::Set { name, value } => Done::State(self.set_param(name, *value)?),
+            Edit::Integrator { integrator, dt } => {
+                // Eq 18 is the one integrator; `dt` the time step.
+                if let Some(i) = integrator
+                    && i != "implicit"
+                {
+                    return Err(cmd(format!(
+                        "unknown integrator \"{i}\": D-NURBS integrate by eq 18 (\"implicit\") only"
+                    )));
+                }
+                if let Some(dt) = dt {
+                    self.ed.dt = *dt;
+                }
+                Done::State(format!("integrator implicit (eq 18), dt {}", self.ed.dt))
+            }
+            Edit::Constraint { .. } => Done::State(self.constraint(edit)?),
+            Edit::RegionForce { .. }
+            | Edit::Extrude { .. }
+            | Edit::DeleteCell { .. }
+            | Edit::FfdMove { .. }
+            | Edit::PdeSet { .. }
+            | Edit::PdeLocal { .. } => return Err(super::not_taken(edit, self.kind, "")),
+            _ => return Err(misrouted()),
+        })
     }
 }
 
@@ -2595,11 +2548,11 @@ impl DnurbsModel {
     /// (`crate::smooth`, neighbours along the control net); eq (17)'s rest values follow and
     /// the surface settles towards the smoothed rest shape as it steps. Undone with the state
     /// (the engine state holds the rest coordinates).
-    fn apply_smooth(&mut self, edit: &Edit, before: Snap) -> Result<Applied, SessionError> {
+    fn smooth(&mut self, edit: &Edit) -> Result<String, SessionError> {
         let net = self.control_net();
         let (smoothed, n) = crate::smooth::smoothed_rest(&NetOf(self), net, edit)?;
         self.engine.set_rest_points(&smoothed)?;
-        self.edited(crate::smooth::message(n), before)
+        Ok(crate::smooth::message(n))
     }
 }
 

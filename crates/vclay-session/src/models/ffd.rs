@@ -39,9 +39,10 @@ use vclay_spline::{MAX_DEGREE, ParametricVolume};
 use super::SpecError;
 use crate::command::{Edit, PointMove, V3};
 use crate::error::SessionError;
+use crate::model::{Clock, Done};
 use crate::model::{
-    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, StepReport,
-    extension, unsupported_export,
+    Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, StepReport, extension,
+    unsupported_export,
 };
 use crate::tools::{a3, v3};
 
@@ -64,9 +65,7 @@ pub struct FfdModel {
     lattice: FfdLattice,
     embedded: EmbeddedMesh,
     mode: SolveMode,
-    dt: f64,
-    time: f64,
-    steps: u64,
+    clock: Clock,
     source: String,
     revision: u64,
 }
@@ -77,9 +76,7 @@ pub(crate) struct FfdSnap {
     control_points: Vec<Vec3>,
     weights: Vec<f64>,
     mode: SolveMode,
-    dt: f64,
-    time: f64,
-    steps: u64,
+    clock: Clock,
 }
 
 fn cmd(reason: impl std::fmt::Display) -> SessionError {
@@ -113,9 +110,7 @@ impl FfdModel {
             lattice,
             embedded,
             mode: SolveMode::Exact,
-            dt: DEFAULT_DT,
-            time: 0.0,
-            steps: 0,
+            clock: Clock::new(DEFAULT_DT),
             source: source.to_string(),
             revision: 1,
         }
@@ -376,7 +371,7 @@ impl FfdModel {
         };
         let mut model = Self::new(lattice, mesh, &source);
         model.mode = mode;
-        model.dt = dt;
+        model.clock.dt = dt;
         Ok(model)
     }
 
@@ -437,17 +432,15 @@ impl FfdModel {
         mesh.validate().map_err(SessionError::kernel)?;
         let mode = parse_mode(&s.mode)
             .ok_or_else(|| SessionError::model(format!("unknown mode \"{}\"", s.mode)))?;
-        if !(s.dt > 0.0 && s.dt.is_finite() && s.time.is_finite()) {
-            return Err(SessionError::model(format!(
+        let clock = Clock::saved(s.time, s.dt, s.steps).ok_or_else(|| {
+            SessionError::model(format!(
                 "dt = {} and time = {} must be finite, dt positive",
                 s.dt, s.time
-            )));
-        }
+            ))
+        })?;
         let mut model = Self::new(lattice, mesh, &s.source);
         model.mode = mode;
-        model.dt = s.dt;
-        model.time = s.time;
-        model.steps = s.steps;
+        model.clock = clock;
         Ok(model)
     }
 
@@ -477,22 +470,19 @@ impl crate::model::Stateful for FfdModel {
             control_points: self.lattice.control_points().to_vec(),
             weights: self.lattice.weights().to_vec(),
             mode: self.mode,
-            dt: self.dt,
-            time: self.time,
-            steps: self.steps,
+            clock: self.clock,
         }
     }
     fn put_state(&mut self, s: &FfdSnap) -> Result<(), SessionError> {
         self.set_lattice(s.control_points.clone(), s.weights.clone())?;
         self.mode = s.mode;
-        self.dt = s.dt;
-        self.time = s.time;
-        self.steps = s.steps;
-        self.revision += 1;
+        self.clock = s.clock;
         Ok(())
     }
-    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        let before = self.take_state();
+    fn revision_mut(&mut self) -> &mut u64 {
+        &mut self.revision
+    }
+    fn edit(&mut self, edit: &Edit, before: &FfdSnap) -> Result<Done, SessionError> {
         let (message, inverse) = match edit {
             Edit::FfdMove { moves } => {
                 let message = self.ffd_move(moves)?;
@@ -529,7 +519,7 @@ impl crate::model::Stateful for FfdModel {
                 w[*index] = *weight;
                 let pts = self.lattice.control_points().to_vec();
                 if let Err(e) = self.set_lattice(pts, w) {
-                    self.put_state(&before)?;
+                    self.put_state(before)?;
                     return Err(cmd(reason(e)));
                 }
                 (
@@ -542,12 +532,7 @@ impl crate::model::Stateful for FfdModel {
             }
             Edit::Set { name, value } => {
                 let old = match name.as_str() {
-                    "dt" => {
-                        if !(*value > 0.0 && value.is_finite()) {
-                            return Err(cmd(format!("dt = {value}: must be positive")));
-                        }
-                        std::mem::replace(&mut self.dt, *value)
-                    }
+                    "dt" => self.clock.set_dt(*value)?,
                     "least_squares" => {
                         let mode = match *value {
                             0.0 => SolveMode::Exact,
@@ -587,16 +572,11 @@ impl crate::model::Stateful for FfdModel {
                 )));
             }
             _ => {
-                return Err(cmd(format!(
-                    "`{}` does not apply to an {} model (it takes ffd-move, move-point, \
-                     set-weight, set)",
-                    edit.action(),
-                    ModelKind::Ffd
-                )));
+                let takes = "ffd-move, move-point, set-weight, set";
+                return Err(super::not_taken(edit, ModelKind::Ffd, takes));
             }
         };
-        self.revision += 1;
-        Ok(Applied::by_inverse(message, inverse, before))
+        Ok(Done::Inverse(message, inverse))
     }
 }
 
@@ -623,18 +603,10 @@ impl Model for FfdModel {
         )
     }
 
-    crate::model::clock_methods!(self => self.time, self.dt, self.steps);
+    crate::model::clock_methods!(self => self.clock.time, self.clock.dt, self.clock.steps);
 
     fn step(&mut self) -> Result<StepReport, SessionError> {
-        let t0 = std::time::Instant::now();
-        self.time += self.dt;
-        self.steps += 1;
-        Ok(StepReport {
-            time: self.time,
-            energy: Energy::default(),
-            iterations: 0,
-            seconds: t0.elapsed().as_secs_f64(),
-        })
+        self.clock.step(|_| Ok(()))
     }
 
     fn energy(&self) -> Energy {
@@ -686,7 +658,7 @@ impl Model for FfdModel {
         vec![
             Param::new(
                 "dt",
-                self.dt,
+                self.clock.dt,
                 1e-4,
                 1.0,
                 "clock step (s); FFD has no dynamics",
@@ -760,9 +732,9 @@ impl Model for FfdModel {
             control_points: self.lattice.control_points().iter().map(a3).collect(),
             weights: self.lattice.weights().to_vec(),
             mode: mode_name(self.mode).to_string(),
-            dt: self.dt,
-            time: self.time,
-            steps: self.steps,
+            dt: self.clock.dt,
+            time: self.clock.time,
+            steps: self.clock.steps,
         };
         serde_json::to_value(saved).map_err(SessionError::kernel)
     }

@@ -16,7 +16,8 @@
 //! [`GeneralizedModel`] gives the same way it gives differently (steps counted by the model,
 //! the elastic energy read live, control points picked before the surface, material
 //! parameters, STEP/IGES and curve exports, fix/free undone by their inverse edit), and the
-//! frozen engine would have to leave the model.
+//! frozen engine would have to leave the model. `docs/architecture.md` (vclay-session) says
+//! precisely what a merge would take.
 
 use std::path::Path;
 
@@ -29,7 +30,7 @@ use super::saved::{SavedState, step_implicit};
 use crate::command::Edit;
 use crate::error::SessionError;
 use crate::model::{
-    Applied, Element, Energy, Hit, LineSet, Model, ModelKind, Param, Ray, StepReport, extension,
+    Done, Element, Energy, Hit, LineSet, Model, ModelKind, Param, Ray, StepReport, extension,
     unsupported_export,
 };
 
@@ -130,14 +131,7 @@ impl<K: GeneralizedKind> GeneralizedModel<K> {
     }
 
     fn set_dt(&mut self, value: f64) -> Result<String, SessionError> {
-        if !(value.is_finite() && value > 0.0) {
-            return Err(SessionError::command(
-                "",
-                "",
-                format!("dt = {value}: must be positive"),
-            ));
-        }
-        self.kind.set_dt(value);
+        self.kind.set_dt(crate::model::positive_dt(value)?);
         Ok(format!("dt = {value}"))
     }
 }
@@ -214,25 +208,23 @@ pub(crate) fn reference(absolute: bool) -> ElasticReference {
 
 impl<K: GeneralizedKind> crate::model::Stateful for GeneralizedModel<K> {
     type State = (GeneralizedState, K::State);
+    const EDITS_REDRAW: bool = K::EDITS_REDRAW;
     fn take_state(&self) -> Self::State {
         (self.engine.state(), self.kind.take())
     }
     fn put_state(&mut self, s: &Self::State) -> Result<(), SessionError> {
         self.engine.set_state(&s.0).map_err(SessionError::kernel)?;
         self.kind.put(&s.1);
-        self.revision += 1;
         Ok(())
     }
-    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        let before = self.take_state();
-        let message = match edit {
+    fn revision_mut(&mut self) -> &mut u64 {
+        &mut self.revision
+    }
+    fn edit(&mut self, edit: &Edit, _before: &Self::State) -> Result<Done, SessionError> {
+        Ok(Done::State(match edit {
             Edit::Set { name, value } if name == "dt" => self.set_dt(*value)?,
             _ => self.kind.apply(&mut self.engine, edit)?,
-        };
-        if K::EDITS_REDRAW {
-            self.revision += 1;
-        }
-        Ok(Applied::by_state(message, before))
+        }))
     }
     fn apply_inverse(&mut self, _edit: &Edit) -> Result<(), SessionError> {
         // The snapshot holds everything the edits change.

@@ -341,6 +341,25 @@ pub fn load(kind: ModelKind, saved: &serde_json::Value) -> Result<Box<dyn Model>
     })
 }
 
+/// The error of an edit that a model of `kind` does not take; `takes`, when given, lists
+/// the edits it does take.
+pub(crate) fn not_taken(edit: &crate::command::Edit, kind: ModelKind, takes: &str) -> SessionError {
+    let article = if kind == ModelKind::Ffd { "an" } else { "a" };
+    let takes = if takes.is_empty() {
+        String::new()
+    } else {
+        format!(" (it takes {takes})")
+    };
+    SessionError::command(
+        "",
+        "",
+        format!(
+            "`{}` does not apply to {article} {kind} model{takes}",
+            edit.action()
+        ),
+    )
+}
+
 /// The error of a kind's edit dispatcher handing an edit to a group of arms that does not
 /// hold it (a bug, reported instead of a panic).
 pub(crate) fn misrouted() -> SessionError {

@@ -34,9 +34,10 @@ use vclay_pde::{PdeError, PdeModel, SpecFile, builtin};
 use super::SpecError;
 use crate::command::Edit;
 use crate::error::SessionError;
+use crate::model::{Clock, Done};
 use crate::model::{
-    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, StepReport,
-    extension, unsupported_export,
+    Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, StepReport, extension,
+    unsupported_export,
 };
 
 /// Default `[simulation] dt`: 1/30 s (one display frame).
@@ -112,9 +113,7 @@ pub struct PdeSurfaceModel {
     locals: Vec<UserLocal>,
     model: PdeModel,
     grid: [usize; 2],
-    dt: f64,
-    time: f64,
-    steps: u64,
+    clock: Clock,
     size: f64,
     surface: Surface,
     source: String,
@@ -126,9 +125,7 @@ pub struct PdeSurfaceModel {
 pub(crate) struct PdeSnap {
     constants: BTreeMap<String, f64>,
     locals: Vec<UserLocal>,
-    dt: f64,
-    time: f64,
-    steps: u64,
+    clock: Clock,
 }
 
 fn cmd(reason: impl std::fmt::Display) -> SessionError {
@@ -205,9 +202,7 @@ impl PdeSurfaceModel {
             locals: Vec::new(),
             model,
             grid,
-            dt,
-            time,
-            steps: 0,
+            clock: Clock { time, dt, steps: 0 },
             size: bbox_size(&surface.mesh),
             surface,
             source: source.to_string(),
@@ -254,7 +249,7 @@ impl PdeSurfaceModel {
             let surface = Surface::solve(&self.model, value, self.grid)
                 .map_err(SessionError::command_from)?;
             self.surface = surface;
-            return Ok(std::mem::replace(&mut self.time, value));
+            return Ok(std::mem::replace(&mut self.clock.time, value));
         }
         let Some(&old) = self.constants.get(name) else {
             return Err(cmd(format!(
@@ -274,8 +269,8 @@ impl PdeSurfaceModel {
         constants.insert(name.to_string(), value);
         let model =
             compile(&self.spec, &constants, &self.locals).map_err(SessionError::command_from)?;
-        let surface =
-            Surface::solve(&model, self.time, self.grid).map_err(SessionError::command_from)?;
+        let surface = Surface::solve(&model, self.clock.time, self.grid)
+            .map_err(SessionError::command_from)?;
         self.model = model;
         self.surface = surface;
         self.constants = constants;
@@ -287,8 +282,8 @@ impl PdeSurfaceModel {
     fn set_locals(&mut self, locals: Vec<UserLocal>) -> Result<(), SessionError> {
         let model =
             compile(&self.spec, &self.constants, &locals).map_err(SessionError::command_from)?;
-        let surface =
-            Surface::solve(&model, self.time, self.grid).map_err(SessionError::command_from)?;
+        let surface = Surface::solve(&model, self.clock.time, self.grid)
+            .map_err(SessionError::command_from)?;
         self.model = model;
         self.surface = surface;
         self.locals = locals;
@@ -414,7 +409,7 @@ impl PdeSurfaceModel {
         if !s.locals.is_empty() {
             model.set_locals(s.locals).map_err(|e| e.in_model(""))?;
         }
-        model.steps = s.steps;
+        model.clock.steps = s.steps;
         model.size = s.size;
         Ok(model)
     }
@@ -427,9 +422,7 @@ impl crate::model::Stateful for PdeSurfaceModel {
         PdeSnap {
             constants: self.constants.clone(),
             locals: self.locals.clone(),
-            dt: self.dt,
-            time: self.time,
-            steps: self.steps,
+            clock: self.clock,
         }
     }
     fn put_state(&mut self, s: &PdeSnap) -> Result<(), SessionError> {
@@ -437,27 +430,26 @@ impl crate::model::Stateful for PdeSurfaceModel {
             let model =
                 compile(&self.spec, &s.constants, &s.locals).map_err(SessionError::kernel)?;
             let surface =
-                Surface::solve(&model, s.time, self.grid).map_err(SessionError::kernel)?;
+                Surface::solve(&model, s.clock.time, self.grid).map_err(SessionError::kernel)?;
             self.model = model;
             self.surface = surface;
             self.constants = s.constants.clone();
             self.locals = s.locals.clone();
-        } else if s.time != self.time {
-            self.surface =
-                Surface::solve(&self.model, s.time, self.grid).map_err(SessionError::kernel)?;
+        } else if s.clock.time != self.clock.time {
+            self.surface = Surface::solve(&self.model, s.clock.time, self.grid)
+                .map_err(SessionError::kernel)?;
         }
-        self.dt = s.dt;
-        self.time = s.time;
-        self.steps = s.steps;
-        self.revision += 1;
+        self.clock = s.clock;
         Ok(())
     }
-    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        let before = self.take_state();
-        let (message, inverse) = match edit {
+    fn revision_mut(&mut self) -> &mut u64 {
+        &mut self.revision
+    }
+    fn edit(&mut self, edit: &Edit, _before: &PdeSnap) -> Result<Done, SessionError> {
+        Ok(match edit {
             Edit::PdeSet { name, value } => {
                 let old = self.set_value(name, *value)?;
-                (
+                Done::Inverse(
                     format!("{name} = {value} (residual {:.3e})", self.surface.residual),
                     Edit::PdeSet {
                         name: name.clone(),
@@ -467,10 +459,7 @@ impl crate::model::Stateful for PdeSurfaceModel {
             }
             Edit::Set { name, value } => {
                 let old = if name == "dt" {
-                    if !(*value > 0.0 && value.is_finite()) {
-                        return Err(cmd(format!("dt = {value}: must be positive")));
-                    }
-                    std::mem::replace(&mut self.dt, *value)
+                    self.clock.set_dt(*value)?
                 } else if self.constants.contains_key(name) {
                     self.set_value(name, *value)?
                 } else {
@@ -484,7 +473,7 @@ impl crate::model::Stateful for PdeSurfaceModel {
                             .join(", ")
                     )));
                 };
-                (
+                Done::Inverse(
                     format!("{name} = {value}"),
                     Edit::Set {
                         name: name.clone(),
@@ -537,12 +526,10 @@ impl crate::model::Stateful for PdeSurfaceModel {
                     }
                 };
                 self.set_locals(locals)?;
-                self.revision += 1;
-                let message = format!(
+                Done::State(format!(
                     "local deformation `{name}` {} on patch {patch}",
                     if replaced { "changed" } else { "added" }
-                );
-                return Ok(Applied::by_state(message, before));
+                ))
             }
             Edit::Release { name } => {
                 let mut locals = self.locals.clone();
@@ -552,20 +539,13 @@ impl crate::model::Stateful for PdeSurfaceModel {
                     return Err(cmd(format!("no local deformation named `{name}`")));
                 }
                 self.set_locals(locals)?;
-                self.revision += 1;
-                let message = format!("local deformation `{name}` removed");
-                return Ok(Applied::by_state(message, before));
+                Done::State(format!("local deformation `{name}` removed"))
             }
             _ => {
-                return Err(cmd(format!(
-                    "`{}` does not apply to a {} model (it takes pde-set, pde-local, release, set)",
-                    edit.action(),
-                    ModelKind::PdeSurface
-                )));
+                let takes = "pde-set, pde-local, release, set";
+                return Err(super::not_taken(edit, ModelKind::PdeSurface, takes));
             }
-        };
-        self.revision += 1;
-        Ok(Applied::by_inverse(message, inverse, before))
+        })
     }
 }
 
@@ -588,21 +568,16 @@ impl Model for PdeSurfaceModel {
         )
     }
 
-    crate::model::clock_methods!(self => self.time, self.dt, self.steps);
+    crate::model::clock_methods!(self => self.clock.time, self.clock.dt, self.clock.steps);
 
     fn step(&mut self) -> Result<StepReport, SessionError> {
-        let t0 = std::time::Instant::now();
-        let t = self.time + self.dt;
-        self.surface = Surface::solve(&self.model, t, self.grid).map_err(SessionError::kernel)?;
-        self.time = t;
-        self.steps += 1;
+        let report = self.clock.step(|t| {
+            self.surface =
+                Surface::solve(&self.model, t, self.grid).map_err(SessionError::kernel)?;
+            Ok(())
+        })?;
         self.revision += 1;
-        Ok(StepReport {
-            time: t,
-            energy: Energy::default(),
-            iterations: 0,
-            seconds: t0.elapsed().as_secs_f64(),
-        })
+        Ok(report)
     }
 
     fn energy(&self) -> Energy {
@@ -680,7 +655,7 @@ impl Model for PdeSurfaceModel {
             .collect();
         out.push(Param::new(
             "dt",
-            self.dt,
+            self.clock.dt,
             1e-4,
             1.0,
             "time step of the PDE's t per session step",
@@ -725,9 +700,9 @@ impl Model for PdeSurfaceModel {
             constants: self.constants.clone(),
             locals: self.locals.clone(),
             grid: self.grid,
-            dt: self.dt,
-            time: self.time,
-            steps: self.steps,
+            dt: self.clock.dt,
+            time: self.clock.time,
+            steps: self.clock.steps,
             size: self.size,
         };
         serde_json::to_value(saved).map_err(SessionError::kernel)

@@ -1,13 +1,15 @@
 //! What the kinds that wrap [`GeneralizedDnurbs`] directly (`dnurbs-triangular`,
 //! `dnurbs-patches`) share: one implicit step as the session reports it (the report also
 //! serves `dnurbs-curve`, `-surface` and `-swung`), and the engine's state as session files
-//! save it.
+//! save it; the knot vectors of a saved tensor-product net (D-NURBS surfaces, B-spline solids).
 
 use serde::{Deserialize, Serialize};
 use vclay_dynamics::dnurbs::generalized::{
     GeneralizedDnurbs, GeneralizedGeometry, GeneralizedState,
 };
 use vclay_dynamics::dnurbs::{ElasticReference, Integrator};
+
+use vclay_spline::KnotVector;
 
 use crate::error::SessionError;
 use crate::model::{Energy, StepReport};
@@ -99,4 +101,20 @@ impl From<SavedState> for GeneralizedState {
             weight_projections: s.weight_projections,
         }
     }
+}
+
+/// The knot vectors of a saved tensor-product net: `knots[a]` of degree `degrees[a]` along
+/// each axis `a` (the control point count is what the length leaves), each checked.
+pub(crate) fn knot_vectors<const N: usize>(
+    knots: &[Vec<f64>; N],
+    degrees: &[usize; N],
+) -> Result<[KnotVector; N], SessionError> {
+    let mut kv = Vec::with_capacity(N);
+    for (a, (k, &p)) in knots.iter().zip(degrees).enumerate() {
+        let n = k.len().checked_sub(p + 1).ok_or_else(|| {
+            SessionError::model(format!("knot vector {a}: too short for degree {p}"))
+        })?;
+        kv.push(KnotVector::new(k.clone(), p, n).map_err(SessionError::kernel)?);
+    }
+    Ok(kv.try_into().expect("one knot vector per axis"))
 }

@@ -25,9 +25,10 @@ use super::{SpecError, misrouted};
 use crate::command::{Edit, V3};
 use crate::command::{MaterialRequest, RopeRequest};
 use crate::error::SessionError;
+use crate::model::Done;
 use crate::model::{
-    Applied, Element, Energy, FieldSpec, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray,
-    StepReport, Undo, extension, unsupported_export,
+    Element, Energy, FieldSpec, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, StepReport,
+    extension, unsupported_export,
 };
 use crate::tools::{CursorPath, ToolHost, ToolTable, a3, field_tool, v3};
 
@@ -119,273 +120,181 @@ impl SolidModel {
             .map_err(SessionError::command_from)
     }
 
-    /// The end of an edit whose undo is the state before it: a new revision, the message.
-    fn edited(&mut self, message: String, before: SolidSnap) -> Result<Applied, SessionError> {
-        self.revision += 1;
-        Ok(Applied::by_state(message, before))
+    /// [`Edit::RegionForce`]: a force on the data points within `radius` of `center`.
+    fn region_force(&mut self, edit: &Edit) -> Result<String, SessionError> {
+        let Edit::RegionForce {
+            name,
+            center,
+            radius,
+            force,
+            until,
+            falloff,
+        } = edit
+        else {
+            return Err(misrouted());
+        };
+        // The name was checked by `Edit::validate`.
+        let falloff = falloff
+            .as_deref()
+            .and_then(Falloff::from_name)
+            .unwrap_or_default();
+        let id = self
+            .solid
+            .add_region_force_with(v3(*center), *radius, v3(*force), falloff)
+            .map_err(SessionError::command_from)?
+            .0;
+        let label = self
+            .tools
+            .label(name.as_deref(), "region", id)
+            .map_err(|e| {
+                let _ = self.solid.remove_tool(ToolId(id));
+                cmd(e)
+            })?;
+        self.tools.track(&label, "region-force", id, None, *until);
+        let n = match self.solid.tool(ToolId(id)) {
+            Some(Tool::RegionForce { points, .. }) => points.len(),
+            _ => 0,
+        };
+        Ok(format!("region force `{label}` on {n} data points"))
     }
 
-    /// [`Self::apply_edit`] for the shared tool edits (`Rope`, `MoveRope`, `Force`, `Release`)
-    /// and `RegionForce`, `Gravity`, `Inflate`.
-    fn apply_field_edit(
-        &mut self,
-        edit: &Edit,
-        before: SolidSnap,
-    ) -> Result<Applied, SessionError> {
-        let message = match edit {
-            _ if crate::tools::is_tool_edit(edit) => crate::tools::tool_edit(self, edit)?,
-            Edit::RegionForce {
-                name,
-                center,
-                radius,
-                force,
-                until,
-                falloff,
-            } => {
-                // The name was checked by `Edit::validate`.
-                let falloff = falloff
-                    .as_deref()
-                    .and_then(Falloff::from_name)
-                    .unwrap_or_default();
-                let id = self
-                    .solid
-                    .add_region_force_with(v3(*center), *radius, v3(*force), falloff)
-                    .map_err(SessionError::command_from)?
-                    .0;
-                let label = self
-                    .tools
-                    .label(name.as_deref(), "region", id)
-                    .map_err(|e| {
-                        let _ = self.solid.remove_tool(ToolId(id));
-                        cmd(e)
-                    })?;
-                self.tools.track(&label, "region-force", id, None, *until);
-                let n = match self.solid.tool(ToolId(id)) {
-                    Some(Tool::RegionForce { points, .. }) => points.len(),
-                    _ => 0,
-                };
-                format!("region force `{label}` on {n} data points")
-            }
-            Edit::Gravity { name, g, until } => {
-                field_tool(self, name, "gravity", Tool::Gravity { g: v3(*g) }, *until)?
-            }
-            Edit::Inflate {
-                name,
-                pressure,
-                until,
-            } => field_tool(
-                self,
-                name,
-                "inflate",
-                Tool::Inflation {
-                    pressure: *pressure,
-                },
-                *until,
-            )?,
-            _ => return Err(misrouted()),
+    /// [`Edit::Fix`] and [`Edit::Free`], undone by their exact inverse.
+    fn fix_or_free(&mut self, edit: &Edit) -> Result<Done, SessionError> {
+        let t0 = std::time::Instant::now();
+        let r = crate::tools::fix_or_free(&mut self.solid, edit)?;
+        let st = self.solid.stats();
+        let message = if matches!(edit, Edit::Fix { .. }) {
+            format!(
+                "fixed {} control points ({} of {} data points and {} springs remain active; rebuilt in {:.1} ms)",
+                r.selected.len(),
+                st.active_data_points,
+                st.data_points,
+                st.active_springs,
+                t0.elapsed().as_secs_f64() * 1e3
+            )
+        } else {
+            format!("freed {} control points", r.selected.len())
         };
-        self.edited(message, before)
+        Ok(Done::Inverse(message, r.inverse))
     }
 
-    /// [`Self::apply_edit`] for `Fix`, `Material`, `Extrude`, `DeleteCell`.
-    fn apply_shape_edit(
-        &mut self,
-        edit: &Edit,
-        before: SolidSnap,
-    ) -> Result<Applied, SessionError> {
-        let message = match edit {
-            Edit::Fix { .. } | Edit::Free { .. } => {
-                let fix = matches!(edit, Edit::Fix { .. });
-                let t0 = std::time::Instant::now();
-                let r = crate::tools::fix_or_free(&mut self.solid, edit)?;
-                let st = self.solid.stats();
-                let message = if fix {
-                    format!(
-                        "fixed {} control points ({} of {} data points and {} springs remain active; rebuilt in {:.1} ms)",
-                        r.selected.len(),
-                        st.active_data_points,
-                        st.data_points,
-                        st.active_springs,
-                        t0.elapsed().as_secs_f64() * 1e3
-                    )
-                } else {
-                    format!("freed {} control points", r.selected.len())
-                };
-                self.revision += 1;
-                return Ok(Applied::by_inverse(message, r.inverse, before));
-            }
-            Edit::Material { .. } => {
-                let r = MaterialRequest::of(edit).ok_or_else(misrouted)?;
-                if r.dnurbs_given() {
-                    return Err(cmd(
-                        "`mu`, `gamma`, `alpha`, `beta` are D-NURBS materials; solids take density, damping, edge_stiffness, virtual_stiffness, anisotropy",
-                    ));
-                }
-                let list: Option<Vec<usize>> = match (&r.cells, &r.min, &r.max) {
-                    (Some(c), _, _) => Some(c.clone()),
-                    (None, Some(lo), Some(hi)) => Some(self.cells_in_box(lo, hi)),
-                    _ => None,
-                };
-                let [density, damping, edge_stiffness, virtual_stiffness] = r.solid;
-                let f = |m: &mut Material| {
-                    if let Some(x) = density {
-                        m.density = x;
-                    }
-                    if let Some(x) = damping {
-                        m.damping = x;
-                    }
-                    if let Some(x) = edge_stiffness {
-                        m.edge_stiffness = x;
-                    }
-                    if let Some(x) = virtual_stiffness {
-                        m.virtual_stiffness = x;
-                    }
-                    if let Some(x) = r.anisotropy {
-                        m.anisotropy = x;
-                    }
-                };
-                self.solid
-                    .update_material(list.as_deref(), f)
-                    .map_err(SessionError::command_from)?;
-                match &list {
-                    Some(l) => format!("material changed in {} control cells", l.len()),
-                    None => "material changed".to_string(),
-                }
-            }
-            Edit::Extrude { face, near, factor } => {
-                let f = match (face, near) {
-                    (Some(f), _) => *f,
-                    (None, Some(x)) => self
-                        .solid
-                        .boundary_face_near(&v3(*x))
-                        .ok_or_else(|| cmd("only subdivision solids can be extruded"))?,
-                    (None, None) => return Err(cmd("give `face` or `near`")),
-                };
-                let full = self.clone();
-                let t0 = std::time::Instant::now();
-                self.solid
-                    .extrude(f, factor.unwrap_or(1.0))
-                    .map_err(SessionError::command_from)?;
-                self.revision += 1;
-                return Ok(Applied {
-                    message: format!(
-                        "extruded control face {f}: {} data points, rebuilt in {:.1} ms",
-                        self.solid.data_points().len(),
-                        t0.elapsed().as_secs_f64() * 1e3
-                    ),
-                    undo: Undo::Model(Box::new(full)),
-                });
-            }
-            Edit::DeleteCell { cell, near } => {
-                let c = match (cell, near) {
-                    (Some(c), _) => *c,
-                    (None, Some(x)) => self
-                        .solid
-                        .cell_near(&v3(*x))
-                        .ok_or_else(|| cmd("only subdivision solids can be trimmed"))?,
-                    (None, None) => return Err(cmd("give `cell` or `near`")),
-                };
-                let full = self.clone();
-                let t0 = std::time::Instant::now();
-                self.solid
-                    .delete_cell(c)
-                    .map_err(SessionError::command_from)?;
-                self.revision += 1;
-                return Ok(Applied {
-                    message: format!(
-                        "deleted control cell {c}: {} data points, rebuilt in {:.1} ms",
-                        self.solid.data_points().len(),
-                        t0.elapsed().as_secs_f64() * 1e3
-                    ),
-                    undo: Undo::Model(Box::new(full)),
-                });
-            }
-            _ => return Err(misrouted()),
+    /// [`Edit::Material`]: the solid material of some control cells (`cells`, or those whose
+    /// centre lies in `min`..`max`) or of all.
+    fn set_material(&mut self, edit: &Edit) -> Result<String, SessionError> {
+        let r = MaterialRequest::of(edit).ok_or_else(misrouted)?;
+        if r.dnurbs_given() {
+            return Err(cmd(
+                "`mu`, `gamma`, `alpha`, `beta` are D-NURBS materials; solids take density, damping, edge_stiffness, virtual_stiffness, anisotropy",
+            ));
+        }
+        let list: Option<Vec<usize>> = match (&r.cells, &r.min, &r.max) {
+            (Some(c), _, _) => Some(c.clone()),
+            (None, Some(lo), Some(hi)) => Some(self.cells_in_box(lo, hi)),
+            _ => None,
         };
-        self.edited(message, before)
+        let values = Values(r.solid, r.anisotropy);
+        self.solid
+            .update_material(list.as_deref(), |m| values.apply(m))
+            .map_err(SessionError::command_from)?;
+        Ok(match &list {
+            Some(l) => format!("material changed in {} control cells", l.len()),
+            None => "material changed".to_string(),
+        })
     }
 
-    /// [`Self::apply_edit`] for `PlasticReset`, `Stop`, `MovePoint`, `SetWeight`, `Set`, `Integrator`, `Data`, `Constraint`, `Repel`, `FfdMove`, `PdeSet`, `PdeLocal`.
-    fn apply_state_edit(
+    /// A topology edit (extrude a face, delete a cell: `what` does it and names what it did),
+    /// undone by a full copy of the model.
+    fn rebuild(
         &mut self,
-        edit: &Edit,
-        before: SolidSnap,
-    ) -> Result<Applied, SessionError> {
-        let message = match edit {
-            Edit::PlasticReset => {
-                let full = self.clone();
-                let e = self.solid.energy().internal;
-                self.solid.plastic_reset();
-                self.revision += 1;
-                return Ok(Applied {
-                    message: format!(
-                        "plastic reset (internal energy {e:.4e} -> {:.4e})",
-                        self.solid.energy().internal
-                    ),
-                    undo: Undo::Model(Box::new(full)),
-                });
-            }
-            Edit::Stop => {
-                self.solid.stop();
-                "stopped all motion".to_string()
-            }
-            Edit::MovePoint { index, to } => {
-                let n = self.solid.control_points().len();
-                if *index >= n {
-                    return Err(cmd(format!(
-                        "control point {index} does not exist (there are {n})"
-                    )));
-                }
-                let mut st = self.solid.state();
-                st.control_points[*index] = v3(*to);
-                st.velocities[*index] = Vec3::zeros();
-                st.data_points = self
-                    .solid
-                    .map_to_data(&st.control_points)
-                    .map_err(SessionError::command_from)?;
-                self.solid
-                    .set_state(&st)
-                    .map_err(SessionError::command_from)?;
-                format!("moved control point {index} to {to:?}")
-            }
-            Edit::SetWeight { .. } => {
-                return Err(cmd(
-                    "the weights of a dynamic solid are frozen (journal section 4.1: c = B q with fixed weights)",
-                ));
-            }
-            Edit::Set { name, value } => self.set_param(name, *value)?,
-            Edit::Integrator { integrator, dt } => {
-                let mut p = *self.solid.params();
-                if let Some(i) = integrator {
-                    p.integrator = parse_integrator(i).ok_or_else(|| {
-                        cmd(format!(
-                            "unknown integrator \"{i}\"; expected \"explicit\", \"symplectic\" or \"implicit\""
-                        ))
-                    })?;
-                }
-                if let Some(dt) = dt {
-                    p.dt = *dt;
-                }
-                self.solid
-                    .set_params(p)
-                    .map_err(SessionError::command_from)?;
-                format!("integrator {:?}, dt {}", p.integrator, p.dt)
-            }
-            Edit::Data { .. }
-            | Edit::Constraint { .. }
-            | Edit::Repel { .. }
-            | Edit::FfdMove { .. }
-            | Edit::PdeSet { .. }
-            | Edit::PdeLocal { .. } => {
-                return Err(cmd(format!(
-                    "`{}` does not apply to a {} model",
-                    edit.action(),
-                    self.kind()
-                )));
-            }
-            _ => return Err(misrouted()),
-        };
-        self.edited(message, before)
+        what: impl FnOnce(&mut DynamicSolid) -> Result<String, SessionError>,
+    ) -> Result<Done, SessionError> {
+        let full = self.clone();
+        let t0 = std::time::Instant::now();
+        let done = what(&mut self.solid)?;
+        let message = format!(
+            "{done}: {} data points, rebuilt in {:.1} ms",
+            self.solid.data_points().len(),
+            t0.elapsed().as_secs_f64() * 1e3
+        );
+        Ok(Done::Model(message, Box::new(full)))
+    }
+
+    /// The control face (`key` = `"face"`, for an extrusion) or cell (`"cell"`, to delete)
+    /// that an edit names by its index or by a point `near` it.
+    fn element(
+        &self,
+        key: &str,
+        index: Option<usize>,
+        near: Option<&V3>,
+    ) -> Result<usize, SessionError> {
+        match (index, near) {
+            (Some(i), _) => Ok(i),
+            (None, Some(x)) if key == "face" => self
+                .solid
+                .boundary_face_near(&v3(*x))
+                .ok_or_else(|| cmd("only subdivision solids can be extruded")),
+            (None, Some(x)) => self
+                .solid
+                .cell_near(&v3(*x))
+                .ok_or_else(|| cmd("only subdivision solids can be trimmed")),
+            (None, None) => Err(cmd(format!("give `{key}` or `near`"))),
+        }
+    }
+
+    /// [`Edit::PlasticReset`]: the current shape becomes the rest shape; undone by a full copy.
+    fn plastic_reset(&mut self) -> Done {
+        let full = self.clone();
+        let e = self.solid.energy().internal;
+        self.solid.plastic_reset();
+        let message = format!(
+            "plastic reset (internal energy {e:.4e} -> {:.4e})",
+            self.solid.energy().internal
+        );
+        Done::Model(message, Box::new(full))
+    }
+
+    /// [`Edit::MovePoint`]: control point `index` to `to`, at rest.
+    fn move_point(&mut self, index: usize, to: &V3) -> Result<String, SessionError> {
+        let n = self.solid.control_points().len();
+        if index >= n {
+            return Err(cmd(format!(
+                "control point {index} does not exist (there are {n})"
+            )));
+        }
+        let mut st = self.solid.state();
+        st.control_points[index] = v3(*to);
+        st.velocities[index] = Vec3::zeros();
+        st.data_points = self
+            .solid
+            .map_to_data(&st.control_points)
+            .map_err(SessionError::command_from)?;
+        self.solid
+            .set_state(&st)
+            .map_err(SessionError::command_from)?;
+        Ok(format!("moved control point {index} to {to:?}"))
+    }
+
+    /// [`Edit::Integrator`]: the integrator of eq 10 and the time step.
+    fn set_integrator(
+        &mut self,
+        integrator: Option<&str>,
+        dt: Option<f64>,
+    ) -> Result<String, SessionError> {
+        let mut p = *self.solid.params();
+        if let Some(i) = integrator {
+            p.integrator = parse_integrator(i).ok_or_else(|| {
+                cmd(format!(
+                    "unknown integrator \"{i}\"; expected \"explicit\", \"symplectic\" or \"implicit\""
+                ))
+            })?;
+        }
+        if let Some(dt) = dt {
+            p.dt = dt;
+        }
+        self.solid
+            .set_params(p)
+            .map_err(SessionError::command_from)?;
+        Ok(format!("integrator {:?}, dt {}", p.integrator, p.dt))
     }
 
     fn cells_in_box(&self, lo: &V3, hi: &V3) -> Vec<usize> {
@@ -556,15 +465,9 @@ impl SolidModel {
                 ),
                 e => SpecError::new("material", "material", e),
             };
-            let base_values = Values {
-                density: mk.density,
-                damping: mk.damping,
-                edge_stiffness: mk.edge_stiffness,
-                virtual_stiffness: mk.virtual_stiffness,
-                anisotropy: mk.anisotropy,
-            };
+            let uniform = mk.values();
             field
-                .update(None, |x| base_values.apply(x))
+                .update(None, |x| uniform.apply(x))
                 .map_err(|e| merr(e, false))?;
             match mk.energy.as_deref() {
                 None | Some("springs") => {
@@ -689,26 +592,11 @@ impl SolidModel {
                 degrees,
                 weights,
                 samples,
-            } => {
-                let mut kv = Vec::new();
-                for a in 0..3 {
-                    let n = knots[a].len().checked_sub(degrees[a] + 1).ok_or_else(|| {
-                        SessionError::model(format!(
-                            "knot vector {a}: too short for degree {}",
-                            degrees[a]
-                        ))
-                    })?;
-                    kv.push(
-                        KnotVector::new(knots[a].clone(), degrees[a], n)
-                            .map_err(SessionError::kernel)?,
-                    );
-                }
-                SolidSource::BSpline {
-                    knots: kv.try_into().expect("three axes"),
-                    weights: weights.clone(),
-                    samples: *samples,
-                }
-            }
+            } => SolidSource::BSpline {
+                knots: super::saved::knot_vectors(knots, degrees)?,
+                weights: weights.clone(),
+                samples: *samples,
+            },
         };
         let material =
             MaterialField::from_cells(s.material.iter().map(|m| m.to_material()).collect())
@@ -910,24 +798,66 @@ impl crate::model::Stateful for SolidModel {
             .set_rest_shape(&s.rest.0, &s.rest.1)
             .map_err(kernel)?;
         self.tools = s.tools.clone();
-        self.revision += 1;
         Ok(())
     }
-    fn apply_edit(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        let before = self.take_state();
-        match edit {
-            _ if crate::tools::is_tool_edit(edit) => self.apply_field_edit(edit, before),
-            Edit::RegionForce { .. } | Edit::Gravity { .. } | Edit::Inflate { .. } => {
-                self.apply_field_edit(edit, before)
+    fn revision_mut(&mut self) -> &mut u64 {
+        &mut self.revision
+    }
+    fn edit(&mut self, edit: &Edit, _before: &SolidSnap) -> Result<Done, SessionError> {
+        Ok(match edit {
+            _ if crate::tools::is_tool_edit(edit) => {
+                Done::State(crate::tools::tool_edit(self, edit)?)
             }
-            Edit::Fix { .. }
-            | Edit::Free { .. }
-            | Edit::Material { .. }
-            | Edit::Extrude { .. }
-            | Edit::DeleteCell { .. } => self.apply_shape_edit(edit, before),
-            Edit::Smooth { .. } => self.apply_smooth(edit, before),
-            _ => self.apply_state_edit(edit, before),
-        }
+            Edit::RegionForce { .. } => Done::State(self.region_force(edit)?),
+            Edit::Gravity { name, g, until } => {
+                let gravity = Tool::Gravity { g: v3(*g) };
+                Done::State(field_tool(self, name, "gravity", gravity, *until)?)
+            }
+            Edit::Inflate {
+                name,
+                pressure,
+                until,
+            } => {
+                let inflation = Tool::Inflation {
+                    pressure: *pressure,
+                };
+                Done::State(field_tool(self, name, "inflate", inflation, *until)?)
+            }
+            Edit::Fix { .. } | Edit::Free { .. } => self.fix_or_free(edit)?,
+            Edit::Material { .. } => Done::State(self.set_material(edit)?),
+            Edit::Extrude { face, near, factor } => {
+                let f = self.element("face", *face, near.as_ref())?;
+                self.rebuild(|s| {
+                    let factor = factor.unwrap_or(1.0);
+                    s.extrude(f, factor).map_err(SessionError::command_from)?;
+                    Ok(format!("extruded control face {f}"))
+                })?
+            }
+            Edit::DeleteCell { cell, near } => {
+                let c = self.element("cell", *cell, near.as_ref())?;
+                self.rebuild(|s| {
+                    s.delete_cell(c).map_err(SessionError::command_from)?;
+                    Ok(format!("deleted control cell {c}"))
+                })?
+            }
+            Edit::Smooth { .. } => Done::State(self.smooth(edit)?),
+            Edit::PlasticReset => self.plastic_reset(),
+            Edit::Stop => {
+                self.solid.stop();
+                Done::State("stopped all motion".to_string())
+            }
+            Edit::MovePoint { index, to } => Done::State(self.move_point(*index, to)?),
+            Edit::SetWeight { .. } => {
+                return Err(cmd(
+                    "the weights of a dynamic solid are frozen (journal section 4.1: c = B q with fixed weights)",
+                ));
+            }
+            Edit::Set { name, value } => Done::State(self.set_param(name, *value)?),
+            Edit::Integrator { integrator, dt } => {
+                Done::State(self.set_integrator(integrator.as_deref(), *dt)?)
+            }
+            _ => return Err(super::not_taken(edit, self.kind(), "")),
+        })
     }
 }
 
@@ -1371,76 +1301,82 @@ pub struct ModelKeys {
     pub cells: Option<usize>,
 }
 
-#[derive(Debug, Default)]
-struct Values {
-    density: Option<f64>,
-    damping: Option<f64>,
-    edge_stiffness: Option<f64>,
-    virtual_stiffness: Option<f64>,
-    anisotropy: Option<V3>,
-}
+/// The solid material values that a `[material]` table, a `[[material.cells]]` entry or a
+/// `material` edit gives: `[density, damping, edge_stiffness, virtual_stiffness]` and the
+/// `anisotropy` (journal section 4.3); absent values stay as they are.
+#[derive(Clone, Copy, Debug, Default)]
+struct Values([Option<f64>; 4], Option<V3>);
 
 impl Values {
     fn apply(&self, m: &mut Material) {
-        if let Some(x) = self.density {
-            m.density = x;
+        let moduli = [
+            &mut m.density,
+            &mut m.damping,
+            &mut m.edge_stiffness,
+            &mut m.virtual_stiffness,
+        ];
+        for (slot, value) in moduli.into_iter().zip(self.0) {
+            if let Some(x) = value {
+                *slot = x;
+            }
         }
-        if let Some(x) = self.damping {
-            m.damping = x;
-        }
-        if let Some(x) = self.edge_stiffness {
-            m.edge_stiffness = x;
-        }
-        if let Some(x) = self.virtual_stiffness {
-            m.virtual_stiffness = x;
-        }
-        if let Some(x) = self.anisotropy {
+        if let Some(x) = self.1 {
             m.anisotropy = x;
         }
     }
 }
 
-/// The entry keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct CellKeys {
-    pub cells: Vec<usize>,
-    pub density: Option<f64>,
-    pub damping: Option<f64>,
-    pub edge_stiffness: Option<f64>,
-    pub virtual_stiffness: Option<f64>,
-    pub anisotropy: Option<V3>,
+/// Declares a key struct of a solid that gives the solid material values (`density`,
+/// `damping`, `edge_stiffness`, `virtual_stiffness`, `anisotropy`: journal section 4.3) besides
+/// its own keys, and its `values()`. Each field is the key of the same name in
+/// `docs/formats.md` section 8 (absent: the documented default).
+macro_rules! material_keys {
+    ($(#[$meta:meta])* pub struct $name:ident { $($own:tt)* }) => {
+        $(#[$meta])*
+        #[allow(missing_docs)]
+        #[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
+        #[serde(deny_unknown_fields)]
+        pub struct $name {
+            pub density: Option<f64>,
+            pub damping: Option<f64>,
+            pub edge_stiffness: Option<f64>,
+            pub virtual_stiffness: Option<f64>,
+            pub anisotropy: Option<V3>,
+            $($own)*
+        }
+
+        impl $name {
+            /// The material values given.
+            fn values(&self) -> Values {
+                let moduli = [
+                    self.density,
+                    self.damping,
+                    self.edge_stiffness,
+                    self.virtual_stiffness,
+                ];
+                Values(moduli, self.anisotropy)
+            }
+        }
+    };
 }
 
-impl CellKeys {
-    fn values(&self) -> Values {
-        Values {
-            density: self.density,
-            damping: self.damping,
-            edge_stiffness: self.edge_stiffness,
-            virtual_stiffness: self.virtual_stiffness,
-            anisotropy: self.anisotropy,
-        }
+material_keys! {
+    /// The entry keys of a `[[material.cells]]` entry of a `subdivision-solid` or
+    /// `bspline-solid` model as a typed value.
+    pub struct CellKeys {
+        pub cells: Vec<usize>,
     }
 }
 
-/// The `[material]` keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct MaterialKeys {
-    pub density: Option<f64>,
-    pub damping: Option<f64>,
-    pub edge_stiffness: Option<f64>,
-    pub virtual_stiffness: Option<f64>,
-    pub anisotropy: Option<V3>,
-    pub energy: Option<String>,
-    pub metric_stiffness: Option<f64>,
-    #[serde(default)]
-    pub cells: Vec<CellKeys>,
+material_keys! {
+    /// The `[material]` keys of a `subdivision-solid` or `bspline-solid` model as a typed
+    /// value.
+    pub struct MaterialKeys {
+        pub energy: Option<String>,
+        pub metric_stiffness: Option<f64>,
+        #[serde(default)]
+        pub cells: Vec<CellKeys>,
+    }
 }
 
 /// The `[simulation]` keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
@@ -1475,36 +1411,49 @@ fn build_source(
     if (0..3).any(|a| max[a] <= min[a]) {
         return Err(err("max", "must exceed `min` along every axis".into()));
     }
-    match kind {
-        ModelKind::SubdivisionSolid => subdivision_source(m, base, min, max),
-        ModelKind::BsplineSolid => bspline_source(m, base, min, max),
-        _ => Err(err("kind", format!("{kind} is not a solid"))),
+    // The keys of the other solid kind (`cells` is also clay's, from a mesh file).
+    let mesh_cells = m.cells.is_some() && !m.file.as_deref().is_some_and(is_mesh);
+    let foreign = match kind {
+        ModelKind::SubdivisionSolid => vec![
+            ("control", m.control.is_some()),
+            ("degree", m.degree.is_some()),
+            ("samples", m.samples.is_some()),
+            ("entity", m.entity.is_some()),
+            ("cells", mesh_cells),
+        ],
+        ModelKind::BsplineSolid => vec![
+            ("cells", m.cells.is_some()),
+            ("primitive", m.primitive.is_some()),
+            ("level", m.level.is_some()),
+            ("boundary", m.boundary.is_some()),
+            ("points", m.points.is_some()),
+            ("radius", m.radius.is_some()),
+            ("height", m.height.is_some()),
+        ],
+        _ => return Err(err("kind", format!("{kind} is not a solid"))),
+    };
+    first_given(&foreign, format!("is not a key of kind \"{kind}\""))?;
+    if kind == ModelKind::SubdivisionSolid {
+        subdivision_source(m, base, min, max)
+    } else {
+        bspline_source(m, base, min, max)
     }
 }
 
-/// An error unless `key`, given (`present`), is a key of `kind`.
-fn forbid_key(kind: ModelKind, key: &str, present: bool) -> Result<(), SpecError> {
-    if present {
-        Err(SpecError::new(
-            "model",
-            key,
-            format!("is not a key of kind \"{kind}\""),
-        ))
-    } else {
-        Ok(())
+/// An error naming the first of `keys` given (`what`: why it may not be).
+fn first_given(keys: &[(&str, bool)], what: impl std::fmt::Display) -> Result<(), SpecError> {
+    match keys.iter().find(|k| k.1) {
+        Some((key, _)) => Err(SpecError::new("model", key, what)),
+        None => Ok(()),
     }
 }
 
 /// An error naming the first of `keys` given: primitive keys with a model read from `file`.
 fn from_file_only(keys: &[(&str, bool)]) -> Result<(), SpecError> {
-    match keys.iter().find(|k| k.1) {
-        Some((key, _)) => Err(SpecError::new(
-            "model",
-            key,
-            "describes a primitive; it does not apply to a model read from `file`",
-        )),
-        None => Ok(()),
-    }
+    first_given(
+        keys,
+        "describes a primitive; it does not apply to a model read from `file`",
+    )
 }
 
 /// `f` resolved against `base` unless it is absolute.
@@ -1524,18 +1473,8 @@ fn subdivision_source(
     min: Vec3,
     max: Vec3,
 ) -> Result<(SolidSource, Vec<Vec3>), SpecError> {
-    const KIND: ModelKind = ModelKind::SubdivisionSolid;
     let err = |key: &str, what: String| SpecError::new("model", key, what);
-    let forbid = |key: &str, present: bool| forbid_key(KIND, key, present);
     let resolve = |f: &Path| resolve_in(base, f);
-    forbid("control", m.control.is_some())?;
-    forbid("degree", m.degree.is_some())?;
-    forbid("samples", m.samples.is_some())?;
-    forbid("entity", m.entity.is_some())?;
-    forbid(
-        "cells",
-        m.cells.is_some() && !m.file.as_deref().is_some_and(is_mesh),
-    )?;
     if m.file.is_some() {
         from_file_only(&[
             ("points", m.points.is_some()),
@@ -1631,21 +1570,8 @@ fn bspline_source(
     min: Vec3,
     max: Vec3,
 ) -> Result<(SolidSource, Vec<Vec3>), SpecError> {
-    const KIND: ModelKind = ModelKind::BsplineSolid;
     let err = |key: &str, what: String| SpecError::new("model", key, what);
-    let forbid = |key: &str, present: bool| forbid_key(KIND, key, present);
     let resolve = |f: &Path| resolve_in(base, f);
-    for (k, present) in [
-        ("cells", m.cells.is_some()),
-        ("primitive", m.primitive.is_some()),
-        ("level", m.level.is_some()),
-        ("boundary", m.boundary.is_some()),
-        ("points", m.points.is_some()),
-        ("radius", m.radius.is_some()),
-        ("height", m.height.is_some()),
-    ] {
-        forbid(k, present)?;
-    }
     let samples = m.samples.unwrap_or([10; 3]);
     for (a, &n) in samples.iter().enumerate() {
         if n < 2 {
@@ -2068,12 +1994,11 @@ impl SolidModel {
     /// [`Edit::Smooth`]: one umbrella step of the rest control points under the brush
     /// (`crate::smooth`); the springs' rest lengths follow (`A p0`, eq 3) and the clay settles
     /// towards the smoothed rest shape as it steps. Undone with the state, rest shape included.
-    fn apply_smooth(&mut self, edit: &Edit, before: SolidSnap) -> Result<Applied, SessionError> {
+    fn smooth(&mut self, edit: &Edit) -> Result<String, SessionError> {
         let (smoothed, n) = crate::smooth::smoothed_rest(&self.solid, self.control_net(), edit)?;
         self.solid
             .set_rest_control_points(&smoothed)
             .map_err(kernel)?;
-        self.revision += 1;
-        Ok(Applied::by_state(crate::smooth::message(n), before))
+        Ok(crate::smooth::message(n))
     }
 }
