@@ -195,6 +195,27 @@ fn a_freed_boundary_leaves_a_gap_that_export_reports() {
         .map(|g| g.gap)
         .fold(0.0, f64::max);
     assert!(worst > part.tolerance(), "gap {worst}");
+    // The face's moved edges are recomputed from its pcurves on the new surface: the part's
+    // edges then follow the sculpted face (at the 65 sample parameters, exactly), and differ
+    // from the ones read.
+    let (_, shells) = part.part().unwrap();
+    let read = import_model(plate()).unwrap();
+    let (_, face) = part.face();
+    let moved: Vec<usize> = part
+        .gaps()
+        .unwrap()
+        .into_iter()
+        .filter(|g| g.moved > part.tolerance())
+        .map(|g| g.edge)
+        .collect();
+    assert!(!moved.is_empty());
+    for &e in &moved {
+        assert_ne!(shells[0].edges[e].curve, read.shells[0].edges[e].curve, "edge {e}");
+    }
+    let s = part.surface().unwrap();
+    for g in vclay_io::trimmed::sculpt::face_edge_gaps(&shells[0], face, &s).unwrap() {
+        assert!(g.moved < 1e-9 * 51.0, "{g:?}");
+    }
     let dir = tempfile::tempdir().unwrap();
     let step = dir.path().join("open.step");
     let e = m.export(&step).unwrap_err().to_string();
@@ -251,6 +272,13 @@ fn opening_a_step_part_gives_a_cad_part_with_surface_tools() {
         assert!(tools.contains(&t), "{t}: {tools:?}");
     }
     assert!(!tools.contains(&"inflate"));
+    // The largest face is sculpted: the bottom, 40 x 30 less the hole.
+    let part = PartModel::load(&m.save().unwrap()).unwrap();
+    let imp = import_model(plate()).unwrap();
+    let f = &imp.shells[0].faces[part.face().1];
+    let d = f.surface.domain();
+    let mid = f.surface.point(d[0].min, d[1].min).unwrap();
+    assert!(f.holes.len() == 1 && mid.z.abs() < 1e-9, "face {:?}", part.face());
     let mesh = m.display_mesh().unwrap();
     // The whole part is shown: a closed mesh whose volume is the plate's.
     let v = mesh_volume(&mesh);
