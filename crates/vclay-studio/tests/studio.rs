@@ -242,24 +242,3 @@ fn the_integrator_box_switches_the_solid_integrator() {
     }
     assert_eq!(integrator, "implicit");
 }
-
-/// Issue 30: a STEP part of trimmed faces opens through `vclay_session::open` as a `cad-part`
-/// (no per-kind code in the studio): the whole plate is shown, its summary names the sculpted
-/// face, and the palette offers the D-NURBS surface tools, the rope first.
-#[test]
-fn a_trimmed_step_part_opens_with_the_surface_tools() {
-    let plate = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../vclay-io/tests/data/cad/trimmed_plate.step");
-    let mut h = harness(Options {
-        file: Some(plate),
-        ..quiet()
-    });
-    h.step();
-    assert!(h.state().error().is_none(), "{:?}", h.state().error());
-    wait(&mut h, "first frame", |s| !s.frame().models.is_empty());
-    let m = &h.state().frame().models[0];
-    assert!(m.summary.contains("11 faces"), "{}", m.summary);
-    assert!(m.mesh.triangles.len() > 100, "the part is shown");
-    let palette = Tool::palette(&m.tools);
-    assert!(palette.contains(&Tool::Rope), "{palette:?}");
-}
