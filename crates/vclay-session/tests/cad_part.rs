@@ -210,7 +210,10 @@ fn a_freed_boundary_leaves_a_gap_that_export_reports() {
         .collect();
     assert!(!moved.is_empty());
     for &e in &moved {
-        assert_ne!(shells[0].edges[e].curve, read.shells[0].edges[e].curve, "edge {e}");
+        assert_ne!(
+            shells[0].edges[e].curve, read.shells[0].edges[e].curve,
+            "edge {e}"
+        );
     }
     let s = part.surface().unwrap();
     for g in vclay_io::trimmed::sculpt::face_edge_gaps(&shells[0], face, &s).unwrap() {
@@ -278,7 +281,11 @@ fn opening_a_step_part_gives_a_cad_part_with_surface_tools() {
     let f = &imp.shells[0].faces[part.face().1];
     let d = f.surface.domain();
     let mid = f.surface.point(d[0].min, d[1].min).unwrap();
-    assert!(f.holes.len() == 1 && mid.z.abs() < 1e-9, "face {:?}", part.face());
+    assert!(
+        f.holes.len() == 1 && mid.z.abs() < 1e-9,
+        "face {:?}",
+        part.face()
+    );
     let mesh = m.display_mesh().unwrap();
     // The whole part is shown: a closed mesh whose volume is the plate's.
     let v = mesh_volume(&mesh);
