@@ -62,3 +62,7 @@ done
 # converted by vclay to STEP directly and through the model JSON, come back as one valid solid
 # with the original face count, volume and area to 1e-6 (bench/check_trimmed.py).
 "$py" bench/check_trimmed.py "$vclay" "$work/trimmed"
+# The sculpted round trip (issue 30): the plate opened as a `cad-part`, its top face pulled up by
+# a rope with the face's boundary fixed, exported as STEP: one valid solid whose volume grew and
+# whose 10 other faces are identical (bench/check_sculpted.py).
+"$py" bench/check_sculpted.py "$vclay" "$work/sculpted"

@@ -128,10 +128,17 @@ pub fn parse_named_model(text: &str) -> Result<Vec<NamedEntity>, IoError> {
 pub fn parse_trimmed_model(
     text: &str,
 ) -> Result<(Vec<NamedEntity>, Vec<crate::brep::Shell>), IoError> {
-    let root = json::parse(text)?;
+    trimmed_model_of_value(&json::parse(text)?)
+}
+
+/// [`parse_trimmed_model`] on a parsed JSON value (what [`trimmed_to_json`] gives: session
+/// files keep a CAD part this way, without going through text).
+pub fn trimmed_model_of_value(
+    root: &Value,
+) -> Result<(Vec<NamedEntity>, Vec<crate::brep::Shell>), IoError> {
     let top = JsonPath::default();
     let mut shells_json = None;
-    let items: Vec<&Value> = match &root {
+    let items: Vec<&Value> = match root {
         Value::Array(a) => a.iter().collect(),
         Value::Object(o) if o.contains_key("entities") => {
             if let Some(k) = o.keys().find(|k| *k != "entities" && *k != "shells") {
@@ -146,7 +153,7 @@ pub fn parse_trimmed_model(
                 .iter()
                 .collect()
         }
-        Value::Object(o) if o.contains_key("type") => vec![&root],
+        Value::Object(o) if o.contains_key("type") => vec![root],
         other => {
             return Err(top.expected(
                 "an entity object (with \"type\"), an array of entities or {\"entities\": [...]}",

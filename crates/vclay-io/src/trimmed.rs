@@ -45,6 +45,7 @@
 //! surfaces that are not iso-lines are polylines (see above).
 
 pub mod mesh;
+pub mod sculpt;
 
 pub use mesh::{MAX_SHELL_SAMPLES, tessellate_shell};
 

@@ -399,6 +399,9 @@ pub fn actions(kind: ModelKind) -> Vec<&'static str> {
         ModelKind::Ffd => vec!["ffd-move", "move-point", "set-weight", "set"],
         ModelKind::PdeSurface => vec!["pde-set", "pde-local", "release", "set"],
         ModelKind::DnurbsTriangular => vec!["set"],
+        // A CAD part's face: a D-NURBS surface whose weights are held (set-weight) and which
+        // has no inside of its own (inflate) and fits no data.
+        ModelKind::CadPart => but(DNURBS_SURFACE, &["inflate", "data", "set-weight"]),
         ModelKind::DnurbsPatches => but(
             DNURBS_SURFACE,
             &[

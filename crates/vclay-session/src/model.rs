@@ -33,11 +33,14 @@ pub enum ModelKind {
     DnurbsTriangular,
     /// Several tensor-product D-NURBS patches with G0/G1 joins (`d-nurbs.txt` section 6).
     DnurbsPatches,
+    /// A CAD part of trimmed faces with one face a D-NURBS surface (issue 30;
+    /// `d-nurbs.txt` section 4.2 for the face, `vclay_io::trimmed` for the part).
+    CadPart,
 }
 
 impl ModelKind {
     /// Every kind, in the order files document them.
-    pub const ALL: [ModelKind; 9] = [
+    pub const ALL: [ModelKind; 10] = [
         ModelKind::DnurbsCurve,
         ModelKind::DnurbsSurface,
         ModelKind::DnurbsSwung,
@@ -47,6 +50,7 @@ impl ModelKind {
         ModelKind::PdeSurface,
         ModelKind::DnurbsTriangular,
         ModelKind::DnurbsPatches,
+        ModelKind::CadPart,
     ];
 
     /// The name files use.
@@ -61,6 +65,7 @@ impl ModelKind {
             ModelKind::PdeSurface => "pde-surface",
             ModelKind::DnurbsTriangular => "dnurbs-triangular",
             ModelKind::DnurbsPatches => "dnurbs-patches",
+            ModelKind::CadPart => "cad-part",
         }
     }
 

@@ -6,7 +6,7 @@
 //! | --- | --- |
 //! | scenario (TOML with a `[model]` table) | its models and scheduled timeline, with its run length and outputs |
 //! | session (JSON whose `format` is `vclay-session`) | the saved session, bit for bit |
-//! | model JSON (`entities`), STEP (`ISO-10303-21`), IGES (column 73 `S`) | the first surface as a `dnurbs-surface` (else the first curve as a `dnurbs-curve`, else the first volume as a `bspline-solid`) |
+//! | model JSON (`entities`), STEP (`ISO-10303-21`), IGES (column 73 `S`) | a part with a closed trimmed shell (a solid) as a `cad-part` whose largest face is sculpted; else the first surface as a `dnurbs-surface` (else the first curve as a `dnurbs-curve`, else the first volume as a `bspline-solid`) |
 //! | triangular model JSON (`"type": "triangular-nurbs"`) | a `dnurbs-triangular` |
 //! | PDE spec JSON (`patches`, `trial_terms`) | a `pde-surface` |
 //! | lattice (`OVM ASCII`, VTK `UnstructuredGrid`) | a level-2 `subdivision-solid` |
@@ -448,9 +448,20 @@ fn check_extension(path: &Path, kind: FileKind, allowed: &[&str]) -> Result<(), 
     ))
 }
 
-/// The spec of a model file's first surface (else curve, else volume).
+/// The spec of a model file: a `cad-part` when it holds a closed trimmed shell (a solid),
+/// else its first surface (else curve, else volume).
 fn model_file_spec(abs: &Path) -> Result<ModelSpec, SessionError> {
-    let entities = vclay_io::model::read_model(abs).map_err(|e| SessionError::io(abs, e))?;
+    let import = vclay_io::model::import_model(abs).map_err(|e| SessionError::io(abs, e))?;
+    if let Some(shell) = import.shells.iter().position(|s| s.closed) {
+        return Ok(ModelSpec::CadPart(models::KindSpec::of_model(
+            models::part::ModelKeys {
+                file: Some(PathBuf::from(abs)),
+                shell: Some(shell),
+                ..Default::default()
+            },
+        )));
+    }
+    let entities: Vec<_> = import.entities.into_iter().map(|e| e.entity).collect();
     let first = |dims: usize| entities.iter().position(|e| e.param_dims() == dims);
     let dnurbs = |entity: usize| {
         models::KindSpec::of_model(models::dnurbs::ModelKeys {

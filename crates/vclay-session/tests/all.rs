@@ -6,6 +6,7 @@
 mod common;
 
 mod brush;
+mod cad_part;
 mod describe;
 mod dnurbs;
 mod dnurbs_issue18;

@@ -940,6 +940,12 @@ impl DnurbsModel {
         self.engine.control_points(false)
     }
 
+    /// The surface at the current state (`None` for a curve or a swung surface's curves'
+    /// failure to form one).
+    pub fn current_surface(&self) -> Result<Option<NurbsSurface>, SessionError> {
+        self.engine.surface().map_err(dyn_err)
+    }
+
     /// The generalized coordinates (generalized engine) or the control point coordinates
     /// x, y, z (frozen engine), flat: for exact comparisons.
     pub fn coordinates(&self) -> Vec<f64> {

@@ -22,6 +22,7 @@ pub mod dnurbs_patches;
 pub mod dnurbs_tri;
 pub mod ffd;
 pub mod generalized;
+pub mod part;
 pub mod pde;
 mod saved;
 pub mod solid;
@@ -163,6 +164,8 @@ pub enum ModelSpec {
     DnurbsTriangular(dnurbs_tri::TriangularSpec),
     /// `dnurbs-patches`.
     DnurbsPatches(dnurbs_patches::PatchesSpec),
+    /// `cad-part`.
+    CadPart(part::PartSpec),
 }
 
 /// The keys of a kind's `[model]`, `[material]` and `[simulation]` tables as one value.
@@ -273,6 +276,7 @@ impl ModelSpec {
             ModelSpec::PdeSurface(_) => ModelKind::PdeSurface,
             ModelSpec::DnurbsTriangular(_) => ModelKind::DnurbsTriangular,
             ModelSpec::DnurbsPatches(_) => ModelKind::DnurbsPatches,
+            ModelSpec::CadPart(_) => ModelKind::CadPart,
         }
     }
 
@@ -293,6 +297,7 @@ impl ModelSpec {
                 ModelSpec::DnurbsTriangular(KindSpec::from_tables(spec)?)
             }
             ModelKind::DnurbsPatches => ModelSpec::DnurbsPatches(KindSpec::from_tables(spec)?),
+            ModelKind::CadPart => ModelSpec::CadPart(KindSpec::from_tables(spec)?),
         })
     }
 
@@ -315,6 +320,7 @@ impl ModelSpec {
             ModelSpec::DnurbsPatches(s) => {
                 Box::new(dnurbs_patches::PatchesModel::from_keys(s, base)?)
             }
+            ModelSpec::CadPart(s) => Box::new(part::PartModel::from_keys(s, base)?),
         })
     }
 }
@@ -338,6 +344,7 @@ pub fn load(kind: ModelKind, saved: &serde_json::Value) -> Result<Box<dyn Model>
         ModelKind::PdeSurface => Box::new(pde::PdeSurfaceModel::load(saved)?),
         ModelKind::DnurbsTriangular => Box::new(dnurbs_tri::TriangularModel::load(saved)?),
         ModelKind::DnurbsPatches => Box::new(dnurbs_patches::PatchesModel::load(saved)?),
+        ModelKind::CadPart => Box::new(part::PartModel::load(saved)?),
     })
 }
 

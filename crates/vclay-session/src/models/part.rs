@@ -1,0 +1,557 @@
+//! The `cad-part` kind (issue 30): a CAD part of trimmed faces (a STEP B-rep, or a model JSON
+//! with `"shells"`) in which one face is a D-NURBS surface that the designer sculpts, the other
+//! faces staying as they are.
+//!
+//! **What.** The part is the file's entities and trimmed shells ([`vclay_io::trimmed`]). The
+//! chosen face's surface becomes a `dnurbs-surface` ([`DnurbsModel`], generalized engine,
+//! weights held: `d-nurbs.txt` eq 18 with the control points as the only unknowns): refined
+//! exactly first ([`refine_for_sculpting`]: degree at least 3, `refine` control points per
+//! direction), so a plane's bilinear patch gets interior control points to move. Every edit of
+//! a D-NURBS surface (rope, force, fix, free, ...) acts on it through the session layer's tools.
+//! The face's trim loops are its pcurves, in the surface's parameter space: they move with it.
+//!
+//! **The boundary.** With `boundary = "fixed"` (the default) the control points whose basis
+//! functions are not zero on the face's pcurves ([`boundary_control_points`]) are fixed when the
+//! model is built, so the face's edges, and with them the closed solid, stay exactly as they
+//! were (the part's other faces are never touched). Freeing them (`free`, or
+//! `boundary = "free"`) lets the edges move: the edges' 3D curves are then recomputed from the
+//! pcurves on the new surface ([`with_face_surface`]) for the display and mesh exports, and
+//! the neighbours' sides of those edges no longer meet them. [`PartModel::gaps`] measures this;
+//! exporting the part as a B-rep (STEP, IGES, model JSON) while a gap exceeds the tolerance
+//! `TRIM_RTOL x size` is refused with an error that names the edge, the neighbouring face
+//! and the gap (no file is written; meshes are still written).
+//!
+//! **Limitations.** One face per model (chosen by `face`; by default the largest). Picking
+//! uses the face's whole (untrimmed) surface. The display mesh is the whole part
+//! re-tessellated ([`vclay_io::trimmed::tessellate_shell`], [`DISPLAY_SAMPLES`]) at each
+//! revision.
+
+use std::path::{Path, PathBuf};
+
+use vclay_core::TriMesh;
+use vclay_io::brep::Shell;
+use vclay_io::model::{Entity, NamedEntity};
+use vclay_io::trimmed::TRIM_RTOL;
+use vclay_io::trimmed::sculpt::{
+    EdgeGap, boundary_control_points, face_edge_gaps, refine_for_sculpting, with_face_surface,
+};
+use vclay_spline::{NurbsSurface, ParametricCurve, ParametricSurface};
+
+use super::SpecError;
+use super::dnurbs::{self, DnurbsModel};
+use crate::command::Edit;
+use crate::error::SessionError;
+use crate::model::{
+    Applied, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot, StepReport,
+    Undo, extension, unsupported_export,
+};
+
+/// Control points per direction of the sculpted face's refined surface (`refine`): a plate's
+/// face with a hole keeps free control points between its edges at this density.
+pub const DEFAULT_REFINE: usize = 24;
+/// Time step of a part whose `[simulation]` and material preset give none (the model files').
+pub const DEFAULT_DT: f64 = crate::open::MODEL_FILE_DT;
+/// Edge spacing `size / DISPLAY_SAMPLES` of the display mesh.
+pub const DISPLAY_SAMPLES: usize = 32;
+
+/// The formats a part exports.
+const FORMATS: [&str; 7] = ["step", "igs", "json", "obj", "stl", "ply", "glb"];
+
+/// The typed spec of a `cad-part` ([`super::ModelSpec`]): its `[model]` keys, and the
+/// `[material]` and `[simulation]` keys of a `dnurbs-surface`.
+pub type PartSpec = super::KindSpec<ModelKeys, dnurbs::MaterialKeys, dnurbs::SimKeys>;
+
+scenario_keys! {
+    /// The `[model]` keys of a `cad-part`.
+    pub struct ModelKeys {
+        /// STEP B-rep or model JSON with `"shells"` (required).
+        pub file: Option<PathBuf>,
+        /// Shell index (default 0).
+        pub shell: Option<usize>,
+        /// Face index in the shell (default: the largest face).
+        pub face: Option<usize>,
+        /// `[nu, nv]`: control points of the refined face (default [`DEFAULT_REFINE`] each).
+        pub refine: Option<Vec<usize>>,
+        /// `"fixed"` (default) or `"free"`.
+        pub boundary: Option<String>,
+    }
+}
+
+/// A CAD part with one face sculpted as a D-NURBS surface (see the [module docs](self)).
+#[derive(Clone, Debug)]
+pub struct PartModel {
+    /// The sculpted face's surface.
+    face: DnurbsModel,
+    /// The part's entities as read (the sculpted face's entity is replaced on export).
+    entities: Vec<NamedEntity>,
+    /// The part's shells as read.
+    shells: Vec<Shell>,
+    /// The shell and face sculpted.
+    shell: usize,
+    face_index: usize,
+    /// The entity of the sculpted face's surface.
+    entity: usize,
+    /// The control points fixed as the face's boundary when built.
+    boundary: Vec<usize>,
+    /// Diagonal of the part's vertices' bounding box.
+    size: f64,
+}
+
+/// The error of a `[model]` key.
+fn key_err(key: &str, what: impl std::fmt::Display) -> SpecError {
+    SpecError::new("model", key, what)
+}
+
+/// A face's area estimated from its loops' pcurves: the parameter-space area inside the outer
+/// loop minus the holes (shoelace over 32 samples per pcurve) times `|S_u x S_v|` at the
+/// middle of the parameter box.
+fn face_area(f: &vclay_io::brep::Face) -> f64 {
+    let mut area = 0.0;
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for l in f.loops() {
+        let mut pts = Vec::new();
+        for it in l {
+            if let vclay_io::brep::LoopItem::Edge {
+                forward,
+                pcurve: Some(k),
+                ..
+            } = *it
+                && let Some(c) = f.pcurves.get(k)
+            {
+                let d = c.domain();
+                let mut seg: Vec<[f64; 2]> = (0..32)
+                    .filter_map(|i| c.point(d.min + d.length() * i as f64 / 31.0).ok())
+                    .map(|q| [q.x, q.y])
+                    .collect();
+                if !forward {
+                    seg.reverse();
+                }
+                pts.extend(seg);
+            }
+        }
+        let n = pts.len();
+        let mut a = 0.0;
+        for i in 0..n {
+            let (p, q) = (pts[i], pts[(i + 1) % n]);
+            a += p[0] * q[1] - q[0] * p[1];
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        area += 0.5 * a;
+    }
+    if !lo[0].is_finite() {
+        return 0.0;
+    }
+    let (u, v) = (0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]));
+    let jac = f
+        .surface
+        .derivatives(u, v, 1)
+        .ok()
+        .map_or(0.0, |d| d[1][0].cross(&d[0][1]).norm());
+    area.abs() * jac
+}
+
+impl PartModel {
+    /// Builds a part from a scenario's (or a front end's) keys; relative files resolve against
+    /// `base`. Errors name the key.
+    pub fn from_keys(spec: &PartSpec, base: &Path) -> Result<Self, SpecError> {
+        let m = &spec.model;
+        let file = m
+            .file
+            .as_ref()
+            .ok_or_else(|| key_err("file", "missing: a cad-part needs `file`"))?;
+        let path = base.join(file);
+        let import =
+            vclay_io::model::import_model(&path).map_err(|e| key_err("file", e.to_string()))?;
+        if import.shells.is_empty() {
+            return Err(key_err(
+                "file",
+                format!(
+                    "{} has no trimmed B-rep (STEP faces, or \"shells\" in a model file): open its surfaces as a dnurbs-surface",
+                    path.display()
+                ),
+            ));
+        }
+        let shell = m.shell.unwrap_or(0);
+        let sh = import.shells.get(shell).ok_or_else(|| {
+            key_err(
+                "shell",
+                format!(
+                    "shell {shell} out of range ({} shells)",
+                    import.shells.len()
+                ),
+            )
+        })?;
+        let face_index = match m.face {
+            Some(f) if f < sh.faces.len() => f,
+            Some(f) => {
+                return Err(key_err(
+                    "face",
+                    format!(
+                        "face {f} out of range (shell {shell} has {} faces)",
+                        sh.faces.len()
+                    ),
+                ));
+            }
+            None => {
+                (0..sh.faces.len())
+                    .map(|i| (i, face_area(&sh.faces[i])))
+                    .fold((0, f64::NEG_INFINITY), |b, x| if x.1 > b.1 { x } else { b })
+                    .0
+            }
+        };
+        let face = &sh.faces[face_index];
+        let entity = face.entity.ok_or_else(|| {
+            key_err(
+                "face",
+                format!("face {face_index} refers to no surface entity"),
+            )
+        })?;
+        let refine = match m.refine.as_deref() {
+            None => [DEFAULT_REFINE; 2],
+            Some(&[a, b]) => [a, b],
+            Some(_) => return Err(key_err("refine", "expected [nu, nv]")),
+        };
+        let refined =
+            refine_for_sculpting(&face.surface, refine).map_err(|e| key_err("refine", e))?;
+        let fixed = match m.boundary.as_deref() {
+            None | Some("fixed") => true,
+            Some("free") => false,
+            Some(o) => {
+                return Err(key_err(
+                    "boundary",
+                    format!("\"{o}\": expected \"fixed\" or \"free\""),
+                ));
+            }
+        };
+        let boundary = if fixed {
+            boundary_control_points(face, &refined).map_err(|e| key_err("face", e))?
+        } else {
+            Vec::new()
+        };
+        let [nu, nv] = refined.dims();
+        if boundary.len() == nu * nv {
+            return Err(key_err(
+                "refine",
+                format!(
+                    "every one of the {nu} x {nv} control points of face {face_index} acts on its edges, so none could move with the boundary fixed: give more (e.g. refine = [{0}, {0}])",
+                    2 * nu.max(nv)
+                ),
+            ));
+        }
+        let mut simulation = spec.simulation.clone();
+        if simulation.dt.is_none() && spec.material.preset.is_none() {
+            simulation.dt = Some(DEFAULT_DT);
+        }
+        let inner = dnurbs::DnurbsSpec {
+            model: dnurbs::ModelKeys {
+                surface: Some(refined),
+                weights: Some("frozen".into()),
+                fix: boundary.clone(),
+                ..Default::default()
+            },
+            material: spec.material.clone(),
+            simulation,
+        };
+        let face_model = DnurbsModel::from_keys(ModelKind::DnurbsSurface, &inner, base)?;
+        let size = part_size(&import.shells);
+        Ok(Self {
+            face: face_model,
+            entities: import.entities,
+            shells: import.shells,
+            shell,
+            face_index,
+            entity,
+            boundary,
+            size,
+        })
+    }
+
+    /// The sculpted face: `(shell, face)` indices in the part.
+    pub fn face(&self) -> (usize, usize) {
+        (self.shell, self.face_index)
+    }
+
+    /// The control points fixed as the face's boundary when the model was built (empty with
+    /// `boundary = "free"`).
+    pub fn boundary(&self) -> &[usize] {
+        &self.boundary
+    }
+
+    /// The tolerance within which the sculpted face's edges still meet their neighbours:
+    /// `TRIM_RTOL x size` (the reader's, [`vclay_io::trimmed::validate_shell`]).
+    pub fn tolerance(&self) -> f64 {
+        TRIM_RTOL * self.size
+    }
+
+    /// The sculpted face's surface now.
+    pub fn surface(&self) -> Result<NurbsSurface, SessionError> {
+        self.face
+            .current_surface()?
+            .ok_or_else(|| SessionError::model("the sculpted face has no surface"))
+    }
+
+    /// How far each edge of the sculpted face moved and how far it is from the neighbouring
+    /// face's side ([`EdgeGap`]).
+    pub fn gaps(&self) -> Result<Vec<EdgeGap>, SessionError> {
+        face_edge_gaps(&self.shells[self.shell], self.face_index, &self.surface()?)
+            .map_err(SessionError::model)
+    }
+
+    /// The part now: its entities (the face's surface the sculpted one) and shells (the face's
+    /// moved edges recomputed, [`with_face_surface`]).
+    pub fn part(&self) -> Result<(Vec<NamedEntity>, Vec<Shell>), SessionError> {
+        let s = self.surface()?;
+        let mut entities = self.entities.clone();
+        entities[self.entity].entity = Entity::Surface(s.clone());
+        let mut shells = self.shells.clone();
+        shells[self.shell] = with_face_surface(
+            &self.shells[self.shell],
+            self.face_index,
+            &s,
+            self.tolerance(),
+        )
+        .map_err(SessionError::model)?;
+        Ok((entities, shells))
+    }
+
+    /// Rebuilds a part saved by [`Model::save`].
+    pub fn load(v: &serde_json::Value) -> Result<Self, SessionError> {
+        let field = |k: &str| {
+            v.get(k)
+                .ok_or_else(|| SessionError::model(format!("saved cad-part: no \"{k}\"")))
+        };
+        let index = |k: &str| -> Result<usize, SessionError> {
+            field(k)?.as_u64().map(|x| x as usize).ok_or_else(|| {
+                SessionError::model(format!("saved cad-part: \"{k}\" is not an index"))
+            })
+        };
+        let (entities, shells) = vclay_io::model::trimmed_model_of_value(field("part")?)
+            .map_err(|e| SessionError::model(format!("saved cad-part: part: {e}")))?;
+        let (shell, face_index) = (index("shell")?, index("face")?);
+        let entity = shells
+            .get(shell)
+            .and_then(|s| s.faces.get(face_index))
+            .and_then(|f| f.entity)
+            .filter(|&e| e < entities.len())
+            .ok_or_else(|| {
+                SessionError::model(format!(
+                    "saved cad-part: shell {shell} face {face_index} is not a face of the part"
+                ))
+            })?;
+        let boundary: Vec<usize> = serde_json::from_value(field("boundary")?.clone())
+            .map_err(|e| SessionError::model(format!("saved cad-part: boundary: {e}")))?;
+        let face = DnurbsModel::load(ModelKind::DnurbsSurface, field("dnurbs")?)?;
+        let size = part_size(&shells);
+        Ok(Self {
+            face,
+            entities,
+            shells,
+            shell,
+            face_index,
+            entity,
+            boundary,
+            size,
+        })
+    }
+
+    /// The largest gap over the tolerance, as an error for exporting `path` as a B-rep.
+    fn check_closed(&self, path: &Path) -> Result<(), SessionError> {
+        let tol = self.tolerance();
+        let worst = self
+            .gaps()?
+            .into_iter()
+            .filter(|g| g.gap > tol)
+            .max_by(|a, b| a.gap.total_cmp(&b.gap));
+        match worst {
+            None => Ok(()),
+            Some(g) => Err(SessionError::io(
+                path,
+                format!(
+                    "not written: the sculpted face's boundary moved, its edge {} is up to {:.3e} from {} (tolerance {tol:.3e}), so the faces no longer close; fix the face's boundary control points (`boundary = \"fixed\"`, the default) or export a mesh (.obj, .stl, .ply, .glb)",
+                    g.edge,
+                    g.gap,
+                    match g.neighbour {
+                        Some(n) => format!("face {n}'s side"),
+                        None => "where it was".into(),
+                    }
+                ),
+            )),
+        }
+    }
+}
+
+/// The diagonal of the bounding box of the shells' vertices.
+fn part_size(shells: &[Shell]) -> f64 {
+    super::generalized::bbox_diagonal(
+        shells
+            .iter()
+            .flat_map(|s| s.vertices.iter().map(|v| &v.point)),
+    )
+}
+
+impl Model for PartModel {
+    fn kind(&self) -> ModelKind {
+        ModelKind::CadPart
+    }
+
+    fn summary(&self) -> String {
+        let faces: usize = self.shells.iter().map(|s| s.faces.len()).sum();
+        let mut s = format!(
+            "{} faces, face {} of shell {} sculpted ({} boundary control points fixed): {}",
+            faces,
+            self.face_index,
+            self.shell,
+            self.boundary.len(),
+            self.face.summary()
+        );
+        if let Ok(g) = self.gaps() {
+            let worst = g.iter().map(|g| g.gap).fold(0.0, f64::max);
+            if worst > self.tolerance() {
+                s.push_str(&format!(
+                    "; the boundary moved: its edges are up to {worst:.3e} from the neighbouring faces (the part is no longer closed)"
+                ));
+            }
+        }
+        s
+    }
+
+    crate::model::clock_methods!(self => self.face.time(), self.face.dt(), self.face.steps());
+
+    fn step(&mut self) -> Result<StepReport, SessionError> {
+        self.face.step()
+    }
+
+    fn energy(&self) -> Energy {
+        self.face.energy()
+    }
+
+    fn size(&self) -> f64 {
+        self.size
+    }
+
+    fn revision(&self) -> u64 {
+        self.face.revision()
+    }
+
+    fn display_mesh(&self) -> Result<TriMesh, SessionError> {
+        let (_, shells) = self.part()?;
+        let mut out = TriMesh::new();
+        for sh in &shells {
+            let m = vclay_io::trimmed::tessellate_shell(sh, DISPLAY_SAMPLES)
+                .map_err(SessionError::model)?;
+            let base = out.positions.len() as u32;
+            out.positions.extend(m.positions);
+            out.normals.extend(m.normals);
+            out.triangles
+                .extend(m.triangles.into_iter().map(|t| t.map(|i| i + base)));
+        }
+        Ok(out)
+    }
+
+    fn display_lines(&self) -> Vec<LineSet> {
+        let mut out = self.face.display_lines();
+        // The part's edges, as curves.
+        if let Ok((_, shells)) = self.part() {
+            let mut edges = LineSet::new(LineRole::Curve);
+            for e in shells.iter().flat_map(|s| &s.edges) {
+                let d = e.curve.domain();
+                let pts: Vec<_> = (0..=16)
+                    .filter_map(|k| e.curve.point(d.min + d.length() * k as f64 / 16.0).ok())
+                    .collect();
+                edges.polyline(&pts);
+            }
+            out.push(edges);
+        }
+        out
+    }
+
+    fn pick(&self, ray: &Ray, tolerance: f64) -> Option<Hit> {
+        self.face.pick(ray, tolerance)
+    }
+
+    fn params(&self) -> Vec<Param> {
+        self.face.params()
+    }
+
+    fn apply(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
+        self.face.apply(edit)
+    }
+
+    fn undo(&mut self, undo: Undo) -> Result<(), SessionError> {
+        self.face.undo(undo)
+    }
+
+    fn snapshot(&self) -> Snapshot {
+        self.face.snapshot()
+    }
+
+    fn restore(&mut self, snapshot: &Snapshot) -> Result<(), SessionError> {
+        self.face.restore(snapshot)
+    }
+
+    fn clone_model(&self) -> Box<dyn Model> {
+        Box::new(self.clone())
+    }
+
+    fn export(&self, path: &Path) -> Result<(), SessionError> {
+        let io = |e: &dyn std::fmt::Display| SessionError::io(path, e);
+        let ext = extension(path);
+        match ext.as_str() {
+            "step" | "igs" | "json" => {
+                self.check_closed(path)?;
+                let (entities, shells) = self.part()?;
+                match ext.as_str() {
+                    "step" => vclay_io::step::write_step_trimmed(
+                        path,
+                        &entities,
+                        &shells,
+                        vclay_io::step::StepLayout::Brep,
+                    ),
+                    "igs" => vclay_io::iges::write_iges_trimmed(
+                        path,
+                        &entities,
+                        &shells,
+                        vclay_io::iges::IgesLayout::default(),
+                    ),
+                    _ => vclay_io::model::write_trimmed_model(path, &entities, &shells),
+                }
+                .map_err(|e| io(&e))
+            }
+            "obj" | "stl" | "ply" => {
+                vclay_io::mesh::write_mesh(path, &self.display_mesh()?).map_err(|e| io(&e))
+            }
+            "glb" => vclay_io::gltf::write_glb(
+                path,
+                &[vclay_io::gltf::GlbMesh::new("part", self.display_mesh()?)],
+            )
+            .map_err(|e| io(&e)),
+            _ => Err(unsupported_export(self.kind(), path, &FORMATS)),
+        }
+    }
+
+    fn save(&self) -> Result<serde_json::Value, SessionError> {
+        Ok(serde_json::json!({
+            "dnurbs": self.face.save()?,
+            "part": vclay_io::model::trimmed_to_json(&self.entities, &self.shells),
+            "shell": self.shell,
+            "face": self.face_index,
+            "boundary": self.boundary,
+        }))
+    }
+
+    fn control_points(&self) -> Vec<vclay_core::Vec3> {
+        self.face.control_points()
+    }
+
+    fn export_formats(&self) -> Vec<&'static str> {
+        FORMATS.to_vec()
+    }
+
+    fn plastic_flow(&mut self, fraction: f64, yield_distance: f64) -> Result<usize, SessionError> {
+        self.face.plastic_flow(fraction, yield_distance)
+    }
+}
