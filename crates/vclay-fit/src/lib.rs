@@ -561,12 +561,8 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
         judge = true;
         if round == 0 {
             // Gross outliers in a plain fit (robust::RobustMode): `auto` goes on as `tukey`.
-            first_round_outliers = robust::gross_outliers(
-                &distances,
-                &params,
-                cand_sigma,
-                robust::AUTO_FLOOR * size,
-            );
+            first_round_outliers =
+                robust::gross_outliers(&distances, &params, cand_sigma, robust::AUTO_FLOOR * size);
             if opts.robust == RobustMode::Auto
                 && robust::auto_switches(first_round_outliers, points.len())
             {

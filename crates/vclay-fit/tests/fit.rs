@@ -507,8 +507,12 @@ fn plain_least_squares_deviation(pts: &[Vec3], g: usize, f: fn(f64, f64) -> f64)
     use vclay_spline::KnotVector;
     let p = 3;
     let knots = KnotVector::clamped_uniform(p, g).unwrap();
-    let (x0, x1) = pts.iter().fold((f64::MAX, f64::MIN), |a, q| (a.0.min(q.x), a.1.max(q.x)));
-    let (y0, y1) = pts.iter().fold((f64::MAX, f64::MIN), |a, q| (a.0.min(q.y), a.1.max(q.y)));
+    let (x0, x1) = pts
+        .iter()
+        .fold((f64::MAX, f64::MIN), |a, q| (a.0.min(q.x), a.1.max(q.x)));
+    let (y0, y1) = pts
+        .iter()
+        .fold((f64::MAX, f64::MIN), |a, q| (a.0.min(q.y), a.1.max(q.y)));
     // The coefficient indices and basis products of the 16 functions non-zero at (x, y).
     let row = |x: f64, y: f64| {
         let (u, v) = ((x - x0) / (x1 - x0), (y - y0) / (y1 - y0));
@@ -536,7 +540,10 @@ fn plain_least_squares_deviation(pts: &[Vec3], g: usize, f: fn(f64, f64) -> f64)
             }
         }
     }
-    let c = ata.cholesky().expect("a full scan determines the net").solve(&atz);
+    let c = ata
+        .cholesky()
+        .expect("a full scan determines the net")
+        .solve(&atz);
     let (mut s2, mut m) = (0.0, 0usize);
     for i in 0..=40 {
         for j in 0..=40 {
@@ -568,7 +575,10 @@ fn default_fit_detects_gross_outliers() {
         let fit = fit_surface(&pts, &opts(16)).unwrap();
         let r = &fit.report;
         assert_eq!(r.robust_mode, RobustMode::Auto);
-        assert!(r.outliers_detected && r.robust == Some(Robust::Tukey), "{r:?}");
+        assert!(
+            r.outliers_detected && r.robust == Some(Robust::Tukey),
+            "{r:?}"
+        );
         // The outliers (and a few inliers the first round's surface was pulled away from).
         let planted = pts.len().div_ceil(every);
         assert!(
@@ -617,11 +627,19 @@ fn auto_leaves_clean_scans_alone() {
     let steep = |x: f64, y: f64| 0.5 * (3.0 * x).sin() * (2.0 * y).cos();
     let hole = |x: f64, y: f64| (x - 0.2).powi(2) + (y + 0.1).powi(2) < 0.0625;
     let cases: [(&str, Vec<Vec3>, usize); 7] = [
-        ("noisy saddle", scan(saddle, 4000, 0.001, 8, |_, _| false), 10),
+        (
+            "noisy saddle",
+            scan(saddle, 4000, 0.001, 8, |_, _| false),
+            10,
+        ),
         ("exact saddle", scan(saddle, 4000, 0.0, 7, |_, _| false), 10),
         ("exact wave", scan(wave, 10_000, 0.0, 11, |_, _| false), 32),
         ("coarse net", scan(steep, 3000, 0.002, 5, |_, _| false), 6),
-        ("exact paraboloid", scan(paraboloid, 3000, 0.0, 5, |_, _| false), 8),
+        (
+            "exact paraboloid",
+            scan(paraboloid, 3000, 0.0, 5, |_, _| false),
+            8,
+        ),
         ("hole", scan(wave, 20_000, 0.002, 5, hole), 24),
         ("triangle", scan(wave, 4000, 0.002, 23, |x, y| y > x), 12),
     ];
