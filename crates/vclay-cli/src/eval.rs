@@ -315,10 +315,11 @@ pub fn evaluate_lattice(
     let lattice = vclay::lattice::formats::ovm::read(path)?;
     crate::limits::check_memory(
         &format!(
-            "the limit of {} ({} cells) at {} queries",
+            "the limit of {} ({} cells) at {} quer{}",
             path.display(),
             lattice.num_cells(),
-            queries.len()
+            queries.len(),
+            if queries.len() == 1 { "y" } else { "ies" }
         ),
         limit_eval_bytes(lattice.num_cells(), queries.len(), text_bytes),
     )?;
