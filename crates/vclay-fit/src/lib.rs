@@ -26,8 +26,11 @@
 //!    toward their foot points pull the surface to them, and such a round is thrown away, so
 //!    corrections never make a fit worse, by that objective, than its first solve
 //!    (`corrections = 0`).
-//! 4. Optionally robust: the weights `w_k` are re-estimated from the distances after each
-//!    round (IRLS with Huber or Tukey weights, [`robust`]), for `robust_rounds` extra rounds.
+//! 4. Robust when asked or needed: the weights `w_k` are re-estimated from the distances after
+//!    each round (IRLS with Huber or Tukey weights, [`robust`]), for `robust_rounds` extra
+//!    rounds. The default, [`RobustMode::Auto`], starts plain and turns to Tukey's weights when
+//!    its first round leaves more than 0.1 % of the points as gross outliers (far beyond the
+//!    scale of their neighbours' distances); otherwise it stays plain least squares.
 //!    Robust or not, the base rectangle is trimmed to where the inliers are when the fringe
 //!    it leaves out holds mostly outliers (points beyond `4.685 sigma`, [`plane`]); the
 //!    points outside get weight 0, and a new domain gets a round of its own.
@@ -261,8 +264,9 @@ pub struct FitReport {
     /// Whether `auto` found gross outliers after the first round and went on robustly (false
     /// in the other modes).
     pub outliers_detected: bool,
-    /// Points beyond Tukey's rejection distance `4.685 sigma` of the first (plain) round, with
-    /// `sigma` its robust scale: what `auto` decides by ([`robust::gross_outliers`]).
+    /// Gross outliers of the first (plain) round: points beyond Tukey's rejection distance of
+    /// the larger of the global and their neighbours' robust scale, and beyond `1e-4` of the
+    /// model size; what `auto` decides by ([`robust::gross_outliers`]; counted in every mode).
     pub first_round_outliers: usize,
     /// RMS of the closest-point distances of all points.
     pub rms: f64,
