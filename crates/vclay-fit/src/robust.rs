@@ -245,3 +245,70 @@ pub fn weights(loss: Robust, distances: &[f64], sigma: f64, out: &mut [f64]) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 4096 points on a 64 x 64 grid of parameters with distances `d(u, v)`.
+    fn grid(d: impl Fn(usize, usize) -> f64) -> (Vec<f64>, Vec<[f64; 2]>) {
+        let (mut dist, mut params) = (Vec::new(), Vec::new());
+        for i in 0..64 {
+            for j in 0..64 {
+                params.push([(i as f64 + 0.5) / 64.0, (j as f64 + 0.5) / 64.0]);
+                dist.push(d(i, j));
+            }
+        }
+        (dist, params)
+    }
+
+    #[test]
+    fn isolated_far_points_are_gross_a_far_region_is_not() {
+        // Noise-like distances 1e-3 (varying 0.5-1.5e-3), 1 % of the points at 0.5: isolated.
+        let base = |i: usize, j: usize| 1e-3 * (1.0 + 0.5 * ((i * 7 + j * 13) as f64).sin());
+        let (d, p) = grid(|i, j| {
+            if (i * 64 + j) % 100 == 0 {
+                0.5
+            } else {
+                base(i, j)
+            }
+        });
+        let sigma = 1.4826 * 1e-3;
+        let n = gross_outliers(&d, &p, sigma, 1e-6);
+        assert_eq!(n, 41);
+        assert!(auto_switches(n, d.len()));
+        // A whole corner (a 17 x 17 block, 7 % of the points, about 3 x 3 of the test's cells)
+        // 20 times farther: model error spread over a region, far only against the global
+        // scale. (A region smaller than a cell is flagged: formats.md section 11.)
+        let (d, p) = grid(|i, j| base(i, j) * if i < 17 && j < 17 { 20.0 } else { 1.0 });
+        let n = gross_outliers(&d, &p, sigma, 1e-6);
+        assert!(!auto_switches(n, d.len()), "{n}");
+        // Below the floor nothing counts.
+        let (d, p) = grid(|i, j| {
+            if (i * 64 + j) % 100 == 0 {
+                0.5
+            } else {
+                base(i, j)
+            }
+        });
+        assert_eq!(gross_outliers(&d, &p, sigma, 1.0), 0);
+    }
+
+    #[test]
+    fn modes_parse_and_print() {
+        for (s, m) in [
+            ("auto", RobustMode::Auto),
+            ("none", RobustMode::None),
+            ("off", RobustMode::None),
+            ("Tukey", RobustMode::Always(Robust::Tukey)),
+            ("huber", RobustMode::Always(Robust::Huber)),
+        ] {
+            assert_eq!(s.parse::<RobustMode>().unwrap(), m);
+        }
+        assert_eq!(RobustMode::default().to_string(), "auto");
+        let e = "cauchy".parse::<RobustMode>().unwrap_err();
+        assert!(e.contains("auto, none, tukey or huber"), "{e}");
+        // Fewer than 3, or at most 0.1 %, is not a pattern.
+        assert!(!auto_switches(2, 100) && !auto_switches(10, 10_000) && auto_switches(11, 10_000));
+    }
+}
