@@ -9,7 +9,8 @@ Newton; for SciPy and geomdl this script runs vectorized Gauss-Newton on the foo
 finite-difference derivatives). Time: the fit alone (vclay: the report's `total`, which
 excludes reading the file; SciPy and geomdl: the call).
 
-Usage: compare_fit.py VCLAY DATA_DIR   (clouds from bench/get_scan.py)."""
+Usage: compare_fit.py VCLAY DATA_DIR [CLOUD.ply ...]   (clouds from bench/get_scan.py; all of
+them unless named)."""
 
 import json
 import os
@@ -82,7 +83,7 @@ def run_vclay(vclay, path, extra=(), truth=False):
         wall = time.perf_counter() - t
         r = json.load(open(rep))
         out = {"rms": r["rms"], "max": r["max"], "time": r["timings"]["total"], "wall": wall,
-               "read": r["timings"]["read"]}
+               "read": r["timings"]["read"], "outliers_detected": r.get("outliers_detected")}
         if truth:
             g = np.linspace(0, 1, 101)
             uv = [[float(a), float(b)] for a in g for b in g]
@@ -152,12 +153,17 @@ def main():
     rows = []
     clouds = [("jacksboro.ply", "jacksboro_grid.npy"), ("wave100k.ply", None), ("wave1m.ply", None),
               ("wave100k_outliers.ply", None), ("wave1m_outliers.ply", None)]
+    if len(sys.argv) > 3:  # a subset: compare_fit.py VCLAY DATA_DIR wave100k.ply ...
+        clouds = [c for c in clouds if c[0] in sys.argv[3:]]
     for name, grid in clouds:
         path = os.path.join(data, name)
         pts = read_ply(path)
         wave = name.startswith("wave")
         row = {"cloud": name, "points": len(pts), "vclay": run_vclay(vclay, path, truth=wave)}
         if "outliers" in name:
+            # The default is `--robust auto` (issue 29): plain least squares that goes on
+            # robustly once its first round shows gross outliers; `none` is plain throughout.
+            row["vclay --robust none"] = run_vclay(vclay, path, ["--robust", "none"], truth=True)
             row["vclay --robust"] = run_vclay(vclay, path, ["--robust"], truth=True)
         if len(pts) <= 200_000:
             row["scipy"] = run_scipy(pts)
@@ -169,7 +175,7 @@ def main():
     print("| cloud | points | method | RMS distance | max distance | RMS off the true wave | fit time (s) |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     for r in rows:
-        for m in ("vclay", "vclay --robust", "scipy", "geomdl"):
+        for m in ("vclay", "vclay --robust none", "vclay --robust", "scipy", "geomdl"):
             if m in r:
                 x = r[m]
                 t = f"{x['truth_rms']:.3g}" if "truth_rms" in x else ""

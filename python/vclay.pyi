@@ -123,7 +123,7 @@ def read_mesh(path: Path) -> Mesh:
     """An OBJ/STL/PLY/glb mesh, a .vtu lattice's boundary or a triangular NURBS file (meshed)."""
 def write_mesh(path: Path, vertices: ArrayLike, triangles: ArrayLike) -> None:
     """`write_mesh(path, vertices, triangles)`: writes an OBJ/STL/PLY/glb mesh (normals computed)."""
-def fit_surface(points: ArrayLike, grid: Tuple[int, int] = (32, 32), degree: int = 3, fairness: Tuple[float, float] = (0.0, 1e-9), robust: Optional[str] = None, weights: bool = False, corrections: int = 2) -> Tuple["Surface", dict]:
+def fit_surface(points: ArrayLike, grid: Tuple[int, int] = (32, 32), degree: int = 3, fairness: Tuple[float, float] = (0.0, 1e-9), robust: Optional[str] = "auto", weights: bool = False, corrections: int = 2) -> Tuple["Surface", dict]:
     """A surface fitted to an (n, 3) point cloud (D-NURBS fairness); (surface, report)."""
 def render(source: Union[Path, Sequence[Entity], Tuple[ArrayLike, ArrayLike]], out: Path, size: Tuple[int, int] = (640, 480), view: str = "iso", wireframe: bool = False, ortho: bool = False) -> None:
     """`render(source, out, size=(640, 480), view="iso", wireframe=False, ortho=False)`: writes a

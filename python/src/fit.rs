@@ -1,7 +1,7 @@
 //! `fit_surface`: a smooth surface fitted to a point cloud (`vclay_fit`, issue 20).
 
 use pyo3::prelude::*;
-use vclay_fit::{FitOptions, Robust};
+use vclay_fit::{FitOptions, RobustMode};
 use vclay_io::model::Entity as IoEntity;
 
 use crate::errors::GeometryError;
@@ -12,16 +12,19 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// `fit_surface(points, grid=(32, 32), degree=3, fairness=(0.0, 1e-9), robust=None,
+/// `fit_surface(points, grid=(32, 32), degree=3, fairness=(0.0, 1e-9), robust="auto",
 /// weights=False, corrections=2)`: a B-spline (NURBS with `weights=True`) surface fitted to an
 /// `(n, 3)` array of points with the D-NURBS thin-plate-under-tension fairness
-/// (`fairness = (alpha, beta)`, dimensionless; `robust`: `None`, `"tukey"` or `"huber"`).
+/// (`fairness = (alpha, beta)`, dimensionless). `robust` is `vclay fit --robust`'s mode:
+/// `"auto"` (plain least squares, robust once the first round shows gross outliers: the
+/// report's `outliers_detected`), `"none"` or `None` (plain least squares), `"tukey"` or
+/// `"huber"` (robust weights throughout).
 /// Returns `(surface, report)`: a `Surface` and the report as a dict (docs/formats.md
 /// section 11: `rms`, `max` closest-point distances, `fairness_energy`, `timings`, ...).
 /// Bad clouds and options raise `GeometryError` with the located message.
 #[pyfunction]
-#[pyo3(signature = (points, grid=(32, 32), degree=3, fairness=(0.0, 1e-9), robust=None, weights=false, corrections=2),
-    text_signature = "(points, grid=(32, 32), degree=3, fairness=(0.0, 1e-9), robust=None, weights=False, corrections=2)")]
+#[pyo3(signature = (points, grid=(32, 32), degree=3, fairness=(0.0, 1e-9), robust=Some("auto".to_owned()), weights=false, corrections=2),
+    text_signature = "(points, grid=(32, 32), degree=3, fairness=(0.0, 1e-9), robust='auto', weights=False, corrections=2)")]
 #[allow(clippy::type_complexity)]
 fn fit_surface<'py>(
     py: Python<'py>,
@@ -40,10 +43,10 @@ fn fit_surface<'py>(
     let degree = util::count(degree, "degree")?;
     let corrections = util::count(corrections, "corrections")?;
     let pts = util::points(points, "points")?;
-    let robust = robust
-        .map(|s| s.parse::<Robust>())
-        .transpose()
-        .map_err(GeometryError::new_err)?;
+    let robust = match robust {
+        Some(s) => s.parse::<RobustMode>().map_err(GeometryError::new_err)?,
+        None => RobustMode::None,
+    };
     let opts = FitOptions {
         grid: [grid.0, grid.1],
         degree,

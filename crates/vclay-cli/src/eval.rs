@@ -30,8 +30,9 @@ pub enum Params {
     Inline(Vec<String>),
 }
 
-/// Bytes of the JSON tree per printed point (a `Value::Array` of three numbers and its text).
-const BYTES_PER_JSON_POINT: f64 = 200.0;
+// Bytes of the JSON tree per printed point and of a lattice's limit evaluation: the session
+// layer's estimates, shared with Python.
+use vclay::session::limits::{BYTES_PER_JSON_POINT, limit_eval_bytes};
 
 /// Evaluates the entity and returns the JSON document; all errors carry the file and place.
 /// A lattice (`.ovm`) goes to [`evaluate_lattice`] with boundary rule `rule`.
@@ -184,12 +185,28 @@ pub fn is_lattice(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("ovm"))
 }
 
-/// Bytes per lattice query: the parsed tuple, the limit point and its JSON text.
-const BYTES_PER_LIMIT_QUERY: f64 = 64.0 + 120.0 + 5.0 * BYTES_PER_JSON_POINT;
+/// Tuples in a parameter file of lattice queries, counted before it is parsed: one `[` each
+/// (and one for the list), read in blocks without holding the file.
+fn count_tuples(path: &Path) -> Result<usize> {
+    use std::io::Read as _;
+    let cannot = || format!("cannot read parameter file {}", path.display());
+    let mut f = std::fs::File::open(path).with_context(cannot)?;
+    let mut buf = vec![0u8; 1 << 16];
+    let mut open = 0usize;
+    loop {
+        let n = f.read(&mut buf).with_context(cannot)?;
+        if n == 0 {
+            break;
+        }
+        open += buf[..n].iter().filter(|&&b| b == b'[').count();
+    }
+    Ok(open.saturating_sub(1))
+}
 
 /// Parses `[[cell, u, v, w], ...]` (a file) or `CELL,U,V,W` items (`--at`); errors name the
-/// tuple. Range checks (cell, `[0, 1]`) are the evaluator's, also by tuple index.
-fn lattice_queries(params: &Params) -> Result<(Vec<LimitQuery>, String)> {
+/// tuple. Range checks (cell, `[0, 1]`) are the evaluator's, also by tuple index. Returns the
+/// queries, their source and the parameter file's size (0 for `--at`).
+fn lattice_queries(params: &Params) -> Result<(Vec<LimitQuery>, String, u64)> {
     let parse_tuple = |nums: &[Value], place: &dyn Fn() -> String| -> Result<LimitQuery> {
         if nums.len() != 4 {
             bail!(
@@ -228,10 +245,11 @@ fn lattice_queries(params: &Params) -> Result<(Vec<LimitQuery>, String)> {
             let bytes = std::fs::metadata(path)
                 .with_context(|| format!("cannot read parameter file {}", path.display()))?
                 .len();
-            // At least 8 bytes per tuple ("[0,0,0,0]"): the most queries the file can hold.
+            // The file's text and its tuples (counted in a first pass), before parsing.
+            let tuples = count_tuples(path)?;
             crate::limits::check_memory(
-                &format!("parameter file {}", path.display()),
-                bytes as f64 / 8.0 * BYTES_PER_LIMIT_QUERY,
+                &format!("parameter file {} ({tuples} tuples)", path.display()),
+                limit_eval_bytes(0, tuples, bytes),
             )?;
             let text = std::fs::read_to_string(path)
                 .with_context(|| format!("cannot read parameter file {}", path.display()))?;
@@ -254,7 +272,7 @@ fn lattice_queries(params: &Params) -> Result<(Vec<LimitQuery>, String)> {
                     }
                 })
                 .collect::<Result<Vec<_>>>()?;
-            Ok((qs, path.display().to_string()))
+            Ok((qs, path.display().to_string(), bytes))
         }
         Params::Inline(items) => {
             let qs = items
@@ -272,7 +290,7 @@ fn lattice_queries(params: &Params) -> Result<(Vec<LimitQuery>, String)> {
                     parse_tuple(&nums, &place)
                 })
                 .collect::<Result<Vec<_>>>()?;
-            Ok((qs, "--at".to_string()))
+            Ok((qs, "--at".to_string(), 0))
         }
     }
 }
@@ -293,15 +311,17 @@ pub fn evaluate_lattice(
             "--derivatives {k}: the limit of a subdivision solid gives first derivatives only (--derivatives 1)"
         );
     }
-    let (queries, source) = lattice_queries(params)?;
-    crate::limits::check_memory(
-        &format!("{} limit queries", queries.len()),
-        queries.len() as f64 * BYTES_PER_LIMIT_QUERY,
-    )?;
+    let (queries, source, text_bytes) = lattice_queries(params)?;
     let lattice = vclay::lattice::formats::ovm::read(path)?;
     crate::limits::check_memory(
-        &format!("limit evaluation set-up of {} cells", lattice.num_cells()),
-        lattice.num_cells() as f64 * vclay::lattice::limit::LIMIT_BYTES_PER_CELL as f64,
+        &format!(
+            "the limit of {} ({} cells) at {} quer{}",
+            path.display(),
+            lattice.num_cells(),
+            queries.len(),
+            if queries.len() == 1 { "y" } else { "ies" }
+        ),
+        limit_eval_bytes(lattice.num_cells(), queries.len(), text_bytes),
     )?;
     let features = Features::none(&lattice);
     let ev = LimitEvaluator::new(

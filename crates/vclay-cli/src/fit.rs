@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use vclay::fit::{FitOptions, Robust, fit_surface, memory_estimate};
+use vclay::fit::{FitOptions, RobustMode, fit_surface, memory_estimate};
 use vclay::io::model::{Entity, NamedEntity};
 
 /// Smallest bytes per point of any cloud file (`0 0 0\n` in `.xyz`): the bound on the points
@@ -68,9 +68,14 @@ pub struct FitArgs {
     /// Fit the weights too (rational surface; D-NURBS dynamic weights, Gauss-Newton).
     #[arg(long)]
     pub weights: bool,
-    /// Robust weights against outliers (IRLS): tukey (default) or huber.
-    #[arg(long, value_name = "LOSS", num_args = 0..=1, default_missing_value = "tukey")]
-    pub robust: Option<Robust>,
+    /// Outliers: auto (default: plain least squares, robust with Tukey's weights once the
+    /// first round shows gross outliers), none (plain least squares), or robust weights (IRLS)
+    /// throughout: tukey (`--robust` alone) or huber.
+    #[arg(long, value_name = "MODE", num_args = 0..=1, default_missing_value = "tukey")]
+    pub robust: Option<RobustMode>,
+    /// Plain least squares even on scans with outliers (same as `--robust none`).
+    #[arg(long, conflicts_with = "robust")]
+    pub no_robust: bool,
     /// Parameter-correction rounds (closest points, then refit).
     #[arg(long, allow_hyphen_values = true, value_parser = crate::limits::parse_count, default_value_t = vclay::fit::DEFAULT_CORRECTIONS)]
     pub corrections: usize,
@@ -145,7 +150,11 @@ pub fn run(args: &FitArgs) -> Result<()> {
         grid: parse_grid(&args.grid)?,
         degree: args.degree,
         rational: args.weights,
-        robust: args.robust,
+        robust: if args.no_robust {
+            RobustMode::None
+        } else {
+            args.robust.unwrap_or_default()
+        },
         corrections: args.corrections,
         ..FitOptions::default()
     };
@@ -177,6 +186,18 @@ pub fn run(args: &FitArgs) -> Result<()> {
     if !crate::quiet() {
         for w in &fit.report.warnings {
             eprintln!("vclay: warning: {}: {w}", args.scan.display());
+        }
+        let r = &fit.report;
+        if r.outliers_detected {
+            eprintln!(
+                "vclay: note: {}: {} of {} points ({:.2} %) lie beyond 4.685 sigma of the plain \
+                 fit: gross outliers, fitted robustly (tukey; --robust none keeps plain least \
+                 squares)",
+                args.scan.display(),
+                r.first_round_outliers,
+                r.points,
+                100.0 * r.first_round_outliers as f64 / r.points as f64
+            );
         }
     }
     let t = Instant::now();

@@ -1,4 +1,5 @@
-//! Issue 29, items 3-6: memory estimates that are right, quiet is quiet, output is short,
+//! Issue 29: the default fit on scans with outliers (item 1), memory estimates that are right,
+//! quiet is quiet, output is short,
 //! messages point the right way, and reading our own STEP files is silent.
 
 use std::path::Path;
@@ -180,4 +181,202 @@ fn lattice_patch_estimate_follows_the_sample_level() {
         "{err}"
     );
     assert!(!dir.path().join("u.step").exists());
+}
+
+/// The estimate an error message prints ("needs about 1.2 MB of memory"), in bytes.
+fn estimate_in(err: &str) -> f64 {
+    let rest = err.split("needs about ").nth(1).expect("an estimate");
+    let mut words = rest.split_whitespace();
+    let x: f64 = words.next().unwrap().parse().unwrap();
+    let unit = match words.next().unwrap() {
+        "B" => 1.0,
+        "kB" => 1e3,
+        "MB" => 1e6,
+        "GB" => 1e9,
+        u => panic!("unit {u}"),
+    };
+    x * unit
+}
+
+/// Issue 29 item 3: `vclay eval LATTICE.ovm --params` bounded its queries by the file size over
+/// 8 bytes at 1.2 kB each (8.5x the measured peak for 1,000,000 queries: 5.2 GB for 610 MB)
+/// and left the lattice itself out. It now counts the tuples before parsing and estimates the
+/// text, the queries and the cells together (`vclay_session::limits::limit_eval_bytes`).
+#[test]
+fn lattice_eval_estimate_counts_the_tuples_and_the_cells() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let made = vclay(
+        d,
+        &[
+            "subdivide",
+            "--primitive",
+            "torus",
+            "--levels",
+            "0",
+            "--out",
+            "t.ovm",
+        ],
+    );
+    assert!(made.status.success(), "{}", text(&made.stderr));
+    let tuples: Vec<String> = (0..1000)
+        .map(|k| format!("[{},0.{:06},0.5,0.25]", k % 128, (k * 7919) % 1_000_000))
+        .collect();
+    let params = format!("[{}]", tuples.join(","));
+    std::fs::write(d.join("p.json"), &params).unwrap();
+    let eval = |limit: &str| {
+        vclay(
+            d,
+            &["--max-memory", limit, "eval", "t.ovm", "--params", "p.json"],
+        )
+    };
+    // The parameter file alone: its text and 1000 queries of 360 B (the old bound: 5.3 MB).
+    let refused = eval("100K");
+    assert_eq!(refused.status.code(), Some(2));
+    let err = text(&refused.stderr);
+    let bytes = params.len() as f64;
+    let e = estimate_in(&err);
+    assert!(err.contains("(1000 tuples)"), "{err}");
+    assert!((e - (bytes + 360e3)).abs() < 0.01 * e, "{err}");
+    // Then the whole evaluation: the 128 cells at 4 kB each on top.
+    let refused = eval("600K");
+    assert_eq!(refused.status.code(), Some(2));
+    let err = text(&refused.stderr);
+    let e = estimate_in(&err);
+    assert!(
+        err.contains("128 cells") && err.contains("1000 queries"),
+        "{err}"
+    );
+    assert!((e - (bytes + 360e3 + 512e3)).abs() < 0.01 * e, "{err}");
+    let ok = eval("1M");
+    assert!(ok.status.success(), "{}", text(&ok.stderr));
+}
+
+/// A seeded wave scan `z = 0.15 sin(2x) cos(1.5y)` on `[-1, 1]^2`: `n` points, noise 0.002 (a
+/// sum of uniforms), and every `every`-th point (if any) moved up by 0.3 to 1.0.
+fn wave_scan(n: usize, every: Option<usize>) -> (String, Vec<[f64; 3]>) {
+    let mut s = 0x2545_f491_4f6c_dd1du64;
+    let mut uniform = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut text = String::new();
+    let mut pts = Vec::new();
+    for k in 0..n {
+        let (x, y) = (2.0 * uniform() - 1.0, 2.0 * uniform() - 1.0);
+        let noise = 0.002 * (uniform() + uniform() + uniform() - 1.5) * 2.0;
+        let mut z = 0.15 * (2.0 * x).sin() * (1.5 * y).cos() + noise;
+        if every.is_some_and(|e| k % e == 0) {
+            z += 0.3 + 0.7 * uniform();
+        }
+        text.push_str(&format!("{x} {y} {z}\n"));
+        pts.push([x, y, z]);
+    }
+    (text, pts)
+}
+
+/// RMS vertical deviation of a fitted model from the true wave, at `vclay eval`'s points of a
+/// 21 x 21 parameter grid inside `[-0.95, 0.95]^2`.
+fn wave_deviation(dir: &std::path::Path, model: &str) -> f64 {
+    let mut uv = Vec::new();
+    for i in 0..=20 {
+        for j in 0..=20 {
+            uv.push(format!("[{},{}]", i as f64 / 20.0, j as f64 / 20.0));
+        }
+    }
+    std::fs::write(dir.join("uv.json"), format!("[{}]", uv.join(","))).unwrap();
+    let out = vclay(dir, &["eval", model, "--params", "uv.json"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let (mut s2, mut n) = (0.0, 0);
+    for p in v["points"].as_array().unwrap() {
+        let p: Vec<f64> = p
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c.as_f64().unwrap())
+            .collect();
+        if p[0].abs() < 0.95 && p[1].abs() < 0.95 {
+            s2 += (p[2] - 0.15 * (2.0 * p[0]).sin() * (1.5 * p[1]).cos()).powi(2);
+            n += 1;
+        }
+    }
+    (s2 / n as f64).sqrt()
+}
+
+/// Issue 29 item 1: the default `vclay fit` on a scan with 2 % one-sided gross outliers was
+/// plain least squares, pulled toward them. It now notices them after its first round and goes
+/// on robustly (said on stderr and in the report), landing near the clean scan's fit; `--robust
+/// none` keeps plain least squares; on a clean scan the default is plain least squares, byte
+/// for byte.
+#[test]
+fn default_fit_goes_robust_on_gross_outliers_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let fit = |scan: &str, out: &str, extra: &[&str]| {
+        let mut args = vec!["fit", scan, "--grid", "12", "--out", out];
+        args.extend_from_slice(extra);
+        let o = vclay(d, &args);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        (r, text(&o.stderr))
+    };
+    let (clean, _) = wave_scan(4000, None);
+    std::fs::write(d.join("clean.xyz"), clean).unwrap();
+    let (r, err) = fit("clean.xyz", "clean.json", &[]);
+    assert_eq!(r["robust_mode"], "auto");
+    assert_eq!(r["outliers_detected"], false, "{r}");
+    assert!(r["robust"].is_null() && err.is_empty(), "{r} {err}");
+    fit("clean.xyz", "plain.json", &["--robust", "none"]);
+    assert_eq!(
+        std::fs::read(d.join("clean.json")).unwrap(),
+        std::fs::read(d.join("plain.json")).unwrap(),
+        "a clean scan: auto is plain least squares"
+    );
+    let dev_clean = wave_deviation(d, "clean.json");
+
+    let (dirty, _) = wave_scan(4000, Some(50));
+    std::fs::write(d.join("dirty.xyz"), dirty).unwrap();
+    let (r, err) = fit("dirty.xyz", "auto.json", &[]);
+    assert_eq!(r["outliers_detected"], true, "{r}");
+    assert_eq!(r["robust"], "tukey");
+    assert!(r["first_round_outliers"].as_u64().unwrap() >= 72, "{r}");
+    assert!(
+        err.contains("gross outliers") && err.contains("--robust none"),
+        "{err}"
+    );
+    let dev = wave_deviation(d, "auto.json");
+    let (r, _) = fit("dirty.xyz", "none.json", &["--no-robust"]);
+    assert_eq!(
+        (&r["robust_mode"], &r["robust"]),
+        (&"none".into(), &serde_json::Value::Null)
+    );
+    let dev_plain = wave_deviation(d, "none.json");
+    assert!(dev < 2.0 * dev_clean, "{dev} vs clean {dev_clean}");
+    assert!(dev_plain > 10.0 * dev, "{dev_plain} vs {dev}");
+    // -q: no note.
+    let o = vclay(
+        d,
+        &["-q", "fit", "dirty.xyz", "--grid", "12", "--out", "q.json"],
+    );
+    assert!(
+        o.status.success() && o.stderr.is_empty(),
+        "{}",
+        text(&o.stderr)
+    );
+    // --robust and --no-robust contradict each other.
+    let o = vclay(
+        d,
+        &[
+            "fit",
+            "dirty.xyz",
+            "--robust",
+            "--no-robust",
+            "--out",
+            "x.json",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2));
 }

@@ -26,8 +26,11 @@
 //!    toward their foot points pull the surface to them, and such a round is thrown away, so
 //!    corrections never make a fit worse, by that objective, than its first solve
 //!    (`corrections = 0`).
-//! 4. Optionally robust: the weights `w_k` are re-estimated from the distances after each
-//!    round (IRLS with Huber or Tukey weights, [`robust`]), for `robust_rounds` extra rounds.
+//! 4. Robust when asked or needed: the weights `w_k` are re-estimated from the distances after
+//!    each round (IRLS with Huber or Tukey weights, [`robust`]), for `robust_rounds` extra
+//!    rounds. The default, [`RobustMode::Auto`], starts plain and turns to Tukey's weights when
+//!    its first round leaves more than 0.1 % of the points as gross outliers (far beyond the
+//!    scale of their neighbours' distances); otherwise it stays plain least squares.
 //!    Robust or not, the base rectangle is trimmed to where the inliers are when the fringe
 //!    it leaves out holds mostly outliers (points beyond `4.685 sigma`, [`plane`]); the
 //!    points outside get weight 0, and a new domain gets a round of its own.
@@ -56,7 +59,7 @@ pub mod system;
 
 pub use error::FitError;
 pub use plane::{BasePlane, base_plane};
-pub use robust::Robust;
+pub use robust::{Robust, RobustMode};
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -118,9 +121,10 @@ pub struct FitOptions {
     pub rigidity: f64,
     /// Parameter-correction rounds ([`DEFAULT_CORRECTIONS`]).
     pub corrections: usize,
-    /// Robust loss, or `None` for plain least squares (default).
-    pub robust: Option<Robust>,
-    /// Extra IRLS rounds when `robust` is set ([`DEFAULT_ROBUST_ROUNDS`]).
+    /// Outliers: plain least squares that turns robust when the first round shows gross
+    /// outliers ([`RobustMode::Auto`], the default), plain always, or a robust loss throughout.
+    pub robust: RobustMode,
+    /// Extra IRLS rounds when robust weights are on ([`DEFAULT_ROBUST_ROUNDS`]).
     pub robust_rounds: usize,
     /// Fit the weights too (rational surface, D-NURBS dynamic weights); default false.
     pub rational: bool,
@@ -138,7 +142,7 @@ impl Default for FitOptions {
             tension: DEFAULT_TENSION,
             rigidity: DEFAULT_RIGIDITY,
             corrections: DEFAULT_CORRECTIONS,
-            robust: None,
+            robust: RobustMode::Auto,
             robust_rounds: DEFAULT_ROBUST_ROUNDS,
             rational: false,
             weight_iterations: DEFAULT_WEIGHT_ITERATIONS,
@@ -253,8 +257,17 @@ pub struct FitReport {
     pub rigidity: f64,
     /// Parameter-correction rounds.
     pub corrections: usize,
-    /// Robust loss, if any.
+    /// The outlier mode as asked: `auto`, `none`, `huber` or `tukey` ([`RobustMode`]).
+    pub robust_mode: RobustMode,
+    /// The robust loss the fit used, if any (`tukey` when `auto` detected outliers).
     pub robust: Option<Robust>,
+    /// Whether `auto` found gross outliers after the first round and went on robustly (false
+    /// in the other modes).
+    pub outliers_detected: bool,
+    /// Gross outliers of the first (plain) round: points beyond Tukey's rejection distance of
+    /// the larger of the global and their neighbours' robust scale, and beyond `1e-4` of the
+    /// model size; what `auto` decides by ([`robust::gross_outliers`]; counted in every mode).
+    pub first_round_outliers: usize,
     /// RMS of the closest-point distances of all points.
     pub rms: f64,
     /// Largest closest-point distance.
@@ -479,9 +492,12 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
     let mut cand_distances = vec![0.0; points.len()];
     let mut history = Vec::new();
     let mut sigma = 0.0;
+    // The robust loss in use: from the start, or from `auto`'s detection after round 0.
+    let mut loss = opts.robust.loss();
+    let (mut outliers_detected, mut first_round_outliers) = (false, 0usize);
     let mut rounds = 1
         + opts.corrections
-        + if opts.robust.is_some() {
+        + if loss.is_some() {
             opts.robust_rounds
         } else {
             0
@@ -497,7 +513,7 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
     let (mut round, mut extra_rounds) = (0usize, 0usize);
     while round < rounds {
         let t = Instant::now();
-        let use_w = (opts.robust.is_some() && round > 0) || domain_updates > 0;
+        let use_w = (loss.is_some() && round > 0) || domain_updates > 0;
         let mut normal =
             system::assemble(&knots, points, &params, use_w.then_some(&weights[..]), par);
         timings.assemble += t.elapsed().as_secs_f64();
@@ -547,7 +563,19 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
         std::mem::swap(&mut distances, &mut cand_distances);
         history.push(rms(&distances));
         judge = true;
-        if let Some(loss) = opts.robust {
+        if round == 0 {
+            // Gross outliers in a plain fit (robust::RobustMode): `auto` goes on as `tukey`.
+            first_round_outliers =
+                robust::gross_outliers(&distances, &params, cand_sigma, robust::AUTO_FLOOR * size);
+            if opts.robust == RobustMode::Auto
+                && robust::auto_switches(first_round_outliers, points.len())
+            {
+                loss = Some(Robust::Tukey);
+                outliers_detected = true;
+                rounds += opts.robust_rounds;
+            }
+        }
+        if let Some(loss) = loss {
             sigma = cand_sigma;
             robust::weights(loss, &distances, sigma, &mut weights);
         }
@@ -671,13 +699,13 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
         }
     }
     let np = points.len() as f64;
-    let downweighted = if opts.robust.is_some() {
+    let downweighted = if loss.is_some() {
         weights.iter().filter(|&&w| w < DOWNWEIGHTED).count()
     } else {
         0
     };
     let outside = outside.iter().filter(|&&o| o).count();
-    let cut = if opts.robust.is_some() {
+    let cut = if loss.is_some() {
         robust::TUKEY_C * sigma
     } else {
         f64::INFINITY
@@ -710,7 +738,10 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
         tension: opts.tension,
         rigidity: opts.rigidity,
         corrections: opts.corrections,
-        robust: opts.robust,
+        robust_mode: opts.robust,
+        robust: loss,
+        outliers_detected,
+        first_round_outliers,
         rms: (s2 / np).sqrt(),
         max,
         mean: sum / np,
@@ -719,7 +750,7 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
         } else {
             0.0
         },
-        outliers: if opts.robust.is_some() { outliers } else { 0 },
+        outliers: if loss.is_some() { outliers } else { 0 },
         downweighted,
         sigma,
         rejected_rounds,

@@ -87,6 +87,34 @@ pub fn subdivision_bytes(cells: usize, levels: usize) -> f64 {
         * vclay_lattice::command::BYTES_PER_CELL as f64
 }
 
+/// Bytes of the JSON tree per printed point (`vclay eval`: a `Value::Array` of three numbers
+/// and its text).
+pub const BYTES_PER_JSON_POINT: f64 = 200.0;
+
+/// Bytes per query of a subdivision solid's limit (`vclay eval LATTICE.ovm --params`), besides
+/// the parameter file's text: the parsed JSON tuple (an array of four values), the query, the
+/// limit point and its JSON tree and text. Measured with the cells' part subtracted (release,
+/// `/usr/bin/time -v`): 315 B (1,000,000 queries on a level-3 torus), 341 B (200,000 on a
+/// level-2 torus), 371 B (1,000,000 on a level-3 box); the middle.
+pub const LIMIT_QUERY_BYTES: f64 = 360.0;
+
+/// Bytes per cell of a lattice whose limit is evaluated (`vclay eval LATTICE.ovm`): the lattice
+/// as read (points, faces, cells, their adjacency) and the evaluator's per-cell data
+/// (`vclay_lattice::limit::LIMIT_BYTES_PER_CELL`, 2.3 kB). Measured, one query, less the
+/// process's 6 MB: 3.88 kB per cell on a level-3 torus (65,536 cells, 260 MB) and 3.89 kB on a
+/// level-3 box (13,824 cells, 60 MB); rounded up.
+pub const LIMIT_EVAL_BYTES_PER_CELL: f64 = 4000.0;
+
+/// Bytes of evaluating the limit of a lattice of `cells` cells at `queries` parameter tuples
+/// read from `text_bytes` bytes of parameter file (0 for inline tuples): the text,
+/// [`LIMIT_QUERY_BYTES`] per query and [`LIMIT_EVAL_BYTES_PER_CELL`] per cell (`vclay eval
+/// LATTICE.ovm`).
+pub fn limit_eval_bytes(cells: usize, queries: usize, text_bytes: u64) -> f64 {
+    text_bytes as f64
+        + queries as f64 * LIMIT_QUERY_BYTES
+        + cells as f64 * LIMIT_EVAL_BYTES_PER_CELL
+}
+
 /// Bytes of `count` `f64` values (an array the caller asked for).
 pub fn f64_bytes(count: f64) -> f64 {
     count * 8.0
