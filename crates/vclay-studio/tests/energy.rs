@@ -35,6 +35,8 @@ primitive = "sheet"
 size = [5, 5]
 degree = [2, 2]
 weights = "dynamic"
+[material]
+preset = "Hemisphere fitting"
 "#;
     let session =
         vclay_session::scenario::Scenario::parse(scenario, "t", "t", std::path::Path::new("."))
