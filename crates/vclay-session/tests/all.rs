@@ -16,6 +16,7 @@ mod examples;
 mod ffd;
 mod hostile;
 mod open;
+mod paper_figures;
 mod pde;
 mod pde_issue22;
 mod plasticity;

@@ -112,6 +112,12 @@ fn steps() -> Vec<Step> {
             run: solids::rope_cube,
         },
         Step {
+            name: "b-spline solid mass distribution",
+            id: "mass",
+            reproduces: "subdivision-solids-journal.txt Fig 3",
+            run: solids::mass_distribution,
+        },
+        Step {
             name: "studio",
             id: "studio",
             reproduces: "",
