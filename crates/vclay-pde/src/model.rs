@@ -59,9 +59,9 @@ fn bbox_diagonal(points: &[Vec3]) -> f64 {
     let Some(first) = points.first() else {
         return 0.0;
     };
-    let (lo, hi) = points.iter().fold((*first, *first), |(lo, hi), p| {
-        (lo.inf(p), hi.sup(p))
-    });
+    let (lo, hi) = points
+        .iter()
+        .fold((*first, *first), |(lo, hi), p| (lo.inf(p), hi.sup(p)));
     (hi - lo).norm()
 }
 

@@ -1184,10 +1184,17 @@ pub mod profiles {
         NurbsCurve::new(
             2,
             vec![0.0, 0.0, 0.0, a, 0.5, 1.0 - a, 1.0, 1.0, 1.0],
-            [(1.0, 0.0), (1.0, y1), (x2, y2), (x2, -y2), (1.0, -y1), (1.0, 0.0)]
-                .iter()
-                .map(|&(x, y)| Vec3::new(r * x, r * y, 0.0))
-                .collect(),
+            [
+                (1.0, 0.0),
+                (1.0, y1),
+                (x2, y2),
+                (x2, -y2),
+                (1.0, -y1),
+                (1.0, 0.0),
+            ]
+            .iter()
+            .map(|&(x, y)| Vec3::new(r * x, r * y, 0.0))
+            .collect(),
             Some(vec![1.0, w1, w2, w2, w1, 1.0]),
         )
     }
@@ -1357,8 +1364,8 @@ impl SwungGeometry {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use vclay_spline::ParametricCurve as _;
     use crate::dnurbs::benchmarks::unit_sheet;
+    use vclay_spline::ParametricCurve as _;
 
     /// A 6 x 7 bicubic/biquadratic sheet with uneven weights and a curve.
     fn geometries() -> Vec<RationalGeometry> {
@@ -1471,8 +1478,16 @@ mod tests {
     #[test]
     fn fig9_trajectories_have_the_papers_counts_and_are_nearly_circles() {
         for (c, n, dev) in [
-            (profiles::circle5(2.0).unwrap(), 5, profiles::CIRCLE5_DEVIATION),
-            (profiles::circle6(2.0).unwrap(), 6, profiles::CIRCLE6_DEVIATION),
+            (
+                profiles::circle5(2.0).unwrap(),
+                5,
+                profiles::CIRCLE5_DEVIATION,
+            ),
+            (
+                profiles::circle6(2.0).unwrap(),
+                6,
+                profiles::CIRCLE6_DEVIATION,
+            ),
         ] {
             assert_eq!(c.control_points().len(), n);
             assert_eq!(c.degree(), 2);
@@ -1485,7 +1500,10 @@ mod tests {
                 worst = worst.max(((p.x * p.x + p.y * p.y).sqrt() / 2.0 - 1.0).abs());
             }
             assert!(worst <= dev, "{n} points: deviation {worst} > {dev}");
-            assert!(worst > 0.5 * dev, "{n} points: {worst}, the constant is stale");
+            assert!(
+                worst > 0.5 * dev,
+                "{n} points: {worst}, the constant is stale"
+            );
         }
         let glass = SwungGeometry::wine_glass().unwrap();
         let hat = SwungGeometry::hat().unwrap();

@@ -43,12 +43,12 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 use vclay_core::{TriMesh, Vec3};
 use vclay_dynamics::DynamicsError;
+use vclay_dynamics::dnurbs::ClosedCurve;
 use vclay_dynamics::dnurbs::{
     Constraint, Density, Dnurbs, DnurbsGeometry, DnurbsState, ElasticReference, Force,
     GeneralizedDnurbs, GeneralizedGeometry, GeneralizedState, Integrator, LocalJacobian, Material,
     Preset, QuadratureRule, RationalGeometry, SwungGeometry, Target,
 };
-use vclay_dynamics::dnurbs::ClosedCurve;
 use vclay_dynamics::{DnurbsClosedCurve, DnurbsCurve, DnurbsSurface};
 use vclay_io::model::Entity;
 use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
@@ -588,7 +588,10 @@ enum Source {
     },
     /// A closed (periodic) B-spline curve ([`ClosedCurve`]): its distinct control points,
     /// unit knot spans.
-    Ring { degree: usize, points: Vec<V3> },
+    Ring {
+        degree: usize,
+        points: Vec<V3>,
+    },
 }
 
 /// The non-empty spans `[t_i, t_i+1]` of a knot vector's domain.
@@ -619,7 +622,9 @@ impl Source {
                 knot_spans(trajectory.curve()?.knots()),
             ],
             Source::Ring { points, .. } => [
-                (0..points.len()).map(|k| (k as f64, k as f64 + 1.0)).collect(),
+                (0..points.len())
+                    .map(|k| (k as f64, k as f64 + 1.0))
+                    .collect(),
                 Vec::new(),
             ],
         })
