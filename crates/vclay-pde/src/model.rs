@@ -102,7 +102,7 @@ impl ResidualCheck {
 
     /// Whether the ratio is over [`RESIDUAL_WARNING_RATIO`] (or not a number).
     pub fn is_large(&self) -> bool {
-        !(self.ratio <= RESIDUAL_WARNING_RATIO)
+        self.ratio.is_nan() || self.ratio > RESIDUAL_WARNING_RATIO
     }
 
     /// The warning to show when [`Self::is_large`], naming the figures.

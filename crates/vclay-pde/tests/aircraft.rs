@@ -48,7 +48,7 @@ fn check(m: &PdeModel, s: &ModelSolution, a: Side, b: Side) -> (f64, f64) {
 
 #[test]
 fn every_shared_boundary_is_g1() {
-    assert_g1(&model());
+    assert_g1(model());
 }
 
 /// Issue 28: the caps' sides are written with the declared `params` (`R`, `r6`, `slope`), so
@@ -62,11 +62,11 @@ fn joins_stay_g1_when_the_declared_params_change() {
         v["params"][name] = serde_json::json!(x * factor);
     }
     let text = serde_json::to_string(&v).unwrap();
-    assert_g1(&PdeModel::from_json(&text, "aircraft.json").unwrap());
+    assert_g1(PdeModel::from_json(&text, "aircraft.json").unwrap());
 }
 
 /// Asserts G0 and G1 across every shared boundary of the aircraft `m` at t = 0, 0.5, 1.
-fn assert_g1(m: &PdeModel) {
+fn assert_g1(m: PdeModel) {
     let tubes = [
         "nose_cabin",
         "wing_front",

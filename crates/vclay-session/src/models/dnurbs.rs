@@ -8,7 +8,7 @@
 //! or `SwungGeometry` (swung surfaces), exactly as the old D-NURBS scenario runner built them,
 //! so that scenarios give the same bits; `"frozen"` is the frozen-weight engine `Dnurbs`
 //! (footnote 2: weights held, constant matrices), for curves and tensor-product surfaces only
-//! and without constraints.
+//! and without constraints; a `ring` (closed periodic curve) runs on it only.
 //!
 //! Tools: every force-producing edit (rope, force, gravity, inflate, data) is one *slot*: a
 //! serializable description of its forces ([`ForceDesc`]) under a handle that the
@@ -17,9 +17,10 @@
 //! `velocity` is the same `Target::Moving` closure the old runner made, and a session file
 //! rebuilds it from its description.
 //!
-//! One model, four engines: the engine enum's two generalized variants (`RationalGeometry`,
+//! One model, five engines: the engine enum's two generalized variants (`RationalGeometry`,
 //! `SwungGeometry`) go through one generic path (each match arm is written once for both,
-//! monomorphized per geometry), and so do the two frozen-weight ones; the rest of the model
+//! monomorphized per geometry), and so do the three frozen-weight ones (surface, open curve,
+//! and the closed periodic curve of the `ring` primitive, `d-nurbs.txt` Fig 6); the rest of the model
 //! (slots, tool table, constraints, display, pick, exports, session files) does not look at
 //! the engine. The triangular and multi-patch kinds are [`super::generalized::GeneralizedModel`]
 //! kinds (see there why this model is not one).
