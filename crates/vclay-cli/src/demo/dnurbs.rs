@@ -177,7 +177,7 @@ pub fn paper_fits(out: &Path) -> Result<(String, Vec<String>)> {
                         scene.add_polyline(set.points.clone(), [150, 60, 40], 2.0);
                     }
                     Some(LineRole::DataPoints) => {
-                        scene.add_markers(&set.points, [200, 40, 40], 0.05)
+                        scene.add_markers(&set.points, [200, 40, 40], 5.0)
                     }
                     _ => {}
                 }

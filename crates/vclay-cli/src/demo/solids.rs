@@ -52,7 +52,7 @@ fn mass_picture(
     use vclay::render::{RenderOptions, Scene, render};
     let mut scene = Scene::new();
     scene.add_segments(edges, [150, 160, 180], 1.0);
-    scene.add_markers(lattice_points, [200, 120, 90], 0.012);
+    scene.add_markers(lattice_points, [200, 120, 90], 2.5);
     let opts = RenderOptions {
         supersample: 2,
         ..RenderOptions::sized(360, 360)
