@@ -184,7 +184,9 @@ pub fn run(args: &PdeArgs) -> Result<()> {
         write(out, &m)?;
         let check = sol.residual_check(&model);
         let warning = check.warning();
-        if let Some(w) = &warning {
+        if let Some(w) = &warning
+            && !crate::quiet()
+        {
             eprintln!("vclay pde: warning: t = {t}: {w}");
         }
         let v = json!({
@@ -258,7 +260,9 @@ pub fn run(args: &PdeArgs) -> Result<()> {
             list.join(", ")
         )
     });
-    if let Some(w) = &warning {
+    if let Some(w) = &warning
+        && !crate::quiet()
+    {
         eprintln!("vclay pde: warning: {w}");
     }
     let v = json!({
