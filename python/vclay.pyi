@@ -330,6 +330,9 @@ class PdeSurface:
         normals)`."""
     def residual(self, t: float = 0.0) -> float:
         """Largest root-mean-square collocation residual over the patches at time `t`."""
+    def residual_check(self, t: float = 0.0) -> dict[str, Any]:
+        """The residual against the surface's size: `residual_rms`, `size` (bounding-box
+        diagonal), `ratio` and `warning` (a sentence when `ratio` is over 1 %, else None)."""
     def __len__(self) -> int: ...
 
 class Session:

@@ -161,6 +161,27 @@ impl PdeSurface {
         Ok(self.solve_at(py, t)?.residual_rms())
     }
 
+    /// The residual at time `t` against the surface's size (`vclay_pde::ResidualCheck`, the
+    /// check `vclay pde` prints): a dict with `residual_rms`, `size` (bounding-box diagonal),
+    /// `ratio` (`residual_rms / size`) and `warning` (a sentence when `ratio` is over
+    /// `vclay_pde::RESIDUAL_WARNING_RATIO`, 1 %, else None).
+    #[pyo3(signature = (t = 0.0))]
+    fn residual_check<'py>(
+        &self,
+        py: Python<'py>,
+        t: f64,
+    ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        let sol = self.solve_at(py, t)?;
+        let m = &self.model;
+        let c = py.detach(|| sol.residual_check(m));
+        let d = pyo3::types::PyDict::new(py);
+        d.set_item("residual_rms", c.residual_rms)?;
+        d.set_item("size", c.size)?;
+        d.set_item("ratio", c.ratio)?;
+        d.set_item("warning", c.warning())?;
+        Ok(d)
+    }
+
     /// Number of patches.
     fn __len__(&self) -> usize {
         self.model.patches.len()

@@ -59,3 +59,14 @@ def test_pde_surface_from_a_dict(root):
     # u = 1 is the boundary curve (r sin v, -r cos v, 0) with r = 1.
     np.testing.assert_allclose(pts[1], [np.sin(2.0), -np.cos(2.0), 0.0], atol=1e-9)
     assert s.residual() >= 0.0
+
+
+def test_pde_residual_check_warns_on_fig6a_at_t1(root):
+    # Issue 28: fig6a at t = 1 is a disc on a pinched spindle (residual RMS 0.081, 2.1 % of
+    # the surface's size); at t = 0.5 the PDE is solved to rounding.
+    spec = json.loads((root / "examples/pde/fig6a.json").read_text())
+    s = vclay.PdeSurface(spec)
+    bad, good = s.residual_check(1.0), s.residual_check(0.5)
+    assert bad["ratio"] > 0.01 and "residual RMS" in bad["warning"]
+    assert abs(bad["ratio"] - bad["residual_rms"] / bad["size"]) < 1e-15
+    assert good["ratio"] < 1e-10 and good["warning"] is None

@@ -182,11 +182,21 @@ pub fn run(args: &PdeArgs) -> Result<()> {
         let (sol, secs, reps) = timed_solve(&mut anim, t)?;
         let (m, tess) = mesh(&model, &sol, nu, nv);
         write(out, &m)?;
+        let check = sol.residual_check(&model);
+        let warning = check.warning();
+        if let Some(w) = &warning
+            && !crate::quiet()
+        {
+            eprintln!("vclay pde: warning: t = {t}: {w}");
+        }
         let v = json!({
             "spec": args.spec.display().to_string(),
             "model": model.name,
             "t": t,
             "residual_rms": sol.residual_rms(),
+            "residual_to_size": check.ratio,
+            "surface_size": check.size,
+            "warning": warning,
             "condition": sol.condition(),
             "solve_seconds": secs,
             "solve_repeats": reps,
@@ -211,16 +221,22 @@ pub fn run(args: &PdeArgs) -> Result<()> {
     let mut entries = Vec::with_capacity(count);
     let mut total_solve = 0.0;
     let bar = crate::progress::bar(count as u64, "vclay pde: frames");
+    let mut large = Vec::new();
     for (k, t) in frame_times(t0, t1, count).into_iter().enumerate() {
         let (sol, secs, _) = timed_solve(&mut anim, t)?;
         total_solve += secs;
         let (m, tess) = mesh(&model, &sol, nu, nv);
         let path = dir.join(format!("frame_{k:04}.{ext}"));
         write(&path, &m)?;
+        let check = sol.residual_check(&model);
+        if check.is_large() {
+            large.push((k, t, check.ratio));
+        }
         entries.push(json!({
             "frame": k,
             "t": t,
             "residual_rms": sol.residual_rms(),
+            "residual_to_size": check.ratio,
             "condition": sol.condition(),
             "solve_seconds": secs,
             "tessellate_seconds": tess,
@@ -230,9 +246,29 @@ pub fn run(args: &PdeArgs) -> Result<()> {
         bar.inc(1);
     }
     bar.finish_and_clear();
+    let warning = (!large.is_empty()).then(|| {
+        let list: Vec<String> = large
+            .iter()
+            .map(|(k, t, r)| format!("frame {k} (t = {t}: {:.2} %)", 100.0 * r))
+            .collect();
+        format!(
+            "the residual RMS is over {} % of the surface's size in {} of {count} frames: {}; \
+             there the trial terms do not solve the PDE and the shape is a least-squares \
+             compromise, look at it before trusting it",
+            100.0 * vclay::pde::RESIDUAL_WARNING_RATIO,
+            large.len(),
+            list.join(", ")
+        )
+    });
+    if let Some(w) = &warning
+        && !crate::quiet()
+    {
+        eprintln!("vclay pde: warning: {w}");
+    }
     let v = json!({
         "spec": args.spec.display().to_string(),
         "model": model.name,
+        "warning": warning,
         "frames": entries,
         "mean_solve_seconds": total_solve / count as f64,
     });

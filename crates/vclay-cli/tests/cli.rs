@@ -274,3 +274,43 @@ fn demo_writes_its_files() {
     assert!(err.contains("`teapot`") && err.contains("rope"), "{err}");
     assert!(!other.exists());
 }
+
+/// Issue 28: `vclay pde` warns when the residual is large compared with the surface (fig6a at
+/// t = 1, a disc on a pinched spindle), on stderr and in its JSON, and not where the PDE is
+/// solved (t = 0.5); frames name the frames over the threshold.
+#[test]
+fn pde_warns_when_the_residual_is_large_for_the_surface() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = format!(
+        "{}/../../examples/pde/fig6a.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let at = |t: &str| {
+        let out = vclay_in(dir.path(), &["pde", &spec, "--t", t, "--out", "s.obj"]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+        (v, String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (bad, err) = at("1");
+    assert!(bad["residual_to_size"].as_f64().unwrap() > 0.01, "{bad}");
+    assert!(bad["warning"].as_str().unwrap().contains("residual RMS"));
+    assert!(err.contains("warning: t = 1"), "{err}");
+    let (good, err) = at("0.5");
+    assert!(good["residual_to_size"].as_f64().unwrap() < 1e-10, "{good}");
+    assert!(
+        good["warning"].is_null() && !err.contains("warning"),
+        "{err}"
+    );
+    let out = vclay_in(
+        dir.path(),
+        &["pde", &spec, "--frames", "0:1:3", "--out-dir", "f"],
+    );
+    assert!(out.status.success());
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let w = v["warning"].as_str().unwrap();
+    assert!(w.contains("in 1 of 3 frames: frame 2 (t = 1"), "{w}");
+}

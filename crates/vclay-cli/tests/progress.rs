@@ -4,9 +4,11 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
+/// A spec whose frames all solve the PDE (section III's surface is over the residual warning
+/// of issue 28, which would be the only thing on stderr).
 const SPEC: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
-    "/../vclay-pde/examples/specs/section3.json"
+    "/../vclay-pde/examples/specs/fig4a.json"
 );
 
 fn vclay(args: &[&str]) -> Output {

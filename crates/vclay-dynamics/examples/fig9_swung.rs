@@ -1,7 +1,9 @@
 //! `d-nurbs.txt` Fig 9: interactive sculpting of swung D-NURBS surfaces with spring forces
 //! (control points and weights of both profile curves dynamic): (a) sphere (profiles with 4 and
-//! 7 control points) into an egg, (b) torus (7 and 7) deformed, (c) hat (9 and 7), (d) a
-//! cylinder (7 and 7) into a wine glass. Springs follow targets that move over time, as a
+//! 7 control points) into an egg, (b) torus (7 and 7) deformed, (c) hat (9 and 6), (d) a
+//! cylinder (7 and 5) into a wine glass (the paper's counts; the 6- and 5-point trajectories
+//! are close to circles, not exact ones). The same figures as scenarios:
+//! `examples/scenarios/fig9{a,b,c,d}_*.toml`. Springs follow targets that move over time, as a
 //! mouse-driven tool would.
 //!
 //! Run: `cargo run --release -p vclay-dynamics --example fig9_swung`

@@ -44,7 +44,7 @@ pub mod trial;
 
 pub use error::PdeError;
 pub use expr::{Expr, ExprError, Var};
-pub use model::{Animator, ModelSolution, frame_times};
+pub use model::{Animator, ModelSolution, RESIDUAL_WARNING_RATIO, ResidualCheck, frame_times};
 pub use patch::{Continuity, Field, LocalDeformation, PdePatch};
 pub use solve::{PatchSolution, SolveStats, Solver};
 pub use spec::{PdeModel, SpecFile};

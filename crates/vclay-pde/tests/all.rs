@@ -10,6 +10,7 @@ mod animation;
 mod expr;
 mod figs56;
 mod patches;
+mod residual_check;
 mod section3;
 mod spec;
 mod spectral;

@@ -17,6 +17,7 @@ mod examples;
 mod ffd;
 mod hostile;
 mod open;
+mod paper_figures;
 mod pde;
 mod pde_issue22;
 mod plasticity;

@@ -29,7 +29,12 @@ fn fit_rms(text: &str, steps: u64) -> f64 {
 
 #[test]
 fn fig6_fit_converges_with_dynamic_and_frozen_weights() {
-    let text = example("fig06_curve_fit.toml");
+    // The scenario before issue 28 (the 9-point rational circle of diameter 2.6; the shipped
+    // Fig 6 is now the paper's closed cubic ring, `paper_figures.rs`).
+    let ring = "primitive = \"ring\"\nsize = [11]\ndegree = [3]\nextent = 2.6\nengine = \"frozen\"";
+    let example = example("fig06_curve_fit.toml");
+    assert!(example.contains(ring), "the Fig 6 scenario changed");
+    let text = example.replace(ring, "primitive = \"circle\"\nextent = 2.6");
     // Initial RMS distance of the data to the circle of radius 1.3: about 0.42.
     let start = fit_rms(&text, 1);
     let dynamic = fit_rms(&text, 250);

@@ -28,11 +28,16 @@ const NEW_SINCE: &[&str] = &[
 ];
 
 /// Examples added after the session layer (the old readers could not express them, so there is
-/// no run to compare with); each is run by its own test (issue 18: `tests/dnurbs_issue18.rs`).
+/// no run to compare with); each is run by its own test (issue 18: `tests/dnurbs_issue18.rs`;
+/// issue 28, the papers' own counts: `tests/paper_figures.rs`).
 const NEW_EXAMPLES: &[&str] = &[
     "fig02_swung_cube",
     "fig06_curve_fit",
     "fig7b_saddle_fit",
+    "fig7c_wave_fit",
+    "fig9b_swung_torus",
+    "fig9c_swung_hat",
+    "fig9d_swung_glass",
     "fig08a_edge_rounding",
     "fig08b_corner_rounding",
     "fig08c_bevel_rounding",

@@ -53,6 +53,7 @@
 
 pub mod benchmarks;
 pub mod error;
+pub mod figures;
 pub mod map;
 pub mod material;
 pub mod metric;

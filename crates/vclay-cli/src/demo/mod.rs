@@ -70,6 +70,12 @@ fn steps() -> Vec<Step> {
             run: dnurbs::hemisphere_fit,
         },
         Step {
+            name: "d-nurbs fits with the paper's counts",
+            id: "fits",
+            reproduces: "d-nurbs.txt Fig 6, Fig 7b, Fig 7c",
+            run: dnurbs::paper_fits,
+        },
+        Step {
             name: "d-nurbs swung egg",
             id: "egg",
             reproduces: "d-nurbs.txt Fig 9a",
@@ -110,6 +116,12 @@ fn steps() -> Vec<Step> {
             id: "rope",
             reproduces: "subdivision-solids-journal.txt Fig 7, Fig 12",
             run: solids::rope_cube,
+        },
+        Step {
+            name: "b-spline solid mass distribution",
+            id: "mass",
+            reproduces: "subdivision-solids-journal.txt Fig 3",
+            run: solids::mass_distribution,
         },
         Step {
             name: "studio",

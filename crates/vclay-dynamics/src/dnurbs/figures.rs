@@ -39,12 +39,15 @@ pub fn hemisphere_points() -> Vec<Vec3> {
     v
 }
 
-/// Fig 7b: a convex/concave set, the saddle `z = (x^2 - y^2) / 2` sampled at 5 x 5 points.
+/// Fig 7b: a convex/concave set of 19 points (the paper's count), the saddle
+/// `z = (x^2 - y^2) / 2` at the centre, a ring of 6 at radius 0.45 and a ring of 12 at radius
+/// 0.9 (the pattern of [`hemisphere_points`]).
 pub fn saddle_points() -> Vec<Vec3> {
-    let mut v = Vec::with_capacity(25);
-    for i in 0..5 {
-        for j in 0..5 {
-            let (x, y) = (-0.9 + 0.45 * i as f64, -0.9 + 0.45 * j as f64);
+    let mut v = vec![Vec3::zeros()];
+    for (count, r) in [(6, 0.45f64), (12, 0.9f64)] {
+        for k in 0..count {
+            let t = std::f64::consts::TAU * k as f64 / count as f64;
+            let (x, y) = (r * t.cos(), r * t.sin());
             v.push(Vec3::new(x, y, 0.5 * (x * x - y * y)));
         }
     }

@@ -1146,6 +1146,62 @@ pub mod profiles {
         )
     }
 
+    /// A closed quadratic trajectory with 5 control points (`d-nurbs.txt` Fig 9d's wine glass:
+    /// "two curves with 7 and 5 control points"), close to the circle of radius `r` in the x-y
+    /// plane: the first and last control points coincide at `(r, 0, 0)` (the seam, tied by
+    /// [`SwungGeometry`]), the other three are mirror-symmetric about the x axis, the knots
+    /// `0, 0, 0, a, 1 - a, 1, 1, 1`.
+    ///
+    /// Not an exact circle: a closed quadratic with 5 control points has three segments joined
+    /// with C1 continuity in homogeneous space, and three conic arcs of one circle joined that
+    /// way need double knots (7 control points, [`circle7`]). The points, weights and `a` were
+    /// chosen by a random search minimising the largest radial deviation, which is
+    /// [`CIRCLE5_DEVIATION`] of `r` (the paper gives no coordinates).
+    pub fn circle5(r: f64) -> Result<NurbsCurve, SplineError> {
+        let (y1, x2, w1, w2, a) = (2.881438, -1.250481, 0.164361, 0.360695, 0.372792);
+        NurbsCurve::new(
+            2,
+            vec![0.0, 0.0, 0.0, a, 1.0 - a, 1.0, 1.0, 1.0],
+            [(1.0, 0.0), (1.0, y1), (x2, 0.0), (1.0, -y1), (1.0, 0.0)]
+                .iter()
+                .map(|&(x, y)| Vec3::new(r * x, r * y, 0.0))
+                .collect(),
+            Some(vec![1.0, w1, w2, w1, 1.0]),
+        )
+    }
+
+    /// The largest radial deviation of [`circle5`] from its circle, relative to the radius
+    /// (measured on 4,001 parameters; a test checks it).
+    pub const CIRCLE5_DEVIATION: f64 = 0.0175;
+
+    /// A closed quadratic trajectory with 6 control points (`d-nurbs.txt` Fig 9c's hat: "two
+    /// curves with 9 and 6 control points"), close to the circle of radius `r`: the seam at
+    /// `(r, 0, 0)`, four control points mirror-symmetric about the x axis, knots
+    /// `0, 0, 0, a, 1/2, 1 - a, 1, 1, 1`. Not an exact circle (see [`circle5`]); the largest
+    /// radial deviation is [`CIRCLE6_DEVIATION`] of `r`.
+    pub fn circle6(r: f64) -> Result<NurbsCurve, SplineError> {
+        let (y1, x2, y2, w1, w2, a) = (1.153759, -0.987256, 0.850188, 0.405402, 0.361714, 0.287029);
+        NurbsCurve::new(
+            2,
+            vec![0.0, 0.0, 0.0, a, 0.5, 1.0 - a, 1.0, 1.0, 1.0],
+            [
+                (1.0, 0.0),
+                (1.0, y1),
+                (x2, y2),
+                (x2, -y2),
+                (1.0, -y1),
+                (1.0, 0.0),
+            ]
+            .iter()
+            .map(|&(x, y)| Vec3::new(r * x, r * y, 0.0))
+            .collect(),
+            Some(vec![1.0, w1, w2, w2, w1, 1.0]),
+        )
+    }
+
+    /// The largest radial deviation of [`circle6`] from its circle, relative to the radius.
+    pub const CIRCLE6_DEVIATION: f64 = 0.0133;
+
     /// A half circle of radius `r` in the x-z plane (x >= 0) from the south pole to the north
     /// pole: quadratic, 4 control points with weights `1, 1/2, 1/2, 1` and one simple interior
     /// knot (the profile count of `d-nurbs.txt` Fig 9a).
@@ -1272,16 +1328,19 @@ impl SwungGeometry {
         Self::new(&profiles::semicircle4(r)?, &profiles::circle7(1.0)?, 1.0)
     }
 
-    /// The hat of Fig 9c (profile with 9 control points; the trajectory is the exact 7-point
-    /// circle, where the paper's 6-point trajectory cannot be an exact circle).
+    /// The hat of Fig 9c with the paper's counts, "two curves with 9 and 6 control points":
+    /// the 9-point profile [`profiles::hat`] swung along the 6-point closed trajectory
+    /// [`profiles::circle6`] (within 1.33 % of a circle; 6 control points cannot make an exact
+    /// one).
     pub fn hat() -> Result<Self, DynamicsError> {
-        Self::new(&profiles::hat()?, &profiles::circle7(1.0)?, 1.0)
+        Self::new(&profiles::hat()?, &profiles::circle6(1.0)?, 1.0)
     }
 
-    /// The wine glass of Fig 9d before sculpting: a cylinder (profile with 7 control points,
-    /// 7-point circular trajectory).
+    /// The wine glass of Fig 9d before sculpting, with the paper's counts, "two curves with 7
+    /// and 5 control points": a cylinder, the 7-point profile [`profiles::wine_glass`] swung
+    /// along the 5-point closed trajectory [`profiles::circle5`] (within 1.75 % of a circle).
     pub fn wine_glass() -> Result<Self, DynamicsError> {
-        Self::new(&profiles::wine_glass()?, &profiles::circle7(1.0)?, 1.0)
+        Self::new(&profiles::wine_glass()?, &profiles::circle5(1.0)?, 1.0)
     }
 
     /// The cubical swung surface of `d-nurbs.txt` Fig 2: the cube `[-h, h]^3` as the swung
@@ -1306,6 +1365,7 @@ impl SwungGeometry {
 mod tests {
     use super::*;
     use crate::dnurbs::benchmarks::unit_sheet;
+    use vclay_spline::ParametricCurve as _;
 
     /// A 6 x 7 bicubic/biquadratic sheet with uneven weights and a curve.
     fn geometries() -> Vec<RationalGeometry> {
@@ -1410,5 +1470,50 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// d-nurbs.txt Fig 9c-d: the hat's and the glass's trajectories have the paper's 6 and 5
+    /// control points, are closed, and stay within their documented radial deviation of the
+    /// circle (which a change of the constants would break).
+    #[test]
+    fn fig9_trajectories_have_the_papers_counts_and_are_nearly_circles() {
+        for (c, n, dev) in [
+            (
+                profiles::circle5(2.0).unwrap(),
+                5,
+                profiles::CIRCLE5_DEVIATION,
+            ),
+            (
+                profiles::circle6(2.0).unwrap(),
+                6,
+                profiles::CIRCLE6_DEVIATION,
+            ),
+        ] {
+            assert_eq!(c.control_points().len(), n);
+            assert_eq!(c.degree(), 2);
+            let (a, b) = (c.point(0.0).unwrap(), c.point(1.0).unwrap());
+            assert!((a - b).norm() < 1e-15, "closed");
+            let mut worst = 0.0f64;
+            for k in 0..=4000 {
+                let p = c.point(k as f64 / 4000.0).unwrap();
+                assert!(p.z.abs() < 1e-15);
+                worst = worst.max(((p.x * p.x + p.y * p.y).sqrt() / 2.0 - 1.0).abs());
+            }
+            assert!(worst <= dev, "{n} points: deviation {worst} > {dev}");
+            assert!(
+                worst > 0.5 * dev,
+                "{n} points: {worst}, the constant is stale"
+            );
+        }
+        let glass = SwungGeometry::wine_glass().unwrap();
+        let hat = SwungGeometry::hat().unwrap();
+        let counts = |g: &SwungGeometry| {
+            (
+                g.profile().unwrap().control_points().len(),
+                g.trajectory().unwrap().control_points().len(),
+            )
+        };
+        assert_eq!(counts(&glass), (7, 5));
+        assert_eq!(counts(&hat), (9, 6));
     }
 }

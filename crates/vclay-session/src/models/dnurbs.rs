@@ -8,7 +8,7 @@
 //! or `SwungGeometry` (swung surfaces), exactly as the old D-NURBS scenario runner built them,
 //! so that scenarios give the same bits; `"frozen"` is the frozen-weight engine `Dnurbs`
 //! (footnote 2: weights held, constant matrices), for curves and tensor-product surfaces only
-//! and without constraints.
+//! and without constraints; a `ring` (closed periodic curve) runs on it only.
 //!
 //! Tools: every force-producing edit (rope, force, gravity, inflate, data) is one *slot*: a
 //! serializable description of its forces ([`ForceDesc`]) under a handle that the
@@ -17,9 +17,10 @@
 //! `velocity` is the same `Target::Moving` closure the old runner made, and a session file
 //! rebuilds it from its description.
 //!
-//! One model, four engines: the engine enum's two generalized variants (`RationalGeometry`,
+//! One model, five engines: the engine enum's two generalized variants (`RationalGeometry`,
 //! `SwungGeometry`) go through one generic path (each match arm is written once for both,
-//! monomorphized per geometry), and so do the two frozen-weight ones; the rest of the model
+//! monomorphized per geometry), and so do the three frozen-weight ones (surface, open curve,
+//! and the closed periodic curve of the `ring` primitive, `d-nurbs.txt` Fig 6); the rest of the model
 //! (slots, tool table, constraints, display, pick, exports, session files) does not look at
 //! the engine. The triangular and multi-patch kinds are [`super::generalized::GeneralizedModel`]
 //! kinds (see there why this model is not one).
@@ -43,12 +44,13 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 use vclay_core::{TriMesh, Vec3};
 use vclay_dynamics::DynamicsError;
+use vclay_dynamics::dnurbs::ClosedCurve;
 use vclay_dynamics::dnurbs::{
     Constraint, Density, Dnurbs, DnurbsGeometry, DnurbsState, ElasticReference, Force,
     GeneralizedDnurbs, GeneralizedGeometry, GeneralizedState, Integrator, LocalJacobian, Material,
     Preset, QuadratureRule, RationalGeometry, SwungGeometry, Target,
 };
-use vclay_dynamics::{DnurbsCurve, DnurbsSurface};
+use vclay_dynamics::{DnurbsClosedCurve, DnurbsCurve, DnurbsSurface};
 use vclay_io::model::Entity;
 use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
 
@@ -71,7 +73,9 @@ pub const DEFAULT_ROPE_STIFFNESS: f64 = 50.0;
 pub const DISPLAY_GRID: [usize; 2] = [32, 32];
 /// Most control points of a sheet along one direction.
 pub const MAX_SHEET_SIZE: usize = 512;
-/// Most control points of a line.
+/// Control points of a `ring` without `size` (`d-nurbs.txt` Fig 6: 11).
+pub const DEFAULT_RING_SIZE: usize = 11;
+/// Most control points of a line (and of a ring).
 pub const MAX_LINE_SIZE: usize = 100_000;
 /// Highest degree (`vclay_spline::MAX_DEGREE`).
 pub const MAX_DEGREE: usize = vclay_spline::MAX_DEGREE;
@@ -90,12 +94,14 @@ enum Engine {
     Swung(GeneralizedDnurbs<SwungGeometry>),
     FrozenSurface(DnurbsSurface),
     FrozenCurve(DnurbsCurve),
+    /// A closed (periodic) curve, `d-nurbs.txt` Fig 6's "closed cubic D-NURBS curve".
+    FrozenRing(DnurbsClosedCurve),
 }
 
 /// Dispatches an expression over the engines: `$a` is written once for both generalized
 /// engines (`GeneralizedDnurbs<G>`, `G` = `RationalGeometry` or `SwungGeometry`: one generic
-/// path), `$b` once for both frozen-weight ones (`Dnurbs<G>`, `G` = `NurbsSurface` or
-/// `NurbsCurve`). With `frozen => $b` the frozen engines are not bound.
+/// path), `$b` once for the frozen-weight ones (`Dnurbs<G>`, `G` = `NurbsSurface`,
+/// `NurbsCurve` or `ClosedCurve`). With `frozen => $b` the frozen engines are not bound.
 macro_rules! each {
     ($e:expr, gen $g:ident => $a:expr, frozen $f:ident => $b:expr) => {
         match $e {
@@ -103,13 +109,14 @@ macro_rules! each {
             Engine::Swung($g) => $a,
             Engine::FrozenSurface($f) => $b,
             Engine::FrozenCurve($f) => $b,
+            Engine::FrozenRing($f) => $b,
         }
     };
     ($e:expr, gen $g:ident => $a:expr, frozen => $b:expr) => {
         match $e {
             Engine::Rational($g) => $a,
             Engine::Swung($g) => $a,
-            Engine::FrozenSurface(_) | Engine::FrozenCurve(_) => $b,
+            Engine::FrozenSurface(_) | Engine::FrozenCurve(_) | Engine::FrozenRing(_) => $b,
         }
     };
 }
@@ -128,6 +135,10 @@ fn cmd(reason: impl std::fmt::Display) -> SessionError {
     SessionError::command("", "", reason)
 }
 
+/// Why a ring refuses the generalized engine.
+const RING_ENGINE: &str = "a ring (a closed periodic curve) runs on the frozen-weight engine \
+     only (weights 1, its repeated control points are one coordinate): give `engine = \"frozen\"`";
+
 /// Why a frozen-weight engine refuses a constraint.
 const NO_FROZEN_CONSTRAINTS: &str = "the frozen-weight engine has no constraints (section 6.2 needs the generalized engine: `engine = \"generalized\"`)";
 
@@ -144,12 +155,15 @@ fn gen_point<G: GeneralizedGeometry>(g: &G, param: [f64; 2]) -> Result<Vec3, Dyn
 
 impl Engine {
     fn is_frozen(&self) -> bool {
-        matches!(self, Engine::FrozenSurface(_) | Engine::FrozenCurve(_))
+        matches!(
+            self,
+            Engine::FrozenSurface(_) | Engine::FrozenCurve(_) | Engine::FrozenRing(_)
+        )
     }
     fn is_curve(&self) -> bool {
         match self {
             Engine::Rational(d) => d.geometry().parametric_dimension() == 1,
-            Engine::FrozenCurve(_) => true,
+            Engine::FrozenCurve(_) | Engine::FrozenRing(_) => true,
             _ => false,
         }
     }
@@ -187,6 +201,7 @@ impl Engine {
             (Engine::Swung(d), EngineState::Generalized(s)) => d.set_state(s),
             (Engine::FrozenSurface(d), EngineState::Frozen(s)) => d.set_state(s),
             (Engine::FrozenCurve(d), EngineState::Frozen(s)) => d.set_state(s),
+            (Engine::FrozenRing(d), EngineState::Frozen(s)) => d.set_state(s),
             _ => Err(wrong()),
         }
     }
@@ -315,6 +330,7 @@ impl Engine {
                 Some(d.geometry().to_curve()?)
             }
             Engine::FrozenCurve(d) => Some(d.geometry().clone()),
+            Engine::FrozenRing(d) => Some(d.geometry().curve().clone()),
             _ => None,
         })
     }
@@ -572,6 +588,12 @@ enum Source {
         trajectory: CurveData,
         alpha: f64,
     },
+    /// A closed (periodic) B-spline curve ([`ClosedCurve`]): its distinct control points,
+    /// unit knot spans.
+    Ring {
+        degree: usize,
+        points: Vec<V3>,
+    },
 }
 
 /// The non-empty spans `[t_i, t_i+1]` of a knot vector's domain.
@@ -600,6 +622,12 @@ impl Source {
             } => [
                 knot_spans(profile.curve()?.knots()),
                 knot_spans(trajectory.curve()?.knots()),
+            ],
+            Source::Ring { points, .. } => [
+                (0..points.len())
+                    .map(|k| (k as f64, k as f64 + 1.0))
+                    .collect(),
+                Vec::new(),
             ],
         })
     }
@@ -667,6 +695,17 @@ impl Source {
                 return Err(SessionError::model(
                     "swung surfaces need the generalized engine",
                 ));
+            }
+            (Source::Ring { degree, points }, true) => Engine::FrozenRing(
+                Dnurbs::new(
+                    ClosedCurve::new(*degree, points.iter().map(|p| v3(*p)).collect())
+                        .map_err(e)?,
+                    material,
+                )
+                .map_err(e)?,
+            ),
+            (Source::Ring { .. }, false) => {
+                return Err(SessionError::model(RING_ENGINE));
             }
         })
     }
@@ -1184,6 +1223,9 @@ impl DnurbsModel {
             Engine::FrozenCurve(d) => d
                 .move_control_point(index, v3(*to))
                 .map_err(SessionError::command_from)?,
+            Engine::FrozenRing(d) => d
+                .move_control_point(index, v3(*to))
+                .map_err(SessionError::command_from)?,
             _ => self.edit_coords(index, &[(0, to[0]), (1, to[1]), (2, to[2])])?,
         }
         Ok(format!("moved control point {index} to {to:?}"))
@@ -1357,7 +1399,12 @@ impl DnurbsModel {
                 }
             }
         } else {
-            set.polyline(&self.engine.control_points(false));
+            let p = self.engine.control_points(false);
+            set.polyline(&p);
+            if matches!(self.engine, Engine::FrozenRing(_)) && p.len() > 2 {
+                // The closed polygon: last point back to the first.
+                set.segments.push([p.len() as u32 - 1, 0]);
+            }
         }
         set
     }
@@ -1833,6 +1880,40 @@ fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, S
                     .map_err(|e| err("primitive", e.to_string()))?,
             ),
         }),
+        (Some("ring"), false) => {
+            // d-nurbs.txt Fig 6: "an initial closed cubic D-NURBS curve with 11 control
+            // points"; the control polygon is a regular n-gon of diameter `extent`.
+            let n = m
+                .size
+                .as_ref()
+                .and_then(|s| s.first().copied())
+                .unwrap_or(DEFAULT_RING_SIZE);
+            let deg = m
+                .degree
+                .as_ref()
+                .and_then(|s| s.first().copied())
+                .unwrap_or(3);
+            if !(deg + 1..=MAX_LINE_SIZE).contains(&n) {
+                return Err(err(
+                    "size",
+                    format!(
+                        "{n} control points; a ring of degree {deg} takes {} to {MAX_LINE_SIZE}",
+                        deg + 1
+                    ),
+                ));
+            }
+            let r = 0.5 * extent;
+            let points = (0..n)
+                .map(|k| {
+                    let t = std::f64::consts::TAU * k as f64 / n as f64;
+                    [r * t.cos(), r * t.sin(), 0.0]
+                })
+                .collect();
+            Ok(Source::Ring {
+                degree: deg,
+                points,
+            })
+        }
         (Some("line") | None, false) => {
             let n = m
                 .size
@@ -1864,7 +1945,11 @@ fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, S
             "primitive",
             format!(
                 "unknown primitive \"{o}\" for {kind}; expected {}",
-                if surface { "sheet" } else { "line or circle" }
+                if surface {
+                    "sheet"
+                } else {
+                    "line, circle or ring"
+                }
             ),
         )),
     }
