@@ -6,6 +6,7 @@
 mod common;
 
 mod brush;
+mod cad_part;
 mod colour;
 mod defects;
 mod energy;
