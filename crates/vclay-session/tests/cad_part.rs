@@ -319,3 +319,29 @@ fn bad_part_keys_are_located() {
         assert!(e.contains(key), "{bad}: {e}");
     }
 }
+
+/// A ray straight down at the top face hits it between the hole and the outer edge, but a ray
+/// through the hole's middle does not attach to the untrimmed surface there (issue 30: ropes
+/// must not attach inside a hole).
+#[test]
+fn picks_inside_the_hole_are_refused() {
+    let (text, _, _) = scenario("");
+    let sc = Scenario::parse(&text, "plate.toml", "plate", Path::new(".")).unwrap();
+    let m = sc.session.model(None).unwrap();
+    let down = |x: f64, y: f64| vclay_session::Ray {
+        origin: vclay_core::Vec3::new(x, y, 20.0),
+        direction: vclay_core::Vec3::new(0.0, 0.0, -1.0),
+    };
+    let tol = 1e-3;
+    let hit = m
+        .pick(&down(8.0, 15.0), tol)
+        .expect("the top face is there");
+    assert!((hit.point.z - 8.0).abs() < 1e-6, "{:?}", hit.point);
+    match m.pick(&down(20.0, 15.0), tol) {
+        None => {}
+        Some(h) => assert!(
+            !matches!(h.element, vclay_session::Element::SurfacePoint { .. }),
+            "a surface point inside the hole: {h:?}"
+        ),
+    }
+}

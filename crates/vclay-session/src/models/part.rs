@@ -42,8 +42,8 @@ use super::dnurbs::{self, DnurbsModel};
 use crate::command::Edit;
 use crate::error::SessionError;
 use crate::model::{
-    Applied, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot, StepReport,
-    Undo, extension, unsupported_export,
+    Applied, Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, Snapshot,
+    StepReport, Undo, extension, unsupported_export,
 };
 
 /// Control points per direction of the sculpted face's refined surface (`refine`): a plate's
@@ -155,6 +155,51 @@ fn face_area(f: &vclay_io::brep::Face) -> f64 {
 }
 
 impl PartModel {
+    /// Whether the parameters `(u, v)` of the sculpted face lie inside its trimming loops
+    /// (even-odd rule over the outer loop and the holes, each pcurve sampled at 32 points; the
+    /// refined face keeps the original parameters, so the pcurves apply as read). A face
+    /// without pcurves (a whole surface) contains every parameter.
+    fn inside_trims(&self, [u, v]: [f64; 2]) -> bool {
+        let face = &self.shells[self.shell].faces[self.face_index];
+        if face.pcurves.is_empty() {
+            return true;
+        }
+        let mut inside = false;
+        for l in face.loops() {
+            let mut poly: Vec<[f64; 2]> = Vec::new();
+            for it in l {
+                if let vclay_io::brep::LoopItem::Edge {
+                    forward,
+                    pcurve: Some(k),
+                    ..
+                } = *it
+                {
+                    let c = &face.pcurves[k];
+                    let d = c.domain();
+                    let mut pts: Vec<[f64; 2]> = (0..=32)
+                        .filter_map(|j| c.point(d.min + (d.max - d.min) * j as f64 / 32.0).ok())
+                        .map(|q| [q.x, q.y])
+                        .collect();
+                    if !forward {
+                        pts.reverse();
+                    }
+                    poly.extend(pts);
+                }
+            }
+            let n = poly.len();
+            for i in 0..n {
+                let (a, b) = (poly[i], poly[(i + 1) % n]);
+                if (a[1] > v) != (b[1] > v) {
+                    let x = a[0] + (v - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+                    if u < x {
+                        inside = !inside;
+                    }
+                }
+            }
+        }
+        inside
+    }
+
     /// Builds a part from a scenario's (or a front end's) keys; relative files resolve against
     /// `base`. Errors name the key.
     pub fn from_keys(spec: &PartSpec, base: &Path) -> Result<Self, SpecError> {
@@ -469,8 +514,14 @@ impl Model for PartModel {
         out
     }
 
+    /// The sculpted face's pick, with surface points outside its trimming loops refused (a
+    /// ray through the hole must not attach a rope to the untrimmed surface there).
     fn pick(&self, ray: &Ray, tolerance: f64) -> Option<Hit> {
-        self.face.pick(ray, tolerance)
+        let hit = self.face.pick(ray, tolerance)?;
+        match hit.element {
+            Element::SurfacePoint { param } if !self.inside_trims(param) => None,
+            _ => Some(hit),
+        }
     }
 
     fn params(&self) -> Vec<Param> {
