@@ -136,6 +136,36 @@ impl Face {
     pub fn loops(&self) -> impl Iterator<Item = &Vec<LoopItem>> {
         std::iter::once(&self.bound).chain(&self.holes)
     }
+
+    /// A loop of this face as a polygon in the surface's parameters: each edge use's pcurve
+    /// sampled at `samples` points (both ends included, at least 2) in loop direction; uses
+    /// without a pcurve (poles, whole-surface boundaries) add nothing, so the polygon closes
+    /// across them implicitly.
+    pub fn loop_polygon(&self, l: &[LoopItem], samples: usize) -> Vec<[f64; 2]> {
+        let n = samples.max(2);
+        let mut out = Vec::with_capacity(l.len() * n);
+        for it in l {
+            if let LoopItem::Edge {
+                forward,
+                pcurve: Some(k),
+                ..
+            } = *it
+                && let Some(c) = self.pcurves.get(k)
+            {
+                use vclay_spline::ParametricCurve;
+                let d = c.domain();
+                let mut seg: Vec<[f64; 2]> = (0..n)
+                    .filter_map(|i| c.point(d.min + d.length() * i as f64 / (n - 1) as f64).ok())
+                    .map(|q| [q.x, q.y])
+                    .collect();
+                if !forward {
+                    seg.reverse();
+                }
+                out.extend(seg);
+            }
+        }
+        out
+    }
 }
 
 /// A connected set of faces sharing edges and vertices.

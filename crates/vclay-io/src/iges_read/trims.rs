@@ -1221,29 +1221,7 @@ pub(super) fn gather(r: &Reader<'_>) -> Result<Gathered, IoError> {
 /// first. Faces whose outer loop spans no area keep their sense.
 pub(super) fn orient(sh: &mut crate::brep::Shell) {
     use crate::brep::LoopItem;
-    let loop_area = |f: &crate::brep::Face| -> f64 {
-        let mut poly: Vec<[f64; 2]> = Vec::new();
-        for it in &f.bound {
-            if let LoopItem::Edge {
-                forward,
-                pcurve: Some(k),
-                ..
-            } = *it
-            {
-                let c = &f.pcurves[k];
-                let d = c.domain();
-                let mut pts: Vec<[f64; 2]> = (0..=16)
-                    .filter_map(|j| c.point(d.min + (d.max - d.min) * j as f64 / 16.0).ok())
-                    .map(|q| [q.x, q.y])
-                    .collect();
-                if !forward {
-                    pts.reverse();
-                }
-                poly.extend(pts);
-            }
-        }
-        area(&poly)
-    };
+    let loop_area = |f: &crate::brep::Face| area(&f.loop_polygon(&f.bound, 17));
     let set_senses = |sh: &mut crate::brep::Shell| {
         for f in &mut sh.faces {
             let a = loop_area(f);

@@ -110,26 +110,7 @@ fn face_area(f: &vclay_io::brep::Face) -> f64 {
     let mut lo = [f64::INFINITY; 2];
     let mut hi = [f64::NEG_INFINITY; 2];
     for l in f.loops() {
-        let mut pts = Vec::new();
-        for it in l {
-            if let vclay_io::brep::LoopItem::Edge {
-                forward,
-                pcurve: Some(k),
-                ..
-            } = *it
-                && let Some(c) = f.pcurves.get(k)
-            {
-                let d = c.domain();
-                let mut seg: Vec<[f64; 2]> = (0..32)
-                    .filter_map(|i| c.point(d.min + d.length() * i as f64 / 31.0).ok())
-                    .map(|q| [q.x, q.y])
-                    .collect();
-                if !forward {
-                    seg.reverse();
-                }
-                pts.extend(seg);
-            }
-        }
+        let pts = f.loop_polygon(l, 32);
         let n = pts.len();
         let mut a = 0.0;
         for i in 0..n {
@@ -166,26 +147,7 @@ impl PartModel {
         }
         let mut inside = false;
         for l in face.loops() {
-            let mut poly: Vec<[f64; 2]> = Vec::new();
-            for it in l {
-                if let vclay_io::brep::LoopItem::Edge {
-                    forward,
-                    pcurve: Some(k),
-                    ..
-                } = *it
-                {
-                    let c = &face.pcurves[k];
-                    let d = c.domain();
-                    let mut pts: Vec<[f64; 2]> = (0..=32)
-                        .filter_map(|j| c.point(d.min + (d.max - d.min) * j as f64 / 32.0).ok())
-                        .map(|q| [q.x, q.y])
-                        .collect();
-                    if !forward {
-                        pts.reverse();
-                    }
-                    poly.extend(pts);
-                }
-            }
+            let poly = face.loop_polygon(l, 33);
             let n = poly.len();
             for i in 0..n {
                 let (a, b) = (poly[i], poly[(i + 1) % n]);
