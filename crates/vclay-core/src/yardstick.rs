@@ -89,6 +89,16 @@ pub fn measure(seconds: f64) -> Yardstick {
     }
 }
 
+/// The line a timing example prints at its end: the yardstick taken at the run's start
+/// (`start`) and one taken now, so a reader can tell a slow host from a slow build.
+pub fn start_and_end_line(start: Yardstick) -> String {
+    let end = measure(0.3);
+    format!(
+        "yardstick v{YARDSTICK_VERSION}: {:.3} ms at the start, {:.3} ms at the end (one thread; divide a figure by it to compare runs)",
+        start.ms, end.ms
+    )
+}
+
 /// CPU time of this process so far (user and system, all threads), in seconds: Linux only
 /// (`/proc/self/stat`, clock ticks of 1/100 s), `None` elsewhere or on a read error. Time
 /// spent waiting for a CPU that another process holds is not counted, so on a loaded machine

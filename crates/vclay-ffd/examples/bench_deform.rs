@@ -143,16 +143,5 @@ fn main() {
             "cubic {cps}^3: embed {embed_ms:7.1} ms | full deform: 1 thread {seq:6.1} ms, rayon {par:6.1} ms (per-vertex kernel: {seq_scalar:6.1}, {par_scalar:6.1}) | 1-thread CPU time: blocked {seq_cpu:6.1} ms, per-vertex {seq_scalar_cpu:6.1} ms | normals {normals:6.1} ms | incremental {inc:6.1} ms ({count} vertices)"
         );
     }
-    print_yardstick(yard_start);
-}
-
-/// Prints the yardstick of the run's start and one taken now (`vclay_core::yardstick`).
-fn print_yardstick(start: vclay_core::yardstick::Yardstick) {
-    let end = vclay_core::yardstick::measure(0.3);
-    println!(
-        "yardstick v{}: {:.3} ms at the start, {:.3} ms at the end (one thread; divide a figure by it to compare runs)",
-        vclay_core::yardstick::YARDSTICK_VERSION,
-        start.ms,
-        end.ms
-    );
+    println!("{}", vclay_core::yardstick::start_and_end_line(yard_start));
 }

@@ -83,16 +83,5 @@ fn main() {
             serde_json::to_string(&r.timings).expect("json")
         );
     }
-    print_yardstick(yard_start);
-}
-
-/// Prints the yardstick of the run's start and one taken now (`vclay_core::yardstick`).
-fn print_yardstick(start: vclay_core::yardstick::Yardstick) {
-    let end = vclay_core::yardstick::measure(0.3);
-    println!(
-        "yardstick v{}: {:.3} ms at the start, {:.3} ms at the end (one thread; divide a figure by it to compare runs)",
-        vclay_core::yardstick::YARDSTICK_VERSION,
-        start.ms,
-        end.ms
-    );
+    println!("{}", vclay_core::yardstick::start_and_end_line(yard_start));
 }

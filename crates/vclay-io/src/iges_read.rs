@@ -303,6 +303,21 @@ impl Reader<'_> {
         }
     }
 
+    /// The directory entry `de` reached through `depth` nested references (curves inside
+    /// composite curves, surfaces' curves): an error past [`MAX_DEPTH`] (a cycle or a hostile
+    /// file).
+    fn nested(&self, de: usize, from: &Dir, depth: usize) -> Result<&Dir, IoError> {
+        let dir = self.dir(de, from)?;
+        if depth >= MAX_DEPTH {
+            return Err(err(
+                dir.line,
+                Some(dir.de),
+                format!("curves nested deeper than {MAX_DEPTH} (a cycle?)"),
+            ));
+        }
+        Ok(dir)
+    }
+
     /// The parameters of `dir` (its type number first, checked).
     fn params(&self, dir: &Dir) -> Result<Params, IoError> {
         let p = self.p;
@@ -378,14 +393,7 @@ impl Reader<'_> {
         from: &Dir,
         depth: usize,
     ) -> Result<Result<NurbsCurve, u32>, IoError> {
-        let dir = self.dir(de, from)?;
-        if depth >= MAX_DEPTH {
-            return Err(err(
-                dir.line,
-                Some(dir.de),
-                format!("curves nested deeper than {MAX_DEPTH} (a cycle?)"),
-            ));
-        }
+        let dir = self.nested(de, from, depth)?;
         if !matches!(dir.kind, 100 | 104 | 110 | 126) {
             return Ok(Err(dir.kind));
         }

@@ -123,6 +123,45 @@ pub fn curve_part(c: &NurbsCurve, a: f64, b: f64) -> Result<NurbsCurve, String> 
     NurbsCurve::new(p, knots, pts, Some(ws)).map_err(|e| e.to_string())
 }
 
+/// Makes the coordinate `axis` of the points of a sampled curve continuous across the seam of
+/// a full turn `[start, end]` (each point moved by whole periods toward its neighbour, from the
+/// middle point out), then moves them all by one period when that brings them inside the turn
+/// (within `rtol` of the period). The samples of a pcurve on a closed surface come wrapped into
+/// the turn one by one; this makes them one curve again.
+pub(crate) fn unwrap_turn<P>(pts: &mut [P], axis: usize, [start, end]: [f64; 2], rtol: f64)
+where
+    P: std::ops::IndexMut<usize, Output = f64>,
+{
+    let n = pts.len();
+    if n == 0 {
+        return;
+    }
+    let period = end - start;
+    let mid = n / 2;
+    for k in (0..mid).rev().chain(mid + 1..n) {
+        let near = if k < mid {
+            pts[k + 1][axis]
+        } else {
+            pts[k - 1][axis]
+        };
+        pts[k][axis] += ((near - pts[k][axis]) / period).round() * period;
+    }
+    let (lo, hi) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |m, p| {
+        (m.0.min(p[axis]), m.1.max(p[axis]))
+    });
+    let eps = rtol * period;
+    let shift = if lo < start - eps {
+        period
+    } else if hi > end + eps {
+        -period
+    } else {
+        0.0
+    };
+    if shift != 0.0 && lo + shift >= start - eps && hi + shift <= end + eps {
+        pts.iter_mut().for_each(|p| p[axis] += shift);
+    }
+}
+
 /// Whether every pcurve of the face is exact (not a polyline standing for a curve on an angle
 /// direction; see the module documentation): true unless a pcurve is of degree 1 with more than
 /// two control points.
@@ -168,30 +207,7 @@ fn pcurve_in_nurbs_params(
             ..
         } = *a
         {
-            let period = end - start;
-            let mid = n / 2;
-            for k in (0..mid).rev().chain(mid + 1..n) {
-                let near = if k < mid {
-                    pts[k + 1][axis]
-                } else {
-                    pts[k - 1][axis]
-                };
-                pts[k][axis] += ((near - pts[k][axis]) / period).round() * period;
-            }
-            let (lo, hi) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |m, p| {
-                (m.0.min(p[axis]), m.1.max(p[axis]))
-            });
-            let eps = 1e-12 * period;
-            let shift = if lo < start - eps {
-                period
-            } else if hi > end + eps {
-                -period
-            } else {
-                0.0
-            };
-            if shift != 0.0 && lo + shift >= start - eps && hi + shift <= end + eps {
-                pts.iter_mut().for_each(|p| p[axis] += shift);
-            }
+            unwrap_turn(&mut pts, axis, [start, end], 1e-12);
         }
     }
     let scale = pts

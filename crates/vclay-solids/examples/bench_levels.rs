@@ -144,7 +144,7 @@ fn main() {
         );
     }
     if fix_half || max_level < 2 {
-        print_yardstick(yard_start);
+        println!("{}", vclay_core::yardstick::start_and_end_line(yard_start));
         return;
     }
     // The other models of conference Table 1 / journal Table 2 that the primitives build.
@@ -198,16 +198,5 @@ fn main() {
         let name = format!("B-spline {}x{}x{}, {m}^3 samples", c[0], c[1], c[2]);
         row(&name, &mut s, build, seconds, paper, &mut largest);
     }
-    print_yardstick(yard_start);
-}
-
-/// Prints the yardstick of the run's start and one taken now (`vclay_core::yardstick`).
-fn print_yardstick(start: vclay_core::yardstick::Yardstick) {
-    let end = vclay_core::yardstick::measure(0.3);
-    println!(
-        "yardstick v{}: {:.3} ms at the start, {:.3} ms at the end (one thread; divide a figure by it to compare runs)",
-        vclay_core::yardstick::YARDSTICK_VERSION,
-        start.ms,
-        end.ms
-    );
+    println!("{}", vclay_core::yardstick::start_and_end_line(yard_start));
 }

@@ -40,7 +40,7 @@
 //! (514) face orientation flags, when given, are checked against it and a disagreement is
 //! warned about.
 
-use super::{Dir, MAX_DEPTH, Reader, err};
+use super::{Dir, Reader, err};
 use crate::error::IoError;
 use crate::step_read::{ParamAxis, TrimEdge, TrimLoop, TrimmedFace};
 use std::collections::{BTreeMap, HashMap};
@@ -85,14 +85,7 @@ impl Reader<'_> {
         depth: usize,
         used: &mut Vec<usize>,
     ) -> Result<Result<Vec<NurbsCurve>, u32>, IoError> {
-        let dir = self.dir(de, from)?;
-        if depth >= MAX_DEPTH {
-            return Err(err(
-                dir.line,
-                Some(dir.de),
-                format!("curves nested deeper than {MAX_DEPTH} (a cycle?)"),
-            ));
-        }
+        let dir = self.nested(de, from, depth)?;
         used.push(dir.de);
         if dir.kind != 102 {
             return Ok(self.edge_curve(dir, from)?.map(|c| vec![c]));
@@ -863,30 +856,7 @@ fn pcurves(
         if !inv.closed[axis] {
             continue;
         }
-        let period = inv.hi[axis] - inv.lo[axis];
-        let mid = n / 2;
-        for k in (0..mid).rev().chain(mid + 1..n) {
-            let near = if k < mid {
-                uv[k + 1][axis]
-            } else {
-                uv[k - 1][axis]
-            };
-            uv[k][axis] += ((near - uv[k][axis]) / period).round() * period;
-        }
-        let (lo, hi) = uv.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |m, p| {
-            (m.0.min(p[axis]), m.1.max(p[axis]))
-        });
-        let eps = 1e-9 * period;
-        let shift = if lo < inv.lo[axis] - eps {
-            period
-        } else if hi > inv.hi[axis] + eps {
-            -period
-        } else {
-            0.0
-        };
-        if shift != 0.0 {
-            uv.iter_mut().for_each(|p| p[axis] += shift);
-        }
+        crate::trimmed::unwrap_turn(&mut uv, axis, [inv.lo[axis], inv.hi[axis]], 1e-9);
         uv.iter_mut()
             .for_each(|p| p[axis] = p[axis].clamp(inv.lo[axis], inv.hi[axis]));
     }
@@ -1234,16 +1204,8 @@ pub(super) fn orient(sh: &mut crate::brep::Shell) {
     if !sh.closed {
         return;
     }
-    let volume = crate::trimmed::tessellate_shell(sh, 4).map(|m| {
-        let p = &m.positions;
-        m.triangles
-            .iter()
-            .map(|t| {
-                let [x, y, z] = t.map(|i| p[i as usize]);
-                x.dot(&y.cross(&z))
-            })
-            .sum::<f64>()
-    });
+    let volume =
+        crate::trimmed::tessellate_shell(sh, 4).map(|m| crate::trimmed::sculpt::mesh_volume(&m));
     if matches!(volume, Ok(v) if v < 0.0) {
         for f in &mut sh.faces {
             for l in std::iter::once(&mut f.bound).chain(f.holes.iter_mut()) {
