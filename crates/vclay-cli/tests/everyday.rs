@@ -144,16 +144,10 @@ fn reading_our_own_step_file_warns_only_about_what_is_dropped() {
     }
 }
 
-/// Issue 29 item 3: `vclay convert LATTICE.ovm` estimated its limit patches one level too deep
-/// (8x too much: a level-3 torus asked for 11.2 GB and ran in 2.07 GB); the estimate now
-/// follows the sample level (`docs/limits.md`: within 1.5x of the measured peaks). The
-/// 128-cell torus samples 65,536 cells: 79 MB now, 398 MB before, so a 200M limit takes it.
-/// Limits read as given (50M, 4G).
-#[test]
-fn lattice_patch_estimate_follows_the_sample_level() {
-    let dir = tempfile::tempdir().unwrap();
+/// Writes `t.ovm` in `dir`: the torus primitive's 128-cell lattice (`vclay subdivide`).
+fn torus_lattice(dir: &std::path::Path) {
     let made = vclay(
-        dir.path(),
+        dir,
         &[
             "subdivide",
             "--primitive",
@@ -165,6 +159,17 @@ fn lattice_patch_estimate_follows_the_sample_level() {
         ],
     );
     assert!(made.status.success(), "{}", text(&made.stderr));
+}
+
+/// Issue 29 item 3: `vclay convert LATTICE.ovm` estimated its limit patches one level too deep
+/// (8x too much: a level-3 torus asked for 11.2 GB and ran in 2.07 GB); the estimate now
+/// follows the sample level (`docs/limits.md`: within 1.5x of the measured peaks). The
+/// 128-cell torus samples 65,536 cells: 79 MB now, 398 MB before, so a 200M limit takes it.
+/// Limits read as given (50M, 4G).
+#[test]
+fn lattice_patch_estimate_follows_the_sample_level() {
+    let dir = tempfile::tempdir().unwrap();
+    torus_lattice(dir.path());
     let ok = vclay(
         dir.path(),
         &["--max-memory", "200M", "convert", "t.ovm", "t.step"],
@@ -206,19 +211,7 @@ fn estimate_in(err: &str) -> f64 {
 fn lattice_eval_estimate_counts_the_tuples_and_the_cells() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let made = vclay(
-        d,
-        &[
-            "subdivide",
-            "--primitive",
-            "torus",
-            "--levels",
-            "0",
-            "--out",
-            "t.ovm",
-        ],
-    );
-    assert!(made.status.success(), "{}", text(&made.stderr));
+    torus_lattice(d);
     let tuples: Vec<String> = (0..1000)
         .map(|k| format!("[{},0.{:06},0.5,0.25]", k % 128, (k * 7919) % 1_000_000))
         .collect();
