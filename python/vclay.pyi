@@ -111,6 +111,35 @@ class Volume(Entity):
 def load(path: Path) -> list[Entity]:
     """The entities of a model file, recognized by content: vclay or geomdl JSON, STEP, IGES,
     or a lattice .ovm (its boundary limit surface as bicubic patches)."""
+def load_part(path: Path) -> "Part":
+    """The trimmed shells of a CAD file (STEP B-rep, IGES 144/142 or 186, or a model JSON with
+    "shells") as a `Part`; a file without trimmed faces raises FileError (use load)."""
+class Part:
+    """A CAD part of trimmed faces: exact surfaces, shared edges, loops and pcurves. Pickles
+    exactly. Open the file with vclay.open to sculpt a face (kind cad-part)."""
+    @property
+    def entities(self) -> list[Entity]:
+        """The part's Curve/Surface entities (a face's "entity" indexes this list)."""
+    @staticmethod
+    def from_json(text: str) -> "Part":
+        """A part from the model JSON text that to_json writes."""
+    def to_json(self) -> str:
+        """The part as model JSON text (docs/formats.md section 1)."""
+    def shell_count(self) -> int: ...
+    def closed(self, shell: int = 0) -> bool:
+        """Whether every edge of the shell is used by two faces in opposite directions."""
+    def faces(self, shell: int = 0) -> list[dict[str, Any]]:
+        """Each face: surface, entity, same_sense, loops ((n, 2) arrays of (u, v): the outer
+        loop then the holes, 33 samples per pcurve) and edges ((edge, forward) uses per loop; a
+        pole is (-1 - vertex, True))."""
+    def edges(self, shell: int = 0) -> list[Entity]:
+        """The shell's edges as exact 3D curves."""
+    def mesh(self, shell: int = 0, samples: int = 32) -> tuple[F64, npt.NDArray[np.uint32], F64, npt.NDArray[np.uint32]]:
+        """(vertices, triangles, normals, faces): the shell meshed with its trims, crack-free;
+        faces[t] is the face of triangle t."""
+    def save(self, path: Path, samples: int = 32) -> None:
+        """Writes .step/.stp (solids as MANIFOLD_SOLID_BREP), .igs/.iges, .json (with shells),
+        or the shells meshed (.obj, .stl, .ply, .glb)."""
 def save(path: Path, entities: Sequence[Entity], samples: int = 48) -> None:
     """`save(path, entities, samples=48)`: writes entities in the format the extension names:
     `.json` (vclay model), `.geomdl.json`, `.step`/`.stp`, `.igs`/`.iges`, or a tessellated mesh

@@ -8,6 +8,7 @@
 //! | Python | Rust |
 //! | --- | --- |
 //! | `load`, `save`, `convert`, `Curve`, `Surface`, `Volume` | `vclay_io`, `vclay_spline` |
+//! | `load_part`, `Part` (trimmed faces of CAD parts) | `vclay_io::brep`, `vclay_io::trimmed` |
 //! | `Ffd` | `vclay_ffd` (`ffd-direct-manipulation.txt` eqs 7, 12) |
 //! | `fit_surface` | `vclay_fit` (scan fitting, `d-nurbs.txt` eq 17 fairness) |
 //! | `Lattice` | `vclay_lattice` (MacCracken-Joy subdivision, `.ovm`) |
@@ -29,6 +30,7 @@ mod fit;
 mod lattice;
 mod limits;
 mod nurbs;
+mod part;
 mod pde;
 mod render;
 mod session;
@@ -82,6 +84,7 @@ fn vclay_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     limits::register(m)?;
     nurbs::register(m)?;
+    part::register(m)?;
     ffd::register(m)?;
     fit::register(m)?;
     lattice::register(m)?;

@@ -242,6 +242,24 @@ impl TriMesh {
         out
     }
 
+    /// The triangle nearest `p` and the nearest point on it (a linear scan; triangles with an
+    /// index out of range are skipped), or `None` for a mesh without triangles.
+    pub fn closest_triangle(&self, p: Vec3) -> Option<(usize, Vec3)> {
+        let mut best: Option<(usize, Vec3, f64)> = None;
+        for (t, tri) in self.triangles.iter().enumerate() {
+            let corner = |k: usize| self.positions.get(tri[k] as usize).copied();
+            let (Some(a), Some(b), Some(c)) = (corner(0), corner(1), corner(2)) else {
+                continue;
+            };
+            let q = closest_on_triangle(p, [a, b, c]);
+            let d = (q - p).norm_squared();
+            if best.is_none_or(|x| d < x.2) {
+                best = Some((t, q, d));
+            }
+        }
+        best.map(|(t, q, _)| (t, q))
+    }
+
     /// Axis-aligned bounding box `(min, max)`, or `None` for an empty mesh.
     pub fn bounding_box(&self) -> Option<(Vec3, Vec3)> {
         let first = *self.positions.first()?;
@@ -291,8 +309,67 @@ impl MeshSink for TriMesh {
     }
 }
 
+/// Closest point to `p` on triangle `abc` (Ericson, Real-Time Collision Detection, 5.1.5).
+pub fn closest_on_triangle(p: Vec3, [a, b, c]: [Vec3; 3]) -> Vec3 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(&ap), ac.dot(&ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(&bp), ac.dot(&bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(&cp), ac.dot(&cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn closest_triangle_finds_the_face_point_edge_or_corner_nearest() {
+        // The unit square of z = 0 as two triangles, and one triangle of x = 0 above its edge.
+        let mut m = TriMesh::new();
+        m.positions = vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(0.0, 0.0, 1.0),
+        ];
+        m.triangles = vec![[0, 2, 1], [2, 3, 1], [0, 1, 4]];
+        // Above the inside of the second triangle: its foot.
+        let (t, q) = m.closest_triangle(Vec3::new(0.8, 0.8, 0.3)).unwrap();
+        assert_eq!(t, 1);
+        assert!((q - Vec3::new(0.8, 0.8, 0.0)).norm() < 1e-15);
+        // In front of the wall x = 0: its foot on the wall.
+        let (t, q) = m.closest_triangle(Vec3::new(-0.5, 0.2, 0.4)).unwrap();
+        assert_eq!(t, 2);
+        assert!((q - Vec3::new(0.0, 0.2, 0.4)).norm() < 1e-15);
+        // Beyond corner 3: the corner itself.
+        let (_, q) = m.closest_triangle(Vec3::new(2.0, 2.0, -1.0)).unwrap();
+        assert_eq!(q, Vec3::new(1.0, 1.0, 0.0));
+        assert!(TriMesh::new().closest_triangle(Vec3::zeros()).is_none());
+    }
 
     #[test]
     fn creases_split_a_cube_corner_and_keep_a_smooth_fan() {

@@ -47,7 +47,7 @@
 pub mod mesh;
 pub mod sculpt;
 
-pub use mesh::{MAX_SHELL_SAMPLES, tessellate_shell};
+pub use mesh::{MAX_SHELL_SAMPLES, tessellate_shell, tessellate_shell_faces};
 
 use crate::brep::{Edge, Face, LoopItem, Shell, Vertex, closure_tolerance};
 use crate::error::IoError;

@@ -254,6 +254,18 @@ pub enum Edit {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         near: Option<V3>,
     },
+    /// Choose which face of a CAD part is sculpted (`cad-part`, issue 30): the face sculpted
+    /// until now keeps its shape in the part, and the chosen face becomes the D-NURBS surface
+    /// that the tools act on; by index in the part's shell, or the face nearest a point (a
+    /// click on the part).
+    SculptFace {
+        /// Face index in the sculpted shell.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        face: Option<usize>,
+        /// The face nearest this point.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        near: Option<V3>,
+    },
     /// The current shape becomes the rest shape.
     PlasticReset,
     /// Zero all velocities.
@@ -492,6 +504,7 @@ impl Edit {
             Edit::Material { .. } => "material",
             Edit::Extrude { .. } => "extrude",
             Edit::DeleteCell { .. } => "delete-cell",
+            Edit::SculptFace { .. } => "sculpt-face",
             Edit::PlasticReset => "plastic-reset",
             Edit::Stop => "stop",
             Edit::MovePoint { .. } => "move-point",
@@ -527,6 +540,7 @@ impl Edit {
             | Edit::Material { .. }
             | Edit::Extrude { .. }
             | Edit::DeleteCell { .. }
+            | Edit::SculptFace { .. }
             | Edit::MovePoint { .. }
             | Edit::SetWeight { .. }
             | Edit::FfdMove { .. } => self.validate_net(),
@@ -623,7 +637,7 @@ impl Edit {
         Ok(())
     }
 
-    /// [`Edit::validate`] for `Fix`, `Free`, `Material`, `Extrude`, `DeleteCell`, `MovePoint`, `SetWeight`, `FfdMove`.
+    /// [`Edit::validate`] for `Fix`, `Free`, `Material`, `Extrude`, `DeleteCell`, `SculptFace`, `MovePoint`, `SetWeight`, `FfdMove`.
     fn validate_net(&self) -> Result<(), EditError> {
         match self {
             Edit::Fix(sel) | Edit::Free(sel) => sel.validate()?,
@@ -652,6 +666,10 @@ impl Edit {
             Edit::DeleteCell { cell, near } => {
                 opt3("near", near)?;
                 one_of(("cell", cell.is_some()), ("near", near.is_some()))?;
+            }
+            Edit::SculptFace { face, near } => {
+                opt3("near", near)?;
+                one_of(("face", face.is_some()), ("near", near.is_some()))?;
             }
             Edit::MovePoint { to, .. } => fin("to", to)?,
             Edit::SetWeight { weight, .. } => pos("weight", Some(*weight), false)?,

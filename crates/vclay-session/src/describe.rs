@@ -23,6 +23,8 @@ pub enum Target {
     Face,
     /// A control cell.
     Cell,
+    /// A face of a CAD part (a trimmed B-rep face), hit through the part's surface.
+    PartFace,
     /// Points of the embedded object (FFD), moved exactly.
     EmbeddedPoints,
     /// A rectangle of a patch's parameter domain (PDE local deformation).
@@ -149,9 +151,9 @@ const SMOOTH_KEYS: &[KeySpec] = &[
 
 /// Every action, in the order of `docs/formats.md` section 9.
 #[rustfmt::skip]
-pub const ACTIONS: [&str; 25] = [
+pub const ACTIONS: [&str; 26] = [
     "rope", "move-rope", "force", "region-force", "gravity", "inflate", "repel", "data",
-    "release", "fix", "free", "smooth", "material", "extrude", "delete-cell", "plastic-reset", "stop",
+    "release", "fix", "free", "smooth", "material", "extrude", "delete-cell", "sculpt-face", "plastic-reset", "stop",
     "move-point", "set-weight", "ffd-move", "pde-set", "pde-local", "set", "integrator",
     "constraint",
 ];
@@ -258,6 +260,12 @@ const EXTRUDE_KEYS: &[KeySpec] = &[
 ];
 
 #[rustfmt::skip]
+const SCULPT_FACE_KEYS: &[KeySpec] = &[
+    key("face", "integer", "", 0.0, INF, false, "face index in the sculpted shell"),
+    NEAR,
+];
+
+#[rustfmt::skip]
 const DELETE_CELL_KEYS: &[KeySpec] = &[
     key("cell", "integer", "", 0.0, INF, false, "cell id"),
     NEAR,
@@ -347,6 +355,7 @@ pub fn tool(action: &str) -> Option<ToolSpec> {
         "material" => (Whole, MATERIAL_KEYS, "changes the material (solids: per control cell)"),
         "extrude" => (Face, EXTRUDE_KEYS, "extrudes a boundary face into a new cell"),
         "delete-cell" => (Cell, DELETE_CELL_KEYS, "deletes a control cell (trimming)"),
+        "sculpt-face" => (PartFace, SCULPT_FACE_KEYS, "chooses the face of a CAD part that is sculpted"),
         "plastic-reset" => (Whole, PLASTIC_RESET_KEYS, "the current shape becomes the rest shape"),
         "stop" => (Whole, STOP_KEYS, "zeroes all velocities"),
         "move-point" => (ControlPoints, MOVE_POINT_KEYS, "moves a control point directly"),
@@ -401,7 +410,13 @@ pub fn actions(kind: ModelKind) -> Vec<&'static str> {
         ModelKind::DnurbsTriangular => vec!["set"],
         // A CAD part's face: a D-NURBS surface whose weights are held (set-weight) and which
         // has no inside of its own (inflate) and fits no data.
-        ModelKind::CadPart => but(DNURBS_SURFACE, &["inflate", "data", "set-weight"]),
+        ModelKind::CadPart => {
+            let face = but(DNURBS_SURFACE, &["inflate", "data", "set-weight"]);
+            ACTIONS
+                .into_iter()
+                .filter(|a| *a == "sculpt-face" || face.contains(a))
+                .collect()
+        }
         ModelKind::DnurbsPatches => but(
             DNURBS_SURFACE,
             &[

@@ -248,9 +248,9 @@ pub enum Element {
         index: usize,
     },
     /// A boundary face of the control lattice (subdivision solids), hit through the display
-    /// surface.
+    /// surface; or a face of a CAD part's sculpted shell (`cad-part`).
     Face {
-        /// Face id of the control lattice.
+        /// Face id of the control lattice (a CAD part: the face's index in its shell).
         index: usize,
     },
     /// A control cell, hit through the display surface.

@@ -345,3 +345,169 @@ fn picks_inside_the_hole_are_refused() {
         ),
     }
 }
+
+/// A horizontal ray at height `z` from far in front (y < 0) towards +y at `x`: it meets the
+/// plate's front side face first.
+fn from_front(x: f64, z: f64) -> vclay_session::Ray {
+    vclay_session::Ray {
+        origin: vclay_core::Vec3::new(x, -50.0, z),
+        direction: vclay_core::Vec3::new(0.0, 1.0, 0.0),
+    }
+}
+
+/// Issue 30, "the designer picks one and sculpts it": a click on another face of the part
+/// names that face (the pick), `sculpt-face` makes it the sculpted one while the face pulled
+/// before keeps its new shape, the clock and the revision run on, a rope aimed at a face that
+/// is not sculpted is refused, the part stays one closed solid, and undo brings the first face
+/// back.
+#[test]
+fn a_clicked_face_becomes_the_sculpted_one_and_the_first_keeps_its_shape() {
+    let (text, top, _) = scenario("");
+    let mut sc = run(&text, 30);
+    let (pulled, t0, steps0, rev0) = {
+        let m = sc.session.model(None).unwrap();
+        let part = PartModel::load(&m.save().unwrap()).unwrap();
+        (part.surface().unwrap(), m.time(), m.steps(), m.revision())
+    };
+    // The pick from the front hits the front side face, not the top face.
+    let side = {
+        let m = sc.session.model(None).unwrap();
+        let hit = m
+            .pick(&from_front(20.0, 4.0), 1e-3)
+            .expect("the front face");
+        match hit.element {
+            vclay_session::Element::Face { index } => index,
+            e => panic!("expected a part face, got {e:?}"),
+        }
+    };
+    assert_ne!(side, top);
+    // A rope at the front face, given by position, is refused while the top face is sculpted.
+    let rope = |from: [f64; 3]| vclay_session::Edit::Rope {
+        name: Some("side".into()),
+        from,
+        param: None,
+        to: None,
+        until: None,
+        velocity: Some([0.0, -10.0, 0.0]),
+        release: None,
+        stiffness: Some(200.0),
+        length: None,
+        kernel: None,
+        start: None,
+    };
+    let err = sc
+        .session
+        .apply(vclay_session::Command::new(rope([20.0, 0.0, 4.0])))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains(&format!("face {side}")), "{err}");
+    // Choose the front face; the top face keeps its pulled surface exactly.
+    sc.session
+        .apply(vclay_session::Command::new(
+            vclay_session::Edit::SculptFace {
+                face: Some(side),
+                near: None,
+            },
+        ))
+        .unwrap();
+    {
+        let m = sc.session.model(None).unwrap();
+        let part = PartModel::load(&m.save().unwrap()).unwrap();
+        assert_eq!(part.face(), (0, side));
+        let (entities, shells) = part.part().unwrap();
+        let e = shells[0].faces[top].entity.unwrap();
+        let Entity::Surface(s) = &entities[e].entity else {
+            panic!("the top face's entity is a surface")
+        };
+        assert_eq!(s.control_points(), pulled.control_points());
+        assert_eq!(m.time(), t0);
+        assert_eq!(m.steps(), steps0);
+        assert!(m.revision() > rev0);
+    }
+    // Now the rope at the front face attaches, and the front face moves out.
+    sc.session
+        .apply(vclay_session::Command::new(rope([20.0, 0.0, 4.0])))
+        .unwrap();
+    for _ in 0..20 {
+        sc.session.step().unwrap();
+    }
+    {
+        let m = sc.session.model(None).unwrap();
+        let part = PartModel::load(&m.save().unwrap()).unwrap();
+        assert!(m.time() > t0);
+        let (_, shells) = part.part().unwrap();
+        validate_shell(&shells[0]).unwrap();
+        let gap = part
+            .gaps()
+            .unwrap()
+            .iter()
+            .map(|g| g.gap)
+            .fold(0.0, f64::max);
+        assert!(gap <= part.tolerance(), "gap {gap}");
+        let min_y = tessellate_shell(&shells[0], 32)
+            .unwrap()
+            .positions
+            .iter()
+            .map(|p| p.y)
+            .fold(f64::INFINITY, f64::min);
+        assert!(min_y < -1e-3, "the front face did not move out: {min_y}");
+    }
+    // Undo the rope, then the change of face: the top face is sculpted again, as it was.
+    sc.session.undo().unwrap();
+    sc.session.undo().unwrap();
+    let m = sc.session.model(None).unwrap();
+    let part = PartModel::load(&m.save().unwrap()).unwrap();
+    assert_eq!(part.face(), (0, top));
+    assert_eq!(
+        part.surface().unwrap().control_points(),
+        pulled.control_points()
+    );
+}
+
+/// `sculpt-face` by `near` takes the nearest face; the part saved after a change of face
+/// continues bit for bit, and the sculpted face is the one chosen.
+#[test]
+fn sculpt_face_near_a_point_and_the_session_file_continues() {
+    let (text, top, _) = scenario("");
+    let mut sc = run(&text, 5);
+    sc.session
+        .apply(vclay_session::Command::new(
+            vclay_session::Edit::SculptFace {
+                face: None,
+                near: Some([20.0, -0.1, 4.0]),
+            },
+        ))
+        .unwrap();
+    let side = {
+        let m = sc.session.model(None).unwrap();
+        PartModel::load(&m.save().unwrap()).unwrap().face().1
+    };
+    assert_ne!(side, top);
+    let again = sc
+        .session
+        .apply(vclay_session::Command::new(
+            vclay_session::Edit::SculptFace {
+                face: Some(side),
+                near: None,
+            },
+        ))
+        .unwrap_err()
+        .to_string();
+    assert!(again.contains("already"), "{again}");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("part.session");
+    vclay_session::file::save(&path, &sc.session, None).unwrap();
+    let (mut back, _) = vclay_session::file::load(&path).unwrap();
+    for _ in 0..3 {
+        sc.session.step().unwrap();
+        back.step().unwrap();
+    }
+    let a = sc.session.model(None).unwrap();
+    let b = back.model(None).unwrap();
+    assert_eq!(a.time(), b.time());
+    assert_eq!(a.control_points(), b.control_points());
+    assert_eq!(
+        PartModel::load(&b.save().unwrap()).unwrap().face(),
+        (0, side)
+    );
+}

@@ -53,6 +53,8 @@ pub enum Tool {
     Extrude,
     /// Delete the cell under the click.
     DeleteCell,
+    /// Choose the face of a CAD part that is sculpted (a click on the face).
+    SculptFace,
     /// Paint material on the cell under the click.
     Paint,
     /// Drag a control point.
@@ -75,6 +77,7 @@ impl Tool {
             Tool::Smooth => "Smooth",
             Tool::Extrude => "Extrude face",
             Tool::DeleteCell => "Delete cell",
+            Tool::SculptFace => "Face to sculpt",
             Tool::Paint => "Paint material",
             Tool::ControlPoint => "Control point",
             Tool::FfdPoint => "FFD point",
@@ -83,7 +86,7 @@ impl Tool {
     }
 
     /// Every tool in palette order (the default of a model is the first it takes).
-    pub const ALL: [Tool; 12] = [
+    pub const ALL: [Tool; 13] = [
         Tool::Rope,
         Tool::Force,
         Tool::Smooth,
@@ -94,6 +97,7 @@ impl Tool {
         Tool::Paint,
         Tool::FfdPoint,
         Tool::PdeLocal,
+        Tool::SculptFace,
         Tool::ControlPoint,
         Tool::Orbit,
     ];
@@ -112,6 +116,7 @@ impl Tool {
             Tool::Smooth => takes("smooth"),
             Tool::Extrude => takes("extrude"),
             Tool::DeleteCell => takes("delete-cell"),
+            Tool::SculptFace => takes("sculpt-face"),
             Tool::Paint => tools
                 .iter()
                 .any(|t| t.action == "material" && t.acts_on == Target::Cell),
@@ -1584,6 +1589,7 @@ impl Studio {
             },
             Tool::Extrude => Grab::Extrude,
             Tool::DeleteCell => Grab::DeleteCell,
+            Tool::SculptFace => Grab::SculptFace,
             Tool::Paint => Grab::PaintMaterial {
                 brush: o.brush * self.model_size(),
                 density: o.paint[0],

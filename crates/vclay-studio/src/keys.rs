@@ -20,6 +20,7 @@ pub fn tool_key(t: Tool) -> Key {
         Tool::Smooth => Key::S,
         Tool::Extrude => Key::E,
         Tool::DeleteCell => Key::D,
+        Tool::SculptFace => Key::B,
         Tool::Paint => Key::P,
         Tool::ControlPoint => Key::C,
         Tool::FfdPoint => Key::M,

@@ -144,6 +144,8 @@ pub enum Grab {
     Extrude,
     /// Delete the control cell under the hit (subdivision solids).
     DeleteCell,
+    /// Make the CAD part's face under the hit the sculpted one (`sculpt-face`).
+    SculptFace,
     /// Paint a material on the control cell under the hit (solids); with `brush > 0`, on every
     /// control cell whose centroid is within a box of half-size `brush` around the hit and
     /// around every cursor position of the drag that follows.
@@ -1196,6 +1198,21 @@ impl State {
                     face,
                     near: if face.is_none() { Some(p) } else { None },
                     factor: None,
+                }));
+                None
+            }
+            Grab::SculptFace => {
+                // The face the pick names (another face's hit, or the sculpted face's
+                // `extra`), else the face nearest the point.
+                let face = std::iter::once(&Some(hit.element))
+                    .chain(hit.extra.iter())
+                    .find_map(|e| match e {
+                        Some(Element::Face { index }) => Some(*index),
+                        _ => None,
+                    });
+                self.apply(one(Edit::SculptFace {
+                    face,
+                    near: if face.is_none() { Some(p) } else { None },
                 }));
                 None
             }

@@ -37,3 +37,48 @@ fn a_step_part_opens_as_a_cad_part() {
     eprintln!("5 frames of the plate: {took:.2?}");
     assert!(!h.state().frame().models[0].mesh.triangles.is_empty());
 }
+
+/// Issue 30, "the designer picks one and sculpts it": the part's palette offers the Face tool
+/// (after the rope, which stays the default), and a click with it on the plate's front side
+/// makes that face the sculpted one; undo gives the first face back.
+#[test]
+fn a_click_with_the_face_tool_chooses_the_face_to_sculpt() {
+    use vclay_studio::app::Tool;
+    use vclay_studio::worker::{Grab, Request, Worker};
+    let plate = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../vclay-io/tests/data/cad/trimmed_plate.step");
+    let o = vclay_session::open(&plate).unwrap();
+    let w = Worker::start(o.session, false);
+    let tools = w.query(|s| s.model(None).unwrap().tools()).unwrap();
+    let palette = Tool::palette(&tools);
+    assert_eq!(palette[0], Tool::Rope);
+    assert!(palette.contains(&Tool::SculptFace), "{palette:?}");
+    let face = |w: &Worker| {
+        w.query(|s| s.model(None).unwrap().save().unwrap()["face"].as_u64())
+            .unwrap()
+            .unwrap() as usize
+    };
+    let first = face(&w);
+    // A ray from the front (y < 0) at mid-height meets the front side face, y = 0.
+    w.send(Request::Grab {
+        ray: vclay_session::Ray {
+            origin: vclay_core::Vec3::new(20.0, -50.0, 4.0),
+            direction: vclay_core::Vec3::new(0.0, 1.0, 0.0),
+        },
+        tolerance: 0.0,
+        grab: Grab::SculptFace,
+    });
+    w.send(Request::Drop);
+    let second = face(&w);
+    assert_ne!(second, first);
+    // The sculpted face's control points are the front face's: all in the plane y = 0.
+    let ys = w
+        .query(|s| s.model(None).unwrap().control_points())
+        .unwrap();
+    assert!(
+        ys.iter().all(|p| p.y.abs() < 1e-9),
+        "the chosen face is not the front one"
+    );
+    w.send(Request::Undo);
+    assert_eq!(face(&w), first);
+}

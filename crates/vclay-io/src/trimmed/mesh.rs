@@ -54,6 +54,15 @@ struct P2 {
 /// sets the spacing `size / samples` (2 to [`MAX_SHELL_SAMPLES`]). Normals are computed from
 /// the triangles.
 pub fn tessellate_shell(shell: &Shell, samples: usize) -> Result<TriMesh, String> {
+    tessellate_shell_faces(shell, samples).map(|(mesh, _)| mesh)
+}
+
+/// [`tessellate_shell`] with the face of each triangle: `faces[t]` is the index in
+/// `shell.faces` of the face that triangle `t` lies on (for picking a face of a part).
+pub fn tessellate_shell_faces(
+    shell: &Shell,
+    samples: usize,
+) -> Result<(TriMesh, Vec<u32>), String> {
     if !(2..=MAX_SHELL_SAMPLES).contains(&samples) {
         return Err(format!(
             "samples {samples}: must be from 2 to {MAX_SHELL_SAMPLES}"
@@ -115,11 +124,13 @@ pub fn tessellate_shell(shell: &Shell, samples: usize) -> Result<TriMesh, String
         }
         edge_samples.push((ts, ids));
     }
+    let mut faces = Vec::new();
     for fi in 0..shell.faces.len() {
         face_mesh(shell, fi, &edge_samples, h, &mut mesh).map_err(|m| format!("face {fi}: {m}"))?;
+        faces.resize(mesh.triangles.len(), fi as u32);
     }
     mesh.compute_normals();
-    Ok(mesh)
+    Ok((mesh, faces))
 }
 
 fn face_mesh(

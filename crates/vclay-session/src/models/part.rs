@@ -21,10 +21,15 @@
 //! `TRIM_RTOL x size` is refused with an error that names the edge, the neighbouring face
 //! and the gap (no file is written; meshes are still written).
 //!
-//! **Limitations.** One face per model (chosen by `face`; by default the largest). Picking
-//! uses the face's whole (untrimmed) surface. The display mesh is the whole part
-//! re-tessellated ([`vclay_io::trimmed::tessellate_shell`], [`DISPLAY_SAMPLES`]) at each
-//! revision.
+//! **Choosing the face.** The face sculpted at the start is `face` (by default the largest);
+//! [`Edit::SculptFace`] (a click on another face: [`Model::pick`] names the face the ray meets
+//! first) puts the current face's shape into the part and builds the chosen face the same
+//! way, with the part's keys; the clock and revision run on, undo restores the whole model.
+//!
+//! **Limitations.** One face is sculpted at a time. Picks on the sculpted face outside its
+//! trimming loops are refused. The display mesh is the whole part re-tessellated
+//! ([`vclay_io::trimmed::tessellate_shell`], [`DISPLAY_SAMPLES`]) at each revision, and a pick
+//! of another face re-tessellates it too.
 
 use std::path::{Path, PathBuf};
 
@@ -53,6 +58,10 @@ pub const DEFAULT_REFINE: usize = 24;
 pub const DEFAULT_DT: f64 = crate::open::MODEL_FILE_DT;
 /// Edge spacing `size / DISPLAY_SAMPLES` of the display mesh.
 pub const DISPLAY_SAMPLES: usize = 32;
+/// A rope or force given by position is refused when its point is on another face and farther
+/// than `AIM_RTOL x size` from the sculpted face (the display mesh's chords are within
+/// `size / DISPLAY_SAMPLES` of the faces, so this is twice a chord's spacing).
+pub const AIM_RTOL: f64 = 2.0 / DISPLAY_SAMPLES as f64;
 
 /// The formats a part exports.
 const FORMATS: [&str; 7] = ["step", "igs", "json", "obj", "stl", "ply", "glb"];
@@ -95,6 +104,20 @@ pub struct PartModel {
     boundary: Vec<usize>,
     /// Diagonal of the part's vertices' bounding box.
     size: f64,
+    /// The keys the part was built with (refine, boundary, material, simulation): a face
+    /// chosen later ([`Edit::SculptFace`]) is built with the same.
+    spec: PartSpec,
+    /// Time, steps and revisions of the faces sculpted before this one, so that the part's
+    /// clock and revision run on across a change of face.
+    before: Offsets,
+}
+
+/// Time, steps and revisions spent on faces sculpted before the current one.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+struct Offsets {
+    time: f64,
+    steps: u64,
+    revision: u64,
 }
 
 /// The error of a `[model]` key.
@@ -182,14 +205,22 @@ impl PartModel {
                 ),
             ));
         }
+        Self::build(spec, import.entities, import.shells, Offsets::default())
+    }
+
+    /// Builds the part of `entities` and `shells` with the face that `spec` chooses sculpted.
+    fn build(
+        spec: &PartSpec,
+        entities: Vec<NamedEntity>,
+        shells: Vec<Shell>,
+        before: Offsets,
+    ) -> Result<Self, SpecError> {
+        let m = &spec.model;
         let shell = m.shell.unwrap_or(0);
-        let sh = import.shells.get(shell).ok_or_else(|| {
+        let sh = shells.get(shell).ok_or_else(|| {
             key_err(
                 "shell",
-                format!(
-                    "shell {shell} out of range ({} shells)",
-                    import.shells.len()
-                ),
+                format!("shell {shell} out of range ({} shells)", shells.len()),
             )
         })?;
         let face_index = match m.face {
@@ -263,17 +294,114 @@ impl PartModel {
             material: spec.material.clone(),
             simulation,
         };
-        let face_model = DnurbsModel::from_keys(ModelKind::DnurbsSurface, &inner, base)?;
-        let size = part_size(&import.shells);
+        let face_model = DnurbsModel::from_keys(ModelKind::DnurbsSurface, &inner, Path::new(""))?;
+        let size = part_size(&shells);
         Ok(Self {
             face: face_model,
-            entities: import.entities,
-            shells: import.shells,
+            entities,
+            shells,
             shell,
             face_index,
             entity,
             boundary,
             size,
+            spec: spec.clone(),
+            before,
+        })
+    }
+
+    /// The sculpted shell now, meshed, with the face of each triangle
+    /// ([`vclay_io::trimmed::tessellate_shell_faces`]).
+    fn part_faces(&self) -> Result<(TriMesh, Vec<u32>), SessionError> {
+        let (_, shells) = self.part()?;
+        vclay_io::trimmed::tessellate_shell_faces(&shells[self.shell], DISPLAY_SAMPLES)
+            .map_err(SessionError::model)
+    }
+
+    /// The face of the sculpted shell nearest `p`, and how far `p` is from the sculpted face
+    /// (over the part's display mesh).
+    fn face_near(&self, p: vclay_core::Vec3) -> Result<(usize, f64), SessionError> {
+        let (mesh, faces) = self.part_faces()?;
+        let nearest = mesh
+            .closest_triangle(p)
+            .map(|(t, _)| faces[t] as usize)
+            .ok_or_else(|| SessionError::model("the part has no faces to choose from"))?;
+        let own = mesh
+            .triangles
+            .iter()
+            .zip(&faces)
+            .filter(|(_, f)| **f as usize == self.face_index)
+            .map(|(t, _)| {
+                let c = |k: usize| mesh.positions[t[k] as usize];
+                (vclay_core::mesh::closest_on_triangle(p, [c(0), c(1), c(2)]) - p).norm()
+            })
+            .fold(f64::INFINITY, f64::min);
+        Ok((nearest, own))
+    }
+
+    /// Refuses a rope or force aimed (by position, not by a surface parameter) at a face that
+    /// is not the sculpted one: the D-NURBS tool would take the sculpted face's nearest
+    /// point, which may lie across the part.
+    fn check_aim(&self, edit: &Edit) -> Result<(), SessionError> {
+        let at = match edit {
+            Edit::Rope {
+                from, param: None, ..
+            } => *from,
+            Edit::Force {
+                near: Some(p),
+                param: None,
+                ..
+            } => *p,
+            _ => return Ok(()),
+        };
+        let (nearest, own) = self.face_near(vclay_core::Vec3::new(at[0], at[1], at[2]))?;
+        if nearest != self.face_index && own > AIM_RTOL * self.size {
+            return Err(SessionError::model(format!(
+                "{} at {at:?} is on face {nearest}, not on the sculpted face {} (it is {own:.3e} away): choose face {nearest} first (`sculpt-face`, the studio's Face tool)",
+                edit.action(),
+                self.face_index,
+            )));
+        }
+        Ok(())
+    }
+
+    /// [`Edit::SculptFace`]: the current face's shape goes into the part, and `face` (or the
+    /// face nearest `near`) becomes the sculpted one, built with the part's keys; the clock
+    /// runs on. Undone by the whole model as it was.
+    fn sculpt_face(
+        &mut self,
+        face: Option<usize>,
+        near: Option<[f64; 3]>,
+    ) -> Result<Applied, SessionError> {
+        let f = match (face, near) {
+            (Some(f), _) => f,
+            (None, Some(p)) => self.face_near(vclay_core::Vec3::new(p[0], p[1], p[2]))?.0,
+            (None, None) => return Err(SessionError::model("sculpt-face: give `face` or `near`")),
+        };
+        let old = self.face_index;
+        if f == old {
+            return Err(SessionError::model(format!(
+                "face {f} is already the sculpted face"
+            )));
+        }
+        let (entities, shells) = self.part()?;
+        let mut spec = self.spec.clone();
+        spec.model.shell = Some(self.shell);
+        spec.model.face = Some(f);
+        let before = Offsets {
+            time: self.time(),
+            steps: self.steps(),
+            revision: self.revision() + 1,
+        };
+        let next = Self::build(&spec, entities, shells, before)
+            .map_err(|e| SessionError::model(format!("sculpt-face: `{}`: {}", e.key, e.what)))?;
+        let prev = std::mem::replace(self, next);
+        Ok(Applied {
+            message: format!(
+                "face {f} is sculpted now ({} boundary control points fixed); face {old} keeps its shape",
+                self.boundary.len()
+            ),
+            undo: Undo::Model(Box::new(prev)),
         })
     }
 
@@ -353,6 +481,19 @@ impl PartModel {
             .map_err(|e| SessionError::model(format!("saved cad-part: boundary: {e}")))?;
         let face = DnurbsModel::load(ModelKind::DnurbsSurface, field("dnurbs")?)?;
         let size = part_size(&shells);
+        // Files written before faces could be changed have neither: the default keys, and no
+        // faces sculpted before.
+        let optional = |k: &str| v.get(k).filter(|x| !x.is_null()).cloned();
+        let spec: PartSpec = match optional("spec") {
+            Some(x) => serde_json::from_value(x)
+                .map_err(|e| SessionError::model(format!("saved cad-part: spec: {e}")))?,
+            None => PartSpec::default(),
+        };
+        let before: Offsets = match optional("before") {
+            Some(x) => serde_json::from_value(x)
+                .map_err(|e| SessionError::model(format!("saved cad-part: before: {e}")))?,
+            None => Offsets::default(),
+        };
         Ok(Self {
             face,
             entities,
@@ -362,6 +503,8 @@ impl PartModel {
             entity,
             boundary,
             size,
+            spec,
+            before,
         })
     }
 
@@ -426,7 +569,10 @@ impl Model for PartModel {
         s
     }
 
-    crate::model::clock_methods!(self => self.face.time(), self.face.dt(), self.face.steps());
+    crate::model::clock_methods!(self =>
+        self.before.time + self.face.time(),
+        self.face.dt(),
+        self.before.steps + self.face.steps());
 
     fn step(&mut self) -> Result<StepReport, SessionError> {
         self.face.step()
@@ -441,7 +587,7 @@ impl Model for PartModel {
     }
 
     fn revision(&self) -> u64 {
-        self.face.revision()
+        self.before.revision + self.face.revision()
     }
 
     fn display_mesh(&self) -> Result<TriMesh, SessionError> {
@@ -477,12 +623,38 @@ impl Model for PartModel {
     }
 
     /// The sculpted face's pick, with surface points outside its trimming loops refused (a
-    /// ray through the hole must not attach a rope to the untrimmed surface there).
+    /// ray through the hole must not attach a rope to the untrimmed surface there); its hits
+    /// name the face as `extra[0]`. A ray that meets another face of the part first hits that
+    /// face ([`Element::Face`] with its index in the shell: what [`Edit::SculptFace`] takes).
     fn pick(&self, ray: &Ray, tolerance: f64) -> Option<Hit> {
-        let hit = self.face.pick(ray, tolerance)?;
-        match hit.element {
-            Element::SurfacePoint { param } if !self.inside_trims(param) => None,
-            _ => Some(hit),
+        let own = self.face.pick(ray, tolerance).filter(|h| match h.element {
+            Element::SurfacePoint { param } => self.inside_trims(param),
+            _ => true,
+        });
+        let other = self.part_faces().ok().and_then(|(mesh, faces)| {
+            crate::pick::ray_mesh(ray, &mesh).map(|(t, tri, _)| (t, faces[tri] as usize))
+        });
+        let face_hit = |(t, f): (f64, usize)| Hit {
+            distance: t,
+            point: ray.origin + ray.direction * t,
+            element: Element::Face { index: f },
+            extra: [None, None],
+        };
+        // Coincident hits (the sculpted face in the part's mesh) within this distance along
+        // the ray go to the sculpted face.
+        let slack = 1e-3 * self.size / ray.direction.norm().max(1e-300);
+        match (own, other) {
+            (Some(h), Some(o)) if o.1 != self.face_index && o.0 < h.distance - slack => {
+                Some(face_hit(o))
+            }
+            (Some(mut h), _) => {
+                h.extra[0] = Some(Element::Face {
+                    index: self.face_index,
+                });
+                Some(h)
+            }
+            (None, Some(o)) if o.1 != self.face_index => Some(face_hit(o)),
+            (None, _) => None,
         }
     }
 
@@ -491,7 +663,13 @@ impl Model for PartModel {
     }
 
     fn apply(&mut self, edit: &Edit) -> Result<Applied, SessionError> {
-        self.face.apply(edit)
+        match edit {
+            Edit::SculptFace { face, near } => self.sculpt_face(*face, *near),
+            _ => {
+                self.check_aim(edit)?;
+                self.face.apply(edit)
+            }
+        }
     }
 
     fn undo(&mut self, undo: Undo) -> Result<(), SessionError> {
@@ -553,6 +731,8 @@ impl Model for PartModel {
             "shell": self.shell,
             "face": self.face_index,
             "boundary": self.boundary,
+            "spec": self.spec,
+            "before": self.before,
         }))
     }
 
