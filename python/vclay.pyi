@@ -125,7 +125,8 @@ class Part:
         """A part from the model JSON text that to_json writes."""
     def to_json(self) -> str:
         """The part as model JSON text (docs/formats.md section 1)."""
-    def shell_count(self) -> int: ...
+    def shell_count(self) -> int:
+        """How many shells the part has."""
     def closed(self, shell: int = 0) -> bool:
         """Whether every edge of the shell is used by two faces in opposite directions."""
     def faces(self, shell: int = 0) -> list[dict[str, Any]]:
