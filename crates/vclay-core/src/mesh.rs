@@ -67,6 +67,11 @@ pub struct TriMesh {
     pub triangles: Vec<[u32; 3]>,
 }
 
+/// Angle between adjacent triangles (of different faces, for a CAD part's display) above
+/// which the edge between them is shaded sharp ([`TriMesh::with_creases`]), in degrees: the
+/// edges of a box and a hole's rim turn by 90, fillets join their faces tangentially.
+pub const CREASE_ANGLE_DEG: f64 = 30.0;
+
 impl TriMesh {
     /// An empty mesh.
     pub fn new() -> Self {
@@ -172,6 +177,23 @@ impl TriMesh {
     /// apart. The copy is not watertight by index: use it to draw, not to measure or export
     /// as a solid. Degenerate triangles join the first group.
     pub fn with_creases(&self, crease: f64) -> TriMesh {
+        self.with_creases_between(crease, None)
+    }
+
+    /// [`TriMesh::with_creases`] where the triangles come in parts (`parts[t]`, e.g. the faces
+    /// of a CAD part): at a vertex, the triangles of one part always share one copy (its
+    /// surface is smooth there, however coarse its triangles), and the copies of different
+    /// parts join when their average normals are within `crease` radians. So a fillet meshed
+    /// with few triangles still shades smooth, and the sharp edges between faces sharp.
+    /// `None`: every triangle a part of its own ([`TriMesh::with_creases`]).
+    ///
+    /// # Panics
+    /// When `parts` is given and its length is not the number of triangles.
+    pub fn with_creases_between(&self, crease: f64, parts: Option<&[u32]>) -> TriMesh {
+        if let Some(p) = parts {
+            assert_eq!(p.len(), self.triangles.len(), "one part per triangle");
+        }
+        let part = |ti: usize| parts.map_or(ti, |p| p[ti] as usize);
         let cos = crease.cos();
         let n = self.positions.len();
         let face_n: Vec<Vec3> = self
@@ -210,15 +232,23 @@ impl TriMesh {
             if l > 0.0 { v / l } else { v }
         };
         let mut groups: Vec<(Vec3, u32)> = Vec::new();
+        // The parts at a vertex: (part, sum of its triangles' normals, group).
+        let mut at: Vec<(usize, Vec3, usize)> = Vec::new();
         for v in 0..n {
             groups.clear();
-            for &(ti, corner) in &around[start[v]..start[v + 1]] {
-                let fnrm = face_n[ti];
-                let dir = unit(fnrm);
+            at.clear();
+            for &(ti, _) in &around[start[v]..start[v + 1]] {
+                match at.iter_mut().find(|x| x.0 == part(ti)) {
+                    Some(x) => x.1 += face_n[ti],
+                    None => at.push((part(ti), face_n[ti], 0)),
+                }
+            }
+            for x in at.iter_mut() {
+                let dir = unit(x.1);
                 let g = groups
                     .iter()
                     .position(|(sum, _)| dir.norm() == 0.0 || unit(*sum).dot(&dir) >= cos);
-                let g = match g {
+                x.2 = match g {
                     Some(g) => g,
                     None => {
                         out.positions.push(self.positions[v]);
@@ -227,7 +257,10 @@ impl TriMesh {
                         groups.len() - 1
                     }
                 };
-                groups[g].0 += fnrm;
+                groups[x.2].0 += x.1;
+            }
+            for &(ti, corner) in &around[start[v]..start[v + 1]] {
+                let g = at.iter().find(|x| x.0 == part(ti)).map_or(0, |x| x.2);
                 out.triangles[ti][corner] = groups[g].1;
             }
             for (sum, id) in &groups {
@@ -369,6 +402,32 @@ mod tests {
         let (_, q) = m.closest_triangle(Vec3::new(2.0, 2.0, -1.0)).unwrap();
         assert_eq!(q, Vec3::new(1.0, 1.0, 0.0));
         assert!(TriMesh::new().closest_triangle(Vec3::zeros()).is_none());
+    }
+
+    #[test]
+    fn parts_keep_a_coarse_curve_smooth_and_split_between_parts() {
+        // Two triangles of one part folded by 60 degrees along edge 0-1, and a third triangle
+        // of another part meeting the first at 90 degrees along edge 0-2.
+        let mut m = TriMesh::new();
+        let h = 60f64.to_radians();
+        m.positions = vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(-h.cos(), 0.0, h.sin()),
+            Vec3::new(0.0, 0.0, -1.0),
+        ];
+        m.triangles = vec![[0, 2, 1], [0, 1, 3], [0, 4, 2]];
+        let by_angle = m.with_creases(30f64.to_radians());
+        let by_part = m.with_creases_between(30f64.to_radians(), Some(&[0, 0, 1]));
+        // By angle alone the 60-degree fold splits vertices 0 and 1; by part it does not.
+        assert_eq!(by_angle.triangles[0][0] == by_angle.triangles[1][0], false);
+        assert_eq!(by_part.triangles[0][0], by_part.triangles[1][0]);
+        assert_eq!(by_part.triangles[0][2], by_part.triangles[1][1]);
+        // The other part's triangle is split off at the 90-degree edge, both ways.
+        assert_ne!(by_part.triangles[2][0], by_part.triangles[0][0]);
+        assert_ne!(by_part.triangles[2][2], by_part.triangles[0][1]);
+        assert_eq!(by_part.positions.len(), 5 + 2);
     }
 
     #[test]

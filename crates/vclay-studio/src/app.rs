@@ -1460,11 +1460,13 @@ impl Studio {
         let local = |p: Pos2| ((p.x - rect.min.x) as f64, (p.y - rect.min.y) as f64);
         // Press: start a grab with the tool, or orbit/pan. Only a press on the viewport itself
         // counts: egui gives one on a dialog, menu or window above it to that layer (the
-        // viewport is then not pressed), and none counts while a dialog or popup is open.
+        // viewport is then not pressed), and none counts while a dialog or popup is open. A
+        // press and its release in one frame (a quick click on a slow frame) is a click on the
+        // viewport: the grab starts and is dropped below.
         let blocked = self.dialog.is_some() || egui::Popup::is_any_open(ui.ctx());
         if pressed
             && !blocked
-            && resp.is_pointer_button_down_on()
+            && (resp.is_pointer_button_down_on() || resp.clicked())
             && let Some(p) = pos
             && rect.contains(p)
         {

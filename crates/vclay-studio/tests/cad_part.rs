@@ -82,3 +82,72 @@ fn a_click_with_the_face_tool_chooses_the_face_to_sculpt() {
     w.send(Request::Undo);
     assert_eq!(face(&w), first);
 }
+
+/// A quick click (press and release in one frame, as on a slow software-rendered window) with
+/// the Face tool (key B) on the plate's front side chooses that face: before, a press that was
+/// released in the same frame did nothing.
+#[test]
+fn a_one_frame_click_with_the_face_tool_chooses_the_face() {
+    use egui::{Event, Key, Modifiers, PointerButton, Vec2};
+    let dir = tempfile::tempdir().unwrap();
+    let plate = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../vclay-io/tests/data/cad/trimmed_plate.step");
+    let mut h = harness(Options {
+        file: Some(plate),
+        paused: true,
+        ..common::quiet(dir.path())
+    });
+    wait_for(&mut h, 120, "the part's first frame", |s| {
+        !s.frame().models.is_empty()
+    });
+    let face = |h: &egui_kittest::Harness<'static, vclay_studio::Studio>| {
+        h.state()
+            .worker()
+            .unwrap()
+            .query(|s| s.model(None).unwrap().save().unwrap()["face"].as_u64())
+            .unwrap()
+            .unwrap()
+    };
+    let first = face(&h);
+    h.key_press(Key::B);
+    h.step();
+    assert_eq!(h.state().tool, vclay_studio::app::Tool::SculptFace);
+    // The middle of the front side (y = 0), on the screen.
+    let s = h.state();
+    let r = s.viewport();
+    let (x, y) = s
+        .camera
+        .project(
+            vclay_core::Vec3::new(20.0, 0.0, 4.0),
+            r.width() as f64,
+            r.height() as f64,
+        )
+        .expect("the front face is in view");
+    let at = r.min + Vec2::new(x as f32, y as f32);
+    h.hover_at(at);
+    h.step();
+    h.input_mut()
+        .events
+        .extend([true, false].map(|pressed| Event::PointerButton {
+            pos: at,
+            button: PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        }));
+    h.step();
+    wait_for(&mut h, 60, "the face chosen", |s| {
+        s.worker()
+            .unwrap()
+            .query(|s| s.model(None).unwrap().save().unwrap()["face"].as_u64())
+            .unwrap()
+            != Some(first)
+    });
+    let ys = h
+        .state()
+        .worker()
+        .unwrap()
+        .query(|s| s.model(None).unwrap().control_points())
+        .unwrap();
+    assert!(ys.iter().all(|p| p.y.abs() < 1e-9), "not the front face");
+    assert_ne!(face(&h), first);
+}

@@ -310,6 +310,23 @@ impl PartModel {
         })
     }
 
+    /// Every shell of the part now, meshed crack-free (closed shells closed by index: what
+    /// mesh exports write), with each triangle's face numbered across the shells.
+    fn crack_free_mesh(&self) -> Result<(TriMesh, Vec<u32>), SessionError> {
+        let (_, shells) = self.part()?;
+        let mut out = TriMesh::new();
+        let mut parts = Vec::new();
+        let mut first_face = 0;
+        for sh in &shells {
+            let (m, faces) = vclay_io::trimmed::tessellate_shell_faces(sh, DISPLAY_SAMPLES)
+                .map_err(SessionError::model)?;
+            out.append(&m);
+            parts.extend(faces.iter().map(|f| first_face + f));
+            first_face += sh.faces.len() as u32;
+        }
+        Ok((out, parts))
+    }
+
     /// The sculpted shell now, meshed, with the face of each triangle
     /// ([`vclay_io::trimmed::tessellate_shell_faces`]).
     fn part_faces(&self) -> Result<(TriMesh, Vec<u32>), SessionError> {
@@ -590,19 +607,15 @@ impl Model for PartModel {
         self.before.revision + self.face.revision()
     }
 
+    /// The whole part meshed, shaded with sharp edges between faces that meet at an angle
+    /// (over [`vclay_core::mesh::CREASE_ANGLE_DEG`]: a box's edges, a hole's rim) and smooth
+    /// within each face however coarse its triangles ([`TriMesh::with_creases_between`]).
     fn display_mesh(&self) -> Result<TriMesh, SessionError> {
-        let (_, shells) = self.part()?;
-        let mut out = TriMesh::new();
-        for sh in &shells {
-            let m = vclay_io::trimmed::tessellate_shell(sh, DISPLAY_SAMPLES)
-                .map_err(SessionError::model)?;
-            let base = out.positions.len() as u32;
-            out.positions.extend(m.positions);
-            out.normals.extend(m.normals);
-            out.triangles
-                .extend(m.triangles.into_iter().map(|t| t.map(|i| i + base)));
-        }
-        Ok(out)
+        let (mesh, parts) = self.crack_free_mesh()?;
+        Ok(mesh.with_creases_between(
+            vclay_core::mesh::CREASE_ANGLE_DEG.to_radians(),
+            Some(&parts),
+        ))
     }
 
     fn display_lines(&self) -> Vec<LineSet> {
@@ -713,11 +726,14 @@ impl Model for PartModel {
                 .map_err(|e| io(&e))
             }
             "obj" | "stl" | "ply" => {
-                vclay_io::mesh::write_mesh(path, &self.display_mesh()?).map_err(|e| io(&e))
+                vclay_io::mesh::write_mesh(path, &self.crack_free_mesh()?.0).map_err(|e| io(&e))
             }
             "glb" => vclay_io::gltf::write_glb(
                 path,
-                &[vclay_io::gltf::GlbMesh::new("part", self.display_mesh()?)],
+                &[vclay_io::gltf::GlbMesh::new(
+                    "part",
+                    self.crack_free_mesh()?.0,
+                )],
             )
             .map_err(|e| io(&e)),
             _ => Err(unsupported_export(self.kind(), path, &FORMATS)),
