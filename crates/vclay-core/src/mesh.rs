@@ -421,7 +421,7 @@ mod tests {
         let by_angle = m.with_creases(30f64.to_radians());
         let by_part = m.with_creases_between(30f64.to_radians(), Some(&[0, 0, 1]));
         // By angle alone the 60-degree fold splits vertices 0 and 1; by part it does not.
-        assert_eq!(by_angle.triangles[0][0] == by_angle.triangles[1][0], false);
+        assert_ne!(by_angle.triangles[0][0], by_angle.triangles[1][0]);
         assert_eq!(by_part.triangles[0][0], by_part.triangles[1][0]);
         assert_eq!(by_part.triangles[0][2], by_part.triangles[1][1]);
         // The other part's triangle is split off at the 90-degree edge, both ways.
