@@ -124,7 +124,7 @@ pub fn scene_from_mesh(mesh: TriMesh, wireframe: bool) -> Scene {
 /// Angle between adjacent triangles above which a rendered CAD part's mesh is shaded with a
 /// sharp edge ([`TriMesh::with_creases`]), in degrees: smooth faces tessellated at 96 samples a
 /// side turn by far less between triangles, fillets join their faces tangentially.
-pub use vclay_core::mesh::CREASE_ANGLE_DEG;
+pub use vclay::core::mesh::CREASE_ANGLE_DEG;
 
 /// Reads a model or mesh file into a scene, choosing by extension (and, for .json, content).
 pub fn scene_from_file(path: &Path, wireframe: bool) -> Result<Scene> {
