@@ -20,6 +20,7 @@ macro_rules! scenario_keys {
 pub mod dnurbs;
 pub mod dnurbs_patches;
 pub mod dnurbs_tri;
+mod engine;
 pub mod ffd;
 pub mod generalized;
 pub mod part;
