@@ -4,23 +4,13 @@
 
 use std::path::Path;
 
-use vclay_session::models::{self, Spec};
+use crate::common;
+use common::saved;
+use vclay_session::models;
 use vclay_session::{Command, Edit, Model, ModelKind, Session};
 
 fn build(kind: ModelKind, model: &str, material: &str, sim: &str) -> Box<dyn Model> {
-    let m: toml::Table = toml::from_str(model).unwrap();
-    let mat: toml::Table = toml::from_str(material).unwrap();
-    let s: toml::Table = toml::from_str(sim).unwrap();
-    models::build(
-        kind,
-        &Spec {
-            model: &m,
-            material: (!mat.is_empty()).then_some(&mat),
-            simulation: Some(&s),
-            base: Path::new("."),
-        },
-    )
-    .unwrap_or_else(|e| panic!("{e:?}"))
+    common::build(kind, model, Some(material).filter(|m| !m.is_empty()), Some(sim))
 }
 
 fn sheet() -> Box<dyn Model> {
@@ -54,10 +44,6 @@ fn sphere() -> Box<dyn Model> {
         "",
         "dt = 0.002",
     )
-}
-
-fn saved(s: &Session) -> serde_json::Value {
-    s.model(None).unwrap().save().unwrap()
 }
 
 fn kind(s: &Session) -> ModelKind {
@@ -522,32 +508,18 @@ fn display_pick_export() {
 
 #[test]
 fn spec_errors() {
-    let m: toml::Table = toml::from_str("kind = \"dnurbs-surface\"\nsize = [600, 6]").unwrap();
-    let s: toml::Table = toml::from_str("dt = 0.01").unwrap();
-    let e = models::build(
+    let err = |kind, model| {
+        common::try_build(kind, model, None, Some("dt = 0.01"), Path::new(".")).unwrap_err()
+    };
+    let e = err(
         ModelKind::DnurbsSurface,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: Some(&s),
-            base: Path::new("."),
-        },
-    )
-    .unwrap_err();
+        "kind = \"dnurbs-surface\"\nsize = [600, 6]",
+    );
     assert_eq!(e.key, "size");
-    let m: toml::Table =
-        toml::from_str("kind = \"dnurbs-swung\"\nprimitive = \"sphere\"\nengine = \"frozen\"")
-            .unwrap();
-    let e = models::build(
+    let e = err(
         ModelKind::DnurbsSwung,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: Some(&s),
-            base: Path::new("."),
-        },
-    )
-    .unwrap_err();
+        "kind = \"dnurbs-swung\"\nprimitive = \"sphere\"\nengine = \"frozen\"",
+    );
     assert_eq!(e.key, "engine");
 }
 

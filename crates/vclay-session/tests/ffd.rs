@@ -6,40 +6,17 @@ use std::path::Path;
 
 use vclay_core::Vec3;
 use vclay_session::command::V3;
-use vclay_session::models::{self, Spec};
+use crate::common;
+use common::{positions, saved_text as saved};
+use vclay_session::models;
 use vclay_session::{Command, Edit, Element, Model, ModelKind, PointMove, Ray, Session};
 
-fn spec_table(text: &str) -> toml::Table {
-    toml::from_str(text).expect("valid toml")
-}
-
 fn build(model: &str, simulation: Option<&str>) -> Box<dyn Model> {
-    let m = spec_table(model);
-    let s = simulation.map(spec_table);
-    models::build(
-        ModelKind::Ffd,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: s.as_ref(),
-            base: Path::new("."),
-        },
-    )
-    .expect("builds")
+    common::build(ModelKind::Ffd, model, None, simulation)
 }
 
 fn build_err(model: &str) -> models::SpecError {
-    let m = spec_table(model);
-    models::build(
-        ModelKind::Ffd,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: None,
-            base: Path::new("."),
-        },
-    )
-    .expect_err("must fail")
+    common::try_build(ModelKind::Ffd, model, None, None, Path::new(".")).expect_err("must fail")
 }
 
 /// A small bottle in a 4 x 4 x 5 cubic lattice.
@@ -49,14 +26,6 @@ fn session() -> Session {
         Some("dt = 0.05"),
     );
     Session::with_model("b", m).unwrap()
-}
-
-fn saved(s: &Session) -> String {
-    serde_json::to_string(&s.model(None).unwrap().save().unwrap()).unwrap()
-}
-
-fn positions(s: &Session) -> Vec<Vec3> {
-    s.model(None).unwrap().display_mesh().unwrap().positions
 }
 
 fn a(v: &Vec3) -> V3 {

@@ -6,29 +6,17 @@
 use std::path::Path;
 
 use vclay_core::Vec3;
-use vclay_session::models::{self, Spec};
+use crate::common;
+use common::{positions, saved_text as saved};
+use vclay_session::models;
 use vclay_session::{Command, Edit, Element, Model, ModelKind, Ray, Session};
-
-fn table(text: &str) -> toml::Table {
-    toml::from_str(text).expect("valid toml")
-}
 
 fn build_at(
     model: &str,
     simulation: Option<&str>,
     base: &Path,
 ) -> Result<Box<dyn Model>, models::SpecError> {
-    let m = table(model);
-    let s = simulation.map(table);
-    models::build(
-        ModelKind::PdeSurface,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: s.as_ref(),
-            base,
-        },
-    )
+    common::try_build(ModelKind::PdeSurface, model, None, simulation, base)
 }
 
 fn build(model: &str) -> Box<dyn Model> {
@@ -39,14 +27,6 @@ fn build(model: &str) -> Box<dyn Model> {
 fn session() -> Session {
     let m = build("kind = \"pde-surface\"\nname = \"g\"\nbuiltin = \"glass\"\ngrid = [8, 12]");
     Session::with_model("g", m).unwrap()
-}
-
-fn saved(s: &Session) -> String {
-    serde_json::to_string(&s.model(None).unwrap().save().unwrap()).unwrap()
-}
-
-fn positions(s: &Session) -> Vec<Vec3> {
-    s.model(None).unwrap().display_mesh().unwrap().positions
 }
 
 fn round_trip(s: &mut Session, edit: Edit) {

@@ -5,30 +5,14 @@
 use std::path::Path;
 
 use vclay_core::Vec3;
-use vclay_session::models::{self, Spec};
+use crate::common;
+use common::{positions, saved_text as saved};
+use vclay_session::models;
 use vclay_session::{Command, Edit, Model, ModelKind, Session};
 
 fn build(model: &str, base: &Path) -> Box<dyn Model> {
-    let m: toml::Table = toml::from_str(model).expect("valid toml");
-    let s: toml::Table = toml::from_str("dt = 0.25").unwrap();
-    models::build(
-        ModelKind::PdeSurface,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: Some(&s),
-            base,
-        },
-    )
-    .unwrap_or_else(|e| panic!("builds: {e:?}"))
-}
-
-fn saved(s: &Session) -> String {
-    serde_json::to_string(&s.model(None).unwrap().save().unwrap()).unwrap()
-}
-
-fn positions(s: &Session) -> Vec<Vec3> {
-    s.model(None).unwrap().display_mesh().unwrap().positions
+    common::try_build(ModelKind::PdeSurface, model, None, Some("dt = 0.25"), base)
+        .unwrap_or_else(|e| panic!("builds: {e:?}"))
 }
 
 fn set(s: &mut Session, name: &str, value: f64) {

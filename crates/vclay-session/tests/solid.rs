@@ -3,27 +3,15 @@
 //! state just before the command, and a saved model continues exactly like the uninterrupted
 //! one.
 
-use std::path::Path;
 
 use crate::common;
-use common::assert_same;
+use common::{assert_same, saved};
 
-use vclay_session::models::{self, Spec};
+use vclay_session::models;
 use vclay_session::{Command, Edit, Element, Model, ModelKind, Ray, Session};
 
 fn build(kind: ModelKind, model: &str, sim: &str) -> Box<dyn Model> {
-    let m: toml::Table = toml::from_str(model).unwrap();
-    let s: toml::Table = toml::from_str(sim).unwrap();
-    models::build(
-        kind,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: Some(&s),
-            base: Path::new("."),
-        },
-    )
-    .unwrap_or_else(|e| panic!("{e:?}"))
+    common::build(kind, model, None, Some(sim))
 }
 
 fn cube() -> Box<dyn Model> {
@@ -40,10 +28,6 @@ fn bspline() -> Box<dyn Model> {
         "kind = \"bspline-solid\"\ncontrol = [4, 4, 4]\nsamples = [5, 5, 5]",
         "dt = 0.002\nintegrator = \"implicit\"",
     )
-}
-
-fn saved(s: &Session) -> serde_json::Value {
-    s.model(None).unwrap().save().unwrap()
 }
 
 /// Save -> string -> load, then n steps of both: identical.
@@ -554,17 +538,12 @@ fn a_closed_mesh_opens_as_a_sculptable_solid() {
     let mesh = vclay_core::TriMesh::revolution(&profile, 32);
     let path = dir.path().join("ball.obj");
     vclay_io::mesh::write_mesh(&path, &mesh).unwrap();
-    let m: toml::Table =
-        toml::from_str("kind = \"subdivision-solid\"\nfile = \"ball.obj\"\ncells = 300\nlevel = 1")
-            .unwrap();
-    let model = models::build(
+    let model = common::try_build(
         ModelKind::SubdivisionSolid,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: None,
-            base: dir.path(),
-        },
+        "kind = \"subdivision-solid\"\nfile = \"ball.obj\"\ncells = 300\nlevel = 1",
+        None,
+        None,
+        dir.path(),
     )
     .unwrap_or_else(|e| panic!("{e:?}"));
     let cells = model.save().unwrap()["material"].as_array().unwrap().len();
@@ -601,31 +580,24 @@ fn a_closed_mesh_opens_as_a_sculptable_solid() {
         top(&s)
     );
     // `cells` belongs to meshes only; an open mesh is a located error.
-    let m: toml::Table = toml::from_str("kind = \"subdivision-solid\"\ncells = 60").unwrap();
-    let e = models::build(
+    let e = common::try_build(
         ModelKind::SubdivisionSolid,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: None,
-            base: dir.path(),
-        },
+        "kind = \"subdivision-solid\"\ncells = 60",
+        None,
+        None,
+        dir.path(),
     )
     .unwrap_err();
     assert_eq!(e.key, "cells");
     let mut open = mesh.clone();
     open.triangles.truncate(open.triangles.len() - 3);
     vclay_io::mesh::write_mesh(&path, &open).unwrap();
-    let m: toml::Table =
-        toml::from_str("kind = \"subdivision-solid\"\nfile = \"ball.obj\"").unwrap();
-    let e = models::build(
+    let e = common::try_build(
         ModelKind::SubdivisionSolid,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: None,
-            base: dir.path(),
-        },
+        "kind = \"subdivision-solid\"\nfile = \"ball.obj\"",
+        None,
+        None,
+        dir.path(),
     )
     .unwrap_err();
     assert_eq!(e.key, "file");

@@ -17,13 +17,18 @@
 //! `velocity` is the same `Target::Moving` closure the old runner made, and a session file
 //! rebuilds it from its description.
 //!
-//! One model, five engines: the engine enum's two generalized variants (`RationalGeometry`,
-//! `SwungGeometry`) go through one generic path (each match arm is written once for both,
-//! monomorphized per geometry), and so do the three frozen-weight ones (surface, open curve,
-//! and the closed periodic curve of the `ring` primitive, `d-nurbs.txt` Fig 6); the rest of the model
-//! (slots, tool table, constraints, display, pick, exports, session files) does not look at
-//! the engine. The triangular and multi-patch kinds are [`super::generalized::GeneralizedModel`]
-//! kinds (see there why this model is not one).
+//! One model, five engines: this kind ([`Nurbs`]) is a kind of the one D-NURBS model,
+//! [`GeneralizedModel`] (as the triangular and multi-patch kinds are), which does the clock,
+//! the step, undo by the engine state, `set dt`, mesh exports and plastic flow once for all.
+//! Its engine, [`NurbsEngine`], is one of two generalized engines (`RationalGeometry`,
+//! `SwungGeometry`) or three frozen-weight ones (surface, open curve, and the closed periodic
+//! curve of the `ring` primitive, `d-nurbs.txt` Fig 6); every one is a
+//! [`DnurbsEngine`](super::generalized::DnurbsEngine) (the trait is implemented once for each
+//! family, generically over the geometry), so the rest of the kind (slots, tool table,
+//! constraints, display, pick, exports, session files) does not look at which it is. The
+//! frozen engines stay in this kind rather than a model of their own because they run the
+//! same scenario kinds with the same tools, slots, display and saved layout (`engine =
+//! "frozen"` in one `Saved` form); where they lack something the trait's method refuses.
 //!
 //! Undo: every edit but fix/free restores a snapshot of the engine state (the engines'
 //! `state()`/`set_state()`) and of what edits change besides it (`Edited`: the slots,
@@ -54,8 +59,10 @@ use vclay_io::model::Entity;
 use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
 
 use super::engine::NO_FROZEN_CONSTRAINTS;
-use super::generalized::{DnurbsEngine, GeneralizedKind, GeneralizedModel, bbox_diagonal};
-use super::{SpecError, misrouted};
+use super::generalized::{
+    DnurbsEngine, GeneralizedKind, GeneralizedModel, bbox_diagonal, reference,
+};
+use super::{SpecError, keyword, misrouted};
 use crate::command::{Edit, V3};
 use crate::command::{MaterialRequest, RopeRequest};
 use crate::error::SessionError;
@@ -1303,17 +1310,13 @@ impl DnurbsModel {
         let m = &spec.model;
         let err = |table: &str, key: &str, what: String| SpecError::new(table, key, what);
         let surface = kind != ModelKind::DnurbsCurve;
-        let frozen = match m.engine.as_deref() {
-            None | Some("generalized") => false,
-            Some("frozen") => true,
-            Some(o) => {
-                return Err(err(
-                    "model",
-                    "engine",
-                    format!("\"{o}\": expected \"generalized\" or \"frozen\""),
-                ));
-            }
-        };
+        let frozen = keyword(
+            "model",
+            "engine",
+            m.engine.as_deref(),
+            &[("generalized", false), ("frozen", true)],
+        )?
+        .unwrap_or(false);
         // Material.
         let (mat, mut consts, per_span, preset) = material_of(surface, &spec.material)?;
         // Simulation.
@@ -1328,17 +1331,13 @@ impl DnurbsModel {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(err("simulation", "dt", format!("{dt} must be positive")));
         }
-        let reference = match sim.reference.as_deref() {
-            None | Some("rest") => ElasticReference::RestShape,
-            Some("absolute") => ElasticReference::Absolute,
-            Some(o) => {
-                return Err(err(
-                    "simulation",
-                    "reference",
-                    format!("\"{o}\": expected \"rest\" or \"absolute\""),
-                ));
-            }
-        };
+        let reference = keyword(
+            "simulation",
+            "reference",
+            sim.reference.as_deref(),
+            &[("rest", false), ("absolute", true)],
+        )?
+        .map_or(ElasticReference::RestShape, reference);
         let quadrature = quadrature_of(sim)?;
         if frozen && sim.quadrature.is_some() {
             return Err(err(
@@ -1348,25 +1347,20 @@ impl DnurbsModel {
             ));
         }
         let penalty = sim.weight_penalty.unwrap_or(0.0);
-        let dynamic_weights = match m.weights.as_deref() {
-            None => !frozen,
-            Some("dynamic") if frozen => {
-                return Err(err(
-                    "model",
-                    "weights",
-                    "\"dynamic\" needs `engine = \"generalized\"` (the frozen engine holds its weights)".into(),
-                ));
-            }
-            Some("dynamic") => true,
-            Some("frozen") => false,
-            Some(o) => {
-                return Err(err(
-                    "model",
-                    "weights",
-                    format!("\"{o}\": expected \"dynamic\" or \"frozen\""),
-                ));
-            }
-        };
+        let dynamic_weights = keyword(
+            "model",
+            "weights",
+            m.weights.as_deref(),
+            &[("dynamic", true), ("frozen", false)],
+        )?
+        .unwrap_or(!frozen);
+        if frozen && dynamic_weights {
+            return Err(err(
+                "model",
+                "weights",
+                "\"dynamic\" needs `engine = \"generalized\"` (the frozen engine holds its weights)".into(),
+            ));
+        }
         if frozen && sim.weight_penalty.is_some() {
             return Err(err(
                 "simulation",
@@ -1496,13 +1490,6 @@ impl DnurbsModel {
     }
 }
 
-fn reference(absolute: bool) -> ElasticReference {
-    if absolute {
-        ElasticReference::Absolute
-    } else {
-        ElasticReference::RestShape
-    }
-}
 
 /// The material of a D-NURBS from its `[material]` keys: the material, its constants, whether
 /// densities are per knot span, and the Table 1 preset named.
@@ -1552,18 +1539,13 @@ fn material_of(
         }
     }
     let consts = Mat::from_material(&mat).expect("constant densities");
-    let per_span = match mk.per.as_deref() {
-        None => !surface,
-        Some("knot-span") => true,
-        Some("parameter") => false,
-        Some(o) => {
-            return Err(err(
-                "material",
-                "per",
-                format!("\"{o}\": expected \"knot-span\" or \"parameter\""),
-            ));
-        }
-    };
+    let per_span = keyword(
+        "material",
+        "per",
+        mk.per.as_deref(),
+        &[("knot-span", true), ("parameter", false)],
+    )?
+    .unwrap_or(!surface);
     Ok((mat, consts, per_span, preset))
 }
 
@@ -2251,26 +2233,7 @@ impl GeneralizedKind for Nurbs {
             })
         } else {
             let (mesh, params) = self.mesh_with_params().ok()?;
-            crate::pick::ray_mesh(ray, &mesh).map(|(s, tri, w)| {
-                let x = ray.origin + ray.direction * s;
-                let ids = mesh.triangles[tri];
-                let param = if params.len() == mesh.positions.len() {
-                    let mut q = [0.0; 2];
-                    for (k, &i) in ids.iter().enumerate() {
-                        q[0] += w[k] * params[i as usize][0];
-                        q[1] += w[k] * params[i as usize][1];
-                    }
-                    q
-                } else {
-                    self.engine.nearest_param(&x).unwrap_or([0.0; 2])
-                };
-                Hit {
-                    distance: s,
-                    point: x,
-                    element: Element::SurfacePoint { param },
-                    extra: [None, None],
-                }
-            })
+            super::generalized::surface_pick(ray, &mesh, &params, &self.engine)
         };
         match (cp, model) {
             // A control point in front of (or just behind) the model wins.

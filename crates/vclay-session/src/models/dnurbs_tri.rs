@@ -31,7 +31,7 @@ use vclay_dynamics::dnurbs::{
     Constraint, GeneralizedDnurbs, TriangleQuadrature, TriangularGeometry,
 };
 
-use super::SpecError;
+use super::{SpecError, keyword};
 use super::generalized::{
     GeneralizedKind, GeneralizedModel, check_material_and_dt, constant_material, reference,
     table_one,
@@ -187,17 +187,13 @@ impl TriangularModel {
                 .to_string()
         });
         let preset = table_one(&preset_name)?;
-        let subdivided = match m.quadrature.as_deref() {
-            None | Some("subdivided") => true,
-            Some("whole") => false,
-            Some(other) => {
-                return Err(SpecError::new(
-                    "model",
-                    "quadrature",
-                    format!("{other:?}: expected \"subdivided\" or \"whole\""),
-                ));
-            }
-        };
+        let subdivided = keyword(
+            "model",
+            "quadrature",
+            m.quadrature.as_deref(),
+            &[("subdivided", true), ("whole", false)],
+        )?
+        .unwrap_or(true);
         if let Some(k) = m.quadrature_points
             && !(1..=20).contains(&k)
         {
@@ -215,18 +211,13 @@ impl TriangularModel {
                 format!("{tessellation}: must be 1 to 64"),
             ));
         }
-        let absolute = match mat.reference.as_deref() {
-            None => rounding.is_some(),
-            Some("absolute") => true,
-            Some("rest") => false,
-            Some(other) => {
-                return Err(SpecError::new(
-                    "material",
-                    "reference",
-                    format!("{other:?}: expected \"absolute\" or \"rest\""),
-                ));
-            }
-        };
+        let absolute = keyword(
+            "material",
+            "reference",
+            mat.reference.as_deref(),
+            &[("absolute", true), ("rest", false)],
+        )?
+        .unwrap_or(rounding.is_some());
         let settings = Settings {
             source,
             subdivided,

@@ -151,6 +151,47 @@ fn edit_coords<G: GeneralizedGeometry + Clone + std::fmt::Debug + Send + Sync + 
     d.set_state(&s).map_err(SessionError::command_from)
 }
 
+/// The [`DnurbsEngine`] methods both engine families answer alike: the inherent method of
+/// the same name (`$T`: `GeneralizedDnurbs` or `Dnurbs`), the implicit step of eq 18, and the
+/// geometry's nearest parameter. Inside the two `impl DnurbsEngine`.
+macro_rules! same_in_both {
+    ($T:ident) => {
+        fn time(&self) -> f64 {
+            $T::time(self)
+        }
+        fn steps(&self) -> u64 {
+            $T::steps(self) as u64
+        }
+        fn step(&mut self, dt: f64) -> Result<vclay_dynamics::StepReport, DynamicsError> {
+            $T::step(self, Integrator::Implicit { dt })
+        }
+        fn state(&self) -> Self::State {
+            $T::state(self)
+        }
+        fn set_state(&mut self, s: &Self::State) -> Result<(), DynamicsError> {
+            $T::set_state(self, s)
+        }
+        fn forces(&self) -> &[Force] {
+            $T::forces(self)
+        }
+        fn forces_mut(&mut self) -> &mut Vec<Force> {
+            $T::forces_mut(self)
+        }
+        fn set_material(&mut self, m: Material) -> Result<(), DynamicsError> {
+            $T::set_material(self, m)
+        }
+        fn stop(&mut self) {
+            $T::stop(self)
+        }
+        fn data_distances(&self) -> Result<Vec<f64>, DynamicsError> {
+            $T::data_distances(self)
+        }
+        fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
+            self.geometry().nearest_param(x)
+        }
+    };
+}
+
 impl<G> DnurbsEngine for GeneralizedDnurbs<G>
 where
     G: GeneralizedGeometry + Clone + std::fmt::Debug + Send + Sync + 'static,
@@ -159,33 +200,7 @@ where
     fn is_frozen(&self) -> bool {
         false
     }
-    fn time(&self) -> f64 {
-        GeneralizedDnurbs::time(self)
-    }
-    fn steps(&self) -> u64 {
-        GeneralizedDnurbs::steps(self) as u64
-    }
-    fn step(&mut self, dt: f64) -> Result<vclay_dynamics::StepReport, DynamicsError> {
-        GeneralizedDnurbs::step(self, Integrator::Implicit { dt })
-    }
-    fn state(&self) -> Self::State {
-        GeneralizedDnurbs::state(self)
-    }
-    fn set_state(&mut self, s: &Self::State) -> Result<(), DynamicsError> {
-        GeneralizedDnurbs::set_state(self, s)
-    }
-    fn forces(&self) -> &[Force] {
-        GeneralizedDnurbs::forces(self)
-    }
-    fn forces_mut(&mut self) -> &mut Vec<Force> {
-        GeneralizedDnurbs::forces_mut(self)
-    }
-    fn set_material(&mut self, m: Material) -> Result<(), DynamicsError> {
-        GeneralizedDnurbs::set_material(self, m)
-    }
-    fn stop(&mut self) {
-        GeneralizedDnurbs::stop(self)
-    }
+    same_in_both!(GeneralizedDnurbs);
     fn plastic_reset(&mut self) -> Result<(), DynamicsError> {
         self.set_rest_shape_to_current()
     }
@@ -195,16 +210,10 @@ where
     fn elastic_energy(&self) -> Result<f64, DynamicsError> {
         GeneralizedDnurbs::elastic_energy(self)
     }
-    fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
-        self.geometry().nearest_param(x)
-    }
     fn point_at(&self, param: [f64; 2]) -> Result<Vec3, DynamicsError> {
         let mut lj = LocalJacobian::default();
         self.geometry().jacobian_at(param, &mut lj)?;
         Ok(lj.s[0])
-    }
-    fn data_distances(&self) -> Result<Vec<f64>, DynamicsError> {
-        GeneralizedDnurbs::data_distances(self)
     }
     fn control_points(&self, rest: bool) -> Vec<Vec3> {
         let q = if rest {
@@ -276,33 +285,7 @@ where
     fn is_frozen(&self) -> bool {
         true
     }
-    fn time(&self) -> f64 {
-        Dnurbs::time(self)
-    }
-    fn steps(&self) -> u64 {
-        Dnurbs::steps(self) as u64
-    }
-    fn step(&mut self, dt: f64) -> Result<vclay_dynamics::StepReport, DynamicsError> {
-        Dnurbs::step(self, Integrator::Implicit { dt })
-    }
-    fn state(&self) -> Self::State {
-        Dnurbs::state(self)
-    }
-    fn set_state(&mut self, s: &Self::State) -> Result<(), DynamicsError> {
-        Dnurbs::set_state(self, s)
-    }
-    fn forces(&self) -> &[Force] {
-        Dnurbs::forces(self)
-    }
-    fn forces_mut(&mut self) -> &mut Vec<Force> {
-        Dnurbs::forces_mut(self)
-    }
-    fn set_material(&mut self, m: Material) -> Result<(), DynamicsError> {
-        Dnurbs::set_material(self, m)
-    }
-    fn stop(&mut self) {
-        Dnurbs::stop(self)
-    }
+    same_in_both!(Dnurbs);
     fn plastic_reset(&mut self) -> Result<(), DynamicsError> {
         self.set_rest_shape_to_current();
         Ok(())
@@ -316,15 +299,9 @@ where
     fn elastic_energy(&self) -> Result<f64, DynamicsError> {
         Ok(Dnurbs::elastic_energy(self))
     }
-    fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
-        self.geometry().nearest_param(x)
-    }
     /// The point at `param` (its first `G::DIM` entries).
     fn point_at(&self, param: [f64; 2]) -> Result<Vec3, DynamicsError> {
         Ok(self.geometry().basis_at(&param[..G::DIM])?.2)
-    }
-    fn data_distances(&self) -> Result<Vec<f64>, DynamicsError> {
-        Dnurbs::data_distances(self)
     }
     fn control_points(&self, rest: bool) -> Vec<Vec3> {
         if rest {

@@ -85,17 +85,7 @@ pub trait GeneralizedKind: Clone + std::fmt::Debug + Send + Sync + 'static {
     }
     /// The nearest hit of `ray`. Default: the display mesh, at the parameter nearest the hit.
     fn pick(&self, ray: &Ray, _tolerance: f64) -> Option<Hit> {
-        let mesh = self.mesh().ok()?;
-        crate::pick::ray_mesh(ray, &mesh).map(|(s, _, _)| {
-            let point = ray.origin + ray.direction * s;
-            let param = self.engine().nearest_param(&point).unwrap_or([0.0, 0.0]);
-            Hit {
-                distance: s,
-                point,
-                element: Element::SurfacePoint { param },
-                extra: [None, None],
-            }
-        })
+        surface_pick(ray, &self.mesh().ok()?, &[], self.engine())
     }
     /// The parameters. Default: `dt`, then [`GeneralizedKind::more_params`].
     fn params(&self) -> Vec<Param> {
@@ -122,6 +112,35 @@ pub trait GeneralizedKind: Clone + std::fmt::Debug + Send + Sync + 'static {
     fn write(&self, ext: &str, path: &Path) -> Option<Result<(), SessionError>>;
     /// The session file form; `size` is the model's size.
     fn save(&self, size: f64) -> Result<serde_json::Value, SessionError>;
+}
+
+/// The hit of `ray` on a surface's display `mesh`: the point and its parameter, interpolated
+/// from `params` (one per mesh vertex) where given, else the engine's nearest parameter.
+pub(crate) fn surface_pick<E: DnurbsEngine>(
+    ray: &Ray,
+    mesh: &TriMesh,
+    params: &[[f64; 2]],
+    engine: &E,
+) -> Option<Hit> {
+    crate::pick::ray_mesh(ray, mesh).map(|(s, tri, w)| {
+        let point = ray.origin + ray.direction * s;
+        let param = if params.len() == mesh.positions.len() {
+            let mut q = [0.0; 2];
+            for (k, &i) in mesh.triangles[tri].iter().enumerate() {
+                q[0] += w[k] * params[i as usize][0];
+                q[1] += w[k] * params[i as usize][1];
+            }
+            q
+        } else {
+            engine.nearest_param(&point).unwrap_or([0.0, 0.0])
+        };
+        Hit {
+            distance: s,
+            point,
+            element: Element::SurfacePoint { param },
+            extra: [None, None],
+        }
+    })
 }
 
 /// The time step as a parameter.
