@@ -10,7 +10,12 @@ use vclay_session::models;
 use vclay_session::{Command, Edit, Model, ModelKind, Session};
 
 fn build(kind: ModelKind, model: &str, material: &str, sim: &str) -> Box<dyn Model> {
-    common::build(kind, model, Some(material).filter(|m| !m.is_empty()), Some(sim))
+    common::build(
+        kind,
+        model,
+        Some(material).filter(|m| !m.is_empty()),
+        Some(sim),
+    )
 }
 
 fn sheet() -> Box<dyn Model> {
@@ -50,36 +55,13 @@ fn kind(s: &Session) -> ModelKind {
     s.model(None).unwrap().kind()
 }
 
-/// Save -> string -> load, then n steps of both: identical saves (every f64 bit).
-fn check_continue(s: &mut Session, n: u64) {
-    let text = serde_json::to_string(&saved(s)).unwrap();
-    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let loaded = models::load(kind(s), &v).unwrap();
-    let mut s2 = Session::with_model("m", loaded).unwrap();
-    assert_eq!(saved(&s2), v, "load did not reproduce the saved state");
-    s.run(n).unwrap();
-    s2.run(n).unwrap();
-    assert_eq!(saved(s), saved(&s2), "continued runs differ");
-}
-
 /// Apply, undo (== before), redo (== after), steps then undo (== before), redo, and
 /// save/load continuation.
 fn check(mut s: Session, edit: Edit) {
     s.run(2).unwrap();
-    let before = saved(&s);
-    s.apply(Command::new(edit.clone()))
-        .unwrap_or_else(|e| panic!("{}: {e}", edit.action()));
-    let after = saved(&s);
-    s.undo().unwrap();
-    assert_eq!(saved(&s), before, "{}: undo", edit.action());
-    s.redo().unwrap();
-    assert_eq!(saved(&s), after, "{}: redo", edit.action());
-    s.run(3)
-        .unwrap_or_else(|e| panic!("{}: {e}", edit.action()));
-    s.undo().unwrap();
-    assert_eq!(saved(&s), before, "{}: undo after steps", edit.action());
+    common::undo_redo_and_after_steps(&mut s, &edit, 3);
     s.apply(Command::new(edit.clone())).unwrap();
-    check_continue(&mut s, 3);
+    common::check_continue(&mut s, 3, edit.action());
 }
 
 fn fails(mut s: Session, edit: Edit) {
@@ -139,27 +121,12 @@ fn common_edits(surface: bool, frozen: bool) -> Vec<Edit> {
             points: vec![[0.1, 0.1, 0.3], [-0.2, 0.0, 0.2]],
             stiffness: Some(20.0),
         },
-        Edit::Fix(vclay_session::Selection {
-            points: Some(vec![1, 2]),
-            min: None,
-            max: None,
-            near: None,
-            radius: None,
-        }),
-        Edit::Fix(vclay_session::Selection {
-            points: None,
-            min: Some([-5.0, -5.0, -5.0]),
-            max: Some([0.0, 5.0, 5.0]),
-            near: None,
-            radius: None,
-        }),
-        Edit::Free(vclay_session::Selection {
-            points: None,
-            min: None,
-            max: None,
-            near: Some([-1.0, 0.0, 0.0]),
-            radius: None,
-        }),
+        Edit::Fix(vclay_session::Selection::ids(vec![1, 2])),
+        Edit::Fix(vclay_session::Selection::rest_box(
+            [-5.0, -5.0, -5.0],
+            [0.0, 5.0, 5.0],
+        )),
+        Edit::Free(vclay_session::Selection::nearest([-1.0, 0.0, 0.0])),
         Edit::Material {
             cells: None,
             min: None,
@@ -348,13 +315,7 @@ fn swung_commands() {
             pressure: 0.5,
             until: None,
         },
-        Edit::Fix(vclay_session::Selection {
-            points: Some(vec![0]),
-            min: None,
-            max: None,
-            near: None,
-            radius: None,
-        }),
+        Edit::Fix(vclay_session::Selection::ids(vec![0])),
         Edit::Stop,
         Edit::PlasticReset,
         Edit::SetWeight {

@@ -4,10 +4,10 @@
 
 use std::path::Path;
 
+use crate::common;
+use common::{positions, round_trip, saved_text as saved};
 use vclay_core::Vec3;
 use vclay_session::command::V3;
-use crate::common;
-use common::{positions, saved_text as saved};
 use vclay_session::models;
 use vclay_session::{Command, Edit, Element, Model, ModelKind, PointMove, Ray, Session};
 
@@ -34,18 +34,6 @@ fn a(v: &Vec3) -> V3 {
 
 /// Applies `edit`, checks undo restores the state before and redo the state after, bit for
 /// bit; leaves the edit applied.
-fn round_trip(s: &mut Session, edit: Edit) {
-    let before = (saved(s), positions(s));
-    s.apply(Command::new(edit.clone()))
-        .unwrap_or_else(|e| panic!("{edit:?}: {e}"));
-    let after = (saved(s), positions(s));
-    assert_ne!(before.0, after.0, "{edit:?} changed nothing");
-    s.undo().unwrap();
-    assert_eq!((saved(s), positions(s)), before, "undo of {edit:?}");
-    s.redo().unwrap();
-    assert_eq!((saved(s), positions(s)), after, "redo of {edit:?}");
-}
-
 #[test]
 fn single_point_move_is_exact_and_undoes() {
     let mut s = session();
@@ -182,26 +170,8 @@ fn edits_that_cannot_apply_leave_the_model_unchanged() {
     let mut s = session();
     let before = (saved(&s), positions(&s));
     let bad = [
-        Edit::Fix(vclay_session::Selection {
-            points: Some(vec![0]),
-            min: None,
-            max: None,
-            near: None,
-            radius: None,
-        }),
-        Edit::Rope {
-            name: None,
-            from: [0.0; 3],
-            param: None,
-            to: None,
-            until: None,
-            velocity: None,
-            release: None,
-            stiffness: None,
-            length: None,
-            kernel: None,
-            start: None,
-        },
+        Edit::Fix(vclay_session::Selection::ids(vec![0])),
+        common::rope(None, [0.0; 3], None, None),
         Edit::PdeSet {
             name: "a".into(),
             value: 1.0,
@@ -245,25 +215,15 @@ fn edits_that_cannot_apply_leave_the_model_unchanged() {
 #[test]
 fn steps_advance_the_clock_only_and_undo_restores_it() {
     let mut s = session();
-    let before = (saved(&s), positions(&s));
     let p = positions(&s)[50];
-    s.apply(Command::new(Edit::FfdMove {
+    let edit = Edit::FfdMove {
         moves: vec![PointMove {
             from: a(&p),
             to: a(&(p + Vec3::new(0.0, 0.0, 0.25))),
         }],
-    }))
-    .unwrap();
-    let after = positions(&s);
-    s.run(5).unwrap();
-    let m = s.model(None).unwrap();
-    assert_eq!(m.steps(), 5);
-    assert!((m.time() - 0.25).abs() < 1e-12);
-    assert_eq!(m.energy().total(), 0.0);
-    assert_eq!(positions(&s), after, "steps change nothing but the clock");
-    s.undo().unwrap();
-    assert_eq!((saved(&s), positions(&s)), before);
-    assert_eq!(s.model(None).unwrap().time(), 0.0);
+    };
+    let (at_edit, stepped) = common::steps_then_undo(&mut s, edit, 5, 0.05);
+    assert_eq!(stepped, at_edit, "steps change nothing but the clock");
 }
 
 #[test]
@@ -283,12 +243,7 @@ fn saved_model_continues_bit_for_bit() {
     }))
     .unwrap();
     s.run(3).unwrap();
-    let text = saved(&s);
-    let value: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let loaded = models::load(ModelKind::Ffd, &value).unwrap();
-    let mut t = Session::with_model("b", loaded).unwrap();
-    assert_eq!(saved(&t), text);
-    assert_eq!(positions(&t), positions(&s));
+    let mut t = common::reloaded(&s, "b");
     s.run(4).unwrap();
     t.run(4).unwrap();
     let q = positions(&s)[400];

@@ -101,7 +101,6 @@ fn text(b: &[u8]) -> std::borrow::Cow<'_, str> {
     String::from_utf8_lossy(b)
 }
 
-
 fn parse_scenario(text: &str) -> Result<Scenario, vclay_session::SessionError> {
     Scenario::parse(text, "hostile.toml", "hostile", Path::new("."))
 }

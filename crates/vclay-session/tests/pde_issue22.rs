@@ -4,10 +4,9 @@
 
 use std::path::Path;
 
-use vclay_core::Vec3;
 use crate::common;
 use common::{positions, saved_text as saved};
-use vclay_session::models;
+use vclay_core::Vec3;
 use vclay_session::{Command, Edit, Model, ModelKind, Session};
 
 fn build(model: &str, base: &Path) -> Box<dyn Model> {
@@ -23,17 +22,15 @@ fn set(s: &mut Session, name: &str, value: f64) {
     .unwrap_or_else(|e| panic!("pde-set {name}: {e}"));
 }
 
-/// Applies, undoes and redoes `pde-set name = value`, bit for bit; returns the positions
-/// before and after.
+/// `pde-set name value` through [`common::round_trip`], which must move the surface; the
+/// display mesh before and after.
 fn round_trip(s: &mut Session, name: &str, value: f64) -> (Vec<Vec3>, Vec<Vec3>) {
-    let before = (saved(s), positions(s));
-    set(s, name, value);
-    let after = (saved(s), positions(s));
+    let edit = Edit::PdeSet {
+        name: name.into(),
+        value,
+    };
+    let (before, after) = common::round_trip(s, edit);
     assert_ne!(before.1, after.1, "{name} = {value} changed nothing");
-    s.undo().unwrap();
-    assert_eq!((saved(s), positions(s)), before, "undo of {name}");
-    s.redo().unwrap();
-    assert_eq!((saved(s), positions(s)), after, "redo of {name}");
     (before.1, after.1)
 }
 
@@ -60,11 +57,7 @@ fn spectral_solvers_drive_undo_and_reload() {
     // The saved model keeps the solver and reloads bit for bit.
     let text = saved(&s);
     assert!(text.contains("pseudospectral"), "{text}");
-    let value: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let loaded = models::load(ModelKind::PdeSurface, &value).unwrap();
-    let t = Session::with_model("s", loaded).unwrap();
-    assert_eq!(saved(&t), text);
-    assert_eq!(positions(&t), positions(&s));
+    common::reloaded(&s, "s");
 }
 
 #[test]

@@ -178,19 +178,7 @@ fn an_undo_group_is_undone_whole_and_keeps_one_snapshot_for_a_drag() {
     s.begin_group();
     s.apply(Command::to(
         "cube",
-        Edit::Rope {
-            name: Some("drag".into()),
-            from: [1.0, 1.0, 1.0],
-            param: None,
-            to: None,
-            until: None,
-            velocity: None,
-            release: None,
-            stiffness: None,
-            length: None,
-            kernel: None,
-            start: None,
-        },
+        common::rope(Some("drag"), [1.0, 1.0, 1.0], None, None),
     ))
     .unwrap();
     for k in 0..20 {
@@ -279,19 +267,12 @@ fn redo_right_after_undo_gives_back_a_drag_exactly() {
         .unwrap()
         .session;
     s.begin_group();
-    s.apply(Command::new(Edit::Rope {
-        name: Some("drag".into()),
-        from: [1.0, 1.0, 1.0],
-        param: None,
-        to: None,
-        until: None,
-        velocity: None,
-        release: None,
-        stiffness: None,
-        length: None,
-        kernel: None,
-        start: None,
-    }))
+    s.apply(Command::new(common::rope(
+        Some("drag"),
+        [1.0, 1.0, 1.0],
+        None,
+        None,
+    )))
     .unwrap();
     s.apply(Command::new(Edit::MoveRope {
         name: "drag".into(),

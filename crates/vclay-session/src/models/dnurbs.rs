@@ -51,8 +51,8 @@ use vclay_dynamics::DynamicsError;
 use vclay_dynamics::dnurbs::ClosedCurve;
 use vclay_dynamics::dnurbs::{
     Constraint, Density, Dnurbs, DnurbsGeometry, DnurbsState, ElasticReference, Force,
-    GeneralizedDnurbs, GeneralizedGeometry, GeneralizedState, Material,
-    Preset, QuadratureRule, RationalGeometry, SwungGeometry, Target,
+    GeneralizedDnurbs, GeneralizedGeometry, GeneralizedState, Material, Preset, QuadratureRule,
+    RationalGeometry, SwungGeometry, Target,
 };
 use vclay_dynamics::{DnurbsClosedCurve, DnurbsCurve, DnurbsSurface};
 use vclay_io::model::Entity;
@@ -68,9 +68,7 @@ use crate::command::{MaterialRequest, RopeRequest};
 use crate::error::SessionError;
 use crate::model::Done;
 use crate::model::Stateful;
-use crate::model::{
-    Element, Energy, Hit, LineRole, LineSet, ModelKind, Param, Ray,
-};
+use crate::model::{Element, Energy, Hit, LineRole, LineSet, ModelKind, Param, Ray};
 use crate::tools::{CursorPath, ToolHost, ToolTable, a3, field_tool, v3};
 
 /// Rope and data spring stiffness when neither the edit nor a preset (its `k`) gives one.
@@ -804,7 +802,13 @@ impl DnurbsModel {
             trajectory: CurveData::of(&g.trajectory().map_err(dyn_err)?),
             alpha: g.alpha(),
         };
-        Self::wrap(ModelKind::DnurbsSwung, NurbsEngine::Swung(d), source, mat, dt)
+        Self::wrap(
+            ModelKind::DnurbsSwung,
+            NurbsEngine::Swung(d),
+            source,
+            mat,
+            dt,
+        )
     }
 
     /// A model over an engine built elsewhere: its forces become the slot `forces0`, its
@@ -1300,7 +1304,6 @@ impl Nurbs {
         }
         set
     }
-
 }
 
 impl DnurbsModel {
@@ -1405,7 +1408,9 @@ impl DnurbsModel {
         }
         let rule = quadrature.rule();
         match &mut n.engine {
-            NurbsEngine::Rational(d) => setup(d, reference, penalty, dynamic_weights, &m.fix, rule)?,
+            NurbsEngine::Rational(d) => {
+                setup(d, reference, penalty, dynamic_weights, &m.fix, rule)?
+            }
             NurbsEngine::Swung(d) => setup(d, reference, penalty, dynamic_weights, &m.fix, rule)?,
             NurbsEngine::FrozenSurface(d) => fix_frozen(d, reference, &m.fix)?,
             NurbsEngine::FrozenCurve(d) => fix_frozen(d, reference, &m.fix)?,
@@ -1489,7 +1494,6 @@ impl DnurbsModel {
         Ok(m)
     }
 }
-
 
 /// The material of a D-NURBS from its `[material]` keys: the material, its constants, whether
 /// densities are per knot span, and the Table 1 preset named.
@@ -1722,6 +1726,13 @@ fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, S
             )),
         };
     }
+    primitive_source(kind, m)
+}
+
+/// The source of a primitive (`sheet`, `line`, `circle`, `ring`) of extent `m.extent`.
+fn primitive_source(kind: ModelKind, m: &ModelKeys) -> Result<Source, SpecError> {
+    let err = |key: &str, what: String| SpecError::new("model", key, what);
+    let surface = kind != ModelKind::DnurbsCurve;
     let extent = m.extent.unwrap_or(2.0);
     match (m.primitive.as_deref(), surface) {
         (Some("sheet") | None, true) => {
@@ -2303,14 +2314,13 @@ impl GeneralizedKind for Nurbs {
             })
         };
         Some(match ext {
-            "json" => entity()
-                .and_then(|e| vclay_io::model::write_model(path, &[e]).map_err(|e| io(&e))),
-            "step" => entity().and_then(|e| {
-                vclay_io::step::write_step(path, &[e.into()]).map_err(|e| io(&e))
-            }),
-            "igs" => entity().and_then(|e| {
-                vclay_io::iges::write_iges(path, &[e.into()]).map_err(|e| io(&e))
-            }),
+            "json" => {
+                entity().and_then(|e| vclay_io::model::write_model(path, &[e]).map_err(|e| io(&e)))
+            }
+            "step" => entity()
+                .and_then(|e| vclay_io::step::write_step(path, &[e.into()]).map_err(|e| io(&e))),
+            "igs" => entity()
+                .and_then(|e| vclay_io::iges::write_iges(path, &[e.into()]).map_err(|e| io(&e))),
             _ => {
                 use std::fmt::Write as _;
                 let mut text = String::from("# vclay D-NURBS curve\n");

@@ -27,10 +27,10 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::model::Done;
 use serde::{Deserialize, Serialize};
 use vclay_core::{TriMesh, Vec3};
 use vclay_dynamics::dnurbs::generalized::{GeneralizedGeometry, GeneralizedState};
-use crate::model::Done;
 use vclay_dynamics::dnurbs::{
     Continuity, ElasticReference, Force, GeneralizedDnurbs, PatchesGeometry, Target,
 };
@@ -578,7 +578,11 @@ impl GeneralizedKind for Patches {
     fn control_points(&self) -> Vec<Vec3> {
         control_points(&self.engine)
     }
-    fn edit(&mut self, edit: &Edit, _before: &(GeneralizedState, (f64, Tools))) -> Result<Done, SessionError> {
+    fn edit(
+        &mut self,
+        edit: &Edit,
+        _before: &(GeneralizedState, (f64, Tools)),
+    ) -> Result<Done, SessionError> {
         Ok(Done::State(match edit {
             Edit::Rope { .. } => self.rope(edit)?,
             Edit::MoveRope { name, to } => {

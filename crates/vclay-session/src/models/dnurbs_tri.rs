@@ -31,12 +31,12 @@ use vclay_dynamics::dnurbs::{
     Constraint, GeneralizedDnurbs, TriangleQuadrature, TriangularGeometry,
 };
 
-use super::{SpecError, keyword};
 use super::generalized::{
     GeneralizedKind, GeneralizedModel, check_material_and_dt, constant_material, reference,
     table_one,
 };
 use super::saved::SavedState;
+use super::{SpecError, keyword};
 use crate::command::Edit;
 use crate::error::SessionError;
 use crate::model::{Done, LineRole, LineSet, ModelKind, Param};
@@ -357,7 +357,11 @@ impl GeneralizedKind for Triangular {
             "penalty c/2 sum (w - w0)^2 holding the weights near their initial values",
         )]
     }
-    fn edit(&mut self, edit: &Edit, _before: &(GeneralizedState, (f64, f64))) -> Result<Done, SessionError> {
+    fn edit(
+        &mut self,
+        edit: &Edit,
+        _before: &(GeneralizedState, (f64, f64)),
+    ) -> Result<Done, SessionError> {
         match edit {
             Edit::Set { name, value } if name == "weight_penalty" => {
                 self.engine

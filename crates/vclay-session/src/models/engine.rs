@@ -21,8 +21,8 @@ use std::ops::Range;
 use vclay_core::Vec3;
 use vclay_dynamics::DynamicsError;
 use vclay_dynamics::dnurbs::{
-    Constraint, Dnurbs, DnurbsGeometry, Force, GeneralizedDnurbs, GeneralizedGeometry,
-    Integrator, LocalJacobian, Material, QuadratureRule,
+    Constraint, Dnurbs, DnurbsGeometry, Force, GeneralizedDnurbs, GeneralizedGeometry, Integrator,
+    LocalJacobian, Material, QuadratureRule,
 };
 
 use crate::error::SessionError;

@@ -387,7 +387,11 @@ pub(crate) fn keyword<T: Copy>(
                 Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
                 _ => names.concat(),
             };
-            Err(SpecError::new(table, key, format!("{g:?}: expected {list}")))
+            Err(SpecError::new(
+                table,
+                key,
+                format!("{g:?}: expected {list}"),
+            ))
         }
     }
 }
