@@ -510,3 +510,61 @@ fn steps_count_steps_of_dt_not_engine_substeps() {
     assert_eq!(m.steps(), 40);
     assert!((m.time() - 40.0 * m.dt()).abs() < 1e-9 * m.time().max(1.0));
 }
+
+/// Issue 26: every D-NURBS kind is the one model (`GeneralizedModel` over a `DnurbsEngine`):
+/// curves, surfaces on either engine, swung, triangular and joined patches take `set dt`
+/// through the same path (the same refusal, the step and the parameter follow), and undo puts
+/// the step back.
+#[test]
+fn every_dnurbs_kind_takes_set_dt_through_the_one_model() {
+    let triangular = common::build(
+        ModelKind::DnurbsTriangular,
+        "kind = \"dnurbs-triangular\"\nrounding = \"edge\"\nquadrature = \"whole\"",
+        None,
+        None,
+    );
+    let patches = vclay_session::scenario::Scenario::parse(
+        &common::example("fig_patches_g1.toml"),
+        "p.toml",
+        "p",
+        Path::new("."),
+    )
+    .unwrap()
+    .session
+    .model(None)
+    .unwrap()
+    .clone_model();
+    let models = [
+        sheet(),
+        frozen_sheet(),
+        line(),
+        sphere(),
+        triangular,
+        patches,
+    ];
+    for m in models {
+        let kind = m.kind();
+        let dt0 = m.dt();
+        let mut s = session(m);
+        let set = |v: f64| {
+            Command::new(Edit::Set {
+                name: "dt".into(),
+                value: v,
+            })
+        };
+        let e = s.apply(set(-1.0)).unwrap_err().to_string();
+        assert!(e.contains("dt = -1: must be positive"), "{kind}: {e}");
+        s.apply(set(0.004)).unwrap();
+        let m = s.model(None).unwrap();
+        assert_eq!(m.dt(), 0.004, "{kind}");
+        let p = m.params().into_iter().find(|p| p.name == "dt").unwrap();
+        assert_eq!(p.value, 0.004, "{kind}");
+        s.step().unwrap();
+        assert!(
+            (s.model(None).unwrap().time() - 0.004).abs() < 1e-12,
+            "{kind}"
+        );
+        s.undo().unwrap();
+        assert_eq!(s.model(None).unwrap().dt(), dt0, "{kind}");
+    }
+}

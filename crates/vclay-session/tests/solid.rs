@@ -28,6 +28,14 @@ fn bspline() -> Box<dyn Model> {
     )
 }
 
+/// The rope lines a model draws.
+fn ropes_of(m: &dyn Model) -> vclay_session::LineSet {
+    m.display_lines()
+        .into_iter()
+        .find(|l| l.role == Some(vclay_session::LineRole::Ropes))
+        .unwrap()
+}
+
 /// A session of `model` with a rope `warm` pulling the corner (1, 1, 1) until t = 0.01, after
 /// `steps` steps.
 fn warmed(model: Box<dyn Model>, steps: u64) -> Session {
@@ -333,11 +341,7 @@ fn scheduled_ropes_move_and_expire_and_the_display_follows() {
     );
     assert!(s.revision() > r0);
     let m = s.model(None).unwrap();
-    let ropes = m
-        .display_lines()
-        .into_iter()
-        .find(|l| l.role == Some(vclay_session::LineRole::Ropes))
-        .unwrap();
+    let ropes = ropes_of(m);
     assert_eq!(ropes.segments.len(), 1);
     // The cursor moves towards `to` (0.4 over 0.016 s), placed before each step: the last
     // step started at t = 0.008, where it is at x = 1.1.
@@ -345,11 +349,7 @@ fn scheduled_ropes_move_and_expire_and_the_display_follows() {
     assert!((cursor.x - 1.1).abs() < 1e-12, "{cursor:?}");
     s.advance_to(0.04).unwrap();
     let m = s.model(None).unwrap();
-    let ropes = m
-        .display_lines()
-        .into_iter()
-        .find(|l| l.role == Some(vclay_session::LineRole::Ropes))
-        .unwrap();
+    let ropes = ropes_of(m);
     assert!(ropes.segments.is_empty(), "released at 0.03");
     // The display mesh is the closed boundary with unit normals.
     let mesh = m.display_mesh().unwrap();

@@ -60,7 +60,7 @@ use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
 
 use super::engine::NO_FROZEN_CONSTRAINTS;
 use super::generalized::{
-    DnurbsEngine, GeneralizedKind, GeneralizedModel, bbox_diagonal, reference,
+    DnurbsEngine, GeneralizedKind, GeneralizedModel, bbox_diagonal, param_or_near, reference,
 };
 use super::{SpecError, keyword, misrouted};
 use crate::command::{Edit, V3};
@@ -982,26 +982,6 @@ impl Nurbs {
         Ok(label)
     }
 
-    fn param_or_near(
-        &self,
-        param: &Option<[f64; 2]>,
-        near: Option<&V3>,
-    ) -> Result<[f64; 2], SessionError> {
-        let p = match (param, near) {
-            (Some(p), _) => *p,
-            (None, Some(x)) => self
-                .engine
-                .nearest_param(&v3(*x))
-                .map_err(SessionError::command_from)?,
-            (None, None) => return Err(cmd("give `param` or a position")),
-        };
-        // Checks the parameter (an error names a parameter outside the domain).
-        self.engine
-            .point_at(p)
-            .map_err(|e| cmd(format!("material point {p:?}: {e}")))?;
-        Ok(p)
-    }
-
     fn stiffness(&self, s: Option<f64>) -> f64 {
         s.unwrap_or(self.default_k)
     }
@@ -1879,7 +1859,7 @@ impl ToolHost for Nurbs {
                 "`length` is for solids; a D-NURBS spring (eq 19) pulls at any length",
             ));
         }
-        let prm = self.param_or_near(&r.param, Some(&r.from))?;
+        let prm = param_or_near(&self.engine, r.param, Some(&r.from))?;
         let spring = ForceDesc::Spring {
             param: prm,
             target: r.from,
@@ -1906,7 +1886,7 @@ impl ToolHost for Nurbs {
         else {
             return Err(misrouted());
         };
-        let prm = self.param_or_near(param, near.as_ref())?;
+        let prm = param_or_near(&self.engine, *param, near.as_ref())?;
         let h = self.add_slot(vec![ForceDesc::Point {
             param: prm,
             force: *force,
@@ -2297,8 +2277,9 @@ impl GeneralizedKind for Nurbs {
 
     /// Model JSON, STEP and IGES of the curve or surface, and the curve's OBJ polyline.
     fn write(&self, ext: &str, path: &Path) -> Option<Result<(), SessionError>> {
-        let curve = self.engine.is_curve();
-        if !matches!(ext, "json" | "step" | "igs") && !(curve && ext == "obj") {
+        let own =
+            matches!(ext, "json" | "step" | "igs") || (ext == "obj" && self.engine.is_curve());
+        if !own {
             return None;
         }
         let io = |e: &dyn std::fmt::Display| SessionError::io(path, e);

@@ -40,7 +40,7 @@ use vclay_spline::{NurbsSurface, ParametricSurface};
 use super::SpecError;
 use super::generalized::{
     GeneralizedKind, GeneralizedModel, bbox_diagonal, check_material_and_dt, constant_material,
-    table_one,
+    param_or_near, table_one,
 };
 use super::saved::SavedState;
 use crate::command::Edit;
@@ -326,21 +326,6 @@ fn xyz(c: usize) -> std::ops::Range<usize> {
     4 * c..4 * c + 3
 }
 
-fn param_of(
-    engine: &Engine,
-    param: Option<[f64; 2]>,
-    near: [f64; 3],
-) -> Result<[f64; 2], SessionError> {
-    match param {
-        Some(p) if p.iter().all(|x| x.is_finite()) => Ok(p),
-        Some(p) => Err(cmd_err(format!("param {p:?} is not finite"))),
-        None => engine
-            .geometry()
-            .nearest_param(&Vec3::from(near))
-            .map_err(SessionError::command_from),
-    }
-}
-
 impl Patches {
     fn name(&mut self, given: Option<&str>, prefix: &str) -> Result<String, SessionError> {
         let name = match given {
@@ -375,7 +360,7 @@ impl Patches {
         if !(k.is_finite() && k > 0.0) {
             return Err(cmd_err(format!("stiffness {k}: must be positive")));
         }
-        let param = param_of(&self.engine, r.param, r.from)?;
+        let param = param_or_near(&self.engine, r.param, Some(&r.from))?;
         let name = self.name(name, "rope")?;
         let start = r.start.unwrap_or(self.engine.time());
         let until = r.until.unwrap_or(start).max(start);
@@ -405,11 +390,7 @@ impl Patches {
             return Err(super::misrouted());
         };
         finite3("force", force)?;
-        let param = match (param, near) {
-            (Some(_), _) => param_of(&self.engine, *param, [0.0; 3])?,
-            (None, Some(x)) => param_of(&self.engine, None, *x)?,
-            (None, None) => return Err(cmd_err("a force needs `param` or `near`")),
-        };
+        let param = param_or_near(&self.engine, *param, near.as_ref())?;
         let name = self.name(name.as_deref(), "force")?;
         self.tools.forces.push(PointForce {
             name: name.clone(),

@@ -143,6 +143,27 @@ pub(crate) fn surface_pick<E: DnurbsEngine>(
     })
 }
 
+/// The material point a tool acts at: `param` when given, else the parameter of the point
+/// nearest `near`; checked (an error names a parameter outside the domain).
+pub(crate) fn param_or_near<E: DnurbsEngine>(
+    engine: &E,
+    param: Option<[f64; 2]>,
+    near: Option<&crate::command::V3>,
+) -> Result<[f64; 2], SessionError> {
+    let cmd = |e: String| SessionError::command("", "", e);
+    let p = match (param, near) {
+        (Some(p), _) => p,
+        (None, Some(x)) => engine
+            .nearest_param(&crate::tools::v3(*x))
+            .map_err(SessionError::command_from)?,
+        (None, None) => return Err(cmd("give `param` or a position".into())),
+    };
+    engine
+        .point_at(p)
+        .map_err(|e| cmd(format!("material point {p:?}: {e}")))?;
+    Ok(p)
+}
+
 /// The time step as a parameter.
 pub(crate) fn dt_param(dt: f64) -> Param {
     Param::new("dt", dt, 1e-5, 0.1, "time step of eq 18 (s)")
