@@ -555,8 +555,10 @@ impl Clock {
 
 /// What an edit did and how it is undone, before the kind pairs it with the state it took
 /// just before the edit: every kind's `apply_edit` ends in one [`Done::applied`].
+/// Public because a [`crate::models::generalized::GeneralizedKind`] returns it.
+#[derive(Debug)]
 #[allow(clippy::large_enum_variant)] // one per applied edit, moved into the undo record at once
-pub(crate) enum Done {
+pub enum Done {
     /// Undone by putting back the state ([`Undo::State`]); the log's message.
     State(String),
     /// Undone by this exact inverse edit, then the state ([`Undo::Inverse`]).

@@ -4,23 +4,18 @@
 
 use std::path::Path;
 
-use vclay_session::models::{self, Spec};
+use crate::common;
+use common::saved;
+use vclay_session::models;
 use vclay_session::{Command, Edit, Model, ModelKind, Session};
 
 fn build(kind: ModelKind, model: &str, material: &str, sim: &str) -> Box<dyn Model> {
-    let m: toml::Table = toml::from_str(model).unwrap();
-    let mat: toml::Table = toml::from_str(material).unwrap();
-    let s: toml::Table = toml::from_str(sim).unwrap();
-    models::build(
+    common::build(
         kind,
-        &Spec {
-            model: &m,
-            material: (!mat.is_empty()).then_some(&mat),
-            simulation: Some(&s),
-            base: Path::new("."),
-        },
+        model,
+        Some(material).filter(|m| !m.is_empty()),
+        Some(sim),
     )
-    .unwrap_or_else(|e| panic!("{e:?}"))
 }
 
 fn sheet() -> Box<dyn Model> {
@@ -56,44 +51,17 @@ fn sphere() -> Box<dyn Model> {
     )
 }
 
-fn saved(s: &Session) -> serde_json::Value {
-    s.model(None).unwrap().save().unwrap()
-}
-
 fn kind(s: &Session) -> ModelKind {
     s.model(None).unwrap().kind()
-}
-
-/// Save -> string -> load, then n steps of both: identical saves (every f64 bit).
-fn check_continue(s: &mut Session, n: u64) {
-    let text = serde_json::to_string(&saved(s)).unwrap();
-    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let loaded = models::load(kind(s), &v).unwrap();
-    let mut s2 = Session::with_model("m", loaded).unwrap();
-    assert_eq!(saved(&s2), v, "load did not reproduce the saved state");
-    s.run(n).unwrap();
-    s2.run(n).unwrap();
-    assert_eq!(saved(s), saved(&s2), "continued runs differ");
 }
 
 /// Apply, undo (== before), redo (== after), steps then undo (== before), redo, and
 /// save/load continuation.
 fn check(mut s: Session, edit: Edit) {
     s.run(2).unwrap();
-    let before = saved(&s);
-    s.apply(Command::new(edit.clone()))
-        .unwrap_or_else(|e| panic!("{}: {e}", edit.action()));
-    let after = saved(&s);
-    s.undo().unwrap();
-    assert_eq!(saved(&s), before, "{}: undo", edit.action());
-    s.redo().unwrap();
-    assert_eq!(saved(&s), after, "{}: redo", edit.action());
-    s.run(3)
-        .unwrap_or_else(|e| panic!("{}: {e}", edit.action()));
-    s.undo().unwrap();
-    assert_eq!(saved(&s), before, "{}: undo after steps", edit.action());
+    common::undo_redo_and_after_steps(&mut s, &edit, 3);
     s.apply(Command::new(edit.clone())).unwrap();
-    check_continue(&mut s, 3);
+    common::check_continue(&mut s, 3, edit.action());
 }
 
 fn fails(mut s: Session, edit: Edit) {
@@ -153,27 +121,12 @@ fn common_edits(surface: bool, frozen: bool) -> Vec<Edit> {
             points: vec![[0.1, 0.1, 0.3], [-0.2, 0.0, 0.2]],
             stiffness: Some(20.0),
         },
-        Edit::Fix(vclay_session::Selection {
-            points: Some(vec![1, 2]),
-            min: None,
-            max: None,
-            near: None,
-            radius: None,
-        }),
-        Edit::Fix(vclay_session::Selection {
-            points: None,
-            min: Some([-5.0, -5.0, -5.0]),
-            max: Some([0.0, 5.0, 5.0]),
-            near: None,
-            radius: None,
-        }),
-        Edit::Free(vclay_session::Selection {
-            points: None,
-            min: None,
-            max: None,
-            near: Some([-1.0, 0.0, 0.0]),
-            radius: None,
-        }),
+        Edit::Fix(vclay_session::Selection::ids(vec![1, 2])),
+        Edit::Fix(vclay_session::Selection::rest_box(
+            [-5.0, -5.0, -5.0],
+            [0.0, 5.0, 5.0],
+        )),
+        Edit::Free(vclay_session::Selection::nearest([-1.0, 0.0, 0.0])),
         Edit::Material {
             cells: None,
             min: None,
@@ -362,13 +315,7 @@ fn swung_commands() {
             pressure: 0.5,
             until: None,
         },
-        Edit::Fix(vclay_session::Selection {
-            points: Some(vec![0]),
-            min: None,
-            max: None,
-            near: None,
-            radius: None,
-        }),
+        Edit::Fix(vclay_session::Selection::ids(vec![0])),
         Edit::Stop,
         Edit::PlasticReset,
         Edit::SetWeight {
@@ -522,32 +469,18 @@ fn display_pick_export() {
 
 #[test]
 fn spec_errors() {
-    let m: toml::Table = toml::from_str("kind = \"dnurbs-surface\"\nsize = [600, 6]").unwrap();
-    let s: toml::Table = toml::from_str("dt = 0.01").unwrap();
-    let e = models::build(
+    let err = |kind, model| {
+        common::try_build(kind, model, None, Some("dt = 0.01"), Path::new(".")).unwrap_err()
+    };
+    let e = err(
         ModelKind::DnurbsSurface,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: Some(&s),
-            base: Path::new("."),
-        },
-    )
-    .unwrap_err();
+        "kind = \"dnurbs-surface\"\nsize = [600, 6]",
+    );
     assert_eq!(e.key, "size");
-    let m: toml::Table =
-        toml::from_str("kind = \"dnurbs-swung\"\nprimitive = \"sphere\"\nengine = \"frozen\"")
-            .unwrap();
-    let e = models::build(
+    let e = err(
         ModelKind::DnurbsSwung,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: Some(&s),
-            base: Path::new("."),
-        },
-    )
-    .unwrap_err();
+        "kind = \"dnurbs-swung\"\nprimitive = \"sphere\"\nengine = \"frozen\"",
+    );
     assert_eq!(e.key, "engine");
 }
 
@@ -576,4 +509,62 @@ fn steps_count_steps_of_dt_not_engine_substeps() {
     let m = s.model(None).unwrap();
     assert_eq!(m.steps(), 40);
     assert!((m.time() - 40.0 * m.dt()).abs() < 1e-9 * m.time().max(1.0));
+}
+
+/// Issue 26: every D-NURBS kind is the one model (`GeneralizedModel` over a `DnurbsEngine`):
+/// curves, surfaces on either engine, swung, triangular and joined patches take `set dt`
+/// through the same path (the same refusal, the step and the parameter follow), and undo puts
+/// the step back.
+#[test]
+fn every_dnurbs_kind_takes_set_dt_through_the_one_model() {
+    let triangular = common::build(
+        ModelKind::DnurbsTriangular,
+        "kind = \"dnurbs-triangular\"\nrounding = \"edge\"\nquadrature = \"whole\"",
+        None,
+        None,
+    );
+    let patches = vclay_session::scenario::Scenario::parse(
+        &common::example("fig_patches_g1.toml"),
+        "p.toml",
+        "p",
+        Path::new("."),
+    )
+    .unwrap()
+    .session
+    .model(None)
+    .unwrap()
+    .clone_model();
+    let models = [
+        sheet(),
+        frozen_sheet(),
+        line(),
+        sphere(),
+        triangular,
+        patches,
+    ];
+    for m in models {
+        let kind = m.kind();
+        let dt0 = m.dt();
+        let mut s = session(m);
+        let set = |v: f64| {
+            Command::new(Edit::Set {
+                name: "dt".into(),
+                value: v,
+            })
+        };
+        let e = s.apply(set(-1.0)).unwrap_err().to_string();
+        assert!(e.contains("dt = -1: must be positive"), "{kind}: {e}");
+        s.apply(set(0.004)).unwrap();
+        let m = s.model(None).unwrap();
+        assert_eq!(m.dt(), 0.004, "{kind}");
+        let p = m.params().into_iter().find(|p| p.name == "dt").unwrap();
+        assert_eq!(p.value, 0.004, "{kind}");
+        s.step().unwrap();
+        assert!(
+            (s.model(None).unwrap().time() - 0.004).abs() < 1e-12,
+            "{kind}"
+        );
+        s.undo().unwrap();
+        assert_eq!(s.model(None).unwrap().dt(), dt0, "{kind}");
+    }
 }

@@ -1,16 +1,11 @@
 //! Issue 18 (d-nurbs.txt section 7.3, Fig 6; Table 1): curve fitting through scenarios with the
 //! Table 1 "Curve fitting" preset no longer diverges (dynamic weights) or collapses (frozen
 //! weights) on a user-built `[0, 1]` curve, because the densities are read per unit knot span.
+use crate::common;
+use common::example;
 use std::path::Path;
 
 use vclay_session::scenario::Scenario;
-
-fn example(name: &str) -> String {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples/scenarios")
-        .join(name);
-    std::fs::read_to_string(p).unwrap()
-}
 
 /// Runs `text` for `steps` steps and returns the data-fit RMS distance the summary reports.
 fn fit_rms(text: &str, steps: u64) -> f64 {

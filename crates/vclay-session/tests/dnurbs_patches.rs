@@ -2,18 +2,13 @@
 //! the shipped G1 scenario sculpts two joined sheets with a rope across the joint; the joint
 //! stays closed (G0 gap) and smooth (normal angle) after sculpting, a G0 join lets a crease
 //! form, session files continue bit for bit, exports read back, bad keys are located.
+use crate::common;
+use common::example;
 use std::path::Path;
 
 use vclay_session::models::dnurbs_patches::PatchesModel;
 use vclay_session::scenario::Scenario;
 use vclay_spline::{NurbsSurface, ParametricSurface};
-
-fn example(name: &str) -> String {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples/scenarios")
-        .join(name);
-    std::fs::read_to_string(p).unwrap()
-}
 
 /// Largest gap and normal angle (radians) along the joint of patch 0's `u = 1` edge and
 /// patch 1's `u = 0` edge, on 41 points.
@@ -113,11 +108,7 @@ fn session_file_continues_bit_for_bit_and_exports_read_back() {
 
 #[test]
 fn bad_keys_are_located() {
-    let bad = |text: &str| {
-        Scenario::parse(text, "bad.toml", "bad", Path::new("."))
-            .unwrap_err()
-            .to_string()
-    };
+    let bad = common::scenario_error;
     let base = example("fig_patches_g1.toml");
     let e = bad(&base.replace("continuity = \"G1\"", "continuity = \"G2\""));
     assert!(e.contains("G2"), "{e}");
@@ -191,14 +182,8 @@ fn tool_edits_undo_exactly() {
         .is_err()
     );
     assert!(
-        m.apply(&Edit::Fix(vclay_session::Selection {
-            points: Some(vec![40]),
-            min: None,
-            max: None,
-            near: None,
-            radius: None,
-        }))
-        .is_err()
+        m.apply(&Edit::Fix(vclay_session::Selection::ids(vec![40])))
+            .is_err()
     );
     m.undo(applied.undo).unwrap();
     assert!(m.summary().contains("0 forces"), "{}", m.summary());

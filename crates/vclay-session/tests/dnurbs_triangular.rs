@@ -1,16 +1,11 @@
 //! Issue 18: the `dnurbs-triangular` kind (d-nurbs.txt section 4.4; Fig 8 rounding scenarios):
 //! scenarios parse and step, the model exports a triangular NURBS file that reads back, session
 //! files restore it bit for bit, and bad keys are located.
+use crate::common;
+use common::example;
 use std::path::Path;
 
 use vclay_session::scenario::Scenario;
-
-fn example(name: &str) -> String {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples/scenarios")
-        .join(name);
-    std::fs::read_to_string(p).unwrap()
-}
 
 #[test]
 fn edge_rounding_scenario_steps_exports_and_restores() {
@@ -55,11 +50,7 @@ fn edge_rounding_scenario_steps_exports_and_restores() {
 
 #[test]
 fn bad_keys_are_located() {
-    let bad = |text: &str| {
-        Scenario::parse(text, "bad.toml", "bad", Path::new("."))
-            .unwrap_err()
-            .to_string()
-    };
+    let bad = common::scenario_error;
     let base = example("fig08a_edge_rounding.toml");
     let e = bad(&base.replace("rounding = \"edge\"", "rounding = \"vertex\""));
     assert!(e.contains("rounding"), "{e}");

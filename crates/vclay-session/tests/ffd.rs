@@ -4,42 +4,19 @@
 
 use std::path::Path;
 
+use crate::common;
+use common::{positions, round_trip, saved_text as saved};
 use vclay_core::Vec3;
 use vclay_session::command::V3;
-use vclay_session::models::{self, Spec};
+use vclay_session::models;
 use vclay_session::{Command, Edit, Element, Model, ModelKind, PointMove, Ray, Session};
 
-fn spec_table(text: &str) -> toml::Table {
-    toml::from_str(text).expect("valid toml")
-}
-
 fn build(model: &str, simulation: Option<&str>) -> Box<dyn Model> {
-    let m = spec_table(model);
-    let s = simulation.map(spec_table);
-    models::build(
-        ModelKind::Ffd,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: s.as_ref(),
-            base: Path::new("."),
-        },
-    )
-    .expect("builds")
+    common::build(ModelKind::Ffd, model, None, simulation)
 }
 
 fn build_err(model: &str) -> models::SpecError {
-    let m = spec_table(model);
-    models::build(
-        ModelKind::Ffd,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: None,
-            base: Path::new("."),
-        },
-    )
-    .expect_err("must fail")
+    common::try_build(ModelKind::Ffd, model, None, None, Path::new(".")).expect_err("must fail")
 }
 
 /// A small bottle in a 4 x 4 x 5 cubic lattice.
@@ -51,32 +28,12 @@ fn session() -> Session {
     Session::with_model("b", m).unwrap()
 }
 
-fn saved(s: &Session) -> String {
-    serde_json::to_string(&s.model(None).unwrap().save().unwrap()).unwrap()
-}
-
-fn positions(s: &Session) -> Vec<Vec3> {
-    s.model(None).unwrap().display_mesh().unwrap().positions
-}
-
 fn a(v: &Vec3) -> V3 {
     [v.x, v.y, v.z]
 }
 
 /// Applies `edit`, checks undo restores the state before and redo the state after, bit for
 /// bit; leaves the edit applied.
-fn round_trip(s: &mut Session, edit: Edit) {
-    let before = (saved(s), positions(s));
-    s.apply(Command::new(edit.clone()))
-        .unwrap_or_else(|e| panic!("{edit:?}: {e}"));
-    let after = (saved(s), positions(s));
-    assert_ne!(before.0, after.0, "{edit:?} changed nothing");
-    s.undo().unwrap();
-    assert_eq!((saved(s), positions(s)), before, "undo of {edit:?}");
-    s.redo().unwrap();
-    assert_eq!((saved(s), positions(s)), after, "redo of {edit:?}");
-}
-
 #[test]
 fn single_point_move_is_exact_and_undoes() {
     let mut s = session();
@@ -213,26 +170,8 @@ fn edits_that_cannot_apply_leave_the_model_unchanged() {
     let mut s = session();
     let before = (saved(&s), positions(&s));
     let bad = [
-        Edit::Fix(vclay_session::Selection {
-            points: Some(vec![0]),
-            min: None,
-            max: None,
-            near: None,
-            radius: None,
-        }),
-        Edit::Rope {
-            name: None,
-            from: [0.0; 3],
-            param: None,
-            to: None,
-            until: None,
-            velocity: None,
-            release: None,
-            stiffness: None,
-            length: None,
-            kernel: None,
-            start: None,
-        },
+        Edit::Fix(vclay_session::Selection::ids(vec![0])),
+        common::rope(None, [0.0; 3], None, None),
         Edit::PdeSet {
             name: "a".into(),
             value: 1.0,
@@ -276,25 +215,15 @@ fn edits_that_cannot_apply_leave_the_model_unchanged() {
 #[test]
 fn steps_advance_the_clock_only_and_undo_restores_it() {
     let mut s = session();
-    let before = (saved(&s), positions(&s));
     let p = positions(&s)[50];
-    s.apply(Command::new(Edit::FfdMove {
+    let edit = Edit::FfdMove {
         moves: vec![PointMove {
             from: a(&p),
             to: a(&(p + Vec3::new(0.0, 0.0, 0.25))),
         }],
-    }))
-    .unwrap();
-    let after = positions(&s);
-    s.run(5).unwrap();
-    let m = s.model(None).unwrap();
-    assert_eq!(m.steps(), 5);
-    assert!((m.time() - 0.25).abs() < 1e-12);
-    assert_eq!(m.energy().total(), 0.0);
-    assert_eq!(positions(&s), after, "steps change nothing but the clock");
-    s.undo().unwrap();
-    assert_eq!((saved(&s), positions(&s)), before);
-    assert_eq!(s.model(None).unwrap().time(), 0.0);
+    };
+    let (at_edit, stepped) = common::steps_then_undo(&mut s, edit, 5, 0.05);
+    assert_eq!(stepped, at_edit, "steps change nothing but the clock");
 }
 
 #[test]
@@ -314,12 +243,7 @@ fn saved_model_continues_bit_for_bit() {
     }))
     .unwrap();
     s.run(3).unwrap();
-    let text = saved(&s);
-    let value: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let loaded = models::load(ModelKind::Ffd, &value).unwrap();
-    let mut t = Session::with_model("b", loaded).unwrap();
-    assert_eq!(saved(&t), text);
-    assert_eq!(positions(&t), positions(&s));
+    let mut t = common::reloaded(&s, "b");
     s.run(4).unwrap();
     t.run(4).unwrap();
     let q = positions(&s)[400];

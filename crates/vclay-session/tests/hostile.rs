@@ -6,6 +6,7 @@
 //! are those of `crates/vclay-io/tests/hostile.rs`. Longer, coverage-guided runs: `fuzz/`
 //! (docs/limits.md).
 
+use crate::common;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 use std::path::Path;
@@ -100,55 +101,20 @@ fn text(b: &[u8]) -> std::borrow::Cow<'_, str> {
     String::from_utf8_lossy(b)
 }
 
-/// Two small models of two kinds with a timeline (as `tests/session.rs`).
-const SCENARIO: &str = r#"
-[[model]]
-name = "cube"
-kind = "subdivision-solid"
-points = [2, 2, 2]
-level = 1
-[model.simulation]
-dt = 0.002
-
-[[model]]
-name = "sheet"
-kind = "dnurbs-surface"
-size = [5, 5]
-[model.simulation]
-dt = 0.01
-
-[simulation]
-steps = 30
-
-[[timeline]]
-at = 0.0
-model = "cube"
-action = "rope"
-from = [1.0, 1.0, 1.0]
-to = [1.2, 1.0, 1.0]
-until = 0.02
-
-[[timeline]]
-at = 0.1
-model = "sheet"
-action = "gravity"
-g = [0.0, 0.0, -1.0]
-"#;
-
 fn parse_scenario(text: &str) -> Result<Scenario, vclay_session::SessionError> {
     Scenario::parse(text, "hostile.toml", "hostile", Path::new("."))
 }
 
 #[test]
 fn scenario_toml() {
-    hostile("scenario TOML", &[SCENARIO.into()], |b| {
+    hostile("scenario TOML", &[common::two_kinds().into()], |b| {
         parse_scenario(&text(b)).is_ok()
     });
 }
 
 #[test]
 fn session_files() {
-    let mut sc = parse_scenario(SCENARIO).unwrap();
+    let mut sc = parse_scenario(&common::two_kinds()).unwrap();
     sc.session.run(3).unwrap();
     let seed = serde_json::to_vec(&file::to_value(&sc.session, None).unwrap()).unwrap();
     hostile("session file", &[seed], |b| {

@@ -1,17 +1,12 @@
 //! Issue 28: the shipped scenarios of `d-nurbs.txt` Figs 6, 7b, 7c and 9b-d have the paper's
 //! own counts (control points, degrees, data points) and show what each figure shows.
+use crate::common;
+use common::example;
 use std::path::Path;
 
 use vclay_io::model::Entity;
 use vclay_session::scenario::Scenario;
 use vclay_spline::{NurbsCurve, NurbsSurface, ParametricCurve, ParametricSurface};
-
-fn example(name: &str) -> String {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples/scenarios")
-        .join(name);
-    std::fs::read_to_string(p).unwrap()
-}
 
 /// Runs a scenario's text for `steps` steps: its final model entity and the model's summary.
 fn run(text: &str, steps: u64) -> (Entity, String) {

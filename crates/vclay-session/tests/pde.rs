@@ -5,30 +5,18 @@
 
 use std::path::Path;
 
+use crate::common;
+use common::{positions, round_trip, saved_text as saved};
 use vclay_core::Vec3;
-use vclay_session::models::{self, Spec};
+use vclay_session::models;
 use vclay_session::{Command, Edit, Element, Model, ModelKind, Ray, Session};
-
-fn table(text: &str) -> toml::Table {
-    toml::from_str(text).expect("valid toml")
-}
 
 fn build_at(
     model: &str,
     simulation: Option<&str>,
     base: &Path,
 ) -> Result<Box<dyn Model>, models::SpecError> {
-    let m = table(model);
-    let s = simulation.map(table);
-    models::build(
-        ModelKind::PdeSurface,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: s.as_ref(),
-            base,
-        },
-    )
+    common::try_build(ModelKind::PdeSurface, model, None, simulation, base)
 }
 
 fn build(model: &str) -> Box<dyn Model> {
@@ -39,26 +27,6 @@ fn build(model: &str) -> Box<dyn Model> {
 fn session() -> Session {
     let m = build("kind = \"pde-surface\"\nname = \"g\"\nbuiltin = \"glass\"\ngrid = [8, 12]");
     Session::with_model("g", m).unwrap()
-}
-
-fn saved(s: &Session) -> String {
-    serde_json::to_string(&s.model(None).unwrap().save().unwrap()).unwrap()
-}
-
-fn positions(s: &Session) -> Vec<Vec3> {
-    s.model(None).unwrap().display_mesh().unwrap().positions
-}
-
-fn round_trip(s: &mut Session, edit: Edit) {
-    let before = (saved(s), positions(s));
-    s.apply(Command::new(edit.clone()))
-        .unwrap_or_else(|e| panic!("{edit:?}: {e}"));
-    let after = (saved(s), positions(s));
-    assert_ne!(before.0, after.0, "{edit:?} changed nothing");
-    s.undo().unwrap();
-    assert_eq!((saved(s), positions(s)), before, "undo of {edit:?}");
-    s.redo().unwrap();
-    assert_eq!((saved(s), positions(s)), after, "redo of {edit:?}");
 }
 
 fn param(s: &Session, name: &str) -> f64 {
@@ -132,22 +100,12 @@ fn setting_the_time_reshapes_and_undoes() {
 #[test]
 fn steps_advance_t_and_undo_restores_the_state_before_the_edit() {
     let mut s = session();
-    let before = (saved(&s), positions(&s));
-    s.apply(Command::new(Edit::PdeSet {
+    let edit = Edit::PdeSet {
         name: "b".into(),
         value: 0.3,
-    }))
-    .unwrap();
-    let at0 = positions(&s);
-    s.run(3).unwrap();
-    let m = s.model(None).unwrap();
-    assert_eq!(m.steps(), 3);
-    assert!((m.time() - 0.3).abs() < 1e-12);
-    assert_eq!(m.energy().total(), 0.0);
-    assert_ne!(positions(&s), at0, "the petals grow with t");
-    s.undo().unwrap();
-    assert_eq!((saved(&s), positions(&s)), before);
-    assert_eq!(s.model(None).unwrap().time(), 0.0);
+    };
+    let (at_edit, stepped) = common::steps_then_undo(&mut s, edit, 3, 0.1);
+    assert_ne!(stepped, at_edit, "the petals grow with t");
 }
 
 #[test]
@@ -159,12 +117,7 @@ fn saved_model_continues_bit_for_bit() {
     }))
     .unwrap();
     s.run(2).unwrap();
-    let text = saved(&s);
-    let value: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let loaded = models::load(ModelKind::PdeSurface, &value).unwrap();
-    let mut t = Session::with_model("g", loaded).unwrap();
-    assert_eq!(saved(&t), text);
-    assert_eq!(positions(&t), positions(&s));
+    let mut t = common::reloaded(&s, "g");
     s.run(3).unwrap();
     t.run(3).unwrap();
     assert_eq!(saved(&t), saved(&s));

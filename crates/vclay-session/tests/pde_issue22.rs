@@ -4,31 +4,14 @@
 
 use std::path::Path;
 
+use crate::common;
+use common::{positions, saved_text as saved};
 use vclay_core::Vec3;
-use vclay_session::models::{self, Spec};
 use vclay_session::{Command, Edit, Model, ModelKind, Session};
 
 fn build(model: &str, base: &Path) -> Box<dyn Model> {
-    let m: toml::Table = toml::from_str(model).expect("valid toml");
-    let s: toml::Table = toml::from_str("dt = 0.25").unwrap();
-    models::build(
-        ModelKind::PdeSurface,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: Some(&s),
-            base,
-        },
-    )
-    .unwrap_or_else(|e| panic!("builds: {e:?}"))
-}
-
-fn saved(s: &Session) -> String {
-    serde_json::to_string(&s.model(None).unwrap().save().unwrap()).unwrap()
-}
-
-fn positions(s: &Session) -> Vec<Vec3> {
-    s.model(None).unwrap().display_mesh().unwrap().positions
+    common::try_build(ModelKind::PdeSurface, model, None, Some("dt = 0.25"), base)
+        .unwrap_or_else(|e| panic!("builds: {e:?}"))
 }
 
 fn set(s: &mut Session, name: &str, value: f64) {
@@ -39,17 +22,15 @@ fn set(s: &mut Session, name: &str, value: f64) {
     .unwrap_or_else(|e| panic!("pde-set {name}: {e}"));
 }
 
-/// Applies, undoes and redoes `pde-set name = value`, bit for bit; returns the positions
-/// before and after.
+/// `pde-set name value` through [`common::round_trip`], which must move the surface; the
+/// display mesh before and after.
 fn round_trip(s: &mut Session, name: &str, value: f64) -> (Vec<Vec3>, Vec<Vec3>) {
-    let before = (saved(s), positions(s));
-    set(s, name, value);
-    let after = (saved(s), positions(s));
+    let edit = Edit::PdeSet {
+        name: name.into(),
+        value,
+    };
+    let (before, after) = common::round_trip(s, edit);
     assert_ne!(before.1, after.1, "{name} = {value} changed nothing");
-    s.undo().unwrap();
-    assert_eq!((saved(s), positions(s)), before, "undo of {name}");
-    s.redo().unwrap();
-    assert_eq!((saved(s), positions(s)), after, "redo of {name}");
     (before.1, after.1)
 }
 
@@ -76,11 +57,7 @@ fn spectral_solvers_drive_undo_and_reload() {
     // The saved model keeps the solver and reloads bit for bit.
     let text = saved(&s);
     assert!(text.contains("pseudospectral"), "{text}");
-    let value: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let loaded = models::load(ModelKind::PdeSurface, &value).unwrap();
-    let t = Session::with_model("s", loaded).unwrap();
-    assert_eq!(saved(&t), text);
-    assert_eq!(positions(&t), positions(&s));
+    common::reloaded(&s, "s");
 }
 
 #[test]

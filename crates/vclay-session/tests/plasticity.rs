@@ -9,22 +9,10 @@ use std::path::Path;
 use vclay_session::scenario::Scenario;
 use vclay_session::{Command, Edit, Plasticity, Session, file};
 
-const MODELS: &str = r#"
-[[model]]
-name = "cube"
-kind = "subdivision-solid"
-points = [3, 3, 3]
-level = 1
-[model.simulation]
-dt = 0.002
-
-[[model]]
-name = "sheet"
-kind = "dnurbs-surface"
-size = [5, 5]
-[model.simulation]
-dt = 0.01
-
+/// [`common::cube_and_sheet`] (3 points) and an FFD `box`, 10 steps.
+fn models() -> String {
+    common::cube_and_sheet(3)
+        + r#"
 [[model]]
 name = "box"
 kind = "ffd"
@@ -33,10 +21,11 @@ control = [4, 4, 5]
 
 [simulation]
 steps = 10
-"#;
+"#
+}
 
 fn session() -> Session {
-    Scenario::parse(MODELS, "m.toml", "m", Path::new("."))
+    Scenario::parse(&models(), "m.toml", "m", Path::new("."))
         .unwrap()
         .session
 }

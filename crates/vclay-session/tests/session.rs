@@ -9,45 +9,17 @@ use std::path::Path;
 use vclay_session::scenario::Scenario;
 use vclay_session::{Command, Edit, Session, SessionError, file};
 
-const TWO: &str = r#"
-[[model]]
-name = "cube"
-kind = "subdivision-solid"
-points = [2, 2, 2]
-level = 1
-[model.simulation]
-dt = 0.002
-
-[[model]]
-name = "sheet"
-kind = "dnurbs-surface"
-size = [5, 5]
-[model.simulation]
-dt = 0.01
-
-[simulation]
-steps = 30
-
-[[timeline]]
-at = 0.0
-model = "cube"
-action = "rope"
-from = [1.0, 1.0, 1.0]
-to = [1.2, 1.0, 1.0]
-until = 0.02
-
-[[timeline]]
-at = 0.1
-model = "sheet"
-action = "gravity"
-g = [0.0, 0.0, -1.0]
-
+/// [`common::two_kinds`] and the rope's release at t = 0.04.
+fn two() -> String {
+    common::two_kinds()
+        + r#"
 [[timeline]]
 at = 0.04
 model = "cube"
 action = "release"
 name = "rope0"
-"#;
+"#
+}
 
 fn saved_all(s: &Session) -> serde_json::Value {
     file::to_value(s, None).unwrap()
@@ -55,7 +27,7 @@ fn saved_all(s: &Session) -> serde_json::Value {
 
 #[test]
 fn a_session_holds_models_of_several_kinds_with_their_own_clocks() {
-    let mut sc = Scenario::parse(TWO, "two.toml", "two", Path::new(".")).unwrap();
+    let mut sc = Scenario::parse(&two(), "two.toml", "two", Path::new(".")).unwrap();
     assert_eq!(sc.session.model_names(), ["cube", "sheet"]);
     let lines = sc.session.run(30).unwrap();
     // The cube's rope at 0, its release at 0.04 (step 20); the sheet's gravity at 0.1 (step 10).
@@ -79,7 +51,7 @@ fn a_session_holds_models_of_several_kinds_with_their_own_clocks() {
 
 #[test]
 fn undo_and_redo_follow_the_history_rules() {
-    let mut sc = Scenario::parse(TWO, "two.toml", "two", Path::new(".")).unwrap();
+    let mut sc = Scenario::parse(&two(), "two.toml", "two", Path::new(".")).unwrap();
     let s = &mut sc.session;
     assert!(matches!(s.undo(), Err(SessionError::History("undo"))));
     assert!(matches!(s.redo(), Err(SessionError::History("redo"))));
@@ -121,7 +93,7 @@ fn undo_and_redo_follow_the_history_rules() {
 fn session_files_continue_exactly_with_the_pending_timeline() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("two.session");
-    let mut a = Scenario::parse(TWO, "two.toml", "two", Path::new("."))
+    let mut a = Scenario::parse(&two(), "two.toml", "two", Path::new("."))
         .unwrap()
         .session;
     a.run(12).unwrap();
@@ -143,7 +115,7 @@ fn session_files_continue_exactly_with_the_pending_timeline() {
 
 #[test]
 fn bad_session_files_are_located_errors() {
-    let a = Scenario::parse(TWO, "two.toml", "two", Path::new("."))
+    let a = Scenario::parse(&two(), "two.toml", "two", Path::new("."))
         .unwrap()
         .session;
     let good = serde_json::to_string(&file::to_value(&a, None).unwrap()).unwrap();
@@ -196,7 +168,7 @@ fn bad_session_files_are_located_errors() {
 
 #[test]
 fn an_undo_group_is_undone_whole_and_keeps_one_snapshot_for_a_drag() {
-    let mut sc = Scenario::parse(TWO, "two.toml", "two", Path::new(".")).unwrap();
+    let mut sc = Scenario::parse(&two(), "two.toml", "two", Path::new(".")).unwrap();
     let s = &mut sc.session;
     s.run(3).unwrap();
     s.apply(Command::to("cube", Edit::Stop)).unwrap();
@@ -206,19 +178,7 @@ fn an_undo_group_is_undone_whole_and_keeps_one_snapshot_for_a_drag() {
     s.begin_group();
     s.apply(Command::to(
         "cube",
-        Edit::Rope {
-            name: Some("drag".into()),
-            from: [1.0, 1.0, 1.0],
-            param: None,
-            to: None,
-            until: None,
-            velocity: None,
-            release: None,
-            stiffness: None,
-            length: None,
-            kernel: None,
-            start: None,
-        },
+        common::rope(Some("drag"), [1.0, 1.0, 1.0], None, None),
     ))
     .unwrap();
     for k in 0..20 {
@@ -285,7 +245,7 @@ fn an_undo_group_is_undone_whole_and_keeps_one_snapshot_for_a_drag() {
 
 #[test]
 fn a_bad_value_in_a_session_file_names_its_path() {
-    let a = Scenario::parse(TWO, "two.toml", "two", Path::new("."))
+    let a = Scenario::parse(&two(), "two.toml", "two", Path::new("."))
         .unwrap()
         .session;
     let mut v = file::to_value(&a, None).unwrap();
@@ -307,19 +267,12 @@ fn redo_right_after_undo_gives_back_a_drag_exactly() {
         .unwrap()
         .session;
     s.begin_group();
-    s.apply(Command::new(Edit::Rope {
-        name: Some("drag".into()),
-        from: [1.0, 1.0, 1.0],
-        param: None,
-        to: None,
-        until: None,
-        velocity: None,
-        release: None,
-        stiffness: None,
-        length: None,
-        kernel: None,
-        start: None,
-    }))
+    s.apply(Command::new(common::rope(
+        Some("drag"),
+        [1.0, 1.0, 1.0],
+        None,
+        None,
+    )))
     .unwrap();
     s.apply(Command::new(Edit::MoveRope {
         name: "drag".into(),

@@ -3,27 +3,13 @@
 //! state just before the command, and a saved model continues exactly like the uninterrupted
 //! one.
 
-use std::path::Path;
-
 use crate::common;
-use common::assert_same;
+use common::{assert_same, saved};
 
-use vclay_session::models::{self, Spec};
 use vclay_session::{Command, Edit, Element, Model, ModelKind, Ray, Session};
 
 fn build(kind: ModelKind, model: &str, sim: &str) -> Box<dyn Model> {
-    let m: toml::Table = toml::from_str(model).unwrap();
-    let s: toml::Table = toml::from_str(sim).unwrap();
-    models::build(
-        kind,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: Some(&s),
-            base: Path::new("."),
-        },
-    )
-    .unwrap_or_else(|e| panic!("{e:?}"))
+    common::build(kind, model, None, Some(sim))
 }
 
 fn cube() -> Box<dyn Model> {
@@ -42,68 +28,41 @@ fn bspline() -> Box<dyn Model> {
     )
 }
 
-fn saved(s: &Session) -> serde_json::Value {
-    s.model(None).unwrap().save().unwrap()
+/// The rope lines a model draws.
+fn ropes_of(m: &dyn Model) -> vclay_session::LineSet {
+    m.display_lines()
+        .into_iter()
+        .find(|l| l.role == Some(vclay_session::LineRole::Ropes))
+        .unwrap()
 }
 
-/// Save -> string -> load, then n steps of both: identical.
-fn check_continue(s: &mut Session, n: u64, what: &str) {
-    let text = serde_json::to_string(&saved(s)).unwrap();
-    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let kind = s.model(None).unwrap().kind();
-    let mut s2 = Session::with_model("m", models::load(kind, &v).unwrap()).unwrap();
-    assert_same(
-        &saved(&s2),
-        &v,
-        &format!("{what}: load did not reproduce the saved state"),
-    );
-    s.run(n).unwrap();
-    s2.run(n).unwrap();
-    assert_same(
-        &saved(s),
-        &saved(&s2),
-        &format!("{what}: continued runs differ"),
-    );
+/// A session of `model` with a rope `warm` pulling the corner (1, 1, 1) until t = 0.01, after
+/// `steps` steps.
+fn warmed(model: Box<dyn Model>, steps: u64) -> Session {
+    let mut s = Session::with_model("m", model).unwrap();
+    s.apply(Command::new(common::rope(
+        Some("warm"),
+        [1.0, 1.0, 1.0],
+        Some([1.2, 1.1, 1.0]),
+        Some(0.01),
+    )))
+    .unwrap();
+    s.run(steps).unwrap();
+    s
 }
 
 /// Apply, undo (== before), redo (== after), steps then undo (== before), redo again.
 fn round_trip(make: fn() -> Box<dyn Model>, warmup: u64, edit: Edit) {
-    let mut s = Session::with_model("m", make()).unwrap();
-    s.apply(Command::new(Edit::Rope {
-        name: Some("warm".into()),
-        from: [1.0, 1.0, 1.0],
-        param: None,
-        to: Some([1.2, 1.1, 1.0]),
-        until: Some(0.01),
-        velocity: None,
-        release: None,
-        stiffness: None,
-        length: None,
-        kernel: None,
-        start: None,
-    }))
-    .unwrap();
-    s.run(warmup).unwrap();
-    let before = saved(&s);
+    let mut s = warmed(make(), warmup);
     let what = edit.action();
-    s.apply(Command::new(edit.clone()))
-        .unwrap_or_else(|e| panic!("{what}: {e}"));
-    let after = saved(&s);
-    s.undo().unwrap();
-    assert_same(&saved(&s), &before, &format!("{what}: undo"));
-    s.redo().unwrap();
-    assert_same(&saved(&s), &after, &format!("{what}: redo"));
-    s.run(5).unwrap();
-    assert!(saved(&s) != after, "{what}: steps changed nothing");
-    s.undo().unwrap();
-    assert_same(&saved(&s), &before, &format!("{what}: undo after steps"));
+    let (_, after) = common::undo_redo_and_after_steps(&mut s, &edit, 5);
     s.redo().unwrap();
     assert_same(
         &saved(&s),
         &after,
         &format!("{what}: redo after undo after steps"),
     );
-    check_continue(&mut s, 4, what);
+    common::check_continue(&mut s, 4, what);
 }
 
 fn every_edit(subdivision: bool) -> Vec<Edit> {
@@ -153,27 +112,12 @@ fn every_edit(subdivision: bool) -> Vec<Edit> {
         Edit::Release {
             name: "warm".into(),
         },
-        Edit::Fix(vclay_session::Selection {
-            points: None,
-            min: Some([-0.1, -0.1, -0.1]),
-            max: Some([1.1, 1.1, 0.1]),
-            near: None,
-            radius: None,
-        }),
-        Edit::Free(vclay_session::Selection {
-            points: Some(vec![0, 1]),
-            min: None,
-            max: None,
-            near: None,
-            radius: None,
-        }),
-        Edit::Fix(vclay_session::Selection {
-            points: None,
-            min: None,
-            max: None,
-            near: Some([1.0, 0.0, 0.0]),
-            radius: None,
-        }),
+        Edit::Fix(vclay_session::Selection::rest_box(
+            [-0.1, -0.1, -0.1],
+            [1.1, 1.1, 0.1],
+        )),
+        Edit::Free(vclay_session::Selection::ids(vec![0, 1])),
+        Edit::Fix(vclay_session::Selection::nearest([1.0, 0.0, 0.0])),
         Edit::Material {
             cells: None,
             min: Some([0.0, 0.0, 0.0]),
@@ -251,16 +195,7 @@ fn commands_that_cannot_apply_name_the_reason_and_change_nothing() {
                 to: [0.0; 3],
             },
         ),
-        (
-            cube,
-            Edit::Fix(vclay_session::Selection {
-                points: Some(vec![999]),
-                min: None,
-                max: None,
-                near: None,
-                radius: None,
-            }),
-        ),
+        (cube, Edit::Fix(vclay_session::Selection::ids(vec![999]))),
         (
             cube,
             Edit::DeleteCell {
@@ -406,11 +341,7 @@ fn scheduled_ropes_move_and_expire_and_the_display_follows() {
     );
     assert!(s.revision() > r0);
     let m = s.model(None).unwrap();
-    let ropes = m
-        .display_lines()
-        .into_iter()
-        .find(|l| l.role == Some(vclay_session::LineRole::Ropes))
-        .unwrap();
+    let ropes = ropes_of(m);
     assert_eq!(ropes.segments.len(), 1);
     // The cursor moves towards `to` (0.4 over 0.016 s), placed before each step: the last
     // step started at t = 0.008, where it is at x = 1.1.
@@ -418,11 +349,7 @@ fn scheduled_ropes_move_and_expire_and_the_display_follows() {
     assert!((cursor.x - 1.1).abs() < 1e-12, "{cursor:?}");
     s.advance_to(0.04).unwrap();
     let m = s.model(None).unwrap();
-    let ropes = m
-        .display_lines()
-        .into_iter()
-        .find(|l| l.role == Some(vclay_session::LineRole::Ropes))
-        .unwrap();
+    let ropes = ropes_of(m);
     assert!(ropes.segments.is_empty(), "released at 0.03");
     // The display mesh is the closed boundary with unit normals.
     let mesh = m.display_mesh().unwrap();
@@ -518,24 +445,9 @@ fn solids_export_to_step_and_iges_as_closed_breps() {
 #[test]
 fn a_model_at_rest_and_one_with_a_moving_rope_continue_exactly() {
     let mut s = Session::with_model("m", cube()).unwrap();
-    check_continue(&mut s, 4, "plain");
-    let mut s = Session::with_model("m", cube()).unwrap();
-    s.apply(Command::new(Edit::Rope {
-        name: Some("warm".into()),
-        from: [1.0, 1.0, 1.0],
-        param: None,
-        to: Some([1.2, 1.1, 1.0]),
-        until: Some(0.01),
-        velocity: None,
-        release: None,
-        stiffness: None,
-        length: None,
-        kernel: None,
-        start: None,
-    }))
-    .unwrap();
-    s.run(3).unwrap();
-    check_continue(&mut s, 1, "rope");
+    common::check_continue(&mut s, 4, "plain");
+    let mut s = warmed(cube(), 3);
+    common::check_continue(&mut s, 1, "rope");
 }
 
 /// Any closed mesh opens as clay (issue 19): a `subdivision-solid` whose `file` is a mesh gets
@@ -554,36 +466,24 @@ fn a_closed_mesh_opens_as_a_sculptable_solid() {
     let mesh = vclay_core::TriMesh::revolution(&profile, 32);
     let path = dir.path().join("ball.obj");
     vclay_io::mesh::write_mesh(&path, &mesh).unwrap();
-    let m: toml::Table =
-        toml::from_str("kind = \"subdivision-solid\"\nfile = \"ball.obj\"\ncells = 300\nlevel = 1")
-            .unwrap();
-    let model = models::build(
+    let model = common::try_build(
         ModelKind::SubdivisionSolid,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: None,
-            base: dir.path(),
-        },
+        "kind = \"subdivision-solid\"\nfile = \"ball.obj\"\ncells = 300\nlevel = 1",
+        None,
+        None,
+        dir.path(),
     )
     .unwrap_or_else(|e| panic!("{e:?}"));
     let cells = model.save().unwrap()["material"].as_array().unwrap().len();
     // Coarse voxel grids lose cells to the one-voxel-thick cleanup: between a third and all.
     assert!((100..=450).contains(&cells), "about 300 cells: {cells}");
     let mut s = Session::with_model("ball", model).unwrap();
-    s.apply(Command::new(Edit::Rope {
-        name: None,
-        from: [0.0, 0.0, 1.0],
-        param: None,
-        to: Some([0.0, 0.0, 1.5]),
-        until: Some(0.05),
-        velocity: None,
-        release: None,
-        stiffness: None,
-        length: None,
-        kernel: None,
-        start: None,
-    }))
+    s.apply(Command::new(common::rope(
+        None,
+        [0.0, 0.0, 1.0],
+        Some([0.0, 0.0, 1.5]),
+        Some(0.05),
+    )))
     .unwrap();
     let top = |s: &Session| {
         s.model(None)
@@ -601,31 +501,24 @@ fn a_closed_mesh_opens_as_a_sculptable_solid() {
         top(&s)
     );
     // `cells` belongs to meshes only; an open mesh is a located error.
-    let m: toml::Table = toml::from_str("kind = \"subdivision-solid\"\ncells = 60").unwrap();
-    let e = models::build(
+    let e = common::try_build(
         ModelKind::SubdivisionSolid,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: None,
-            base: dir.path(),
-        },
+        "kind = \"subdivision-solid\"\ncells = 60",
+        None,
+        None,
+        dir.path(),
     )
     .unwrap_err();
     assert_eq!(e.key, "cells");
     let mut open = mesh.clone();
     open.triangles.truncate(open.triangles.len() - 3);
     vclay_io::mesh::write_mesh(&path, &open).unwrap();
-    let m: toml::Table =
-        toml::from_str("kind = \"subdivision-solid\"\nfile = \"ball.obj\"").unwrap();
-    let e = models::build(
+    let e = common::try_build(
         ModelKind::SubdivisionSolid,
-        &Spec {
-            model: &m,
-            material: None,
-            simulation: None,
-            base: dir.path(),
-        },
+        "kind = \"subdivision-solid\"\nfile = \"ball.obj\"",
+        None,
+        None,
+        dir.path(),
     )
     .unwrap_err();
     assert_eq!(e.key, "file");

@@ -17,13 +17,18 @@
 //! `velocity` is the same `Target::Moving` closure the old runner made, and a session file
 //! rebuilds it from its description.
 //!
-//! One model, five engines: the engine enum's two generalized variants (`RationalGeometry`,
-//! `SwungGeometry`) go through one generic path (each match arm is written once for both,
-//! monomorphized per geometry), and so do the three frozen-weight ones (surface, open curve,
-//! and the closed periodic curve of the `ring` primitive, `d-nurbs.txt` Fig 6); the rest of the model
-//! (slots, tool table, constraints, display, pick, exports, session files) does not look at
-//! the engine. The triangular and multi-patch kinds are [`super::generalized::GeneralizedModel`]
-//! kinds (see there why this model is not one).
+//! One model, five engines: this kind ([`Nurbs`]) is a kind of the one D-NURBS model,
+//! [`GeneralizedModel`] (as the triangular and multi-patch kinds are), which does the clock,
+//! the step, undo by the engine state, `set dt`, mesh exports and plastic flow once for all.
+//! Its engine, [`NurbsEngine`], is one of two generalized engines (`RationalGeometry`,
+//! `SwungGeometry`) or three frozen-weight ones (surface, open curve, and the closed periodic
+//! curve of the `ring` primitive, `d-nurbs.txt` Fig 6); every one is a
+//! [`DnurbsEngine`](super::generalized::DnurbsEngine) (the trait is implemented once for each
+//! family, generically over the geometry), so the rest of the kind (slots, tool table,
+//! constraints, display, pick, exports, session files) does not look at which it is. The
+//! frozen engines stay in this kind rather than a model of their own because they run the
+//! same scenario kinds with the same tools, slots, display and saved layout (`engine =
+//! "frozen"` in one `Saved` form); where they lack something the trait's method refuses.
 //!
 //! Undo: every edit but fix/free restores a snapshot of the engine state (the engines'
 //! `state()`/`set_state()`) and of what edits change besides it (`Edited`: the slots,
@@ -37,7 +42,6 @@
 //! `alpha` has no index. Swung control points are not picked (the control net shown is the
 //! tensor-product net of the exact surface, which has no simulated coordinates of its own).
 
-use std::ops::Range;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -47,24 +51,24 @@ use vclay_dynamics::DynamicsError;
 use vclay_dynamics::dnurbs::ClosedCurve;
 use vclay_dynamics::dnurbs::{
     Constraint, Density, Dnurbs, DnurbsGeometry, DnurbsState, ElasticReference, Force,
-    GeneralizedDnurbs, GeneralizedGeometry, GeneralizedState, Integrator, LocalJacobian, Material,
-    Preset, QuadratureRule, RationalGeometry, SwungGeometry, Target,
+    GeneralizedDnurbs, GeneralizedGeometry, GeneralizedState, Material, Preset, QuadratureRule,
+    RationalGeometry, SwungGeometry, Target,
 };
 use vclay_dynamics::{DnurbsClosedCurve, DnurbsCurve, DnurbsSurface};
 use vclay_io::model::Entity;
 use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
 
-use super::generalized::bbox_diagonal;
-use super::{SpecError, misrouted};
+use super::engine::NO_FROZEN_CONSTRAINTS;
+use super::generalized::{
+    DnurbsEngine, GeneralizedKind, GeneralizedModel, bbox_diagonal, param_or_near, reference,
+};
+use super::{SpecError, keyword, misrouted};
 use crate::command::{Edit, V3};
 use crate::command::{MaterialRequest, RopeRequest};
 use crate::error::SessionError;
 use crate::model::Done;
 use crate::model::Stateful;
-use crate::model::{
-    Element, Energy, Hit, LineRole, LineSet, Model, ModelKind, Param, Ray, StepReport, extension,
-    unsupported_export,
-};
+use crate::model::{Element, Energy, Hit, LineRole, LineSet, ModelKind, Param, Ray};
 use crate::tools::{CursorPath, ToolHost, ToolTable, a3, field_tool, v3};
 
 /// Rope and data spring stiffness when neither the edit nor a preset (its `k`) gives one.
@@ -86,45 +90,44 @@ pub const DEFAULT_MATERIAL: [f64; 4] = [1.0, 2.0, 1.0, 0.1];
 // Engines
 // ---------------------------------------------------------------------------------------
 
-/// The engine of a model: generalized (every coordinate dynamic) over a rational curve or
-/// surface or a swung surface, or frozen-weight over a surface or a curve.
+/// The engine of a `dnurbs-curve`, `-surface` or `-swung` model: generalized (every
+/// coordinate dynamic) over a rational curve or surface or a swung surface, or frozen-weight
+/// over a surface or a curve. Each variant is a [`DnurbsEngine`]; so is the enum (by
+/// delegation), which is the engine of the [`Nurbs`] kind.
 #[derive(Clone, Debug)]
-enum Engine {
+pub enum NurbsEngine {
+    /// A rational curve or surface (eqs 3-6).
     Rational(GeneralizedDnurbs<RationalGeometry>),
+    /// A swung surface (eq 7).
     Swung(GeneralizedDnurbs<SwungGeometry>),
+    /// A tensor-product surface with frozen weights.
     FrozenSurface(DnurbsSurface),
+    /// An open curve with frozen weights.
     FrozenCurve(DnurbsCurve),
     /// A closed (periodic) curve, `d-nurbs.txt` Fig 6's "closed cubic D-NURBS curve".
     FrozenRing(DnurbsClosedCurve),
 }
 
-/// Dispatches an expression over the engines: `$a` is written once for both generalized
-/// engines (`GeneralizedDnurbs<G>`, `G` = `RationalGeometry` or `SwungGeometry`: one generic
-/// path), `$b` once for the frozen-weight ones (`Dnurbs<G>`, `G` = `NurbsSurface`,
-/// `NurbsCurve` or `ClosedCurve`). With `frozen => $b` the frozen engines are not bound.
-macro_rules! each {
-    ($e:expr, gen $g:ident => $a:expr, frozen $f:ident => $b:expr) => {
-        match $e {
-            Engine::Rational($g) => $a,
-            Engine::Swung($g) => $a,
-            Engine::FrozenSurface($f) => $b,
-            Engine::FrozenCurve($f) => $b,
-            Engine::FrozenRing($f) => $b,
-        }
-    };
-    ($e:expr, gen $g:ident => $a:expr, frozen => $b:expr) => {
-        match $e {
-            Engine::Rational($g) => $a,
-            Engine::Swung($g) => $a,
-            Engine::FrozenSurface(_) | Engine::FrozenCurve(_) | Engine::FrozenRing(_) => $b,
-        }
-    };
+/// The state of a [`NurbsEngine`]: its variant's.
+#[derive(Clone, Debug, PartialEq)]
+pub enum NurbsState {
+    /// Of a generalized engine.
+    Generalized(GeneralizedState),
+    /// Of a frozen-weight engine.
+    Frozen(DnurbsState),
 }
 
-#[derive(Clone, Debug, PartialEq)]
-enum EngineState {
-    Generalized(GeneralizedState),
-    Frozen(DnurbsState),
+/// `$body` for whichever engine `$e` is, bound to `$d` (each variant is a [`DnurbsEngine`]).
+macro_rules! each {
+    ($e:expr, $d:ident => $body:expr) => {
+        match $e {
+            NurbsEngine::Rational($d) => $body,
+            NurbsEngine::Swung($d) => $body,
+            NurbsEngine::FrozenSurface($d) => $body,
+            NurbsEngine::FrozenCurve($d) => $body,
+            NurbsEngine::FrozenRing($d) => $body,
+        }
+    };
 }
 
 fn dyn_err(e: DynamicsError) -> SessionError {
@@ -139,218 +142,143 @@ fn cmd(reason: impl std::fmt::Display) -> SessionError {
 const RING_ENGINE: &str = "a ring (a closed periodic curve) runs on the frozen-weight engine \
      only (weights 1, its repeated control points are one coordinate): give `engine = \"frozen\"`";
 
-/// Why a frozen-weight engine refuses a constraint.
-const NO_FROZEN_CONSTRAINTS: &str = "the frozen-weight engine has no constraints (section 6.2 needs the generalized engine: `engine = \"generalized\"`)";
-
-/// The point of a frozen-weight engine's geometry at `param` (its first `G::DIM` entries).
-fn frozen_point<G: DnurbsGeometry>(d: &Dnurbs<G>, param: [f64; 2]) -> Result<Vec3, DynamicsError> {
-    Ok(d.geometry().basis_at(&param[..G::DIM])?.2)
-}
-
-fn gen_point<G: GeneralizedGeometry>(g: &G, param: [f64; 2]) -> Result<Vec3, DynamicsError> {
-    let mut lj = LocalJacobian::default();
-    g.jacobian_at(param, &mut lj)?;
-    Ok(lj.s[0])
-}
-
-impl Engine {
+impl DnurbsEngine for NurbsEngine {
+    type State = NurbsState;
     fn is_frozen(&self) -> bool {
-        matches!(
-            self,
-            Engine::FrozenSurface(_) | Engine::FrozenCurve(_) | Engine::FrozenRing(_)
-        )
+        each!(self, d => d.is_frozen())
     }
+    fn time(&self) -> f64 {
+        each!(self, d => DnurbsEngine::time(d))
+    }
+    fn steps(&self) -> u64 {
+        each!(self, d => DnurbsEngine::steps(d))
+    }
+    fn step(&mut self, dt: f64) -> Result<vclay_dynamics::StepReport, DynamicsError> {
+        each!(self, d => DnurbsEngine::step(d, dt))
+    }
+    fn state(&self) -> NurbsState {
+        match self {
+            NurbsEngine::Rational(d) => NurbsState::Generalized(d.state()),
+            NurbsEngine::Swung(d) => NurbsState::Generalized(d.state()),
+            NurbsEngine::FrozenSurface(d) => NurbsState::Frozen(d.state()),
+            NurbsEngine::FrozenCurve(d) => NurbsState::Frozen(d.state()),
+            NurbsEngine::FrozenRing(d) => NurbsState::Frozen(d.state()),
+        }
+    }
+    fn set_state(&mut self, s: &NurbsState) -> Result<(), DynamicsError> {
+        match (self, s) {
+            (NurbsEngine::Rational(d), NurbsState::Generalized(s)) => d.set_state(s),
+            (NurbsEngine::Swung(d), NurbsState::Generalized(s)) => d.set_state(s),
+            (NurbsEngine::FrozenSurface(d), NurbsState::Frozen(s)) => d.set_state(s),
+            (NurbsEngine::FrozenCurve(d), NurbsState::Frozen(s)) => d.set_state(s),
+            (NurbsEngine::FrozenRing(d), NurbsState::Frozen(s)) => d.set_state(s),
+            _ => Err(DynamicsError::Parameter {
+                name: "state",
+                value: 0.0,
+                why: "belongs to the other engine",
+            }),
+        }
+    }
+    fn forces(&self) -> &[Force] {
+        each!(self, d => DnurbsEngine::forces(d))
+    }
+    fn forces_mut(&mut self) -> &mut Vec<Force> {
+        each!(self, d => DnurbsEngine::forces_mut(d))
+    }
+    fn set_material(&mut self, m: Material) -> Result<(), DynamicsError> {
+        each!(self, d => DnurbsEngine::set_material(d, m))
+    }
+    fn stop(&mut self) {
+        each!(self, d => DnurbsEngine::stop(d))
+    }
+    fn plastic_reset(&mut self) -> Result<(), DynamicsError> {
+        each!(self, d => d.plastic_reset())
+    }
+    fn plastic_flow(&mut self, fraction: f64, yield_distance: f64) -> Result<usize, SessionError> {
+        each!(self, d => DnurbsEngine::plastic_flow(d, fraction, yield_distance))
+    }
+    fn elastic_energy(&self) -> Result<f64, DynamicsError> {
+        each!(self, d => DnurbsEngine::elastic_energy(d))
+    }
+    fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
+        each!(self, d => d.nearest_param(x))
+    }
+    fn point_at(&self, param: [f64; 2]) -> Result<Vec3, DynamicsError> {
+        each!(self, d => d.point_at(param))
+    }
+    fn data_distances(&self) -> Result<Vec<f64>, DynamicsError> {
+        each!(self, d => DnurbsEngine::data_distances(d))
+    }
+    fn control_points(&self, rest: bool) -> Vec<Vec3> {
+        each!(self, d => DnurbsEngine::control_points(d, rest))
+    }
+    fn is_point_fixed(&self, i: usize) -> bool {
+        each!(self, d => d.is_point_fixed(i))
+    }
+    fn set_point_fixed(&mut self, i: usize, fixed: bool) -> Result<(), DynamicsError> {
+        each!(self, d => d.set_point_fixed(i, fixed))
+    }
+    fn move_point(&mut self, i: usize, to: Vec3) -> Result<(), SessionError> {
+        each!(self, d => d.move_point(i, to))
+    }
+    fn set_weight(&mut self, i: usize, weight: f64) -> Result<(), SessionError> {
+        each!(self, d => d.set_weight(i, weight))
+    }
+    fn weight_penalty(&self) -> Option<f64> {
+        each!(self, d => DnurbsEngine::weight_penalty(d))
+    }
+    fn set_weight_penalty(&mut self, c: f64) -> Result<(), SessionError> {
+        each!(self, d => DnurbsEngine::set_weight_penalty(d, c))
+    }
+    fn set_rest_points(&mut self, points: &[Vec3]) -> Result<(), SessionError> {
+        each!(self, d => d.set_rest_points(points))
+    }
+    fn constraints(&self) -> Vec<Constraint> {
+        each!(self, d => DnurbsEngine::constraints(d))
+    }
+    fn set_constraints(&mut self, cs: &[(&str, Constraint)]) -> Result<(), SessionError> {
+        each!(self, d => d.set_constraints(cs))
+    }
+    fn quadrature_rule(&self) -> Option<QuadratureRule> {
+        each!(self, d => DnurbsEngine::quadrature_rule(d))
+    }
+}
+
+impl NurbsEngine {
     fn is_curve(&self) -> bool {
         match self {
-            Engine::Rational(d) => d.geometry().parametric_dimension() == 1,
-            Engine::FrozenCurve(_) | Engine::FrozenRing(_) => true,
+            NurbsEngine::Rational(d) => d.geometry().parametric_dimension() == 1,
+            NurbsEngine::FrozenCurve(_) | NurbsEngine::FrozenRing(_) => true,
             _ => false,
         }
     }
-    fn time(&self) -> f64 {
-        each!(self, gen d => d.time(), frozen d => d.time())
-    }
-    fn step(&mut self, dt: f64) -> Result<vclay_dynamics::StepReport, DynamicsError> {
-        let i = Integrator::Implicit { dt };
-        each!(self, gen d => d.step(i), frozen d => d.step(i))
-    }
-    fn set_forces(&mut self, f: Vec<Force>) {
-        each!(self, gen d => *d.forces_mut() = f, frozen d => *d.forces_mut() = f)
-    }
-    /// The energy stored in the ropes' and data points' springs
-    /// (`vclay_dynamics::dnurbs::spring_energy`).
-    fn tool_energy(&self) -> f64 {
-        let forces = each!(self, gen d => d.forces(), frozen d => d.forces());
-        vclay_dynamics::dnurbs::spring_energy(forces, self.time(), &|u| self.point_at(u), &|x| {
-            self.nearest_param(x)
-        })
-        .unwrap_or(f64::NAN)
-    }
-    fn state(&self) -> EngineState {
-        each!(self, gen d => EngineState::Generalized(d.state()),
-            frozen d => EngineState::Frozen(d.state()))
-    }
-    fn set_state(&mut self, s: &EngineState) -> Result<(), DynamicsError> {
-        let wrong = || DynamicsError::Parameter {
-            name: "state",
-            value: 0.0,
-            why: "belongs to the other engine",
-        };
-        match (self, s) {
-            (Engine::Rational(d), EngineState::Generalized(s)) => d.set_state(s),
-            (Engine::Swung(d), EngineState::Generalized(s)) => d.set_state(s),
-            (Engine::FrozenSurface(d), EngineState::Frozen(s)) => d.set_state(s),
-            (Engine::FrozenCurve(d), EngineState::Frozen(s)) => d.set_state(s),
-            (Engine::FrozenRing(d), EngineState::Frozen(s)) => d.set_state(s),
-            _ => Err(wrong()),
-        }
-    }
-    fn set_material(&mut self, m: Material) -> Result<(), DynamicsError> {
-        each!(self, gen d => d.set_material(m), frozen d => d.set_material(m))
-    }
-    fn stop(&mut self) {
-        each!(self, gen d => d.stop(), frozen d => d.stop())
-    }
-    fn plastic_reset(&mut self) -> Result<(), DynamicsError> {
-        each!(self, gen d => d.set_rest_shape_to_current(),
-            frozen d => { d.set_rest_shape_to_current(); Ok(()) })
-    }
-    /// Plastic flow (`vclay_core::plasticity`) of the generalized engines; frozen-weight
-    /// engines have no rest coordinates in their undo state and refuse it.
-    fn plastic_flow(&mut self, fraction: f64, yield_distance: f64) -> Result<usize, SessionError> {
-        let frozen = || {
-            SessionError::model(
-                "a D-NURBS with frozen weights (engine = \"frozen\") has no plastic flow; use the \
-                 generalized engine",
-            )
-        };
-        each!(self, gen d => d.plastic_flow(fraction, yield_distance).map_err(dyn_err),
-            frozen => Err(frozen()))
-    }
-    fn elastic_energy(&self) -> f64 {
-        each!(self, gen d => d.elastic_energy().unwrap_or(f64::NAN), frozen d => d.elastic_energy())
-    }
-    fn nearest_param(&self, x: &Vec3) -> Result<[f64; 2], DynamicsError> {
-        each!(self, gen d => d.geometry().nearest_param(x),
-            frozen d => d.geometry().nearest_param(x))
-    }
-    fn point_at(&self, param: [f64; 2]) -> Result<Vec3, DynamicsError> {
-        each!(self, gen d => gen_point(d.geometry(), param),
-            frozen d => frozen_point(d, param))
-    }
-    /// Puts `points` (one per control point, as [`Self::control_points`] counts them) into the
-    /// rest coordinates of a generalized engine (weights and default-held coordinates stay);
-    /// frozen-weight engines have no rest coordinates in their undo state and refuse.
-    fn set_rest_points(&mut self, points: &[Vec3]) -> Result<(), SessionError> {
-        let groups = self.groups();
-        let held = self.default_fixed();
-        each!(self, gen d => {
-            let mut q0 = d.rest_coordinates().to_vec();
-            for (g, p) in groups.iter().zip(points) {
-                for k in 0..3 {
-                    if !held.contains(&(g.start + k)) {
-                        q0[g.start + k] = p[k];
-                    }
-                }
-            }
-            d.set_rest_coordinates(&q0).map_err(dyn_err)
-        },
-        frozen _d => Err(cmd(
-            "the smooth brush changes the rest shape, which a D-NURBS with frozen weights \
-             (engine = \"frozen\") keeps in its elements; use the generalized engine"
-        )))
-    }
-    /// Coordinate ranges of the control points (x, y, z, w) of a generalized engine.
-    fn groups(&self) -> Vec<Range<usize>> {
-        let g = each!(self, gen d => d.geometry().coordinate_groups(), frozen => return Vec::new());
-        g.into_iter().filter(|g| g.len() == 4).collect()
-    }
-    fn default_fixed(&self) -> Vec<usize> {
-        each!(self, gen d => d.geometry().default_fixed_coordinates(), frozen => Vec::new())
-    }
-    /// Control points (current, or rest) as the fix/free/move-point indices count them.
-    fn control_points(&self, rest: bool) -> Vec<Vec3> {
-        let q = each!(self,
-        gen d => if rest {
-            d.state().rest_coordinates
-        } else {
-            d.geometry().coordinates().to_vec()
-        },
-        frozen d => return if rest {
-            d.rest_shape().to_vec()
-        } else {
-            d.geometry().points().to_vec()
-        });
-        self.groups()
-            .iter()
-            .map(|g| Vec3::new(q[g.start], q[g.start + 1], q[g.start + 2]))
-            .collect()
-    }
-    /// The x, y, z coordinates of control point `i` that fix/free act on (a generalized
-    /// geometry's default-held coordinates stay held).
-    fn point_coords(&self, i: usize) -> Vec<usize> {
-        let groups = self.groups();
-        let held = self.default_fixed();
-        groups
-            .get(i)
-            .map(|g| {
-                (g.start..g.start + 3)
-                    .filter(|c| !held.contains(c))
-                    .collect()
-            })
-            .unwrap_or_default()
-    }
-    fn is_point_fixed(&self, i: usize) -> bool {
-        each!(self, gen d => self
-                .point_coords(i)
-                .first()
-                .is_some_and(|&c| d.is_fixed_coordinate(c)),
-            frozen d => d.is_fixed(i))
-    }
-    fn set_point_fixed(&mut self, i: usize, fixed: bool) -> Result<(), DynamicsError> {
-        let coords = self.point_coords(i);
-        each!(self, gen d => coords
-                .iter()
-                .try_for_each(|&c| d.set_fixed_coordinate(c, fixed)),
-            frozen d => d.set_fixed(i, fixed))
-    }
     fn surface(&self) -> Result<Option<NurbsSurface>, DynamicsError> {
         Ok(match self {
-            Engine::Rational(d) if d.geometry().parametric_dimension() == 2 => {
+            NurbsEngine::Rational(d) if d.geometry().parametric_dimension() == 2 => {
                 Some(d.geometry().to_surface()?)
             }
-            Engine::Swung(d) => Some(d.geometry().to_surface()?),
-            Engine::FrozenSurface(d) => Some(d.geometry().clone()),
+            NurbsEngine::Swung(d) => Some(d.geometry().to_surface()?),
+            NurbsEngine::FrozenSurface(d) => Some(d.geometry().clone()),
             _ => None,
         })
     }
     fn curve(&self) -> Result<Option<NurbsCurve>, DynamicsError> {
         Ok(match self {
-            Engine::Rational(d) if d.geometry().parametric_dimension() == 1 => {
+            NurbsEngine::Rational(d) if d.geometry().parametric_dimension() == 1 => {
                 Some(d.geometry().to_curve()?)
             }
-            Engine::FrozenCurve(d) => Some(d.geometry().clone()),
-            Engine::FrozenRing(d) => Some(d.geometry().curve().clone()),
+            NurbsEngine::FrozenCurve(d) => Some(d.geometry().clone()),
+            NurbsEngine::FrozenRing(d) => Some(d.geometry().curve().clone()),
             _ => None,
         })
     }
+    /// Puts the named constraints into the engine.
     fn sync_constraints(&mut self, cs: &[NamedConstraint]) -> Result<(), SessionError> {
-        fn put<G: GeneralizedGeometry>(
-            d: &mut GeneralizedDnurbs<G>,
-            cs: &[NamedConstraint],
-        ) -> Result<(), SessionError> {
-            d.clear_constraints();
-            for c in cs {
-                d.add_constraint(c.constraint.to_constraint())
-                    .map_err(|e| cmd(format!("constraint `{}`: {e}", c.name)))?;
-            }
-            Ok(())
-        }
-        each!(self, gen d => put(d, cs), frozen => if cs.is_empty() {
-            Ok(())
-        } else {
-            Err(cmd(NO_FROZEN_CONSTRAINTS))
-        })
+        let cs: Vec<(&str, Constraint)> = cs
+            .iter()
+            .map(|c| (c.name.as_str(), c.constraint.to_constraint()))
+            .collect();
+        self.set_constraints(&cs)
     }
 }
 
@@ -656,24 +584,24 @@ impl Source {
             .map_err(SessionError::kernel)
     }
     /// The engine over this geometry.
-    fn engine(&self, frozen: bool, material: Material) -> Result<Engine, SessionError> {
+    fn engine(&self, frozen: bool, material: Material) -> Result<NurbsEngine, SessionError> {
         let e = |e: DynamicsError| SessionError::kernel(e);
         Ok(match (self, frozen) {
-            (Source::Curve { curve }, false) => Engine::Rational(
+            (Source::Curve { curve }, false) => NurbsEngine::Rational(
                 GeneralizedDnurbs::new(RationalGeometry::from_curve(&curve.curve()?), material)
                     .map_err(e)?,
             ),
             (Source::Curve { curve }, true) => {
-                Engine::FrozenCurve(Dnurbs::new(curve.curve()?, material).map_err(e)?)
+                NurbsEngine::FrozenCurve(Dnurbs::new(curve.curve()?, material).map_err(e)?)
             }
-            (Source::Surface { .. }, false) => Engine::Rational(
+            (Source::Surface { .. }, false) => NurbsEngine::Rational(
                 GeneralizedDnurbs::new(
                     RationalGeometry::from_surface(&self.surface()?.expect("surface")),
                     material,
                 )
                 .map_err(e)?,
             ),
-            (Source::Surface { .. }, true) => Engine::FrozenSurface(
+            (Source::Surface { .. }, true) => NurbsEngine::FrozenSurface(
                 Dnurbs::new(self.surface()?.expect("surface"), material).map_err(e)?,
             ),
             (
@@ -683,7 +611,7 @@ impl Source {
                     alpha,
                 },
                 false,
-            ) => Engine::Swung(
+            ) => NurbsEngine::Swung(
                 GeneralizedDnurbs::new(
                     SwungGeometry::new(&profile.curve()?, &trajectory.curve()?, *alpha)
                         .map_err(e)?,
@@ -696,7 +624,7 @@ impl Source {
                     "swung surfaces need the generalized engine",
                 ));
             }
-            (Source::Ring { degree, points }, true) => Engine::FrozenRing(
+            (Source::Ring { degree, points }, true) => NurbsEngine::FrozenRing(
                 Dnurbs::new(
                     ClosedCurve::new(*degree, points.iter().map(|p| v3(*p)).collect())
                         .map_err(e)?,
@@ -715,26 +643,30 @@ impl Source {
 // The model
 // ---------------------------------------------------------------------------------------
 
-/// A D-NURBS curve, surface or swung surface with its named tools and constraints (see the
-/// [module docs](self)).
+/// The `dnurbs-curve`, `-surface` and `-swung` kind of [`GeneralizedModel`]: its engine
+/// (generalized or frozen-weight, [`NurbsEngine`]), the initial geometry, and its named tools,
+/// force slots and constraints (see the [module docs](self)).
 #[derive(Clone, Debug)]
-pub struct DnurbsModel {
+pub struct Nurbs {
     kind: ModelKind,
-    engine: Engine,
+    engine: NurbsEngine,
     source: Source,
     /// What edits and steps change besides the engine state.
     ed: Edited,
     default_k: f64,
-    size: f64,
-    revision: u64,
     /// Forces of a wrapped engine that have no description (closures): they come first in the
     /// engine's force list, and a model holding them cannot be saved.
     external: Vec<Force>,
 }
 
-/// What edits and steps change besides the engine state: kept whole in undo snapshots.
+/// A D-NURBS curve, surface or swung surface with its named tools and constraints (see the
+/// [module docs](self)).
+pub type DnurbsModel = GeneralizedModel<Nurbs>;
+
+/// What edits and steps change besides the engine state of a [`Nurbs`] model: kept whole in
+/// undo snapshots.
 #[derive(Clone, Debug)]
-pub(crate) struct Edited {
+pub struct Edited {
     material: Mat,
     dt: f64,
     /// The force slots, in the order of the engine's force list.
@@ -748,16 +680,13 @@ pub(crate) struct Edited {
 }
 
 /// An undo snapshot: the engine state and [`Edited`].
-#[derive(Clone, Debug)]
-pub(crate) struct Snap {
-    state: EngineState,
-    edited: Edited,
-}
+type Snap = (NurbsState, Edited);
 
 impl DnurbsModel {
-    fn new(
+    /// A model over `engine` built from `source`, with no tools (revision 1).
+    fn build_model(
         kind: ModelKind,
-        engine: Engine,
+        engine: NurbsEngine,
         source: Source,
         material: Mat,
         dt: f64,
@@ -769,7 +698,7 @@ impl DnurbsModel {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(SessionError::model(format!("dt = {dt} must be positive")));
         }
-        Ok(Self {
+        let nurbs = Nurbs {
             kind,
             engine,
             source,
@@ -784,10 +713,9 @@ impl DnurbsModel {
                 steps: 0,
             },
             default_k: DEFAULT_ROPE_STIFFNESS,
-            size,
-            revision: 1,
             external: Vec::new(),
-        })
+        };
+        Ok(GeneralizedModel::new(nurbs, size, 1))
     }
 
     fn constants(d: &Material) -> Result<Mat, SessionError> {
@@ -807,7 +735,7 @@ impl DnurbsModel {
         let source = Source::of_surface(d.geometry());
         Self::wrap(
             ModelKind::DnurbsSurface,
-            Engine::FrozenSurface(d),
+            NurbsEngine::FrozenSurface(d),
             source,
             mat,
             dt,
@@ -822,7 +750,7 @@ impl DnurbsModel {
         };
         Self::wrap(
             ModelKind::DnurbsCurve,
-            Engine::FrozenCurve(d),
+            NurbsEngine::FrozenCurve(d),
             source,
             mat,
             dt,
@@ -856,7 +784,7 @@ impl DnurbsModel {
         } else {
             ModelKind::DnurbsSurface
         };
-        Self::wrap(kind, Engine::Rational(d), source, mat, dt)
+        Self::wrap(kind, NurbsEngine::Rational(d), source, mat, dt)
     }
 
     /// Wraps a swung surface (`GeneralizedDnurbs<SwungGeometry>`) that has not stepped yet;
@@ -874,25 +802,30 @@ impl DnurbsModel {
             trajectory: CurveData::of(&g.trajectory().map_err(dyn_err)?),
             alpha: g.alpha(),
         };
-        Self::wrap(ModelKind::DnurbsSwung, Engine::Swung(d), source, mat, dt)
+        Self::wrap(
+            ModelKind::DnurbsSwung,
+            NurbsEngine::Swung(d),
+            source,
+            mat,
+            dt,
+        )
     }
 
     /// A model over an engine built elsewhere: its forces become the slot `forces0`, its
     /// constraints (generalized engines) `constraint<N>`.
     fn wrap(
         kind: ModelKind,
-        engine: Engine,
+        engine: NurbsEngine,
         source: Source,
         mat: Mat,
         dt: f64,
     ) -> Result<Self, SessionError> {
-        let (forces, constraints) = each!(&engine,
-            gen d => (d.forces().to_vec(), d.constraints().to_vec()),
-            frozen d => (d.forces().to_vec(), Vec::new()));
-        let mut m = Self::new(kind, engine, source, mat, dt)?;
-        m.adopt_forces(&forces)?;
+        let (forces, constraints) = (engine.forces().to_vec(), engine.constraints());
+        let mut m = Self::build_model(kind, engine, source, mat, dt)?;
+        let n = m.kind_mut();
+        n.adopt_forces(&forces)?;
         for (k, c) in constraints.iter().enumerate() {
-            m.ed.constraints.push(NamedConstraint {
+            n.ed.constraints.push(NamedConstraint {
                 name: format!("constraint{k}"),
                 constraint: match c {
                     Constraint::Point { param, target } => ConstraintDesc::Point {
@@ -907,6 +840,50 @@ impl DnurbsModel {
             });
         }
         Ok(m)
+    }
+}
+
+impl DnurbsModel {
+    /// Which engine runs the model: `"generalized"` or `"frozen"`.
+    pub fn engine_name(&self) -> &'static str {
+        self.kind_part().engine_name()
+    }
+
+    /// The named tools.
+    pub fn tools(&self) -> &ToolTable {
+        &self.kind_part().ed.tools
+    }
+
+    /// Current control points (the indices fix/free/move-point use; see the module docs for
+    /// swung surfaces).
+    pub fn control_points(&self) -> Vec<Vec3> {
+        self.engine().control_points(false)
+    }
+
+    /// The surface at the current state (`None` for a curve or a swung surface's curves'
+    /// failure to form one).
+    pub fn current_surface(&self) -> Result<Option<NurbsSurface>, SessionError> {
+        self.engine().surface().map_err(dyn_err)
+    }
+
+    /// The generalized coordinates (generalized engine) or the control point coordinates
+    /// x, y, z (frozen engine), flat: for exact comparisons.
+    pub fn coordinates(&self) -> Vec<f64> {
+        match self.engine() {
+            NurbsEngine::Rational(d) => d.geometry().coordinates().to_vec(),
+            NurbsEngine::Swung(d) => d.geometry().coordinates().to_vec(),
+            e => e.control_points(false).iter().flat_map(a3).collect(),
+        }
+    }
+}
+
+impl Nurbs {
+    fn engine_name(&self) -> &'static str {
+        if self.engine.is_frozen() {
+            "frozen"
+        } else {
+            "generalized"
+        }
     }
 
     fn adopt_forces(&mut self, forces: &[Force]) -> Result<(), SessionError> {
@@ -959,39 +936,6 @@ impl DnurbsModel {
         self.add_tool(&None, "forces", descs).map(drop)
     }
 
-    /// Which engine runs the model: `"generalized"` or `"frozen"`.
-    pub fn engine_name(&self) -> &'static str {
-        if self.engine.is_frozen() {
-            "frozen"
-        } else {
-            "generalized"
-        }
-    }
-
-    /// The named tools.
-    pub fn tools(&self) -> &ToolTable {
-        &self.ed.tools
-    }
-
-    /// Current control points (the indices fix/free/move-point use; see the module docs for
-    /// swung surfaces).
-    pub fn control_points(&self) -> Vec<Vec3> {
-        self.engine.control_points(false)
-    }
-
-    /// The surface at the current state (`None` for a curve or a swung surface's curves'
-    /// failure to form one).
-    pub fn current_surface(&self) -> Result<Option<NurbsSurface>, SessionError> {
-        self.engine.surface().map_err(dyn_err)
-    }
-
-    /// The generalized coordinates (generalized engine) or the control point coordinates
-    /// x, y, z (frozen engine), flat: for exact comparisons.
-    pub fn coordinates(&self) -> Vec<f64> {
-        each!(&self.engine, gen d => d.geometry().coordinates().to_vec(),
-            frozen d => d.geometry().points().iter().flat_map(a3).collect())
-    }
-
     fn sync_forces(&mut self) {
         let f = self
             .external
@@ -1004,7 +948,7 @@ impl DnurbsModel {
                     .flat_map(|s| s.forces.iter().map(ForceDesc::to_force)),
             )
             .collect();
-        self.engine.set_forces(f);
+        *self.engine.forces_mut() = f;
     }
 
     fn add_slot(&mut self, forces: Vec<ForceDesc>) -> usize {
@@ -1036,26 +980,6 @@ impl DnurbsModel {
         let h = self.add_slot(forces);
         self.ed.tools.track(&label, what, h, None, None);
         Ok(label)
-    }
-
-    fn param_or_near(
-        &self,
-        param: &Option<[f64; 2]>,
-        near: Option<&V3>,
-    ) -> Result<[f64; 2], SessionError> {
-        let p = match (param, near) {
-            (Some(p), _) => *p,
-            (None, Some(x)) => self
-                .engine
-                .nearest_param(&v3(*x))
-                .map_err(SessionError::command_from)?,
-            (None, None) => return Err(cmd("give `param` or a position")),
-        };
-        // Checks the parameter (an error names a parameter outside the domain).
-        self.engine
-            .point_at(p)
-            .map_err(|e| cmd(format!("material point {p:?}: {e}")))?;
-        Ok(p)
     }
 
     fn stiffness(&self, s: Option<f64>) -> f64 {
@@ -1096,28 +1020,6 @@ impl DnurbsModel {
             .map_err(SessionError::command_from)?;
         self.ed.material = m;
         Ok(())
-    }
-
-    /// Sets x, y, z (and zeroes their velocity) or the weight of control point `i` of a
-    /// generalized engine through its state.
-    fn edit_coords(&mut self, i: usize, values: &[(usize, f64)]) -> Result<(), SessionError> {
-        let groups = self.engine.groups();
-        let Some(g) = groups.get(i) else {
-            return Err(cmd(format!(
-                "control point {i} does not exist (there are {})",
-                groups.len()
-            )));
-        };
-        let EngineState::Generalized(mut s) = self.engine.state() else {
-            unreachable!("generalized engines only")
-        };
-        for &(k, v) in values {
-            s.coordinates[g.start + k] = v;
-            s.velocity[g.start + k] = 0.0;
-        }
-        self.engine
-            .set_state(&EngineState::Generalized(s))
-            .map_err(SessionError::command_from)
     }
 
     /// [`Edit::Inflate`], [`Edit::Repel`] and [`Edit::Data`]: the field tools that depend on
@@ -1187,7 +1089,9 @@ impl DnurbsModel {
                 r.inverse,
             )),
             Err(e) => {
-                self.put_state(before)?;
+                self.put_before(&before.1)?;
+                self.engine.set_state(&before.0).map_err(dyn_err)?;
+                self.put(&before.1)?;
                 Err(e)
             }
         }
@@ -1216,29 +1120,13 @@ impl DnurbsModel {
 
     /// [`Edit::MovePoint`]: control point `index` to `to`, at rest.
     fn move_point(&mut self, index: usize, to: &V3) -> Result<String, SessionError> {
-        match &mut self.engine {
-            Engine::FrozenSurface(d) => d
-                .move_control_point(index, v3(*to))
-                .map_err(SessionError::command_from)?,
-            Engine::FrozenCurve(d) => d
-                .move_control_point(index, v3(*to))
-                .map_err(SessionError::command_from)?,
-            Engine::FrozenRing(d) => d
-                .move_control_point(index, v3(*to))
-                .map_err(SessionError::command_from)?,
-            _ => self.edit_coords(index, &[(0, to[0]), (1, to[1]), (2, to[2])])?,
-        }
+        self.engine.move_point(index, v3(*to))?;
         Ok(format!("moved control point {index} to {to:?}"))
     }
 
     /// [`Edit::SetWeight`] (generalized engines).
     fn set_weight(&mut self, index: usize, weight: f64) -> Result<String, SessionError> {
-        if self.engine.is_frozen() {
-            return Err(cmd(
-                "the frozen-weight engine holds its weights (footnote 2 of d-nurbs.txt); use `engine = \"generalized\"`",
-            ));
-        }
-        self.edit_coords(index, &[(3, weight)])?;
+        self.engine.set_weight(index, weight)?;
         Ok(format!("weight of control point {index} = {weight}"))
     }
 
@@ -1319,24 +1207,12 @@ impl DnurbsModel {
             "gamma" => self.set_material_values(None, Some(value), None, None)?,
             "alpha" => self.set_material_values(None, None, Some(value), None)?,
             "beta" => self.set_material_values(None, None, None, Some(value))?,
-            "dt" => {
-                if !(value.is_finite() && value > 0.0) {
-                    return Err(cmd(format!("dt = {value} must be positive")));
-                }
-                self.ed.dt = value;
-            }
-            "weight_penalty" => each!(&mut self.engine,
-            gen d => d
-                .set_weight_penalty(value)
-                .map_err(SessionError::command_from)?,
-            frozen => return Err(cmd(
-                "the frozen-weight engine has no weight penalty (its weights are held)",
-            ))),
+            "weight_penalty" => self.engine.set_weight_penalty(value)?,
             _ => {
                 return Err(cmd(format!(
                     "no parameter `{name}`; a {} model has {}",
                     self.kind,
-                    self.params()
+                    GeneralizedKind::params(self)
                         .iter()
                         .map(|p| p.name.as_str())
                         .collect::<Vec<_>>()
@@ -1401,31 +1277,29 @@ impl DnurbsModel {
         } else {
             let p = self.engine.control_points(false);
             set.polyline(&p);
-            if matches!(self.engine, Engine::FrozenRing(_)) && p.len() > 2 {
+            if matches!(self.engine, NurbsEngine::FrozenRing(_)) && p.len() > 2 {
                 // The closed polygon: last point back to the first.
                 set.segments.push([p.len() as u32 - 1, 0]);
             }
         }
         set
     }
+}
 
+impl DnurbsModel {
     /// Builds a model from a scenario's `[model]`, `[material]` and `[simulation]` tables
     /// (`docs/formats.md`, D-NURBS keys).
     pub fn from_keys(kind: ModelKind, spec: &DnurbsSpec, base: &Path) -> Result<Self, SpecError> {
         let m = &spec.model;
         let err = |table: &str, key: &str, what: String| SpecError::new(table, key, what);
         let surface = kind != ModelKind::DnurbsCurve;
-        let frozen = match m.engine.as_deref() {
-            None | Some("generalized") => false,
-            Some("frozen") => true,
-            Some(o) => {
-                return Err(err(
-                    "model",
-                    "engine",
-                    format!("\"{o}\": expected \"generalized\" or \"frozen\""),
-                ));
-            }
-        };
+        let frozen = keyword(
+            "model",
+            "engine",
+            m.engine.as_deref(),
+            &[("generalized", false), ("frozen", true)],
+        )?
+        .unwrap_or(false);
         // Material.
         let (mat, mut consts, per_span, preset) = material_of(surface, &spec.material)?;
         // Simulation.
@@ -1440,17 +1314,13 @@ impl DnurbsModel {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(err("simulation", "dt", format!("{dt} must be positive")));
         }
-        let reference = match sim.reference.as_deref() {
-            None | Some("rest") => ElasticReference::RestShape,
-            Some("absolute") => ElasticReference::Absolute,
-            Some(o) => {
-                return Err(err(
-                    "simulation",
-                    "reference",
-                    format!("\"{o}\": expected \"rest\" or \"absolute\""),
-                ));
-            }
-        };
+        let reference = keyword(
+            "simulation",
+            "reference",
+            sim.reference.as_deref(),
+            &[("rest", false), ("absolute", true)],
+        )?
+        .map_or(ElasticReference::RestShape, reference);
         let quadrature = quadrature_of(sim)?;
         if frozen && sim.quadrature.is_some() {
             return Err(err(
@@ -1460,25 +1330,20 @@ impl DnurbsModel {
             ));
         }
         let penalty = sim.weight_penalty.unwrap_or(0.0);
-        let dynamic_weights = match m.weights.as_deref() {
-            None => !frozen,
-            Some("dynamic") if frozen => {
-                return Err(err(
-                    "model",
-                    "weights",
-                    "\"dynamic\" needs `engine = \"generalized\"` (the frozen engine holds its weights)".into(),
-                ));
-            }
-            Some("dynamic") => true,
-            Some("frozen") => false,
-            Some(o) => {
-                return Err(err(
-                    "model",
-                    "weights",
-                    format!("\"{o}\": expected \"dynamic\" or \"frozen\""),
-                ));
-            }
-        };
+        let dynamic_weights = keyword(
+            "model",
+            "weights",
+            m.weights.as_deref(),
+            &[("dynamic", true), ("frozen", false)],
+        )?
+        .unwrap_or(!frozen);
+        if frozen && dynamic_weights {
+            return Err(err(
+                "model",
+                "weights",
+                "\"dynamic\" needs `engine = \"generalized\"` (the frozen engine holds its weights)".into(),
+            ));
+        }
         if frozen && sim.weight_penalty.is_some() {
             return Err(err(
                 "simulation",
@@ -1513,23 +1378,24 @@ impl DnurbsModel {
         let engine = source
             .engine(frozen, mat)
             .map_err(|e| err("model", "material", e.to_string()))?;
-        let mut model = Self::new(kind, engine, source, consts, dt)
+        let mut model = Self::build_model(kind, engine, source, consts, dt)
             .map_err(|e| err("simulation", "dt", e.to_string()))?;
+        let n = model.kind_mut();
         if let Some(p) = preset
             && p.k > 0.0
         {
-            model.default_k = p.k;
+            n.default_k = p.k;
         }
-        each!(&mut model.engine,
-        gen d => {
-            setup(d, reference, penalty, dynamic_weights, &m.fix)?;
-            d.set_quadrature_rule(quadrature.rule())
-                .map_err(|e| err("simulation", "quadrature", e.to_string()))?;
-        },
-        frozen d => {
-            d.set_elastic_reference(reference);
-            fix_frozen(d, &m.fix)?;
-        });
+        let rule = quadrature.rule();
+        match &mut n.engine {
+            NurbsEngine::Rational(d) => {
+                setup(d, reference, penalty, dynamic_weights, &m.fix, rule)?
+            }
+            NurbsEngine::Swung(d) => setup(d, reference, penalty, dynamic_weights, &m.fix, rule)?,
+            NurbsEngine::FrozenSurface(d) => fix_frozen(d, reference, &m.fix)?,
+            NurbsEngine::FrozenCurve(d) => fix_frozen(d, reference, &m.fix)?,
+            NurbsEngine::FrozenRing(d) => fix_frozen(d, reference, &m.fix)?,
+        }
         Ok(model)
     }
 
@@ -1542,18 +1408,21 @@ impl DnurbsModel {
             o => return Err(SessionError::model(format!("unknown engine \"{o}\""))),
         };
         let engine = s.source.engine(frozen, s.material.to_material())?;
-        let mut m = Self::new(kind, engine, s.source, s.material, s.dt)?;
+        let mut m = Self::build_model(kind, engine, s.source, s.material, s.dt)?;
         if let Some(q) = s.quadrature {
-            each!(&mut m.engine, gen d => d.set_quadrature_rule(q.rule()).map_err(dyn_err)?,
-                frozen => {});
+            match &mut m.kind_mut().engine {
+                NurbsEngine::Rational(d) => d.set_quadrature_rule(q.rule()).map_err(dyn_err)?,
+                NurbsEngine::Swung(d) => d.set_quadrature_rule(q.rule()).map_err(dyn_err)?,
+                _ => {}
+            }
         }
-        if m.engine.is_curve() != (kind == ModelKind::DnurbsCurve) {
+        if m.engine().is_curve() != (kind == ModelKind::DnurbsCurve) {
             return Err(SessionError::model(format!(
                 "the saved geometry is not a {kind}"
             )));
         }
-        m.default_k = s.default_k;
-        m.size = s.size;
+        m.kind_mut().default_k = s.default_k;
+        m.set_size(s.size);
         for t in &s.tools.tools {
             if !s.slots.iter().any(|x| x.handle == t.handle) {
                 return Err(SessionError::model(format!(
@@ -1563,7 +1432,7 @@ impl DnurbsModel {
             }
         }
         let state = match s.state {
-            SavedState::Generalized(g) => EngineState::Generalized(GeneralizedState::from(g)),
+            SavedState::Generalized(g) => NurbsState::Generalized(GeneralizedState::from(g)),
             SavedState::Frozen {
                 points,
                 previous,
@@ -1575,7 +1444,7 @@ impl DnurbsModel {
                 products,
             } => {
                 let f = |v: Vec<V3>| v.into_iter().map(v3).collect::<Vec<_>>();
-                EngineState::Frozen(DnurbsState {
+                NurbsState::Frozen(DnurbsState {
                     points: f(points),
                     previous: f(previous),
                     rest: f(rest),
@@ -1587,10 +1456,10 @@ impl DnurbsModel {
                 })
             }
         };
-        let snap = Snap {
+        let snap = (
             state,
-            edited: Edited {
-                material: m.ed.material.clone(),
+            Edited {
+                material: m.kind_part().ed.material.clone(),
                 dt: s.dt,
                 slots: s.slots,
                 next_handle: s.next_handle,
@@ -1599,18 +1468,10 @@ impl DnurbsModel {
                 kinetic: s.kinetic,
                 steps: s.steps,
             },
-        };
+        );
         m.put_state(&snap)?;
-        m.revision = 1;
+        m.set_revision(1);
         Ok(m)
-    }
-}
-
-fn reference(absolute: bool) -> ElasticReference {
-    if absolute {
-        ElasticReference::Absolute
-    } else {
-        ElasticReference::RestShape
     }
 }
 
@@ -1662,18 +1523,13 @@ fn material_of(
         }
     }
     let consts = Mat::from_material(&mat).expect("constant densities");
-    let per_span = match mk.per.as_deref() {
-        None => !surface,
-        Some("knot-span") => true,
-        Some("parameter") => false,
-        Some(o) => {
-            return Err(err(
-                "material",
-                "per",
-                format!("\"{o}\": expected \"knot-span\" or \"parameter\""),
-            ));
-        }
-    };
+    let per_span = keyword(
+        "material",
+        "per",
+        mk.per.as_deref(),
+        &[("knot-span", true), ("parameter", false)],
+    )?
+    .unwrap_or(!surface);
     Ok((mat, consts, per_span, preset))
 }
 
@@ -1707,13 +1563,14 @@ fn quadrature_of(sim: &SimKeys) -> Result<Quad, SpecError> {
 }
 
 /// The old runner's setup: reference, weight penalty, frozen weights, fixed control points
-/// (x, y, z of the n-th control point's coordinate group).
+/// (x, y, z of the n-th control point's coordinate group), then the quadrature rule.
 fn setup<G: GeneralizedGeometry>(
     d: &mut GeneralizedDnurbs<G>,
     reference: ElasticReference,
     penalty: f64,
     dynamic_weights: bool,
     fix: &[usize],
+    rule: QuadratureRule,
 ) -> Result<(), SpecError> {
     d.set_elastic_reference(reference);
     d.set_weight_penalty(penalty)
@@ -1739,10 +1596,18 @@ fn setup<G: GeneralizedGeometry>(
                 .map_err(|e| SpecError::new("model", "fix", e))?;
         }
     }
+    d.set_quadrature_rule(rule)
+        .map_err(|e| SpecError::new("simulation", "quadrature", e))?;
     Ok(())
 }
 
-fn fix_frozen<G: DnurbsGeometry>(d: &mut Dnurbs<G>, fix: &[usize]) -> Result<(), SpecError> {
+/// The frozen engine's setup: reference and fixed control points.
+fn fix_frozen<G: DnurbsGeometry>(
+    d: &mut Dnurbs<G>,
+    reference: ElasticReference,
+    fix: &[usize],
+) -> Result<(), SpecError> {
+    d.set_elastic_reference(reference);
     for &cp in fix {
         d.set_fixed(cp, true).map_err(|_| {
             SpecError::new("model", "fix", format!("control point {cp} does not exist"))
@@ -1841,6 +1706,13 @@ fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, S
             )),
         };
     }
+    primitive_source(kind, m)
+}
+
+/// The source of a primitive (`sheet`, `line`, `circle`, `ring`) of extent `m.extent`.
+fn primitive_source(kind: ModelKind, m: &ModelKeys) -> Result<Source, SpecError> {
+    let err = |key: &str, what: String| SpecError::new("model", key, what);
+    let surface = kind != ModelKind::DnurbsCurve;
     let extent = m.extent.unwrap_or(2.0);
     match (m.primitive.as_deref(), surface) {
         (Some("sheet") | None, true) => {
@@ -1957,7 +1829,7 @@ fn build_source(kind: ModelKind, m: &ModelKeys, base: &Path) -> Result<Source, S
 
 /// A D-NURBS's tools for the shared rope, force and release edits: a handle is a slot of
 /// force descriptions (the engine's force list is rebuilt from the slots).
-impl ToolHost for DnurbsModel {
+impl ToolHost for Nurbs {
     type Field = ForceDesc;
     crate::tools::tool_table!(ed.tools);
     /// [`ToolTable::label`], refusing a constraint's name (an unnamed tool skips them).
@@ -1987,7 +1859,7 @@ impl ToolHost for DnurbsModel {
                 "`length` is for solids; a D-NURBS spring (eq 19) pulls at any length",
             ));
         }
-        let prm = self.param_or_near(&r.param, Some(&r.from))?;
+        let prm = param_or_near(&self.engine, r.param, Some(&r.from))?;
         let spring = ForceDesc::Spring {
             param: prm,
             target: r.from,
@@ -2014,7 +1886,7 @@ impl ToolHost for DnurbsModel {
         else {
             return Err(misrouted());
         };
-        let prm = self.param_or_near(param, near.as_ref())?;
+        let prm = param_or_near(&self.engine, *param, near.as_ref())?;
         let h = self.add_slot(vec![ForceDesc::Point {
             param: prm,
             force: *force,
@@ -2062,7 +1934,7 @@ impl ToolHost for DnurbsModel {
 }
 
 /// The control net of a D-NURBS for the shared fix/free tool.
-struct NetOf<'a>(&'a mut DnurbsModel);
+struct NetOf<'a>(&'a mut Nurbs);
 
 impl crate::tools::ControlNet for NetOf<'_> {
     fn current_points(&self) -> Vec<Vec3> {
@@ -2085,31 +1957,9 @@ impl crate::tools::ControlNet for NetOf<'_> {
     }
 }
 
-impl crate::model::Stateful for DnurbsModel {
-    type State = Snap;
-    fn take_state(&self) -> Snap {
-        Snap {
-            state: self.engine.state(),
-            edited: self.ed.clone(),
-        }
-    }
-    fn put_state(&mut self, s: &Snap) -> Result<(), SessionError> {
-        if self.ed.material != s.edited.material {
-            self.engine
-                .set_material(s.edited.material.to_material())
-                .map_err(dyn_err)?;
-            self.ed.material = s.edited.material.clone();
-        }
-        self.engine.set_state(&s.state).map_err(dyn_err)?;
-        self.ed = s.edited.clone();
-        self.sync_forces();
-        self.engine.sync_constraints(&self.ed.constraints)?;
-        Ok(())
-    }
-    fn revision_mut(&mut self) -> &mut u64 {
-        &mut self.revision
-    }
-    fn edit(&mut self, edit: &Edit, before: &Snap) -> Result<Done, SessionError> {
+impl Nurbs {
+    /// Applies an edit ([`GeneralizedKind::edit`]).
+    fn apply_edit(&mut self, edit: &Edit, before: &Snap) -> Result<Done, SessionError> {
         Ok(match edit {
             _ if crate::tools::is_tool_edit(edit) => {
                 Done::State(crate::tools::tool_edit(self, edit)?)
@@ -2125,7 +1975,7 @@ impl crate::model::Stateful for DnurbsModel {
             Edit::Material { .. } => Done::State(self.material(edit)?),
             Edit::Smooth { .. } => Done::State(self.smooth(edit)?),
             Edit::PlasticReset => {
-                let e = self.engine.elastic_energy();
+                let e = self.engine.elastic_energy().unwrap_or(f64::NAN);
                 self.engine
                     .plastic_reset()
                     .map_err(SessionError::command_from)?;
@@ -2165,9 +2015,59 @@ impl crate::model::Stateful for DnurbsModel {
     }
 }
 
-impl Model for DnurbsModel {
+impl GeneralizedKind for Nurbs {
+    type Engine = NurbsEngine;
+    type State = Edited;
+    const EDITS_REDRAW: bool = true;
+    const MESH_NAME: &'static str = "dnurbs";
+
     fn kind(&self) -> ModelKind {
         self.kind
+    }
+
+    fn engine(&self) -> &NurbsEngine {
+        &self.engine
+    }
+
+    fn engine_mut(&mut self) -> &mut NurbsEngine {
+        &mut self.engine
+    }
+
+    fn dt(&self) -> f64 {
+        self.ed.dt
+    }
+
+    fn set_dt(&mut self, dt: f64) {
+        self.ed.dt = dt;
+    }
+
+    fn steps(&self) -> u64 {
+        self.ed.steps
+    }
+
+    fn take(&self) -> Edited {
+        self.ed.clone()
+    }
+
+    /// The material first: the frozen engine integrates its elements with it.
+    fn put_before(&mut self, s: &Edited) -> Result<(), SessionError> {
+        if self.ed.material != s.material {
+            self.engine
+                .set_material(s.material.to_material())
+                .map_err(dyn_err)?;
+            self.ed.material = s.material.clone();
+        }
+        Ok(())
+    }
+
+    fn put(&mut self, s: &Edited) -> Result<(), SessionError> {
+        self.ed = s.clone();
+        self.sync_forces();
+        self.engine.sync_constraints(&self.ed.constraints)
+    }
+
+    fn edit(&mut self, edit: &Edit, before: &Snap) -> Result<Done, SessionError> {
+        self.apply_edit(edit, before)
     }
 
     fn summary(&self) -> String {
@@ -2181,8 +2081,7 @@ impl Model for DnurbsModel {
         );
         // Fitting (d-nurbs.txt section 7.3, Figs 6-7): the distances of the data points to the
         // nearest points of the model.
-        let d = each!(&self.engine, gen e => e.data_distances(), frozen e => e.data_distances());
-        if let Ok(d) = d
+        if let Ok(d) = self.engine.data_distances()
             && !d.is_empty()
         {
             let rms = (d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64).sqrt();
@@ -2195,9 +2094,8 @@ impl Model for DnurbsModel {
         s
     }
 
-    crate::model::clock_methods!(self => self.engine.time(), self.ed.dt, self.ed.steps);
-
-    fn step(&mut self) -> Result<StepReport, SessionError> {
+    /// The tool table's expiry and cursor paths.
+    fn before_step(&mut self) {
         let due = self.ed.tools.due(self.engine.time(), self.ed.dt);
         let mut changed = !due.expired.is_empty();
         for e in &due.expired {
@@ -2217,39 +2115,27 @@ impl Model for DnurbsModel {
         if changed {
             self.sync_forces();
         }
-        self.revision += 1;
-        let t0 = std::time::Instant::now();
-        let r = self.engine.step(self.ed.dt).map_err(dyn_err)?;
+    }
+
+    fn after_step(&mut self, r: &vclay_dynamics::StepReport) {
         self.ed.kinetic = r.kinetic_energy;
         self.ed.steps += 1;
-        Ok(super::saved::step_report(&r, t0))
     }
 
-    fn plastic_flow(&mut self, fraction: f64, yield_distance: f64) -> Result<usize, SessionError> {
-        self.engine.plastic_flow(fraction, yield_distance)
-    }
-
-    fn energy(&self) -> Energy {
+    /// The kinetic energy of the last step, the elastic energy and the springs' energy now.
+    fn energy(&self, _last: Energy) -> Energy {
         Energy {
             kinetic: self.ed.kinetic,
-            elastic: self.engine.elastic_energy(),
+            elastic: self.engine.elastic_energy().unwrap_or(f64::NAN),
             tools: self.engine.tool_energy(),
         }
     }
 
-    fn size(&self) -> f64 {
-        self.size
-    }
-
-    fn revision(&self) -> u64 {
-        self.revision
-    }
-
-    fn display_mesh(&self) -> Result<TriMesh, SessionError> {
+    fn mesh(&self) -> Result<TriMesh, SessionError> {
         Ok(self.mesh_with_params()?.0)
     }
 
-    fn display_lines(&self) -> Vec<LineSet> {
+    fn display_lines(&self, size: f64) -> Vec<LineSet> {
         let mut out = vec![self.control_net()];
         if self.engine.is_curve() {
             let mut c = LineSet::new(LineRole::Curve);
@@ -2262,7 +2148,6 @@ impl Model for DnurbsModel {
             self.engine.is_point_fixed(i)
         }));
         let t = self.engine.time();
-        let size = self.size;
         let mut ropes = LineSet::new(LineRole::Ropes);
         let mut forces = LineSet::new(LineRole::Forces);
         let mut data = LineSet::new(LineRole::DataPoints);
@@ -2318,7 +2203,7 @@ impl Model for DnurbsModel {
     }
 
     fn pick(&self, ray: &Ray, tolerance: f64) -> Option<Hit> {
-        let cp = if matches!(self.engine, Engine::Swung(_)) {
+        let cp = if matches!(self.engine, NurbsEngine::Swung(_)) {
             None
         } else {
             crate::pick::control_point(ray, &self.engine.control_points(false), tolerance)
@@ -2339,26 +2224,7 @@ impl Model for DnurbsModel {
             })
         } else {
             let (mesh, params) = self.mesh_with_params().ok()?;
-            crate::pick::ray_mesh(ray, &mesh).map(|(s, tri, w)| {
-                let x = ray.origin + ray.direction * s;
-                let ids = mesh.triangles[tri];
-                let param = if params.len() == mesh.positions.len() {
-                    let mut q = [0.0; 2];
-                    for (k, &i) in ids.iter().enumerate() {
-                        q[0] += w[k] * params[i as usize][0];
-                        q[1] += w[k] * params[i as usize][1];
-                    }
-                    q
-                } else {
-                    self.engine.nearest_param(&x).unwrap_or([0.0; 2])
-                };
-                Hit {
-                    distance: s,
-                    point: x,
-                    element: Element::SurfacePoint { param },
-                    extra: [None, None],
-                }
-            })
+            super::generalized::surface_pick(ray, &mesh, &params, &self.engine)
         };
         match (cp, model) {
             // A control point in front of (or just behind) the model wins.
@@ -2387,10 +2253,9 @@ impl Model for DnurbsModel {
                 1000.0,
                 "rigidity (eq 17; first pair shown, set applies to all)",
             ),
-            par("dt", self.ed.dt, 1e-5, 0.1, "time step of eq 18 (s)"),
+            super::generalized::dt_param(self.ed.dt),
         ];
-        let penalty = each!(&self.engine, gen d => Some(d.weight_penalty()), frozen => None);
-        if let Some(c) = penalty {
+        if let Some(c) = self.engine.weight_penalty() {
             v.push(par(
                 "weight_penalty",
                 c,
@@ -2402,35 +2267,42 @@ impl Model for DnurbsModel {
         v
     }
 
-    crate::model::stateful_methods!();
+    fn exports(&self) -> &'static [&'static str] {
+        if self.engine.is_curve() {
+            &["json", "obj", "step", "igs"]
+        } else {
+            &["json", "obj", "stl", "ply", "glb", "step", "igs"]
+        }
+    }
 
-    fn export(&self, path: &Path) -> Result<(), SessionError> {
-        let ext = extension(path);
+    /// Model JSON, STEP and IGES of the curve or surface, and the curve's OBJ polyline.
+    fn write(&self, ext: &str, path: &Path) -> Option<Result<(), SessionError>> {
+        let own =
+            matches!(ext, "json" | "step" | "igs") || (ext == "obj" && self.engine.is_curve());
+        if !own {
+            return None;
+        }
         let io = |e: &dyn std::fmt::Display| SessionError::io(path, e);
-        let surface = self.engine.surface().map_err(|e| io(&e))?;
-        let entity = match &surface {
-            Some(s) => Entity::Surface(s.clone()),
-            None => Entity::Curve(
-                self.engine
-                    .curve()
-                    .map_err(|e| io(&e))?
-                    .expect("a curve or a surface"),
-            ),
+        let entity = || -> Result<Entity, SessionError> {
+            Ok(match self.engine.surface().map_err(|e| io(&e))? {
+                Some(s) => Entity::Surface(s),
+                None => Entity::Curve(
+                    self.engine
+                        .curve()
+                        .map_err(|e| io(&e))?
+                        .expect("a curve or a surface"),
+                ),
+            })
         };
-        match (ext.as_str(), surface.is_some()) {
-            ("json", _) => vclay_io::model::write_model(path, &[entity]).map_err(|e| io(&e)),
-            ("step", _) => vclay_io::step::write_step(path, &[entity.into()]).map_err(|e| io(&e)),
-            ("igs", _) => vclay_io::iges::write_iges(path, &[entity.into()]).map_err(|e| io(&e)),
-            ("obj" | "stl" | "ply", true) => {
-                let mesh = self.display_mesh()?;
-                vclay_io::mesh::write_mesh(path, &mesh).map_err(|e| io(&e))
+        Some(match ext {
+            "json" => {
+                entity().and_then(|e| vclay_io::model::write_model(path, &[e]).map_err(|e| io(&e)))
             }
-            ("glb", true) => {
-                let mesh = self.display_mesh()?;
-                vclay_io::gltf::write_glb(path, &[vclay_io::gltf::GlbMesh::new("dnurbs", mesh)])
-                    .map_err(|e| io(&e))
-            }
-            ("obj", false) => {
+            "step" => entity()
+                .and_then(|e| vclay_io::step::write_step(path, &[e.into()]).map_err(|e| io(&e))),
+            "igs" => entity()
+                .and_then(|e| vclay_io::iges::write_iges(path, &[e.into()]).map_err(|e| io(&e))),
+            _ => {
                 use std::fmt::Write as _;
                 let mut text = String::from("# vclay D-NURBS curve\n");
                 let pts = self.curve_samples();
@@ -2444,23 +2316,10 @@ impl Model for DnurbsModel {
                 text.push('\n');
                 vclay_io::write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(|e| io(&e))
             }
-            _ => Err(unsupported_export(
-                self.kind,
-                path,
-                if surface.is_some() {
-                    &["json", "obj", "stl", "ply", "glb", "step", "igs"]
-                } else {
-                    &["json", "obj", "step", "igs"]
-                },
-            )),
-        }
+        })
     }
 
-    fn control_points(&self) -> Vec<Vec3> {
-        self.engine.control_points(false)
-    }
-
-    fn save(&self) -> Result<serde_json::Value, SessionError> {
+    fn save(&self, size: f64) -> Result<serde_json::Value, SessionError> {
         if !self.external.is_empty() {
             return Err(SessionError::model(
                 "the wrapped engine's forces include a spring with a closure target, which a session file cannot describe (add such springs with `rope` and `velocity`)",
@@ -2468,8 +2327,8 @@ impl Model for DnurbsModel {
         }
         let arr = |v: &[Vec3]| v.iter().map(a3).collect::<Vec<_>>();
         let state = match self.engine.state() {
-            EngineState::Generalized(s) => SavedState::Generalized((&s).into()),
-            EngineState::Frozen(s) => SavedState::Frozen {
+            NurbsState::Generalized(s) => SavedState::Generalized((&s).into()),
+            NurbsState::Frozen(s) => SavedState::Frozen {
                 points: arr(&s.points),
                 previous: arr(&s.previous),
                 rest: arr(&s.rest),
@@ -2486,7 +2345,7 @@ impl Model for DnurbsModel {
             material: self.ed.material.clone(),
             dt: self.ed.dt,
             default_k: self.default_k,
-            size: self.size,
+            size,
             state,
             slots: self.ed.slots.clone(),
             next_handle: self.ed.next_handle,
@@ -2494,8 +2353,7 @@ impl Model for DnurbsModel {
             tools: self.ed.tools.clone(),
             kinetic: self.ed.kinetic,
             steps: self.ed.steps,
-            quadrature: each!(&self.engine, gen d => Some(Quad::of(d.quadrature_rule())),
-                frozen => None),
+            quadrature: self.engine.quadrature_rule().map(Quad::of),
         };
         serde_json::to_value(saved).map_err(SessionError::kernel)
     }
@@ -2634,7 +2492,7 @@ enum SavedState {
     },
 }
 
-impl DnurbsModel {
+impl Nurbs {
     /// [`Edit::Smooth`]: one umbrella step of the rest control points under the brush
     /// (`crate::smooth`, neighbours along the control net); eq (17)'s rest values follow and
     /// the surface settles towards the smoothed rest shape as it steps. Undone with the state

@@ -27,6 +27,7 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::model::Done;
 use serde::{Deserialize, Serialize};
 use vclay_core::{TriMesh, Vec3};
 use vclay_dynamics::dnurbs::generalized::{GeneralizedGeometry, GeneralizedState};
@@ -39,7 +40,7 @@ use vclay_spline::{NurbsSurface, ParametricSurface};
 use super::SpecError;
 use super::generalized::{
     GeneralizedKind, GeneralizedModel, bbox_diagonal, check_material_and_dt, constant_material,
-    table_one,
+    param_or_near, table_one,
 };
 use super::saved::SavedState;
 use crate::command::Edit;
@@ -129,9 +130,10 @@ pub struct Tools {
     next: usize,
 }
 
-/// The `dnurbs-patches` kind's part of [`GeneralizedModel`]: its settings and tools.
+/// The `dnurbs-patches` kind's part of [`GeneralizedModel`]: its engine, settings and tools.
 #[derive(Clone, Debug)]
 pub struct Patches {
+    engine: Engine,
     settings: Settings,
     tools: Tools,
 }
@@ -197,7 +199,15 @@ impl PatchesModel {
         for t in ties {
             engine.add_tie(t).map_err(|e| e.to_string())?;
         }
-        Ok(Self::new(Patches { settings, tools }, engine, size))
+        Ok(Self::new(
+            Patches {
+                engine,
+                settings,
+                tools,
+            },
+            size,
+            0,
+        ))
     }
 
     /// Patch `k`'s current surface.
@@ -287,7 +297,7 @@ impl PatchesModel {
         let saved: Saved = serde_json::from_value(v.clone()).map_err(SessionError::kernel)?;
         Self::build(saved.settings, saved.tools)
             .map_err(model_err)?
-            .with_state(saved.state)
+            .with_state(saved.state.into())
     }
 }
 
@@ -316,21 +326,6 @@ fn xyz(c: usize) -> std::ops::Range<usize> {
     4 * c..4 * c + 3
 }
 
-fn param_of(
-    engine: &Engine,
-    param: Option<[f64; 2]>,
-    near: [f64; 3],
-) -> Result<[f64; 2], SessionError> {
-    match param {
-        Some(p) if p.iter().all(|x| x.is_finite()) => Ok(p),
-        Some(p) => Err(cmd_err(format!("param {p:?} is not finite"))),
-        None => engine
-            .geometry()
-            .nearest_param(&Vec3::from(near))
-            .map_err(SessionError::command_from),
-    }
-}
-
 impl Patches {
     fn name(&mut self, given: Option<&str>, prefix: &str) -> Result<String, SessionError> {
         let name = match given {
@@ -349,7 +344,7 @@ impl Patches {
     }
 
     /// `rope`: a delta spring (eq 19) to a cursor moving linearly from `from` to `to`.
-    fn rope(&mut self, engine: &Engine, edit: &Edit) -> Result<String, SessionError> {
+    fn rope(&mut self, edit: &Edit) -> Result<String, SessionError> {
         let Some((r, name, release)) = RopeRequest::of(edit) else {
             return Err(super::misrouted());
         };
@@ -365,9 +360,9 @@ impl Patches {
         if !(k.is_finite() && k > 0.0) {
             return Err(cmd_err(format!("stiffness {k}: must be positive")));
         }
-        let param = param_of(engine, r.param, r.from)?;
+        let param = param_or_near(&self.engine, r.param, Some(&r.from))?;
         let name = self.name(name, "rope")?;
-        let start = r.start.unwrap_or(engine.time());
+        let start = r.start.unwrap_or(self.engine.time());
         let until = r.until.unwrap_or(start).max(start);
         self.tools.ropes.push(Rope {
             name: name.clone(),
@@ -383,7 +378,7 @@ impl Patches {
     }
 
     /// `force`: a constant force at `param` or at the point nearest `near`.
-    fn force(&mut self, engine: &Engine, edit: &Edit) -> Result<String, SessionError> {
+    fn force(&mut self, edit: &Edit) -> Result<String, SessionError> {
         let Edit::Force {
             name,
             near,
@@ -395,11 +390,7 @@ impl Patches {
             return Err(super::misrouted());
         };
         finite3("force", force)?;
-        let param = match (param, near) {
-            (Some(_), _) => param_of(engine, *param, [0.0; 3])?,
-            (None, Some(x)) => param_of(engine, None, *x)?,
-            (None, None) => return Err(cmd_err("a force needs `param` or `near`")),
-        };
+        let param = param_or_near(&self.engine, *param, near.as_ref())?;
         let name = self.name(name.as_deref(), "force")?;
         self.tools.forces.push(PointForce {
             name: name.clone(),
@@ -457,13 +448,23 @@ fn control_points(engine: &Engine) -> Vec<Vec3> {
 }
 
 impl GeneralizedKind for Patches {
-    type Geometry = PatchesGeometry;
+    type Engine = Engine;
     /// The time step and the tools.
     type State = (f64, Tools);
-    const KIND: ModelKind = ModelKind::DnurbsPatches;
-    const EXPORTS: &'static [&'static str] = &["json", "obj", "ply", "stl"];
     const EDITS_REDRAW: bool = true;
     const MESH_NAME: &'static str = "dnurbs-patches";
+    fn kind(&self) -> ModelKind {
+        ModelKind::DnurbsPatches
+    }
+    fn engine(&self) -> &Engine {
+        &self.engine
+    }
+    fn engine_mut(&mut self) -> &mut Engine {
+        &mut self.engine
+    }
+    fn exports(&self) -> &'static [&'static str] {
+        &["json", "obj", "ply", "stl"]
+    }
     fn dt(&self) -> f64 {
         self.settings.dt
     }
@@ -473,11 +474,13 @@ impl GeneralizedKind for Patches {
     fn take(&self) -> (f64, Tools) {
         (self.settings.dt, self.tools.clone())
     }
-    fn put(&mut self, s: &(f64, Tools)) {
+    fn put(&mut self, s: &(f64, Tools)) -> Result<(), SessionError> {
         self.settings.dt = s.0;
         self.tools = s.1.clone();
+        Ok(())
     }
-    fn summary(&self, engine: &Engine) -> String {
+    fn summary(&self) -> String {
+        let engine = &self.engine;
         format!(
             "dnurbs-patches: {} patches, {} control points, {} joins ({} ties), {} ropes, {} forces",
             engine.geometry().len(),
@@ -489,7 +492,8 @@ impl GeneralizedKind for Patches {
         )
     }
     /// Puts the tools into the engine's force list for a step starting at the engine's time.
-    fn before_step(&mut self, engine: &mut Engine) {
+    fn before_step(&mut self) {
+        let engine = &mut self.engine;
         let t = engine.time();
         self.tools
             .ropes
@@ -512,7 +516,8 @@ impl GeneralizedKind for Patches {
             });
         }
     }
-    fn mesh(&self, engine: &Engine) -> Result<TriMesh, SessionError> {
+    fn mesh(&self) -> Result<TriMesh, SessionError> {
+        let engine = &self.engine;
         let mut mesh = TriMesh::new();
         let n = self.settings.tessellation;
         for k in 0..engine.geometry().len() {
@@ -523,7 +528,8 @@ impl GeneralizedKind for Patches {
         }
         Ok(mesh)
     }
-    fn display_lines(&self, engine: &Engine) -> Vec<LineSet> {
+    fn display_lines(&self, _size: f64) -> Vec<LineSet> {
+        let engine = &self.engine;
         let mut net = LineSet::new(LineRole::ControlNet);
         for k in 0..engine.geometry().len() {
             let Ok(s) = patch(engine, k) else { continue };
@@ -550,12 +556,16 @@ impl GeneralizedKind for Patches {
         let fixed = LineSet::markers(LineRole::Fixed, &control_points(engine), |c| f[4 * c]);
         vec![net, ropes, fixed]
     }
-    fn control_points(&self, engine: &Engine) -> Vec<Vec3> {
-        control_points(engine)
+    fn control_points(&self) -> Vec<Vec3> {
+        control_points(&self.engine)
     }
-    fn apply(&mut self, engine: &mut Engine, edit: &Edit) -> Result<String, SessionError> {
-        Ok(match edit {
-            Edit::Rope { .. } => self.rope(engine, edit)?,
+    fn edit(
+        &mut self,
+        edit: &Edit,
+        _before: &(GeneralizedState, (f64, Tools)),
+    ) -> Result<Done, SessionError> {
+        Ok(Done::State(match edit {
+            Edit::Rope { .. } => self.rope(edit)?,
             Edit::MoveRope { name, to } => {
                 finite3("to", to)?;
                 let r = self
@@ -568,7 +578,7 @@ impl GeneralizedKind for Patches {
                 r.to = *to;
                 format!("rope `{name}` cursor at {to:?}")
             }
-            Edit::Force { .. } => self.force(engine, edit)?,
+            Edit::Force { .. } => self.force(edit)?,
             Edit::Release { name } => {
                 let n = self.tools.ropes.len() + self.tools.forces.len();
                 self.tools.ropes.retain(|r| &r.name != name);
@@ -579,7 +589,7 @@ impl GeneralizedKind for Patches {
                 format!("released `{name}`")
             }
             Edit::Fix { .. } | Edit::Free { .. } => {
-                let r = crate::tools::fix_or_free(&mut PatchNet(engine), edit)?;
+                let r = crate::tools::fix_or_free(&mut PatchNet(&mut self.engine), edit)?;
                 crate::tools::fixed_message(edit, &r)
             }
             other => {
@@ -587,20 +597,22 @@ impl GeneralizedKind for Patches {
                     "a dnurbs-patches model takes rope, move-rope, force, release, fix, free and `set dt` only, not {other:?}"
                 )));
             }
+        }))
+    }
+    fn write(&self, ext: &str, path: &Path) -> Option<Result<(), SessionError>> {
+        (ext == "json").then(|| {
+            let n = self.engine.geometry().len();
+            let entities = (0..n)
+                .map(|k| patch(&self.engine, k).map(Entity::Surface))
+                .collect::<Result<Vec<_>, _>>()?;
+            vclay_io::model::write_model(path, &entities).map_err(|e| SessionError::io(path, e))
         })
     }
-    fn write_json(&self, engine: &Engine, path: &Path) -> Result<(), SessionError> {
-        let mut entities = Vec::with_capacity(engine.geometry().len());
-        for k in 0..engine.geometry().len() {
-            entities.push(Entity::Surface(patch(engine, k)?));
-        }
-        vclay_io::model::write_model(path, &entities).map_err(|e| SessionError::io(path, e))
-    }
-    fn save(&self, state: &GeneralizedState) -> Result<serde_json::Value, SessionError> {
+    fn save(&self, _size: f64) -> Result<serde_json::Value, SessionError> {
         serde_json::to_value(Saved {
             settings: self.settings.clone(),
             tools: self.tools.clone(),
-            state: SavedState::from(state),
+            state: SavedState::from(&self.engine.state()),
         })
         .map_err(SessionError::kernel)
     }

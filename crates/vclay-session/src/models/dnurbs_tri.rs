@@ -25,21 +25,22 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 use vclay_core::{TriMesh, Vec3};
-use vclay_dynamics::dnurbs::generalized::{GeneralizedGeometry, GeneralizedState};
+use vclay_dynamics::dnurbs::generalized::GeneralizedGeometry;
 use vclay_dynamics::dnurbs::rounding::{ROUNDING_WEIGHT_PENALTY, RoundingKind, RoundingModel};
 use vclay_dynamics::dnurbs::{
     Constraint, GeneralizedDnurbs, TriangleQuadrature, TriangularGeometry,
 };
 
-use super::SpecError;
 use super::generalized::{
     GeneralizedKind, GeneralizedModel, check_material_and_dt, constant_material, reference,
     table_one,
 };
 use super::saved::SavedState;
+use super::{SpecError, keyword};
 use crate::command::Edit;
 use crate::error::SessionError;
-use crate::model::{LineRole, LineSet, ModelKind, Param};
+use crate::model::{Done, LineRole, LineSet, ModelKind, Param};
+use vclay_dynamics::dnurbs::generalized::GeneralizedState;
 
 /// Default display tessellation level (`level^2` triangles per domain triangle).
 pub const DEFAULT_TESSELLATION: usize = 6;
@@ -71,11 +72,14 @@ struct Settings {
     dt: f64,
 }
 
-/// The `dnurbs-triangular` kind's part of [`GeneralizedModel`]: its settings.
+/// The `dnurbs-triangular` kind's part of [`GeneralizedModel`]: its engine and settings.
 #[derive(Clone, Debug)]
 pub struct Triangular {
+    engine: Engine,
     settings: Settings,
 }
+
+type Engine = GeneralizedDnurbs<TriangularGeometry>;
 
 /// A triangular D-NURBS model (see the [module docs](self)).
 pub type TriangularModel = GeneralizedModel<Triangular>;
@@ -129,7 +133,7 @@ impl TriangularModel {
         for c in constraints {
             engine.add_constraint(c).map_err(|e| e.to_string())?;
         }
-        Ok(Self::new(Triangular { settings }, engine, size))
+        Ok(Self::new(Triangular { engine, settings }, size, 0))
     }
 
     /// Builds the model from its scenario tables.
@@ -183,17 +187,13 @@ impl TriangularModel {
                 .to_string()
         });
         let preset = table_one(&preset_name)?;
-        let subdivided = match m.quadrature.as_deref() {
-            None | Some("subdivided") => true,
-            Some("whole") => false,
-            Some(other) => {
-                return Err(SpecError::new(
-                    "model",
-                    "quadrature",
-                    format!("{other:?}: expected \"subdivided\" or \"whole\""),
-                ));
-            }
-        };
+        let subdivided = keyword(
+            "model",
+            "quadrature",
+            m.quadrature.as_deref(),
+            &[("subdivided", true), ("whole", false)],
+        )?
+        .unwrap_or(true);
         if let Some(k) = m.quadrature_points
             && !(1..=20).contains(&k)
         {
@@ -211,18 +211,13 @@ impl TriangularModel {
                 format!("{tessellation}: must be 1 to 64"),
             ));
         }
-        let absolute = match mat.reference.as_deref() {
-            None => rounding.is_some(),
-            Some("absolute") => true,
-            Some("rest") => false,
-            Some(other) => {
-                return Err(SpecError::new(
-                    "material",
-                    "reference",
-                    format!("{other:?}: expected \"absolute\" or \"rest\""),
-                ));
-            }
-        };
+        let absolute = keyword(
+            "material",
+            "reference",
+            mat.reference.as_deref(),
+            &[("absolute", true), ("rest", false)],
+        )?
+        .unwrap_or(rounding.is_some());
         let settings = Settings {
             source,
             subdivided,
@@ -256,18 +251,28 @@ impl TriangularModel {
         let saved: Saved = serde_json::from_value(v.clone()).map_err(SessionError::kernel)?;
         Self::build(saved.settings)
             .map_err(model_err)?
-            .with_state(saved.state)
+            .with_state(saved.state.into())
     }
 }
 
 impl GeneralizedKind for Triangular {
-    type Geometry = TriangularGeometry;
+    type Engine = Engine;
     /// The time step and the weight penalty.
     type State = (f64, f64);
-    const KIND: ModelKind = ModelKind::DnurbsTriangular;
-    const EXPORTS: &'static [&'static str] = &["json", "obj", "ply", "stl", "glb"];
     const EDITS_REDRAW: bool = false;
     const MESH_NAME: &'static str = "triangular-dnurbs";
+    fn kind(&self) -> ModelKind {
+        ModelKind::DnurbsTriangular
+    }
+    fn engine(&self) -> &Engine {
+        &self.engine
+    }
+    fn engine_mut(&mut self) -> &mut Engine {
+        &mut self.engine
+    }
+    fn exports(&self) -> &'static [&'static str] {
+        &["json", "obj", "ply", "stl", "glb"]
+    }
     fn dt(&self) -> f64 {
         self.settings.dt
     }
@@ -277,10 +282,12 @@ impl GeneralizedKind for Triangular {
     fn take(&self) -> (f64, f64) {
         (self.settings.dt, self.settings.weight_penalty)
     }
-    fn put(&mut self, s: &(f64, f64)) {
+    fn put(&mut self, s: &(f64, f64)) -> Result<(), SessionError> {
         (self.settings.dt, self.settings.weight_penalty) = *s;
+        Ok(())
     }
-    fn summary(&self, engine: &GeneralizedDnurbs<TriangularGeometry>) -> String {
+    fn summary(&self) -> String {
+        let engine = &self.engine;
         let s = engine.geometry().surface();
         format!(
             "dnurbs-triangular ({}): degree {}, {} domain triangles, {} control points, {} constraints",
@@ -294,19 +301,17 @@ impl GeneralizedKind for Triangular {
             engine.constraints().len()
         )
     }
-    fn mesh(
-        &self,
-        engine: &GeneralizedDnurbs<TriangularGeometry>,
-    ) -> Result<TriMesh, SessionError> {
+    fn mesh(&self) -> Result<TriMesh, SessionError> {
         let mut mesh = TriMesh::new();
-        engine
+        self.engine
             .geometry()
             .surface()
             .tessellate(self.settings.tessellation, &mut mesh)
             .map_err(SessionError::kernel)?;
         Ok(mesh)
     }
-    fn display_lines(&self, engine: &GeneralizedDnurbs<TriangularGeometry>) -> Vec<LineSet> {
+    fn display_lines(&self, _size: f64) -> Vec<LineSet> {
+        let engine = &self.engine;
         // The control net: the points of each domain triangle's functions joined in the
         // Bezier pattern (markers when the net is shared), and the constraint points.
         let g = engine.geometry();
@@ -340,10 +345,10 @@ impl GeneralizedKind for Triangular {
         }
         vec![net, cons]
     }
-    fn control_points(&self, engine: &GeneralizedDnurbs<TriangularGeometry>) -> Vec<Vec3> {
-        engine.geometry().control_points().to_vec()
+    fn control_points(&self) -> Vec<Vec3> {
+        self.engine.geometry().control_points().to_vec()
     }
-    fn params(&self) -> Vec<Param> {
+    fn more_params(&self) -> Vec<Param> {
         vec![Param::new(
             "weight_penalty",
             self.settings.weight_penalty,
@@ -352,18 +357,18 @@ impl GeneralizedKind for Triangular {
             "penalty c/2 sum (w - w0)^2 holding the weights near their initial values",
         )]
     }
-    fn apply(
+    fn edit(
         &mut self,
-        engine: &mut GeneralizedDnurbs<TriangularGeometry>,
         edit: &Edit,
-    ) -> Result<String, SessionError> {
+        _before: &(GeneralizedState, (f64, f64)),
+    ) -> Result<Done, SessionError> {
         match edit {
             Edit::Set { name, value } if name == "weight_penalty" => {
-                engine
+                self.engine
                     .set_weight_penalty(*value)
                     .map_err(SessionError::kernel)?;
                 self.settings.weight_penalty = *value;
-                Ok(format!("weight_penalty = {value}"))
+                Ok(Done::State(format!("weight_penalty = {value}")))
             }
             other => Err(SessionError::command(
                 "",
@@ -374,18 +379,16 @@ impl GeneralizedKind for Triangular {
             )),
         }
     }
-    fn write_json(
-        &self,
-        engine: &GeneralizedDnurbs<TriangularGeometry>,
-        path: &Path,
-    ) -> Result<(), SessionError> {
-        vclay_io::triangular::write_triangular(path, engine.geometry().surface(), None)
-            .map_err(|e| SessionError::io(path, e))
+    fn write(&self, ext: &str, path: &Path) -> Option<Result<(), SessionError>> {
+        (ext == "json").then(|| {
+            vclay_io::triangular::write_triangular(path, self.engine.geometry().surface(), None)
+                .map_err(|e| SessionError::io(path, e))
+        })
     }
-    fn save(&self, state: &GeneralizedState) -> Result<serde_json::Value, SessionError> {
+    fn save(&self, _size: f64) -> Result<serde_json::Value, SessionError> {
         serde_json::to_value(Saved {
             settings: self.settings.clone(),
-            state: SavedState::from(state),
+            state: SavedState::from(&self.engine.state()),
         })
         .map_err(SessionError::kernel)
     }

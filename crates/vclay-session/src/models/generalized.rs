@@ -1,32 +1,26 @@
-//! One session model over the generalized D-NURBS engine `GeneralizedDnurbs<G>`
-//! (`d-nurbs.txt` eq 15 with the mass, damping and stiffness matrices of eqs 16-17 of any
-//! geometry `G`, integrated by eq 18): [`GeneralizedModel`] does what every such kind does the
-//! same way (the clock, the step and its energies, undo by the engine state, the display mesh's
-//! pick, the time step as a parameter, mesh exports, session files' engine state); a
-//! [`GeneralizedKind`] holds what differs (building the geometry from keys, the display lines,
-//! the edits it takes besides `set dt`, the JSON export and the saved settings).
+//! The one session model over the D-NURBS engines ([`DnurbsEngine`]: the generalized
+//! `GeneralizedDnurbs<G>`, `d-nurbs.txt` eq 15 with the matrices of eqs 16-17 of any geometry
+//! `G`, and the frozen-weight `Dnurbs<G>` of footnote 2; both integrated by eq 18):
+//! [`GeneralizedModel`] does what every D-NURBS kind does the same way (the clock, the step
+//! and its report, undo by the engine state plus what the kind's edits change, `set dt`, the
+//! pick through the display mesh, mesh exports, plastic flow); a [`GeneralizedKind`] holds
+//! its engine and what differs (building it from keys, display, the edits it takes, its own
+//! export formats, its saved form).
 //!
-//! Kinds: `dnurbs-triangular` ([`super::dnurbs_tri::Triangular`]) and `dnurbs-patches`
-//! ([`super::dnurbs_patches::Patches`]). `dnurbs-curve`, `-surface` and `-swung` are the other
-//! model over the same engine, [`super::dnurbs::DnurbsModel`]: one model over an engine enum
-//! whose two generalized variants (`GeneralizedDnurbs<RationalGeometry>`,
-//! `GeneralizedDnurbs<SwungGeometry>`) share every line of code, beside the frozen-weight
-//! engine (`d-nurbs.txt` footnote 2) that the same kinds run with the same tools, force slots,
-//! saved form and display. It is not a [`GeneralizedKind`] because nearly every answer
-//! [`GeneralizedModel`] gives the same way it gives differently (steps counted by the model,
-//! the elastic energy read live, control points picked before the surface, material
-//! parameters, STEP/IGES and curve exports, fix/free undone by their inverse edit), and the
-//! frozen engine would have to leave the model. `docs/architecture.md` (vclay-session) says
-//! precisely what a merge would take.
+//! Kinds: [`super::dnurbs::Nurbs`] (`dnurbs-curve`, `-surface`, `-swung`: rational curves and
+//! surfaces and swung surfaces on the generalized engine, curves and surfaces also on the
+//! frozen-weight one, with force slots, constraints and the shared tool table),
+//! [`super::dnurbs_tri::Triangular`] (`dnurbs-triangular`) and
+//! [`super::dnurbs_patches::Patches`] (`dnurbs-patches`).
 
 use std::path::Path;
 
 use vclay_core::{TriMesh, Vec3};
-use vclay_dynamics::dnurbs::generalized::{GeneralizedGeometry, GeneralizedState};
-use vclay_dynamics::dnurbs::{Density, ElasticReference, GeneralizedDnurbs, Material, Preset};
+use vclay_dynamics::dnurbs::{Density, ElasticReference, Material, Preset};
 
 use super::SpecError;
-use super::saved::{SavedState, step_implicit};
+pub use super::engine::DnurbsEngine;
+use super::saved::step_report;
 use crate::command::Edit;
 use crate::error::SessionError;
 use crate::model::{
@@ -34,82 +28,165 @@ use crate::model::{
     unsupported_export,
 };
 
-/// What a kind over [`GeneralizedDnurbs`] adds to [`GeneralizedModel`]: its settings and tools,
-/// and the few answers that differ between geometries.
+/// A D-NURBS kind of [`GeneralizedModel`]: its engine and what it changes, and the answers
+/// that differ between kinds (defaults: what the triangular and patch kinds answer).
 pub trait GeneralizedKind: Clone + std::fmt::Debug + Send + Sync + 'static {
-    /// The geometry the engine moves (`d-nurbs.txt` section 4: its Jacobian of eqs 3-6 or 13).
-    type Geometry: GeneralizedGeometry + Clone + std::fmt::Debug + Send + Sync + 'static;
+    /// The engine (`d-nurbs.txt` section 4: its geometry's Jacobian of eqs 3-6, 7 or 13).
+    type Engine: DnurbsEngine;
     /// What edits change besides the engine state (kept in undo snapshots).
     type State: Clone + Send + Sync + 'static;
-    /// The kind.
-    const KIND: ModelKind;
-    /// The extensions [`Model::export`] writes (mesh formats through the display mesh, `json`
-    /// through [`GeneralizedKind::write_json`]).
-    const EXPORTS: &'static [&'static str];
     /// Whether every applied edit is a new revision (kinds whose edits are drawn: ropes, forces,
     /// fixed points); otherwise an edit leaves the revision alone (`set dt`, `set
     /// weight_penalty` change nothing drawn).
     const EDITS_REDRAW: bool;
-    /// The mesh's name in a `.glb` export (where [`GeneralizedKind::EXPORTS`] has `glb`).
+    /// The mesh's name in a `.glb` export.
     const MESH_NAME: &'static str;
+    /// The kind.
+    fn kind(&self) -> ModelKind;
+    /// The engine.
+    fn engine(&self) -> &Self::Engine;
+    /// The engine, mutably.
+    fn engine_mut(&mut self) -> &mut Self::Engine;
     /// The time step of eq 18 (s).
     fn dt(&self) -> f64;
     /// Sets the time step (checked by the caller: positive and finite).
     fn set_dt(&mut self, dt: f64);
-    /// Takes what edits change.
+    /// Steps taken. Default: the engine's count.
+    fn steps(&self) -> u64 {
+        self.engine().steps()
+    }
+    /// Takes what edits change besides the engine state.
     fn take(&self) -> Self::State;
-    /// Puts back what [`GeneralizedKind::take`] took.
-    fn put(&mut self, state: &Self::State);
+    /// Puts back what [`GeneralizedKind::take`] took, after the engine state.
+    fn put(&mut self, state: &Self::State) -> Result<(), SessionError>;
+    /// What must change before the engine state is put back (a material the elements are
+    /// integrated with). Default: nothing.
+    fn put_before(&mut self, _state: &Self::State) -> Result<(), SessionError> {
+        Ok(())
+    }
     /// One line about the model (sizes).
-    fn summary(&self, engine: &GeneralizedDnurbs<Self::Geometry>) -> String;
+    fn summary(&self) -> String;
     /// Before each step: the engine's forces for a step that starts at the engine's time.
-    fn before_step(&mut self, _engine: &mut GeneralizedDnurbs<Self::Geometry>) {}
+    fn before_step(&mut self) {}
+    /// After each step, with the engine's report.
+    fn after_step(&mut self, _report: &vclay_dynamics::StepReport) {}
+    /// The energies; `last` is the last step's report (the initial elastic energy before the
+    /// first). Default: `last`.
+    fn energy(&self, last: Energy) -> Energy {
+        last
+    }
     /// The display mesh.
-    fn mesh(&self, engine: &GeneralizedDnurbs<Self::Geometry>) -> Result<TriMesh, SessionError>;
-    /// Control net, tools, fixed points, constraints.
-    fn display_lines(&self, engine: &GeneralizedDnurbs<Self::Geometry>) -> Vec<LineSet>;
+    fn mesh(&self) -> Result<TriMesh, SessionError>;
+    /// Control net, tools, fixed points, constraints; `size` is the model's size (arrows).
+    fn display_lines(&self, size: f64) -> Vec<LineSet>;
     /// The control points at the current state.
-    fn control_points(&self, engine: &GeneralizedDnurbs<Self::Geometry>) -> Vec<Vec3>;
-    /// The parameters besides `dt`.
+    fn control_points(&self) -> Vec<Vec3> {
+        self.engine().control_points(false)
+    }
+    /// The nearest hit of `ray`. Default: the display mesh, at the parameter nearest the hit.
+    fn pick(&self, ray: &Ray, _tolerance: f64) -> Option<Hit> {
+        surface_pick(ray, &self.mesh().ok()?, &[], self.engine())
+    }
+    /// The parameters. Default: `dt`, then [`GeneralizedKind::more_params`].
     fn params(&self) -> Vec<Param> {
+        let mut v = vec![dt_param(self.dt())];
+        v.extend(self.more_params());
+        v
+    }
+    /// The parameters besides `dt` (for the default [`GeneralizedKind::params`]).
+    fn more_params(&self) -> Vec<Param> {
         Vec::new()
     }
-    /// Applies an edit other than `set dt`, or fails leaving everything unchanged; returns
-    /// the log's message.
-    fn apply(
+    /// Applies an edit other than `set dt`, or fails leaving everything unchanged (`before`
+    /// is the state just before); says what it did and how it is undone.
+    fn edit(
         &mut self,
-        engine: &mut GeneralizedDnurbs<Self::Geometry>,
         edit: &Edit,
-    ) -> Result<String, SessionError>;
-    /// Writes the model file (`.json`).
-    fn write_json(
-        &self,
-        engine: &GeneralizedDnurbs<Self::Geometry>,
-        path: &Path,
-    ) -> Result<(), SessionError>;
-    /// The session file form: the kind's settings with the engine state.
-    fn save(&self, state: &GeneralizedState) -> Result<serde_json::Value, SessionError>;
+        before: &(<Self::Engine as DnurbsEngine>::State, Self::State),
+    ) -> Result<Done, SessionError>;
+    /// The extensions [`Model::export`] writes.
+    fn exports(&self) -> &'static [&'static str];
+    /// Writes the formats of [`GeneralizedKind::exports`] that are the kind's own (model
+    /// JSON, CAD files); `None` for a mesh format, which the model writes from the display
+    /// mesh.
+    fn write(&self, ext: &str, path: &Path) -> Option<Result<(), SessionError>>;
+    /// The session file form; `size` is the model's size.
+    fn save(&self, size: f64) -> Result<serde_json::Value, SessionError>;
 }
 
-/// A model over the generalized D-NURBS engine (see the [module docs](self)).
+/// The hit of `ray` on a surface's display `mesh`: the point and its parameter, interpolated
+/// from `params` (one per mesh vertex) where given, else the engine's nearest parameter.
+pub(crate) fn surface_pick<E: DnurbsEngine>(
+    ray: &Ray,
+    mesh: &TriMesh,
+    params: &[[f64; 2]],
+    engine: &E,
+) -> Option<Hit> {
+    crate::pick::ray_mesh(ray, mesh).map(|(s, tri, w)| {
+        let point = ray.origin + ray.direction * s;
+        let param = if params.len() == mesh.positions.len() {
+            let mut q = [0.0; 2];
+            for (k, &i) in mesh.triangles[tri].iter().enumerate() {
+                q[0] += w[k] * params[i as usize][0];
+                q[1] += w[k] * params[i as usize][1];
+            }
+            q
+        } else {
+            engine.nearest_param(&point).unwrap_or([0.0, 0.0])
+        };
+        Hit {
+            distance: s,
+            point,
+            element: Element::SurfacePoint { param },
+            extra: [None, None],
+        }
+    })
+}
+
+/// The material point a tool acts at: `param` when given, else the parameter of the point
+/// nearest `near`; checked (an error names a parameter outside the domain).
+pub(crate) fn param_or_near<E: DnurbsEngine>(
+    engine: &E,
+    param: Option<[f64; 2]>,
+    near: Option<&crate::command::V3>,
+) -> Result<[f64; 2], SessionError> {
+    let cmd = |e: String| SessionError::command("", "", e);
+    let p = match (param, near) {
+        (Some(p), _) => p,
+        (None, Some(x)) => engine
+            .nearest_param(&crate::tools::v3(*x))
+            .map_err(SessionError::command_from)?,
+        (None, None) => return Err(cmd("give `param` or a position".into())),
+    };
+    engine
+        .point_at(p)
+        .map_err(|e| cmd(format!("material point {p:?}: {e}")))?;
+    Ok(p)
+}
+
+/// The time step as a parameter.
+pub(crate) fn dt_param(dt: f64) -> Param {
+    Param::new("dt", dt, 1e-5, 0.1, "time step of eq 18 (s)")
+}
+
+/// A model over a D-NURBS engine (see the [module docs](self)).
 #[derive(Clone, Debug)]
 pub struct GeneralizedModel<K: GeneralizedKind> {
     kind: K,
-    engine: GeneralizedDnurbs<K::Geometry>,
     size: f64,
     revision: u64,
     energy: Energy,
 }
 
 impl<K: GeneralizedKind> GeneralizedModel<K> {
-    /// A model of `kind` over `engine` (built, not stepped); `size` scales tolerances.
-    pub(crate) fn new(kind: K, engine: GeneralizedDnurbs<K::Geometry>, size: f64) -> Self {
-        let elastic = engine.elastic_energy().unwrap_or(0.0);
+    /// A model of `kind` (its engine built, not stepped); `size` scales tolerances; the
+    /// revision starts at `revision`.
+    pub(crate) fn new(kind: K, size: f64, revision: u64) -> Self {
+        let elastic = kind.engine().elastic_energy().unwrap_or(0.0);
         Self {
             kind,
-            engine,
             size,
-            revision: 0,
+            revision,
             energy: Energy {
                 elastic,
                 ..Energy::default()
@@ -118,21 +195,37 @@ impl<K: GeneralizedKind> GeneralizedModel<K> {
     }
 
     /// Puts back a saved engine state (session files).
-    pub(crate) fn with_state(mut self, state: SavedState) -> Result<Self, SessionError> {
-        self.engine
-            .set_state(&GeneralizedState::from(state))
+    pub(crate) fn with_state(
+        mut self,
+        state: <K::Engine as DnurbsEngine>::State,
+    ) -> Result<Self, SessionError> {
+        self.kind
+            .engine_mut()
+            .set_state(&state)
             .map_err(SessionError::kernel)?;
         Ok(self)
     }
 
     /// The engine (for tests and tools).
-    pub fn engine(&self) -> &GeneralizedDnurbs<K::Geometry> {
-        &self.engine
+    pub fn engine(&self) -> &K::Engine {
+        self.kind.engine()
     }
 
-    fn set_dt(&mut self, value: f64) -> Result<String, SessionError> {
-        self.kind.set_dt(crate::model::positive_dt(value)?);
-        Ok(format!("dt = {value}"))
+    /// The kind's part.
+    pub fn kind_part(&self) -> &K {
+        &self.kind
+    }
+
+    pub(crate) fn kind_mut(&mut self) -> &mut K {
+        &mut self.kind
+    }
+
+    pub(crate) fn set_size(&mut self, size: f64) {
+        self.size = size;
+    }
+
+    pub(crate) fn set_revision(&mut self, revision: u64) {
+        self.revision = revision;
     }
 }
 
@@ -207,47 +300,58 @@ pub(crate) fn reference(absolute: bool) -> ElasticReference {
 }
 
 impl<K: GeneralizedKind> crate::model::Stateful for GeneralizedModel<K> {
-    type State = (GeneralizedState, K::State);
+    type State = (<K::Engine as DnurbsEngine>::State, K::State);
     const EDITS_REDRAW: bool = K::EDITS_REDRAW;
     fn take_state(&self) -> Self::State {
-        (self.engine.state(), self.kind.take())
+        (self.kind.engine().state(), self.kind.take())
     }
     fn put_state(&mut self, s: &Self::State) -> Result<(), SessionError> {
-        self.engine.set_state(&s.0).map_err(SessionError::kernel)?;
-        self.kind.put(&s.1);
-        Ok(())
+        self.kind.put_before(&s.1)?;
+        self.kind
+            .engine_mut()
+            .set_state(&s.0)
+            .map_err(SessionError::from)?;
+        self.kind.put(&s.1)
     }
     fn revision_mut(&mut self) -> &mut u64 {
         &mut self.revision
     }
-    fn edit(&mut self, edit: &Edit, _before: &Self::State) -> Result<Done, SessionError> {
-        Ok(Done::State(match edit {
-            Edit::Set { name, value } if name == "dt" => self.set_dt(*value)?,
-            _ => self.kind.apply(&mut self.engine, edit)?,
-        }))
-    }
-    fn apply_inverse(&mut self, _edit: &Edit) -> Result<(), SessionError> {
-        // The snapshot holds everything the edits change.
-        Ok(())
+    fn edit(&mut self, edit: &Edit, before: &Self::State) -> Result<Done, SessionError> {
+        match edit {
+            Edit::Set { name, value } if name == "dt" => {
+                self.kind.set_dt(crate::model::positive_dt(*value)?);
+                Ok(Done::State(format!("dt = {value}")))
+            }
+            _ => self.kind.edit(edit, before),
+        }
     }
 }
 
 impl<K: GeneralizedKind> Model for GeneralizedModel<K> {
     fn kind(&self) -> ModelKind {
-        K::KIND
+        self.kind.kind()
     }
     fn summary(&self) -> String {
-        self.kind.summary(&self.engine)
+        self.kind.summary()
     }
-    crate::model::clock_methods!(self => self.engine.time(), self.kind.dt(), self.engine.steps() as u64);
+    crate::model::clock_methods!(self => self.kind.engine().time(), self.kind.dt(), self.kind.steps());
     fn step(&mut self) -> Result<StepReport, SessionError> {
-        self.kind.before_step(&mut self.engine);
-        let report = step_implicit(&mut self.engine, self.kind.dt(), &mut self.energy)?;
+        self.kind.before_step();
         self.revision += 1;
+        let t0 = std::time::Instant::now();
+        let dt = self.kind.dt();
+        let r = self
+            .kind
+            .engine_mut()
+            .step(dt)
+            .map_err(SessionError::from)?;
+        self.kind.after_step(&r);
+        let report = step_report(&r, t0);
+        self.energy = report.energy;
         Ok(report)
     }
     fn energy(&self) -> Energy {
-        self.energy
+        self.kind.energy(self.energy)
     }
     fn size(&self) -> f64 {
         self.size
@@ -256,72 +360,51 @@ impl<K: GeneralizedKind> Model for GeneralizedModel<K> {
         self.revision
     }
     fn display_mesh(&self) -> Result<TriMesh, SessionError> {
-        self.kind.mesh(&self.engine)
+        self.kind.mesh()
     }
     fn display_lines(&self) -> Vec<LineSet> {
-        self.kind.display_lines(&self.engine)
+        self.kind.display_lines(self.size)
     }
-    fn pick(&self, ray: &Ray, _tolerance: f64) -> Option<Hit> {
-        let mesh = self.display_mesh().ok()?;
-        crate::pick::ray_mesh(ray, &mesh).map(|(s, _, _)| {
-            let point = ray.origin + ray.direction * s;
-            let param = self
-                .engine
-                .geometry()
-                .nearest_param(&point)
-                .unwrap_or([0.0, 0.0]);
-            Hit {
-                distance: s,
-                point,
-                element: Element::SurfacePoint { param },
-                extra: [None, None],
-            }
-        })
+    fn pick(&self, ray: &Ray, tolerance: f64) -> Option<Hit> {
+        self.kind.pick(ray, tolerance)
     }
     fn params(&self) -> Vec<Param> {
-        let mut v = vec![Param::new(
-            "dt",
-            self.kind.dt(),
-            1e-4,
-            0.1,
-            "time step of eq 18",
-        )];
-        v.extend(self.kind.params());
-        v
+        self.kind.params()
     }
     crate::model::stateful_methods!();
     fn control_points(&self) -> Vec<Vec3> {
-        self.kind.control_points(&self.engine)
+        self.kind.control_points()
     }
     fn export(&self, path: &Path) -> Result<(), SessionError> {
         let io = |e: &dyn std::fmt::Display| SessionError::io(path, e);
         let ext = extension(path);
-        if !K::EXPORTS.contains(&ext.as_str()) {
-            return Err(unsupported_export(K::KIND, path, K::EXPORTS));
+        let formats = self.kind.exports();
+        if !formats.contains(&ext.as_str()) {
+            return Err(unsupported_export(self.kind.kind(), path, formats));
         }
+        if let Some(r) = self.kind.write(&ext, path) {
+            return r;
+        }
+        let mesh = self.display_mesh()?;
         match ext.as_str() {
-            "json" => self.kind.write_json(&self.engine, path),
             "glb" => vclay_io::gltf::write_glb(
                 path,
-                &[vclay_io::gltf::GlbMesh::new(
-                    K::MESH_NAME.to_string(),
-                    self.display_mesh()?,
-                )],
+                &[vclay_io::gltf::GlbMesh::new(K::MESH_NAME.to_string(), mesh)],
             )
             .map_err(|e| io(&e)),
-            _ => vclay_io::write_mesh(path, &self.display_mesh()?).map_err(|e| io(&e)),
+            _ => vclay_io::write_mesh(path, &mesh).map_err(|e| io(&e)),
         }
     }
     fn export_formats(&self) -> Vec<&'static str> {
-        K::EXPORTS.to_vec()
+        self.kind.exports().to_vec()
     }
     fn save(&self) -> Result<serde_json::Value, SessionError> {
-        self.kind.save(&self.engine.state())
+        self.kind.save(self.size)
     }
     fn plastic_flow(&mut self, fraction: f64, yield_distance: f64) -> Result<usize, SessionError> {
         // The undo state is the engine's, rest coordinates included.
-        self.engine
+        self.kind
+            .engine_mut()
             .plastic_flow(fraction, yield_distance)
-            .map_err(SessionError::kernel)
     }
 }

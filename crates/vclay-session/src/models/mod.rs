@@ -20,6 +20,7 @@ macro_rules! scenario_keys {
 pub mod dnurbs;
 pub mod dnurbs_patches;
 pub mod dnurbs_tri;
+mod engine;
 pub mod ffd;
 pub mod generalized;
 pub mod part;
@@ -365,6 +366,34 @@ pub(crate) fn not_taken(edit: &crate::command::Edit, kind: ModelKind, takes: &st
             edit.action()
         ),
     )
+}
+
+/// The value paired with the keyword `given` at `table.key` among `words` (`None` when the
+/// key is absent); an error names the words the key takes (`"x": expected "a" or "b"`).
+pub(crate) fn keyword<T: Copy>(
+    table: &str,
+    key: &str,
+    given: Option<&str>,
+    words: &[(&str, T)],
+) -> Result<Option<T>, SpecError> {
+    let Some(g) = given else {
+        return Ok(None);
+    };
+    match words.iter().find(|(w, _)| *w == g) {
+        Some(&(_, v)) => Ok(Some(v)),
+        None => {
+            let names: Vec<String> = words.iter().map(|(w, _)| format!("\"{w}\"")).collect();
+            let list = match names.split_last() {
+                Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+                _ => names.concat(),
+            };
+            Err(SpecError::new(
+                table,
+                key,
+                format!("{g:?}: expected {list}"),
+            ))
+        }
+    }
 }
 
 /// The error of a kind's edit dispatcher handing an edit to a group of arms that does not

@@ -255,16 +255,13 @@ impl PartModel {
         };
         let refined =
             refine_for_sculpting(&face.surface, refine).map_err(|e| key_err("refine", e))?;
-        let fixed = match m.boundary.as_deref() {
-            None | Some("fixed") => true,
-            Some("free") => false,
-            Some(o) => {
-                return Err(key_err(
-                    "boundary",
-                    format!("\"{o}\": expected \"fixed\" or \"free\""),
-                ));
-            }
-        };
+        let fixed = super::keyword(
+            "model",
+            "boundary",
+            m.boundary.as_deref(),
+            &[("fixed", true), ("free", false)],
+        )?
+        .unwrap_or(true);
         let boundary = if fixed {
             boundary_control_points(face, &refined).map_err(|e| key_err("face", e))?
         } else {

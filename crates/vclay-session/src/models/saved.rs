@@ -1,34 +1,15 @@
-//! What the kinds that wrap [`GeneralizedDnurbs`] directly (`dnurbs-triangular`,
-//! `dnurbs-patches`) share: one implicit step as the session reports it (the report also
-//! serves `dnurbs-curve`, `-surface` and `-swung`), and the engine's state as session files
-//! save it; the knot vectors of a saved tensor-product net (D-NURBS surfaces, B-spline solids).
+//! What the D-NURBS kinds share in session files and reports: a step as the session reports
+//! it, and the generalized engine's state as session files save it; the knot vectors of a
+//! saved tensor-product net (D-NURBS surfaces, B-spline solids).
 
 use serde::{Deserialize, Serialize};
-use vclay_dynamics::dnurbs::generalized::{
-    GeneralizedDnurbs, GeneralizedGeometry, GeneralizedState,
-};
-use vclay_dynamics::dnurbs::{ElasticReference, Integrator};
+use vclay_dynamics::dnurbs::ElasticReference;
+use vclay_dynamics::dnurbs::generalized::GeneralizedState;
 
 use vclay_spline::KnotVector;
 
 use crate::error::SessionError;
 use crate::model::{Energy, StepReport};
-
-/// One implicit step of size `dt` (`d-nurbs.txt` eq 18); `energy` becomes the step's kinetic and
-/// elastic energy (tools: 0, these kinds report no tool energy).
-pub(crate) fn step_implicit<G: GeneralizedGeometry>(
-    engine: &mut GeneralizedDnurbs<G>,
-    dt: f64,
-    energy: &mut Energy,
-) -> Result<StepReport, SessionError> {
-    let t0 = std::time::Instant::now();
-    let r = engine
-        .step(Integrator::Implicit { dt })
-        .map_err(SessionError::from)?;
-    let report = step_report(&r, t0);
-    *energy = report.energy;
-    Ok(report)
-}
 
 /// The session's report of a D-NURBS engine's step (either engine) begun at `t0`: its time,
 /// kinetic and elastic energy (tools: 0, D-NURBS report no tool energy) and solver iterations.
@@ -90,11 +71,7 @@ impl From<SavedState> for GeneralizedState {
             fixed: s.fixed,
             weight_targets: s.weight_targets,
             weight_penalty: s.weight_penalty,
-            reference: if s.absolute {
-                ElasticReference::Absolute
-            } else {
-                ElasticReference::RestShape
-            },
+            reference: super::generalized::reference(s.absolute),
             time: s.time,
             steps: s.steps,
             substeps: s.substeps,

@@ -1278,27 +1278,25 @@ impl Model for SolidModel {
 // Scenario keys
 // ---------------------------------------------------------------------------------------
 
-/// The `[model]` keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct ModelKeys {
-    pub primitive: Option<String>,
-    pub file: Option<std::path::PathBuf>,
-    pub entity: Option<usize>,
-    pub points: Option<[usize; 3]>,
-    pub min: Option<V3>,
-    pub max: Option<V3>,
-    pub radius: Option<f64>,
-    pub height: Option<f64>,
-    pub level: Option<usize>,
-    pub boundary: Option<String>,
-    pub control: Option<[usize; 3]>,
-    pub degree: Option<[usize; 3]>,
-    pub samples: Option<[usize; 3]>,
-    /// Cells of the lattice built from a mesh `file`.
-    pub cells: Option<usize>,
+scenario_keys! {
+    /// The `[model]` keys of a `subdivision-solid` or `bspline-solid` model.
+    pub struct ModelKeys {
+        pub primitive: Option<String>,
+        pub file: Option<std::path::PathBuf>,
+        pub entity: Option<usize>,
+        pub points: Option<[usize; 3]>,
+        pub min: Option<V3>,
+        pub max: Option<V3>,
+        pub radius: Option<f64>,
+        pub height: Option<f64>,
+        pub level: Option<usize>,
+        pub boundary: Option<String>,
+        pub control: Option<[usize; 3]>,
+        pub degree: Option<[usize; 3]>,
+        pub samples: Option<[usize; 3]>,
+        /// Cells of the lattice built from a mesh `file`.
+        pub cells: Option<usize>,
+    }
 }
 
 /// The solid material values that a `[material]` table, a `[[material.cells]]` entry or a
@@ -1379,17 +1377,15 @@ material_keys! {
     }
 }
 
-/// The `[simulation]` keys of a `subdivision-solid` or `bspline-solid` model as a typed value; each field is the key of
-/// the same name in `docs/formats.md` section 8 (absent: the documented default).
-#[allow(missing_docs)]
-#[derive(Debug, Default, Deserialize, Clone, PartialEq, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct SimKeys {
-    pub integrator: Option<String>,
-    pub dt: Option<f64>,
-    pub divergence_factor: Option<f64>,
-    pub cg_tolerance: Option<f64>,
-    pub cg_max_iterations: Option<usize>,
+scenario_keys! {
+    /// The `[simulation]` keys of a `subdivision-solid` or `bspline-solid` model.
+    pub struct SimKeys {
+        pub integrator: Option<String>,
+        pub dt: Option<f64>,
+        pub divergence_factor: Option<f64>,
+        pub cg_tolerance: Option<f64>,
+        pub cg_max_iterations: Option<usize>,
+    }
 }
 
 /// The typed spec of a solid ([`super::ModelSpec`]).
