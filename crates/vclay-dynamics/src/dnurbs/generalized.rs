@@ -353,6 +353,20 @@ impl Gram {
     /// Writes the accumulated matrix into `out`, dense and symmetric (row-major `nd x nd`, the
     /// local order of [`LocalJacobian::dofs`]; every entry is set).
     fn write(&mut self, out: &mut [f64]) {
+        let (nb, nd) = (self.nb, 3 * self.nb + self.nv);
+        for a in 0..3 * nb {
+            for b in 0..nb {
+                // The block pair is `v I`: only the matching component is nonzero.
+                out[a * nd + 3 * b..a * nd + 3 * b + 3].copy_from_slice(&[0.0; 3]);
+            }
+        }
+        self.write_nonzero(out);
+    }
+
+    /// [`Self::write`] without the structural zeros (a block pair's entries between different
+    /// components): `out` must hold zeros there already (a zeroed buffer, or one this shape
+    /// was written into before).
+    fn write_nonzero(&mut self, out: &mut [f64]) {
         self.finish();
         let (nb, nv, nc) = (self.nb, self.nv, self.nc());
         let nd = 3 * nb + nv;
@@ -361,10 +375,7 @@ impl Gram {
             for k in 0..3 {
                 let o = &mut out[(3 * a + k) * nd..(3 * a + k + 1) * nd];
                 for b in 0..nb {
-                    let v = row[b];
-                    // The block pair is `v I`: only the matching component is nonzero.
-                    o[3 * b..3 * b + 3].copy_from_slice(&[0.0; 3]);
-                    o[3 * b + k] = v;
+                    o[3 * b + k] = row[b];
                 }
                 o[3 * nb..].copy_from_slice(&row[nb + k * nv..nb + (k + 1) * nv]);
             }
@@ -1252,6 +1263,9 @@ fn element_order<G: GeneralizedGeometry>(
 struct ElementWork {
     /// The coordinates of `a` and `rhs`: the element's columns less the fixed coordinates.
     dofs: Vec<usize>,
+    /// `(blocks, vectors)` of `dofs` ([`Gram`]'s shape): `a`'s entries between different
+    /// components of two blocks are structural zeros.
+    shape: (usize, usize),
     a: Vec<f64>,
     /// Every column of the element, fixed ones included (the coordinates of `mass_diag`).
     all_dofs: Vec<usize>,
@@ -1321,6 +1335,8 @@ pub struct GeneralizedDnurbs<G: GeneralizedGeometry> {
     /// [`GeneralizedDnurbs::tolerance`], the paper's method).
     pub solver: LinearSolver,
     direct: Option<Arc<DirectPattern>>,
+    /// Buffers of the numeric factorization kept between steps (scratch; no state).
+    factor_buffers: FactorBuffers,
     /// Rows of constraints that act only on fixed coordinates (see [`RowCache`]).
     row_cache: RowCache,
 }
@@ -1381,6 +1397,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             inertial_force: true,
             solver: geometry_solver,
             direct: None,
+            factor_buffers: FactorBuffers::default(),
             row_cache: RowCache::default(),
             substeps: 0,
             keep_fixed_columns: false,
@@ -2175,6 +2192,9 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         if ratio > 1.0 {
             if dynamic {
                 // The caller halves the step: keep the element buffers for the retry.
+                if let Solve::Direct(f) = pre {
+                    self.factor_buffers.factor = f.values;
+                }
                 works.truncate(ne);
                 self.work_pool = works;
                 return Ok(None);
@@ -2258,6 +2278,9 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             self.time += dt;
         }
         self.steps += 1;
+        if let Solve::Direct(f) = pre {
+            self.factor_buffers.factor = f.values;
+        }
         works.truncate(ne);
         self.work_pool = works;
         Ok(Some(StepReport {
@@ -2345,7 +2368,12 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                     let moving = vl.iter().any(|x| *x != 0.0);
                     let shape = lj.free_dofs_into(fixed, &mut w.dofs);
                     let nd = w.dofs.len();
-                    w.a.resize(nd * nd, 0.0);
+                    if w.shape != shape || w.a.len() != nd * nd {
+                        // `write_nonzero` leaves the structural zeros as they are.
+                        w.a.clear();
+                        w.a.resize(nd * nd, 0.0);
+                        w.shape = shape;
+                    }
                     w.rhs.clear();
                     w.rhs.resize(nd, 0.0);
                     (w.elastic, w.kinetic) = (0.0, 0.0);
@@ -2431,7 +2459,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                         gram.add(lj, &coef);
                         lj.apply_transpose_all(&y, &mut w.rhs);
                     }
-                    gram.write(&mut w.a);
+                    gram.write_nonzero(&mut w.a);
                     Ok(())
                 })
             })
@@ -2468,6 +2496,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                 a: vec![0.0; nd * nd],
                 rhs: vec![0.0; nd],
                 dofs,
+                shape: (lj.blocks.len(), lj.vectors.len()),
                 ..Default::default()
             };
             let f = match force {
@@ -2496,9 +2525,18 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             self.direct = Some(Arc::new(DirectPattern::new(pattern, &self.fixed)?));
         }
         let dp = self.direct.clone()?;
-        let mut vals: Vec<f64> = dp.src.iter().map(|&k| full[k]).collect();
+        // The buffers of the last step's factor (faer's `Llt::try_new_with_symbolic` allocated
+        // and zeroed the factor's 13 MB every step of a 32 x 32 sheet, which the numeric
+        // factorization zeroes again itself); the same calls otherwise, so the same values.
+        let FactorBuffers {
+            matrix,
+            factor,
+            scratch,
+        } = &mut self.factor_buffers;
+        matrix.clear();
+        matrix.extend(dp.src.iter().map(|&k| full[k]));
         for (j, &i) in dp.free.iter().enumerate() {
-            vals[dp.col_ptr[j]] += extra_diag[i];
+            matrix[dp.col_ptr[j]] += extra_diag[i];
         }
         let m = dp.free.len();
         let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(
@@ -2508,14 +2546,29 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             None,
             &dp.row_idx,
         );
-        let mat = faer::sparse::SparseColMatRef::new(sym, &vals);
-        let llt = faer::sparse::linalg::solvers::Llt::try_new_with_symbolic(
-            dp.symbolic.clone(),
-            mat,
-            faer::Side::Lower,
-        )
-        .ok()?;
-        Some(Factor { pattern: dp, llt })
+        let mat = faer::sparse::SparseColMatRef::new(sym, matrix);
+        let mut values = std::mem::take(factor);
+        values.resize(dp.symbolic.len_val(), 0.0);
+        let par = faer::get_global_parallelism();
+        let req = dp
+            .symbolic
+            .factorize_numeric_llt_scratch::<f64>(par, Default::default());
+        let buffer = scratch.get(req);
+        dp.symbolic
+            .factorize_numeric_llt::<f64>(
+                &mut values,
+                mat,
+                faer::Side::Lower,
+                Default::default(),
+                par,
+                faer::dyn_stack::MemStack::new(buffer),
+                Default::default(),
+            )
+            .ok()?;
+        Some(Factor {
+            pattern: dp,
+            values,
+        })
     }
 
     /// Lagrange multipliers for the constraints on the linearized step (module docs).
@@ -2656,8 +2709,10 @@ struct Op<'a> {
 struct CsrPattern {
     row_ptr: Vec<usize>,
     cols: Vec<usize>,
-    /// `positions[e][a * nd + b]`: index in `cols` of element `e`'s entry `(a, b)`.
-    positions: Vec<Vec<usize>>,
+    /// Per element, the index in `cols` of each entry of `a` that is not a structural zero
+    /// (see [`ElementWork::shape`]), row by row: a block row `3 b + k` has the `nb` entries
+    /// `3 b' + k` and the `nv` vector columns, a vector row all `nd` entries.
+    positions: Vec<Vec<u32>>,
     /// The fixed coordinates the element columns were built without.
     fixed: Vec<bool>,
 }
@@ -2682,11 +2737,14 @@ impl CsrPattern {
         let positions = works
             .iter()
             .map(|w| {
-                let mut pos = Vec::with_capacity(w.dofs.len() * w.dofs.len());
-                for &i in &w.dofs {
+                let nd = w.dofs.len();
+                let mut pos = Vec::with_capacity(nd * nd);
+                for (a, &i) in w.dofs.iter().enumerate() {
                     let row = &cols[row_ptr[i]..row_ptr[i + 1]];
-                    for &j in &w.dofs {
-                        pos.push(row_ptr[i] + row.binary_search(&j).expect("in pattern"));
+                    for c in nonzero_columns(w.shape, a) {
+                        let j = w.dofs[c];
+                        let p = row_ptr[i] + row.binary_search(&j).expect("in pattern");
+                        pos.push(u32::try_from(p).expect("fewer than 2^32 entries"));
                     }
                 }
                 pos
@@ -2717,22 +2775,49 @@ impl CsrPattern {
             rest = tail;
             at = end;
         }
+        // Structural zeros are skipped: adding +0 changes no sum (a sum that starts at +0 is
+        // never -0), so the values are those of adding every entry.
         slices.into_par_iter().for_each(|(rows, base, out)| {
             for (w, pos) in works.iter().zip(&self.positions) {
+                let (nb, nv) = w.shape;
                 let nd = w.dofs.len();
+                let mut at = 0;
                 for (a, &i) in w.dofs.iter().enumerate() {
+                    let len = if a < 3 * nb { nb + nv } else { nd };
+                    let (p, next) = (&pos[at..at + len], at + len);
+                    at = next;
                     if !rows.contains(&i) {
                         continue;
                     }
-                    let row = a * nd..(a + 1) * nd;
-                    for (&p, &x) in pos[row.clone()].iter().zip(&w.a[row]) {
-                        out[p - base] += x;
+                    let row = &w.a[a * nd..(a + 1) * nd];
+                    if a < 3 * nb {
+                        let k = a % 3;
+                        let (pb, pv) = p.split_at(nb);
+                        for (&p, b) in pb.iter().zip(0..nb) {
+                            out[p as usize - base] += row[3 * b + k];
+                        }
+                        for (&p, &x) in pv.iter().zip(&row[3 * nb..]) {
+                            out[p as usize - base] += x;
+                        }
+                    } else {
+                        for (&p, &x) in p.iter().zip(row) {
+                            out[p as usize - base] += x;
+                        }
                     }
                 }
             }
         });
         v
     }
+}
+
+/// The columns of row `a` of an element matrix of shape `(nb, nv)` that are not structural
+/// zeros, in order (see [`CsrPattern::positions`]).
+fn nonzero_columns((nb, nv): (usize, usize), a: usize) -> impl Iterator<Item = usize> {
+    let nd = 3 * nb + nv;
+    let (blocks, k) = if a < 3 * nb { (nb, a % 3) } else { (0, 0) };
+    let first = if a < 3 * nb { 3 * nb } else { 0 };
+    (0..blocks).map(move |b| 3 * b + k).chain(first..nd)
 }
 
 impl Op<'_> {
@@ -2900,7 +2985,7 @@ struct DirectPattern {
     row_idx: Vec<usize>,
     /// For each stored entry, its index in the CSR values of [`CsrPattern`].
     src: Vec<usize>,
-    symbolic: faer::sparse::linalg::solvers::SymbolicLlt<usize>,
+    symbolic: faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
 }
 
 impl DirectPattern {
@@ -2931,8 +3016,15 @@ impl DirectPattern {
         let m = free.len();
         let sym =
             faer::sparse::SymbolicSparseColMatRef::new_checked(m, m, &col_ptr, None, &row_idx);
-        let symbolic =
-            faer::sparse::linalg::solvers::SymbolicLlt::try_new(sym, faer::Side::Lower).ok()?;
+        // What `SymbolicLlt::try_new` computes (approximate minimum degree ordering, default
+        // parameters), kept unwrapped for the numeric calls with reused buffers.
+        let symbolic = faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(
+            sym,
+            faer::Side::Lower,
+            Default::default(),
+            Default::default(),
+        )
+        .ok()?;
         Some(Self {
             fixed: fixed.to_vec(),
             free,
@@ -2944,10 +3036,53 @@ impl DirectPattern {
     }
 }
 
-/// A numeric Cholesky factorization of one step's matrix.
+/// A numeric Cholesky factorization of one step's matrix: the values of the factor of
+/// [`DirectPattern::symbolic`].
 struct Factor {
     pattern: Arc<DirectPattern>,
-    llt: faer::sparse::linalg::solvers::Llt<usize, f64>,
+    values: Vec<f64>,
+}
+
+/// The direct solver's buffers, kept between steps: the lower triangle of the step matrix on
+/// the free coordinates, the factor's values and faer's scratch memory. A clone starts empty.
+#[derive(Default)]
+struct FactorBuffers {
+    matrix: Vec<f64>,
+    factor: Vec<f64>,
+    scratch: Scratch,
+}
+
+impl Clone for FactorBuffers {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
+impl std::fmt::Debug for FactorBuffers {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FactorBuffers")
+            .field("matrix", &self.matrix.len())
+            .field("factor", &self.factor.len())
+            .finish_non_exhaustive()
+    }
+}
+
+/// faer scratch memory, reallocated only when a larger request comes.
+#[derive(Default)]
+struct Scratch(Option<(faer::dyn_stack::StackReq, faer::dyn_stack::MemBuffer)>);
+
+impl Scratch {
+    /// A buffer that satisfies `req`.
+    fn get(&mut self, req: faer::dyn_stack::StackReq) -> &mut faer::dyn_stack::MemBuffer {
+        if self
+            .0
+            .as_ref()
+            .is_none_or(|(have, _)| have.or(req) != *have)
+        {
+            self.0 = Some((req, faer::dyn_stack::MemBuffer::new(req)));
+        }
+        &mut self.0.as_mut().expect("just set").1
+    }
 }
 
 /// How a step's systems `A x = b` are solved.
@@ -2965,13 +3100,23 @@ impl Solve {
         match self {
             Solve::Pcg(pre) => pcg(op, pre, b, x, max_it, tol),
             Solve::Direct(f) => {
-                use faer::linalg::solvers::Solve as _;
                 let free = &f.pattern.free;
                 let mut rhs = faer::Mat::<f64>::zeros(free.len(), 1);
                 for (k, &i) in free.iter().enumerate() {
                     rhs[(k, 0)] = b[i];
                 }
-                f.llt.solve_in_place(rhs.as_mut());
+                // As `Llt::solve_in_place` does it.
+                let par = faer::get_global_parallelism();
+                let symbolic = &f.pattern.symbolic;
+                faer::sparse::linalg::cholesky::LltRef::<'_, usize, f64>::new(symbolic, &f.values)
+                    .solve_in_place_with_conj(
+                        faer::Conj::No,
+                        rhs.as_mut(),
+                        par,
+                        faer::dyn_stack::MemStack::new(&mut faer::dyn_stack::MemBuffer::new(
+                            symbolic.solve_in_place_scratch::<f64>(1, par),
+                        )),
+                    );
                 x.iter_mut().for_each(|v| *v = 0.0);
                 for (k, &i) in free.iter().enumerate() {
                     x[i] = rhs[(k, 0)];
