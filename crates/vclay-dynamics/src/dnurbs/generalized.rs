@@ -274,21 +274,40 @@ impl Gram {
     }
 
     /// Adds `sum_a coef[a] J^a^T J^a` for one Jacobian (same columns as at construction):
-    /// appends the rows of the kinds with a nonzero coefficient.
+    /// appends the rows of the kinds with a nonzero coefficient. Each column's six (or
+    /// eighteen) values are read once and stored into the rows (reading one row at a time
+    /// gathered every value with the stride of a column).
     fn add(&mut self, lj: &LocalJacobian, coef: &[f64; 6]) {
-        let (nb, nv) = (self.nb, self.nv);
+        let (nb, nv, ld) = (self.nb, self.nv, self.ld());
         debug_assert_eq!((lj.blocks.len(), lj.vectors.len()), (nb, nv));
+        let mut kinds = [0usize; 6];
+        let mut nk = 0;
         for (m, &c) in coef.iter().enumerate() {
-            if c == 0.0 {
-                continue;
+            if c != 0.0 {
+                kinds[nk] = m;
+                nk += 1;
             }
-            let at = self.x.len();
-            self.x.extend(lj.blocks.iter().map(|(_, r)| r[m]));
-            for k in 0..3 {
-                self.x.extend(lj.vectors.iter().map(|(_, g)| g[m][k]));
+        }
+        let kinds = &kinds[..nk];
+        let at = self.x.len();
+        self.x.resize(at + nk * ld, 0.0);
+        let rows = &mut self.x[at..];
+        for (c, (_, r)) in lj.blocks.iter().enumerate() {
+            for (slot, &m) in kinds.iter().enumerate() {
+                rows[slot * ld + c] = r[m];
             }
-            self.x.extend([0.0; GEMM_PAD]);
-            self.cx.extend(self.x[at..].iter().map(|v| c * v));
+        }
+        for (j, (_, g)) in lj.vectors.iter().enumerate() {
+            for (slot, &m) in kinds.iter().enumerate() {
+                for k in 0..3 {
+                    rows[slot * ld + nb + k * nv + j] = g[m][k];
+                }
+            }
+        }
+        for (slot, &m) in kinds.iter().enumerate() {
+            let c = coef[m];
+            let row = &self.x[at + slot * ld..at + (slot + 1) * ld];
+            self.cx.extend(row.iter().map(|v| c * v));
         }
     }
 
@@ -353,6 +372,20 @@ impl Gram {
     /// Writes the accumulated matrix into `out`, dense and symmetric (row-major `nd x nd`, the
     /// local order of [`LocalJacobian::dofs`]; every entry is set).
     fn write(&mut self, out: &mut [f64]) {
+        let (nb, nd) = (self.nb, 3 * self.nb + self.nv);
+        for a in 0..3 * nb {
+            for b in 0..nb {
+                // The block pair is `v I`: only the matching component is nonzero.
+                out[a * nd + 3 * b..a * nd + 3 * b + 3].copy_from_slice(&[0.0; 3]);
+            }
+        }
+        self.write_nonzero(out);
+    }
+
+    /// [`Self::write`] without the structural zeros (a block pair's entries between different
+    /// components): `out` must hold zeros there already (a zeroed buffer, or one this shape
+    /// was written into before).
+    fn write_nonzero(&mut self, out: &mut [f64]) {
         self.finish();
         let (nb, nv, nc) = (self.nb, self.nv, self.nc());
         let nd = 3 * nb + nv;
@@ -361,10 +394,7 @@ impl Gram {
             for k in 0..3 {
                 let o = &mut out[(3 * a + k) * nd..(3 * a + k + 1) * nd];
                 for b in 0..nb {
-                    let v = row[b];
-                    // The block pair is `v I`: only the matching component is nonzero.
-                    o[3 * b..3 * b + 3].copy_from_slice(&[0.0; 3]);
-                    o[3 * b + k] = v;
+                    o[3 * b + k] = row[b];
                 }
                 o[3 * nb..].copy_from_slice(&row[nb + k * nv..nb + (k + 1) * nv]);
             }
@@ -1021,6 +1051,177 @@ pub fn denominator_radius(values: &[f64], nodes: &[f64]) -> (f64, f64) {
     (radius.max(1.0), spread)
 }
 
+/// Relative margin on the ellipse radius within which [`slice_order`] trusts its closed-form
+/// zeros: both ends of `[r (1 - m), r (1 + m)]` must give the same order. The verified zeros
+/// (see [`closed_form_radius`]) and nalgebra's companion eigenvalues agree to about `1e-5` of
+/// the radius even at a double zero, far inside the margin.
+const FAST_RADIUS_MARGIN: f64 = 1e-3;
+
+/// The Gauss order `rule` picks for one slice of denominator samples: the integer
+/// `rule.order(degree, r, spread)` with `(r, spread)` from [`denominator_radius`]. For a
+/// polynomial of degree at most 3 (every cubic or lower geometry) the zeros come in closed form
+/// ([`closed_form_radius`], about 30x cheaper than the companion eigenvalues, which were 10-15 %
+/// of a dynamic-weight step); that order is taken when the whole interval of
+/// [`FAST_RADIUS_MARGIN`] around the radius gives it, so the result is the order the companion
+/// eigenvalues give. Otherwise (an order boundary within the margin, higher degrees, zeros that
+/// fail the check) [`denominator_radius`] decides.
+fn slice_order(rule: QuadratureRule, degree: usize, values: &[f64], nodes: &[f64]) -> usize {
+    if let Some((r, spread)) = closed_form_radius(values, nodes) {
+        let lo = rule.order(degree, r * (1.0 - FAST_RADIUS_MARGIN), spread);
+        if lo == rule.order(degree, r * (1.0 + FAST_RADIUS_MARGIN), spread) {
+            return lo;
+        }
+    }
+    let (r, spread) = denominator_radius(values, nodes);
+    rule.order(degree, r, spread)
+}
+
+/// [`denominator_radius`] for up to 4 samples (a polynomial of degree at most 3) from the
+/// closed-form zeros: the same monomial coefficients (the same LU solve) and degree; the cubic's
+/// zeros by the trigonometric or Cardano formula (Numerical Recipes section 5.6), each refined by
+/// two Newton steps on the polynomial, then checked against the coefficients (Vieta's
+/// formulas to `1e-9` of the terms' size). `None` when the check fails or the samples are more
+/// than 4 (the caller then uses the eigenvalues).
+fn closed_form_radius(values: &[f64], nodes: &[f64]) -> Option<(f64, f64)> {
+    use nalgebra::{Complex, DVector, Matrix4, Vector4};
+    type C = Complex<f64>;
+    let n = values.len().min(nodes.len());
+    if n > 4 {
+        return None;
+    }
+    let (lo, hi) = values[..n]
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), &w| {
+            (lo.min(w.abs()), hi.max(w.abs()))
+        });
+    if n < 2 || lo.is_nan() || lo <= 0.0 || !hi.is_finite() {
+        return Some((f64::INFINITY, 1.0));
+    }
+    let spread = hi / lo;
+    // The coefficients exactly as `denominator_radius` computes them (the same generic LU).
+    let c: Vec<f64> = if n == 4 {
+        let v = Matrix4::from_fn(|i, j| nodes[i].powi(j as i32));
+        let Some(c) = v.lu().solve(&Vector4::from_column_slice(&values[..4])) else {
+            return Some((f64::INFINITY, spread));
+        };
+        c.iter().copied().collect()
+    } else {
+        let v = nalgebra::DMatrix::from_fn(n, n, |i, j| nodes[i].powi(j as i32));
+        let Some(c) = v.lu().solve(&DVector::from_column_slice(&values[..n])) else {
+            return Some((f64::INFINITY, spread));
+        };
+        c.iter().copied().collect()
+    };
+    let cmax = c.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let mut deg = n - 1;
+    while deg > 0 && c[deg].abs() <= 1e-12 * cmax {
+        deg -= 1;
+    }
+    if deg == 0 {
+        return Some((f64::INFINITY, spread));
+    }
+    // Monic coefficients: z^deg + a[deg-1] z^(deg-1) + ... + a[0].
+    let a: Vec<f64> = c[..deg].iter().map(|x| x / c[deg]).collect();
+    let eval = |z: C| -> (C, C) {
+        let (mut p, mut dp) = (C::new(1.0, 0.0), C::new(0.0, 0.0));
+        for &ak in a.iter().rev() {
+            dp = dp * z + p;
+            p = p * z + ak;
+        }
+        (p, dp)
+    };
+    let mut roots: Vec<C> = match deg {
+        1 => vec![C::new(-a[0], 0.0)],
+        2 => {
+            let (b, c0) = (a[1], a[0]);
+            let disc = b * b - 4.0 * c0;
+            if disc >= 0.0 {
+                let q = -0.5 * (b + b.signum() * disc.sqrt());
+                if q == 0.0 {
+                    vec![C::new(0.0, 0.0); 2]
+                } else {
+                    vec![C::new(q, 0.0), C::new(c0 / q, 0.0)]
+                }
+            } else {
+                let im = 0.5 * (-disc).sqrt();
+                vec![C::new(-0.5 * b, im), C::new(-0.5 * b, -im)]
+            }
+        }
+        _ => {
+            let (a2, a1, a0) = (a[2], a[1], a[0]);
+            let q = (a2 * a2 - 3.0 * a1) / 9.0;
+            let r = (2.0 * a2 * a2 * a2 - 9.0 * a2 * a1 + 27.0 * a0) / 54.0;
+            let shift = a2 / 3.0;
+            if r * r < q * q * q {
+                let theta = (r / (q * q * q).sqrt()).clamp(-1.0, 1.0).acos();
+                let m = -2.0 * q.sqrt();
+                let tau = 2.0 * std::f64::consts::PI / 3.0;
+                (0..3)
+                    .map(|k| C::new(m * (theta / 3.0 + tau * k as f64).cos() - shift, 0.0))
+                    .collect()
+            } else {
+                let big = -r.signum() * (r.abs() + (r * r - q * q * q).sqrt()).cbrt();
+                let small = if big == 0.0 { 0.0 } else { q / big };
+                let re = -0.5 * (big + small) - shift;
+                let im = 0.5 * 3f64.sqrt() * (big - small);
+                vec![
+                    C::new(big + small - shift, 0.0),
+                    C::new(re, im),
+                    C::new(re, -im),
+                ]
+            }
+        }
+    };
+    for z in roots.iter_mut() {
+        for _ in 0..2 {
+            let (p, dp) = eval(*z);
+            if dp.norm() > 0.0 {
+                let step = p / dp;
+                if step.re.is_finite() && step.im.is_finite() {
+                    *z -= step;
+                }
+            }
+        }
+    }
+    // Vieta: the elementary symmetric functions of the zeros against the coefficients.
+    const VIETA: f64 = 1e-9;
+    let close = |x: C, target: f64, size: f64| (x - target).norm() <= VIETA * size;
+    let ok = match deg {
+        1 => true,
+        2 => {
+            let (z1, z2) = (roots[0], roots[1]);
+            close(z1 + z2, -a[1], z1.norm() + z2.norm())
+                && close(z1 * z2, a[0], z1.norm() * z2.norm())
+        }
+        _ => {
+            let (z1, z2, z3) = (roots[0], roots[1], roots[2]);
+            let (n1, n2, n3) = (z1.norm(), z2.norm(), z3.norm());
+            close(z1 + z2 + z3, -a[2], n1 + n2 + n3)
+                && close(
+                    z1 * z2 + z1 * z3 + z2 * z3,
+                    a[1],
+                    n1 * n2 + n1 * n3 + n2 * n3,
+                )
+                && close(z1 * z2 * z3, -a[0], n1 * n2 * n3)
+        }
+    };
+    if !ok
+        || roots
+            .iter()
+            .any(|z| !(z.re.is_finite() && z.im.is_finite()))
+    {
+        return None;
+    }
+    let radius = roots
+        .iter()
+        .map(|&z| {
+            let w = (z * z - 1.0).sqrt();
+            (z + w).norm().max((z - w).norm())
+        })
+        .fold(f64::INFINITY, f64::min);
+    Some((radius.max(1.0), spread))
+}
+
 /// `k` Chebyshev points of the first kind in `[-1, 1]`.
 fn chebyshev_nodes(k: usize) -> Vec<f64> {
     (0..k)
@@ -1069,8 +1270,7 @@ fn element_order<G: GeneralizedGeometry>(
                 continue;
             }
             for slice in list {
-                let (r, spread) = denominator_radius(slice, &nodes);
-                order[d] = order[d].max(rule.order(deg, r, spread));
+                order[d] = order[d].max(slice_order(rule, deg, slice, &nodes));
             }
         }
     }
@@ -1082,6 +1282,9 @@ fn element_order<G: GeneralizedGeometry>(
 struct ElementWork {
     /// The coordinates of `a` and `rhs`: the element's columns less the fixed coordinates.
     dofs: Vec<usize>,
+    /// `(blocks, vectors)` of `dofs` ([`Gram`]'s shape): `a`'s entries between different
+    /// components of two blocks are structural zeros.
+    shape: (usize, usize),
     a: Vec<f64>,
     /// Every column of the element, fixed ones included (the coordinates of `mass_diag`).
     all_dofs: Vec<usize>,
@@ -1151,6 +1354,8 @@ pub struct GeneralizedDnurbs<G: GeneralizedGeometry> {
     /// [`GeneralizedDnurbs::tolerance`], the paper's method).
     pub solver: LinearSolver,
     direct: Option<Arc<DirectPattern>>,
+    /// Buffers of the numeric factorization kept between steps (scratch; no state).
+    factor_buffers: FactorBuffers,
     /// Rows of constraints that act only on fixed coordinates (see [`RowCache`]).
     row_cache: RowCache,
 }
@@ -1211,6 +1416,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             inertial_force: true,
             solver: geometry_solver,
             direct: None,
+            factor_buffers: FactorBuffers::default(),
             row_cache: RowCache::default(),
             substeps: 0,
             keep_fixed_columns: false,
@@ -2005,6 +2211,9 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         if ratio > 1.0 {
             if dynamic {
                 // The caller halves the step: keep the element buffers for the retry.
+                if let Solve::Direct(f) = pre {
+                    self.factor_buffers.factor = f.values;
+                }
                 works.truncate(ne);
                 self.work_pool = works;
                 return Ok(None);
@@ -2088,6 +2297,9 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             self.time += dt;
         }
         self.steps += 1;
+        if let Solve::Direct(f) = pre {
+            self.factor_buffers.factor = f.values;
+        }
         works.truncate(ne);
         self.work_pool = works;
         Ok(Some(StepReport {
@@ -2175,7 +2387,12 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                     let moving = vl.iter().any(|x| *x != 0.0);
                     let shape = lj.free_dofs_into(fixed, &mut w.dofs);
                     let nd = w.dofs.len();
-                    w.a.resize(nd * nd, 0.0);
+                    if w.shape != shape || w.a.len() != nd * nd {
+                        // `write_nonzero` leaves the structural zeros as they are.
+                        w.a.clear();
+                        w.a.resize(nd * nd, 0.0);
+                        w.shape = shape;
+                    }
                     w.rhs.clear();
                     w.rhs.resize(nd, 0.0);
                     (w.elastic, w.kinetic) = (0.0, 0.0);
@@ -2261,7 +2478,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                         gram.add(lj, &coef);
                         lj.apply_transpose_all(&y, &mut w.rhs);
                     }
-                    gram.write(&mut w.a);
+                    gram.write_nonzero(&mut w.a);
                     Ok(())
                 })
             })
@@ -2298,6 +2515,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                 a: vec![0.0; nd * nd],
                 rhs: vec![0.0; nd],
                 dofs,
+                shape: (lj.blocks.len(), lj.vectors.len()),
                 ..Default::default()
             };
             let f = match force {
@@ -2326,9 +2544,18 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             self.direct = Some(Arc::new(DirectPattern::new(pattern, &self.fixed)?));
         }
         let dp = self.direct.clone()?;
-        let mut vals: Vec<f64> = dp.src.iter().map(|&k| full[k]).collect();
+        // The buffers of the last step's factor (faer's `Llt::try_new_with_symbolic` allocated
+        // and zeroed the factor's 13 MB every step of a 32 x 32 sheet, which the numeric
+        // factorization zeroes again itself); the same calls otherwise, so the same values.
+        let FactorBuffers {
+            matrix,
+            factor,
+            scratch,
+        } = &mut self.factor_buffers;
+        matrix.clear();
+        matrix.extend(dp.src.iter().map(|&k| full[k]));
         for (j, &i) in dp.free.iter().enumerate() {
-            vals[dp.col_ptr[j]] += extra_diag[i];
+            matrix[dp.col_ptr[j]] += extra_diag[i];
         }
         let m = dp.free.len();
         let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(
@@ -2338,14 +2565,29 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             None,
             &dp.row_idx,
         );
-        let mat = faer::sparse::SparseColMatRef::new(sym, &vals);
-        let llt = faer::sparse::linalg::solvers::Llt::try_new_with_symbolic(
-            dp.symbolic.clone(),
-            mat,
-            faer::Side::Lower,
-        )
-        .ok()?;
-        Some(Factor { pattern: dp, llt })
+        let mat = faer::sparse::SparseColMatRef::new(sym, matrix);
+        let mut values = std::mem::take(factor);
+        values.resize(dp.symbolic.len_val(), 0.0);
+        let par = faer::get_global_parallelism();
+        let req = dp
+            .symbolic
+            .factorize_numeric_llt_scratch::<f64>(par, Default::default());
+        let buffer = scratch.get(req);
+        dp.symbolic
+            .factorize_numeric_llt::<f64>(
+                &mut values,
+                mat,
+                faer::Side::Lower,
+                Default::default(),
+                par,
+                faer::dyn_stack::MemStack::new(buffer),
+                Default::default(),
+            )
+            .ok()?;
+        Some(Factor {
+            pattern: dp,
+            values,
+        })
     }
 
     /// Lagrange multipliers for the constraints on the linearized step (module docs).
@@ -2486,8 +2728,10 @@ struct Op<'a> {
 struct CsrPattern {
     row_ptr: Vec<usize>,
     cols: Vec<usize>,
-    /// `positions[e][a * nd + b]`: index in `cols` of element `e`'s entry `(a, b)`.
-    positions: Vec<Vec<usize>>,
+    /// Per element, the index in `cols` of each entry of `a` that is not a structural zero
+    /// (see [`ElementWork::shape`]), row by row: a block row `3 b + k` has the `nb` entries
+    /// `3 b' + k` and the `nv` vector columns, a vector row all `nd` entries.
+    positions: Vec<Vec<u32>>,
     /// The fixed coordinates the element columns were built without.
     fixed: Vec<bool>,
 }
@@ -2512,11 +2756,14 @@ impl CsrPattern {
         let positions = works
             .iter()
             .map(|w| {
-                let mut pos = Vec::with_capacity(w.dofs.len() * w.dofs.len());
-                for &i in &w.dofs {
+                let nd = w.dofs.len();
+                let mut pos = Vec::with_capacity(nd * nd);
+                for (a, &i) in w.dofs.iter().enumerate() {
                     let row = &cols[row_ptr[i]..row_ptr[i + 1]];
-                    for &j in &w.dofs {
-                        pos.push(row_ptr[i] + row.binary_search(&j).expect("in pattern"));
+                    for c in nonzero_columns(w.shape, a) {
+                        let j = w.dofs[c];
+                        let p = row_ptr[i] + row.binary_search(&j).expect("in pattern");
+                        pos.push(u32::try_from(p).expect("fewer than 2^32 entries"));
                     }
                 }
                 pos
@@ -2547,22 +2794,49 @@ impl CsrPattern {
             rest = tail;
             at = end;
         }
+        // Structural zeros are skipped: adding +0 changes no sum (a sum that starts at +0 is
+        // never -0), so the values are those of adding every entry.
         slices.into_par_iter().for_each(|(rows, base, out)| {
             for (w, pos) in works.iter().zip(&self.positions) {
+                let (nb, nv) = w.shape;
                 let nd = w.dofs.len();
+                let mut at = 0;
                 for (a, &i) in w.dofs.iter().enumerate() {
+                    let len = if a < 3 * nb { nb + nv } else { nd };
+                    let (p, next) = (&pos[at..at + len], at + len);
+                    at = next;
                     if !rows.contains(&i) {
                         continue;
                     }
-                    let row = a * nd..(a + 1) * nd;
-                    for (&p, &x) in pos[row.clone()].iter().zip(&w.a[row]) {
-                        out[p - base] += x;
+                    let row = &w.a[a * nd..(a + 1) * nd];
+                    if a < 3 * nb {
+                        let k = a % 3;
+                        let (pb, pv) = p.split_at(nb);
+                        for (&p, b) in pb.iter().zip(0..nb) {
+                            out[p as usize - base] += row[3 * b + k];
+                        }
+                        for (&p, &x) in pv.iter().zip(&row[3 * nb..]) {
+                            out[p as usize - base] += x;
+                        }
+                    } else {
+                        for (&p, &x) in p.iter().zip(row) {
+                            out[p as usize - base] += x;
+                        }
                     }
                 }
             }
         });
         v
     }
+}
+
+/// The columns of row `a` of an element matrix of shape `(nb, nv)` that are not structural
+/// zeros, in order (see [`CsrPattern::positions`]).
+fn nonzero_columns((nb, nv): (usize, usize), a: usize) -> impl Iterator<Item = usize> {
+    let nd = 3 * nb + nv;
+    let (blocks, k) = if a < 3 * nb { (nb, a % 3) } else { (0, 0) };
+    let first = if a < 3 * nb { 3 * nb } else { 0 };
+    (0..blocks).map(move |b| 3 * b + k).chain(first..nd)
 }
 
 impl Op<'_> {
@@ -2730,7 +3004,7 @@ struct DirectPattern {
     row_idx: Vec<usize>,
     /// For each stored entry, its index in the CSR values of [`CsrPattern`].
     src: Vec<usize>,
-    symbolic: faer::sparse::linalg::solvers::SymbolicLlt<usize>,
+    symbolic: faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
 }
 
 impl DirectPattern {
@@ -2761,8 +3035,15 @@ impl DirectPattern {
         let m = free.len();
         let sym =
             faer::sparse::SymbolicSparseColMatRef::new_checked(m, m, &col_ptr, None, &row_idx);
-        let symbolic =
-            faer::sparse::linalg::solvers::SymbolicLlt::try_new(sym, faer::Side::Lower).ok()?;
+        // What `SymbolicLlt::try_new` computes (approximate minimum degree ordering, default
+        // parameters), kept unwrapped for the numeric calls with reused buffers.
+        let symbolic = faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(
+            sym,
+            faer::Side::Lower,
+            Default::default(),
+            Default::default(),
+        )
+        .ok()?;
         Some(Self {
             fixed: fixed.to_vec(),
             free,
@@ -2774,10 +3055,53 @@ impl DirectPattern {
     }
 }
 
-/// A numeric Cholesky factorization of one step's matrix.
+/// A numeric Cholesky factorization of one step's matrix: the values of the factor of
+/// [`DirectPattern::symbolic`].
 struct Factor {
     pattern: Arc<DirectPattern>,
-    llt: faer::sparse::linalg::solvers::Llt<usize, f64>,
+    values: Vec<f64>,
+}
+
+/// The direct solver's buffers, kept between steps: the lower triangle of the step matrix on
+/// the free coordinates, the factor's values and faer's scratch memory. A clone starts empty.
+#[derive(Default)]
+struct FactorBuffers {
+    matrix: Vec<f64>,
+    factor: Vec<f64>,
+    scratch: Scratch,
+}
+
+impl Clone for FactorBuffers {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
+impl std::fmt::Debug for FactorBuffers {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FactorBuffers")
+            .field("matrix", &self.matrix.len())
+            .field("factor", &self.factor.len())
+            .finish_non_exhaustive()
+    }
+}
+
+/// faer scratch memory, reallocated only when a larger request comes.
+#[derive(Default)]
+struct Scratch(Option<(faer::dyn_stack::StackReq, faer::dyn_stack::MemBuffer)>);
+
+impl Scratch {
+    /// A buffer that satisfies `req`.
+    fn get(&mut self, req: faer::dyn_stack::StackReq) -> &mut faer::dyn_stack::MemBuffer {
+        if self
+            .0
+            .as_ref()
+            .is_none_or(|(have, _)| have.or(req) != *have)
+        {
+            self.0 = Some((req, faer::dyn_stack::MemBuffer::new(req)));
+        }
+        &mut self.0.as_mut().expect("just set").1
+    }
 }
 
 /// How a step's systems `A x = b` are solved.
@@ -2795,13 +3119,23 @@ impl Solve {
         match self {
             Solve::Pcg(pre) => pcg(op, pre, b, x, max_it, tol),
             Solve::Direct(f) => {
-                use faer::linalg::solvers::Solve as _;
                 let free = &f.pattern.free;
                 let mut rhs = faer::Mat::<f64>::zeros(free.len(), 1);
                 for (k, &i) in free.iter().enumerate() {
                     rhs[(k, 0)] = b[i];
                 }
-                f.llt.solve_in_place(rhs.as_mut());
+                // As `Llt::solve_in_place` does it.
+                let par = faer::get_global_parallelism();
+                let symbolic = &f.pattern.symbolic;
+                faer::sparse::linalg::cholesky::LltRef::<'_, usize, f64>::new(symbolic, &f.values)
+                    .solve_in_place_with_conj(
+                        faer::Conj::No,
+                        rhs.as_mut(),
+                        par,
+                        faer::dyn_stack::MemStack::new(&mut faer::dyn_stack::MemBuffer::new(
+                            symbolic.solve_in_place_scratch::<f64>(1, par),
+                        )),
+                    );
                 x.iter_mut().for_each(|v| *v = 0.0);
                 for (k, &i) in free.iter().enumerate() {
                     x[i] = rhs[(k, 0)];
@@ -3123,5 +3457,157 @@ mod tests {
         }
         assert_eq!(worst(&m), moved);
         assert_eq!(cached(&m), 0);
+    }
+
+    impl Gram {
+        /// The row-by-row `add` this one replaced (the reference it must equal).
+        fn add_reference(&mut self, lj: &LocalJacobian, coef: &[f64; 6]) {
+            let (nb, nv) = (self.nb, self.nv);
+            debug_assert_eq!((lj.blocks.len(), lj.vectors.len()), (nb, nv));
+            for (m, &c) in coef.iter().enumerate() {
+                if c == 0.0 {
+                    continue;
+                }
+                let at = self.x.len();
+                self.x.extend(lj.blocks.iter().map(|(_, r)| r[m]));
+                for k in 0..3 {
+                    self.x.extend(lj.vectors.iter().map(|(_, g)| g[m][k]));
+                }
+                self.x.extend([0.0; GEMM_PAD]);
+                self.cx.extend(self.x[at..].iter().map(|v| c * v));
+            }
+        }
+    }
+
+    /// `Gram::add` stores the rows of the row-by-row version, bit for bit, for every pattern of
+    /// zero coefficients.
+    #[test]
+    fn column_wise_rows_equal_row_wise_rows() {
+        for (nb, nv) in [(16, 16), (3, 5), (0, 4), (7, 0)] {
+            let lj = jacobian(nb, nv, 0.3);
+            for mask in [0b111111u32, 0b000001, 0b101010, 0b011110, 0] {
+                let coef: [f64; 6] = std::array::from_fn(|m| {
+                    if mask >> m & 1 == 1 {
+                        0.5 - m as f64
+                    } else {
+                        0.0
+                    }
+                });
+                let (mut a, mut b) = (Gram::new(&lj), Gram::new(&lj));
+                for _ in 0..3 {
+                    a.add(&lj, &coef);
+                    b.add_reference(&lj, &coef);
+                }
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&a.x), bits(&b.x));
+                assert_eq!(bits(&a.cx), bits(&b.cx));
+            }
+        }
+    }
+
+    /// Measurement (run with `--ignored --nocapture`, release): `Gram::add` against the
+    /// row-by-row reference on a bicubic element's point, alternated in the same process.
+    #[test]
+    #[ignore]
+    fn gram_add_timing() {
+        let lj = jacobian(16, 16, 0.3);
+        let coef = [1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125];
+        let mut g = Gram::new(&lj);
+        let reps = 100_000;
+        for round in 0..6 {
+            for reference in [false, true] {
+                let t = std::time::Instant::now();
+                for r in 0..reps {
+                    if r % 50 == 0 {
+                        g.reset(&lj);
+                    }
+                    if reference {
+                        g.add_reference(std::hint::black_box(&lj), &coef);
+                    } else {
+                        g.add(std::hint::black_box(&lj), &coef);
+                    }
+                }
+                let ns = t.elapsed().as_secs_f64() * 1e9 / reps as f64;
+                eprintln!("round {round} reference {reference}: {ns:.0} ns per point");
+            }
+        }
+    }
+
+    /// A seeded xorshift stream in `[0, 1)` (the tests' randomness).
+    fn uniform_stream(mut x: u64) -> impl FnMut() -> f64 {
+        move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// The closed-form zeros give the order the companion eigenvalues give, slice by slice, over
+    /// random cubic and quadratic denominators whose spreads cover every order (uniform weights
+    /// up to a factor 20, near-double zeros included), and the fast path is taken almost always.
+    #[test]
+    fn closed_form_orders_equal_eigenvalue_orders() {
+        let mut rnd = uniform_stream(0x9e37_79b9_7f4a_7c15);
+        let (mut fast, mut total) = (0usize, 0usize);
+        for tolerance in [1e-4, 1e-8, 1e-12] {
+            let rule = QuadratureRule::WeightAware { tolerance };
+            for degree in [2usize, 3] {
+                let nodes = chebyshev_nodes(degree + 1);
+                for k in 0..4000 {
+                    // Spread 10^(-7..1.3) around 1; every 7th slice a square (double zero).
+                    let eps = 10f64.powf(-7.0 + 8.3 * rnd());
+                    let values: Vec<f64> = if k % 7 == 0 {
+                        let z0 = 1.0 + 3.0 * rnd() / eps.sqrt();
+                        nodes.iter().map(|t| (t - z0) * (t - z0)).collect()
+                    } else {
+                        (0..=degree).map(|_| 1.0 + eps * rnd()).collect()
+                    };
+                    let (r, spread) = denominator_radius(&values, &nodes);
+                    let exact = rule.order(degree, r, spread);
+                    assert_eq!(
+                        slice_order(rule, degree, &values, &nodes),
+                        exact,
+                        "{values:?}"
+                    );
+                    total += 1;
+                    if let Some((rf, sf)) = closed_form_radius(&values, &nodes) {
+                        assert_eq!(sf.to_bits(), spread.to_bits());
+                        assert!(
+                            (rf - r).abs() <= 1e-6 * r || (rf.is_infinite() && r.is_infinite()),
+                            "{rf} against {r} for {values:?}"
+                        );
+                        fast += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            fast * 100 >= total * 99,
+            "fast path taken {fast} of {total}"
+        );
+    }
+
+    /// The 4 x 4 Vandermonde solve of the closed-form path gives the coefficients of the
+    /// dynamic-size solve of `denominator_radius` bit for bit (the degree test reads them).
+    #[test]
+    fn static_vandermonde_solve_equals_dynamic_bit_for_bit() {
+        use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
+        let nodes = chebyshev_nodes(4);
+        let mut rnd = uniform_stream(7);
+        for _ in 0..2000 {
+            let values: Vec<f64> = (0..4).map(|_| 0.2 + 3.0 * rnd()).collect();
+            let d = DMatrix::from_fn(4, 4, |i, j| nodes[i].powi(j as i32))
+                .lu()
+                .solve(&DVector::from_column_slice(&values))
+                .unwrap();
+            let s = Matrix4::from_fn(|i, j| nodes[i].powi(j as i32))
+                .lu()
+                .solve(&Vector4::from_column_slice(&values))
+                .unwrap();
+            for k in 0..4 {
+                assert_eq!(d[k].to_bits(), s[k].to_bits());
+            }
+        }
     }
 }
