@@ -334,11 +334,17 @@ fn cube_creases(
     assert_eq!(params.len(), mesh.positions.len());
     let on = |t: f64, k: f64| (t - k).abs() < 1e-12;
     let kind = |[u, v]: [f64; 2]| -> Option<&'static str> {
-        if on(u, 1.0 / 3.0) {
+        let on_v_line = [0.0, 0.25, 0.5, 0.75, 1.0].iter().any(|&k| on(v, k));
+        let on_u_line = on(u, 1.0 / 3.0) || on(u, 2.0 / 3.0);
+        // The cube's corners (on a u and a v line at once) are written four times; their
+        // pairs mix the two lines, so they are left out.
+        if on_v_line && on_u_line {
+            None
+        } else if on(u, 1.0 / 3.0) {
             Some("bottom edges")
         } else if on(u, 2.0 / 3.0) {
             Some("top edges")
-        } else if [0.0, 0.25, 0.5, 0.75, 1.0].iter().any(|&k| on(v, k)) {
+        } else if on_v_line {
             Some(if u < 1.0 / 3.0 {
                 "bottom diagonals"
             } else if u > 2.0 / 3.0 {
@@ -385,11 +391,17 @@ fn fig2_swung_cube_is_drawn_with_sharp_edges_that_stay_sharp_away_from_the_force
     let sign = -1.0;
     for (p, n) in mesh.positions.iter().zip(&mesh.normals) {
         let m = p.abs().max();
-        assert!((m - e).abs() < tol, "vertex {p:?} is not on the cube's boundary");
+        assert!(
+            (m - e).abs() < tol,
+            "vertex {p:?} is not on the cube's boundary"
+        );
         // The vertex normal is the normal of a face the vertex lies on.
         let k = n.iamax();
         assert!((n[k].abs() - 1.0).abs() < 1e-9, "normal {n:?} at {p:?}");
-        assert!((p[k] - sign * e * n[k]).abs() < tol, "normal {n:?} at {p:?}");
+        assert!(
+            (p[k] - sign * e * n[k]).abs() < tol,
+            "normal {n:?} at {p:?}"
+        );
     }
     // Every non-degenerate triangle lies in one face of the cube (no chord across an edge:
     // the dihedral angle across each edge is 90 degrees).
@@ -422,7 +434,16 @@ fn fig2_swung_cube_is_drawn_with_sharp_edges_that_stay_sharp_away_from_the_force
     // Sculpted: run the scenario to its end (300 steps).
     let (mesh, s) = display_after(&text, 300);
     let creases = cube_creases(&mesh, &s);
-    eprintln!("{creases:?}");
-    let (lo, _) = creases["vertical edges"];
-    assert!(lo > 80.0, "vertical edges soften to {lo} degrees");
+    // Measured: vertical edges 90 degrees (the sides stay flat and square), bottom and top
+    // edges 79.8 and 78.3 degrees (the poles pulled apart make both faces shallow pyramids,
+    // 14-16 degrees across their diagonals), every C0 line still a crease.
+    let (lo, hi) = creases["vertical edges"];
+    assert!(
+        (lo - 90.0).abs() < 1e-6 && (hi - 90.0).abs() < 1e-6,
+        "vertical edges: {lo}..{hi} degrees"
+    );
+    for k in ["bottom edges", "top edges"] {
+        let (lo, _) = creases[k];
+        assert!(lo > 70.0, "{k} soften to {lo} degrees: {creases:?}");
+    }
 }

@@ -57,7 +57,10 @@ fn sphere_normals_are_radial_even_at_the_poles() {
     // The rational circles' double knots are C0 knots (G1 in space): lines are cut there.
     let sampling = SurfaceSampling::new(&s, [33, 41]);
     assert_eq!(m.positions.len(), sampling.vertex_count());
-    assert!(sampling.pieces[1].len() > 1, "the circle's double knots cut the v lines");
+    assert!(
+        sampling.pieces[1].len() > 1,
+        "the circle's double knots cut the v lines"
+    );
     let sign = m.normals[500].dot(&m.positions[500]).signum();
     for (p, n) in m.positions.iter().zip(&m.normals) {
         assert!(
@@ -180,7 +183,10 @@ fn c0_knots_get_sample_lines_and_split_normals() {
         .collect();
     assert_eq!(crease.len(), 2 * 5);
     let floor_normal = m.normals[0];
-    assert!((floor_normal.z.abs() - 1.0).abs() < 1e-12, "{floor_normal:?}");
+    assert!(
+        (floor_normal.z.abs() - 1.0).abs() < 1e-12,
+        "{floor_normal:?}"
+    );
     let (mut on_floor, mut on_wall) = (0, 0);
     for &k in &crease {
         let n = m.normals[k];
@@ -216,8 +222,14 @@ fn surfaces_without_c0_knots_keep_the_uniform_grid() {
     )
     .unwrap();
     let sampling = SurfaceSampling::new(&s, [7, 9]);
-    assert_eq!(sampling.pieces[0], vec![vclay_core::Interval::new(0.0, 1.0).linspace(7)]);
-    assert_eq!(sampling.pieces[1], vec![vclay_core::Interval::new(0.0, 1.0).linspace(9)]);
+    assert_eq!(
+        sampling.pieces[0],
+        vec![vclay_core::Interval::new(0.0, 1.0).linspace(7)]
+    );
+    assert_eq!(
+        sampling.pieces[1],
+        vec![vclay_core::Interval::new(0.0, 1.0).linspace(9)]
+    );
     let mut m = TriMesh::new();
     tessellate_surface(&s, [7, 9], &mut m).unwrap();
     assert_eq!(m.positions.len(), 7 * 9);
