@@ -46,11 +46,13 @@ fn grid_triangles(nu: usize, nv: usize, flip: bool, base: u32, sink: &mut dyn Me
 /// multiplicity at least the degree, where a sharp edge can be) into pieces, and each piece is
 /// sampled uniformly from its start to its end, both included.
 ///
-/// A piece of length `l` of a domain of width `L` gets `max(1, round((n - 1) l / L))` intervals
-/// for `n` samples on the axis, so a surface without C0 knots keeps the plain uniform grid of
-/// `n` lines, and one with C0 knots gets lines exactly on its creases (a uniform grid misses
-/// them and cuts every sharp edge with a chord: issue 28, the swung cube of `d-nurbs.txt`
-/// Fig 2).
+/// With `n` samples on an axis cut into `P` pieces, the pieces share `n - P` intervals (at least
+/// one each, the others given one by one to the piece whose spacing is widest), so the axis
+/// still has exactly `n` lines (the vertex count, and the memory estimates built on it, stay
+/// `n_u n_v`); a surface without C0 knots keeps the plain uniform grid, and one with C0 knots
+/// gets lines exactly on its creases (a uniform grid misses them and cuts every sharp edge
+/// with a chord: issue 28, the swung cube of `d-nurbs.txt` Fig 2). An axis with more than
+/// `n / 2` pieces (a net finer than the tessellation) is sampled uniformly, without cuts.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SurfaceSampling {
     /// Per axis (`u`, `v`), the pieces' parameter lists, in increasing order; consecutive
@@ -68,7 +70,7 @@ impl SurfaceSampling {
     }
 
     /// The number of vertices [`tessellate_surface`] writes: the sum over piece pairs of
-    /// their products.
+    /// their products, `n_u n_v` for `n_u x n_v` samples (at least 2 each).
     pub fn vertex_count(&self) -> usize {
         let [pu, pv] = &self.pieces;
         let nu: usize = pu.iter().map(Vec::len).sum();
@@ -97,14 +99,28 @@ fn axis_pieces(kv: &KnotVector, samples: usize) -> Vec<Vec<f64>> {
     let mut cuts = vec![d.min];
     cuts.extend(kv.c0_knots());
     cuts.push(d.max);
-    let total = (samples - 1) as f64;
-    cuts.windows(2)
-        .map(|w| {
-            let (a, b) = (w[0], w[1]);
-            let n = ((total * (b - a) / d.length()).round() as usize).max(1);
-            // Interval::linspace, so a surface without C0 knots keeps the old grid bit for bit.
-            vclay_core::Interval::new(a, b).linspace(n + 1)
-        })
+    let pieces = cuts.len() - 1;
+    if 2 * pieces > samples {
+        // More C0 pieces than half the samples (a net finer than the tessellation): the plain
+        // uniform grid, so that the mesh never has more than `samples` lines per axis.
+        return vec![d.linspace(samples)];
+    }
+    // `samples - pieces` intervals in all (each piece's end line is also the next one's start
+    // line), one per piece first, then each to the piece whose spacing is widest.
+    let len: Vec<f64> = cuts.windows(2).map(|w| w[1] - w[0]).collect();
+    let mut k = vec![1usize; pieces];
+    for _ in pieces..samples - pieces {
+        let mut widest = 0;
+        for i in 1..pieces {
+            if len[i] / k[i] as f64 > len[widest] / k[widest] as f64 {
+                widest = i;
+            }
+        }
+        k[widest] += 1;
+    }
+    (0..pieces)
+        // Interval::linspace, so a surface without C0 knots keeps the old grid bit for bit.
+        .map(|i| vclay_core::Interval::new(cuts[i], cuts[i + 1]).linspace(k[i] + 1))
         .collect()
 }
 

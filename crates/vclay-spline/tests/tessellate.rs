@@ -54,9 +54,11 @@ fn sphere_normals_are_radial_even_at_the_poles() {
     let mut m = TriMesh::new();
     tessellate_surface(&s, [33, 41], &mut m).unwrap();
     m.validate().unwrap();
-    // The rational circles' double knots are C0 knots (G1 in space): lines are cut there.
+    // The rational circles' double knots are C0 knots (G1 in space): lines are cut there, and
+    // there are still 33 x 41 of them.
     let sampling = SurfaceSampling::new(&s, [33, 41]);
-    assert_eq!(m.positions.len(), sampling.vertex_count());
+    assert_eq!(m.positions.len(), 33 * 41);
+    assert_eq!(sampling.vertex_count(), 33 * 41);
     assert!(
         sampling.pieces[1].len() > 1,
         "the circle's double knots cut the v lines"
@@ -143,14 +145,21 @@ fn c0_knots_get_sample_lines_and_split_normals() {
     assert_eq!(sampling.pieces[0].len(), 2, "{:?}", sampling.pieces[0]);
     assert_eq!(*sampling.pieces[0][0].last().unwrap(), 0.5);
     assert_eq!(sampling.pieces[0][1][0], 0.5);
-    // 31 intervals over two halves: 16 + 16 rounded, each piece uniform.
-    let lines: usize = sampling.pieces[0].iter().map(Vec::len).sum();
-    assert!((32..=34).contains(&lines), "{lines} lines");
+    // Still 32 lines: 30 intervals, 15 on each half, each half uniform.
+    assert_eq!(
+        sampling.pieces[0][0],
+        vclay_core::Interval::new(0.0, 0.5).linspace(16)
+    );
+    assert_eq!(
+        sampling.pieces[0][1],
+        vclay_core::Interval::new(0.5, 1.0).linspace(16)
+    );
     assert_eq!(sampling.pieces[1], vec![vec![0.0, 0.25, 0.5, 0.75, 1.0]]);
     let mut m = TriMesh::new();
     tessellate_surface(&s, [32, 5], &mut m).unwrap();
     m.validate().unwrap();
-    assert_eq!(m.positions.len(), sampling.vertex_count());
+    assert_eq!(m.positions.len(), 32 * 5);
+    assert_eq!(sampling.vertex_count(), 32 * 5);
     assert_eq!(sampling.vertex_params().len(), m.positions.len());
     // Every vertex on the L, and at its parameters.
     for (p, uv) in m.positions.iter().zip(sampling.vertex_params()) {
@@ -199,6 +208,36 @@ fn c0_knots_get_sample_lines_and_split_normals() {
         }
     }
     assert_eq!((on_floor, on_wall), (5, 5));
+}
+
+#[test]
+fn a_net_finer_than_the_samples_is_sampled_uniformly() {
+    // A bilinear sheet has a C0 knot at each of its 9 interior knots: 10 pieces, more than
+    // half of 8 samples, so the axis is not cut (the mesh keeps at most 8 x 8 vertices); with
+    // 20 samples it is cut at every knot.
+    let rows = (0..11)
+        .map(|i| {
+            (0..2)
+                .map(|j| Vec3::new(i as f64, j as f64, (i % 2) as f64))
+                .collect()
+        })
+        .collect();
+    let mut u = vec![0.0];
+    u.extend((0..=10).map(|i| i as f64 / 10.0));
+    u.push(1.0);
+    let s = NurbsSurface::new([1, 1], [u, vec![0.0, 0.0, 1.0, 1.0]], rows, None).unwrap();
+    let coarse = SurfaceSampling::new(&s, [8, 8]);
+    assert_eq!(coarse.pieces[0].len(), 1);
+    assert_eq!(coarse.vertex_count(), 64);
+    let fine = SurfaceSampling::new(&s, [20, 8]);
+    assert_eq!(fine.pieces[0].len(), 10);
+    assert_eq!(fine.vertex_count(), 20 * 8);
+    for (i, piece) in fine.pieces[0].iter().enumerate() {
+        assert_eq!(
+            (piece[0], piece[piece.len() - 1]),
+            (i as f64 / 10.0, (i + 1) as f64 / 10.0)
+        );
+    }
 }
 
 #[test]
