@@ -121,8 +121,11 @@ pub fn run(args: &SubdivideArgs) -> Result<()> {
     if outcome.inverted_cells > 0 {
         eprintln!(
             "warning: {} of {} cells of the subdivided lattice have non-positive volume \
-             (folded; a single non-convex cell such as tetrahedron-with-holes-paper does this, \
-             docs/formats.md)",
+             (folded; it happens with a control cell whose cell point lies outside it, as \
+             tetrahedron-with-holes-paper's single cell, with a control cell sheared or bent \
+             so much that the smooth surface rule moves its boundary layer through the cells \
+             inside, with the sharp rule at the crease corners of paper-torus and gear, and \
+             with the interior rule at boundary corners; docs/formats.md, `vclay subdivide`)",
             outcome.inverted_cells, outcome.counts.cells
         );
     }

@@ -278,7 +278,12 @@ fn soccer_player_unit() -> Result<Lattice, LatticeError> {
     )?;
     let chest = trunk[0];
     // Arms: shoulder out along x, then down; the left arm (x > 0) swings forward, the right
-    // back.
+    // back. The shoulder is grown from the chest's whole side, so its lower face (the upper
+    // arm's base) runs from the armpit at the pelvis's top corner (z = 1.46) up to the shoulder
+    // (z = 1.71): the upper arm's far face must lie below the armpit. With it at z = 1.56
+    // (until issue 28) the arm's inner edges rose from the armpit, a sheared sliver of a cell
+    // whose boundary layer folded from level 4 on (35 cells at level 4, 290 at level 5 with
+    // the smooth rule); at or below z = 1.46 no cell folds at levels 1-5.
     for side in [1.0, -1.0] {
         let f = s.face(chest, v(side, 0.0, 0.0));
         let (shoulder, _) = s.grow(f, v(0.58 * side, 0.02, 1.94), v(side, 0.0, 0.0), 0.75)?;
@@ -288,17 +293,17 @@ fn soccer_player_unit() -> Result<Lattice, LatticeError> {
             down,
             &[
                 (
-                    v(0.56 * side, 0.02 + swing * 0.4, 1.56),
+                    v(0.56 * side, 0.02 + swing * 0.4, 1.36),
                     v(0.15 * side, swing, -1.0),
                     0.85,
                 ),
                 (
-                    v(0.62 * side, 0.03 + swing, 1.22),
+                    v(0.62 * side, 0.03 + swing, 1.06),
                     v(0.2 * side, swing * 2.0, -1.0),
                     0.85,
                 ),
                 (
-                    v(0.64 * side, 0.04 + swing * 1.3, 1.06),
+                    v(0.64 * side, 0.04 + swing * 1.3, 0.90),
                     v(0.2 * side, swing * 2.0, -1.0),
                     0.8,
                 ),

@@ -142,6 +142,39 @@ fn no_primitive_folds() {
     }
 }
 
+/// Issue 28: `vclay subdivide --primitive soccer-player --levels 4` folded 35 cells (290 at
+/// level 5), all in the boundary layer of the two upper arms at the armpit: the upper arm's far
+/// face lay above the armpit corner, so the cell's inner edges rose from it (a sheared sliver).
+/// The recipe now hangs the arm below the armpit; no cell folds at level 4 with the smooth
+/// rule (level 5, 786,432 cells, is measured with the release CLI: docs/formats.md). The
+/// worst scaled cell volume (volume over the cube of the cell's diameter) also stays above the
+/// level-3 value of the folding recipe (2.6e-3; 1.3e-2 now).
+#[test]
+fn soccer_player_does_not_fold_at_level_4() {
+    let s = solid(gallery::soccer_player(2.0), BoundaryRule::Smooth, 4);
+    let quality = |l: &Lattice| {
+        (0..l.num_cells())
+            .map(|c| {
+                let c = CellId::new(c);
+                let p: Vec<Vec3> = l.cell_vertices(c).iter().map(|&v| l.point(v)).collect();
+                let d = p
+                    .iter()
+                    .flat_map(|a| p.iter().map(move |b| (a - b).norm()))
+                    .fold(0.0, f64::max);
+                l.cell_signed_volume(c) / d.powi(3)
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    assert!(quality(s.lattice(3)) > 1e-2, "{}", quality(s.lattice(3)));
+    let f = folded(s.lattice(4));
+    assert_eq!(
+        f,
+        0,
+        "{f} of {} level-4 cells folded",
+        s.lattice(4).num_cells()
+    );
+}
+
 /// The paper's single cell folds at every hole size (its cell point is in the hollow); the split
 /// lattice has the same points and boundary faces and does not fold.
 #[test]

@@ -37,6 +37,20 @@ impl AxisBasis {
         params: &[f64],
         with_derivs: bool,
     ) -> Result<Self, SplineError> {
+        Self::with_sides(kv, axis, params, with_derivs, &[])
+    }
+
+    /// [`AxisBasis::new`] with the parameters whose `from_left` entry is true evaluated on the
+    /// span that ends there ([`KnotVector::find_span_left`]): at a C0 knot, the basis values
+    /// and derivatives of the piece on the left (its one-sided limit). Entries beyond
+    /// `from_left`'s length count as false.
+    pub fn with_sides(
+        kv: &KnotVector,
+        axis: usize,
+        params: &[f64],
+        with_derivs: bool,
+        from_left: &[bool],
+    ) -> Result<Self, SplineError> {
         let p = kv.degree();
         let w = p + 1;
         let mut spans = Vec::with_capacity(params.len());
@@ -50,7 +64,11 @@ impl AxisBasis {
         let mut tmp = vec![0.0; 2 * w];
         for (i, &u) in params.iter().enumerate() {
             let u = check_param(kv, axis, u)?;
-            let s = kv.find_span(u);
+            let s = if from_left.get(i).copied().unwrap_or(false) {
+                kv.find_span_left(u)
+            } else {
+                kv.find_span(u)
+            };
             spans.push(s);
             if with_derivs {
                 kv.basis_derivatives(s, u, 1, &mut tmp, &mut ws);
@@ -214,6 +232,20 @@ impl NurbsSurface {
         vs: &[f64],
         par: Parallelism,
     ) -> Result<SurfaceGrid, SplineError> {
+        self.eval_grid_with_derivatives_sided(us, vs, [&[], &[]], par)
+    }
+
+    /// [`NurbsSurface::eval_grid_with_derivatives`] with one-sided limits: `from_left[0][i]`
+    /// (`from_left[1][j]`) evaluates `us[i]` (`vs[j]`) on the knot span that ends there
+    /// ([`AxisBasis::with_sides`]), so that at a C0 knot the derivatives are those of the
+    /// piece before it. Missing entries count as false (the piece after, as usual).
+    pub fn eval_grid_with_derivatives_sided(
+        &self,
+        us: &[f64],
+        vs: &[f64],
+        from_left: [&[bool]; 2],
+        par: Parallelism,
+    ) -> Result<SurfaceGrid, SplineError> {
         let n = us.len() * vs.len();
         let mut grid = SurfaceGrid {
             points: vec![Vec3::zeros(); n],
@@ -223,8 +255,8 @@ impl NurbsSurface {
         if n == 0 {
             return Ok(grid);
         }
-        let bu = AxisBasis::new(&self.knots()[0], 0, us, true)?;
-        let bv = AxisBasis::new(&self.knots()[1], 1, vs, true)?;
+        let bu = AxisBasis::with_sides(&self.knots()[0], 0, us, true, from_left[0])?;
+        let bv = AxisBasis::with_sides(&self.knots()[1], 1, vs, true, from_left[1])?;
         let pw = self.homogeneous_points();
         let [p, q] = self.degree();
         let nv = self.dims()[1];

@@ -214,6 +214,37 @@ impl KnotVector {
         (p + idx - 1).clamp(self.first_span, self.last_span)
     }
 
+    /// Span index `i` with `t_i < u <= t_{i+1}`: the span whose polynomial piece ends at `u`
+    /// when `u` is a knot, so that evaluation there gives the limit from the left (one-sided
+    /// derivatives at a C0 knot, for tessellations that split normals along creases). Away
+    /// from knots it equals [`KnotVector::find_span`]; parameters at or before the domain start
+    /// give the first non-empty span.
+    pub fn find_span_left(&self, u: f64) -> usize {
+        let n = self.control_points();
+        let p = self.degree;
+        if u <= self.knots[p] {
+            return self.first_span;
+        }
+        if u > self.knots[n] {
+            return self.last_span;
+        }
+        // Number of knots in t_p..=t_n that are < u, minus one, offset by p.
+        let idx = self.knots[p..=n].partition_point(|&t| t < u);
+        (p + idx - 1).clamp(self.first_span, self.last_span)
+    }
+
+    /// The interior knot values (strictly inside the domain) of multiplicity at least the
+    /// degree: where a spline of this knot vector is only C0 (or discontinuous), so its
+    /// derivatives may jump and a surface may have a crease (a sharp edge).
+    pub fn c0_knots(&self) -> Vec<f64> {
+        let d = self.domain();
+        self.distinct()
+            .into_iter()
+            .filter(|&(t, m)| t > d.min && t < d.max && m >= self.degree.max(1))
+            .map(|(t, _)| t)
+            .collect()
+    }
+
     /// How many knots equal `u` to within [`KnotVector::parameter_tolerance`].
     pub fn multiplicity(&self, u: f64) -> usize {
         let tol = self.parameter_tolerance();

@@ -42,7 +42,7 @@ pub use jacobian::{SparseJacobian, generalized_coordinates};
 pub use knots::{BasisWorkspace, KnotVector, MAX_DEGREE, MAX_DERIVATIVE_ORDER};
 pub use simplex::{SimplexError, SimplexSpline};
 pub use surface::NurbsSurface;
-pub use tessellate::{tessellate_surface, tessellate_volume_boundary};
+pub use tessellate::{SurfaceSampling, tessellate_surface, tessellate_volume_boundary};
 pub use traits::{ParametricCurve, ParametricSurface, ParametricVolume};
 pub use triangular::{
     KnotClouds, TriangularBasis, TriangularError, TriangularNurbs, TriangularPoint, Triangulation,

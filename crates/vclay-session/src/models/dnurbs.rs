@@ -1248,13 +1248,9 @@ impl Nurbs {
         };
         vclay_spline::tessellate_surface(&s, DISPLAY_GRID, &mut mesh)
             .map_err(SessionError::kernel)?;
-        let [du, dv] = vclay_spline::ParametricSurface::domain(&s);
-        let [nu, nv] = DISPLAY_GRID.map(|n| n.max(2));
-        let (us, vs) = (du.linspace(nu), dv.linspace(nv));
-        let params = us
-            .iter()
-            .flat_map(|&u| vs.iter().map(move |&v| [u, v]))
-            .collect();
+        // The tessellation's own vertex parameters (lines on the C0 knots included).
+        let params = vclay_spline::SurfaceSampling::new(&s, DISPLAY_GRID).vertex_params();
+        debug_assert_eq!(params.len(), mesh.positions.len());
         Ok((mesh, params))
     }
 
