@@ -378,9 +378,9 @@ pub fn closest_on_triangle(p: Vec3, [a, b, c]: [Vec3; 3]) -> Vec3 {
 #[cfg(test)]
 mod tests {
 
-    #[test]
-    fn closest_triangle_finds_the_face_point_edge_or_corner_nearest() {
-        // The unit square of z = 0 as two triangles, and one triangle of x = 0 above its edge.
+    /// The unit square of z = 0 as two triangles, and one triangle of x = 0 standing on its
+    /// edge from (0, 0, 0) to (0, 1, 0).
+    fn square_and_wall() -> TriMesh {
         let mut m = TriMesh::new();
         m.positions = vec![
             Vec3::new(0.0, 0.0, 0.0),
@@ -390,6 +390,13 @@ mod tests {
             Vec3::new(0.0, 0.0, 1.0),
         ];
         m.triangles = vec![[0, 2, 1], [2, 3, 1], [0, 1, 4]];
+        m
+    }
+
+    #[test]
+    fn closest_triangle_finds_the_face_point_edge_or_corner_nearest() {
+        // The unit square of z = 0 as two triangles, and one triangle of x = 0 above its edge.
+        let m = square_and_wall();
         // Above the inside of the second triangle: its foot.
         let (t, q) = m.closest_triangle(Vec3::new(0.8, 0.8, 0.3)).unwrap();
         assert_eq!(t, 1);
@@ -433,15 +440,7 @@ mod tests {
     #[test]
     fn creases_split_a_cube_corner_and_keep_a_smooth_fan() {
         // Two triangles of the plane z = 0 and one of the plane x = 0 meeting at edge a-b.
-        let mut m = TriMesh::new();
-        m.positions = vec![
-            Vec3::new(0.0, 0.0, 0.0),
-            Vec3::new(0.0, 1.0, 0.0),
-            Vec3::new(1.0, 0.0, 0.0),
-            Vec3::new(1.0, 1.0, 0.0),
-            Vec3::new(0.0, 0.0, 1.0),
-        ];
-        m.triangles = vec![[0, 2, 1], [2, 3, 1], [0, 1, 4]];
+        let m = square_and_wall();
         let c = m.with_creases(30f64.to_radians());
         // Vertices 0 and 1 are on the 90-degree edge: two copies each; 2, 3, 4 one.
         assert_eq!(c.positions.len(), 7);

@@ -7,19 +7,29 @@ use vclay_studio::Options;
 
 use common::{harness, wait_for};
 
-#[test]
-fn a_step_part_opens_as_a_cad_part() {
-    let dir = tempfile::tempdir().unwrap();
-    let plate = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../vclay-io/tests/data/cad/trimmed_plate.step");
+/// The plate of bench/gen_trimmed_parts.py.
+fn plate() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../vclay-io/tests/data/cad/trimmed_plate.step")
+}
+
+/// The studio with the plate opened, paused, after its first frame.
+fn open_plate(dir: &std::path::Path) -> egui_kittest::Harness<'static, vclay_studio::Studio> {
     let mut h = harness(Options {
-        file: Some(plate),
+        file: Some(plate()),
         paused: true,
-        ..common::quiet(dir.path())
+        ..common::quiet(dir)
     });
     wait_for(&mut h, 120, "the part's first frame", |s| {
         !s.frame().models.is_empty()
     });
+    h
+}
+
+#[test]
+fn a_step_part_opens_as_a_cad_part() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = open_plate(dir.path());
     let kind = h
         .state()
         .worker()
@@ -45,9 +55,7 @@ fn a_step_part_opens_as_a_cad_part() {
 fn a_click_with_the_face_tool_chooses_the_face_to_sculpt() {
     use vclay_studio::app::Tool;
     use vclay_studio::worker::{Grab, Request, Worker};
-    let plate = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../vclay-io/tests/data/cad/trimmed_plate.step");
-    let o = vclay_session::open(&plate).unwrap();
+    let o = vclay_session::open(&plate()).unwrap();
     let w = Worker::start(o.session, false);
     let tools = w.query(|s| s.model(None).unwrap().tools()).unwrap();
     let palette = Tool::palette(&tools);
@@ -90,16 +98,7 @@ fn a_click_with_the_face_tool_chooses_the_face_to_sculpt() {
 fn a_one_frame_click_with_the_face_tool_chooses_the_face() {
     use egui::{Event, Key, Modifiers, PointerButton, Vec2};
     let dir = tempfile::tempdir().unwrap();
-    let plate = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../vclay-io/tests/data/cad/trimmed_plate.step");
-    let mut h = harness(Options {
-        file: Some(plate),
-        paused: true,
-        ..common::quiet(dir.path())
-    });
-    wait_for(&mut h, 120, "the part's first frame", |s| {
-        !s.frame().models.is_empty()
-    });
+    let mut h = open_plate(dir.path());
     let face = |h: &egui_kittest::Harness<'static, vclay_studio::Studio>| {
         h.state()
             .worker()
