@@ -150,3 +150,39 @@ fn a_one_frame_click_with_the_face_tool_chooses_the_face() {
     assert!(ys.iter().all(|p| p.y.abs() < 1e-9), "not the front face");
     assert_ne!(face(&h), first);
 }
+
+/// The handles' visibility above the per-frame budget (a part's hundreds of boundary points
+/// against its mesh) comes from a coarse depth buffer: seen from above, points on the plate's
+/// top face are in sight and points on its bottom face are hidden. Before, every handle was
+/// drawn above the budget, so the bottom face's boundary showed through the part.
+#[test]
+fn handles_behind_the_part_are_hidden_above_the_visibility_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let h = open_plate(dir.path());
+    let s = h.state();
+    assert!(s.camera.back().z > 0.2, "the default view looks down");
+    // 10 x 10 points on the top (z = 8) and the bottom (z = 0), away from the hole (radius 6
+    // about (20, 15)) and the fillets (radius 2 along the top edges).
+    let grid = |z: f64| -> Vec<vclay_core::Vec3> {
+        (0..100)
+            .map(|k| {
+                let (i, j) = ((k % 10) as f64, (k / 10) as f64);
+                vclay_core::Vec3::new(3.0 + 3.4 * i, 3.0 + 2.4 * j, z)
+            })
+            .filter(|p| (p.x - 20.0).hypot(p.y - 15.0) > 7.0)
+            .collect()
+    };
+    let (top, bottom) = (grid(8.0), grid(0.0));
+    let tris = s.frame().models[0].mesh.triangles.len();
+    assert!(top.len() * tris > 250_000, "the depth-buffer path is taken");
+    let seen_top = s.visibility(&top);
+    let seen_bottom = s.visibility(&bottom);
+    assert!(
+        seen_top.iter().all(|&v| v),
+        "top points hidden: {seen_top:?}"
+    );
+    assert!(
+        seen_bottom.iter().all(|&v| !v),
+        "bottom points in sight: {seen_bottom:?}"
+    );
+}

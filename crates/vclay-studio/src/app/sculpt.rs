@@ -29,9 +29,12 @@ pub const FIXED_COLOR: Color32 = Color32::from_rgb(70, 140, 255);
 pub const PIN_COLOR: Color32 = Color32::from_rgb(240, 60, 220);
 /// Most point-triangle tests per frame for hiding the handles behind the surface; above it
 /// every handle is drawn. At 4,000,000 a CAD part's 400 fixed boundary points against its
-/// mesh took 2 s a frame in a debug build (about 0.1 s in release), so the budget is 250,000
-/// (0.04 s a debug frame for the plate, tests/cad_part.rs).
+/// mesh took 2 s a frame in a debug build (about 0.1 s in release), so the budget is 250,000;
+/// above it a coarse depth buffer judges them ([`DEPTH_GRID`]).
 const VISIBILITY_BUDGET: usize = 250_000;
+/// Cells across the coarse depth buffer that judges the handles' visibility above
+/// [`VISIBILITY_BUDGET`] (one cell is about 4 points of a 800-point-wide viewport).
+pub const DEPTH_GRID: usize = 200;
 /// Segments of the brush circle.
 const CIRCLE_SEGMENTS: usize = 48;
 /// Largest brush radius relative to the model size, the force brush's and the others'.
@@ -390,9 +393,11 @@ impl Studio {
         axes_gizmo(&painter, rect, &self.camera);
     }
 
-    /// Whether each of `points` is in sight (no display surface between it and the eye). All
-    /// are when the test would cost too much for one frame (many points on a fine mesh).
-    fn visibility(&self, points: &[Vec3]) -> Vec<bool> {
+    /// Whether each of `points` is in sight (no display surface between it and the eye): a ray
+    /// per point against the meshes, or, when that would cost over [`VISIBILITY_BUDGET`]
+    /// point-triangle tests (many points on a fine mesh, a CAD part's boundary), a coarse depth
+    /// buffer of the meshes ([`Studio::visibility_by_depth`]).
+    pub fn visibility(&self, points: &[Vec3]) -> Vec<bool> {
         let tris: usize = self
             .frame
             .models
@@ -400,7 +405,7 @@ impl Studio {
             .map(|m| m.mesh.triangles.len())
             .sum();
         if points.len().saturating_mul(tris) > VISIBILITY_BUDGET {
-            return vec![true; points.len()];
+            return self.visibility_by_depth(points);
         }
         let eye = self.camera.eye();
         points
@@ -413,6 +418,91 @@ impl Studio {
                 };
                 // Distances are in units of |d|: the point itself is at 1.
                 crate::pick::ray_frame(&ray, &self.frame).is_none_or(|h| h.distance > 0.995)
+            })
+            .collect()
+    }
+
+    /// [`Studio::visibility`] by a depth buffer of [`DEPTH_GRID`] cells across (the
+    /// viewport's aspect): each triangle's view depth is written into the cells whose centres
+    /// it covers (1/depth interpolated, which is linear on the screen), and a point is in
+    /// sight when it is no deeper than its cell plus a slack of two cells' width at its depth
+    /// and 1 % of the model size (points lie on the surface; a cell keeps the nearest depth it
+    /// covers). Cost: the triangles' covered cells plus one lookup a point. Triangles with a
+    /// corner behind the eye occlude nothing.
+    fn visibility_by_depth(&self, points: &[Vec3]) -> Vec<bool> {
+        let v = self.viewport;
+        let aspect = (v.height() / v.width().max(1.0)) as f64;
+        let gw = DEPTH_GRID;
+        let gh = ((gw as f64 * aspect).ceil() as usize).clamp(1, 4 * DEPTH_GRID);
+        let (fw, fh) = (gw as f64, gh as f64);
+        let eye = self.camera.eye();
+        let ahead = -self.camera.back();
+        let depth = |p: Vec3| (p - eye).dot(&ahead);
+        let mut zbuf = vec![f64::INFINITY; gw * gh];
+        for m in &self.frame.models {
+            let mesh = &m.mesh;
+            for t in &mesh.triangles {
+                let mut c = [(0.0, 0.0, 0.0); 3];
+                let mut ok = true;
+                for k in 0..3 {
+                    let Some(&p) = mesh.positions.get(t[k] as usize) else {
+                        ok = false;
+                        break;
+                    };
+                    match self.camera.project(p, fw, fh) {
+                        Some((x, y)) => c[k] = (x, y, 1.0 / depth(p)),
+                        None => ok = false,
+                    }
+                }
+                if !ok {
+                    continue;
+                }
+                let [(x0, y0, w0), (x1, y1, w1), (x2, y2, w2)] = c;
+                let area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0);
+                if area.abs() < 1e-12 {
+                    continue;
+                }
+                let lo = |a: f64, b: f64, c: f64| (a.min(b).min(c) - 0.5).ceil().max(0.0);
+                let hi =
+                    |a: f64, b: f64, c: f64, n: f64| (a.max(b).max(c) - 0.5).floor().min(n - 1.0);
+                let (ix0, ix1) = (lo(x0, x1, x2), hi(x0, x1, x2, fw));
+                let (iy0, iy1) = (lo(y0, y1, y2), hi(y0, y1, y2, fh));
+                if ix0 > ix1 || iy0 > iy1 {
+                    continue;
+                }
+                for iy in iy0 as usize..=iy1 as usize {
+                    for ix in ix0 as usize..=ix1 as usize {
+                        let (px, py) = (ix as f64 + 0.5, iy as f64 + 0.5);
+                        let b1 = ((px - x0) * (y2 - y0) - (x2 - x0) * (py - y0)) / area;
+                        let b2 = ((x1 - x0) * (py - y0) - (px - x0) * (y1 - y0)) / area;
+                        let b0 = 1.0 - b1 - b2;
+                        if b0 < 0.0 || b1 < 0.0 || b2 < 0.0 {
+                            continue;
+                        }
+                        let z = 1.0 / (b0 * w0 + b1 * w1 + b2 * w2);
+                        let cell = &mut zbuf[iy * gw + ix];
+                        if z < *cell {
+                            *cell = z;
+                        }
+                    }
+                }
+            }
+        }
+        let size = self.model_size();
+        let cell_angle = 2.0 * (crate::camera::FOV_Y / 2.0).tan() / fh;
+        points
+            .iter()
+            .map(|&p| {
+                let Some((x, y)) = self.camera.project(p, fw, fh) else {
+                    return true;
+                };
+                let (ix, iy) = (x.floor(), y.floor());
+                if ix < 0.0 || iy < 0.0 || ix >= fw || iy >= fh {
+                    return true;
+                }
+                let d = depth(p);
+                let slack = 2.0 * cell_angle * d + 0.01 * size;
+                d <= zbuf[iy as usize * gw + ix as usize] + slack
             })
             .collect()
     }
