@@ -8,8 +8,9 @@ use vclay_io::model::Entity;
 use vclay_session::scenario::Scenario;
 use vclay_spline::{NurbsCurve, NurbsSurface, ParametricCurve, ParametricSurface};
 
-/// Runs a scenario's text for `steps` steps: its final model entity and the model's summary.
-fn run(text: &str, steps: u64) -> (Entity, String) {
+/// Runs a scenario's text for `steps` steps: the scenario (its session as the run left it)
+/// and its final model entity as written.
+fn run_scenario(text: &str, steps: u64) -> (Scenario, Entity) {
     let mut sc = Scenario::parse(text, "s.toml", "s", Path::new(".")).unwrap();
     let out = tempfile::tempdir().unwrap();
     let mut output = sc.output.clone();
@@ -18,12 +19,18 @@ fn run(text: &str, steps: u64) -> (Entity, String) {
     output.csv = None;
     vclay_session::run::run(&mut sc.session, steps, out.path(), &output, &mut |_| {})
         .unwrap_or_else(|e| panic!("{e}"));
-    let summary = sc.session.model(None).unwrap().summary();
     let e = vclay_io::model::read_model(out.path().join("final.json"))
         .unwrap()
         .into_iter()
         .next()
         .unwrap();
+    (sc, e)
+}
+
+/// Runs a scenario's text for `steps` steps: its final model entity and the model's summary.
+fn run(text: &str, steps: u64) -> (Entity, String) {
+    let (sc, e) = run_scenario(text, steps);
+    let summary = sc.session.model(None).unwrap().summary();
     (e, summary)
 }
 
@@ -293,20 +300,8 @@ fn fig9d_glass_7_and_5_becomes_a_glass_from_a_cylinder() {
 /// Runs a surface scenario's text for `steps` steps: the model's display mesh (what is drawn
 /// and exported as OBJ) and its final surface.
 fn display_after(text: &str, steps: u64) -> (vclay_core::TriMesh, NurbsSurface) {
-    let mut sc = Scenario::parse(text, "s.toml", "s", Path::new(".")).unwrap();
-    let out = tempfile::tempdir().unwrap();
-    let mut output = sc.output.clone();
-    output.final_files = vec!["final.json".into()];
-    output.frames.clear();
-    output.csv = None;
-    vclay_session::run::run(&mut sc.session, steps, out.path(), &output, &mut |_| {})
-        .unwrap_or_else(|e| panic!("{e}"));
+    let (sc, e) = run_scenario(text, steps);
     let mesh = sc.session.model(None).unwrap().display_mesh().unwrap();
-    let e = vclay_io::model::read_model(out.path().join("final.json"))
-        .unwrap()
-        .into_iter()
-        .next()
-        .unwrap();
     (mesh, surface(e))
 }
 
