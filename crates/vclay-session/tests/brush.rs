@@ -3,9 +3,6 @@
 use crate::common;
 use common::assert_same;
 
-use std::path::Path;
-
-use vclay_session::scenario::Scenario;
 use vclay_session::{Command, Edit, Session, file};
 
 const CUBE: &str = r#"
@@ -19,9 +16,7 @@ steps = 10
 "#;
 
 fn cube() -> Session {
-    Scenario::parse(CUBE, "c.toml", "c", Path::new("."))
-        .unwrap()
-        .session
+    common::scenario(CUBE)
 }
 
 fn push(falloff: Option<&str>) -> Edit {
@@ -84,17 +79,10 @@ fn an_unknown_falloff_is_refused_and_files_keep_a_known_one() {
     assert!(e.contains("falloff") && e.contains("smooth"), "{e}");
     s.apply(Command::new(push(Some("sharp")))).unwrap();
     s.run(5).unwrap();
-    let v = file::to_value(&s, None).unwrap();
-    let text = serde_json::to_string(&v).unwrap();
+    let text = common::session_text(&s);
     assert!(text.contains("\"falloff\":\"sharp\""));
     let (mut back, _) = file::parse(&text, "b.session").unwrap();
-    s.run(5).unwrap();
-    back.run(5).unwrap();
-    assert_same(
-        &file::to_value(&back, None).unwrap()["models"],
-        &file::to_value(&s, None).unwrap()["models"],
-        "continued with a sharp brush",
-    );
+    common::continue_alike(&mut s, &mut back, 5, "continued with a sharp brush");
     let bad = text.replace("\"falloff\":\"sharp\"", "\"falloff\":\"soft\"");
     let e = file::parse(&bad, "b.session").unwrap_err().to_string();
     assert!(e.contains("unknown falloff \"soft\""), "{e}");
@@ -102,12 +90,7 @@ fn an_unknown_falloff_is_refused_and_files_keep_a_known_one() {
 
 /// Highest data point of the model.
 fn top(s: &Session) -> f64 {
-    s.model(None)
-        .unwrap()
-        .data_points()
-        .iter()
-        .map(|p| p.z)
-        .fold(f64::MIN, f64::max)
+    common::top_z(&s.model(None).unwrap().data_points())
 }
 
 #[test]
@@ -168,12 +151,7 @@ fn the_smooth_brush_flattens_a_sculpted_bump_through_the_physics() {
 
 /// Highest control point of the model.
 fn top_control(s: &Session) -> f64 {
-    s.model(None)
-        .unwrap()
-        .control_points()
-        .iter()
-        .map(|p| p.z)
-        .fold(f64::MIN, f64::max)
+    common::top_z(&s.model(None).unwrap().control_points())
 }
 
 #[test]
@@ -183,9 +161,7 @@ fn the_smooth_brush_fairs_a_dnurbs_bump_and_the_frozen_engine_refuses() {
             "[model]\nkind = \"dnurbs-surface\"\nsize = [8, 8]\nengine = \"{engine}\"\n\
              [simulation]\ndt = 0.01\nsteps = 10\n"
         );
-        Scenario::parse(&text, "s.toml", "s", Path::new("."))
-            .unwrap()
-            .session
+        common::scenario(&text)
     };
     let mut s = sheet("generalized");
     // The sheet's border held, so the rope raises a bump instead of lifting the sheet.
@@ -200,12 +176,11 @@ fn the_smooth_brush_fairs_a_dnurbs_bump_and_the_frozen_engine_refuses() {
         ))))
         .unwrap();
     }
-    let rope: Edit = serde_json::from_value(serde_json::json!({
-        "action": "rope", "name": "r", "from": [0.5, 0.5, 0.0], "to": [0.5, 0.5, 0.5],
-        "stiffness": 200.0
-    }))
-    .unwrap();
-    s.apply(Command::new(rope)).unwrap();
+    common::apply_json(
+        &mut s,
+        serde_json::json!({"action": "rope", "name": "r", "from": [0.5, 0.5, 0.0],
+                           "to": [0.5, 0.5, 0.5], "stiffness": 200.0}),
+    );
     s.run(60).unwrap();
     for e in [
         Edit::Release { name: "r".into() },

@@ -188,12 +188,7 @@ fn a_freed_boundary_leaves_a_gap_that_export_reports() {
     let m = sc.session.model(None).unwrap();
     let part = PartModel::load(&m.save().unwrap()).unwrap();
     assert!(part.boundary().is_empty());
-    let worst = part
-        .gaps()
-        .unwrap()
-        .into_iter()
-        .map(|g| g.gap)
-        .fold(0.0, f64::max);
+    let worst = largest_gap(&part);
     assert!(worst > part.tolerance(), "gap {worst}");
     // The face's moved edges are recomputed from its pcurves on the new surface: the part's
     // edges then follow the sculpted face (at the 65 sample parameters, exactly), and differ
@@ -437,12 +432,7 @@ fn a_clicked_face_becomes_the_sculpted_one_and_the_first_keeps_its_shape() {
         assert!(m.time() > t0);
         let (_, shells) = part.part().unwrap();
         validate_shell(&shells[0]).unwrap();
-        let gap = part
-            .gaps()
-            .unwrap()
-            .iter()
-            .map(|g| g.gap)
-            .fold(0.0, f64::max);
+        let gap = largest_gap(&part);
         assert!(gap <= part.tolerance(), "gap {gap}");
         let min_y = tessellate_shell(&shells[0], 32)
             .unwrap()
@@ -510,4 +500,13 @@ fn sculpt_face_near_a_point_and_the_session_file_continues() {
         PartModel::load(&b.save().unwrap()).unwrap().face(),
         (0, side)
     );
+}
+
+/// The largest gap between the part's edges and its faces' pcurves on the surfaces now.
+fn largest_gap(part: &PartModel) -> f64 {
+    part.gaps()
+        .unwrap()
+        .iter()
+        .map(|g| g.gap)
+        .fold(0.0, f64::max)
 }

@@ -92,105 +92,39 @@ fn rope(param: Option<[f64; 2]>, velocity: Option<[f64; 3]>, to: Option<[f64; 3]
 }
 
 fn common_edits(surface: bool, frozen: bool) -> Vec<Edit> {
+    use serde_json::json;
     let p = if surface { [0.4, 0.6] } else { [0.4, 0.0] };
     let mut v = vec![
         rope(Some(p), None, None),
         rope(None, Some([0.0, 0.0, 1.0]), None),
         rope(Some(p), None, Some([0.0, 0.0, 1.0])),
-        Edit::Force {
-            name: Some("f".into()),
-            near: None,
-            param: Some(p),
-            force: [0.0, 0.0, 3.0],
-            until: Some(0.05),
-        },
-        Edit::Force {
-            name: None,
-            near: Some([0.1, 0.0, 0.0]),
-            param: None,
-            force: [0.0, 1.0, 0.0],
-            until: None,
-        },
-        Edit::Gravity {
-            name: None,
-            g: [0.0, 0.0, -9.8],
-            until: None,
-        },
-        Edit::Data {
-            name: None,
-            points: vec![[0.1, 0.1, 0.3], [-0.2, 0.0, 0.2]],
-            stiffness: Some(20.0),
-        },
-        Edit::Fix(vclay_session::Selection::ids(vec![1, 2])),
-        Edit::Fix(vclay_session::Selection::rest_box(
-            [-5.0, -5.0, -5.0],
-            [0.0, 5.0, 5.0],
-        )),
-        Edit::Free(vclay_session::Selection::nearest([-1.0, 0.0, 0.0])),
-        Edit::Material {
-            cells: None,
-            min: None,
-            max: None,
-            density: None,
-            damping: None,
-            edge_stiffness: None,
-            virtual_stiffness: None,
-            anisotropy: None,
-            mu: Some(2.0),
-            gamma: None,
-            alpha: Some(3.0),
-            beta: Some(0.2),
-        },
-        Edit::PlasticReset,
-        Edit::Stop,
-        Edit::MovePoint {
-            index: 3,
-            to: [0.0, 0.1, 0.3],
-        },
-        Edit::Set {
-            name: "gamma".into(),
-            value: 0.5,
-        },
-        Edit::Set {
-            name: "dt".into(),
-            value: 0.005,
-        },
-        Edit::Integrator {
-            integrator: Some("implicit".into()),
-            dt: Some(0.02),
-        },
     ];
+    v.extend(common::edits(json!([
+        {"action": "force", "name": "f", "param": p, "force": [0.0, 0.0, 3.0], "until": 0.05},
+        {"action": "force", "near": [0.1, 0.0, 0.0], "force": [0.0, 1.0, 0.0]},
+        {"action": "gravity", "g": [0.0, 0.0, -9.8]},
+        {"action": "data", "points": [[0.1, 0.1, 0.3], [-0.2, 0.0, 0.2]], "stiffness": 20.0},
+        {"action": "fix", "points": [1, 2]},
+        {"action": "fix", "min": [-5.0, -5.0, -5.0], "max": [0.0, 5.0, 5.0]},
+        {"action": "free", "near": [-1.0, 0.0, 0.0]},
+        {"action": "material", "mu": 2.0, "alpha": 3.0, "beta": 0.2},
+    ])));
+    v.extend(common::closing_edits(("gamma", 0.5), 0.005, "implicit"));
     if surface {
-        v.push(Edit::Inflate {
-            name: None,
-            pressure: 0.5,
-            until: None,
-        });
+        v.extend(common::edits(
+            json!([{"action": "inflate", "pressure": 0.5}]),
+        ));
     }
     if !frozen {
-        v.push(Edit::SetWeight {
-            index: 2,
-            weight: 1.5,
-        });
-        v.push(Edit::Set {
-            name: "weight_penalty".into(),
-            value: 2.0,
-        });
-        v.push(Edit::Constraint {
-            name: Some("c".into()),
-            kind: "point".into(),
-            param: p,
-            target: Some([0.1, 0.1, 0.1]),
-            normal: None,
-        });
+        v.extend(common::edits(json!([
+            {"action": "set-weight", "index": 2, "weight": 1.5},
+            {"action": "set", "name": "weight_penalty", "value": 2.0},
+            {"action": "constraint", "name": "c", "type": "point", "param": p, "target": [0.1, 0.1, 0.1]},
+        ])));
         if surface {
-            v.push(Edit::Constraint {
-                name: None,
-                kind: "normal".into(),
-                param: p,
-                target: None,
-                normal: Some([0.0, 0.0, 1.0]),
-            });
+            v.extend(common::edits(json!([
+                {"action": "constraint", "type": "normal", "param": p, "normal": [0.0, 0.0, 1.0]},
+            ])));
         }
     }
     v
@@ -215,35 +149,16 @@ fn not_applicable() -> Vec<Edit> {
             until: None,
             falloff: None,
         },
-        Edit::PdeSet {
-            name: "a".into(),
-            value: 1.0,
-        },
+        common::pde_set("a", 1.0),
         Edit::Integrator {
             integrator: Some("explicit".into()),
             dt: None,
         },
-        Edit::Set {
-            name: "nope".into(),
-            value: 1.0,
-        },
+        common::set("nope", 1.0),
         Edit::Release {
             name: "nobody".into(),
         },
-        Edit::Material {
-            cells: None,
-            min: None,
-            max: None,
-            density: Some(1.0),
-            damping: None,
-            edge_stiffness: None,
-            virtual_stiffness: None,
-            anisotropy: None,
-            mu: None,
-            gamma: None,
-            alpha: None,
-            beta: None,
-        },
+        common::edit(serde_json::json!({"action": "material", "density": 1.0})),
         Edit::MovePoint {
             index: 10_000,
             to: [0.0; 3],
@@ -264,16 +179,7 @@ fn frozen_surface_commands() {
         check(session(frozen_sheet()), e);
     }
     let mut s = session(frozen_sheet());
-    fails(
-        s,
-        Edit::Constraint {
-            name: None,
-            kind: "point".into(),
-            param: [0.5, 0.5],
-            target: Some([0.0; 3]),
-            normal: None,
-        },
-    );
+    fails(s, common::point_constraint([0.5, 0.5]));
     s = session(frozen_sheet());
     fails(
         s,
@@ -345,10 +251,7 @@ fn swung_commands() {
                 normal: None,
             }
         },
-        Edit::Set {
-            name: "mu".into(),
-            value: 2.0,
-        },
+        common::set("mu", 2.0),
     ];
     for e in edits {
         check(session(sphere()), e);
@@ -546,12 +449,7 @@ fn every_dnurbs_kind_takes_set_dt_through_the_one_model() {
         let kind = m.kind();
         let dt0 = m.dt();
         let mut s = session(m);
-        let set = |v: f64| {
-            Command::new(Edit::Set {
-                name: "dt".into(),
-                value: v,
-            })
-        };
+        let set = |v: f64| Command::new(common::set("dt", v));
         let e = s.apply(set(-1.0)).unwrap_err().to_string();
         assert!(e.contains("dt = -1: must be positive"), "{kind}: {e}");
         s.apply(set(0.004)).unwrap();

@@ -173,6 +173,7 @@ fn repel_text(kind: &str, extra: &str) -> String {
     };
     format!(
         r#"
+timeline = [{{ at = 0.0, action = "repel", name = "push", center = [0.0, 0.0, -0.3], strength = 0.5, core = 0.1 }}]
 [model]
 kind = "{kind}"
 {shape}
@@ -181,13 +182,6 @@ kind = "{kind}"
 [simulation]
 dt = 0.03
 steps = 1
-[[timeline]]
-at = 0.0
-action = "repel"
-name = "push"
-center = [0.0, 0.0, -0.3]
-strength = 0.5
-core = 0.1
 "#
     )
 }
@@ -231,9 +225,7 @@ fn repel_command_undoes_redoes_and_saved_models_continue_exactly() {
     use vclay_session::{Command, Edit, Session, models};
     // A rational (dynamic-weight) sphere with the weight-aware quadrature and the seam ties.
     let text = "[model]\nkind = \"dnurbs-swung\"\nprimitive = \"sphere\"\n[simulation]\ndt = 0.002\nsteps = 1\n";
-    let mut s = Scenario::parse(text, "r.toml", "r", Path::new("."))
-        .unwrap()
-        .session;
+    let mut s = common::scenario(text);
     let save = |s: &Session| s.model(None).unwrap().save().unwrap();
     s.run(2).unwrap();
     let before = save(&s);

@@ -50,15 +50,21 @@ fn edge_rounding_scenario_steps_exports_and_restores() {
 
 #[test]
 fn bad_keys_are_located() {
-    let bad = common::scenario_error;
-    let base = example("fig08a_edge_rounding.toml");
-    let e = bad(&base.replace("rounding = \"edge\"", "rounding = \"vertex\""));
-    assert!(e.contains("rounding"), "{e}");
-    let e = bad(&base.replace(
-        "rounding = \"edge\"",
-        "rounding = \"edge\"\nquadrature = \"exact\"",
-    ));
-    assert!(e.contains("quadrature"), "{e}");
-    let e = bad(&base.replace("preset = \"Edge rounding\"", "preset = \"Edge sanding\""));
-    assert!(e.contains("preset"), "{e}");
+    let edge = "rounding = \"edge\"";
+    common::refused_variants(
+        "fig08a_edge_rounding.toml",
+        &[
+            (edge, "rounding = \"vertex\"", "rounding"),
+            (
+                edge,
+                "rounding = \"edge\"\nquadrature = \"exact\"",
+                "quadrature",
+            ),
+            (
+                "preset = \"Edge rounding\"",
+                "preset = \"Edge sanding\"",
+                "preset",
+            ),
+        ],
+    );
 }

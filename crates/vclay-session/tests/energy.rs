@@ -1,9 +1,8 @@
 //! Energies that add up (issue 32 item 8): a D-NURBS with a rope or data points reports the
 //! energy stored in their springs as `tools` (it was 0.0), `1/2 k |s(u0) - d0|^2` for a rope.
 
-use std::path::Path;
+use crate::common;
 
-use vclay_session::scenario::Scenario;
 use vclay_session::{Command, Edit};
 
 const SHEET: &str = r#"
@@ -17,20 +16,17 @@ steps = 10
 
 #[test]
 fn a_dnurbs_rope_and_data_points_store_spring_energy() {
-    let mut s = Scenario::parse(SHEET, "s.toml", "s", Path::new("."))
-        .unwrap()
-        .session;
+    let mut s = common::scenario(SHEET);
     assert_eq!(
         s.model(None).unwrap().energy().tools,
         0.0,
         "no tools, no energy"
     );
-    let rope: Edit = serde_json::from_value(serde_json::json!({
-        "action": "rope", "name": "r", "from": [0.5, 0.5, 0.0], "to": [0.5, 0.5, 0.4],
-        "stiffness": 10.0
-    }))
-    .unwrap();
-    s.apply(Command::new(rope)).unwrap();
+    common::apply_json(
+        &mut s,
+        serde_json::json!({"action": "rope", "name": "r", "from": [0.5, 0.5, 0.0],
+                           "to": [0.5, 0.5, 0.4], "stiffness": 10.0}),
+    );
     s.run(1).unwrap();
     let e = s.model(None).unwrap().energy();
     // After a step the cursor is 0.4 above where the sheet's point was: about

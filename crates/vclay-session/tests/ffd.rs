@@ -28,8 +28,18 @@ fn session() -> Session {
     Session::with_model("b", m).unwrap()
 }
 
-fn a(v: &Vec3) -> V3 {
-    [v.x, v.y, v.z]
+/// An FFD move of each `(from, to)` pair (eq 7: the material point under `from` goes to `to`).
+fn ffd_move(pairs: &[(Vec3, Vec3)]) -> Edit {
+    let a = |v: &Vec3| -> V3 { [v.x, v.y, v.z] };
+    Edit::FfdMove {
+        moves: pairs
+            .iter()
+            .map(|(f, t)| PointMove {
+                from: a(f),
+                to: a(t),
+            })
+            .collect(),
+    }
 }
 
 /// Applies `edit`, checks undo restores the state before and redo the state after, bit for
@@ -40,29 +50,13 @@ fn single_point_move_is_exact_and_undoes() {
     let k = 200;
     let p = positions(&s)[k];
     let to = p + Vec3::new(0.3, -0.1, 0.2);
-    round_trip(
-        &mut s,
-        Edit::FfdMove {
-            moves: vec![PointMove {
-                from: a(&p),
-                to: a(&to),
-            }],
-        },
-    );
+    round_trip(&mut s, ffd_move(&[(p, to)]));
     // Eq 7 moves the material point under `from` (mesh vertex k) exactly onto `to`.
     let x = positions(&s)[k];
     assert!((x - to).norm() < 1e-9, "vertex {k} at {x:?}, target {to:?}");
     // A second move starts from the deformed position.
     let to2 = to + Vec3::new(0.0, 0.2, 0.0);
-    round_trip(
-        &mut s,
-        Edit::FfdMove {
-            moves: vec![PointMove {
-                from: a(&to),
-                to: a(&to2),
-            }],
-        },
-    );
+    round_trip(&mut s, ffd_move(&[(to, to2)]));
     assert!((positions(&s)[k] - to2).norm() < 1e-9);
 }
 
@@ -73,21 +67,7 @@ fn multi_point_move_meets_every_target() {
     let (i, j) = (100, 500);
     let ti = pos[i] + Vec3::new(0.2, 0.0, 0.0);
     let tj = pos[j] + Vec3::new(0.0, 0.0, 0.3);
-    round_trip(
-        &mut s,
-        Edit::FfdMove {
-            moves: vec![
-                PointMove {
-                    from: a(&pos[i]),
-                    to: a(&ti),
-                },
-                PointMove {
-                    from: a(&pos[j]),
-                    to: a(&tj),
-                },
-            ],
-        },
-    );
+    round_trip(&mut s, ffd_move(&[(pos[i], ti), (pos[j], tj)]));
     let now = positions(&s);
     assert!((now[i] - ti).norm() < 1e-9);
     assert!((now[j] - tj).norm() < 1e-9);
@@ -97,30 +77,16 @@ fn multi_point_move_meets_every_target() {
 fn conflicting_moves_fail_unchanged_until_least_squares() {
     let mut s = session();
     let p = positions(&s)[300];
-    let conflicting = Edit::FfdMove {
-        moves: vec![
-            PointMove {
-                from: a(&p),
-                to: a(&(p + Vec3::new(0.1, 0.0, 0.0))),
-            },
-            PointMove {
-                from: a(&p),
-                to: a(&(p - Vec3::new(0.1, 0.0, 0.0))),
-            },
-        ],
-    };
+    let conflicting = ffd_move(&[
+        (p, p + Vec3::new(0.1, 0.0, 0.0)),
+        (p, p - Vec3::new(0.1, 0.0, 0.0)),
+    ]);
     let before = saved(&s);
     let e = s.apply(Command::new(conflicting.clone())).unwrap_err();
     assert!(e.to_string().contains("least_squares"), "{e}");
     assert_eq!(saved(&s), before);
     assert!(!s.can_undo());
-    round_trip(
-        &mut s,
-        Edit::Set {
-            name: "least_squares".into(),
-            value: 1.0,
-        },
-    );
+    round_trip(&mut s, common::set("least_squares", 1.0));
     round_trip(&mut s, conflicting);
     // The least-squares compromise of two opposite targets keeps the point in place.
     assert!((positions(&s)[300] - p).norm() < 1e-9);
@@ -134,7 +100,7 @@ fn lattice_edits_undo_and_redo() {
         &mut s,
         Edit::MovePoint {
             index: 20,
-            to: a(&(cp + Vec3::new(0.1, 0.2, -0.1))),
+            to: (cp + Vec3::new(0.1, 0.2, -0.1)).into(),
         },
     );
     round_trip(
@@ -146,22 +112,8 @@ fn lattice_edits_undo_and_redo() {
     );
     // A move on the now rational lattice.
     let p = positions(&s)[250];
-    round_trip(
-        &mut s,
-        Edit::FfdMove {
-            moves: vec![PointMove {
-                from: a(&p),
-                to: a(&(p + Vec3::new(0.0, 0.1, 0.1))),
-            }],
-        },
-    );
-    round_trip(
-        &mut s,
-        Edit::Set {
-            name: "dt".into(),
-            value: 0.01,
-        },
-    );
+    round_trip(&mut s, ffd_move(&[(p, p + Vec3::new(0.0, 0.1, 0.1))]));
+    round_trip(&mut s, common::set("dt", 0.01));
     assert_eq!(s.model(None).unwrap().dt(), 0.01);
 }
 
@@ -172,10 +124,7 @@ fn edits_that_cannot_apply_leave_the_model_unchanged() {
     let bad = [
         Edit::Fix(vclay_session::Selection::ids(vec![0])),
         common::rope(None, [0.0; 3], None, None),
-        Edit::PdeSet {
-            name: "a".into(),
-            value: 1.0,
-        },
+        common::pde_set("a", 1.0),
         Edit::MovePoint {
             index: 10_000,
             to: [0.0; 3],
@@ -184,21 +133,10 @@ fn edits_that_cannot_apply_leave_the_model_unchanged() {
             index: 10_000,
             weight: 1.0,
         },
-        Edit::Set {
-            name: "stiffness".into(),
-            value: 1.0,
-        },
-        Edit::Set {
-            name: "least_squares".into(),
-            value: 0.5,
-        },
+        common::set("stiffness", 1.0),
+        common::set("least_squares", 0.5),
         // Far outside the lattice.
-        Edit::FfdMove {
-            moves: vec![PointMove {
-                from: [50.0, 0.0, 0.0],
-                to: [51.0, 0.0, 0.0],
-            }],
-        },
+        ffd_move(&[(Vec3::new(50.0, 0.0, 0.0), Vec3::new(51.0, 0.0, 0.0))]),
     ];
     for edit in bad {
         let e = s.apply(Command::new(edit.clone())).unwrap_err();
@@ -216,12 +154,7 @@ fn edits_that_cannot_apply_leave_the_model_unchanged() {
 fn steps_advance_the_clock_only_and_undo_restores_it() {
     let mut s = session();
     let p = positions(&s)[50];
-    let edit = Edit::FfdMove {
-        moves: vec![PointMove {
-            from: a(&p),
-            to: a(&(p + Vec3::new(0.0, 0.0, 0.25))),
-        }],
-    };
+    let edit = ffd_move(&[(p, p + Vec3::new(0.0, 0.0, 0.25))]);
     let (at_edit, stepped) = common::steps_then_undo(&mut s, edit, 5, 0.05);
     assert_eq!(stepped, at_edit, "steps change nothing but the clock");
 }
@@ -235,12 +168,10 @@ fn saved_model_continues_bit_for_bit() {
         weight: 0.5,
     }))
     .unwrap();
-    s.apply(Command::new(Edit::FfdMove {
-        moves: vec![PointMove {
-            from: a(&p),
-            to: a(&(p + Vec3::new(0.15, 0.1, 0.0))),
-        }],
-    }))
+    s.apply(Command::new(ffd_move(&[(
+        p,
+        p + Vec3::new(0.15, 0.1, 0.0),
+    )])))
     .unwrap();
     s.run(3).unwrap();
     let mut t = common::reloaded(&s, "b");
@@ -248,13 +179,8 @@ fn saved_model_continues_bit_for_bit() {
     t.run(4).unwrap();
     let q = positions(&s)[400];
     for x in [&mut s, &mut t] {
-        x.apply(Command::new(Edit::FfdMove {
-            moves: vec![PointMove {
-                from: a(&q),
-                to: a(&(q - Vec3::new(0.1, 0.0, 0.1))),
-            }],
-        }))
-        .unwrap();
+        x.apply(Command::new(ffd_move(&[(q, q - Vec3::new(0.1, 0.0, 0.1))])))
+            .unwrap();
     }
     assert_eq!(saved(&t), saved(&s));
     assert_eq!(positions(&t), positions(&s));
@@ -265,11 +191,7 @@ fn pick_finds_mesh_vertices_and_control_points() {
     let s = session();
     let m = s.model(None).unwrap();
     // The bottle's axis is z; a ray along -x at mid-body height hits the body at x = 1.
-    let ray = Ray {
-        origin: Vec3::new(5.0, 0.0, 1.0),
-        direction: Vec3::new(-1.0, 0.0, 0.0),
-    };
-    let hit = m.pick(&ray, 1e-3).expect("hits the bottle");
+    let hit = common::pick_along_minus_x(&s, [5.0, 0.0, 1.0]);
     let Element::MeshVertex { index } = hit.element else {
         panic!("{hit:?}")
     };
@@ -323,11 +245,7 @@ fn exports_meshes_and_the_lattice() {
     let s = session();
     let m = s.model(None).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    for ext in ["obj", "ply", "stl", "glb", "json"] {
-        let path = dir.path().join(format!("b.{ext}"));
-        m.export(&path).unwrap();
-        assert!(std::fs::metadata(&path).unwrap().len() > 0);
-    }
+    common::export_each(&s, dir.path(), "b", &["obj", "ply", "stl", "glb", "json"]);
     let lattice = vclay_io::read_model(dir.path().join("b.json")).unwrap();
     assert_eq!(lattice.len(), 1);
     let e = m.export(&dir.path().join("b.vtu")).unwrap_err();

@@ -9,7 +9,7 @@ use crate::common;
 use common::{positions, round_trip, saved_text as saved};
 use vclay_core::Vec3;
 use vclay_session::models;
-use vclay_session::{Command, Edit, Element, Model, ModelKind, Ray, Session};
+use vclay_session::{Command, Edit, Element, Model, ModelKind, Session};
 
 fn build_at(
     model: &str,
@@ -43,47 +43,23 @@ fn param(s: &Session, name: &str) -> f64 {
 fn setting_a_constant_reshapes_and_undoes() {
     let mut s = session();
     let before = positions(&s);
-    round_trip(
-        &mut s,
-        Edit::PdeSet {
-            name: "a".into(),
-            value: 1.5,
-        },
-    );
+    round_trip(&mut s, common::pde_set("a", 1.5));
     assert_eq!(param(&s, "a"), 1.5);
     // The rim (u = 0 of the bowl) is x = a cos v at t = 0: its first vertex (v = 0) moved.
     let now = positions(&s);
     assert!((now[0].x - 1.5).abs() < 1e-9, "{:?}", now[0]);
     assert!((before[0].x - 1.0).abs() < 1e-9, "{:?}", before[0]);
     // `set` reaches the same constants.
-    round_trip(
-        &mut s,
-        Edit::Set {
-            name: "h0".into(),
-            value: 3.5,
-        },
-    );
+    round_trip(&mut s, common::set("h0", 3.5));
     assert!((positions(&s)[0].z - 3.5).abs() < 1e-9);
-    round_trip(
-        &mut s,
-        Edit::Set {
-            name: "dt".into(),
-            value: 0.25,
-        },
-    );
+    round_trip(&mut s, common::set("dt", 0.25));
     assert_eq!(s.model(None).unwrap().dt(), 0.25);
 }
 
 #[test]
 fn setting_the_time_reshapes_and_undoes() {
     let mut s = session();
-    round_trip(
-        &mut s,
-        Edit::PdeSet {
-            name: "t".into(),
-            value: 1.0,
-        },
-    );
+    round_trip(&mut s, common::pde_set("t", 1.0));
     let m = s.model(None).unwrap();
     assert_eq!(m.time(), 1.0);
     // At t = 1 the rim carries the petals: x(0, 0) = a cos 0 + b sin 0 = 1, but z = h0 + h01 sin(5v).
@@ -100,10 +76,7 @@ fn setting_the_time_reshapes_and_undoes() {
 #[test]
 fn steps_advance_t_and_undo_restores_the_state_before_the_edit() {
     let mut s = session();
-    let edit = Edit::PdeSet {
-        name: "b".into(),
-        value: 0.3,
-    };
+    let edit = common::pde_set("b", 0.3);
     let (at_edit, stepped) = common::steps_then_undo(&mut s, edit, 3, 0.1);
     assert_ne!(stepped, at_edit, "the petals grow with t");
 }
@@ -111,11 +84,7 @@ fn steps_advance_t_and_undo_restores_the_state_before_the_edit() {
 #[test]
 fn saved_model_continues_bit_for_bit() {
     let mut s = session();
-    s.apply(Command::new(Edit::PdeSet {
-        name: "h01".into(),
-        value: 0.4,
-    }))
-    .unwrap();
+    s.apply(Command::new(common::pde_set("h01", 0.4))).unwrap();
     s.run(2).unwrap();
     let mut t = common::reloaded(&s, "g");
     s.run(3).unwrap();
@@ -130,14 +99,8 @@ fn edits_that_cannot_apply_leave_the_model_unchanged() {
     let mut s = session();
     let before = (saved(&s), positions(&s));
     let bad = [
-        Edit::PdeSet {
-            name: "nope".into(),
-            value: 1.0,
-        },
-        Edit::Set {
-            name: "stiffness".into(),
-            value: 1.0,
-        },
+        common::pde_set("nope", 1.0),
+        common::set("stiffness", 1.0),
         Edit::MovePoint {
             index: 0,
             to: [0.0; 3],
@@ -166,11 +129,7 @@ fn edits_that_cannot_apply_leave_the_model_unchanged() {
 fn pick_reports_surface_parameters() {
     let s = session();
     let m = s.model(None).unwrap();
-    let ray = Ray {
-        origin: Vec3::new(5.0, 0.01, 2.8),
-        direction: Vec3::new(-1.0, 0.0, 0.0),
-    };
-    let hit = m.pick(&ray, 1e-3).expect("hits the bowl");
+    let hit = common::pick_along_minus_x(&s, [5.0, 0.01, 2.8]);
     let Element::SurfacePoint { param } = hit.element else {
         panic!("{hit:?}")
     };
@@ -228,11 +187,7 @@ fn exports_the_surface_and_the_spec() {
     let s = session();
     let m = s.model(None).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    for ext in ["obj", "ply", "stl", "glb", "json"] {
-        let path = dir.path().join(format!("g.{ext}"));
-        m.export(&path).unwrap();
-        assert!(std::fs::metadata(&path).unwrap().len() > 0);
-    }
+    common::export_each(&s, dir.path(), "g", &["obj", "ply", "stl", "glb", "json"]);
     // The exported spec compiles.
     vclay_pde::PdeModel::read(dir.path().join("g.json")).unwrap();
     assert!(m.export(&dir.path().join("g.vtu")).is_err());

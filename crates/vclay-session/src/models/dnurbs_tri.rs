@@ -32,8 +32,8 @@ use vclay_dynamics::dnurbs::{
 };
 
 use super::generalized::{
-    GeneralizedKind, GeneralizedModel, check_material_and_dt, constant_material, reference,
-    table_one,
+    GeneralizedKind, GeneralizedModel, check_material_and_dt, constant_material,
+    generalized_accessors, reference, table_one,
 };
 use super::saved::SavedState;
 use super::{SpecError, keyword};
@@ -264,20 +264,9 @@ impl GeneralizedKind for Triangular {
     fn kind(&self) -> ModelKind {
         ModelKind::DnurbsTriangular
     }
-    fn engine(&self) -> &Engine {
-        &self.engine
-    }
-    fn engine_mut(&mut self) -> &mut Engine {
-        &mut self.engine
-    }
+    generalized_accessors!(engine, settings.dt);
     fn exports(&self) -> &'static [&'static str] {
         &["json", "obj", "ply", "stl", "glb"]
-    }
-    fn dt(&self) -> f64 {
-        self.settings.dt
-    }
-    fn set_dt(&mut self, dt: f64) {
-        self.settings.dt = dt;
     }
     fn take(&self) -> (f64, f64) {
         (self.settings.dt, self.settings.weight_penalty)

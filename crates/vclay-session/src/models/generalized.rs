@@ -28,6 +28,27 @@ use crate::model::{
     unsupported_export,
 };
 
+/// The four accessors of [`GeneralizedKind`] that every kind writes the same way: the engine
+/// (shared and mutable) and the time step, from the field paths given
+/// (`generalized_accessors!(engine, settings.dt)`).
+macro_rules! generalized_accessors {
+    ($engine:ident, $($dt:ident).+) => {
+        fn engine(&self) -> &Self::Engine {
+            &self.$engine
+        }
+        fn engine_mut(&mut self) -> &mut Self::Engine {
+            &mut self.$engine
+        }
+        fn dt(&self) -> f64 {
+            self.$($dt).+
+        }
+        fn set_dt(&mut self, dt: f64) {
+            self.$($dt).+ = dt;
+        }
+    };
+}
+pub(crate) use generalized_accessors;
+
 /// A D-NURBS kind of [`GeneralizedModel`]: its engine and what it changes, and the answers
 /// that differ between kinds (defaults: what the triangular and patch kinds answer).
 pub trait GeneralizedKind: Clone + std::fmt::Debug + Send + Sync + 'static {

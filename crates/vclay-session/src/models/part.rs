@@ -292,9 +292,30 @@ impl PartModel {
             simulation,
         };
         let face_model = DnurbsModel::from_keys(ModelKind::DnurbsSurface, &inner, Path::new(""))?;
+        Ok(Self::assemble(
+            face_model,
+            (entities, shells),
+            [shell, face_index, entity],
+            boundary,
+            spec.clone(),
+            before,
+        ))
+    }
+
+    /// The part from its pieces: the sculpted face's model, the part, where the face is
+    /// (`[shell, face index, surface entity]`), its held boundary control points, the keys
+    /// it was built with and the offsets of faces sculpted before.
+    fn assemble(
+        face: DnurbsModel,
+        (entities, shells): (Vec<NamedEntity>, Vec<Shell>),
+        [shell, face_index, entity]: [usize; 3],
+        boundary: Vec<usize>,
+        spec: PartSpec,
+        before: Offsets,
+    ) -> Self {
         let size = part_size(&shells);
-        Ok(Self {
-            face: face_model,
+        Self {
+            face,
             entities,
             shells,
             shell,
@@ -302,9 +323,9 @@ impl PartModel {
             entity,
             boundary,
             size,
-            spec: spec.clone(),
+            spec,
             before,
-        })
+        }
     }
 
     /// Every shell of the part now, meshed crack-free (closed shells closed by index: what
@@ -494,7 +515,6 @@ impl PartModel {
         let boundary: Vec<usize> = serde_json::from_value(field("boundary")?.clone())
             .map_err(|e| SessionError::model(format!("saved cad-part: boundary: {e}")))?;
         let face = DnurbsModel::load(ModelKind::DnurbsSurface, field("dnurbs")?)?;
-        let size = part_size(&shells);
         // Files written before faces could be changed have neither: the default keys, and no
         // faces sculpted before.
         let optional = |k: &str| v.get(k).filter(|x| !x.is_null()).cloned();
@@ -508,18 +528,14 @@ impl PartModel {
                 .map_err(|e| SessionError::model(format!("saved cad-part: before: {e}")))?,
             None => Offsets::default(),
         };
-        Ok(Self {
+        Ok(Self::assemble(
             face,
-            entities,
-            shells,
-            shell,
-            face_index,
-            entity,
+            (entities, shells),
+            [shell, face_index, entity],
             boundary,
-            size,
             spec,
             before,
-        })
+        ))
     }
 
     /// The largest gap over the tolerance, as an error for exporting `path` as a B-rep.

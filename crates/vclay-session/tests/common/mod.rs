@@ -1,5 +1,122 @@
 //! Shared test helpers.
 
+/// An edit from its session-file form: the `action` tag and its keys (docs/formats.md
+/// section 9).
+pub fn edit(v: serde_json::Value) -> vclay_session::Edit {
+    serde_json::from_value(v.clone()).unwrap_or_else(|e| panic!("{v}: {e}"))
+}
+
+/// Applies the edit of session-file form `v` to the session's first model.
+#[track_caller]
+pub fn apply_json(s: &mut vclay_session::Session, v: serde_json::Value) {
+    s.apply(vclay_session::Command::new(edit(v))).unwrap();
+}
+
+/// The highest `z` of `points`.
+pub fn top_z(points: &[vclay_core::Vec3]) -> f64 {
+    points.iter().map(|p| p.z).fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// The whole session file of `s` as text (`vclay_session::file`'s form).
+pub fn session_text(s: &vclay_session::Session) -> String {
+    serde_json::to_string(&vclay_session::file::to_value(s, None).unwrap()).unwrap()
+}
+
+/// `s` and `back` (loaded from `s`'s session file) run on `steps` steps each and must end
+/// with the same models, bit for bit.
+#[track_caller]
+pub fn continue_alike(
+    s: &mut vclay_session::Session,
+    back: &mut vclay_session::Session,
+    steps: u64,
+    what: &str,
+) {
+    s.run(steps).unwrap();
+    back.run(steps).unwrap();
+    let models = |s: &vclay_session::Session| {
+        vclay_session::file::to_value(s, None).unwrap()["models"].clone()
+    };
+    assert_same(&models(back), &models(s), what);
+}
+
+/// The first model's hit of a ray from `origin` along -x (pick tolerance 1e-3).
+#[track_caller]
+pub fn pick_along_minus_x(s: &vclay_session::Session, origin: [f64; 3]) -> vclay_session::Hit {
+    let ray = vclay_session::Ray {
+        origin: origin.into(),
+        direction: vclay_core::Vec3::new(-1.0, 0.0, 0.0),
+    };
+    let m = s.model(None).unwrap();
+    m.pick(&ray, 1e-3)
+        .unwrap_or_else(|| panic!("nothing hit from {origin:?}"))
+}
+
+/// `set name = value` (a parameter of [`vclay_session::Model::params`]).
+pub fn set(name: &str, value: f64) -> vclay_session::Edit {
+    vclay_session::Edit::Set {
+        name: name.into(),
+        value,
+    }
+}
+
+/// `pde-set name = value` (a PDE parameter).
+pub fn pde_set(name: &str, value: f64) -> vclay_session::Edit {
+    vclay_session::Edit::PdeSet {
+        name: name.into(),
+        value,
+    }
+}
+
+/// A point constraint (an unnamed `constraint` of kind `point`) holding the surface point at
+/// `param` at the origin.
+pub fn point_constraint(param: [f64; 2]) -> vclay_session::Edit {
+    vclay_session::Edit::Constraint {
+        name: None,
+        kind: "point".into(),
+        param,
+        target: Some([0.0; 3]),
+        normal: None,
+    }
+}
+
+/// Exports the session's first model as `dir/stem.ext` for each of `exts`; each file is written
+/// and not empty.
+#[track_caller]
+pub fn export_each(s: &vclay_session::Session, dir: &std::path::Path, stem: &str, exts: &[&str]) {
+    let m = s.model(None).unwrap();
+    for ext in exts {
+        let path = dir.join(format!("{stem}.{ext}"));
+        m.export(&path).unwrap_or_else(|e| panic!("{ext}: {e}"));
+        assert!(std::fs::metadata(&path).unwrap().len() > 0, "{ext}: empty");
+    }
+}
+
+/// Edits from an array of their session-file forms.
+pub fn edits(v: serde_json::Value) -> Vec<vclay_session::Edit> {
+    let serde_json::Value::Array(a) = v else {
+        panic!("not an array: {v}")
+    };
+    a.into_iter().map(edit).collect()
+}
+
+/// The edits every control-net kind takes, in their session-file form: plastic reset, stop,
+/// moving point 3, setting the material key `key`, `set dt` and a change to `integrator` at
+/// half that step.
+pub fn closing_edits(
+    (key, value): (&str, f64),
+    dt: f64,
+    integrator: &str,
+) -> Vec<vclay_session::Edit> {
+    edits(serde_json::json!([
+        {"action": "plastic-reset"},
+        {"action": "stop"},
+        {"action": "move-point", "index": 3, "to": [0.1, 0.2, 0.3]},
+        {"action": "set", "name": key, "value": value},
+        {"action": "set", "name": "dt", "value": dt},
+        {"action": "integrator", "integrator": integrator, "dt": dt / 2.0},
+    ]))
+}
+
 /// The first place where two JSON values differ (`None` if equal), with both values
 /// shortened: keeps failure messages readable when saved models are large.
 pub fn first_difference(a: &serde_json::Value, b: &serde_json::Value) -> Option<String> {
@@ -295,4 +412,24 @@ pub fn scenario_error(text: &str) -> String {
     vclay_session::scenario::Scenario::parse(text, "bad.toml", "bad", std::path::Path::new("."))
         .unwrap_err()
         .to_string()
+}
+
+/// For each `(from, to, says)`: the example scenario `name` with its first `from` replaced by
+/// `to` is refused with a message containing `says`.
+#[track_caller]
+pub fn refused_variants(name: &str, cases: &[(&str, &str, &str)]) {
+    let base = example(name);
+    for (from, to, says) in cases {
+        assert!(base.contains(from), "{name} has no `{from}`");
+        let e = scenario_error(&base.replacen(from, to, 1));
+        assert!(e.contains(says), "{from} -> {to}: {e}");
+    }
+}
+
+/// Parses the scenario `text` (errors panic) into its session.
+#[track_caller]
+pub fn scenario(text: &str) -> vclay_session::Session {
+    vclay_session::scenario::Scenario::parse(text, "t.toml", "t", std::path::Path::new("."))
+        .unwrap_or_else(|e| panic!("{e}"))
+        .session
 }
