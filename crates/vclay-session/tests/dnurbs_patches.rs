@@ -227,3 +227,43 @@ fn too_many_control_points_are_refused_before_building() {
         .to_string();
     assert!(e.contains("24576 control points"), "{e}");
 }
+
+/// The patches' ropes and forces go through the shared tool table (`ToolHost`): unnamed tools
+/// are named by handle, names are unique, `move-rope` ends a rope's path, releases follow the
+/// table's rule, and the session-file form keeps them so that a reloaded model continues bit
+/// for bit.
+#[test]
+fn patch_tools_share_the_tool_table_and_survive_saving() {
+    use serde_json::json;
+    let mut s = run(&example("fig_patches_g1.toml"), 2).session;
+    let dt = s.model(None).unwrap().dt();
+    let t0 = s.model(None).unwrap().time();
+    common::apply_json(
+        &mut s,
+        json!({"action": "force", "near": [0.5, 0.5, 0.0], "force": [0.0, 0.0, 1.0],
+               "until": t0 + 3.0 * dt}),
+    );
+    let said = &s.log().last().unwrap().message;
+    assert!(said.starts_with("force `force1` at parameter"), "{said}");
+    let taken = s.apply(vclay_session::Command::new(common::edit(
+        json!({"action": "rope", "name": "force1", "from": [0.5, 0.5, 0.0]}),
+    )));
+    assert!(taken.unwrap_err().to_string().contains("already active"));
+    common::apply_json(
+        &mut s,
+        json!({"action": "move-rope", "name": "pull", "to": [0.2, 0.5, 0.4]}),
+    );
+    let summary = |s: &vclay_session::Session| s.model(None).unwrap().summary();
+    assert!(summary(&s).contains("1 ropes, 1 forces"), "{}", summary(&s));
+    // Saved and loaded: the same text, and the two continue alike.
+    let mut back = common::reloaded(&s, "again");
+    for _ in 0..4 {
+        s.step().unwrap();
+        back.step().unwrap();
+    }
+    assert_eq!(common::positions(&s), common::positions(&back));
+    // The force was released by the table's rule (its `until` is 3 steps after t0); the
+    // moved rope stays.
+    assert!(summary(&s).contains("1 ropes, 0 forces"), "{}", summary(&s));
+    assert_eq!(summary(&s), summary(&back));
+}

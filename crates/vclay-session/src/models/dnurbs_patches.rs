@@ -21,9 +21,10 @@
 //! are refused with a message.
 //!
 //! The model is [`GeneralizedModel`] over `GeneralizedDnurbs<PatchesGeometry>`; this file holds
-//! what is the kind's own ([`Patches`]): its keys, how the patches and joins are built, its
-//! ropes and forces (a cursor path and release rule of their own, kept by session files), the
-//! patch control nets, the model JSON export and the saved settings.
+//! what is the kind's own ([`Patches`]): its keys, how the patches and joins are built, the
+//! forces of its ropes and point forces (named and scheduled by the shared
+//! [`crate::tools::ToolTable`], saved in the layout earlier builds wrote), the patch control
+//! nets, the model JSON export and the saved settings.
 
 use std::path::{Path, PathBuf};
 
@@ -47,6 +48,7 @@ use crate::command::Edit;
 use crate::command::RopeRequest;
 use crate::error::SessionError;
 use crate::model::{LineRole, LineSet, ModelKind};
+use crate::tools::{CursorPath, ScheduledTool, ToolHost, ToolTable, v3};
 
 /// Default display samples per patch and direction.
 pub const DEFAULT_TESSELLATION: usize = 24;
@@ -83,10 +85,11 @@ struct Settings {
     dt: f64,
 }
 
-/// A rope: a delta spring (eq 19) from the material point `param` to a cursor.
+/// A rope as session files keep it: a delta spring (eq 19) from the material point `param` to
+/// a cursor moving linearly from `from` at `start` to `to` at `until`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct Rope {
+struct SavedRope {
     name: String,
     param: [f64; 2],
     from: [f64; 3],
@@ -97,37 +100,160 @@ struct Rope {
     stiffness: f64,
 }
 
-impl Rope {
-    fn cursor(&self, t: f64) -> Vec3 {
-        let s = if self.until > self.start {
-            ((t - self.start) / (self.until - self.start)).clamp(0.0, 1.0)
-        } else if t >= self.start {
-            1.0
-        } else {
-            0.0
-        };
-        let (a, b) = (Vec3::from(self.from), Vec3::from(self.to));
-        a + (b - a) * s
-    }
-}
-
-/// A constant force at a material point.
+/// A constant force at a material point as session files keep it (`until`: its release).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct PointForce {
+struct SavedForce {
     name: String,
     param: [f64; 2],
     force: [f64; 3],
     until: Option<f64>,
 }
 
-/// Tools and counters that evolve with the edits.
+/// The tools as session files keep them: ropes, then forces (the layout written before the
+/// shared [`ToolTable`], so that those files load and continue unchanged).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct Tools {
-    ropes: Vec<Rope>,
-    forces: Vec<PointForce>,
+struct SavedTools {
+    ropes: Vec<SavedRope>,
+    forces: Vec<SavedForce>,
+    /// A counter of the old naming of unnamed tools; kept as read.
     next: usize,
+}
+
+/// What a tool's handle holds: where it acts (a global parameter) and how.
+#[derive(Clone, Debug, PartialEq)]
+enum Slot {
+    /// A delta spring (eq 19) to a cursor; `cursor` is where it is when the tool has no path
+    /// (after `move-rope`).
+    Rope {
+        param: [f64; 2],
+        stiffness: f64,
+        cursor: [f64; 3],
+    },
+    /// A constant force.
+    Point { param: [f64; 2], force: [f64; 3] },
+}
+
+/// The tools: named and scheduled by the shared [`ToolTable`] (naming, cursor paths, release
+/// times and messages are those of every kind, [`crate::tools::tool_edit`]); a handle is an
+/// index into `slots`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(from = "SavedTools", into = "SavedTools")]
+pub struct Tools {
+    table: ToolTable,
+    slots: Vec<Option<Slot>>,
+    next: usize,
+}
+
+impl Tools {
+    /// The active tools of `action` with their slots, in the order they were attached.
+    fn active<'a>(
+        &'a self,
+        action: &'a str,
+    ) -> impl Iterator<Item = (&'a ScheduledTool, &'a Slot)> {
+        self.table
+            .tools
+            .iter()
+            .filter(move |e| e.action == action)
+            .filter_map(|e| Some((e, self.slots.get(e.handle)?.as_ref()?)))
+    }
+
+    /// The cursor of rope `e` (slot `s`) at time `t`.
+    fn cursor(e: &ScheduledTool, s: &Slot, t: f64) -> Vec3 {
+        match (&e.path, s) {
+            (Some(p), _) => p.at(t),
+            (None, Slot::Rope { cursor, .. }) => v3(*cursor),
+            (None, Slot::Point { .. }) => Vec3::zeros(),
+        }
+    }
+}
+
+impl From<SavedTools> for Tools {
+    fn from(s: SavedTools) -> Self {
+        let mut tools = Tools {
+            next: s.next,
+            ..Tools::default()
+        };
+        for r in s.ropes {
+            let h = tools.slots.len();
+            tools.slots.push(Some(Slot::Rope {
+                param: r.param,
+                stiffness: r.stiffness,
+                cursor: r.to,
+            }));
+            let path = CursorPath::Linear {
+                from: r.from,
+                to: r.to,
+                start: r.start,
+                end: r.until,
+            };
+            tools.table.track(&r.name, "rope", h, Some(path), r.release);
+        }
+        for f in s.forces {
+            let h = tools.slots.len();
+            tools.slots.push(Some(Slot::Point {
+                param: f.param,
+                force: f.force,
+            }));
+            tools.table.track(&f.name, "force", h, None, f.until);
+        }
+        tools
+    }
+}
+
+impl From<Tools> for SavedTools {
+    fn from(t: Tools) -> Self {
+        let ropes = t
+            .active("rope")
+            .filter_map(|(e, s)| {
+                let Slot::Rope {
+                    param,
+                    stiffness,
+                    cursor,
+                } = *s
+                else {
+                    return None;
+                };
+                let (from, to, start, until) = match e.path {
+                    Some(CursorPath::Linear {
+                        from,
+                        to,
+                        start,
+                        end,
+                    }) => (from, to, start, end),
+                    _ => (cursor, cursor, 0.0, 0.0),
+                };
+                Some(SavedRope {
+                    name: e.name.clone(),
+                    param,
+                    from,
+                    to,
+                    start,
+                    until,
+                    release: e.release,
+                    stiffness,
+                })
+            })
+            .collect();
+        let forces = t
+            .active("force")
+            .filter_map(|(e, s)| match *s {
+                Slot::Point { param, force } => Some(SavedForce {
+                    name: e.name.clone(),
+                    param,
+                    force,
+                    until: e.release,
+                }),
+                Slot::Rope { .. } => None,
+            })
+            .collect();
+        SavedTools {
+            ropes,
+            forces,
+            next: t.next,
+        }
+    }
 }
 
 /// The `dnurbs-patches` kind's part of [`GeneralizedModel`]: its engine, settings and tools.
@@ -327,27 +453,24 @@ fn xyz(c: usize) -> std::ops::Range<usize> {
 }
 
 impl Patches {
-    fn name(&mut self, given: Option<&str>, prefix: &str) -> Result<String, SessionError> {
-        let name = match given {
-            Some(n) => n.to_string(),
-            None => {
-                self.tools.next += 1;
-                format!("{prefix}{}", self.tools.next - 1)
-            }
-        };
-        if self.tools.ropes.iter().any(|r| r.name == name)
-            || self.tools.forces.iter().any(|f| f.name == name)
-        {
-            return Err(cmd_err(format!("a tool named {name:?} exists already")));
-        }
-        Ok(name)
+    /// Adds a slot; returns its handle.
+    fn add_slot(&mut self, slot: Slot) -> usize {
+        self.tools.slots.push(Some(slot));
+        self.tools.slots.len() - 1
     }
+}
 
-    /// `rope`: a delta spring (eq 19) to a cursor moving linearly from `from` to `to`.
-    fn rope(&mut self, edit: &Edit) -> Result<String, SessionError> {
-        let Some((r, name, release)) = RopeRequest::of(edit) else {
-            return Err(super::misrouted());
-        };
+/// The patches' ropes and forces as the shared `rope`, `move-rope`, `force` and `release` edits
+/// see them ([`crate::tools::tool_edit`]); a rope is a delta spring (eq 19) to a cursor moving
+/// linearly from `from` to `to` between `start` and `until`, a force is constant.
+impl ToolHost for Patches {
+    /// No field tools: gravity, inflation and repulsion are refused.
+    type Field = std::convert::Infallible;
+    crate::tools::tool_table!(tools.table);
+    fn attach_rope(
+        &mut self,
+        r: &RopeRequest,
+    ) -> Result<(usize, Option<CursorPath>, String), SessionError> {
         if r.velocity.is_some() || r.length.is_some() || r.kernel.is_some() {
             return Err(cmd_err(
                 "a dnurbs-patches rope takes from, param, to, start, until, release and stiffness (not velocity, length or kernel)",
@@ -356,49 +479,57 @@ impl Patches {
         finite3("from", &r.from)?;
         let to = r.to.unwrap_or(r.from);
         finite3("to", &to)?;
-        let k = r.stiffness.unwrap_or(self.settings.k);
-        if !(k.is_finite() && k > 0.0) {
-            return Err(cmd_err(format!("stiffness {k}: must be positive")));
+        let stiffness = r.stiffness.unwrap_or(self.settings.k);
+        if !(stiffness.is_finite() && stiffness > 0.0) {
+            return Err(cmd_err(format!("stiffness {stiffness}: must be positive")));
         }
         let param = param_or_near(&self.engine, r.param, Some(&r.from))?;
-        let name = self.name(name, "rope")?;
         let start = r.start.unwrap_or(self.engine.time());
-        let until = r.until.unwrap_or(start).max(start);
-        self.tools.ropes.push(Rope {
-            name: name.clone(),
-            param,
+        let path = CursorPath::Linear {
             from: r.from,
             to,
             start,
-            until,
-            release,
-            stiffness: k,
-        });
-        Ok(format!("rope `{name}` attached at parameter {param:?}"))
-    }
-
-    /// `force`: a constant force at `param` or at the point nearest `near`.
-    fn force(&mut self, edit: &Edit) -> Result<String, SessionError> {
-        let Edit::Force {
-            name,
-            near,
+            end: r.until.unwrap_or(start).max(start),
+        };
+        let h = self.add_slot(Slot::Rope {
             param,
-            force,
-            until,
+            stiffness,
+            cursor: to,
+        });
+        Ok((h, Some(path), format!("at parameter {param:?}")))
+    }
+    fn attach_force(&mut self, edit: &Edit) -> Result<(usize, String), SessionError> {
+        let Edit::Force {
+            near, param, force, ..
         } = edit
         else {
             return Err(super::misrouted());
         };
         finite3("force", force)?;
         let param = param_or_near(&self.engine, *param, near.as_ref())?;
-        let name = self.name(name.as_deref(), "force")?;
-        self.tools.forces.push(PointForce {
-            name: name.clone(),
+        let h = self.add_slot(Slot::Point {
             param,
             force: *force,
-            until: *until,
         });
-        Ok(format!("force `{name}` at parameter {param:?}"))
+        Ok((h, format!("at parameter {param:?}")))
+    }
+    fn attach_field(&mut self, field: Self::Field) -> Result<usize, SessionError> {
+        match field {}
+    }
+    fn replace_field(&mut self, _handle: usize, field: Self::Field) -> Result<usize, SessionError> {
+        match field {}
+    }
+    fn move_cursor(&mut self, handle: usize, to: [f64; 3]) -> Result<(), SessionError> {
+        finite3("to", &to)?;
+        if let Some(Some(Slot::Rope { cursor, .. })) = self.tools.slots.get_mut(handle) {
+            *cursor = to;
+        }
+        Ok(())
+    }
+    fn detach(&mut self, handle: usize) {
+        if let Some(s) = self.tools.slots.get_mut(handle) {
+            *s = None;
+        }
     }
 }
 
@@ -476,33 +607,43 @@ impl GeneralizedKind for Patches {
             engine.geometry().coordinates().len() / 4,
             self.settings.joins.len(),
             engine.ties().len(),
-            self.tools.ropes.len(),
-            self.tools.forces.len()
+            self.tools.active("rope").count(),
+            self.tools.active("force").count()
         )
     }
-    /// Puts the tools into the engine's force list for a step starting at the engine's time.
+    /// Puts the tools into the engine's force list for a step starting at the engine's time:
+    /// the shared schedule first ([`ToolTable::due`]: releases, then the cursors), then the
+    /// ropes' springs and the forces, ropes first.
     fn before_step(&mut self) {
         let engine = &mut self.engine;
         let t = engine.time();
-        self.tools
-            .ropes
-            .retain(|r| r.release.is_none_or(|rel| t < rel));
-        self.tools.forces.retain(|f| f.until.is_none_or(|u| t < u));
+        for gone in self.tools.table.due(t, self.settings.dt).expired {
+            if let Some(s) = self.tools.slots.get_mut(gone.handle) {
+                *s = None;
+            }
+        }
         let forces = engine.forces_mut();
         forces.clear();
-        for r in &self.tools.ropes {
-            forces.push(Force::Spring {
-                param: r.param,
-                target: Target::Fixed(r.cursor(t)),
-                stiffness: r.stiffness,
-                kernel: None,
-            });
+        for (e, s) in self.tools.active("rope") {
+            if let Slot::Rope {
+                param, stiffness, ..
+            } = *s
+            {
+                forces.push(Force::Spring {
+                    param,
+                    target: Target::Fixed(Tools::cursor(e, s, t)),
+                    stiffness,
+                    kernel: None,
+                });
+            }
         }
-        for f in &self.tools.forces {
-            forces.push(Force::Point {
-                param: f.param,
-                force: Vec3::from(f.force),
-            });
+        for (_, s) in self.tools.active("force") {
+            if let Slot::Point { param, force } = *s {
+                forces.push(Force::Point {
+                    param,
+                    force: Vec3::from(force),
+                });
+            }
         }
     }
     fn mesh(&self) -> Result<TriMesh, SessionError> {
@@ -536,9 +677,11 @@ impl GeneralizedKind for Patches {
         }
         let mut ropes = LineSet::new(LineRole::Ropes);
         let t = engine.time();
-        for r in &self.tools.ropes {
-            if let Some(p) = point_at(engine, r.param) {
-                ropes.segment(p, r.cursor(t));
+        for (e, s) in self.tools.active("rope") {
+            if let Slot::Rope { param, .. } = *s
+                && let Some(p) = point_at(engine, param)
+            {
+                ropes.segment(p, Tools::cursor(e, s, t));
             }
         }
         let f = &engine.state().fixed;
@@ -554,29 +697,7 @@ impl GeneralizedKind for Patches {
         _before: &(GeneralizedState, (f64, Tools)),
     ) -> Result<Done, SessionError> {
         Ok(Done::State(match edit {
-            Edit::Rope { .. } => self.rope(edit)?,
-            Edit::MoveRope { name, to } => {
-                finite3("to", to)?;
-                let r = self
-                    .tools
-                    .ropes
-                    .iter_mut()
-                    .find(|r| &r.name == name)
-                    .ok_or_else(|| cmd_err(format!("no rope named {name:?}")))?;
-                r.from = *to;
-                r.to = *to;
-                format!("rope `{name}` cursor at {to:?}")
-            }
-            Edit::Force { .. } => self.force(edit)?,
-            Edit::Release { name } => {
-                let n = self.tools.ropes.len() + self.tools.forces.len();
-                self.tools.ropes.retain(|r| &r.name != name);
-                self.tools.forces.retain(|f| &f.name != name);
-                if n == self.tools.ropes.len() + self.tools.forces.len() {
-                    return Err(cmd_err(format!("no tool named {name:?}")));
-                }
-                format!("released `{name}`")
-            }
+            _ if crate::tools::is_tool_edit(edit) => crate::tools::tool_edit(self, edit)?,
             Edit::Fix { .. } | Edit::Free { .. } => {
                 let r = crate::tools::fix_or_free(&mut PatchNet(&mut self.engine), edit)?;
                 crate::tools::fixed_message(edit, &r)
