@@ -510,3 +510,31 @@ fn largest_gap(part: &PartModel) -> f64 {
         .map(|g| g.gap)
         .fold(0.0, f64::max)
 }
+
+/// Without `refine`, the holed top face is refined until at least half of its control points
+/// are free with the boundary fixed (`part::AUTO_REFINE`); at the first density, 24 x 24, most
+/// of them touch the outer edges or the hole. An explicit `refine` is taken as given.
+#[test]
+fn the_default_density_leaves_half_of_a_holed_face_free() {
+    use vclay_session::models::part::{AUTO_REFINE, MIN_FREE_SHARE};
+    let counts = |keys: &str| {
+        let (text, _, _) = scenario(keys);
+        let sc = run(&text, 0);
+        let m = sc.session.model(None).unwrap();
+        let part = PartModel::load(&m.save().unwrap()).unwrap();
+        (m.control_points().len(), part.boundary().len())
+    };
+    let (n, fixed) = counts("");
+    assert!(
+        (n - fixed) as f64 >= MIN_FREE_SHARE * n as f64,
+        "{fixed} of {n} fixed"
+    );
+    let (n24, fixed24) = counts("refine = [24, 24]");
+    assert_eq!(n24, 24 * 24);
+    assert!(
+        ((n24 - fixed24) as f64) < MIN_FREE_SHARE * n24 as f64,
+        "the first density would have done: {fixed24} of {n24} fixed"
+    );
+    assert!(n > n24 && n <= AUTO_REFINE[AUTO_REFINE.len() - 1].pow(2), "{n}");
+    eprintln!("default: {fixed} of {n} fixed; refine = [24, 24]: {fixed24} of {n24}");
+}

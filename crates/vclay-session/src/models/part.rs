@@ -51,9 +51,13 @@ use crate::model::{
     StepReport, Undo, extension, unsupported_export,
 };
 
-/// Control points per direction of the sculpted face's refined surface (`refine`): a plate's
-/// face with a hole keeps free control points between its edges at this density.
-pub const DEFAULT_REFINE: usize = 24;
+/// The densities tried, in order, for the sculpted face's refined surface when `refine` is not
+/// given (control points per direction): the first at which at least [`MIN_FREE_SHARE`] of the
+/// control points are free with the boundary fixed, else the last. A face whose trims cross
+/// many basis supports (a plate's face with a hole) gets the finer ones.
+pub const AUTO_REFINE: [usize; 4] = [24, 32, 48, 64];
+/// The share of free control points [`AUTO_REFINE`] asks for.
+pub const MIN_FREE_SHARE: f64 = 0.5;
 /// Time step of a part whose `[simulation]` and material preset give none (the model files').
 pub const DEFAULT_DT: f64 = crate::open::MODEL_FILE_DT;
 /// Edge spacing `size / DISPLAY_SAMPLES` of the display mesh.
@@ -79,7 +83,7 @@ scenario_keys! {
         pub shell: Option<usize>,
         /// Face index in the shell (default: the largest face).
         pub face: Option<usize>,
-        /// `[nu, nv]`: control points of the refined face (default [`DEFAULT_REFINE`] each).
+        /// `[nu, nv]`: control points of the refined face (default: chosen by [`AUTO_REFINE`]).
         pub refine: Option<Vec<usize>>,
         /// `"fixed"` (default) or `"free"`.
         pub boundary: Option<String>,
@@ -248,13 +252,6 @@ impl PartModel {
                 format!("face {face_index} refers to no surface entity"),
             )
         })?;
-        let refine = match m.refine.as_deref() {
-            None => [DEFAULT_REFINE; 2],
-            Some(&[a, b]) => [a, b],
-            Some(_) => return Err(key_err("refine", "expected [nu, nv]")),
-        };
-        let refined =
-            refine_for_sculpting(&face.surface, refine).map_err(|e| key_err("refine", e))?;
         let fixed = super::keyword(
             "model",
             "boundary",
@@ -262,11 +259,27 @@ impl PartModel {
             &[("fixed", true), ("free", false)],
         )?
         .unwrap_or(true);
-        let boundary = if fixed {
-            boundary_control_points(face, &refined).map_err(|e| key_err("face", e))?
-        } else {
-            Vec::new()
+        let densities: Vec<[usize; 2]> = match m.refine.as_deref() {
+            None if fixed => AUTO_REFINE.iter().map(|&n| [n, n]).collect(),
+            None => vec![[AUTO_REFINE[0]; 2]],
+            Some(&[a, b]) => vec![[a, b]],
+            Some(_) => return Err(key_err("refine", "expected [nu, nv]")),
         };
+        let (mut refined, mut boundary) = (None, Vec::new());
+        for d in densities {
+            let r = refine_for_sculpting(&face.surface, d).map_err(|e| key_err("refine", e))?;
+            boundary = if fixed {
+                boundary_control_points(face, &r).map_err(|e| key_err("face", e))?
+            } else {
+                Vec::new()
+            };
+            let n = r.control_points().len();
+            refined = Some(r);
+            if (n - boundary.len()) as f64 >= MIN_FREE_SHARE * n as f64 {
+                break;
+            }
+        }
+        let refined = refined.expect("at least one density");
         let [nu, nv] = refined.dims();
         if boundary.len() == nu * nv {
             return Err(key_err(
