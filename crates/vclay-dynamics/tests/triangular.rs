@@ -456,8 +456,8 @@ fn fillet_is_convex_and_tangent(kind: RoundingKind, steps: usize, max_wrong: f64
     }
     // How far the old edge's corner (the joint's middle) moved.
     let (q, inward) = match kind {
-        RoundingKind::Corner => ([0.0, 0.0], vclay_core::Vec3::new(-1.0, -1.0, -1.0)),
-        _ => ([1.5, 1.5], vclay_core::Vec3::new(-1.0, 0.0, 1.0)),
+        RoundingKind::Corner => ([0.0, 0.0], vclay_core::Vec3::new(-1.0, 1.0, -1.0)),
+        _ => ([1.5, 1.5], vclay_core::Vec3::new(1.0, 0.0, 1.0)),
     };
     let moved = (s.point(q).unwrap() - r.surface.point(q).unwrap()).dot(&inward.normalize());
     eprintln!(

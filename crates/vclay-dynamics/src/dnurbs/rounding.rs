@@ -15,7 +15,8 @@
 //! - **Corner** (Fig 8b): a trihedral corner of a cube, 13 triangles (a central cap, three quads
 //!   across the three cube edges and three rhombi on the faces) times 6 = 78 control points.
 //!   The edges are the domain rays at 30, 150 and 270 degrees, through the middles of the edge
-//!   quads ([`CORNER_QUAD_DEPTH`] deep); the initial shape is the corner `max(x, y, z) = 0`
+//!   quads ([`CORNER_QUAD_DEPTH`] deep); the initial shape is the corner of the solid
+//!   `x <= 0, y >= 0, z <= 0`
 //!   unfolded onto the domain (`corner_map`: linear on each half of the 120-degree sectors,
 //!   so that each segment across an edge maps into a plane across that edge).
 //!   Far boundary: the outer hexagon.
@@ -320,8 +321,8 @@ fn corner_domain() -> Result<Triangulation, DynamicsError> {
     Triangulation::new(v, t).map_err(|e| DynamicsError::Spline(e.into()))
 }
 
-/// The corner's initial map: the cube corner `max(x, y, z) = 0` unfolded onto the domain.
-/// The rays at 30, 150 and 270 degrees go to the edges along `-x`, `-y` and `-z` (unit
+/// The corner's initial map: the corner of the solid `x <= 0, y >= 0, z <= 0` unfolded onto
+/// the domain. The rays at 30, 150 and 270 degrees go to the edges along `-x`, `+y` and `-z` (unit
 /// speed). Each 120-degree sector between two rays goes to the quadrant of the face between
 /// their edges, linearly on each half of the sector: on the half next to ray `k` (edge `E_k`),
 /// towards ray `j`, `F(q) = (q . r_k) E_k + (q . n_kj) / sqrt 3 E_j` with `r_k` the ray's
@@ -355,9 +356,11 @@ fn corner_ray(k: usize) -> f64 {
     30.0 + 120.0 * k as f64
 }
 
-/// The cube edge `k` of the corner: along `-x`, `-y`, `-z`.
+/// The cube edge `k` of the corner: along `-x`, `+y`, `-z` (the corner of the solid
+/// `x <= 0, y >= 0, z <= 0`, whose outside faces the renderer's iso view from `(+x, -y, +z)`).
 fn corner_edge(k: usize) -> Vec3 {
-    -Vec3::ith(k, 1.0)
+    let sign = if k == 1 { 1.0 } else { -1.0 };
+    Vec3::ith(k, sign)
 }
 
 impl RoundingModel {
@@ -372,8 +375,9 @@ impl RoundingModel {
             ),
             RoundingKind::Bevel => (
                 grid(3, 3)?,
-                // Concave joint at u = 1.5: floor, then a wall going up.
-                Box::new(|q: Point2| Vec3::new(q[0].min(1.5), q[1], (q[0] - 1.5).max(0.0))),
+                // Concave joint at u = 1.5: floor, then a wall going up (turned half a turn
+                // about z, so that the renderer's iso view sees the joint's open side).
+                Box::new(|q: Point2| Vec3::new(-q[0].min(1.5), -q[1], (q[0] - 1.5).max(0.0))),
             ),
             RoundingKind::Corner => (corner_domain()?, Box::new(corner_map)),
         };
