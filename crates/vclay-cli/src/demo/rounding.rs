@@ -7,7 +7,7 @@ use anyhow::{Context, Result, ensure};
 use std::path::Path;
 use vclay::TriMesh;
 use vclay::dynamics::dnurbs::TriangleQuadrature;
-use vclay::dynamics::dnurbs::rounding::{RoundingKind, RoundingModel, normal_jump};
+use vclay::dynamics::dnurbs::rounding::{RoundingKind, RoundingModel, mesh_turning, normal_jump};
 use vclay::io::mesh::write_mesh;
 use vclay::render::{RenderOptions, render};
 
@@ -34,10 +34,22 @@ fn wireframe(s: &vclay::spline::TriangularNurbs, png: &Path) -> Result<()> {
 pub fn rounding(out: &Path) -> Result<(String, Vec<String>)> {
     let mut files = Vec::new();
     let mut lines = Vec::new();
-    for (kind, name) in [
-        (RoundingKind::Edge, "edge"),
-        (RoundingKind::Corner, "corner"),
-        (RoundingKind::Bevel, "bevel"),
+    for (kind, name, paper) in [
+        (
+            RoundingKind::Edge,
+            "edge",
+            "Fig 8a: \"the sharp edges are rounded as the final shape equilibrates into the minimal energy state\"",
+        ),
+        (
+            RoundingKind::Corner,
+            "corner",
+            "Fig 8b: \"the sharp edges and corner are rounded with position and normal constraints along the far boundaries of the faces\"",
+        ),
+        (
+            RoundingKind::Bevel,
+            "bevel",
+            "Fig 8c: \"the initial right-angle joint and the final rounded surface\"",
+        ),
     ] {
         let r = RoundingModel::new(kind)?;
         let initial = format!("rounding_{name}_initial.png");
@@ -58,13 +70,16 @@ pub fn rounding(out: &Path) -> Result<(String, Vec<String>)> {
         let jump = normal_jump(s, &r.edges, 1e-6, 7)?;
         let mut mesh = TriMesh::new();
         s.tessellate(8, &mut mesh)?;
+        // Issue 28: a fillet turns one way only (convex edge and corner, concave bevel).
+        let wrong = mesh_turning(&mesh).wrong_way();
         let obj = format!("rounding_{name}.obj");
         write_mesh(out.join(&obj), &mesh)?;
         let json = format!("rounding_{name}.json");
         vclay::io::triangular::write_triangular(out.join(&json), s, Some(name))?;
         lines.push(format!(
-            "{name}: {} control points, energy {e0:.4e} -> {e1:.4e}, constraint violation {worst:.1e}, normal jump across the old edge {jump:.1e} rad",
-            s.control_points().len()
+            "{name} ({paper}): {} control points, energy {e0:.4e} -> {e1:.4e}, constraint violation {worst:.1e}, normal jump across the old edge {jump:.1e} rad, {:.1} % of the surface's turning the wrong way",
+            s.control_points().len(),
+            100.0 * wrong
         ));
         files.extend([initial, obj, json]);
     }

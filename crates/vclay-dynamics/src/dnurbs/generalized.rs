@@ -3312,8 +3312,8 @@ mod tests {
     }
 
     /// Dropping the fixed coordinates' columns from the element products (and computing only
-    /// the order-0 columns of fixed controls) changes no step: the corner rounding (60 of 78
-    /// control points fixed, one more held with its weight free, triangular cells, normal
+    /// the order-0 columns of fixed controls) changes no step: the corner rounding (50 of 78
+    /// control points fixed, 9 sliding, one more held with its weight free, triangular cells, normal
     /// constraints) and a rational sheet with a fixed edge, a fixed weight, a fixed point with
     /// a free weight, and point forces.
     #[test]
@@ -3425,7 +3425,7 @@ mod tests {
         };
         let scale = m.geometry().scale();
         assert!(worst(&m) < 1e-9 * scale);
-        // The far-boundary constraints act on held coordinates (17 of the 18 only on them:
+        // The far-boundary constraints act on held coordinates (most only on them:
         // those are cached).
         let cached =
             |m: &GeneralizedDnurbs<_>| m.row_cache.lock().iter().filter(|e| e.is_some()).count();

@@ -13,10 +13,12 @@
 //!   share a control point, 7 x 3 = 21 control points. The initial net is folded by 90 degrees
 //!   along its middle column (a convex edge); far boundaries `u = 0` and `u = 3`.
 //! - **Corner** (Fig 8b): a trihedral corner of a cube, 13 triangles (a central cap, three quads
-//!   across the three cube edges and three quads on the faces) times 6 = 78 control points.
-//!   The domain sits in the plane through the corner normal to `(1, 1, 1)`; the initial shape
-//!   is the projection of the domain along `(1, 1, 1)` onto the corner surface
-//!   `max(x, y, z) = 0` (the three cube edges are the rays at 30, 150 and 270 degrees).
+//!   across the three cube edges and three rhombi on the faces) times 6 = 78 control points.
+//!   The edges are the domain rays at 30, 150 and 270 degrees, through the middles of the edge
+//!   quads ([`CORNER_QUAD_DEPTH`] deep); the initial shape is the corner of the solid
+//!   `x <= 0, y >= 0, z <= 0`
+//!   unfolded onto the domain (`corner_map`: linear on each half of the 120-degree sectors,
+//!   so that each segment across an edge maps into a plane across that edge).
 //!   Far boundary: the outer hexagon.
 //! - **Bevel** (Fig 8c): a right-angle (concave) joint of two plates, a 3 x 3 quad grid (18
 //!   triangles) times 6 = 108 control points, folded along its middle; far boundaries `u = 0`
@@ -30,20 +32,33 @@
 //! crease needs coincident knots, which simplex splines exclude).
 //!
 //! ## Constraints
-//! Far boundaries: the edge's two sides parallel to the old edge; the whole outer boundary of
-//! the corner and of the bevel (with the Bevel row's tension in both directions, `a22 = 100`,
-//! a strip with free sides contracts to a line). Positions and normals along them are held
-//! by the paper's linear constraints, the freezing of control points (section 6.2): every
-//! control point (and weight) whose basis function is positive somewhere on a far boundary is
-//! fixed. Because the quadratic DMS basis is `C^1` and non-negative, a function that vanishes
-//! at a boundary point has a zero gradient there, so the boundary curve **and** the surface
-//! tangents along it depend on the fixed coordinates only: position and normal hold exactly
-//! along the whole boundary, not just at samples. [`ROUNDING_BOUNDARY_SAMPLES`] normal
-//! constraints ([`Constraint::Normal`]) per far edge are registered as well and checked every
-//! step (their rows act only on fixed coordinates, so the engine finds them satisfied and
-//! drops them without cost). Constraining the boundary by point constraints instead (5 rows
-//! per sample) costs 90 constraint rows on the corner, whose dense Schur complement and
-//! Newton projection made a step 5x slower.
+//! Far boundaries of the faces (section 7.3, "position and normal constraints along the far
+//! boundaries of the faces"): the edge's two sides parallel to the old edge; the corner's and
+//! the bevel's outer boundary where it lies in a face. Positions and normals along them are
+//! held by the paper's linear constraints, the freezing of control points (section 6.2): every
+//! control point (and weight) whose basis function is positive somewhere on such a boundary is
+//! fixed ([`RoundingModel::fixed_controls`]). Because the quadratic DMS basis is `C^1` and
+//! non-negative, a function that vanishes at a boundary point has a zero gradient there, so
+//! the boundary curve **and** the surface tangents along it depend on the fixed coordinates
+//! only: position and normal hold exactly along the whole boundary, not just at samples.
+//! [`ROUNDING_BOUNDARY_SAMPLES`] normal constraints ([`Constraint::Normal`]) per held edge are
+//! registered as well and checked every step (their rows act only on fixed coordinates, so
+//! the engine finds them satisfied and drops them without cost). Constraining the boundary by
+//! point constraints instead (5 rows per sample) costs 90 constraint rows on the corner, whose
+//! dense Schur complement and Newton projection made a step 5x slower.
+//!
+//! Boundaries that cross an old edge (the corner's three outer quad sides, the bevel's sides
+//! `v = 0` and `v = 3`) **slide** (issue 28, [`RoundingModel::sliding`]): a control point
+//! acting on one keeps its coordinate along the edge (and its weight) and is free across it,
+//! so the fillet's cross-section there lies in its plane across the edge and rounds like the
+//! rest of the edge; the tension's natural boundary condition (no derivative across the
+//! boundary in the free coordinates) is met by a fillet extruded along the edge. Held whole,
+//! as before, they pinned the sharp profile at the patch's ends: the bevel's fillet tapered
+//! back to a sharp joint there (13 % of its turning the wrong way with the densities below,
+//! 1.7 % sliding). On the corner only 9 control points slide and the difference is not
+//! measurable (3.05 % against 3.06 %); the corner's gain came from the unfolded map and the
+//! deeper quads (Table 1 as printed: 25 % before, 15.6 % on the new model) and from the
+//! densities (3.1 %). The edge's sides are free (its Table 1 row has no `v` terms).
 //!
 //! ## Reading Table 1: why the fillets folded the wrong way (issue 28)
 //! With Table 1 as printed over our unit domain spans the relaxed surfaces are not the convex
@@ -76,14 +91,24 @@
 //! 12,493 to 11,009 in 60 steps; the control points at the corner stayed within 0.05 of it).
 //! Not kept.
 //!
-//! What is done: the edge reads Table 1 over spans of length [`RoundingKind::span`]
-//! (`a11 h^2 = 6 b11`, [`RoundingKind::material`]) and relaxes into a convex fillet tangent to
-//! both faces (1.6 % wrong way, `tests/triangular.rs`). Open: the corner with `a = 6 b` still
-//! turns 11 % the wrong way and the bevel with `b = a / 6` 13 % (a likely cause, not yet
-//! verified: both hold the sharp edge profile where their outer boundary crosses the old
-//! edges, so the fillet must taper back to a sharp edge there; freeing those ends needs
-//! coordinate constraints that the session layer does not pass on yet), so both keep Table 1
-//! as printed.
+//! What is done: each model reads Table 1 over spans of length [`RoundingKind::span`]
+//! ([`RoundingKind::material`]): the edge with `a11 h^2 = 6 b11`, the corner with `a h^2 = b`
+//! (three fillets meeting need more bending than the one-dimensional bound), and the bevel,
+//! whose row has no bending at all, with its bending densities raised to `a11 / 6`. With the
+//! bevel's sides sliding and the corner unfolded, the three relax into fillets tangent to the
+//! faces whose turning
+//! folds the wrong way by 1.6 % (edge), 3.1 % (corner) and 1.7 % (bevel), against 30 %, 25 %
+//! and 30 % before (`tests/triangular.rs`). What is left of the corner's share lies along the
+//! middle of its edge fillets, where the held face boundaries converge on the edges (the
+//! rhombi's outer sides meet the quads' at 60 degrees, so the fillet narrows towards the
+//! crossing ends) and along the rhombus diagonals; a domain whose held sides run parallel to
+//! the edges (tried: a Y-shaped domain of one-span-wide strips) leaves almost every control
+//! point fixed, and the fillet is then the initial `C^1` rounding (largest motion 0.05).
+//! Not done: a sharp initial edge. The crease lies inside a domain triangle (the middle of the
+//! edge quads or column), so the `C^1` basis rounds it over that triangle's width; the
+//! collapsed-net representation above did not move under tension, and a triangulation with
+//! the creases on triangle edges needs a central cap split at the corner point (more than 13
+//! triangles, or a collapsed cap).
 
 use super::generalized::{Constraint, GeneralizedDnurbs};
 use super::presets::Preset;
@@ -98,6 +123,12 @@ use vclay_spline::triangular::{KnotClouds, TriangularBasis, TriangularNurbs, Tri
 pub const ROUNDING_CLOUD_RADIUS: f64 = 0.1;
 /// Constraint points per far boundary edge (its two ends and interior points, equally spaced).
 pub const ROUNDING_BOUNDARY_SAMPLES: usize = 3;
+
+/// Depth of the corner's edge quads along the cube edges (domain units; the central triangle
+/// has circumradius 1). Issue 28: with 1.5 the held face boundaries converge on the edges over
+/// a shorter stretch and the fillet tapers more (3.5 % of its turning the wrong way against
+/// 3.0 % with 2.0, 3.6 % with 3.0; 100 steps, `tests/triangular.rs`).
+pub const CORNER_QUAD_DEPTH: f64 = 2.0;
 
 /// Weight penalty `c` of the rounding models ([`GeneralizedDnurbs::set_weight_penalty`]). Table
 /// 1 gives `mu = 0` for rounding, so the weights have neither mass nor (for control points near
@@ -135,24 +166,25 @@ impl RoundingKind {
 
     /// The parameter length `h` of the paper's domain span that one unit span of ours stands
     /// for, when the model reads the Table 1 densities ([`RoundingKind::material`]): the paper
-    /// gives no domain size. The edge uses `h = sqrt(6 b11 / a11)`, the largest span over which
-    /// the thin plate under tension does not alternate next to a held tangent (`a h^2 <= 6 b`,
-    /// see the module docs); the corner and the bevel use `h = 1` (Table 1 as printed; the
-    /// bevel's `b = 0` has no such span, and the corner's remaining wrong-way turning has a
-    /// second cause, see the module docs).
+    /// gives no domain size. The edge uses `h = sqrt(6 b11 / a11)` (0.077), the largest span
+    /// over which the thin plate under tension does not alternate next to a held tangent
+    /// (`a h^2 <= 6 b`, see the module docs). The corner, where three fillets meet, needs more
+    /// bending than that one-dimensional bound: `h = sqrt(b11 / a11)` (0.1; wrong-way share
+    /// after 60 steps 6.0 % at `a h^2 = 6 b`, 3.1 % at `a h^2 = b`, 2.5 % for pure bending,
+    /// with the fillet moving less as the tension drops). The bevel uses `h = 1`: its `b = 0`
+    /// has no such span, and [`RoundingKind::material`] adds bending instead.
     pub fn span(self) -> f64 {
         self.span_squared().sqrt()
     }
 
-    /// [`RoundingKind::span`] squared (computed without the square root, so that the edge's
-    /// `a11 h^2` is exactly 6).
+    /// [`RoundingKind::span`] squared (computed without the square root, so that `a11 h^2` is
+    /// exactly `6 b11`).
     fn span_squared(self) -> f64 {
+        let p = self.preset();
         match self {
-            Self::Edge => {
-                let p = self.preset();
-                6.0 * p.beta[0] / p.alpha[0]
-            }
-            Self::Corner | Self::Bevel => 1.0,
+            Self::Edge => 6.0 * p.beta[0] / p.alpha[0],
+            Self::Corner => p.beta[0] / p.alpha[0],
+            Self::Bevel => 1.0,
         }
     }
 
@@ -161,16 +193,27 @@ impl RoundingKind {
     /// of eq 17 (`integral a |s_u|^2 du dv`) unchanged, divides the bending term by `h^2` and
     /// multiplies the mass and damping terms (eq 16) by `h^2`; multiplying every term by `h^2`
     /// (which leaves the motion of eq 18 with `mu = 0` unchanged) gives `a h^2`, `b`, `gamma
-    /// h^4`, `mu h^4` over unit spans. For the edge: `a11 = 6`, `b11 = 1`, `gamma = 0.018`.
+    /// h^4`, `mu h^4` over unit spans. Edge: `a11 = 6`, `b11 = 1`, `gamma = 0.018`. Corner:
+    /// `a11 = a22 = 10`, `b = 10`, `gamma = 0.005`. The bevel's row is a membrane (`b = 0`),
+    /// whose minimum under held positions is a chamfer that cannot meet the held normals (a
+    /// second-order energy takes positions only as boundary data): its bending densities are
+    /// raised to `a11 / 6` (16.7), the least bending for which a unit span does not alternate,
+    /// the rest of the row kept. Section 7.3 asks for "a smooth fillet by minimizing its
+    /// internal deformation energy subject to position and normal constraints"; section 7.1
+    /// says "increasing beta tends to make objects more rigid".
     pub fn material(self) -> Material {
         let p = self.preset();
         let h2 = self.span_squared();
         let c = |x: f64| super::Density::Constant(x);
+        let beta = |b: f64| match self {
+            Self::Bevel => b.max(p.alpha[0] / 6.0),
+            Self::Edge | Self::Corner => b,
+        };
         Material {
             mu: c(p.mu * h2 * h2),
             gamma: c(p.gamma * h2 * h2),
             alpha: p.alpha.iter().map(|&a| c(a * h2)).collect(),
-            beta: p.beta.iter().map(|&b| c(b)).collect(),
+            beta: p.beta.iter().map(|&b| c(beta(b))).collect(),
         }
     }
 
@@ -198,8 +241,15 @@ pub struct RoundingModel {
     /// non-zero on the far boundary, so the boundary curve keeps its position exactly (the
     /// paper's linear constraints, "the freezing of control points", section 6.2).
     pub fixed_controls: Vec<usize>,
+    /// Control points held in one coordinate only (with their weights), as `(control, axis)`:
+    /// those acting on a far boundary that crosses an old sharp edge, held in the coordinate
+    /// along that edge and free across it, so the fillet's cross-section there can round (see
+    /// the module docs). None of them is in [`RoundingModel::fixed_controls`].
+    pub sliding: Vec<(usize, usize)>,
     /// The old sharp edges in the parameter domain, as segments.
     pub edges: Vec<[Point2; 2]>,
+    /// The far boundaries held whole (position and normal), as segments.
+    held: Vec<[Point2; 2]>,
 }
 
 /// A `cols x rows` grid of unit quads, each split along the diagonal `(i, j)-(i+1, j+1)`.
@@ -222,9 +272,12 @@ fn grid(cols: usize, rows: usize) -> Result<Triangulation, DynamicsError> {
 }
 
 /// The corner domain: central triangle, three edge quads, three corner rhombi (13 triangles).
+/// The central vertices lie at distance 1 on the bisectors (90, 210, 330 degrees); edge quad
+/// `k` extends the central edge `k` by [`CORNER_QUAD_DEPTH`] along its outward normal, the
+/// ray of a cube edge.
 fn corner_domain() -> Result<Triangulation, DynamicsError> {
     let r = 1.0;
-    let h = 1.5;
+    let h = CORNER_QUAD_DEPTH;
     let ang = |deg: f64| {
         let a = deg.to_radians();
         [a.cos(), a.sin()]
@@ -272,14 +325,46 @@ fn corner_domain() -> Result<Triangulation, DynamicsError> {
     Triangulation::new(v, t).map_err(|e| DynamicsError::Spline(e.into()))
 }
 
-/// The corner's initial map: the domain point in the plane normal to `(1, 1, 1)`, projected
-/// along `(1, 1, 1)` onto `max(x, y, z) = 0`.
+/// The corner's initial map: the corner of the solid `x <= 0, y >= 0, z <= 0` unfolded onto
+/// the domain. The rays at 30, 150 and 270 degrees go to the edges along `-x`, `+y` and `-z` (unit
+/// speed). Each 120-degree sector between two rays goes to the quadrant of the face between
+/// their edges, linearly on each half of the sector: on the half next to ray `k` (edge `E_k`),
+/// towards ray `j`, `F(q) = (q . r_k) E_k + (q . n_kj) / sqrt 3 E_j` with `r_k` the ray's
+/// direction and `n_kj` the unit normal of the ray towards ray `j`. The two halves agree on
+/// the bisector (`cos 60 = sin 60 / sqrt 3`), and a segment across ray `k` at `q . r_k = l`
+/// within 60 degrees of it goes into the plane `E_k . x = l` across the edge.
 fn corner_map(q: Point2) -> Vec3 {
-    let e1 = Vec3::new(0.0, 1.0, -1.0) / 2f64.sqrt();
-    let e2 = Vec3::new(2.0, -1.0, -1.0) / 6f64.sqrt();
-    let x = e1 * q[0] + e2 * q[1];
-    let m = x.x.max(x.y).max(x.z);
-    x - Vec3::repeat(m)
+    // Nearest ray (the half-sector q lies in) and the ray on q's side of it.
+    let angle = q[1].atan2(q[0]).to_degrees();
+    let (k, _) = (0..3)
+        .map(|k| {
+            let d = (angle - corner_ray(k)).rem_euclid(360.0);
+            (k, d.min(360.0 - d))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap_or((0, 0.0));
+    let r = corner_ray(k).to_radians();
+    let (rk, nk) = ([r.cos(), r.sin()], [-r.sin(), r.cos()]);
+    let (along, across) = (q[0] * rk[0] + q[1] * rk[1], q[0] * nk[0] + q[1] * nk[1]);
+    // Counter-clockwise of ray k lies ray k + 1.
+    let j = if across >= 0.0 {
+        (k + 1) % 3
+    } else {
+        (k + 2) % 3
+    };
+    corner_edge(k) * along + corner_edge(j) * (across.abs() / 3f64.sqrt())
+}
+
+/// The direction (degrees) of the corner domain's ray `k` (the cube edge along [`corner_edge`]).
+fn corner_ray(k: usize) -> f64 {
+    30.0 + 120.0 * k as f64
+}
+
+/// The cube edge `k` of the corner: along `-x`, `+y`, `-z` (the corner of the solid
+/// `x <= 0, y >= 0, z <= 0`, whose outside faces the renderer's iso view from `(+x, -y, +z)`).
+fn corner_edge(k: usize) -> Vec3 {
+    let sign = if k == 1 { 1.0 } else { -1.0 };
+    Vec3::ith(k, sign)
 }
 
 impl RoundingModel {
@@ -294,8 +379,9 @@ impl RoundingModel {
             ),
             RoundingKind::Bevel => (
                 grid(3, 3)?,
-                // Concave joint at u = 1.5: floor, then a wall going up.
-                Box::new(|q: Point2| Vec3::new(q[0].min(1.5), q[1], (q[0] - 1.5).max(0.0))),
+                // Concave joint at u = 1.5: floor, then a wall going up (turned half a turn
+                // about z, so that the renderer's iso view sees the joint's open side).
+                Box::new(|q: Point2| Vec3::new(-q[0].min(1.5), -q[1], (q[0] - 1.5).max(0.0))),
             ),
             RoundingKind::Corner => (corner_domain()?, Box::new(corner_map)),
         };
@@ -331,9 +417,26 @@ impl RoundingModel {
         // Far boundary edges and the sharp edges.
         let dom = surface.basis().domain().clone();
         let ext = dom.extent();
-        let far: Vec<[Point2; 2]> = match kind {
-            RoundingKind::Edge => vec![[[0.0, 0.0], [0.0, 1.0]], [[3.0, 0.0], [3.0, 1.0]]],
-            RoundingKind::Corner | RoundingKind::Bevel => boundary_edges(&dom),
+        // Far boundaries: held whole (`None`) or, where they cross an old edge, along the
+        // edge's axis only (`Some(axis)`).
+        let far: Vec<([Point2; 2], Option<usize>)> = match kind {
+            RoundingKind::Edge => vec![
+                ([[0.0, 0.0], [0.0, 1.0]], None),
+                ([[3.0, 0.0], [3.0, 1.0]], None),
+            ],
+            RoundingKind::Bevel => boundary_edges(&dom)
+                .into_iter()
+                .map(|seg| {
+                    // The sides v = 0 and v = 3 cross the edge (along y).
+                    let side = (seg[0][1] - seg[1][1]).abs() < 1e-9 * ext
+                        && (seg[0][1].abs() < 1e-9 * ext || (seg[0][1] - 3.0).abs() < 1e-9 * ext);
+                    (seg, side.then_some(1))
+                })
+                .collect(),
+            RoundingKind::Corner => boundary_edges(&dom)
+                .into_iter()
+                .map(|seg| (seg, corner_crossing(seg)))
+                .collect(),
         };
         let edges: Vec<[Point2; 2]> = match kind {
             RoundingKind::Edge => vec![[[1.5, 0.0], [1.5, 1.0]]],
@@ -342,16 +445,21 @@ impl RoundingModel {
                 .iter()
                 .map(|d| {
                     let a = d.to_radians();
-                    // The ray from the corner to the far boundary (2.5 = r/2 + h + margin).
-                    [[0.0, 0.0], [3.0 * a.cos(), 3.0 * a.sin()]]
+                    // The ray from the corner to the far boundary (0.5 + depth).
+                    let l = 0.5 + CORNER_QUAD_DEPTH;
+                    [[0.0, 0.0], [l * a.cos(), l * a.sin()]]
                 })
                 .collect(),
         };
         let mut constraints = Vec::new();
         let mut seen: Vec<Point2> = Vec::new();
         let mut fixed = vec![false; surface.control_points().len()];
+        let mut slide: Vec<Option<usize>> = vec![None; fixed.len()];
         let mut p = vclay_spline::TriangularPoint::default();
-        for seg in &far {
+        // Whole holds first, so that the normal constraints sit on them only.
+        let mut far = far;
+        far.sort_by_key(|f| f.1.is_some());
+        for &(seg, hold) in &far {
             // Position: every control point acting on the boundary is held.
             for k in 0..=FIXING_SAMPLES {
                 let f = k as f64 / FIXING_SAMPLES as f64;
@@ -364,9 +472,15 @@ impl RoundingModel {
                     .map_err(|e| DynamicsError::Spline(e.into()))?;
                 for (k, &c) in p.controls.iter().enumerate() {
                     if p.basis[k][0] > 0.0 {
-                        fixed[c] = true;
+                        match hold {
+                            None => fixed[c] = true,
+                            Some(axis) => slide[c] = Some(axis),
+                        }
                     }
                 }
+            }
+            if hold.is_some() {
+                continue;
             }
             // Normal: constraints at samples.
             for k in 0..ROUNDING_BOUNDARY_SAMPLES {
@@ -389,14 +503,45 @@ impl RoundingModel {
                 constraints.push(Constraint::Normal { param: q, normal });
             }
         }
+        let held = far.iter().filter(|f| f.1.is_none()).map(|f| f.0).collect();
         let fixed_controls = (0..fixed.len()).filter(|&c| fixed[c]).collect();
+        let sliding = (0..fixed.len())
+            .filter(|&c| !fixed[c])
+            .filter_map(|c| slide[c].map(|a| (c, a)))
+            .collect();
         Ok(Self {
             kind,
             surface,
             constraints,
             fixed_controls,
+            sliding,
             edges,
+            held,
         })
+    }
+
+    /// The far boundaries held whole (position and normal, section 6.2), as segments of the
+    /// parameter domain; the others (where a boundary crosses an old edge) slide.
+    pub fn held_boundaries(&self) -> &[[Point2; 2]] {
+        &self.held
+    }
+
+    /// The held generalized coordinates (`4 c + k`, `k = 3` the weight): all four of each
+    /// [`RoundingModel::fixed_controls`] entry, the axis and the weight of each
+    /// [`RoundingModel::sliding`] entry.
+    pub fn fixed_coordinates(&self) -> Vec<usize> {
+        let mut out: Vec<usize> = self
+            .fixed_controls
+            .iter()
+            .flat_map(|&c| (0..4).map(move |k| 4 * c + k))
+            .chain(
+                self.sliding
+                    .iter()
+                    .flat_map(|&(c, a)| [4 * c + a, 4 * c + 3]),
+            )
+            .collect();
+        out.sort_unstable();
+        out
     }
 
     /// The D-NURBS model: the Table 1 material read over [`RoundingKind::span`]
@@ -420,10 +565,8 @@ impl RoundingModel {
         let mut m = GeneralizedDnurbs::new(geometry, material)?;
         m.set_elastic_reference(ElasticReference::Absolute);
         m.set_weight_penalty(ROUNDING_WEIGHT_PENALTY)?;
-        for &c in &self.fixed_controls {
-            for k in 0..4 {
-                m.set_fixed_coordinate(4 * c + k, true)?;
-            }
+        for i in self.fixed_coordinates() {
+            m.set_fixed_coordinate(i, true)?;
         }
         for c in &self.constraints {
             m.add_constraint(c.clone())?;
@@ -435,6 +578,33 @@ impl RoundingModel {
     pub fn dt(&self) -> f64 {
         self.kind.preset().dt
     }
+}
+
+/// The axis (0, 1, 2 for x, y, z) of the old cube edge that a boundary segment of the corner
+/// domain crosses, or `None` for a segment inside one face. The edges are the rays at 30, 150
+/// and 270 degrees; [`corner_map`] sends each onto a negative coordinate axis.
+fn corner_crossing(seg: [Point2; 2]) -> Option<usize> {
+    [30.0f64, 150.0, 270.0].iter().find_map(|&deg| {
+        let a = deg.to_radians();
+        let d = [a.cos(), a.sin()];
+        // Signed distances of the ends from the ray's line, and the crossing point's position
+        // along the ray.
+        let side = |q: Point2| q[0] * d[1] - q[1] * d[0];
+        let (s0, s1) = (side(seg[0]), side(seg[1]));
+        if s0 * s1 >= 0.0 {
+            return None;
+        }
+        let f = s0 / (s0 - s1);
+        let x = [
+            seg[0][0] + f * (seg[1][0] - seg[0][0]),
+            seg[0][1] + f * (seg[1][1] - seg[0][1]),
+        ];
+        if x[0] * d[0] + x[1] * d[1] <= 0.0 {
+            return None;
+        }
+        let e = corner_map(x);
+        (0..3).max_by(|&i, &j| e[i].abs().total_cmp(&e[j].abs()))
+    })
 }
 
 /// The boundary edges of a triangulation, as segments.

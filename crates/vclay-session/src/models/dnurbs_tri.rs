@@ -107,7 +107,8 @@ impl TriangularModel {
                 let kind = RoundingKind::parse(name)
                     .ok_or_else(|| format!("rounding {name:?}: expected edge, corner or bevel"))?;
                 let r = RoundingModel::new(kind).map_err(|e| e.to_string())?;
-                (r.surface, r.constraints, r.fixed_controls)
+                let fixed = r.fixed_coordinates();
+                (r.surface, r.constraints, fixed)
             }
             Source::File(v) => {
                 let text = serde_json::to_string(v).map_err(|e| e.to_string())?;
@@ -122,13 +123,11 @@ impl TriangularModel {
         engine
             .set_weight_penalty(settings.weight_penalty)
             .map_err(|e| e.to_string())?;
-        // The rounding's far boundary: its control points (and weights) are frozen.
-        for c in fixed {
-            for k in 0..4 {
-                engine
-                    .set_fixed_coordinate(4 * c + k, true)
-                    .map_err(|e| e.to_string())?;
-            }
+        // The rounding's far boundary: its held coordinates (RoundingModel::fixed_coordinates).
+        for i in fixed {
+            engine
+                .set_fixed_coordinate(i, true)
+                .map_err(|e| e.to_string())?;
         }
         for c in constraints {
             engine.add_constraint(c).map_err(|e| e.to_string())?;
