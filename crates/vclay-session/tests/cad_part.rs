@@ -535,6 +535,9 @@ fn the_default_density_leaves_half_of_a_holed_face_free() {
         ((n24 - fixed24) as f64) < MIN_FREE_SHARE * n24 as f64,
         "the first density would have done: {fixed24} of {n24} fixed"
     );
-    assert!(n > n24 && n <= AUTO_REFINE[AUTO_REFINE.len() - 1].pow(2), "{n}");
+    assert!(
+        n > n24 && n <= AUTO_REFINE[AUTO_REFINE.len() - 1].pow(2),
+        "{n}"
+    );
     eprintln!("default: {fixed} of {n} fixed; refine = [24, 24]: {fixed24} of {n24}");
 }
