@@ -187,8 +187,12 @@ def main():
         v = r["vclay"]
         for m, peer in (("scipy", "SciPy FITPACK LSQBivariateSpline"), ("geomdl", "geomdl approximate_surface")):
             if m in r:
+                check = f"RMS distance vclay {v['rms']:.3g}, {m} {r[m]['rms']:.3g}"
+                if "truth_rms" in v and "truth_rms" in r[m]:
+                    check += (f"; RMS off the true wave vclay {v['truth_rms']:.3g}, "
+                              f"{m} {r[m]['truth_rms']:.3g}")
                 emit("fit", work, "vclay fit, all threads", v["time"] * 1e3, peer, r[m]["time"] * 1e3,
-                     f"RMS distance vclay {v['rms']:.3g}, {m} {r[m]['rms']:.3g}")
+                     check)
     for r in rows:
         if "scipy" in r:
             v, s = r["vclay"], r["scipy"]

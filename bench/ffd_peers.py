@@ -96,22 +96,12 @@ def best_ms(fn, runs):
     return best * 1e3
 
 
-def cpu_name():
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
-
-
 def main():
     ensure_venv()
     import numpy as np
     import pygem
     from pygem import FFD
-    from peers_rows import emit
+    from peers_rows import cpu_name, emit
 
     side = int(os.environ.get("VCLAY_FFD_SIDE", "1000"))
     runs = int(os.environ.get("VCLAY_FFD_RUNS", "5"))

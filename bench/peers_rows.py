@@ -9,6 +9,7 @@ Standard library only: the scripts run in different virtual environments.
 
 import json
 import os
+import platform
 
 
 def emit(suite, workload, vclay, vclay_ms, peer, peer_ms, check):
@@ -21,3 +22,12 @@ def emit(suite, workload, vclay, vclay_ms, peer, peer_ms, check):
            "peer": peer, "peer_ms": float(peer_ms), "check": check}
     with open(path, "a") as f:
         f.write(json.dumps(row) + "\n")
+
+
+def cpu_name():
+    """The CPU's model name as Linux reports it (or the platform's machine name)."""
+    try:
+        with open("/proc/cpuinfo") as fh:
+            return next(l.split(":", 1)[1].strip() for l in fh if l.startswith("model name"))
+    except (OSError, StopIteration):
+        return platform.processor() or platform.machine()

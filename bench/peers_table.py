@@ -15,8 +15,9 @@ why. Standard library only.
 
 import json
 import os
-import platform
 import sys
+
+from peers_rows import cpu_name
 
 BEGIN = "<!-- bench/peers.sh table: begin (generated; do not edit by hand) -->"
 END = "<!-- bench/peers.sh table: end -->"
@@ -32,13 +33,7 @@ SUITES = {
 
 
 def machine():
-    cpu = platform.machine()
-    try:
-        with open("/proc/cpuinfo") as fh:
-            cpu = next(l.split(":", 1)[1].strip() for l in fh if l.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    return f"{cpu}, {os.cpu_count()} CPUs"
+    return f"{cpu_name()}, {os.cpu_count()} CPUs"
 
 
 def read(path, default=None):

@@ -376,12 +376,9 @@ def main():
         return worker(args)
     if not args.dirs:
         ap.error("give at least one LEVEL_DIR")
-    cpu = platform.machine()
-    try:
-        with open("/proc/cpuinfo") as fh:
-            cpu = next(l.split(":", 1)[1].strip() for l in fh if l.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
+    from peers_rows import cpu_name
+
+    cpu = cpu_name()
     rows, versions, errs = [], {}, []
     for d in args.dirs:
         a = load(d)
