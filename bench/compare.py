@@ -152,6 +152,16 @@ def main():
     print(text)
     if dev_geomdl > 1e-9 or dev_rhino > 1e-9:
         sys.exit("peers disagree with vclay eval by more than 1e-9")
+    # One row per peer for bench/peers.sh (bench/peers_rows.py): ms per million scattered points.
+    from peers_rows import emit
+
+    work = "surface evaluation, 16x16 rational bicubic, scattered points (ms per million)"
+    vclay_ms = vc["surface_point_ns"]
+    for peer, ms, d in [(f"OpenNURBS (rhino3dm {rhino3dm.__version__}) PointAt", t_rh * ns, dev_rhino),
+                        ("OpenNURBS PointAt less the Python call", (t_rh - t_call) * ns, dev_rhino),
+                        (f"geomdl {geomdl.__version__} evaluate_list", t_gd * ns, dev_geomdl)]:
+        emit("eval", work, "vclay point by point, 1 thread", vclay_ms, peer, ms,
+             f"largest coordinate difference to `vclay eval` {d:.1e} (tolerance 1e-9)")
 
 
 if __name__ == "__main__":

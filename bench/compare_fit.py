@@ -180,6 +180,19 @@ def main():
                 x = r[m]
                 t = f"{x['truth_rms']:.3g}" if "truth_rms" in x else ""
                 print(f"| {r['cloud']} | {r['points']} | {m} | {x['rms']:.4g} | {x['max']:.4g} | {t} | {x['time']:.3f} |")
+    from peers_rows import emit
+
+    for r in rows:
+        work = f"scan fit, {r['cloud']} ({r['points']:,} points), 32x32 bicubic"
+        v = r["vclay"]
+        for m, peer in (("scipy", "SciPy FITPACK LSQBivariateSpline"), ("geomdl", "geomdl approximate_surface")):
+            if m in r:
+                check = f"RMS distance vclay {v['rms']:.3g}, {m} {r[m]['rms']:.3g}"
+                if "truth_rms" in v and "truth_rms" in r[m]:
+                    check += (f"; RMS off the true wave vclay {v['truth_rms']:.3g}, "
+                              f"{m} {r[m]['truth_rms']:.3g}")
+                emit("fit", work, "vclay fit, all threads", v["time"] * 1e3, peer, r[m]["time"] * 1e3,
+                     check)
     for r in rows:
         if "scipy" in r:
             v, s = r["vclay"], r["scipy"]

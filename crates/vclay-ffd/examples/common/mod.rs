@@ -5,6 +5,7 @@
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 use vclay_core::{TriMesh, Vec3};
 use vclay_ffd::FfdLattice;
 
@@ -114,4 +115,66 @@ pub fn fish(rings: usize, segments: usize) -> TriMesh {
 pub fn fish_point(s: f64, angle: f64) -> Vec3 {
     let r = fish_radius(s);
     Vec3::new(0.45 * r * angle.cos(), s, r * angle.sin())
+}
+
+/// UV sphere of radius 1 with `n x n` vertices (rings at polar angles `pi (i + 1/2) / n`, `n`
+/// vertices a ring) and `2 n (n - 1)` triangles: the benchmark mesh of `bench_deform` and
+/// `ffd_peer`.
+pub fn uv_sphere(n: usize) -> TriMesh {
+    let mut m = TriMesh::new();
+    for i in 0..n {
+        let th = std::f64::consts::PI * (i as f64 + 0.5) / n as f64;
+        for j in 0..n {
+            let ph = std::f64::consts::TAU * j as f64 / n as f64;
+            m.positions.push(Vec3::new(
+                th.sin() * ph.cos(),
+                th.sin() * ph.sin(),
+                th.cos(),
+            ));
+        }
+    }
+    for i in 0..n - 1 {
+        for j in 0..n {
+            let a = (i * n + j) as u32;
+            let b = (i * n + (j + 1) % n) as u32;
+            let (c, d) = (b + n as u32, a + n as u32);
+            m.triangles.push([a, b, c]);
+            m.triangles.push([a, c, d]);
+        }
+    }
+    m
+}
+
+/// The smallest wall time of `runs` calls of `f` (milliseconds).
+pub fn best_of<F: FnMut()>(runs: usize, mut f: F) -> f64 {
+    (0..runs)
+        .map(|_| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64() * 1e3
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// CPU time of the calling thread in milliseconds (Linux `/proc/thread-self/schedstat`, first
+/// field: nanoseconds on a CPU), or `None` where unavailable. Unlike wall time it does not count
+/// time spent waiting for a CPU, so it stays meaningful on a busy machine.
+pub fn thread_cpu_ms() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: f64 = s.split_whitespace().next()?.parse().ok()?;
+    Some(ns * 1e-6)
+}
+
+/// The smallest thread CPU time of `runs` calls of `f` (milliseconds; NaN where unavailable).
+pub fn best_cpu_of<F: FnMut()>(runs: usize, mut f: F) -> f64 {
+    (0..runs)
+        .map(|_| {
+            let t0 = thread_cpu_ms();
+            f();
+            match (t0, thread_cpu_ms()) {
+                (Some(a), Some(b)) => b - a,
+                _ => f64::NAN,
+            }
+        })
+        .fold(f64::INFINITY, f64::min)
 }
