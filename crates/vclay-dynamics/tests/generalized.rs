@@ -583,6 +583,62 @@ fn direct_and_conjugate_gradient_solvers_agree_with_dynamic_weights() {
     assert_eq!(swung.solver, LinearSolver::ConjugateGradient);
 }
 
+/// `FactorReuse` (the studio's faster direct solver): an earlier step's factorization as the
+/// CG preconditioner. Over 60 steps of a 10 x 10 sheet pulled by a moving spring, with a point
+/// constraint, the trajectory stays within the stated tolerance of the default path's
+/// (`docs/performance.md`: 1e-9 of the model size), most steps skip the factorization, and the
+/// default path is untouched (one factorization per step).
+#[test]
+fn reused_factorizations_follow_the_direct_path_within_the_stated_tolerance() {
+    use vclay_dynamics::dnurbs::{FactorReuse, benchmarks};
+    let run = |reuse: Option<FactorReuse>| {
+        let mut d = benchmarks::dynamic_sheet(10).unwrap();
+        d.factor_reuse = reuse;
+        d.add_constraint(Constraint::Point {
+            param: [0.9, 0.9],
+            target: d.geometry().to_surface().unwrap().point(0.9, 0.9).unwrap(),
+        })
+        .unwrap();
+        let mut worst: f64 = 0.0;
+        let mut path = Vec::new();
+        for _ in 0..60 {
+            let r = d.step(Integrator::Implicit { dt: benchmarks::DT }).unwrap();
+            worst = worst.max(r.solver.relative_residual);
+            path.push(d.geometry().coordinates().to_vec());
+        }
+        (path, worst, d.factorizations(), d.geometry().scale())
+    };
+    let (direct, direct_residual, direct_factors, scale) = run(None);
+    let (reused, reused_residual, reused_factors, _) = run(Some(FactorReuse::default()));
+    assert_eq!(direct_factors, 60, "the default path factors every step");
+    assert!(
+        reused_factors < 20,
+        "{reused_factors} factorizations in 60 steps"
+    );
+    assert!(direct_residual < 1e-12, "{direct_residual:e}");
+    assert!(reused_residual < 1e-9, "{reused_residual:e}");
+    let start = benchmarks::dynamic_sheet(10).unwrap();
+    let travel = direct[59]
+        .iter()
+        .zip(start.geometry().coordinates())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(travel > 1e-2 * scale, "the sheet moved ({travel:e})");
+    let gap = direct
+        .iter()
+        .zip(&reused)
+        .flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()))
+        .fold(0.0, f64::max);
+    eprintln!(
+        "reused vs direct over 60 steps: largest gap {gap:e} (size {scale}), {reused_factors} factorizations"
+    );
+    assert!(gap > 0.0, "a different solve, so not the same bits");
+    assert!(
+        gap <= 1e-9 * scale,
+        "reused vs direct: {gap:e} (size {scale})"
+    );
+}
+
 #[test]
 fn kernel_spring_pulls_with_dynamic_weights_and_bad_widths_are_named() {
     let target = Vec3::new(0.5, 0.5, 0.4);

@@ -73,6 +73,10 @@ pub struct Result {
     pub frame_ms: f64,
     /// Slowest frame, ms.
     pub max_ms: f64,
+    /// Mean process CPU time per frame (all threads: the steps' element work runs on rayon's
+    /// pool), ms; NaN where `/proc/self/stat` cannot be read. On a loaded machine the wall
+    /// times include waits for a core, this does not.
+    pub cpu_ms: f64,
     /// Mean time of the steps of one frame, ms.
     pub step_ms: f64,
     /// Mean time of the display data, ms.
@@ -120,6 +124,7 @@ pub fn run(case: &Case, frames: usize) -> std::result::Result<Result, String> {
     let (mut steps, mut display, mut buffers, mut max) = (0.0, 0.0, 0.0, 0.0_f64);
     let (mut tris, mut bytes) = (0, 0);
     let start = Instant::now();
+    let cpu0 = vclay_core::yardstick::process_cpu_seconds();
     for f in 0..frames {
         let t0 = Instant::now();
         if f % 2 == 0 {
@@ -142,11 +147,11 @@ pub fn run(case: &Case, frames: usize) -> std::result::Result<Result, String> {
         }
         let t1 = Instant::now();
         // As the worker does while the simulation runs: energies at most every
-        // `ENERGY_REFRESH`.
+        // `ENERGY_REFRESH` and `ENERGY_COST_RATIO` times their cost.
         let known = clock.reuse(true);
         let (models, energy) = model_views(&session, None, known);
         if known.is_none() {
-            clock.evaluated(energy);
+            clock.evaluated_in(energy, t1.elapsed());
         }
         let frame = Frame {
             revision: session.revision(),
@@ -165,12 +170,16 @@ pub fn run(case: &Case, frames: usize) -> std::result::Result<Result, String> {
         max = max.max((t3 - t0).as_secs_f64());
     }
     let n = frames.max(1) as f64;
+    let cpu_ms = cpu0
+        .zip(vclay_core::yardstick::process_cpu_seconds())
+        .map_or(f64::NAN, |(a, b)| (b - a) * 1e3 / n);
     Ok(Result {
         name: case.name.into(),
         frames,
         steps: case.steps,
         frame_ms: start.elapsed().as_secs_f64() * 1e3 / n,
         max_ms: max * 1e3,
+        cpu_ms,
         step_ms: steps * 1e3 / n,
         display_ms: display * 1e3 / n,
         buffers_ms: buffers * 1e3 / n,

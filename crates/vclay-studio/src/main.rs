@@ -70,17 +70,18 @@ fn main() -> anyhow::Result<()> {
 
 fn run_bench(frames: usize) -> anyhow::Result<()> {
     println!(
-        "| model | steps/frame | frame ms (mean / max) | steps ms | display ms | buffers ms | triangles | frames/s | goal |"
+        "| model | steps/frame | frame ms (mean / max) | CPU ms/frame | steps ms | display ms | buffers ms | triangles | frames/s | goal |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     for case in &bench::CASES {
         let r = bench::run(case, frames).map_err(|e| anyhow::anyhow!("{}: {e}", case.name))?;
         println!(
-            "| {} | {} | {:.2} / {:.2} | {:.2} | {:.2} | {:.2} | {} | {:.0} | {:.0} |",
+            "| {} | {} | {:.2} / {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {} | {:.0} | {:.0} |",
             r.name,
             r.steps,
             r.frame_ms,
             r.max_ms,
+            r.cpu_ms,
             r.step_ms,
             r.display_ms,
             r.buffers_ms,

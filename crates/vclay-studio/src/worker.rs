@@ -1630,7 +1630,7 @@ impl State {
         let known = self.energy_clock.reuse(self.running);
         let (models, energy) = model_views(&self.session, self.colour_by.as_deref(), known);
         if known.is_none() {
-            self.energy_clock.evaluated(energy);
+            self.energy_clock.evaluated_in(energy, t0.elapsed());
         }
         let n = self.step_times.len().max(1) as f64;
         let step_seconds = self.step_times.iter().map(|s| s.1).sum::<f64>() / n;
@@ -1728,14 +1728,24 @@ pub fn model_views(
 }
 
 /// How often the frames of a running simulation evaluate the models' energies for the
-/// readout under the energy plot. The plot's samples come from the steps' own reports, so
-/// only the readout waits; a paused model's frames always evaluate them.
+/// readout under the energy plot, at most. The plot's samples come from the steps' own
+/// reports, so only the readout waits; a paused model's frames always evaluate them.
 pub const ENERGY_REFRESH: Duration = Duration::from_millis(100);
 
-/// When the frames last evaluated the energies, and what they were ([`ENERGY_REFRESH`]).
+/// The interval between two evaluations of a running simulation's energies is also at least
+/// this many times what the last evaluating frame's display data took
+/// ([`EnergyClock::evaluated_in`]), so the readout costs at most 1/20 of the worker's time: a
+/// 32 x 32 D-NURBS with dynamic weights pays about a third of a step for it, and with steps of
+/// 50-100 ms a fixed 100 ms interval evaluated it every frame or every second frame.
+pub const ENERGY_COST_RATIO: u32 = 20;
+
+/// When the frames last evaluated the energies, and what they were ([`ENERGY_REFRESH`],
+/// [`ENERGY_COST_RATIO`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct EnergyClock {
     last: Option<(Instant, Energy)>,
+    /// Wait at least this long before the next evaluation.
+    interval: Duration,
 }
 
 impl EnergyClock {
@@ -1743,13 +1753,20 @@ impl EnergyClock {
     /// simulation runs.
     pub fn reuse(&self, running: bool) -> Option<Energy> {
         match self.last {
-            Some((t, e)) if running && t.elapsed() < ENERGY_REFRESH => Some(e),
+            Some((t, e)) if running && t.elapsed() < ENERGY_REFRESH.max(self.interval) => Some(e),
             _ => None,
         }
     }
 
     /// Records energies just evaluated.
     pub fn evaluated(&mut self, e: Energy) {
+        self.evaluated_in(e, Duration::ZERO);
+    }
+
+    /// Records energies just evaluated by a frame whose display data took `took`: the next
+    /// evaluation waits [`ENERGY_COST_RATIO`] times that, at least [`ENERGY_REFRESH`].
+    pub fn evaluated_in(&mut self, e: Energy, took: Duration) {
         self.last = Some((Instant::now(), e));
+        self.interval = took.saturating_mul(ENERGY_COST_RATIO);
     }
 }

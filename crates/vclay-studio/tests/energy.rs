@@ -1,11 +1,12 @@
 //! The readout of the energies under the plot (issue 27's frame loop): while a simulation runs,
-//! frames evaluate the models' energies at most every `ENERGY_REFRESH` (a D-NURBS with dynamic
-//! weights pays about a third of a step for it) and reuse the last values in between; paused,
+//! frames evaluate the models' energies at most every `ENERGY_REFRESH`, and at most every
+//! `ENERGY_COST_RATIO` times what the last evaluating frame took (a D-NURBS with dynamic
+//! weights pays about a third of a step for it), and reuse the last values in between; paused,
 //! every frame evaluates them.
 
 use std::time::Duration;
 use vclay_session::Energy;
-use vclay_studio::worker::{ENERGY_REFRESH, EnergyClock, model_views};
+use vclay_studio::worker::{ENERGY_COST_RATIO, ENERGY_REFRESH, EnergyClock, model_views};
 
 #[test]
 fn running_frames_reuse_the_energies_within_the_refresh_interval() {
@@ -23,6 +24,25 @@ fn running_frames_reuse_the_energies_within_the_refresh_interval() {
     // Paused: always evaluated (a frame is built only when something changed).
     assert!(clock.reuse(false).is_none());
     std::thread::sleep(ENERGY_REFRESH + Duration::from_millis(20));
+    assert!(clock.reuse(true).is_none());
+}
+
+#[test]
+fn an_expensive_evaluation_waits_in_proportion_to_its_cost() {
+    let mut clock = EnergyClock::default();
+    let e = Energy {
+        kinetic: 1.0,
+        elastic: 2.0,
+        tools: 3.0,
+    };
+    // A frame that took 10 ms: the next evaluation waits 20 x 10 = 200 ms, past the 100 ms.
+    let took = Duration::from_millis(10);
+    assert!(took * ENERGY_COST_RATIO > ENERGY_REFRESH + Duration::from_millis(60));
+    clock.evaluated_in(e, took);
+    std::thread::sleep(ENERGY_REFRESH + Duration::from_millis(20));
+    assert!(clock.reuse(true).is_some(), "still within 20 x its cost");
+    assert!(clock.reuse(false).is_none(), "paused: always evaluated");
+    std::thread::sleep(took * ENERGY_COST_RATIO - ENERGY_REFRESH);
     assert!(clock.reuse(true).is_none());
 }
 

@@ -818,6 +818,41 @@ pub const GENERALIZED_CG_ITERATIONS: usize = 1000;
 pub const GENERALIZED_CG_TOLERANCE: f64 = 1e-10;
 /// Default relative weight inertia (see [`GeneralizedDnurbs::weight_inertia`]).
 pub const DEFAULT_WEIGHT_INERTIA: f64 = 1.0;
+/// Reuse of the direct solver's factorization across steps
+/// ([`GeneralizedDnurbs::factor_reuse`]): a step first solves its system by conjugate gradients
+/// preconditioned with the last factorization (`M^-1 = (L L^T)^-1` of an earlier step's matrix),
+/// from the warm start of the module docs, and factors its own matrix (the default path's exact
+/// solve) only when that does not reach [`FactorReuse::tolerance`] within
+/// [`FactorReuse::max_iterations`]. The step matrix changes with the weights and the shape
+/// (eqs 16-17), slowly from step to step, so the old factor is a close preconditioner and a
+/// few iterations (each two triangular solves and one product with the assembled matrix) replace
+/// the factorization. The result differs from the default path's by the solve tolerance per
+/// step (`docs/performance.md` states what this means over many steps;
+/// `tests/generalized.rs` checks it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FactorReuse {
+    /// Relative residual `|b - A x| / |b|` on the free coordinates that a step must reach with
+    /// the old factor (default [`FACTOR_REUSE_TOLERANCE`]).
+    pub tolerance: f64,
+    /// Iterations after which a step gives up on the old factor and factors its own matrix
+    /// (default [`FACTOR_REUSE_ITERATIONS`]).
+    pub max_iterations: usize,
+}
+
+/// Default [`FactorReuse::tolerance`].
+pub const FACTOR_REUSE_TOLERANCE: f64 = 1e-10;
+/// Default [`FactorReuse::max_iterations`].
+pub const FACTOR_REUSE_ITERATIONS: usize = 6;
+
+impl Default for FactorReuse {
+    fn default() -> Self {
+        Self {
+            tolerance: FACTOR_REUSE_TOLERANCE,
+            max_iterations: FACTOR_REUSE_ITERATIONS,
+        }
+    }
+}
+
 /// Largest relative weight change of one linearized step before it is split in two.
 pub const MAX_RELATIVE_WEIGHT_CHANGE: f64 = 0.25;
 /// Most halvings of one step.
@@ -1353,6 +1388,12 @@ pub struct GeneralizedDnurbs<G: GeneralizedGeometry> {
     /// block-Jacobi CG with [`GeneralizedDnurbs::max_iterations`] and
     /// [`GeneralizedDnurbs::tolerance`], the paper's method).
     pub solver: LinearSolver,
+    /// Whether the direct solver reuses an earlier step's factorization as a preconditioner
+    /// (see [`FactorReuse`]; default `None`: every step factors its own matrix, the path every
+    /// recorded trajectory was computed with). Only for [`LinearSolver::Direct`].
+    pub factor_reuse: Option<FactorReuse>,
+    /// Numeric factorizations so far (the direct solver's; see [`FactorReuse`]).
+    factorizations: usize,
     direct: Option<Arc<DirectPattern>>,
     /// Buffers of the numeric factorization kept between steps (scratch; no state).
     factor_buffers: FactorBuffers,
@@ -1415,6 +1456,8 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             weight_projections: 0,
             inertial_force: true,
             solver: geometry_solver,
+            factor_reuse: None,
+            factorizations: 0,
             direct: None,
             factor_buffers: FactorBuffers::default(),
             row_cache: RowCache::default(),
@@ -2053,6 +2096,12 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         self.substeps
     }
 
+    /// Numeric factorizations of the direct solver so far (one per step unless
+    /// [`Self::factor_reuse`] is set).
+    pub fn factorizations(&self) -> usize {
+        self.factorizations
+    }
+
     fn substep(&mut self, dt: f64, level: usize) -> Result<StepReport, DynamicsError> {
         if let Some(r) = self.step_once(dt, true)? {
             return Ok(r);
@@ -2168,28 +2217,59 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         // element pattern) and factors them; CG applies them element-wise.
         let folded = self.solver == LinearSolver::Direct
             && fold_extras(&pattern, &mut values, &works[ne..], &self.fixed);
-        let direct = if folded {
-            self.factor(&pattern, &values, &extra_diag)
-        } else {
-            None
-        };
         let first_extra = if folded { works.len() } else { ne };
+        let warm: Vec<f64> = (0..n)
+            .map(|i| if self.fixed[i] { 0.0 } else { v[i] })
+            .collect();
+        let mut x = warm.clone();
+        // An earlier step's factor as the preconditioner (`factor_reuse`), if it fits this
+        // step's pattern; the step factors its own matrix if that does not converge.
+        let lagged = match (self.factor_reuse, folded) {
+            (Some(reuse), true) => self
+                .factor_buffers
+                .lagged
+                .take()
+                .filter(|f| f.pattern.fixed == self.fixed)
+                .map(|f| (reuse, f)),
+            _ => None,
+        };
+        // The operator borrows a copy of the fixed mask, so that `factor` may take `self`.
+        let fixed = self.fixed.clone();
         let op = Op {
             works: &works,
             csr: Some((&pattern, &values)),
             first_extra,
             extra_diag: &extra_diag,
-            fixed: &self.fixed,
+            fixed: &fixed,
             n,
         };
-        let mut x: Vec<f64> = (0..n)
-            .map(|i| if self.fixed[i] { 0.0 } else { v[i] })
-            .collect();
-        let pre = match direct {
-            Some(f) => Solve::Direct(f),
-            None => Solve::Pcg(Precond::new(&op, &self.geometry.coordinate_groups())),
+        let reused = lagged.and_then(|(reuse, f)| {
+            let stats = pcg(&op, &f, &b, &mut x, reuse.max_iterations, reuse.tolerance);
+            if stats.relative_residual <= reuse.tolerance {
+                Some((f, stats))
+            } else {
+                // Its buffer holds the new factor.
+                self.factor_buffers.factor = f.values;
+                x.copy_from_slice(&warm);
+                None
+            }
+        });
+        let direct = if folded && reused.is_none() {
+            self.factor(&pattern, &values, &extra_diag)
+        } else {
+            None
         };
-        let mut stats = pre.solve(&op, &b, &mut x, self.max_iterations, self.tolerance);
+        let (pre, mut stats) = match (reused, direct) {
+            (Some((f, stats)), _) => (Solve::Reused(f), stats),
+            (None, direct) => {
+                let pre = match direct {
+                    Some(f) => Solve::Direct(f),
+                    None => Solve::Pcg(Precond::new(&op, &self.geometry.coordinate_groups())),
+                };
+                let stats = pre.solve(&op, &b, &mut x, self.max_iterations, self.tolerance);
+                (pre, stats)
+            }
+        };
         if self.has_constraints() {
             stats = self.apply_constraints(&op, &pre, &b, &mut x, self.baumgarte, stats)?;
         }
@@ -2211,9 +2291,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         if ratio > 1.0 {
             if dynamic {
                 // The caller halves the step: keep the element buffers for the retry.
-                if let Solve::Direct(f) = pre {
-                    self.factor_buffers.factor = f.values;
-                }
+                self.factor_buffers.keep(pre, self.factor_reuse.is_some());
                 works.truncate(ne);
                 self.work_pool = works;
                 return Ok(None);
@@ -2297,9 +2375,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             self.time += dt;
         }
         self.steps += 1;
-        if let Solve::Direct(f) = pre {
-            self.factor_buffers.factor = f.values;
-        }
+        self.factor_buffers.keep(pre, self.factor_reuse.is_some());
         works.truncate(ne);
         self.work_pool = works;
         Ok(Some(StepReport {
@@ -2551,6 +2627,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             matrix,
             factor,
             scratch,
+            ..
         } = &mut self.factor_buffers;
         matrix.clear();
         matrix.extend(dp.src.iter().map(|&k| full[k]));
@@ -2584,6 +2661,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                 Default::default(),
             )
             .ok()?;
+        self.factorizations += 1;
         Some(Factor {
             pattern: dp,
             values,
@@ -2732,6 +2810,10 @@ struct CsrPattern {
     /// (see [`ElementWork::shape`]), row by row: a block row `3 b + k` has the `nb` entries
     /// `3 b' + k` and the `nv` vector columns, a vector row all `nd` entries.
     positions: Vec<Vec<u32>>,
+    /// The rows cut into one band per thread, each with the element rows that fall into it
+    /// (`(element, row of a, start of the row in positions[element])`, elements in order), so
+    /// that [`Self::values`] adds a band's rows without scanning the others'.
+    bands: Vec<(std::ops::Range<usize>, Vec<[u32; 3]>)>,
     /// The fixed coordinates the element columns were built without.
     fixed: Vec<bool>,
 }
@@ -2769,59 +2851,70 @@ impl CsrPattern {
                 pos
             })
             .collect();
+        let nbands = rayon::current_num_threads().clamp(1, 8);
+        let mut bands: Vec<(std::ops::Range<usize>, Vec<[u32; 3]>)> = (0..nbands)
+            .map(|t| (n * t / nbands..n * (t + 1) / nbands, Vec::new()))
+            .collect();
+        let index = |x: usize| u32::try_from(x).expect("fewer than 2^32 element rows");
+        for (e, w) in works.iter().enumerate() {
+            let (nb, nv) = w.shape;
+            let nd = w.dofs.len();
+            let mut at = 0;
+            for (a, &i) in w.dofs.iter().enumerate() {
+                if let Some(band) = bands.iter_mut().find(|b| b.0.contains(&i)) {
+                    band.1.push([index(e), index(a), index(at)]);
+                }
+                at += if a < 3 * nb { nb + nv } else { nd };
+            }
+        }
         Self {
             row_ptr,
             cols,
             positions,
+            bands,
             fixed: fixed.to_vec(),
         }
     }
 
-    /// The summed element matrices as CSR values. The rows are cut into one band per thread;
-    /// each band adds the element rows that fall into it, so the bands run side by side.
+    /// The summed element matrices as CSR values. The rows are cut into bands
+    /// ([`Self::bands`]); each band adds the element rows that fall into it, so the bands run
+    /// side by side. Every entry receives its elements' terms in element order, whatever the
+    /// bands, so the values do not depend on the number of threads.
     fn values(&self, works: &[ElementWork]) -> Vec<f64> {
-        let n = self.row_ptr.len() - 1;
         let mut v = vec![0.0; self.cols.len()];
-        let bands = rayon::current_num_threads().clamp(1, 8);
-        let mut slices = Vec::with_capacity(bands);
+        let mut slices = Vec::with_capacity(self.bands.len());
         let mut rest = v.as_mut_slice();
         let mut at = 0;
-        for t in 0..bands {
-            let rows = n * t / bands..n * (t + 1) / bands;
+        for (rows, jobs) in &self.bands {
             let end = self.row_ptr[rows.end];
             let (head, tail) = std::mem::take(&mut rest).split_at_mut(end - at);
-            slices.push((rows, at, head));
+            slices.push((jobs, at, head));
             rest = tail;
             at = end;
         }
         // Structural zeros are skipped: adding +0 changes no sum (a sum that starts at +0 is
         // never -0), so the values are those of adding every entry.
-        slices.into_par_iter().for_each(|(rows, base, out)| {
-            for (w, pos) in works.iter().zip(&self.positions) {
+        slices.into_par_iter().for_each(|(jobs, base, out)| {
+            for &[e, a, at] in jobs {
+                let (e, a, at) = (e as usize, a as usize, at as usize);
+                let (w, pos) = (&works[e], &self.positions[e]);
                 let (nb, nv) = w.shape;
                 let nd = w.dofs.len();
-                let mut at = 0;
-                for (a, &i) in w.dofs.iter().enumerate() {
-                    let len = if a < 3 * nb { nb + nv } else { nd };
-                    let (p, next) = (&pos[at..at + len], at + len);
-                    at = next;
-                    if !rows.contains(&i) {
-                        continue;
+                let len = if a < 3 * nb { nb + nv } else { nd };
+                let p = &pos[at..at + len];
+                let row = &w.a[a * nd..(a + 1) * nd];
+                if a < 3 * nb {
+                    let k = a % 3;
+                    let (pb, pv) = p.split_at(nb);
+                    for (&p, b) in pb.iter().zip(0..nb) {
+                        out[p as usize - base] += row[3 * b + k];
                     }
-                    let row = &w.a[a * nd..(a + 1) * nd];
-                    if a < 3 * nb {
-                        let k = a % 3;
-                        let (pb, pv) = p.split_at(nb);
-                        for (&p, b) in pb.iter().zip(0..nb) {
-                            out[p as usize - base] += row[3 * b + k];
-                        }
-                        for (&p, &x) in pv.iter().zip(&row[3 * nb..]) {
-                            out[p as usize - base] += x;
-                        }
-                    } else {
-                        for (&p, &x) in p.iter().zip(row) {
-                            out[p as usize - base] += x;
-                        }
+                    for (&p, &x) in pv.iter().zip(&row[3 * nb..]) {
+                        out[p as usize - base] += x;
+                    }
+                } else {
+                    for (&p, &x) in p.iter().zip(row) {
+                        out[p as usize - base] += x;
                     }
                 }
             }
@@ -3069,6 +3162,20 @@ struct FactorBuffers {
     matrix: Vec<f64>,
     factor: Vec<f64>,
     scratch: Scratch,
+    /// The last factorization, kept for [`GeneralizedDnurbs::factor_reuse`].
+    lagged: Option<Factor>,
+}
+
+impl FactorBuffers {
+    /// Takes back a step's factor: as the preconditioner of the next steps (`reuse`) or as the
+    /// buffer of the next factorization.
+    fn keep(&mut self, solve: Solve, reuse: bool) {
+        match solve {
+            Solve::Direct(f) | Solve::Reused(f) if reuse => self.lagged = Some(f),
+            Solve::Direct(f) | Solve::Reused(f) => self.factor = f.values,
+            Solve::Pcg(_) => {}
+        }
+    }
 }
 
 impl Clone for FactorBuffers {
@@ -3110,6 +3217,53 @@ enum Solve {
     Pcg(Precond),
     /// The step's sparse Cholesky factorization.
     Direct(Factor),
+    /// Conjugate gradients preconditioned with an earlier step's factorization
+    /// ([`FactorReuse`]).
+    Reused(Factor),
+}
+
+/// A preconditioner `z = M^-1 r` on the free coordinates (fixed entries of `z` untouched).
+trait Preconditioner {
+    fn apply(&self, r: &[f64], z: &mut [f64]);
+}
+
+impl Preconditioner for Precond {
+    fn apply(&self, r: &[f64], z: &mut [f64]) {
+        Precond::apply(self, r, z);
+    }
+}
+
+impl Preconditioner for Factor {
+    fn apply(&self, r: &[f64], z: &mut [f64]) {
+        self.solve_into(r, z);
+    }
+}
+
+impl Factor {
+    /// `x = (L L^T)^-1 b` on the free coordinates; fixed entries of `x` become 0.
+    fn solve_into(&self, b: &[f64], x: &mut [f64]) {
+        let free = &self.pattern.free;
+        let mut rhs = faer::Mat::<f64>::zeros(free.len(), 1);
+        for (k, &i) in free.iter().enumerate() {
+            rhs[(k, 0)] = b[i];
+        }
+        // As `Llt::solve_in_place` does it.
+        let par = faer::get_global_parallelism();
+        let symbolic = &self.pattern.symbolic;
+        faer::sparse::linalg::cholesky::LltRef::<'_, usize, f64>::new(symbolic, &self.values)
+            .solve_in_place_with_conj(
+                faer::Conj::No,
+                rhs.as_mut(),
+                par,
+                faer::dyn_stack::MemStack::new(&mut faer::dyn_stack::MemBuffer::new(
+                    symbolic.solve_in_place_scratch::<f64>(1, par),
+                )),
+            );
+        x.iter_mut().for_each(|v| *v = 0.0);
+        for (k, &i) in free.iter().enumerate() {
+            x[i] = rhs[(k, 0)];
+        }
+    }
 }
 
 impl Solve {
@@ -3118,28 +3272,12 @@ impl Solve {
     fn solve(&self, op: &Op<'_>, b: &[f64], x: &mut [f64], max_it: usize, tol: f64) -> SolverStats {
         match self {
             Solve::Pcg(pre) => pcg(op, pre, b, x, max_it, tol),
+            // The old factor's own cap and tolerance: the step's systems after the first
+            // (constraint rows, projections) are solved like the first.
+            Solve::Reused(f) => pcg(op, f, b, x, max_it, tol),
             Solve::Direct(f) => {
                 let free = &f.pattern.free;
-                let mut rhs = faer::Mat::<f64>::zeros(free.len(), 1);
-                for (k, &i) in free.iter().enumerate() {
-                    rhs[(k, 0)] = b[i];
-                }
-                // As `Llt::solve_in_place` does it.
-                let par = faer::get_global_parallelism();
-                let symbolic = &f.pattern.symbolic;
-                faer::sparse::linalg::cholesky::LltRef::<'_, usize, f64>::new(symbolic, &f.values)
-                    .solve_in_place_with_conj(
-                        faer::Conj::No,
-                        rhs.as_mut(),
-                        par,
-                        faer::dyn_stack::MemStack::new(&mut faer::dyn_stack::MemBuffer::new(
-                            symbolic.solve_in_place_scratch::<f64>(1, par),
-                        )),
-                    );
-                x.iter_mut().for_each(|v| *v = 0.0);
-                for (k, &i) in free.iter().enumerate() {
-                    x[i] = rhs[(k, 0)];
-                }
+                f.solve_into(b, x);
                 let mut ax = vec![0.0; b.len()];
                 op.apply(x, &mut ax);
                 let (mut rn, mut bn) = (0.0, 0.0);
@@ -3163,7 +3301,7 @@ impl Solve {
 /// Block-Jacobi-preconditioned CG on the free coordinates (fixed entries of `x` stay 0).
 fn pcg(
     op: &Op<'_>,
-    pre: &Precond,
+    pre: &impl Preconditioner,
     b: &[f64],
     x: &mut [f64],
     max_it: usize,

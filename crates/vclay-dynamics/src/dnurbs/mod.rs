@@ -49,7 +49,7 @@ mod system;
 pub mod triangular;
 
 pub use generalized::{
-    Constraint, DEFAULT_QUADRATURE_TOLERANCE, GeneralizedDnurbs, GeneralizedGeometry,
+    Constraint, DEFAULT_QUADRATURE_TOLERANCE, FactorReuse, GeneralizedDnurbs, GeneralizedGeometry,
     GeneralizedState, LinearTie, LocalJacobian, QuadratureRule, denominator_radius,
 };
 pub use geometry::{ClosedCurve, DnurbsGeometry, ElementSamples};
