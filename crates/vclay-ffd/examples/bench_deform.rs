@@ -5,7 +5,8 @@
 //! only, sequential and on rayon's pool), normal recomputation, and an incremental update after a
 //! single-point manipulation.
 //!
-//! Run: `cargo run --release -p vclay-ffd --example bench_deform [vertices-per-side]`.
+//! Run: `cargo run --release -p vclay-ffd --example bench_deform [vertices-per-side [cps,...]]`
+//! (the second argument picks the lattices, e.g. `4` or `4,20`; default `4,7,10,20`).
 
 mod common;
 
@@ -27,7 +28,11 @@ fn main() {
         mesh.triangles.len(),
         rayon::current_num_threads()
     );
-    for cps in [4, 7, 10, 20] {
+    let lattices: Vec<usize> = std::env::args()
+        .nth(2)
+        .map(|s| s.split(',').filter_map(|c| c.parse().ok()).collect())
+        .unwrap_or_else(|| vec![4, 7, 10, 20]);
+    for cps in lattices {
         let mut lattice =
             FfdLattice::enclosing(&mesh.positions, LatticeSpec::uniform(3, cps), 0.05).unwrap();
         let t = Instant::now();

@@ -1,45 +1,68 @@
-//! A mesh embedded in a lattice: precomputed parameters and basis values, full and incremental
-//! deformation.
+//! A mesh embedded in a lattice: precomputed knot cells and local coordinates, full and
+//! incremental deformation.
 //!
 //! **What.** The process of `ffd-direct-manipulation.txt` section 2: "calculate the parameters
 //! (u, v, w) of the points on O with reference to Q(u, v, w), deform the NURBS volume, and compute
 //! the new positions of these points by substituting the computed parameters into the deformed
 //! NURBS volume", i.e. `x = Q(t_x) = sum P_ijk R_ijk(t_x)` (eq 1) for every embedded vertex.
 //!
-//! **How.** Once, at embedding: each vertex inside the rest box gets its parameters (linear map),
-//! the flat index of its first support control point and its per-axis non-rational B-spline values
-//! (`(p+1) + (q+1) + (r+1)` numbers; the tensor products `B_i B_j B_k` and, for a rational lattice,
-//! the weights are applied at evaluation, so weight changes need no re-embedding). Vertices are
-//! bucketed by knot cell (CSR arrays). A full deformation evaluates every embedded vertex with
-//! the contracted tensor-product kernel (`(p+1)(q+1)(r+1) + (p+1)(q+1) + (p+1)` multiply-adds per
-//! coordinate), in parallel over vertex chunks; runs of [`LANES`] consecutive vertices in the
-//! same knot cell (most of them in a mesh whose vertex order is spatially coherent) go through a
-//! blocked kernel that evaluates them together in lane arrays, which the compiler vectorizes
-//! (no `unsafe`, no target-specific code). An incremental update after control points
-//! `C` changed recomputes only the vertices of the cells whose support meets `C`: control point
-//! `i` influences knot cells `i - p ..= i` along each axis.
+//! **How.** Once, at embedding: each vertex inside the rest box gets its parameters `t_x` by the
+//! linear map of section 2 (the rest lattice is the identity, so no Newton iteration), the knot
+//! cell `(i, j, k)` (non-empty knot span per axis) containing them and its local coordinates
+//! `(s_u, s_v, s_w) in [0, 1]^3` in that cell, `s = (t - t_i) / (t_{i+1} - t_i)`: 28 bytes per
+//! vertex. The parameters themselves are not stored: [`EmbeddedMesh::parameters`] recomputes them
+//! from the rest position with the same arithmetic. Vertices are bucketed by knot cell (CSR arrays,
+//! a counting sort) for incremental updates.
+//!
+//! On one knot cell every B-spline `B_a(t)` of eq (2) is a polynomial of degree `p` in `s`,
+//! `B_{i-p+a}(t) = sum_k M_ak s^k` (the matrix `M` of each span follows from Cox-de Boor,
+//! Piegl & Tiller A2.2, carried out on polynomial coefficients), so the deformed volume is, on that
+//! cell, the polynomial
+//!
+//! ```text
+//! Q = sum_{k,l,m} C_klm s_u^k s_v^l s_w^m,    C_klm = sum_{a,b,c} M^u_ak M^v_bl M^w_cm P_(i-p+a)(j-q+b)(k-r+c)
+//! ```
+//!
+//! (for a rational lattice the same with `(W P, W)` and one division). A deformation first
+//! converts the cells it meets to these coefficients (sum factorization, three contractions,
+//! `3 (p+1)^4` multiply-adds per component for `p = q = r`, once per cell and task, kept in a
+//! small per-task cache), then evaluates every vertex by nested Horner: `(p+1)(q+1) r + (p+1) q
+//! + p` multiply-adds per component (63 for cubics, against 84 for the tensor-product contraction
+//! with stored basis values) and no basis evaluation. Runs of [`LANES`] consecutive vertices of
+//! one cell are evaluated together in lane arrays, which the compiler vectorizes (no `unsafe`,
+//! no target-specific code); a lone vertex goes through the same arithmetic with one lane, so
+//! every vertex gets bit-identical results whichever path, chunking or thread count evaluates it.
+//! An incremental update after control points `C` changed recomputes only the vertices of the
+//! cells whose support meets `C`: control point `i` influences knot cells `i - p ..= i` along
+//! each axis.
 //!
 //! **Limitations.** Vertices outside the rest box are never moved. Normals, when enabled, are
 //! recomputed for the whole mesh ([`TriMesh::compute_normals`] is `O(triangles)`), also after an
-//! incremental update. Memory is about `8 (p + q + r + 3) + 40` bytes per embedded vertex.
+//! incremental update. The power form differs from the B-spline form by rounding only (about
+//! `1e-16` of the box diagonal for the degrees up to 7 that use it; higher degrees, whose power
+//! form is worse conditioned, and [`EmbeddedMesh::set_blocked_kernel`]`(false)` use the
+//! per-vertex B-spline kernel). Memory is 40 bytes per embedded vertex (local coordinates 24,
+//! cell 4, mesh index 4, CSR member 4, slot 4) besides the rest and deformed positions.
 
-use crate::lattice::FfdLattice;
+use crate::lattice::{FfdLattice, box_parameters};
 use rayon::prelude::*;
 use vclay_core::{Parallelism, TriMesh, Vec3};
 
 /// Marker for vertices outside the lattice.
 const OUTSIDE: u32 = u32::MAX;
 /// Vertices per parallel task (a multiple of [`LANES`]).
-const CHUNK: usize = 4096;
+const CHUNK: usize = 8192;
 /// Vertices evaluated together by the blocked kernel of [`EmbeddedMesh::deform`].
 pub const LANES: usize = 4;
-/// The blocked kernel is used for degrees below this (a stack buffer of `3 * BLOCK_DEGREE`
-/// lane arrays); higher degrees use the per-vertex kernel.
+/// The power-form kernel is used for degrees below this; higher degrees use the per-vertex
+/// B-spline kernel (the monomial form grows ill-conditioned with the degree).
 const BLOCK_DEGREE: usize = 8;
+/// Cells whose coefficients a task keeps (direct-mapped by cell index).
+const CACHE_CELLS: usize = 64;
 
 /// A triangle mesh embedded in an [`FfdLattice`] (`ffd-direct-manipulation.txt` section 2): rest
-/// positions, precomputed `(t_x, B(t_x))` per embedded vertex, and the deformed mesh
-/// `x = sum P_ijk R_ijk(t_x)` (eq 1).
+/// positions, the knot cell and local coordinates of every embedded vertex, and the deformed
+/// mesh `x = sum P_ijk R_ijk(t_x)` (eq 1).
 #[derive(Clone, Debug)]
 pub struct EmbeddedMesh {
     rest: Vec<Vec3>,
@@ -48,14 +71,16 @@ pub struct EmbeddedMesh {
     slot: Vec<u32>,
     /// Per embedded vertex: mesh vertex index.
     vertex: Vec<u32>,
-    params: Vec<[f64; 3]>,
-    /// Per embedded vertex: flat index of the first support control point.
-    base: Vec<u32>,
-    /// Per embedded vertex: `B_u (p+1) | B_v (q+1) | B_w (r+1)`.
-    basis: Vec<f64>,
+    /// Per embedded vertex: local coordinates `(s_u, s_v, s_w)` in its knot cell.
+    local: Vec<[f64; 3]>,
+    /// Per embedded vertex: knot cell `(i * cells_v + j) * cells_w + k`.
+    cell: Vec<u32>,
     /// CSR over knot cells: embedded vertices of cell `c` are `cell_members[cell_start[c]..cell_start[c+1]]`.
     cell_start: Vec<u32>,
     cell_members: Vec<u32>,
+    /// Per axis, per knot cell: the `(p+1) x (p+1)` matrix `M_ak` (row `a`) of
+    /// `B_{i-p+a} = sum_k M_ak s^k`.
+    power: [Vec<f64>; 3],
     degree: [usize; 3],
     dims: [usize; 3],
     bounds: (Vec3, Vec3),
@@ -74,79 +99,83 @@ impl EmbeddedMesh {
         let n = mesh.positions.len();
         assert!(n < OUTSIDE as usize, "too many vertices");
         let rest = mesh.positions.clone();
-        let located: Vec<Option<[f64; 3]>> = if par.is_parallel(n) {
-            rest.par_iter().map(|x| lattice.parameters(x)).collect()
-        } else {
-            rest.iter().map(|x| lattice.parameters(x)).collect()
-        };
-        let mut slot = vec![OUTSIDE; n];
-        let mut vertex = Vec::new();
-        let mut params = Vec::new();
-        for (v, t) in located.iter().enumerate() {
-            if let Some(t) = t {
-                slot[v] = vertex.len() as u32;
-                vertex.push(v as u32);
-                params.push(*t);
-            }
-        }
-        drop(located);
         let degree = lattice.degree();
-        let stride = degree.iter().sum::<usize>() + 3;
-        let m = vertex.len();
-        let mut base = vec![0u32; m];
-        let mut basis = vec![0.0; m * stride];
-        let fill = |(t, (b, vals)): (&[f64; 3], (&mut u32, &mut [f64]))| {
-            let lb = lattice.local_basis(*t);
-            *b = lattice.base_flat(lb.base) as u32;
-            let mut o = 0;
-            for a in 0..3 {
-                vals[o..o + degree[a] + 1].copy_from_slice(&lb.values[a][..=degree[a]]);
-                o += degree[a] + 1;
-            }
-        };
-        if par.is_parallel(m) {
-            params
-                .par_iter()
-                .zip(base.par_iter_mut().zip(basis.par_chunks_mut(stride)))
-                .for_each(fill);
-        } else {
-            params
-                .iter()
-                .zip(base.iter_mut().zip(basis.chunks_mut(stride)))
-                .for_each(fill);
-        }
-        // Bucket by knot cell.
         let dims = lattice.dims();
         let cells = cell_counts(degree, dims);
-        let ncells: usize = cells.iter().product();
-        let cell_of = |b: u32| {
-            let [i, j, k] = lattice.multi_index(b as usize);
-            (i * cells[1] + j) * cells[2] + k
+        let (lo, hi) = lattice.bounds();
+        let knots = lattice.knots();
+        let locate = |x: &Vec3| -> (u32, [f64; 3]) {
+            let Some(t) = box_parameters(lo, hi, x) else {
+                return (OUTSIDE, [0.0; 3]);
+            };
+            let mut ci = [0usize; 3];
+            let mut s = [0.0; 3];
+            for a in 0..3 {
+                let span = knots[a].find_span(t[a]);
+                let k = knots[a].as_slice();
+                s[a] = (t[a] - k[span]) / (k[span + 1] - k[span]);
+                ci[a] = span - degree[a];
+            }
+            (((ci[0] * cells[1] + ci[1]) * cells[2] + ci[2]) as u32, s)
         };
+        let mut cell = Vec::new();
+        let mut local = Vec::new();
+        if par.is_parallel(n) {
+            rest.par_iter()
+                .map(locate)
+                .unzip_into_vecs(&mut cell, &mut local);
+        } else {
+            (cell, local) = rest.iter().map(locate).unzip();
+        }
+        let m = cell.iter().filter(|&&c| c != OUTSIDE).count();
+        let (slot, vertex) = if m == n {
+            let ids: Vec<u32> = (0..n as u32).collect();
+            (ids.clone(), ids)
+        } else {
+            let mut slot = vec![OUTSIDE; n];
+            let mut vertex = Vec::with_capacity(m);
+            for (v, &c) in cell.iter().enumerate() {
+                if c != OUTSIDE {
+                    slot[v] = vertex.len() as u32;
+                    vertex.push(v as u32);
+                }
+            }
+            let mut keep = cell.iter().map(|&c| c != OUTSIDE);
+            local.retain(|_| keep.next().expect("same length"));
+            cell.retain(|&c| c != OUTSIDE);
+            (slot, vertex)
+        };
+        // Bucket by knot cell: a counting sort, linear in the vertices (stable, so the members
+        // of a cell keep the mesh order).
+        let ncells: usize = cells.iter().product();
         let mut cell_start = vec![0u32; ncells + 1];
-        for &b in &base {
-            cell_start[cell_of(b) + 1] += 1;
+        for &c in &cell {
+            cell_start[c as usize + 1] += 1;
         }
         for c in 0..ncells {
             cell_start[c + 1] += cell_start[c];
         }
         let mut fill_pos = cell_start.clone();
         let mut cell_members = vec![0u32; m];
-        for (e, &b) in base.iter().enumerate() {
-            let c = cell_of(b);
-            cell_members[fill_pos[c] as usize] = e as u32;
-            fill_pos[c] += 1;
+        for (e, &c) in cell.iter().enumerate() {
+            cell_members[fill_pos[c as usize] as usize] = e as u32;
+            fill_pos[c as usize] += 1;
         }
+        let power = [0, 1, 2].map(|a| {
+            (0..cells[a])
+                .flat_map(|c| span_power_matrix(knots[a].as_slice(), degree[a], c + degree[a]))
+                .collect()
+        });
         let mut out = Self {
             rest,
             mesh,
             slot,
             vertex,
-            params,
-            base,
-            basis,
+            local,
+            cell,
             cell_start,
             cell_members,
+            power,
             degree,
             dims,
             bounds: lattice.bounds(),
@@ -163,9 +192,10 @@ impl EmbeddedMesh {
         self.recompute_normals = on;
     }
 
-    /// Whether [`EmbeddedMesh::deform`] may use the blocked (SIMD-friendly) kernel (default
-    /// true). Both kernels give the same positions up to rounding; turning it off is for
-    /// comparisons in benchmarks.
+    /// Whether [`EmbeddedMesh::deform`] and [`EmbeddedMesh::update`] may use the blocked
+    /// power-form kernel (default true; see the module docs). Off, every vertex is evaluated by
+    /// the B-spline form of eq (1) with its basis values computed on the spot (Cox-de Boor);
+    /// both give the same positions up to rounding, so turning it off is for comparisons.
     pub fn set_blocked_kernel(&mut self, on: bool) {
         self.blocked_kernel = on;
     }
@@ -190,10 +220,14 @@ impl EmbeddedMesh {
     pub fn is_embedded(&self, v: usize) -> bool {
         self.slot.get(v).is_some_and(|&s| s != OUTSIDE)
     }
-    /// Parameters of vertex `v`, `None` when it is outside.
+    /// Parameters of vertex `v`, `None` when it is outside (recomputed from the rest position by
+    /// the linear map of section 2, identical to [`FfdLattice::parameters`]).
     pub fn parameters(&self, v: usize) -> Option<[f64; 3]> {
         let s = *self.slot.get(v)?;
-        (s != OUTSIDE).then(|| self.params[s as usize])
+        if s == OUTSIDE {
+            return None;
+        }
+        box_parameters(self.bounds.0, self.bounds.1, &self.rest[v])
     }
 
     #[track_caller]
@@ -206,14 +240,18 @@ impl EmbeddedMesh {
         );
     }
 
-    #[inline]
-    fn eval(&self, lattice: &FfdLattice, e: usize) -> Vec3 {
-        let [p, q, r] = self.degree;
-        let stride = p + q + r + 3;
-        let b = &self.basis[e * stride..(e + 1) * stride];
-        let (bu, rest) = b.split_at(p + 1);
-        let (bv, bw) = rest.split_at(q + 1);
-        lattice.eval_local(self.base[e] as usize, bu, bv, bw)
+    /// Whether the power-form kernel applies.
+    fn blocked(&self) -> bool {
+        self.blocked_kernel && self.degree.iter().all(|&d| d < BLOCK_DEGREE)
+    }
+
+    /// The per-vertex B-spline kernel: parameters from the rest position, Cox-de Boor basis
+    /// values, the contraction of [`FfdLattice::eval_local`].
+    fn eval_bspline(&self, lattice: &FfdLattice, e: usize) -> Vec3 {
+        let v = self.vertex[e] as usize;
+        let t = box_parameters(self.bounds.0, self.bounds.1, &self.rest[v])
+            .expect("embedded vertices are inside the box");
+        lattice.point_at_unchecked(t)
     }
 
     /// Full deformation: every embedded vertex `x = sum P_ijk R_ijk(t_x)` (eq 1), then normals.
@@ -221,7 +259,7 @@ impl EmbeddedMesh {
     /// Runs of [`LANES`] consecutive mesh vertices that are all embedded in the same knot cell
     /// (the common case: neighbouring vertices are near each other) are evaluated together, lane
     /// by lane in fixed-size arrays the compiler turns into SIMD instructions; other vertices one
-    /// by one. Parallel over chunks of vertices when `par` allows.
+    /// by one with the same arithmetic. Parallel over chunks of vertices when `par` allows.
     ///
     /// # Panics
     /// If `lattice` has other dimensions, degrees or box than the one embedded in.
@@ -230,117 +268,184 @@ impl EmbeddedMesh {
         self.check_lattice(lattice);
         let mut positions = std::mem::take(&mut self.mesh.positions);
         let this = &*self;
-        let blocked = self.blocked_kernel
-            && !lattice.is_rational()
-            && self.degree.iter().all(|&d| d < BLOCK_DEGREE);
-        let kernel = |(xs, slots): (&mut [Vec3], &[u32])| {
-            if blocked {
-                let mut xb = xs.chunks_exact_mut(LANES);
-                let mut sb = slots.chunks_exact(LANES);
-                for (x, s) in (&mut xb).zip(&mut sb) {
-                    let s: &[u32; LANES] = s.try_into().expect("chunk of LANES");
-                    let b0 = if s[0] != OUTSIDE {
-                        this.base[s[0] as usize]
-                    } else {
-                        OUTSIDE
-                    };
-                    if b0 != OUTSIDE
-                        && s.iter()
-                            .all(|&e| e != OUTSIDE && this.base[e as usize] == b0)
-                    {
-                        let out = this.eval_block(lattice, s);
-                        x.copy_from_slice(&out);
-                    } else {
-                        for (xi, &e) in x.iter_mut().zip(s) {
-                            if e != OUTSIDE {
-                                *xi = this.eval(lattice, e as usize);
-                            }
-                        }
-                    }
-                }
-                for (xi, &e) in xb.into_remainder().iter_mut().zip(sb.remainder()) {
-                    if e != OUTSIDE {
-                        *xi = this.eval(lattice, e as usize);
-                    }
-                }
+        if this.blocked() {
+            let kernel = |cache: &mut CellCache, (xs, slots): (&mut [Vec3], &[u32])| {
+                this.eval_run(lattice, cache, slots, xs);
+            };
+            if par.is_parallel(this.vertex.len()) {
+                positions
+                    .par_chunks_mut(CHUNK)
+                    .zip(this.slot.par_chunks(CHUNK))
+                    .for_each_init(|| CellCache::new(this, lattice), kernel);
             } else {
+                let mut cache = CellCache::new(this, lattice);
+                positions
+                    .chunks_mut(CHUNK)
+                    .zip(this.slot.chunks(CHUNK))
+                    .for_each(|c| kernel(&mut cache, c));
+            }
+        } else {
+            let kernel = |(xs, slots): (&mut [Vec3], &[u32])| {
                 for (x, &s) in xs.iter_mut().zip(slots) {
                     if s != OUTSIDE {
-                        *x = this.eval(lattice, s as usize);
+                        *x = this.eval_bspline(lattice, s as usize);
                     }
                 }
+            };
+            if par.is_parallel(this.vertex.len()) {
+                positions
+                    .par_chunks_mut(CHUNK)
+                    .zip(this.slot.par_chunks(CHUNK))
+                    .for_each(kernel);
+            } else {
+                positions
+                    .chunks_mut(CHUNK)
+                    .zip(this.slot.chunks(CHUNK))
+                    .for_each(kernel);
             }
-        };
-        if par.is_parallel(this.vertex.len()) {
-            positions
-                .par_chunks_mut(CHUNK)
-                .zip(this.slot.par_chunks(CHUNK))
-                .for_each(kernel);
-        } else {
-            positions
-                .chunks_mut(CHUNK)
-                .zip(this.slot.chunks(CHUNK))
-                .for_each(kernel);
         }
         self.mesh.positions = positions;
         self.finish();
         &self.mesh
     }
 
-    /// [`LANES`] embedded vertices of one knot cell (same support base) at once, non-rational
-    /// lattice: the same contraction as [`FfdLattice::eval_local`] with every scalar replaced by
-    /// a lane array (control points broadcast, basis values per lane).
-    #[inline]
-    fn eval_block(&self, lattice: &FfdLattice, e: &[u32; LANES]) -> [Vec3; LANES] {
-        let [p, q, r] = self.degree;
-        let stride = p + q + r + 3;
-        let mut bl = [[0.0f64; LANES]; 3 * BLOCK_DEGREE];
-        for (l, &ei) in e.iter().enumerate() {
-            let b = &self.basis[ei as usize * stride..(ei as usize + 1) * stride];
-            for (k, &v) in b.iter().enumerate() {
-                bl[k][l] = v;
-            }
+    /// Evaluates the embedded vertices `ids` (embedded indices; entries [`OUTSIDE`] are skipped,
+    /// `out` left as is there) into `out` (same length) with the power-form kernel.
+    fn eval_run(
+        &self,
+        lattice: &FfdLattice,
+        cache: &mut CellCache,
+        ids: &[u32],
+        out: &mut [Vec3],
+    ) {
+        // The cubic lattice gets its own instance, with the degrees constant-folded.
+        match self.degree {
+            [3, 3, 3] => self.eval_run_deg(lattice, cache, ids, out, [3, 3, 3]),
+            [2, 2, 2] => self.eval_run_deg(lattice, cache, ids, out, [2, 2, 2]),
+            d => self.eval_run_deg(lattice, cache, ids, out, d),
         }
-        let (bu, rest) = bl[..stride].split_at(p + 1);
-        let (bv, bw) = rest.split_at(q + 1);
-        let [_, nv, nw] = self.dims;
-        let su = nv * nw;
-        let base = self.base[e[0] as usize] as usize;
-        let pts = lattice.control_points();
-        let zero = [0.0f64; LANES];
-        let (mut x, mut y, mut z) = (zero, zero, zero);
-        for (a, ba) in bu.iter().enumerate() {
-            let (mut xv, mut yv, mut zv) = (zero, zero, zero);
-            for (c, bc) in bv.iter().enumerate() {
-                let start = base + a * su + c * nw;
-                let row = &pts[start..start + bw.len()];
-                let (mut xw, mut yw, mut zw) = (zero, zero, zero);
-                for (pt, be) in row.iter().zip(bw) {
-                    for l in 0..LANES {
-                        xw[l] += pt.x * be[l];
-                        yw[l] += pt.y * be[l];
-                        zw[l] += pt.z * be[l];
+    }
+
+    #[inline(always)]
+    fn eval_run_deg(
+        &self,
+        lattice: &FfdLattice,
+        cache: &mut CellCache,
+        ids: &[u32],
+        out: &mut [Vec3],
+        deg: [usize; 3],
+    ) {
+        let rational = lattice.is_rational();
+        let mut ib = ids.chunks_exact(LANES);
+        let mut ob = out.chunks_exact_mut(LANES);
+        for (e, x) in (&mut ib).zip(&mut ob) {
+            let e: &[u32; LANES] = e.try_into().expect("chunk of LANES");
+            let c0 = if e[0] != OUTSIDE {
+                self.cell[e[0] as usize]
+            } else {
+                OUTSIDE
+            };
+            if c0 != OUTSIDE
+                && e.iter()
+                    .all(|&ei| ei != OUTSIDE && self.cell[ei as usize] == c0)
+            {
+                let coef = cache.get_lanes(self, lattice, c0);
+                let t: [[f64; LANES]; 3] =
+                    std::array::from_fn(|a| std::array::from_fn(|l| self.local[e[l] as usize][a]));
+                x.copy_from_slice(&eval_power::<LANES>(coef, deg, rational, &t));
+            } else {
+                for (xi, &ei) in x.iter_mut().zip(e) {
+                    if ei != OUTSIDE {
+                        *xi = self.eval_one(lattice, cache, ei as usize, deg, rational);
                     }
                 }
-                for l in 0..LANES {
-                    xv[l] += xw[l] * bc[l];
-                    yv[l] += yw[l] * bc[l];
-                    zv[l] += zw[l] * bc[l];
-                }
-            }
-            for l in 0..LANES {
-                x[l] += xv[l] * ba[l];
-                y[l] += yv[l] * ba[l];
-                z[l] += zv[l] * ba[l];
             }
         }
-        std::array::from_fn(|l| Vec3::new(x[l], y[l], z[l]))
+        for (xi, &ei) in ob.into_remainder().iter_mut().zip(ib.remainder()) {
+            if ei != OUTSIDE {
+                *xi = self.eval_one(lattice, cache, ei as usize, deg, rational);
+            }
+        }
+    }
+
+    /// One embedded vertex through the power-form kernel (one lane: the same arithmetic as a
+    /// lane of the blocked kernel).
+    #[inline(always)]
+    fn eval_one(
+        &self,
+        lattice: &FfdLattice,
+        cache: &mut CellCache,
+        e: usize,
+        deg: [usize; 3],
+        rational: bool,
+    ) -> Vec3 {
+        let coef = cache.get(self, lattice, self.cell[e]).as_chunks::<1>().0;
+        let t = self.local[e].map(|s| [s]);
+        eval_power::<1>(coef, deg, rational, &t)[0]
+    }
+
+    /// The power-form coefficients `C_klm` of knot cell `c` (module docs), component-major
+    /// (`x`, `y`, `z` and, for a rational lattice, `w` of the homogeneous points), each
+    /// `[k][l][m]`; `work` holds two blocks of `(p+1)(q+1)(r+1)`.
+    fn cell_coefficients(&self, lattice: &FfdLattice, c: usize, out: &mut [f64], work: &mut [f64]) {
+        let [p, q, r] = self.degree;
+        let cells = cell_counts(self.degree, self.dims);
+        let ci = [c / (cells[1] * cells[2]), (c / cells[2]) % cells[1], c % cells[2]];
+        let base = lattice.flat_index(ci[0], ci[1], ci[2]);
+        let [_, nv, nw] = self.dims;
+        let (pu, pv, pw) = (p + 1, q + 1, r + 1);
+        let n = pu * pv * pw;
+        let mu = &self.power[0][ci[0] * pu * pu..][..pu * pu];
+        let mv = &self.power[1][ci[1] * pv * pv..][..pv * pv];
+        let mw = &self.power[2][ci[2] * pw * pw..][..pw * pw];
+        let rational = lattice.is_rational();
+        let ncomp = if rational { 4 } else { 3 };
+        let (t0, t1) = work.split_at_mut(n);
+        for comp in 0..ncomp {
+            // t0[a][b][c] = P_(base + (a, b, c)), component `comp`.
+            for a in 0..pu {
+                for b in 0..pv {
+                    let start = base + a * nv * nw + b * nw;
+                    for cc in 0..pw {
+                        t0[(a * pv + b) * pw + cc] = if rational {
+                            lattice.homogeneous()[start + cc][comp]
+                        } else {
+                            lattice.control_points()[start + cc][comp]
+                        };
+                    }
+                }
+            }
+            // Contract w: t1[a][b][m] = sum_c Mw[c][m] t0[a][b][c].
+            for ab in 0..pu * pv {
+                for m in 0..pw {
+                    t1[ab * pw + m] = (0..pw).map(|cc| mw[cc * pw + m] * t0[ab * pw + cc]).sum();
+                }
+            }
+            // Contract v: t0[a][l][m] = sum_b Mv[b][l] t1[a][b][m].
+            for a in 0..pu {
+                for l in 0..pv {
+                    for m in 0..pw {
+                        t0[(a * pv + l) * pw + m] = (0..pv)
+                            .map(|b| mv[b * pv + l] * t1[(a * pv + b) * pw + m])
+                            .sum();
+                    }
+                }
+            }
+            // Contract u: C[k][l][m] = sum_a Mu[a][k] t0[a][l][m].
+            let dst = &mut out[comp * n..(comp + 1) * n];
+            for k in 0..pu {
+                for lm in 0..pv * pw {
+                    dst[k * pv * pw + lm] = (0..pu).map(|a| mu[a * pu + k] * t0[a * pv * pw + lm]).sum();
+                }
+            }
+        }
     }
 
     /// Incremental deformation after the control points (or weights) with flat indices `changed`
     /// were modified: recomputes only the vertices of knot cells whose support contains one of
     /// them. Returns how many vertices were recomputed. The result equals [`EmbeddedMesh::deform`]
-    /// as long as nothing else in the lattice changed.
+    /// as long as nothing else in the lattice changed (bit for bit: each vertex goes through the
+    /// same arithmetic).
     ///
     /// # Panics
     /// If `lattice` has another shape than the one embedded in, or an index is out of range.
@@ -375,46 +480,42 @@ impl EmbeddedMesh {
             })
             .collect();
         let this = &*self;
-        let blocked = self.blocked_kernel
-            && !lattice.is_rational()
-            && self.degree.iter().all(|&d| d < BLOCK_DEGREE);
-        // Members of one cell are consecutive in `affected` and share their support base, so
-        // the blocked kernel applies to almost every group of LANES.
-        let kernel = |(es, xs): (&[u32], &mut [Vec3])| {
-            if blocked {
-                let mut eb = es.chunks_exact(LANES);
-                let mut xb = xs.chunks_exact_mut(LANES);
-                for (e, x) in (&mut eb).zip(&mut xb) {
-                    let e: &[u32; LANES] = e.try_into().expect("chunk of LANES");
-                    let b0 = this.base[e[0] as usize];
-                    if e.iter().all(|&ei| this.base[ei as usize] == b0) {
-                        x.copy_from_slice(&this.eval_block(lattice, e));
-                    } else {
-                        for (xi, &ei) in x.iter_mut().zip(e) {
-                            *xi = this.eval(lattice, ei as usize);
-                        }
-                    }
-                }
-                for (xi, &ei) in xb.into_remainder().iter_mut().zip(eb.remainder()) {
-                    *xi = this.eval(lattice, ei as usize);
-                }
-            } else {
-                for (xi, &ei) in xs.iter_mut().zip(es) {
-                    *xi = this.eval(lattice, ei as usize);
-                }
-            }
-        };
+        // Members of one cell are consecutive in `affected`, so the blocked kernel applies to
+        // almost every group of LANES.
         let mut new = vec![Vec3::zeros(); affected.len()];
-        if par.is_parallel(affected.len()) {
-            affected
-                .par_chunks(CHUNK)
-                .zip(new.par_chunks_mut(CHUNK))
-                .for_each(kernel);
+        if this.blocked() {
+            let kernel = |cache: &mut CellCache, (es, xs): (&[u32], &mut [Vec3])| {
+                this.eval_run(lattice, cache, es, xs);
+            };
+            if par.is_parallel(affected.len()) {
+                affected
+                    .par_chunks(CHUNK)
+                    .zip(new.par_chunks_mut(CHUNK))
+                    .for_each_init(|| CellCache::new(this, lattice), kernel);
+            } else {
+                let mut cache = CellCache::new(this, lattice);
+                affected
+                    .chunks(CHUNK)
+                    .zip(new.chunks_mut(CHUNK))
+                    .for_each(|c| kernel(&mut cache, c));
+            }
         } else {
-            affected
-                .chunks(CHUNK)
-                .zip(new.chunks_mut(CHUNK))
-                .for_each(kernel);
+            let kernel = |(es, xs): (&[u32], &mut [Vec3])| {
+                for (xi, &ei) in xs.iter_mut().zip(es) {
+                    *xi = this.eval_bspline(lattice, ei as usize);
+                }
+            };
+            if par.is_parallel(affected.len()) {
+                affected
+                    .par_chunks(CHUNK)
+                    .zip(new.par_chunks_mut(CHUNK))
+                    .for_each(kernel);
+            } else {
+                affected
+                    .chunks(CHUNK)
+                    .zip(new.chunks_mut(CHUNK))
+                    .for_each(kernel);
+            }
         }
         for (&e, x) in affected.iter().zip(new) {
             self.mesh.positions[self.vertex[e as usize] as usize] = x;
@@ -430,6 +531,161 @@ impl EmbeddedMesh {
             self.mesh.compute_normals();
         }
     }
+}
+
+/// Power-form coefficients of the last [`CACHE_CELLS`] cells a task met (direct-mapped), so that
+/// a cell's conversion is paid once per task rather than once per vertex.
+struct CellCache {
+    tags: [u32; CACHE_CELLS],
+    /// `CACHE_CELLS` blocks of `stride` coefficients.
+    coef: Vec<f64>,
+    work: Vec<f64>,
+    stride: usize,
+    /// The cell whose coefficients `lanes` holds, each repeated [`LANES`] times (so that the
+    /// blocked kernel loads them as vectors instead of broadcasting each one).
+    lanes_cell: u32,
+    lanes: Vec<[f64; LANES]>,
+}
+
+impl CellCache {
+    fn new(mesh: &EmbeddedMesh, lattice: &FfdLattice) -> Self {
+        let n: usize = mesh.degree.iter().map(|d| d + 1).product();
+        let stride = n * if lattice.is_rational() { 4 } else { 3 };
+        Self {
+            tags: [OUTSIDE; CACHE_CELLS],
+            coef: vec![0.0; CACHE_CELLS * stride],
+            work: vec![0.0; 2 * n],
+            stride,
+            lanes_cell: OUTSIDE,
+            lanes: vec![[0.0; LANES]; stride],
+        }
+    }
+
+    /// [`CellCache::get`], each coefficient repeated [`LANES`] times.
+    #[inline(always)]
+    fn get_lanes(
+        &mut self,
+        mesh: &EmbeddedMesh,
+        lattice: &FfdLattice,
+        cell: u32,
+    ) -> &[[f64; LANES]] {
+        if self.lanes_cell != cell {
+            self.get(mesh, lattice, cell);
+            let i = cell as usize % CACHE_CELLS;
+            let block = &self.coef[i * self.stride..(i + 1) * self.stride];
+            for (d, &c) in self.lanes.iter_mut().zip(block) {
+                *d = [c; LANES];
+            }
+            self.lanes_cell = cell;
+        }
+        &self.lanes
+    }
+
+    #[inline(always)]
+    fn get(&mut self, mesh: &EmbeddedMesh, lattice: &FfdLattice, cell: u32) -> &[f64] {
+        let i = cell as usize % CACHE_CELLS;
+        let block = &mut self.coef[i * self.stride..(i + 1) * self.stride];
+        if self.tags[i] != cell {
+            mesh.cell_coefficients(lattice, cell as usize, block, &mut self.work);
+            self.tags[i] = cell;
+        }
+        block
+    }
+}
+
+/// `L` points of one knot cell in power form (module docs): `x = sum C_klm s_u^k s_v^l s_w^m`
+/// by nested Horner, every operation lane by lane; rational lattices divide by the fourth
+/// component.
+#[inline(always)]
+fn eval_power<const L: usize>(
+    coef: &[[f64; L]],
+    deg: [usize; 3],
+    rational: bool,
+    t: &[[f64; L]; 3],
+) -> [Vec3; L] {
+    let n: usize = deg.iter().map(|d| d + 1).product();
+    let x = horner::<L>(&coef[..n], deg, t);
+    let y = horner::<L>(&coef[n..2 * n], deg, t);
+    let z = horner::<L>(&coef[2 * n..3 * n], deg, t);
+    if rational {
+        let w = horner::<L>(&coef[3 * n..4 * n], deg, t);
+        std::array::from_fn(|l| Vec3::new(x[l] / w[l], y[l] / w[l], z[l] / w[l]))
+    } else {
+        std::array::from_fn(|l| Vec3::new(x[l], y[l], z[l]))
+    }
+}
+
+/// `sum_k s_u^k sum_l s_v^l sum_m s_w^m c[k][l][m]`, Horner along each axis, for `L` points.
+#[inline(always)]
+fn horner<const L: usize>(c: &[[f64; L]], [p, q, r]: [usize; 3], t: &[[f64; L]; 3]) -> [f64; L] {
+    let [su, sv, sw] = t;
+    let mut x = [0.0; L];
+    for k in (0..=p).rev() {
+        let mut y = [0.0; L];
+        for l in (0..=q).rev() {
+            let row = &c[(k * (q + 1) + l) * (r + 1)..][..r + 1];
+            let mut z = row[r];
+            for m in (0..r).rev() {
+                for i in 0..L {
+                    z[i] = z[i] * sw[i] + row[m][i];
+                }
+            }
+            if l == q {
+                y = z;
+            } else {
+                for i in 0..L {
+                    y[i] = y[i] * sv[i] + z[i];
+                }
+            }
+        }
+        if k == p {
+            x = y;
+        } else {
+            for i in 0..L {
+                x[i] = x[i] * su[i] + y[i];
+            }
+        }
+    }
+    x
+}
+
+/// The B-splines of degree `p` that are non-zero on knot span `span` (`t_span <= t < t_span+1`,
+/// non-empty), as polynomials in the local coordinate `s = (t - t_span) / (t_span+1 - t_span)`:
+/// row `a` holds the coefficients of `s^0 ..= s^p` of `B_{span-p+a}`. Cox-de Boor (Piegl &
+/// Tiller A2.2) carried out on polynomials: `left_j = t - t_{span+1-j}` and
+/// `right_j = t_{span+j} - t` are linear in `s`, the denominators are knot differences.
+fn span_power_matrix(knots: &[f64], p: usize, span: usize) -> Vec<f64> {
+    let h = knots[span + 1] - knots[span];
+    let w = p + 1;
+    let mut n = vec![0.0; w * w];
+    n[0] = 1.0;
+    // poly * (c0 + c1 s), degree grows by one.
+    let mul_linear = |poly: &[f64], c0: f64, c1: f64, out: &mut [f64]| {
+        for k in 0..w {
+            out[k] = c0 * poly[k] + if k > 0 { c1 * poly[k - 1] } else { 0.0 };
+        }
+    };
+    let mut temp = vec![0.0; w];
+    let mut a = vec![0.0; w];
+    let mut b = vec![0.0; w];
+    for j in 1..=p {
+        let mut saved = vec![0.0; w];
+        for r in 0..j {
+            let den = knots[span + r + 1] - knots[span + 1 + r - j];
+            for k in 0..w {
+                temp[k] = n[r * w + k] / den;
+            }
+            // right_{r+1} = (t_{span+r+1} - t_span) - h s; left_{j-r} = (t_span - t_{span+1+r-j}) + h s.
+            mul_linear(&temp, knots[span + r + 1] - knots[span], -h, &mut a);
+            mul_linear(&temp, knots[span] - knots[span + 1 + r - j], h, &mut b);
+            for k in 0..w {
+                n[r * w + k] = saved[k] + a[k];
+            }
+            saved.copy_from_slice(&b);
+        }
+        n[j * w..(j + 1) * w].copy_from_slice(&saved);
+    }
+    n
 }
 
 /// Knot cells (non-empty spans) per axis of a clamped uniform lattice: `n - p`.

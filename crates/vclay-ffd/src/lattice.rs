@@ -327,17 +327,7 @@ impl FfdLattice {
     /// clamped onto them).
     #[inline]
     pub fn parameters(&self, x: &Vec3) -> Option<[f64; 3]> {
-        let tol = Tolerance::PARAMETER.relative;
-        let mut t = [0.0; 3];
-        for a in 0..3 {
-            let u = (x[a] - self.lo[a]) / (self.hi[a] - self.lo[a]);
-            // NaN fails both comparisons and is rejected.
-            if !(u >= -tol && u <= 1.0 + tol) {
-                return None;
-            }
-            t[a] = u.clamp(0.0, 1.0);
-        }
-        Some(t)
+        box_parameters(self.lo, self.hi, x)
     }
 
     /// Whether a point of the rest space is embedded (see [`FfdLattice::parameters`]).
@@ -370,6 +360,11 @@ impl FfdLattice {
             lb.base[a] = span - kv.degree();
         }
         lb
+    }
+
+    /// `(W P, W)` per control point; filled only while the lattice is rational.
+    pub(crate) fn homogeneous(&self) -> &[[f64; 4]] {
+        &self.homogeneous
     }
 
     /// Flat index of the first support control point of a local basis.
@@ -505,4 +500,23 @@ impl FfdLattice {
             Vec3::new(acc[0], acc[1], acc[2]) / acc[3]
         }
     }
+}
+
+/// The linear map of section 2, `(u, v, w) = (x - lo) / (hi - lo)` (componentwise), or `None`
+/// outside the box by more than `1e-12` of the extent (points on the faces are clamped onto them).
+/// Shared by [`FfdLattice::parameters`] and the embedded mesh, which recomputes parameters from
+/// its rest positions instead of storing them.
+#[inline]
+pub(crate) fn box_parameters(lo: Vec3, hi: Vec3, x: &Vec3) -> Option<[f64; 3]> {
+    let tol = Tolerance::PARAMETER.relative;
+    let mut t = [0.0; 3];
+    for a in 0..3 {
+        let u = (x[a] - lo[a]) / (hi[a] - lo[a]);
+        // NaN fails both comparisons and is rejected.
+        if !(u >= -tol && u <= 1.0 + tol) {
+            return None;
+        }
+        t[a] = u.clamp(0.0, 1.0);
+    }
+    Some(t)
 }
