@@ -9,10 +9,10 @@
 //! **How.** Once, at embedding: each vertex inside the rest box gets its parameters `t_x` by the
 //! linear map of section 2 (the rest lattice is the identity, so no Newton iteration), the knot
 //! cell `(i, j, k)` (non-empty knot span per axis) containing them and its local coordinates
-//! `(s_u, s_v, s_w) in [0, 1]^3` in that cell, `s = (t - t_i) / (t_{i+1} - t_i)`: 28 bytes per
-//! vertex. The parameters themselves are not stored: [`EmbeddedMesh::parameters`] recomputes them
-//! from the rest position with the same arithmetic. Vertices are bucketed by knot cell (CSR arrays,
-//! a counting sort) for incremental updates.
+//! `(s_u, s_v, s_w) in [0, 1]^3` in that cell, `s = (t - t_i) / (t_{i+1} - t_i)`. The embedded
+//! vertices are stored sorted by cell (a stable counting sort, skipped when the mesh order is
+//! already the cell order), with CSR offsets per cell. The parameters themselves are not stored:
+//! [`EmbeddedMesh::parameters`] recomputes them from the rest position with the same arithmetic.
 //!
 //! On one knot cell every B-spline `B_a(t)` of eq (2) is a polynomial of degree `p` in `s`,
 //! `B_{i-p+a}(t) = sum_k M_ak s^k` (the matrix `M` of each span follows from Cox-de Boor,
@@ -23,26 +23,28 @@
 //! Q = sum_{k,l,m} C_klm s_u^k s_v^l s_w^m,    C_klm = sum_{a,b,c} M^u_ak M^v_bl M^w_cm P_(i-p+a)(j-q+b)(k-r+c)
 //! ```
 //!
-//! (for a rational lattice the same with `(W P, W)` and one division). A deformation first
-//! converts the cells it meets to these coefficients (sum factorization, three contractions,
-//! `3 (p+1)^4` multiply-adds per component for `p = q = r`, once per cell and task, kept in a
-//! small per-task cache), then evaluates every vertex by nested Horner: `(p+1)(q+1) r + (p+1) q
-//! + p` multiply-adds per component (63 for cubics, against 84 for the tensor-product contraction
-//! with stored basis values) and no basis evaluation. Runs of [`LANES`] consecutive vertices of
-//! one cell are evaluated together in lane arrays, which the compiler vectorizes (no `unsafe`,
-//! no target-specific code); a lone vertex goes through the same arithmetic with one lane, so
-//! every vertex gets bit-identical results whichever path, chunking or thread count evaluates it.
-//! An incremental update after control points `C` changed recomputes only the vertices of the
-//! cells whose support meets `C`: control point `i` influences knot cells `i - p ..= i` along
-//! each axis.
+//! (for a rational lattice the same with `(W P, W)` and one division). A deformation converts
+//! each cell it meets to these coefficients once per parallel task (sum factorization: three
+//! contractions, `3 (p+1)^4` multiply-adds per component when `p = q = r`), then evaluates the
+//! cell's vertices by nested Horner: `(p+1)(q+1) r + (p+1) q + p` multiply-adds per component
+//! (63 for cubics, against 84 for the tensor-product contraction with stored basis values) and
+//! no basis evaluation. Vertices go [`LANES`] at a time through lane arrays, which the compiler
+//! vectorizes (no `unsafe`, no target-specific code); a cell's short last group repeats its last
+//! vertex, so every vertex gets bit-identical results whichever grouping, chunking or thread
+//! count evaluates it. When the mesh order is the cell order (every vertex embedded; one cell,
+//! or a mesh sorted by cell) positions are written in place, otherwise into a buffer in cell
+//! order and gathered. An incremental update after control points `C` changed recomputes only
+//! the vertices of the cells whose support meets `C` (control point `i` influences knot cells
+//! `i - p ..= i` along each axis), contiguous ranges of the cell-sorted storage.
 //!
 //! **Limitations.** Vertices outside the rest box are never moved. Normals, when enabled, are
 //! recomputed for the whole mesh ([`TriMesh::compute_normals`] is `O(triangles)`), also after an
 //! incremental update. The power form differs from the B-spline form by rounding only (about
-//! `1e-16` of the box diagonal for the degrees up to 7 that use it; higher degrees, whose power
+//! `1e-16` of the box diagonal for the degrees below 8 that use it; higher degrees, whose power
 //! form is worse conditioned, and [`EmbeddedMesh::set_blocked_kernel`]`(false)` use the
-//! per-vertex B-spline kernel). Memory is 40 bytes per embedded vertex (local coordinates 24,
-//! cell 4, mesh index 4, CSR member 4, slot 4) besides the rest and deformed positions.
+//! per-vertex B-spline kernel). Memory is 32 bytes per embedded vertex (local coordinates 24,
+//! mesh index 4, slot 4) besides the rest and deformed positions, and a deformation of a mesh
+//! not in cell order allocates a 24-byte-per-vertex buffer for the gather.
 
 use crate::lattice::{FfdLattice, box_parameters};
 use rayon::prelude::*;
@@ -57,8 +59,6 @@ pub const LANES: usize = 4;
 /// The power-form kernel is used for degrees below this; higher degrees use the per-vertex
 /// B-spline kernel (the monomial form grows ill-conditioned with the degree).
 const BLOCK_DEGREE: usize = 8;
-/// Cells whose coefficients a task keeps (direct-mapped by cell index).
-const CACHE_CELLS: usize = 64;
 
 /// A triangle mesh embedded in an [`FfdLattice`] (`ffd-direct-manipulation.txt` section 2): rest
 /// positions, the knot cell and local coordinates of every embedded vertex, and the deformed
@@ -69,15 +69,17 @@ pub struct EmbeddedMesh {
     mesh: TriMesh,
     /// Per vertex: embedded index or [`OUTSIDE`].
     slot: Vec<u32>,
-    /// Per embedded vertex: mesh vertex index.
+    /// Per embedded vertex: mesh vertex index. Embedded vertices are sorted by knot cell (stably,
+    /// so a cell's vertices keep the mesh order).
     vertex: Vec<u32>,
     /// Per embedded vertex: local coordinates `(s_u, s_v, s_w)` in its knot cell.
     local: Vec<[f64; 3]>,
-    /// Per embedded vertex: knot cell `(i * cells_v + j) * cells_w + k`.
-    cell: Vec<u32>,
-    /// CSR over knot cells: embedded vertices of cell `c` are `cell_members[cell_start[c]..cell_start[c+1]]`.
+    /// CSR over knot cells `(i * cells_v + j) * cells_w + k`: the embedded vertices of cell `c`
+    /// are `cell_start[c]..cell_start[c+1]`.
     cell_start: Vec<u32>,
-    cell_members: Vec<u32>,
+    /// Whether embedded index and mesh index coincide (every vertex embedded, already in cell
+    /// order): then a deformation writes the positions directly, without a gather.
+    identity: bool,
     /// Per axis, per knot cell: the `(p+1) x (p+1)` matrix `M_ak` (row `a`) of
     /// `B_{i-p+a} = sum_k M_ak s^k`.
     power: [Vec<f64>; 3],
@@ -127,40 +129,41 @@ impl EmbeddedMesh {
         } else {
             (cell, local) = rest.iter().map(locate).unzip();
         }
-        let m = cell.iter().filter(|&&c| c != OUTSIDE).count();
-        let (slot, vertex) = if m == n {
-            let ids: Vec<u32> = (0..n as u32).collect();
-            (ids.clone(), ids)
-        } else {
-            let mut slot = vec![OUTSIDE; n];
-            let mut vertex = Vec::with_capacity(m);
-            for (v, &c) in cell.iter().enumerate() {
-                if c != OUTSIDE {
-                    slot[v] = vertex.len() as u32;
-                    vertex.push(v as u32);
-                }
-            }
-            let mut keep = cell.iter().map(|&c| c != OUTSIDE);
-            local.retain(|_| keep.next().expect("same length"));
-            cell.retain(|&c| c != OUTSIDE);
-            (slot, vertex)
-        };
         // Bucket by knot cell: a counting sort, linear in the vertices (stable, so the members
-        // of a cell keep the mesh order).
+        // of a cell keep the mesh order); no sort at all when the mesh order is already the
+        // cell order (one cell, or a mesh sorted that way), the common case for coarse lattices.
         let ncells: usize = cells.iter().product();
         let mut cell_start = vec![0u32; ncells + 1];
         for &c in &cell {
-            cell_start[c as usize + 1] += 1;
+            if c != OUTSIDE {
+                cell_start[c as usize + 1] += 1;
+            }
         }
         for c in 0..ncells {
             cell_start[c + 1] += cell_start[c];
         }
-        let mut fill_pos = cell_start.clone();
-        let mut cell_members = vec![0u32; m];
-        for (e, &c) in cell.iter().enumerate() {
-            cell_members[fill_pos[c as usize] as usize] = e as u32;
-            fill_pos[c as usize] += 1;
-        }
+        let m = cell_start[ncells] as usize;
+        let sorted = m == n && cell.windows(2).all(|w| w[0] <= w[1]);
+        let (slot, vertex, local) = if sorted {
+            let ids: Vec<u32> = (0..n as u32).collect();
+            (ids.clone(), ids, local)
+        } else {
+            let mut fill_pos = cell_start.clone();
+            let mut slot = vec![OUTSIDE; n];
+            let mut vertex = vec![0u32; m];
+            let mut sorted_local = vec![[0.0; 3]; m];
+            for (v, &c) in cell.iter().enumerate() {
+                if c != OUTSIDE {
+                    let e = fill_pos[c as usize] as usize;
+                    fill_pos[c as usize] += 1;
+                    slot[v] = e as u32;
+                    vertex[e] = v as u32;
+                    sorted_local[e] = local[v];
+                }
+            }
+            (slot, vertex, sorted_local)
+        };
+        drop(cell);
         let power = [0, 1, 2].map(|a| {
             (0..cells[a])
                 .flat_map(|c| span_power_matrix(knots[a].as_slice(), degree[a], c + degree[a]))
@@ -172,9 +175,8 @@ impl EmbeddedMesh {
             slot,
             vertex,
             local,
-            cell,
             cell_start,
-            cell_members,
+            identity: sorted,
             power,
             degree,
             dims,
@@ -256,10 +258,11 @@ impl EmbeddedMesh {
 
     /// Full deformation: every embedded vertex `x = sum P_ijk R_ijk(t_x)` (eq 1), then normals.
     ///
-    /// Runs of [`LANES`] consecutive mesh vertices that are all embedded in the same knot cell
-    /// (the common case: neighbouring vertices are near each other) are evaluated together, lane
-    /// by lane in fixed-size arrays the compiler turns into SIMD instructions; other vertices one
-    /// by one with the same arithmetic. Parallel over chunks of vertices when `par` allows.
+    /// Embedded vertices are stored by knot cell, so each cell is converted to power form once
+    /// per task and its vertices are evaluated [`LANES`] at a time, lane by lane in fixed-size
+    /// arrays the compiler turns into SIMD instructions. When the mesh order is the cell order
+    /// the positions are written directly, otherwise through a gather. Parallel over chunks of
+    /// vertices when `par` allows.
     ///
     /// # Panics
     /// If `lattice` has other dimensions, degrees or box than the one embedded in.
@@ -268,40 +271,34 @@ impl EmbeddedMesh {
         self.check_lattice(lattice);
         let mut positions = std::mem::take(&mut self.mesh.positions);
         let this = &*self;
-        if this.blocked() {
-            let kernel = |cache: &mut CellCache, (xs, slots): (&mut [Vec3], &[u32])| {
-                this.eval_run(lattice, cache, slots, xs);
-            };
-            if par.is_parallel(this.vertex.len()) {
-                positions
-                    .par_chunks_mut(CHUNK)
-                    .zip(this.slot.par_chunks(CHUNK))
-                    .for_each_init(|| CellCache::new(this, lattice), kernel);
+        let m = this.vertex.len();
+        let parallel = par.is_parallel(m);
+        let eval = |(i, xs): (usize, &mut [Vec3])| {
+            let e0 = i * CHUNK;
+            this.eval_range(lattice, e0, e0 + xs.len(), xs);
+        };
+        if this.identity {
+            if parallel {
+                positions.par_chunks_mut(CHUNK).enumerate().for_each(eval);
             } else {
-                let mut cache = CellCache::new(this, lattice);
-                positions
-                    .chunks_mut(CHUNK)
-                    .zip(this.slot.chunks(CHUNK))
-                    .for_each(|c| kernel(&mut cache, c));
+                positions.chunks_mut(CHUNK).enumerate().for_each(eval);
             }
         } else {
-            let kernel = |(xs, slots): (&mut [Vec3], &[u32])| {
-                for (x, &s) in xs.iter_mut().zip(slots) {
-                    if s != OUTSIDE {
-                        *x = this.eval_bspline(lattice, s as usize);
-                    }
+            let mut out = vec![Vec3::zeros(); m];
+            if parallel {
+                out.par_chunks_mut(CHUNK).enumerate().for_each(eval);
+            } else {
+                out.chunks_mut(CHUNK).enumerate().for_each(eval);
+            }
+            let gather = |(x, &s): (&mut Vec3, &u32)| {
+                if s != OUTSIDE {
+                    *x = out[s as usize];
                 }
             };
-            if par.is_parallel(this.vertex.len()) {
-                positions
-                    .par_chunks_mut(CHUNK)
-                    .zip(this.slot.par_chunks(CHUNK))
-                    .for_each(kernel);
+            if parallel {
+                positions.par_iter_mut().zip(&this.slot).for_each(gather);
             } else {
-                positions
-                    .chunks_mut(CHUNK)
-                    .zip(this.slot.chunks(CHUNK))
-                    .for_each(kernel);
+                positions.iter_mut().zip(&this.slot).for_each(gather);
             }
         }
         self.mesh.positions = positions;
@@ -309,79 +306,64 @@ impl EmbeddedMesh {
         &self.mesh
     }
 
-    /// Evaluates the embedded vertices `ids` (embedded indices; entries [`OUTSIDE`] are skipped,
-    /// `out` left as is there) into `out` (same length) with the power-form kernel.
-    fn eval_run(
-        &self,
-        lattice: &FfdLattice,
-        cache: &mut CellCache,
-        ids: &[u32],
-        out: &mut [Vec3],
-    ) {
-        // The cubic lattice gets its own instance, with the degrees constant-folded.
+    /// Evaluates the embedded vertices `e0..e1` into `out` (length `e1 - e0`), cell by cell.
+    fn eval_range(&self, lattice: &FfdLattice, e0: usize, e1: usize, out: &mut [Vec3]) {
+        if !self.blocked() {
+            for (x, e) in out.iter_mut().zip(e0..e1) {
+                *x = self.eval_bspline(lattice, e);
+            }
+            return;
+        }
+        // The cubic and quadratic lattices get their own instances, degrees constant-folded.
         match self.degree {
-            [3, 3, 3] => self.eval_run_deg(lattice, cache, ids, out, [3, 3, 3]),
-            [2, 2, 2] => self.eval_run_deg(lattice, cache, ids, out, [2, 2, 2]),
-            d => self.eval_run_deg(lattice, cache, ids, out, d),
+            [3, 3, 3] => self.eval_range_deg(lattice, e0, e1, out, [3, 3, 3]),
+            [2, 2, 2] => self.eval_range_deg(lattice, e0, e1, out, [2, 2, 2]),
+            d => self.eval_range_deg(lattice, e0, e1, out, d),
         }
     }
 
     #[inline(always)]
-    fn eval_run_deg(
+    fn eval_range_deg(
         &self,
         lattice: &FfdLattice,
-        cache: &mut CellCache,
-        ids: &[u32],
+        e0: usize,
+        e1: usize,
         out: &mut [Vec3],
         deg: [usize; 3],
     ) {
         let rational = lattice.is_rational();
-        let mut ib = ids.chunks_exact(LANES);
-        let mut ob = out.chunks_exact_mut(LANES);
-        for (e, x) in (&mut ib).zip(&mut ob) {
-            let e: &[u32; LANES] = e.try_into().expect("chunk of LANES");
-            let c0 = if e[0] != OUTSIDE {
-                self.cell[e[0] as usize]
-            } else {
-                OUTSIDE
-            };
-            if c0 != OUTSIDE
-                && e.iter()
-                    .all(|&ei| ei != OUTSIDE && self.cell[ei as usize] == c0)
-            {
-                let coef = cache.get_lanes(self, lattice, c0);
-                let t: [[f64; LANES]; 3] =
-                    std::array::from_fn(|a| std::array::from_fn(|l| self.local[e[l] as usize][a]));
-                x.copy_from_slice(&eval_power::<LANES>(coef, deg, rational, &t));
-            } else {
-                for (xi, &ei) in x.iter_mut().zip(e) {
-                    if ei != OUTSIDE {
-                        *xi = self.eval_one(lattice, cache, ei as usize, deg, rational);
-                    }
+        let n: usize = deg.iter().map(|d| d + 1).product();
+        let stride = n * if rational { 4 } else { 3 };
+        let mut coef = vec![0.0; stride];
+        let mut work = vec![0.0; 2 * n];
+        let mut lanes = vec![[0.0; LANES]; stride];
+        // First cell with cell_start[c + 1] > e0.
+        let mut c = self.cell_start.partition_point(|&s| s as usize <= e0) - 1;
+        let mut e = e0;
+        while e < e1 {
+            let end = (self.cell_start[c + 1] as usize).min(e1);
+            if end > e {
+                self.cell_coefficients(lattice, c, &mut coef, &mut work);
+                for (d, &v) in lanes.iter_mut().zip(&coef) {
+                    *d = [v; LANES];
                 }
+                let mut g = e;
+                while g < end {
+                    // A group of LANES vertices of cell c; a short last group repeats its last
+                    // vertex (each lane's arithmetic is the same, so results do not depend on
+                    // the grouping).
+                    let k = (end - g).min(LANES);
+                    let t: [[f64; LANES]; 3] = std::array::from_fn(|a| {
+                        std::array::from_fn(|l| self.local[g + l.min(k - 1)][a])
+                    });
+                    let x = eval_power::<LANES>(&lanes, deg, rational, &t);
+                    out[g - e0..g - e0 + k].copy_from_slice(&x[..k]);
+                    g += k;
+                }
+                e = end;
             }
+            c += 1;
         }
-        for (xi, &ei) in ob.into_remainder().iter_mut().zip(ib.remainder()) {
-            if ei != OUTSIDE {
-                *xi = self.eval_one(lattice, cache, ei as usize, deg, rational);
-            }
-        }
-    }
-
-    /// One embedded vertex through the power-form kernel (one lane: the same arithmetic as a
-    /// lane of the blocked kernel).
-    #[inline(always)]
-    fn eval_one(
-        &self,
-        lattice: &FfdLattice,
-        cache: &mut CellCache,
-        e: usize,
-        deg: [usize; 3],
-        rational: bool,
-    ) -> Vec3 {
-        let coef = cache.get(self, lattice, self.cell[e]).as_chunks::<1>().0;
-        let t = self.local[e].map(|s| [s]);
-        eval_power::<1>(coef, deg, rational, &t)[0]
     }
 
     /// The power-form coefficients `C_klm` of knot cell `c` (module docs), component-major
@@ -390,7 +372,11 @@ impl EmbeddedMesh {
     fn cell_coefficients(&self, lattice: &FfdLattice, c: usize, out: &mut [f64], work: &mut [f64]) {
         let [p, q, r] = self.degree;
         let cells = cell_counts(self.degree, self.dims);
-        let ci = [c / (cells[1] * cells[2]), (c / cells[2]) % cells[1], c % cells[2]];
+        let ci = [
+            c / (cells[1] * cells[2]),
+            (c / cells[2]) % cells[1],
+            c % cells[2],
+        ];
         let base = lattice.flat_index(ci[0], ci[1], ci[2]);
         let [_, nv, nw] = self.dims;
         let (pu, pv, pw) = (p + 1, q + 1, r + 1);
@@ -435,7 +421,8 @@ impl EmbeddedMesh {
             let dst = &mut out[comp * n..(comp + 1) * n];
             for k in 0..pu {
                 for lm in 0..pv * pw {
-                    dst[k * pv * pw + lm] = (0..pu).map(|a| mu[a * pu + k] * t0[a * pv * pw + lm]).sum();
+                    dst[k * pv * pw + lm] =
+                        (0..pu).map(|a| mu[a * pu + k] * t0[a * pv * pw + lm]).sum();
                 }
             }
         }
@@ -470,126 +457,39 @@ impl EmbeddedMesh {
                 }
             }
         }
-        let affected: Vec<u32> = hit
-            .iter()
-            .enumerate()
-            .filter(|(_, h)| **h)
-            .flat_map(|(c, _)| {
-                let (a, b) = (self.cell_start[c] as usize, self.cell_start[c + 1] as usize);
-                self.cell_members[a..b].iter().copied()
-            })
-            .collect();
+        // Ranges of embedded vertices of the hit cells, cut into pieces of at most CHUNK.
+        let mut pieces = Vec::new();
+        for (c, _) in hit.iter().enumerate().filter(|(_, h)| **h) {
+            let (a, b) = (self.cell_start[c] as usize, self.cell_start[c + 1] as usize);
+            pieces.extend((a..b).step_by(CHUNK).map(|s| (s, (s + CHUNK).min(b))));
+        }
         let this = &*self;
-        // Members of one cell are consecutive in `affected`, so the blocked kernel applies to
-        // almost every group of LANES.
-        let mut new = vec![Vec3::zeros(); affected.len()];
-        if this.blocked() {
-            let kernel = |cache: &mut CellCache, (es, xs): (&[u32], &mut [Vec3])| {
-                this.eval_run(lattice, cache, es, xs);
-            };
-            if par.is_parallel(affected.len()) {
-                affected
-                    .par_chunks(CHUNK)
-                    .zip(new.par_chunks_mut(CHUNK))
-                    .for_each_init(|| CellCache::new(this, lattice), kernel);
-            } else {
-                let mut cache = CellCache::new(this, lattice);
-                affected
-                    .chunks(CHUNK)
-                    .zip(new.chunks_mut(CHUNK))
-                    .for_each(|c| kernel(&mut cache, c));
-            }
+        let eval = |&(a, b): &(usize, usize)| {
+            let mut x = vec![Vec3::zeros(); b - a];
+            this.eval_range(lattice, a, b, &mut x);
+            x
+        };
+        let count: usize = pieces.iter().map(|(a, b)| b - a).sum();
+        let new: Vec<Vec<Vec3>> = if par.is_parallel(count) {
+            pieces.par_iter().map(eval).collect()
         } else {
-            let kernel = |(es, xs): (&[u32], &mut [Vec3])| {
-                for (xi, &ei) in xs.iter_mut().zip(es) {
-                    *xi = this.eval_bspline(lattice, ei as usize);
-                }
-            };
-            if par.is_parallel(affected.len()) {
-                affected
-                    .par_chunks(CHUNK)
-                    .zip(new.par_chunks_mut(CHUNK))
-                    .for_each(kernel);
-            } else {
-                affected
-                    .chunks(CHUNK)
-                    .zip(new.chunks_mut(CHUNK))
-                    .for_each(kernel);
+            pieces.iter().map(eval).collect()
+        };
+        for (&(a, _), xs) in pieces.iter().zip(&new) {
+            for (e, x) in (a..).zip(xs) {
+                self.mesh.positions[self.vertex[e] as usize] = *x;
             }
         }
-        for (&e, x) in affected.iter().zip(new) {
-            self.mesh.positions[self.vertex[e as usize] as usize] = x;
-        }
-        if !affected.is_empty() {
+        if count > 0 {
             self.finish();
         }
-        affected.len()
+        count
     }
 
     fn finish(&mut self) {
         if self.recompute_normals && !self.mesh.triangles.is_empty() {
             self.mesh.compute_normals();
         }
-    }
-}
-
-/// Power-form coefficients of the last [`CACHE_CELLS`] cells a task met (direct-mapped), so that
-/// a cell's conversion is paid once per task rather than once per vertex.
-struct CellCache {
-    tags: [u32; CACHE_CELLS],
-    /// `CACHE_CELLS` blocks of `stride` coefficients.
-    coef: Vec<f64>,
-    work: Vec<f64>,
-    stride: usize,
-    /// The cell whose coefficients `lanes` holds, each repeated [`LANES`] times (so that the
-    /// blocked kernel loads them as vectors instead of broadcasting each one).
-    lanes_cell: u32,
-    lanes: Vec<[f64; LANES]>,
-}
-
-impl CellCache {
-    fn new(mesh: &EmbeddedMesh, lattice: &FfdLattice) -> Self {
-        let n: usize = mesh.degree.iter().map(|d| d + 1).product();
-        let stride = n * if lattice.is_rational() { 4 } else { 3 };
-        Self {
-            tags: [OUTSIDE; CACHE_CELLS],
-            coef: vec![0.0; CACHE_CELLS * stride],
-            work: vec![0.0; 2 * n],
-            stride,
-            lanes_cell: OUTSIDE,
-            lanes: vec![[0.0; LANES]; stride],
-        }
-    }
-
-    /// [`CellCache::get`], each coefficient repeated [`LANES`] times.
-    #[inline(always)]
-    fn get_lanes(
-        &mut self,
-        mesh: &EmbeddedMesh,
-        lattice: &FfdLattice,
-        cell: u32,
-    ) -> &[[f64; LANES]] {
-        if self.lanes_cell != cell {
-            self.get(mesh, lattice, cell);
-            let i = cell as usize % CACHE_CELLS;
-            let block = &self.coef[i * self.stride..(i + 1) * self.stride];
-            for (d, &c) in self.lanes.iter_mut().zip(block) {
-                *d = [c; LANES];
-            }
-            self.lanes_cell = cell;
-        }
-        &self.lanes
-    }
-
-    #[inline(always)]
-    fn get(&mut self, mesh: &EmbeddedMesh, lattice: &FfdLattice, cell: u32) -> &[f64] {
-        let i = cell as usize % CACHE_CELLS;
-        let block = &mut self.coef[i * self.stride..(i + 1) * self.stride];
-        if self.tags[i] != cell {
-            mesh.cell_coefficients(lattice, cell as usize, block, &mut self.work);
-            self.tags[i] = cell;
-        }
-        block
     }
 }
 
@@ -691,4 +591,37 @@ fn span_power_matrix(knots: &[f64], p: usize, span: usize) -> Vec<f64> {
 /// Knot cells (non-empty spans) per axis of a clamped uniform lattice: `n - p`.
 fn cell_counts(degree: [usize; 3], dims: [usize; 3]) -> [usize; 3] {
     [0, 1, 2].map(|a| dims[a] - degree[a])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vclay_spline::KnotVector;
+
+    /// The power form of each span reproduces Cox-de Boor (Piegl & Tiller A2.2) on that span.
+    #[test]
+    fn span_power_matrix_matches_cox_de_boor() {
+        for (p, n) in [(1, 2), (2, 3), (2, 5), (3, 4), (3, 7), (5, 9)] {
+            let kv = KnotVector::clamped_uniform(p, n).unwrap();
+            let k = kv.as_slice();
+            for span in p..n {
+                let mat = span_power_matrix(k, p, span);
+                for i in 0..=10 {
+                    let s = i as f64 / 10.0;
+                    let t = k[span] + s * (k[span + 1] - k[span]);
+                    let mut want = vec![0.0; p + 1];
+                    kv.basis(span, t, &mut want);
+                    for a in 0..=p {
+                        let got: f64 = (0..=p)
+                            .map(|j| mat[a * (p + 1) + j] * s.powi(j as i32))
+                            .sum();
+                        assert!(
+                            (got - want[a]).abs() < 1e-14,
+                            "p {p} span {span} s {s} a {a}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }
