@@ -49,6 +49,7 @@
 use crate::lattice::{FfdLattice, box_parameters};
 use rayon::prelude::*;
 use vclay_core::{Parallelism, TriMesh, Vec3};
+use vclay_spline::KnotVector;
 
 /// Marker for vertices outside the lattice.
 const OUTSIDE: u32 = u32::MAX;
@@ -100,12 +101,29 @@ impl EmbeddedMesh {
     pub fn new(lattice: &FfdLattice, mesh: TriMesh, par: Parallelism) -> Self {
         let n = mesh.positions.len();
         assert!(n < OUTSIDE as usize, "too many vertices");
-        let rest = mesh.positions.clone();
+        // Cloned in parallel: the copy's cost is mostly first-touch page faults.
+        let rest: Vec<Vec3> = if par.is_parallel(n) {
+            mesh.positions.par_iter().copied().collect()
+        } else {
+            mesh.positions.clone()
+        };
         let degree = lattice.degree();
         let dims = lattice.dims();
         let cells = cell_counts(degree, dims);
         let (lo, hi) = lattice.bounds();
         let knots = lattice.knots();
+        // Per axis: `cells / (domain length)` for the span guess and `1 / (t_{i+1} - t_i)` per
+        // cell (multiplications instead of six of the nine divisions per vertex).
+        let guess_scale = [0, 1, 2].map(|a| {
+            let k = knots[a].as_slice();
+            cells[a] as f64 / (k[degree[a] + cells[a]] - k[degree[a]])
+        });
+        let inv_width: [Vec<f64>; 3] = [0, 1, 2].map(|a| {
+            let k = knots[a].as_slice();
+            (degree[a]..degree[a] + cells[a])
+                .map(|i| 1.0 / (k[i + 1] - k[i]))
+                .collect()
+        });
         let locate = |x: &Vec3| -> (u32, [f64; 3]) {
             let Some(t) = box_parameters(lo, hi, x) else {
                 return (OUTSIDE, [0.0; 3]);
@@ -113,10 +131,10 @@ impl EmbeddedMesh {
             let mut ci = [0usize; 3];
             let mut s = [0.0; 3];
             for a in 0..3 {
-                let span = knots[a].find_span(t[a]);
+                let span = span_of(&knots[a], cells[a], guess_scale[a], t[a]);
                 let k = knots[a].as_slice();
-                s[a] = (t[a] - k[span]) / (k[span + 1] - k[span]);
                 ci[a] = span - degree[a];
+                s[a] = (t[a] - k[span]) * inv_width[a][ci[a]];
             }
             (((ci[0] * cells[1] + ci[1]) * cells[2] + ci[2]) as u32, s)
         };
@@ -622,6 +640,22 @@ fn span_power_matrix(knots: &[f64], p: usize, span: usize) -> Vec<f64> {
     n
 }
 
+/// [`KnotVector::find_span`] (the same span), found by a guess from a uniform spacing of the
+/// `cells` spans (`scale = cells / domain length`) and one check against the knots; the binary
+/// search only where the check fails (non-uniform knots, parameters on the domain ends).
+#[inline]
+fn span_of(kv: &KnotVector, cells: usize, scale: f64, u: f64) -> usize {
+    let k = kv.as_slice();
+    let p = kv.degree();
+    let (a, b) = (k[p], k[p + cells]);
+    let guess = p + (((u - a) * scale) as usize).min(cells - 1);
+    if u > a && u < b && k[guess] <= u && u < k[guess + 1] {
+        guess
+    } else {
+        kv.find_span(u)
+    }
+}
+
 /// Knot cells (non-empty spans) per axis of a clamped uniform lattice: `n - p`.
 fn cell_counts(degree: [usize; 3], dims: [usize; 3]) -> [usize; 3] {
     [0, 1, 2].map(|a| dims[a] - degree[a])
@@ -630,7 +664,27 @@ fn cell_counts(degree: [usize; 3], dims: [usize; 3]) -> [usize; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use vclay_spline::KnotVector;
+
+    /// The guessed span is the binary search's, at and between the knots and on the ends.
+    #[test]
+    fn span_of_equals_find_span() {
+        for (p, n) in [(1, 2), (2, 3), (2, 5), (3, 4), (3, 7), (3, 20), (5, 9)] {
+            let kv = KnotVector::clamped_uniform(p, n).unwrap();
+            let cells = n - p;
+            let mut us: Vec<f64> = (0..=1000).map(|i| i as f64 / 1000.0).collect();
+            for &k in kv.as_slice() {
+                us.extend([k, k.next_down(), k.next_up()]);
+            }
+            for u in us.into_iter().filter(|u| (0.0..=1.0).contains(u)) {
+                let scale = cells as f64;
+                assert_eq!(
+                    span_of(&kv, cells, scale, u),
+                    kv.find_span(u),
+                    "p {p} n {n} u {u}"
+                );
+            }
+        }
+    }
 
     /// The power form of each span reproduces Cox-de Boor (Piegl & Tiller A2.2) on that span.
     #[test]
