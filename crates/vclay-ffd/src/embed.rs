@@ -43,8 +43,9 @@
 //! `1e-16` of the box diagonal for the degrees below 8 that use it; higher degrees, whose power
 //! form is worse conditioned, and [`EmbeddedMesh::set_blocked_kernel`]`(false)` use the
 //! per-vertex B-spline kernel). Memory is 32 bytes per embedded vertex (local coordinates 24,
-//! mesh index 4, slot 4) besides the rest and deformed positions, and a deformation of a mesh
-//! not in cell order allocates a 24-byte-per-vertex buffer for the gather.
+//! mesh index 4, slot 4) besides the rest and deformed positions, plus, for a mesh whose order
+//! is not the cell order, a 24-byte-per-vertex buffer of deformed positions in cell order that
+//! the first deformation allocates and later ones reuse.
 
 use crate::lattice::{FfdLattice, box_parameters};
 use rayon::prelude::*;
@@ -81,6 +82,8 @@ pub struct EmbeddedMesh {
     /// Whether embedded index and mesh index coincide (every vertex embedded, already in cell
     /// order): then a deformation writes the positions directly, without a gather.
     identity: bool,
+    /// Deformed positions in cell order when `identity` is false (kept between deformations).
+    scratch: Vec<Vec3>,
     /// Per axis, per knot cell: the `(p+1) x (p+1)` matrix `M_ak` (row `a`) of
     /// `B_{i-p+a} = sum_k M_ak s^k`.
     power: [Vec<f64>; 3],
@@ -195,6 +198,7 @@ impl EmbeddedMesh {
             local,
             cell_start,
             identity: sorted,
+            scratch: Vec::new(),
             power,
             degree,
             dims,
@@ -287,41 +291,80 @@ impl EmbeddedMesh {
     #[track_caller]
     pub fn deform(&mut self, lattice: &FfdLattice, par: Parallelism) -> &TriMesh {
         self.check_lattice(lattice);
-        let mut positions = std::mem::take(&mut self.mesh.positions);
-        let this = &*self;
-        let m = this.vertex.len();
-        let parallel = par.is_parallel(m);
-        let eval = |(i, xs): (usize, &mut [Vec3])| {
-            let e0 = i * CHUNK;
-            this.eval_range(lattice, e0, e0 + xs.len(), xs);
-        };
-        if this.identity {
-            if parallel {
-                positions.par_chunks_mut(CHUNK).enumerate().for_each(eval);
-            } else {
-                positions.chunks_mut(CHUNK).enumerate().for_each(eval);
-            }
-        } else {
-            let mut out = vec![Vec3::zeros(); m];
-            if parallel {
-                out.par_chunks_mut(CHUNK).enumerate().for_each(eval);
-            } else {
-                out.chunks_mut(CHUNK).enumerate().for_each(eval);
-            }
-            let gather = |(x, &s): (&mut Vec3, &u32)| {
-                if s != OUTSIDE {
-                    *x = out[s as usize];
-                }
-            };
-            if parallel {
-                positions.par_iter_mut().zip(&this.slot).for_each(gather);
-            } else {
-                positions.iter_mut().zip(&this.slot).for_each(gather);
-            }
-        }
-        self.mesh.positions = positions;
+        let m = self.vertex.len();
+        let ranges: Vec<(usize, usize)> = (0..m)
+            .step_by(CHUNK)
+            .map(|a| (a, (a + CHUNK).min(m)))
+            .collect();
+        self.eval_ranges(lattice, &ranges, par);
         self.finish();
         &self.mesh
+    }
+
+    /// Evaluates the embedded vertices of `ranges` (ascending, disjoint, each at most [`CHUNK`]
+    /// long) and stores them in the mesh: in place when the mesh order is the cell order, else
+    /// through the `scratch` buffer (kept between calls) and a gather (all vertices) or scatter
+    /// (some).
+    fn eval_ranges(&mut self, lattice: &FfdLattice, ranges: &[(usize, usize)], par: Parallelism) {
+        let m = self.vertex.len();
+        let count: usize = ranges.iter().map(|(a, b)| b - a).sum();
+        let parallel = par.is_parallel(count);
+        let mut target = if self.identity {
+            std::mem::take(&mut self.mesh.positions)
+        } else {
+            let mut t = std::mem::take(&mut self.scratch);
+            t.resize(m, Vec3::zeros());
+            t
+        };
+        // Disjoint mutable pieces of the target, one per range.
+        let mut parts = Vec::with_capacity(ranges.len());
+        let mut rest = &mut target[..];
+        let mut offset = 0;
+        for &(a, b) in ranges {
+            let (_, tail) = rest.split_at_mut(a - offset);
+            let (mid, tail) = tail.split_at_mut(b - a);
+            parts.push((a, mid));
+            rest = tail;
+            offset = b;
+        }
+        let this = &*self;
+        let eval = |(a, xs): (usize, &mut [Vec3])| this.eval_range(lattice, a, a + xs.len(), xs);
+        if parallel {
+            parts.into_par_iter().for_each(eval);
+        } else {
+            parts.into_iter().for_each(eval);
+        }
+        if self.identity {
+            self.mesh.positions = target;
+        } else {
+            if count == m {
+                let gather = |(x, &s): (&mut Vec3, &u32)| {
+                    if s != OUTSIDE {
+                        *x = target[s as usize];
+                    }
+                };
+                if parallel {
+                    self.mesh
+                        .positions
+                        .par_iter_mut()
+                        .zip(&self.slot)
+                        .for_each(gather);
+                } else {
+                    self.mesh
+                        .positions
+                        .iter_mut()
+                        .zip(&self.slot)
+                        .for_each(gather);
+                }
+            } else {
+                for &(a, b) in ranges {
+                    for e in a..b {
+                        self.mesh.positions[self.vertex[e] as usize] = target[e];
+                    }
+                }
+            }
+            self.scratch = target;
+        }
     }
 
     /// Evaluates the embedded vertices `e0..e1` into `out` (length `e1 - e0`), cell by cell.
@@ -476,29 +519,23 @@ impl EmbeddedMesh {
                 }
             }
         }
-        // Ranges of embedded vertices of the hit cells, cut into pieces of at most CHUNK.
-        let mut pieces = Vec::new();
+        // Ranges of embedded vertices of the hit cells (cells are contiguous in the storage, so
+        // neighbouring hit cells merge), cut into pieces of at most CHUNK.
+        let mut merged: Vec<(usize, usize)> = Vec::new();
         for (c, _) in hit.iter().enumerate().filter(|(_, h)| **h) {
             let (a, b) = (self.cell_start[c] as usize, self.cell_start[c + 1] as usize);
-            pieces.extend((a..b).step_by(CHUNK).map(|s| (s, (s + CHUNK).min(b))));
-        }
-        let this = &*self;
-        let eval = |&(a, b): &(usize, usize)| {
-            let mut x = vec![Vec3::zeros(); b - a];
-            this.eval_range(lattice, a, b, &mut x);
-            x
-        };
-        let count: usize = pieces.iter().map(|(a, b)| b - a).sum();
-        let new: Vec<Vec<Vec3>> = if par.is_parallel(count) {
-            pieces.par_iter().map(eval).collect()
-        } else {
-            pieces.iter().map(eval).collect()
-        };
-        for (&(a, _), xs) in pieces.iter().zip(&new) {
-            for (e, x) in (a..).zip(xs) {
-                self.mesh.positions[self.vertex[e] as usize] = *x;
+            match merged.last_mut() {
+                Some(last) if last.1 == a => last.1 = b,
+                _ if a < b => merged.push((a, b)),
+                _ => {}
             }
         }
+        let ranges: Vec<(usize, usize)> = merged
+            .iter()
+            .flat_map(|&(a, b)| (a..b).step_by(CHUNK).map(move |s| (s, (s + CHUNK).min(b))))
+            .collect();
+        let count: usize = ranges.iter().map(|(a, b)| b - a).sum();
+        self.eval_ranges(lattice, &ranges, par);
         if count > 0 {
             self.finish();
         }
