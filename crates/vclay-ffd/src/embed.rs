@@ -154,17 +154,32 @@ impl EmbeddedMesh {
         // of a cell keep the mesh order); no sort at all when the mesh order is already the
         // cell order (one cell, or a mesh sorted that way), the common case for coarse lattices.
         let ncells: usize = cells.iter().product();
-        let mut cell_start = vec![0u32; ncells + 1];
-        for &c in &cell {
-            if c != OUTSIDE {
-                cell_start[c as usize + 1] += 1;
+        // OUTSIDE is the largest value: a sorted `cell` that does not end with it has every
+        // vertex embedded.
+        let in_order = |w: &[u32]| w[0] <= w[1];
+        let sorted = cell.last().is_none_or(|&c| c != OUTSIDE)
+            && if par.is_parallel(n) {
+                cell.par_windows(2).all(in_order)
+            } else {
+                cell.windows(2).all(in_order)
+            };
+        let cell_start: Vec<u32> = if sorted {
+            (0..=ncells)
+                .map(|c| cell.partition_point(|&x| (x as usize) < c) as u32)
+                .collect()
+        } else {
+            let mut cell_start = vec![0u32; ncells + 1];
+            for &c in &cell {
+                if c != OUTSIDE {
+                    cell_start[c as usize + 1] += 1;
+                }
             }
-        }
-        for c in 0..ncells {
-            cell_start[c + 1] += cell_start[c];
-        }
+            for c in 0..ncells {
+                cell_start[c + 1] += cell_start[c];
+            }
+            cell_start
+        };
         let m = cell_start[ncells] as usize;
-        let sorted = m == n && cell.windows(2).all(|w| w[0] <= w[1]);
         let (slot, vertex, local) = if sorted {
             let ids: Vec<u32> = (0..n as u32).collect();
             (ids.clone(), ids, local)
