@@ -20,7 +20,8 @@
 //! cell, the polynomial
 //!
 //! ```text
-//! Q = sum_{k,l,m} C_klm s_u^k s_v^l s_w^m,    C_klm = sum_{a,b,c} M^u_ak M^v_bl M^w_cm P_(i-p+a)(j-q+b)(k-r+c)
+//! Q = sum_{k,l,m} C_klm s_u^k s_v^l s_w^m,
+//! C_klm = sum_{a,b,c} M^u_ak M^v_bl M^w_cm P_(i-p+a)(j-q+b)(k-r+c)
 //! ```
 //!
 //! (for a rational lattice the same with `(W P, W)` and one division). A deformation converts
@@ -29,11 +30,13 @@
 //! cell's vertices by nested Horner: `(p+1)(q+1) r + (p+1) q + p` multiply-adds per component
 //! (63 for cubics, against 84 for the tensor-product contraction with stored basis values) and
 //! no basis evaluation. Vertices go [`LANES`] at a time through lane arrays, which the compiler
-//! vectorizes (no `unsafe`, no target-specific code); a cell's short last group repeats its last
-//! vertex, so every vertex gets bit-identical results whichever grouping, chunking or thread
-//! count evaluates it. When the mesh order is the cell order (every vertex embedded; one cell,
-//! or a mesh sorted by cell) positions are written in place, otherwise into a buffer in cell
-//! order and gathered. An incremental update after control points `C` changed recomputes only
+//! vectorizes; `pulp::Arch::dispatch` compiles that loop for the best instruction set the CPU
+//! has (AVX2 on x86-64 where present; runtime detection, no `unsafe` here, and no fused
+//! multiply-adds, so every instruction set rounds alike); a cell's short last group repeats its
+//! last vertex, so every vertex gets bit-identical results whichever grouping, chunking or
+//! thread count evaluates it. When the mesh order is the cell order (every vertex embedded; one
+//! cell, or a mesh sorted by cell) positions are written in place, otherwise into a buffer in
+//! cell order and gathered. An incremental update after control points `C` changed recomputes only
 //! the vertices of the cells whose support meets `C` (control point `i` influences knot cells
 //! `i - p ..= i` along each axis), contiguous ranges of the cell-sorted storage.
 //!
@@ -679,7 +682,8 @@ fn span_power_matrix(knots: &[f64], p: usize, span: usize) -> Vec<f64> {
             for k in 0..w {
                 temp[k] = n[r * w + k] / den;
             }
-            // right_{r+1} = (t_{span+r+1} - t_span) - h s; left_{j-r} = (t_span - t_{span+1+r-j}) + h s.
+            // right_{r+1} = (t_{span+r+1} - t_span) - h s,
+            // left_{j-r} = (t_span - t_{span+1+r-j}) + h s.
             mul_linear(&temp, knots[span + r + 1] - knots[span], -h, &mut a);
             mul_linear(&temp, knots[span] - knots[span + 1 + r - j], h, &mut b);
             for k in 0..w {

@@ -8,8 +8,8 @@
 //! **What.**
 //! - [`FfdLattice`]: a NURBS volume over a box that is exactly the identity at rest; parameters of a
 //!   point by a linear map (section 2, eqs 1-2).
-//! - [`EmbeddedMesh`]: a mesh with precomputed parameters and basis values; full (parallel) and
-//!   incremental deformation.
+//! - [`EmbeddedMesh`]: a mesh with precomputed knot cells and local coordinates, evaluated per
+//!   cell in power form; full (parallel) and incremental deformation.
 //! - [`Manipulation`]: the least-norm control-point displacement moving one source to a target
 //!   (eq 7) or several (eq 12), with the commutative group laws of section 4 (compose, inverse).
 //! - [`decompose()`]: a multi-point manipulation as a sequence of single-point ones (section 6, eqs
