@@ -1,9 +1,11 @@
 //! Quick timing of embedded-mesh deformation (not a benchmark harness; no assertions).
 //!
 //! Embeds a UV sphere of about one million vertices in cubic lattices of `4^3`, `7^3`, `10^3` and `20^3`
-//! control points and times: embedding (parameters and basis values), a full deformation (positions
-//! only, sequential and on rayon's pool), normal recomputation, and an incremental update after a
-//! single-point manipulation.
+//! control points and times: embedding (knot cells and local coordinates, bucketing, the first
+//! deformation and normals; wall time including the clone of the input mesh, and the CPU time
+//! of a sequential embedding), a full deformation (positions only, sequential and on rayon's
+//! pool; "per-vertex kernel" is the B-spline reference path), normal recomputation, and an
+//! incremental update after a single-point manipulation.
 //!
 //! Run: `cargo run --release -p vclay-ffd --example bench_deform [vertices-per-side [cps,...]]`
 //! (the second argument picks the lattices, e.g. `4` or `4,20`; default `4,7,10,20`).
