@@ -139,19 +139,44 @@ pub fn inside(rect: &[f64; 4], [a, b]: [f64; 2]) -> bool {
 
 /// The range of the values from the first to the last window of width `extent /
 /// DOMAIN_WINDOWS` holding at least `DOMAIN_DENSITY` times the mean count per window.
+///
+/// The windows sit at the ends of the sorted values, so only the smallest and the largest
+/// [`DENSE_TAIL`] share are sorted (after two selections) and searched; the whole array is
+/// sorted only when a window is not found there. Either way the sorted values, and so the
+/// result, are those of a full sort (issue 31: two full sorts of the inliers per round took
+/// 9 % of a 1,000,000-point fit).
 fn dense_range(x: &mut [f64], extent: f64) -> Option<[f64; 2]> {
-    if x.len() >= 65_536 {
+    let n = x.len();
+    let h = extent / DOMAIN_WINDOWS as f64;
+    let t = ((DOMAIN_DENSITY * n as f64 / DOMAIN_WINDOWS as f64).ceil() as usize).clamp(1, n - 1);
+    let tail = (n / DENSE_TAIL).max(8 * t);
+    if 2 * tail < n {
+        // x[..tail] the smallest values, x[n - tail..] the largest, each sorted.
+        x.select_nth_unstable_by(tail, f64::total_cmp);
+        x[..tail].sort_unstable_by(f64::total_cmp);
+        let rest = &mut x[tail..];
+        let m = rest.len() - tail;
+        rest.select_nth_unstable_by(m, f64::total_cmp);
+        rest[m..].sort_unstable_by(f64::total_cmp);
+        let lo = (0..tail - t).find(|&i| x[i + t] - x[i] <= h);
+        let hi = (n - tail + t..n).rev().find(|&j| x[j] - x[j - t] <= h);
+        if let (Some(lo), Some(hi)) = (lo, hi) {
+            return (hi > lo).then(|| [x[lo], x[hi]]);
+        }
+    }
+    if n >= 65_536 {
         x.par_sort_unstable_by(f64::total_cmp);
     } else {
         x.sort_unstable_by(f64::total_cmp);
     }
-    let n = x.len();
-    let h = extent / DOMAIN_WINDOWS as f64;
-    let t = ((DOMAIN_DENSITY * n as f64 / DOMAIN_WINDOWS as f64).ceil() as usize).clamp(1, n - 1);
     let lo = (0..n - t).find(|&i| x[i + t] - x[i] <= h)?;
     let hi = (t..n).rev().find(|&j| x[j] - x[j - t] <= h)?;
     (hi > lo).then(|| [x[lo], x[hi]])
 }
+
+/// [`dense_range`] first sorts and searches the `1 / DENSE_TAIL` smallest and largest values
+/// (at least eight windows' worth of points).
+const DENSE_TAIL: usize = 16;
 
 /// The base plane of `points` (already checked finite and non-empty).
 pub fn base_plane(points: &[Vec3], par: Parallelism) -> Result<BasePlane, FitError> {
@@ -288,5 +313,60 @@ fn least_area_angle(points: &[Vec3], c: &Vec3, p1: &Vec3, p2: &Vec3) -> f64 {
         0.0
     } else {
         best.1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The old `dense_range`: a full sort, then the two searches.
+    fn dense_range_sorted(x: &mut [f64], extent: f64) -> Option<[f64; 2]> {
+        x.sort_unstable_by(f64::total_cmp);
+        let n = x.len();
+        let h = extent / DOMAIN_WINDOWS as f64;
+        let t =
+            ((DOMAIN_DENSITY * n as f64 / DOMAIN_WINDOWS as f64).ceil() as usize).clamp(1, n - 1);
+        let lo = (0..n - t).find(|&i| x[i + t] - x[i] <= h)?;
+        let hi = (t..n).rev().find(|&j| x[j] - x[j - t] <= h)?;
+        (hi > lo).then(|| [x[lo], x[hi]])
+    }
+
+    #[test]
+    fn dense_range_equals_the_full_sort() {
+        let mut state = 7u64;
+        let mut rnd = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        // Uniform, a sparse fringe of 2 % far out on one side, a fringe of 10 % (beyond the
+        // sorted tails: the full-sort fallback), duplicates, and small arrays.
+        for (n, share, far) in [
+            (100_000, 0.0, 0.0),
+            (100_000, 0.02, 3.0),
+            (100_000, 0.10, 3.0),
+            (50_000, 0.02, -2.0),
+            (1000, 0.0, 0.0),
+            (40, 0.1, 1.0),
+        ] {
+            let mut x: Vec<f64> = (0..n)
+                .map(|_| {
+                    let r = rnd();
+                    if rnd() < share {
+                        1.0 + far * r
+                    } else {
+                        (r * 256.0).floor() / 256.0
+                    }
+                })
+                .collect();
+            let mut y = x.clone();
+            assert_eq!(
+                dense_range(&mut x, 1.0),
+                dense_range_sorted(&mut y, 1.0),
+                "n {n} share {share}"
+            );
+        }
     }
 }
