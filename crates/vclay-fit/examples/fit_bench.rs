@@ -6,7 +6,9 @@
 //! figures need no file. Prints one JSON line per size: the best of `RUNS` fits, the phase
 //! times of that fit and its RMS and maximum closest-point distances.
 //!
-//! `cargo run --release -p vclay-fit --example fit_bench [POINTS...]`
+//! `cargo run --release -p vclay-fit --example fit_bench [--robust MODE] [--rational]
+//! [POINTS...]` (`MODE` as `vclay fit --robust`: auto, none, huber, tukey; `--rational` fits
+//! the weights too, as `vclay fit --weights`).
 
 use std::time::Instant;
 use vclay_core::Vec3;
@@ -47,10 +49,20 @@ fn cloud(n: usize, seed: u64) -> Vec<Vec3> {
 fn main() {
     // The same run's reference workload (issue 31), at the start and at the end.
     let yard_start = vclay_core::yardstick::measure(0.3);
-    let sizes: Vec<usize> = std::env::args()
-        .skip(1)
-        .filter_map(|a| a.parse().ok())
-        .collect();
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut opts = FitOptions::default();
+    let mut sizes = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--robust" => {
+                let mode = it.next().expect("--robust MODE");
+                opts.robust = mode.parse().expect("robust mode");
+            }
+            "--rational" => opts.rational = true,
+            _ => sizes.push(a.parse::<usize>().expect("a number of points")),
+        }
+    }
     let sizes = if sizes.is_empty() {
         vec![100_000, 1_000_000]
     } else {
@@ -58,7 +70,6 @@ fn main() {
     };
     for n in sizes {
         let pts = cloud(n, 1);
-        let opts = FitOptions::default();
         let mut best: Option<(f64, vclay_fit::FitReport)> = None;
         for _ in 0..RUNS {
             let t = Instant::now();
@@ -75,11 +86,13 @@ fn main() {
             10.0 * n as f64 / 1e6
         };
         println!(
-            "{{\"points\": {n}, \"grid\": [32, 32], \"seconds\": {s:.4}, \"goal\": {goal}, \"met\": {}, \"rms\": {:.6e}, \"max\": {:.6e}, \"threads\": {}, \"timings\": {}}}",
+            "{{\"points\": {n}, \"grid\": [32, 32], \"seconds\": {s:.4}, \"goal\": {goal}, \"met\": {}, \"rms\": {:.6e}, \"max\": {:.6e}, \"threads\": {}, \"robust\": \"{}\", \"rational\": {}, \"timings\": {}}}",
             s < goal,
             r.rms,
             r.max,
             rayon::current_num_threads(),
+            opts.robust,
+            opts.rational,
             serde_json::to_string(&r.timings).expect("json")
         );
     }

@@ -58,8 +58,9 @@ pub struct Scratch {
 ///
 /// A polynomial surface (all weights 1) of equal degrees 1 to 5 takes a fast path for
 /// first-order evaluation (the hot path of parameter correction): basis values on the stack,
-/// no weights, no quotient rule (the same values up to rounding).
-#[derive(Clone, Copy, Debug)]
+/// no weights, no quotient rule, the knot differences' reciprocals tabulated (the same values
+/// up to rounding).
+#[derive(Clone, Debug)]
 pub struct Evaluator<'a> {
     ku: &'a KnotVector,
     kv: &'a KnotVector,
@@ -69,6 +70,25 @@ pub struct Evaluator<'a> {
     polynomial: bool,
     span_u: SpanGuess,
     span_v: SpanGuess,
+    inv_u: Vec<f64>,
+    inv_v: Vec<f64>,
+}
+
+/// `inv[i (p + 1) + j] = 1 / (t_{i+j} - t_i)` for `j = 1..=p` (0 where the difference is not
+/// positive or `i + j` is past the end): the denominators of the basis recurrences
+/// (Piegl & Tiller A2.2 and eq 2.7) as multiplications.
+pub(crate) fn reciprocals(kv: &KnotVector) -> Vec<f64> {
+    let p = kv.degree();
+    let k = kv.as_slice();
+    let mut inv = vec![0.0; k.len() * (p + 1)];
+    for i in 0..k.len() {
+        for j in 1..=p {
+            if i + j < k.len() && k[i + j] > k[i] {
+                inv[i * (p + 1) + j] = 1.0 / (k[i + j] - k[i]);
+            }
+        }
+    }
+    inv
 }
 
 /// [`KnotVector::find_span`] with a first guess from uniform spacing of the domain, checked
@@ -126,6 +146,8 @@ impl<'a> Evaluator<'a> {
             polynomial: surface.weights().iter().all(|&w| w == 1.0),
             span_u: SpanGuess::new(ku),
             span_v: SpanGuess::new(kv),
+            inv_u: reciprocals(ku),
+            inv_v: reciprocals(kv),
         }
     }
 
@@ -217,8 +239,8 @@ impl<'a> Evaluator<'a> {
         let v = v.clamp(0.0, 1.0);
         let su = self.span_u.span(self.ku, u);
         let sv = self.span_v.span(self.kv, v);
-        let (nu, du) = basis_first_fixed::<P1>(self.ku.as_slice(), su, u);
-        let (nv, dv) = basis_first_fixed::<Q1>(self.kv.as_slice(), sv, v);
+        let (nu, du) = basis_first_fixed::<P1>(self.ku.as_slice(), &self.inv_u, su, u);
+        let (nv, dv) = basis_first_fixed::<Q1>(self.kv.as_slice(), &self.inv_v, sv, v);
         let (mut s, mut s_u, mut s_v) = (Vec3::zeros(), Vec3::zeros(), Vec3::zeros());
         for iu in 0..P1 {
             let row = (su + 1 - P1 + iu) * self.nv + sv + 1 - Q1;
@@ -313,53 +335,86 @@ impl<'a> Evaluator<'a> {
     }
 }
 
-/// [`basis_first`] for degree `P1 - 1` into arrays on the stack: `(N, N')` of the `P1`
-/// non-zero basis functions at `u` in span `span` of the knots `k` (the same arithmetic).
+/// The `P1` non-zero basis functions of degree `p = P1 - 1` at `u` in span `span` of the
+/// knots `k` (Piegl & Tiller A2.2) into an array on the stack, each division by a knot
+/// difference a multiplication by its reciprocal in `inv` ([`reciprocals`]), the table built
+/// up to degree `last` (`p - 1` leaves `N_{span-p+1+r, p-1}` in `[0..p]`, for derivatives).
 #[inline(always)]
-pub(crate) fn basis_first_fixed<const P1: usize>(
+fn basis_table<const P1: usize>(
     k: &[f64],
+    inv: &[f64],
     span: usize,
     u: f64,
-) -> ([f64; P1], [f64; P1]) {
-    let p = P1 - 1;
+    last: usize,
+) -> [f64; P1] {
     let mut n = [0.0; P1];
-    let mut d = [0.0; P1];
     n[0] = 1.0;
-    let step = |n: &mut [f64; P1], j: usize| {
+    for j in 1..=last {
         let mut saved = 0.0;
         for r in 0..j {
+            // right + left = t_{span+r+1} - t_{span+1+r-j}, a difference of j knots apart.
             let right = k[span + r + 1] - u;
             let left = u - k[span + 1 + r - j];
-            let temp = n[r] / (right + left);
+            let temp = n[r] * inv[(span + 1 + r - j) * P1 + j];
             n[r] = saved + right * temp;
             saved = left * temp;
         }
         n[j] = saved;
-    };
-    for j in 1..p {
-        step(&mut n, j);
     }
+    n
+}
+
+/// The `P1` non-zero basis functions of degree `P1 - 1` at `u` (span `span` of the knots `k`,
+/// reciprocals `inv` of [`reciprocals`]): Piegl & Tiller A2.2 on the stack, for assembly.
+#[inline(always)]
+pub(crate) fn basis_fixed<const P1: usize>(
+    k: &[f64],
+    inv: &[f64],
+    span: usize,
+    u: f64,
+) -> [f64; P1] {
+    basis_table::<P1>(k, inv, span, u, P1 - 1)
+}
+
+/// [`basis_first`] for degree `p = P1 - 1` into arrays on the stack, with the reciprocals
+/// `inv` of the knot differences ([`reciprocals`]): `(N, N')` of the `P1` non-zero basis
+/// functions at `u` in span `span` of the knots `k`.
+#[inline(always)]
+pub(crate) fn basis_first_fixed<const P1: usize>(
+    k: &[f64],
+    inv: &[f64],
+    span: usize,
+    u: f64,
+) -> ([f64; P1], [f64; P1]) {
+    let p = P1 - 1;
+    if p == 0 {
+        return ([1.0; P1], [0.0; P1]);
+    }
+    // N_{span-p+1+r, p-1} in n[0..p].
+    let mut n = basis_table::<P1>(k, inv, span, u, p - 1);
+    let mut d = [0.0; P1];
     let pf = p as f64;
     for r in 0..=p {
         let i = span - p + r;
         let mut v = 0.0;
         if r >= 1 {
-            let den = k[i + p] - k[i];
-            if den > 0.0 {
-                v += n[r - 1] / den;
-            }
+            v += n[r - 1] * inv[i * P1 + p];
         }
         if r < p {
-            let den = k[i + p + 1] - k[i + 1];
-            if den > 0.0 {
-                v -= n[r] / den;
-            }
+            v -= n[r] * inv[(i + 1) * P1 + p];
         }
         d[r] = pf * v;
     }
-    if p >= 1 {
-        step(&mut n, p);
+    // The last row of the table: degree p.
+    let mut saved = 0.0;
+    for r in 0..p {
+        let right = k[span + r + 1] - u;
+        let left = u - k[span + 1 + r - p];
+        let temp = n[r] * inv[(span + 1 + r - p) * P1 + p];
+        n[r] = saved + right * temp;
+        saved = left * temp;
     }
+    n[p] = saved;
     (n, d)
 }
 
@@ -414,6 +469,39 @@ fn basis_first(kv: &KnotVector, span: usize, u: f64, out: &mut [f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fixed_degree_basis_matches_the_general_one() {
+        fn check<const P1: usize>() {
+            let p = P1 - 1;
+            let kv = KnotVector::new(
+                [vec![0.0; p + 1], vec![0.2, 0.5, 0.5, 0.9], vec![1.0; p + 1]].concat(),
+                p,
+                p + 5,
+            )
+            .unwrap();
+            let inv = reciprocals(&kv);
+            for &u in &[0.0, 0.1, 0.2, 0.35, 0.5, 0.77, 0.999, 1.0] {
+                let span = kv.find_span(u);
+                let mut a = vec![0.0; 2 * P1];
+                let mut b = vec![0.0; P1];
+                basis_first(&kv, span, u, &mut a);
+                kv.basis(span, u, &mut b);
+                let (n, d) = basis_first_fixed::<P1>(kv.as_slice(), &inv, span, u);
+                let m = basis_fixed::<P1>(kv.as_slice(), &inv, span, u);
+                for r in 0..P1 {
+                    assert!((n[r] - a[r]).abs() < 1e-12, "p {p} u {u} N_{r}");
+                    assert!((d[r] - a[P1 + r]).abs() < 1e-11, "p {p} u {u} N'_{r}");
+                    assert!((m[r] - b[r]).abs() < 1e-12, "p {p} u {u} basis {r}");
+                }
+            }
+        }
+        check::<2>();
+        check::<3>();
+        check::<4>();
+        check::<5>();
+        check::<6>();
+    }
 
     #[test]
     fn span_guess_matches_binary_search() {

@@ -128,25 +128,28 @@ fn add_points<const P1: usize, const Q1: usize>(
         crate::project::SpanGuess::new(&knots[0]),
         crate::project::SpanGuess::new(&knots[1]),
     ];
-    let mut nu_b = [0.0; P1];
-    let mut nv_b = [0.0; Q1];
-    for k in range {
-        let w = weights.map_or(1.0, |w| w[k]);
+    let inv = [
+        crate::project::reciprocals(&knots[0]),
+        crate::project::reciprocals(&knots[1]),
+    ];
+    let k = [knots[0].as_slice(), knots[1].as_slice()];
+    for i in range {
+        let w = weights.map_or(1.0, |w| w[i]);
         if w == 0.0 {
             continue;
         }
-        let [u, v] = params[k];
+        let [u, v] = params[i];
         let su = guess[0].span(&knots[0], u);
         let sv = guess[1].span(&knots[1], v);
-        knots[0].basis(su, u, &mut nu_b);
-        knots[1].basis(sv, v, &mut nv_b);
+        let nu_b = crate::project::basis_fixed::<P1>(k[0], &inv[0], su, u);
+        let nv_b = crate::project::basis_fixed::<Q1>(k[1], &inv[1], sv, v);
         let mut prod = [[0.0; Q1]; P1];
         for a in 0..P1 {
             for b in 0..Q1 {
                 prod[a][b] = nu_b[a] * nv_b[b];
             }
         }
-        let x = points[k] * w;
+        let x = points[i] * w;
         acc.weight += w;
         let base = (su - p) * nv + sv - q;
         for a in 0..P1 {
