@@ -45,6 +45,17 @@ pub struct Local {
     pub svv: Vec3,
 }
 
+/// A closest point: its parameter and its distance.
+pub type FootPoint = ([f64; 2], f64);
+
+/// The state of a closest-point iteration: parameter, evaluation there, squared distance.
+#[derive(Clone, Copy, Debug)]
+struct Foot {
+    uv: [f64; 2],
+    e: Local,
+    f: f64,
+}
+
 /// Per-thread scratch space of an [`Evaluator`].
 #[derive(Clone, Debug)]
 pub struct Scratch {
@@ -264,6 +275,42 @@ impl<'a> Evaluator<'a> {
         }
     }
 
+    /// The closest point to `x` near `start`: the same as [`Evaluator::project`], and when
+    /// the iteration did not stop by itself within `iterations` steps, its continuation for
+    /// at most `more` further steps (the same tolerance), returned as a second result when it
+    /// moved the parameter: what a second call of `project` from the first result would
+    /// return, without evaluating the surface again at that parameter. Parameter correction
+    /// uses it to have the final closest-point distances of its last round at once.
+    #[allow(clippy::too_many_arguments)]
+    pub fn project_continued(
+        &self,
+        x: &Vec3,
+        start: [f64; 2],
+        iterations: usize,
+        more: usize,
+        tol: f64,
+        newton: bool,
+        sc: &mut Scratch,
+    ) -> (FootPoint, Option<FootPoint>) {
+        let order = if newton { 2 } else { 1 };
+        let uv = [start[0].clamp(0.0, 1.0), start[1].clamp(0.0, 1.0)];
+        let e = self.eval_order(uv[0], uv[1], order, sc);
+        let mut st = Foot {
+            uv,
+            f: (e.s - x).norm_squared(),
+            e,
+        };
+        let stopped = self.iterate(x, &mut st, iterations, tol, order, sc);
+        let first = (st.uv, st.f.sqrt());
+        if stopped || more == 0 {
+            return (first, None);
+        }
+        let at = st.uv;
+        self.iterate(x, &mut st, more, tol, order, sc);
+        let moved = st.uv != at;
+        (first, moved.then(|| (st.uv, st.f.sqrt())))
+    }
+
     /// The closest point to `x` near `start` by at most `iterations` Newton steps (`newton`
     /// true; else Gauss-Newton steps, which need first derivatives only and converge almost as
     /// fast when the distance is small against the radius of curvature): returns the parameter
@@ -278,9 +325,30 @@ impl<'a> Evaluator<'a> {
         sc: &mut Scratch,
     ) -> ([f64; 2], f64) {
         let order = if newton { 2 } else { 1 };
-        let mut uv = [start[0].clamp(0.0, 1.0), start[1].clamp(0.0, 1.0)];
-        let mut e = self.eval_order(uv[0], uv[1], order, sc);
-        let mut f = (e.s - x).norm_squared();
+        let uv = [start[0].clamp(0.0, 1.0), start[1].clamp(0.0, 1.0)];
+        let e = self.eval_order(uv[0], uv[1], order, sc);
+        let mut st = Foot {
+            uv,
+            f: (e.s - x).norm_squared(),
+            e,
+        };
+        self.iterate(x, &mut st, iterations, tol, order, sc);
+        (st.uv, st.f.sqrt())
+    }
+
+    /// At most `iterations` steps of [`Evaluator::project`] from `st`; whether the iteration
+    /// stopped by itself (a step below `tol`, no descent, a singular matrix).
+    #[inline(always)]
+    fn iterate(
+        &self,
+        x: &Vec3,
+        st: &mut Foot,
+        iterations: usize,
+        tol: f64,
+        order: usize,
+        sc: &mut Scratch,
+    ) -> bool {
+        let Foot { uv, e, f } = st;
         for _ in 0..iterations {
             let r = e.s - x;
             let g = [e.su.dot(&r), e.sv.dot(&r)];
@@ -295,7 +363,7 @@ impl<'a> Evaluator<'a> {
             }
             let det = h11 * h22 - h12 * h12;
             if !(det > 0.0 && det.is_finite()) {
-                break;
+                return true;
             }
             let mut step = [
                 -(h22 * g[0] - h12 * g[1]) / det,
@@ -307,7 +375,7 @@ impl<'a> Evaluator<'a> {
             // steps are at the rounding level of `f` and were refused about half the time,
             // costing up to six evaluations each (issue 31).
             if step[0].abs() + step[1].abs() <= tol {
-                break;
+                return true;
             }
             let mut accepted = false;
             for _ in 0..6 {
@@ -317,21 +385,21 @@ impl<'a> Evaluator<'a> {
                 ];
                 let ec = self.eval_order(cand[0], cand[1], order, sc);
                 let fc = (ec.s - x).norm_squared();
-                if fc <= f {
+                if fc <= *f {
                     let moved = (cand[0] - uv[0]).abs() + (cand[1] - uv[1]).abs();
-                    uv = cand;
-                    e = ec;
-                    f = fc;
+                    *uv = cand;
+                    *e = ec;
+                    *f = fc;
                     accepted = moved > tol;
                     break;
                 }
                 step = [step[0] * 0.5, step[1] * 0.5];
             }
             if !accepted {
-                break;
+                return true;
             }
         }
-        (uv, f.sqrt())
+        false
     }
 }
 
