@@ -178,12 +178,25 @@ fn dense_range(x: &mut [f64], extent: f64) -> Option<[f64; 2]> {
 /// (at least eight windows' worth of points).
 const DENSE_TAIL: usize = 16;
 
+/// Points per chunk of the base plane's parallel sums (fixed, so that the sums do not depend
+/// on the threads' scheduling).
+const SUM_CHUNK: usize = 16_384;
+
 /// The base plane of `points` (already checked finite and non-empty).
 pub fn base_plane(points: &[Vec3], par: Parallelism) -> Result<BasePlane, FitError> {
     let n = points.len() as f64;
     let parallel = par.is_parallel(points.len());
+    // Parallel sums over fixed chunks, added in order: the same rounding whatever the thread
+    // scheduling (a work-stealing reduce is not, and a fit's result then changed in its last
+    // bits from run to run: `tests/fit.rs` `auto_leaves_clean_scans_alone` compares two fits
+    // bit for bit and failed now and then on a loaded machine).
     let sum = if parallel {
-        points.par_iter().copied().reduce(Vec3::zeros, |a, b| a + b)
+        points
+            .par_chunks(SUM_CHUNK)
+            .map(|c| c.iter().fold(Vec3::zeros(), |a, b| a + b))
+            .collect::<Vec<_>>()
+            .into_iter()
+            .fold(Vec3::zeros(), |a, b| a + b)
     } else {
         points.iter().fold(Vec3::zeros(), |a, b| a + b)
     };
@@ -194,9 +207,11 @@ pub fn base_plane(points: &[Vec3], par: Parallelism) -> Result<BasePlane, FitErr
     };
     let cov = if parallel {
         points
-            .par_iter()
-            .map(outer)
-            .reduce(Matrix3::zeros, |a, b| a + b)
+            .par_chunks(SUM_CHUNK)
+            .map(|c| c.iter().map(outer).fold(Matrix3::zeros(), |a, b| a + b))
+            .collect::<Vec<_>>()
+            .into_iter()
+            .fold(Matrix3::zeros(), |a, b| a + b)
     } else {
         points
             .iter()
