@@ -98,22 +98,40 @@ impl BasePlane {
     /// The rectangle of the points `k` with `inlier(k)`, trimmed to where they are dense
     /// (module docs), within the current rectangle. `None` when fewer than
     /// `DOMAIN_WINDOWS` inliers are left or the trimmed rectangle would be empty.
-    pub fn dense_rect(&self, points: &[Vec3], inlier: impl Fn(usize) -> bool) -> Option<[f64; 4]> {
-        let mut a = Vec::new();
-        let mut b = Vec::new();
-        for (k, x) in points.iter().enumerate() {
-            if inlier(k) {
-                let [pa, pb] = self.project(x);
-                a.push(pa);
-                b.push(pb);
-            }
-        }
+    pub fn dense_rect(
+        &self,
+        points: &[Vec3],
+        inlier: impl Fn(usize) -> bool + Sync,
+    ) -> Option<[f64; 4]> {
+        // Two threads from 65,536 points: the projections (their order does not matter, only
+        // the sorted values do) and the two axes side by side.
+        let parallel = points.len() >= 65_536;
+        let keep = |(k, x): (usize, &Vec3)| inlier(k).then(|| self.project(x));
+        let (mut a, mut b): (Vec<f64>, Vec<f64>) = if parallel {
+            points
+                .par_iter()
+                .enumerate()
+                .filter_map(keep)
+                .map(|[pa, pb]| (pa, pb))
+                .unzip()
+        } else {
+            points
+                .iter()
+                .enumerate()
+                .filter_map(keep)
+                .map(|[pa, pb]| (pa, pb))
+                .unzip()
+        };
         if a.len() < DOMAIN_WINDOWS {
             return None;
         }
         let [lu, lv] = self.extents();
-        let [a0, a1] = dense_range(&mut a, lu)?;
-        let [b0, b1] = dense_range(&mut b, lv)?;
+        let (ra, rb) = if parallel {
+            rayon::join(|| dense_range(&mut a, lu), || dense_range(&mut b, lv))
+        } else {
+            (dense_range(&mut a, lu), dense_range(&mut b, lv))
+        };
+        let ([a0, a1], [b0, b1]) = (ra?, rb?);
         let r = self.rect;
         let rect = [a0.max(r[0]), a1.min(r[1]), b0.max(r[2]), b1.min(r[3])];
         (rect[1] > rect[0] && rect[3] > rect[2]).then_some(rect)
