@@ -661,6 +661,8 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
         timings.correct += t.elapsed().as_secs_f64();
     }
     drop((cand_params, cand_distances));
+    // The rational refinement moves the surface: its final distances are computed afresh.
+    let finish = finish.filter(|_| !opts.rational);
     let mut surface = polynomial(&knots, ctrl)?;
     let mut energy_value =
         0.5 * system::quadratic_form(&stiffness, opts.grid, [p, p], surface.control_points());
@@ -683,7 +685,7 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
     }
 
     let t = Instant::now();
-    match finish.filter(|_| !opts.rational) {
+    match finish {
         // The last accepted round's continuation: the same as projecting again.
         Some(moved) => {
             for (k, uv, d) in moved {
