@@ -36,10 +36,11 @@
 //!    points outside get weight 0, and a new domain gets a round of its own.
 //! 5. Optionally rational (`rational = true`, D-NURBS's dynamic weights, `d-nurbs.txt` eqs 3-6):
 //!    a few damped Gauss-Newton iterations on the control points *and* weights ([`rational`]).
-//! 6. Report: closest-point distances (Newton to convergence), RMS and maximum, the fairness
-//!    energy `U = 1/2 P^T K P`, the worst cell of an 8 x 8 partition of the domain, how many
-//!    points were down-weighted, warnings (fewer points than control points), time per phase
-//!    ([`FitReport`]).
+//! 6. Report: closest-point distances (Gauss-Newton to convergence, carried on from the last
+//!    round's correction: [`project::Evaluator::project_continued`]), RMS and maximum, the
+//!    fairness energy `U = 1/2 P^T K P`, the worst cell of an 8 x 8 partition of the domain,
+//!    how many points were down-weighted, warnings (fewer points than control points), time
+//!    per phase ([`FitReport`]).
 //!
 //! **Limitations.** The cloud must be a height field over its principal plane, possibly with
 //! folds that parameter correction can untangle (a scanned face, terrain, a car panel, half a
