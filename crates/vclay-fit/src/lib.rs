@@ -36,10 +36,11 @@
 //!    points outside get weight 0, and a new domain gets a round of its own.
 //! 5. Optionally rational (`rational = true`, D-NURBS's dynamic weights, `d-nurbs.txt` eqs 3-6):
 //!    a few damped Gauss-Newton iterations on the control points *and* weights ([`rational`]).
-//! 6. Report: closest-point distances (Newton to convergence), RMS and maximum, the fairness
-//!    energy `U = 1/2 P^T K P`, the worst cell of an 8 x 8 partition of the domain, how many
-//!    points were down-weighted, warnings (fewer points than control points), time per phase
-//!    ([`FitReport`]).
+//! 6. Report: closest-point distances (Gauss-Newton to convergence, carried on from the last
+//!    round's correction: [`project::Evaluator::project_continued`]), RMS and maximum, the
+//!    fairness energy `U = 1/2 P^T K P`, the worst cell of an 8 x 8 partition of the domain,
+//!    how many points were down-weighted, warnings (fewer points than control points), time
+//!    per phase ([`FitReport`]).
 //!
 //! **Limitations.** The cloud must be a height field over its principal plane, possibly with
 //! folds that parameter correction can untangle (a scanned face, terrain, a car panel, half a
@@ -90,9 +91,9 @@ pub const CORRECTION_NEWTON_STEPS: usize = 2;
 /// Gauss-Newton steps per point (at most) for the reported distances (they converge to the
 /// same foot point as Newton's method; linearly, at a rate of about distance x curvature).
 pub const REPORT_NEWTON_STEPS: usize = 30;
-/// Parameter step below which the reported closest-point iteration stops (the distance is
-/// stationary at the foot point, so its error is of the order of the square of this times the
-/// model size).
+/// Parameter step below which the reported closest-point iteration (and that of parameter
+/// correction) stops (the distance is stationary at the foot point, so its error is of the
+/// order of the square of this times the model size).
 pub const REPORT_PARAM_TOL: f64 = 1e-9;
 /// Largest number of points.
 pub const MAX_POINTS: usize = 100_000_000;
@@ -511,6 +512,10 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
     // Whether each point lies outside the (trimmed) domain; rounds added for a new domain.
     let mut outside = vec![false; points.len()];
     let (mut round, mut extra_rounds) = (0usize, 0usize);
+    // The accepted round's closest points run to convergence on its surface, where they moved
+    // on from its corrected parameters (`correct_all`): the final distances, unless the
+    // parameters were remapped afterwards.
+    let mut finish: Option<Vec<(usize, [f64; 2], f64)>> = None;
     while round < rounds {
         let t = Instant::now();
         let use_w = (loss.is_some() && round > 0) || domain_updates > 0;
@@ -533,15 +538,20 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
 
         let t = Instant::now();
         let surface = polynomial(&knots, cand.clone())?;
-        cand_params.copy_from_slice(&params);
-        project_all(
+        // Only the round that is the last so far goes on to the final closest points (the
+        // continuation costs evaluations where the corrected parameters are still moving).
+        let more = if round + 1 == rounds {
+            REPORT_NEWTON_STEPS
+        } else {
+            0
+        };
+        let cand_finish = correct_all(
             &surface,
             points,
+            &params,
             &mut cand_params,
             &mut cand_distances,
-            CORRECTION_NEWTON_STEPS,
-            1e-9,
-            false,
+            more,
             par,
         );
         let cand_sigma = robust::scale(&cand_distances, size);
@@ -561,6 +571,7 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
         (best_sigma, best_energy) = (cand_sigma, cand_energy);
         std::mem::swap(&mut params, &mut cand_params);
         std::mem::swap(&mut distances, &mut cand_distances);
+        finish = cand_finish;
         history.push(rms(&distances));
         judge = true;
         if round == 0 {
@@ -624,6 +635,7 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
                 for uv in params.iter_mut() {
                     *uv = base.remap(&old, *uv);
                 }
+                finish = None;
                 for (o, x) in outside.iter_mut().zip(points) {
                     *o = !plane::inside(&rect, base.project(x));
                 }
@@ -650,6 +662,8 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
         timings.correct += t.elapsed().as_secs_f64();
     }
     drop((cand_params, cand_distances));
+    // The rational refinement moves the surface: its final distances are computed afresh.
+    let finish = finish.filter(|_| !opts.rational);
     let mut surface = polynomial(&knots, ctrl)?;
     let mut energy_value =
         0.5 * system::quadratic_form(&stiffness, opts.grid, [p, p], surface.control_points());
@@ -672,16 +686,25 @@ pub fn fit_surface(points: &[Vec3], opts: &FitOptions) -> Result<Fit, FitError> 
     }
 
     let t = Instant::now();
-    project_all(
-        &surface,
-        points,
-        &mut params,
-        &mut distances,
-        REPORT_NEWTON_STEPS,
-        REPORT_PARAM_TOL,
-        false,
-        par,
-    );
+    match finish {
+        // The last accepted round's continuation: the same as projecting again.
+        Some(moved) => {
+            for (k, uv, d) in moved {
+                params[k] = uv;
+                distances[k] = d;
+            }
+        }
+        None => project_all(
+            &surface,
+            points,
+            &mut params,
+            &mut distances,
+            REPORT_NEWTON_STEPS,
+            REPORT_PARAM_TOL,
+            false,
+            par,
+        ),
+    }
     let (mut s2, mut max, mut sum) = (0.0f64, 0.0f64, 0.0f64);
     let (mut wsum, mut wd2, mut in2, mut nin, mut outliers) = (0.0, 0.0, 0.0, 0usize, 0usize);
     for (d, w) in distances.iter().zip(&weights) {
@@ -838,6 +861,71 @@ pub fn project_all(
     } else {
         work((points, (params, distances)));
     }
+}
+
+/// One parameter-correction pass: `out` gets each point's parameter after at most
+/// [`CORRECTION_NEWTON_STEPS`] Gauss-Newton steps from `params` on `surface`, `distances` its
+/// distance. With `more > 0`, where those steps did not reach the tolerance
+/// [`REPORT_PARAM_TOL`], the iteration goes on to convergence (at most `more` steps) and the
+/// returned list holds `(index, parameter, distance)` of the points it moved: the final closest
+/// points, should this round's surface be the result (what [`project_all`] from `out` with
+/// `more` steps would give, without its evaluation at every start; issue 31).
+fn correct_all(
+    surface: &NurbsSurface,
+    points: &[Vec3],
+    params: &[[f64; 2]],
+    out: &mut [[f64; 2]],
+    distances: &mut [f64],
+    more: usize,
+    par: Parallelism,
+) -> Option<Vec<(usize, [f64; 2], f64)>> {
+    let ev = project::Evaluator::new(surface);
+    const CHUNK: usize = 1024;
+    type Chunk<'a> = (
+        usize,
+        (
+            (&'a [Vec3], &'a [[f64; 2]]),
+            (&'a mut [[f64; 2]], &'a mut [f64]),
+        ),
+    );
+    let work = |(c, ((pts, prm), (out, d))): Chunk<'_>| {
+        let mut sc = ev.scratch();
+        let mut moved = Vec::new();
+        for (k, (x, start)) in pts.iter().zip(prm).enumerate() {
+            let (first, more) = ev.project_continued(
+                x,
+                *start,
+                CORRECTION_NEWTON_STEPS,
+                more,
+                REPORT_PARAM_TOL,
+                false,
+                &mut sc,
+            );
+            (out[k], d[k]) = first;
+            if let Some((uv, dist)) = more {
+                moved.push((c * CHUNK + k, uv, dist));
+            }
+        }
+        moved
+    };
+    let moved = if par.is_parallel_from(points.len(), system::PARALLEL_POINTS) {
+        points
+            .par_chunks(CHUNK)
+            .zip(params.par_chunks(CHUNK))
+            .zip(
+                out.par_chunks_mut(CHUNK)
+                    .zip(distances.par_chunks_mut(CHUNK)),
+            )
+            .enumerate()
+            .map(work)
+            .reduce(Vec::new, |mut a, mut b| {
+                a.append(&mut b);
+                a
+            })
+    } else {
+        work((0, ((points, params), (out, distances))))
+    };
+    (more > 0).then_some(moved)
 }
 
 /// Closest-point distances from `points` to `surface`, each started from the given parameter

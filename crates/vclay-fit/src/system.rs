@@ -84,50 +84,13 @@ pub fn assemble(
     let degree = [knots[0].degree(), knots[1].degree()];
     let chunk = |range: std::ops::Range<usize>| {
         let mut acc = Normal::zeros(dims, degree);
-        let (p, q) = (degree[0], degree[1]);
-        let nv = dims[1];
-        let bv = 2 * q + 1;
-        let bw = (2 * p + 1) * bv;
-        let mut nu_b = vec![0.0; p + 1];
-        let mut nv_b = vec![0.0; q + 1];
-        let mut prod = vec![0.0; (p + 1) * (q + 1)];
-        for k in range {
-            let w = weights.map_or(1.0, |w| w[k]);
-            if w == 0.0 {
-                continue;
-            }
-            let [u, v] = params[k];
-            let su = knots[0].find_span(u);
-            let sv = knots[1].find_span(v);
-            knots[0].basis(su, u, &mut nu_b);
-            knots[1].basis(sv, v, &mut nv_b);
-            for a in 0..=p {
-                for b in 0..=q {
-                    prod[a * (q + 1) + b] = nu_b[a] * nv_b[b];
-                }
-            }
-            let x = points[k] * w;
-            acc.weight += w;
-            let base = (su - p) * nv + sv - q;
-            for a in 0..=p {
-                for b in 0..=q {
-                    let pa = prod[a * (q + 1) + b];
-                    let row = base + a * nv + b;
-                    acc.rhs[row] += x * pa;
-                    let wpa = w * pa;
-                    let r = &mut acc.band[row * bw..(row + 1) * bw];
-                    // Neighbours (c, d) at or after (a, b) in the net's order (the upper
-                    // triangle; mirrored after the sum): di = c - a, dj = d - b.
-                    for c in a..=p {
-                        let d0 = if c == a { b } else { 0 };
-                        let off = (c + p - a) * bv + q - b;
-                        let pc = &prod[c * (q + 1)..(c + 1) * (q + 1)];
-                        for d in d0..=q {
-                            r[off + d] += wpa * pc[d];
-                        }
-                    }
-                }
-            }
+        match (degree[0], degree[1]) {
+            (1, 1) => add_points::<2, 2>(&mut acc, knots, points, params, weights, range),
+            (2, 2) => add_points::<3, 3>(&mut acc, knots, points, params, weights, range),
+            (3, 3) => add_points::<4, 4>(&mut acc, knots, points, params, weights, range),
+            (4, 4) => add_points::<5, 5>(&mut acc, knots, points, params, weights, range),
+            (5, 5) => add_points::<6, 6>(&mut acc, knots, points, params, weights, range),
+            _ => add_points_any(&mut acc, knots, points, params, weights, range),
         }
         acc
     };
@@ -144,6 +107,129 @@ pub fn assemble(
     };
     mirror_upper(&mut normal.band, dims, degree);
     normal
+}
+
+/// Adds the points `range` to `acc` for degrees `P1 - 1`, `Q1 - 1`: the basis on the stack and
+/// each row's upper part written as whole runs of `Q1` entries (SIMD-friendly; the entries of
+/// a run left of the diagonal are lower-triangle ones, overwritten by [`mirror_upper`]).
+fn add_points<const P1: usize, const Q1: usize>(
+    acc: &mut Normal,
+    knots: &[KnotVector; 2],
+    points: &[Vec3],
+    params: &[[f64; 2]],
+    weights: Option<&[f64]>,
+    range: std::ops::Range<usize>,
+) {
+    let (p, q) = (P1 - 1, Q1 - 1);
+    let nv = acc.dims[1];
+    let bv = 2 * q + 1;
+    let bw = (2 * p + 1) * bv;
+    let guess = [
+        crate::project::SpanGuess::new(&knots[0]),
+        crate::project::SpanGuess::new(&knots[1]),
+    ];
+    let inv = [
+        crate::project::reciprocals(&knots[0]),
+        crate::project::reciprocals(&knots[1]),
+    ];
+    let k = [knots[0].as_slice(), knots[1].as_slice()];
+    for i in range {
+        let w = weights.map_or(1.0, |w| w[i]);
+        if w == 0.0 {
+            continue;
+        }
+        let [u, v] = params[i];
+        let su = guess[0].span(&knots[0], u);
+        let sv = guess[1].span(&knots[1], v);
+        let nu_b = crate::project::basis_fixed::<P1>(k[0], &inv[0], su, u);
+        let nv_b = crate::project::basis_fixed::<Q1>(k[1], &inv[1], sv, v);
+        let mut prod = [[0.0; Q1]; P1];
+        for a in 0..P1 {
+            for b in 0..Q1 {
+                prod[a][b] = nu_b[a] * nv_b[b];
+            }
+        }
+        let x = points[i] * w;
+        acc.weight += w;
+        let base = (su - p) * nv + sv - q;
+        for a in 0..P1 {
+            for b in 0..Q1 {
+                let pa = prod[a][b];
+                let row = base + a * nv + b;
+                acc.rhs[row] += x * pa;
+                let wpa = w * pa;
+                let r = &mut acc.band[row * bw..(row + 1) * bw];
+                // Neighbours (c, d), c >= a: di = c - a, dj = d - b; the run d = 0..=q starts
+                // at column (c - a + p) bv + q - b.
+                for (c, pc) in prod.iter().enumerate().skip(a) {
+                    let off = (c + p - a) * bv + q - b;
+                    let run: &mut [f64; Q1] =
+                        (&mut r[off..off + Q1]).try_into().expect("Q1 entries");
+                    for d in 0..Q1 {
+                        run[d] += wpa * pc[d];
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// [`add_points`] for any degrees.
+fn add_points_any(
+    acc: &mut Normal,
+    knots: &[KnotVector; 2],
+    points: &[Vec3],
+    params: &[[f64; 2]],
+    weights: Option<&[f64]>,
+    range: std::ops::Range<usize>,
+) {
+    let dims = acc.dims;
+    let degree = acc.degree;
+    let (p, q) = (degree[0], degree[1]);
+    let nv = dims[1];
+    let bv = 2 * q + 1;
+    let bw = (2 * p + 1) * bv;
+    let mut nu_b = vec![0.0; p + 1];
+    let mut nv_b = vec![0.0; q + 1];
+    let mut prod = vec![0.0; (p + 1) * (q + 1)];
+    for k in range {
+        let w = weights.map_or(1.0, |w| w[k]);
+        if w == 0.0 {
+            continue;
+        }
+        let [u, v] = params[k];
+        let su = knots[0].find_span(u);
+        let sv = knots[1].find_span(v);
+        knots[0].basis(su, u, &mut nu_b);
+        knots[1].basis(sv, v, &mut nv_b);
+        for a in 0..=p {
+            for b in 0..=q {
+                prod[a * (q + 1) + b] = nu_b[a] * nv_b[b];
+            }
+        }
+        let x = points[k] * w;
+        acc.weight += w;
+        let base = (su - p) * nv + sv - q;
+        for a in 0..=p {
+            for b in 0..=q {
+                let pa = prod[a * (q + 1) + b];
+                let row = base + a * nv + b;
+                acc.rhs[row] += x * pa;
+                let wpa = w * pa;
+                let r = &mut acc.band[row * bw..(row + 1) * bw];
+                // Neighbours (c, d) at or after (a, b) in the net's order (the upper
+                // triangle; mirrored after the sum): di = c - a, dj = d - b.
+                for c in a..=p {
+                    let d0 = if c == a { b } else { 0 };
+                    let off = (c + p - a) * bv + q - b;
+                    let pc = &prod[c * (q + 1)..(c + 1) * (q + 1)];
+                    for d in d0..=q {
+                        r[off + d] += wpa * pc[d];
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// Copies each entry `(I, J)`, `J > I` in the net's order, to `(J, I)`.
