@@ -11,7 +11,8 @@
 //! - **Edge** (Fig 8a): a quadratic surface over a strip of 3 x 1 quads (6 triangles, 36 basis
 //!   functions) with the paper's "continuous net": functions at the same Bezier domain point
 //!   share a control point, 7 x 3 = 21 control points. The initial net is folded by 90 degrees
-//!   along its middle column (a convex edge); far boundaries `u = 0` and `u = 3`.
+//!   along its middle column (a convex edge), whose points lie on the edge (the sharp start,
+//!   below); far boundaries `u = 0` and `u = 3`.
 //! - **Corner** (Fig 8b): a trihedral corner of a cube, 13 triangles (a central cap, three quads
 //!   across the three cube edges and three rhombi on the faces) times 6 = 78 control points.
 //!   The edges are the domain rays at 30, 150 and 270 degrees, through the middles of the edge
@@ -21,15 +22,41 @@
 //!   so that each segment across an edge maps into a plane across that edge).
 //!   Far boundary: the outer hexagon.
 //! - **Bevel** (Fig 8c): a right-angle (concave) joint of two plates, a 3 x 3 quad grid (18
-//!   triangles) times 6 = 108 control points, folded along its middle; far boundaries `u = 0`
-//!   and `u = 3`.
+//!   triangles) times 6 = 108 control points, folded along its middle (sharp); far boundaries
+//!   `u = 0` and `u = 3`.
 //!
 //! Control points are the piecewise-linear initial map `F` evaluated at the mean of each basis
 //! function's blossom knots (exact for `F` linear on the function's support, DMS polynomial
 //! reproduction) or, for the shared net, at the Bezier domain point. Knot clouds have radius
-//! [`ROUNDING_CLOUD_RADIUS`] of the shortest edge at each vertex: the quadratic basis is `C^1`,
-//! so the initial "sharp" edge is already rounded across a band of about that width (a
-//! crease needs coincident knots, which simplex splines exclude).
+//! [`ROUNDING_CLOUD_RADIUS`] of the shortest edge at each vertex: the quadratic basis is `C^1`
+//! (a crease by coincident knots is excluded by simplex splines).
+//!
+//! ## The sharp initial edge (Fig 8a1, 8c1; issue 28)
+//! The paper: "the sharp edge can be represented exactly with multiple control points or with
+//! multiple knots". With the control points at `F`'s images the `C^1` basis rounds the edge
+//! over the middle column ([`InitialShape::Rounded`]: the old edge's middle lies 0.12 off
+//! both faces). The edge and the bevel start instead from [`InitialShape::Sharp`], the paper's
+//! multiple control points: every control point of a function over a triangle of the middle
+//! column (for the edge's continuous net: the columns `u = 1, 1.5, 2`) lies on the edge line,
+//! keeping its coordinate along the edge ([`RoundingModel::sharp_target`]). A point of the
+//! middle column then depends on points of the edge line only and lies on it; a point of a
+//! side column or next to the middle column's sides on points of one face and of the edge,
+//! all in that face's plane. The image is exactly the two faces meeting at the edge (every
+//! vertex of the tessellation within 4.4e-16 of a face plane), a fold of the parameter
+//! domain's middle column onto the edge line (`s_u = 0` there: no normal inside it). The
+//! held boundaries' control points are not moved, so both starts have the same constrained
+//! minimum: the sharp start relaxes into the fillet of the `C^1` start within the scenarios'
+//! steps (surfaces 2.2e-16 apart after 100 steps for the edge, 4.1e-11 after 60 for the
+//! bevel; `tests/triangular.rs`).
+//!
+//! The corner keeps the `C^1` start: collapsing its edge quads (with or without the central
+//! cap on the corner point) gives a first linearized step whose weight change (about twice
+//! the weights of the collapsed functions) does not shrink with the time step, so the
+//! engine's weight trust check refuses every halving (`Diverged` at step 0). The collapsed
+//! functions' weight columns of the Jacobian (`N_c (p_c - r) / W`) vanish where their points
+//! coincide with the surface, and the weight penalty alone then sets those weights. A sharp
+//! corner would need that null space handled (frozen weights for the first steps, or a
+//! step that projects it out); not done.
 //!
 //! ## Constraints
 //! Far boundaries of the faces (section 7.3, "position and normal constraints along the far
@@ -54,8 +81,8 @@
 //! rest of the edge; the tension's natural boundary condition (no derivative across the
 //! boundary in the free coordinates) is met by a fillet extruded along the edge. Held whole,
 //! as before, they pinned the sharp profile at the patch's ends: the bevel's fillet tapered
-//! back to a sharp joint there (13 % of its turning the wrong way with the densities below,
-//! 1.7 % sliding). On the corner only 9 control points slide and the difference is not
+//! back to a sharp joint there (13 % of its turning the wrong way with the densities below
+//! from the `C^1` start, 35 % from the sharp one; 1.7 % sliding). On the corner only 9 control points slide and the difference is not
 //! measurable (3.05 % against 3.06 %); the corner's gain came from the unfolded map and the
 //! deeper quads (Table 1 as printed: 25 % before, 15.6 % on the new model) and from the
 //! densities (3.1 %). The edge's sides are free (its Table 1 row has no `v` terms).
@@ -84,12 +111,9 @@
 //! size) and never for the bevel's pure membrane. The continuous net of the edge adds a second
 //! effect: its shared points make the surface close to a `C^0` piecewise Bezier surface, and
 //! tension pulls a free junction point back towards the held ones (the minimum of a quadratic
-//! segment's `integral |r'|^2` over its end point `C` is `C = B - (B - A) / 2`). Representing
-//! the initial edge sharply by collapsing the middle column onto the edge (the paper's
-//! "multiple control points") was tried: the image is exactly the sharp solid, but a collapsed
-//! region has `r_u = 0` and so no tension energy, and the corner then barely moves (energy
-//! 12,493 to 11,009 in 60 steps; the control points at the corner stayed within 0.05 of it).
-//! Not kept.
+//! segment's `integral |r'|^2` over its end point `C` is `C = B - (B - A) / 2`). (A first try
+//! of the sharp start, with Table 1 as printed, barely moved the corner in 60 steps; with the
+//! densities below the edge and the bevel reach their fillets from it, see above.)
 //!
 //! What is done: each model reads Table 1 over spans of length [`RoundingKind::span`]
 //! ([`RoundingKind::material`]): the edge with `a11 h^2 = 6 b11`, the corner with `a h^2 = b`
@@ -104,11 +128,7 @@
 //! crossing ends) and along the rhombus diagonals; a domain whose held sides run parallel to
 //! the edges (tried: a Y-shaped domain of one-span-wide strips) leaves almost every control
 //! point fixed, and the fillet is then the initial `C^1` rounding (largest motion 0.05).
-//! Not done: a sharp initial edge. The crease lies inside a domain triangle (the middle of the
-//! edge quads or column), so the `C^1` basis rounds it over that triangle's width; the
-//! collapsed-net representation above did not move under tension, and a triangulation with
-//! the creases on triangle edges needs a central cap split at the corner point (more than 13
-//! triangles, or a collapsed cap).
+//! Not done: the corner's sharp start (above).
 
 use super::generalized::{Constraint, GeneralizedDnurbs};
 use super::presets::Preset;
@@ -141,6 +161,19 @@ pub const ROUNDING_WEIGHT_PENALTY: f64 = 100.0;
 /// Boundary samples per far edge at which the acting control points are found (the basis is
 /// evaluated at `FIXING_SAMPLES + 1` equally spaced points).
 const FIXING_SAMPLES: usize = 32;
+
+/// The initial shape of a rounding model ([`RoundingModel::with_initial`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InitialShape {
+    /// The sharp edge of the paper's Fig 8a1 and 8c1: the control points of the functions over
+    /// the triangles that carry the old edge collapse onto it (the paper's "multiple control
+    /// points"), so the surface is exactly the faces meeting at the edge. The corner (Fig 8b)
+    /// keeps [`InitialShape::Rounded`] (module docs).
+    Sharp,
+    /// The control points at the initial map's images (`C^1`: the edge is rounded over the
+    /// width of the triangles that carry it).
+    Rounded,
+}
 
 /// Which Fig 8 model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -370,6 +403,13 @@ fn corner_edge(k: usize) -> Vec3 {
 impl RoundingModel {
     /// Builds one of the Fig 8 models (see the module docs).
     pub fn new(kind: RoundingKind) -> Result<Self, DynamicsError> {
+        Self::with_initial(kind, InitialShape::Sharp)
+    }
+
+    /// [`RoundingModel::new`] with the initial shape chosen (the sharp one of the paper's
+    /// Fig 8a1-c1, or the `C^1` rounding of the initial map; the corner has only the latter).
+    /// Both relax into the same fillet (`tests/triangular.rs`).
+    pub fn with_initial(kind: RoundingKind, initial: InitialShape) -> Result<Self, DynamicsError> {
         let err = |e: vclay_spline::triangular::TriangularError| DynamicsError::Spline(e.into());
         let (domain, map): (Triangulation, Box<dyn Fn(Point2) -> Vec3>) = match kind {
             RoundingKind::Edge => (
@@ -411,6 +451,17 @@ impl RoundingModel {
                 (pts, None)
             }
         };
+        // The sharp initial shape (Fig 8a1, 8c1): the control points of every function of a
+        // triangle that carries the old edge collapse onto it, see
+        // [`RoundingModel::sharp_target`].
+        let mut points = points;
+        for f in (0..basis.len()).filter(|_| initial == InitialShape::Sharp) {
+            let t = basis.function_index(f).0;
+            let c = control_map.as_ref().map_or(f, |m| m[f]);
+            if let Some(target) = Self::sharp_target(kind, t, points[c]) {
+                points[c] = target;
+            }
+        }
         let n = points.len();
         let surface =
             TriangularNurbs::new(basis, points, vec![1.0; n], control_map).map_err(err)?;
@@ -518,6 +569,31 @@ impl RoundingModel {
             edges,
             held,
         })
+    }
+
+    /// Where a control point of a function of domain triangle `t`, placed at `p` by the
+    /// initial map, goes in the sharp initial shape ([`InitialShape::Sharp`]): onto the old
+    /// edge if `t` carries it (the edge's and the bevel's middle column; the point keeps its
+    /// coordinate along the edge), nowhere else (`None`: the faces keep the initial map). The
+    /// paper's "multiple control points" (section 7.3): every point on which the surface
+    /// depends over such a triangle lies on the edge, so the triangle's image is the edge
+    /// line, and every domain point next to it combines points of one face and of the edge,
+    /// which lie in that face's plane: the image is exactly the two faces meeting at a sharp
+    /// edge. With the edge's continuous net the shared points of the columns `u = 1` and
+    /// `u = 2` go onto the edge as well (they belong to the middle column's functions).
+    fn sharp_target(kind: RoundingKind, t: usize, p: Vec3) -> Option<Vec3> {
+        match kind {
+            // The middle column of the 3 x 1 (3 x 3) quads: triangles 2 and 3 (6 to 11) of
+            // `grid`, whose edge lies at x = 1.5 (x = -1.5) with z = 0.
+            RoundingKind::Edge | RoundingKind::Bevel => {
+                let rows = if kind == RoundingKind::Edge { 1 } else { 3 };
+                (t / (2 * rows) == 1).then(|| Vec3::new(1.5f64.copysign(p.x), p.y, 0.0))
+            }
+            // The corner keeps the `C^1` rounding of its initial map (see the module docs:
+            // collapsing its edge quads, with or without its cap, gives a linearized step
+            // whose weight change does not shrink with the time step).
+            RoundingKind::Corner => None,
+        }
     }
 
     /// The far boundaries held whole (position and normal, section 6.2), as segments of the
@@ -630,7 +706,9 @@ fn boundary_edges(dom: &Triangulation) -> Vec<[Point2; 2]> {
 
 /// The largest angle (radians) between surface normals at parameter pairs straddling the
 /// segments `edges` at distance `delta` on either side, sampled at `samples` points per
-/// segment (ends excluded). For a `C^1` surface it tends to 0 with `delta`.
+/// segment (ends excluded). For a `C^1` surface it tends to 0 with `delta`. A pair where the
+/// surface has no normal (`|s_u x s_v|` under 1e-9 of `(|s_u| + |s_v|)^2`, inside the collapsed column of an
+/// [`InitialShape::Sharp`] model, whose image is the edge line) is skipped.
 pub fn normal_jump(
     surface: &TriangularNurbs,
     edges: &[[Point2; 2]],
@@ -651,14 +729,17 @@ pub fn normal_jump(
             if dom.locate(a).is_none() || dom.locate(b).is_none() {
                 continue;
             }
-            let nor = |x: Point2| -> Result<Vec3, DynamicsError> {
+            let nor = |x: Point2| -> Result<Option<Vec3>, DynamicsError> {
                 let s = surface
                     .derivatives(x)
                     .map_err(|e| DynamicsError::Spline(e.into()))?;
-                Ok(s[1].cross(&s[2]).normalize())
+                // No normal where the tangents are parallel to rounding (1e-9 of their size).
+                let size = (s[1].norm() + s[2].norm()).powi(2);
+                Ok(s[1].cross(&s[2]).try_normalize(1e-9 * size))
             };
-            let (na, nb) = (nor(a)?, nor(b)?);
-            worst = worst.max(na.dot(&nb).clamp(-1.0, 1.0).acos());
+            if let (Some(na), Some(nb)) = (nor(a)?, nor(b)?) {
+                worst = worst.max(na.dot(&nb).clamp(-1.0, 1.0).acos());
+            }
         }
     }
     Ok(worst)
