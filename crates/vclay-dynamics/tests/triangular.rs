@@ -586,7 +586,7 @@ fn issue_28_held_crossing_boundaries_fold_the_fillet() {
 #[test]
 fn issue_28_edge_and_bevel_start_sharp_and_relax_into_the_same_fillet() {
     for (kind, steps, edge_x, probe) in [
-        (RoundingKind::Edge, 100, 1.5, [1.5, 0.5]),
+        (RoundingKind::Edge, 100, 1.5f64, [1.5, 0.5]),
         (RoundingKind::Bevel, 60, -1.5, [1.5, 1.5]),
     ] {
         let sharp = RoundingModel::new(kind).unwrap();
@@ -596,9 +596,16 @@ fn issue_28_edge_and_bevel_start_sharp_and_relax_into_the_same_fillet() {
         let off_faces = |s: &vclay_spline::TriangularNurbs| {
             let mut mesh = vclay_core::TriMesh::new();
             s.tessellate(8, &mut mesh).unwrap();
+            // The faces: z = 0 on the edge's side of x = edge_x, x = edge_x on the side
+            // z <= 0 (edge) or z >= 0 (bevel); beyond them a vertex counts by its distance.
+            let inside = |x: f64| (x * edge_x.signum()).max(0.0);
             mesh.positions
                 .iter()
-                .map(|p| p.z.abs().min((p.x - edge_x).abs()))
+                .map(|p| {
+                    let a = p.z.abs().hypot(inside(p.x - edge_x));
+                    let b = (p.x - edge_x).abs().hypot((p.z * edge_x.signum()).max(0.0));
+                    a.min(b)
+                })
                 .fold(0.0f64, f64::max)
         };
         let (a, b) = (off_faces(&sharp.surface), off_faces(&rounded.surface));

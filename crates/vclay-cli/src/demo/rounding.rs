@@ -19,6 +19,8 @@ const STEPS: usize = 40;
 fn wireframe(s: &vclay::spline::TriangularNurbs, png: &Path) -> Result<()> {
     let mut mesh = TriMesh::new();
     s.tessellate(2, &mut mesh)?;
+    // The sharp starts (edge, bevel) have no normal on the old edge: shade the faces apart.
+    let mesh = mesh.with_creases(crate::render::CREASE_ANGLE_DEG.to_radians());
     let scene = crate::render::scene_from_mesh(mesh, true);
     let opts = RenderOptions {
         supersample: 2,

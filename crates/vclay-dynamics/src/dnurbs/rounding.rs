@@ -42,7 +42,7 @@
 //! middle column then depends on points of the edge line only and lies on it; a point of a
 //! side column or next to the middle column's sides on points of one face and of the edge,
 //! all in that face's plane. The image is exactly the two faces meeting at the edge (every
-//! vertex of the tessellation within 4.4e-16 of a face plane), a fold of the parameter
+//! vertex of the tessellation within 6.7e-16 of its face), a fold of the parameter
 //! domain's middle column onto the edge line (`s_u = 0` there: no normal inside it). The
 //! held boundaries' control points are not moved, so both starts have the same constrained
 //! minimum: the sharp start relaxes into the fillet of the `C^1` start within the scenarios'
