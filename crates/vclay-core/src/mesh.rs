@@ -166,12 +166,14 @@ impl TriMesh {
     /// for free). Every policy and thread count performs these same floating-point operations
     /// in the same order, so the normals are the same to the bit.
     ///
-    /// In parallel the vertices are cut into one contiguous range per rayon thread; each task
-    /// walks the triangles in order, computes the cross product of those that touch its range
-    /// and adds it to its own slice of the output. No buffer besides the normals is allocated,
-    /// and a mesh whose triangles mostly join nearby vertex indices (any tessellation's output)
-    /// computes few cross products twice; on a mesh with no index locality every task may
-    /// compute most cross products, and the parallel run is then no faster than one thread.
+    /// In parallel the vertices are cut into contiguous ranges, a few per rayon thread; one
+    /// pass over the triangles finds the interval of triangles that touches each range, and
+    /// each range's task walks its interval in order, computing the cross products of the
+    /// triangles that touch the range and adding them to its own slice of the output. Only the
+    /// normals are allocated (and their buffer is reused from the previous call). A mesh whose
+    /// triangles join nearby vertex indices (any tessellator's output, a revolution surface)
+    /// computes few cross products twice; on a mesh without index locality the ranges fall
+    /// back to one per thread, each walking every triangle, and the parallel run gains little.
     ///
     /// # Panics
     /// If a triangle references a vertex that does not exist.
@@ -182,8 +184,7 @@ impl TriMesh {
         // no allocation and no page faults on fresh memory.
         acc.clear();
         let threads = rayon::current_num_threads();
-        if threads < 2 || !par.is_parallel_from(self.triangles.len(), NORMALS_PARALLEL_THRESHOLD)
-        {
+        if threads < 2 || !par.is_parallel_from(self.triangles.len(), NORMALS_PARALLEL_THRESHOLD) {
             acc.resize(n, Vec3::zeros());
             for tri in &self.triangles {
                 let [a, b, c] = tri.map(|i| self.positions[i as usize]);
@@ -194,17 +195,7 @@ impl TriMesh {
             }
             acc.iter_mut().for_each(normalize_or_zero);
         } else {
-            // Zeroed in parallel, so the page faults of a fresh buffer are spread over the
-            // threads too.
-            acc.par_extend(rayon::iter::repeat_n(Vec3::zeros(), n));
-            let range = n.div_ceil(threads).max(1);
-            let (positions, triangles) = (&self.positions, &self.triangles);
-            acc.par_chunks_mut(range)
-                .enumerate()
-                .for_each(|(k, out)| {
-                    accumulate_normals(positions, triangles, k * range, out);
-                    out.iter_mut().for_each(normalize_or_zero);
-                });
+            normals_parallel(&self.positions, &self.triangles, threads, &mut acc);
         }
         self.normals = acc;
     }
@@ -418,8 +409,109 @@ pub fn closest_on_triangle(p: Vec3, [a, b, c]: [Vec3; 3]) -> Vec3 {
 
 /// Triangles above which [`Parallelism::Auto`] computes normals in parallel
 /// ([`TriMesh::compute_normals_with`]): below it the thread hand-off costs more than it saves
-/// (measured 2026-12-03, `normals_scaling` in `examples/bench_normals.rs`).
+/// (measured 2026-12-03 with `examples/bench_normals.rs`; docs/performance.md, Direct FFD).
 pub const NORMALS_PARALLEL_THRESHOLD: usize = 16_384;
+
+/// Vertex ranges per rayon thread in [`TriMesh::compute_normals_with`]: more than one, so that
+/// work stealing evens out a core that is busy with something else.
+const NORMAL_RANGES_PER_THREAD: usize = 4;
+
+/// The parallel path of [`TriMesh::compute_normals_with`]: `acc` (empty) receives the normals.
+///
+/// The vertices are cut into ranges of `2^shift` (about [`NORMAL_RANGES_PER_THREAD`] per
+/// thread). A first parallel pass over blocks of triangles finds, for each range, the first and
+/// last triangle that reference one of its vertices (and checks every index); then each range's
+/// task walks only that interval of triangles, in order, adding the cross products to its own
+/// slice of `acc`. When the intervals overlap so much that together they exceed
+/// `2 x triangles` (a mesh without index locality), the ranges are merged to one per thread, so
+/// that no more than `threads` passes over the triangles are made.
+fn normals_parallel(
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    threads: usize,
+    acc: &mut Vec<Vec3>,
+) {
+    let n = positions.len();
+    // Zeroed in parallel, so the page faults of a fresh buffer are spread over the threads.
+    acc.par_extend(rayon::iter::repeat_n(Vec3::zeros(), n));
+    let shift = n
+        .div_ceil(threads * NORMAL_RANGES_PER_THREAD)
+        .max(1)
+        .next_power_of_two()
+        .trailing_zeros();
+    let ranges = n.div_ceil(1 << shift);
+    let block = triangles
+        .len()
+        .div_ceil(threads * NORMAL_RANGES_PER_THREAD)
+        .max(1);
+    let empty = (usize::MAX, 0);
+    let spans: Vec<(usize, usize)> = triangles
+        .par_chunks(block)
+        .enumerate()
+        .map(|(b, chunk)| {
+            let mut spans = vec![empty; ranges];
+            // The range of the last triangle that lay in one range, and the end of its
+            // interval so far, kept out of memory while consecutive triangles stay there (the
+            // common case).
+            let (mut cur, mut cur_end) = (usize::MAX, 0);
+            for (i, tri) in chunk.iter().enumerate() {
+                let t = b * block + i;
+                let (lo, hi) = (tri.iter().min().unwrap(), tri.iter().max().unwrap());
+                assert!(
+                    (*hi as usize) < n,
+                    "a triangle references vertex {hi}, but the mesh has {n} vertices"
+                );
+                let (r0, r1) = ((lo >> shift) as usize, (hi >> shift) as usize);
+                if r0 == r1 {
+                    if r0 != cur {
+                        if cur != usize::MAX {
+                            spans[cur].1 = spans[cur].1.max(cur_end);
+                        }
+                        cur = r0;
+                        spans[r0].0 = spans[r0].0.min(t);
+                    }
+                    cur_end = t + 1;
+                } else {
+                    for &v in tri {
+                        let s = &mut spans[(v >> shift) as usize];
+                        s.0 = s.0.min(t);
+                        s.1 = t + 1;
+                    }
+                }
+            }
+            if cur != usize::MAX {
+                spans[cur].1 = spans[cur].1.max(cur_end);
+            }
+            spans
+        })
+        .reduce(
+            || vec![empty; ranges],
+            |a, b| {
+                a.iter()
+                    .zip(&b)
+                    .map(|(x, y)| (x.0.min(y.0), x.1.max(y.1)))
+                    .collect()
+            },
+        );
+    let walked: usize = spans.iter().map(|&(lo, hi)| hi.saturating_sub(lo)).sum();
+    let per_task = if walked > 2 * triangles.len() {
+        // One range per thread: each walks the union of its ranges' intervals.
+        ranges.div_ceil(threads)
+    } else {
+        1
+    };
+    acc.par_chunks_mut(per_task << shift)
+        .zip(spans.par_chunks(per_task))
+        .enumerate()
+        .for_each(|(k, (out, spans))| {
+            let lo = spans.iter().map(|s| s.0).min().unwrap_or(usize::MAX);
+            let hi = spans.iter().map(|s| s.1).max().unwrap_or(0);
+            if lo < hi {
+                accumulate_normals(positions, &triangles[lo..hi], (k * per_task) << shift, out);
+            }
+            out.iter_mut().for_each(normalize_or_zero);
+        });
+}
 
 /// Adds the cross product `(b - a) x (c - a)` of every triangle, in triangle order, to the
 /// accumulators of its corners that lie in `first..first + out.len()` (`out[v - first]`).
@@ -428,15 +520,6 @@ fn accumulate_normals(positions: &[Vec3], triangles: &[[u32; 3]], first: usize, 
     for tri in triangles {
         let local = tri.map(|i| (i as usize).wrapping_sub(first));
         if local.iter().all(|&l| l >= len) {
-            // Skipped by this task; every task checks what it skips, so that an index past
-            // the end panics as it does on one thread (`positions[i]` below does it for a
-            // triangle that some task takes).
-            let last = tri.iter().max().copied().unwrap_or(0);
-            assert!(
-                (last as usize) < positions.len(),
-                "a triangle references vertex {last}, but the mesh has {} vertices",
-                positions.len()
-            );
             continue;
         }
         let [a, b, c] = tri.map(|i| positions[i as usize]);
@@ -629,7 +712,11 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap();
-            for par in [Parallelism::Sequential, Parallelism::Rayon, Parallelism::Auto] {
+            for par in [
+                Parallelism::Sequential,
+                Parallelism::Rayon,
+                Parallelism::Auto,
+            ] {
                 let mut m = m.clone();
                 for _ in 0..2 {
                     pool.install(|| m.compute_normals_with(par));
