@@ -5,8 +5,8 @@
 //! with its vertices and triangles in random order (no index locality, the parallel path's worst
 //! case), times: the sequential code as it was before it went parallel (2026-12-03), the
 //! `Sequential` policy and the `Rayon` policy, wall time (best of several runs, the normal
-//! buffer reused as a deforming mesh does) and the 1-thread CPU time of the sequential policy,
-//! and checks that every result is the same to the bit.
+//! buffer reused as a deforming mesh does) and CPU time of all threads (mean per call), and
+//! checks that every result is the same to the bit.
 //!
 //! Run: `RAYON_NUM_THREADS=2 cargo run --release -p vclay-core --example bench_normals [sides]`
 //! (sides comma-separated; default `10,20,40,60,90,130,180,260,1000`).
@@ -76,23 +76,30 @@ fn shuffled(m: &TriMesh) -> TriMesh {
     out
 }
 
-fn cpu_ms() -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
-        .map_or(f64::NAN, |ns| ns * 1e-6)
+/// CPU time of all the process's threads in milliseconds (the sum of
+/// `/proc/self/task/*/schedstat`; here it advances in scheduler ticks, so only means over many
+/// calls are meaningful).
+fn process_cpu_ms() -> f64 {
+    let Ok(dir) = std::fs::read_dir("/proc/self/task") else {
+        return f64::NAN;
+    };
+    dir.filter_map(|e| std::fs::read_to_string(e.ok()?.path().join("schedstat")).ok())
+        .filter_map(|s| s.split_whitespace().next()?.parse::<f64>().ok())
+        .sum::<f64>()
+        * 1e-6
 }
 
-/// Best wall and best calling-thread CPU time of `runs` calls, in milliseconds.
+/// Best wall time and mean CPU time of all threads per call, over `runs` calls, in
+/// milliseconds.
 fn best(runs: usize, mut f: impl FnMut()) -> (f64, f64) {
-    let (mut wall, mut cpu) = (f64::INFINITY, f64::INFINITY);
+    let mut wall = f64::INFINITY;
+    let c = process_cpu_ms();
     for _ in 0..runs {
-        let (t, c) = (Instant::now(), cpu_ms());
+        let t = Instant::now();
         f();
         wall = wall.min(t.elapsed().as_secs_f64() * 1e3);
-        cpu = cpu.min(cpu_ms() - c);
     }
-    (wall, cpu)
+    (wall, (process_cpu_ms() - c) / runs as f64)
 }
 
 fn bits(v: &[Vec3]) -> Vec<[u64; 3]> {
@@ -109,7 +116,7 @@ fn row(name: &str, mut m: TriMesh) {
     let (old, old_cpu) = best(runs, || normals_before(&mut m));
     let (seq, seq_cpu) = best(runs, || m.compute_normals_with(Parallelism::Sequential));
     assert_eq!(bits(&m.normals), want, "sequential differs");
-    let (par, _) = best(runs, || m.compute_normals_with(Parallelism::Rayon));
+    let (par, par_cpu) = best(runs, || m.compute_normals_with(Parallelism::Rayon));
     assert_eq!(bits(&m.normals), want, "rayon differs");
     let auto =
         if Parallelism::Auto.is_parallel_from(tris, vclay_core::mesh::NORMALS_PARALLEL_THRESHOLD) {
@@ -118,7 +125,7 @@ fn row(name: &str, mut m: TriMesh) {
             "sequential"
         };
     println!(
-        "{name:>22} {:>9} vertices {tris:>9} triangles | before {old:8.3} ms (CPU {old_cpu:8.3}) | sequential {seq:8.3} ms (CPU {seq_cpu:8.3}) | rayon {par:8.3} ms | rayon/sequential {:5.2} | Auto: {auto}",
+        "{name:>22} {:>9} vertices {tris:>9} triangles | before {old:8.3} ms (CPU {old_cpu:8.3}) | sequential {seq:8.3} ms (CPU {seq_cpu:8.3}) | rayon {par:8.3} ms (CPU {par_cpu:8.3}) | rayon/sequential {:5.2} | Auto: {auto}",
         m.positions.len(),
         par / seq
     );

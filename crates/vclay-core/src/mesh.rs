@@ -179,12 +179,13 @@ impl TriMesh {
     /// If a triangle references a vertex that does not exist.
     pub fn compute_normals_with(&mut self, par: Parallelism) {
         let n = self.positions.len();
-        let mut acc = std::mem::take(&mut self.normals);
         // Reuse the buffer of the previous call (a deforming mesh calls this every frame):
         // no allocation and no page faults on fresh memory.
-        acc.clear();
+        let mut acc = std::mem::take(&mut self.normals);
+        acc.truncate(n);
         let threads = rayon::current_num_threads();
         if threads < 2 || !par.is_parallel_from(self.triangles.len(), NORMALS_PARALLEL_THRESHOLD) {
+            acc.clear();
             acc.resize(n, Vec3::zeros());
             for tri in &self.triangles {
                 let [a, b, c] = tri.map(|i| self.positions[i as usize]);
@@ -416,7 +417,8 @@ pub const NORMALS_PARALLEL_THRESHOLD: usize = 16_384;
 /// work stealing evens out a core that is busy with something else.
 const NORMAL_RANGES_PER_THREAD: usize = 4;
 
-/// The parallel path of [`TriMesh::compute_normals_with`]: `acc` (empty) receives the normals.
+/// The parallel path of [`TriMesh::compute_normals_with`]: `acc` (at most `positions.len()`
+/// long, its contents ignored) receives the normals.
 ///
 /// The vertices are cut into ranges of `2^shift` (about [`NORMAL_RANGES_PER_THREAD`] per
 /// thread). A first parallel pass over blocks of triangles finds, for each range, the first and
@@ -432,8 +434,9 @@ fn normals_parallel(
     acc: &mut Vec<Vec3>,
 ) {
     let n = positions.len();
-    // Zeroed in parallel, so the page faults of a fresh buffer are spread over the threads.
-    acc.par_extend(rayon::iter::repeat_n(Vec3::zeros(), n));
+    // A fresh buffer is filled in parallel, so that its page faults are spread over the
+    // threads; each task zeroes its own slice just before its sums, while it is in cache.
+    acc.par_extend(rayon::iter::repeat_n(Vec3::zeros(), n - acc.len()));
     let shift = n
         .div_ceil(threads * NORMAL_RANGES_PER_THREAD)
         .max(1)
@@ -504,6 +507,7 @@ fn normals_parallel(
         .zip(spans.par_chunks(per_task))
         .enumerate()
         .for_each(|(k, (out, spans))| {
+            out.fill(Vec3::zeros());
             let lo = spans.iter().map(|s| s.0).min().unwrap_or(usize::MAX);
             let hi = spans.iter().map(|s| s.1).max().unwrap_or(0);
             if lo < hi {
