@@ -411,7 +411,7 @@ pub fn closest_on_triangle(p: Vec3, [a, b, c]: [Vec3; 3]) -> Vec3 {
 /// Triangles above which [`Parallelism::Auto`] computes normals in parallel
 /// ([`TriMesh::compute_normals_with`]): below it the thread hand-off costs more than it saves
 /// (measured 2026-12-03 with `examples/bench_normals.rs`; docs/performance.md, Direct FFD).
-pub const NORMALS_PARALLEL_THRESHOLD: usize = 16_384;
+pub const NORMALS_PARALLEL_THRESHOLD: usize = 32_768;
 
 /// Vertex ranges per rayon thread in [`TriMesh::compute_normals_with`]: more than one, so that
 /// work stealing evens out a core that is busy with something else.
@@ -766,7 +766,7 @@ mod tests {
                 (a.sin(), -a.cos())
             })
             .collect();
-        let sphere = TriMesh::revolution(&profile, 120);
+        let sphere = TriMesh::revolution(&profile, 200);
         assert!(sphere.triangles.len() > NORMALS_PARALLEL_THRESHOLD);
         assert_normals_as_before(&sphere);
         // Random positions and random triangles (no locality: every vertex's triangles spread
