@@ -5,6 +5,8 @@
 //! the triangles in the layout it wants. [`TriMesh`] is the plain indexed mesh that most callers use.
 
 use crate::math::Vec3;
+use crate::par::Parallelism;
+use rayon::prelude::*;
 use thiserror::Error;
 
 /// Receiver of tessellated geometry: vertices (with optional normals) and triangles by index.
@@ -146,24 +148,55 @@ impl TriMesh {
         Ok(())
     }
 
-    /// Replaces the normals by area-weighted averages of the adjacent face normals.
+    /// Replaces the normals by area-weighted averages of the adjacent face normals, in parallel
+    /// for large meshes ([`Parallelism::Auto`] from [`NORMALS_PARALLEL_THRESHOLD`] triangles).
     ///
     /// Vertices with no non-degenerate adjacent face get the zero vector.
     pub fn compute_normals(&mut self) {
-        let mut acc = vec![Vec3::zeros(); self.positions.len()];
-        for tri in &self.triangles {
-            let [a, b, c] = tri.map(|i| self.positions[i as usize]);
-            // Cross product length is twice the area: area weighting comes for free.
-            let n = (b - a).cross(&(c - a));
-            for &i in tri {
-                acc[i as usize] += n;
+        self.compute_normals_with(Parallelism::Auto);
+    }
+
+    /// [`TriMesh::compute_normals`] with the caller's parallelism policy; `Auto` goes parallel
+    /// from [`NORMALS_PARALLEL_THRESHOLD`] triangles.
+    ///
+    /// The normal of vertex `v` is `s / |s|` (zero where `|s| = 0`), with
+    /// `s = 0 + n_{t_1} + n_{t_2} + ...` summed in ascending triangle order over the triangles
+    /// `t_k` that reference `v` (twice for a triangle that names it twice), and
+    /// `n_t = (b - a) x (c - a)` (twice the area times the unit normal, so area weighting comes
+    /// for free). Every policy and thread count performs these same floating-point operations
+    /// in the same order, so the normals are the same to the bit.
+    ///
+    /// In parallel the vertices are cut into contiguous ranges, a few per rayon thread; one
+    /// pass over the triangles finds the interval of triangles that touches each range, and
+    /// each range's task walks its interval in order, computing the cross products of the
+    /// triangles that touch the range and adding them to its own slice of the output. Only the
+    /// normals are allocated (and their buffer is reused from the previous call). A mesh whose
+    /// triangles join nearby vertex indices (any tessellator's output, a revolution surface)
+    /// computes few cross products twice; on a mesh without index locality the ranges fall
+    /// back to one per thread, each walking every triangle, and the parallel run gains little.
+    ///
+    /// # Panics
+    /// If a triangle references a vertex that does not exist.
+    pub fn compute_normals_with(&mut self, par: Parallelism) {
+        let n = self.positions.len();
+        // Reuse the buffer of the previous call (a deforming mesh calls this every frame):
+        // no allocation and no page faults on fresh memory.
+        let mut acc = std::mem::take(&mut self.normals);
+        acc.truncate(n);
+        let threads = rayon::current_num_threads();
+        if threads < 2 || !par.is_parallel_from(self.triangles.len(), NORMALS_PARALLEL_THRESHOLD) {
+            acc.clear();
+            acc.resize(n, Vec3::zeros());
+            for tri in &self.triangles {
+                let [a, b, c] = tri.map(|i| self.positions[i as usize]);
+                let n = (b - a).cross(&(c - a));
+                for &i in tri {
+                    acc[i as usize] += n;
+                }
             }
-        }
-        for n in &mut acc {
-            let len = n.norm();
-            if len > 0.0 {
-                *n /= len;
-            }
+            acc.iter_mut().for_each(normalize_or_zero);
+        } else {
+            normals_parallel(&self.positions, &self.triangles, threads, &mut acc);
         }
         self.normals = acc;
     }
@@ -375,6 +408,142 @@ pub fn closest_on_triangle(p: Vec3, [a, b, c]: [Vec3; 3]) -> Vec3 {
     a + ab * (vb * denom) + ac * (vc * denom)
 }
 
+/// Triangles above which [`Parallelism::Auto`] computes normals in parallel
+/// ([`TriMesh::compute_normals_with`]): below it the thread hand-off costs more than it saves
+/// (measured 2026-12-03 with `examples/bench_normals.rs`; docs/performance.md, Direct FFD).
+pub const NORMALS_PARALLEL_THRESHOLD: usize = 32_768;
+
+/// Vertex ranges per rayon thread in [`TriMesh::compute_normals_with`]: more than one, so that
+/// work stealing evens out a core that is busy with something else.
+const NORMAL_RANGES_PER_THREAD: usize = 4;
+
+/// The parallel path of [`TriMesh::compute_normals_with`]: `acc` (at most `positions.len()`
+/// long, its contents ignored) receives the normals.
+///
+/// The vertices are cut into ranges of `2^shift` (about [`NORMAL_RANGES_PER_THREAD`] per
+/// thread). A first parallel pass over blocks of triangles finds, for each range, the first and
+/// last triangle that reference one of its vertices (and checks every index); then each range's
+/// task walks only that interval of triangles, in order, adding the cross products to its own
+/// slice of `acc`. When the intervals overlap so much that together they exceed
+/// `2 x triangles` (a mesh without index locality), the ranges are merged to one per thread, so
+/// that no more than `threads` passes over the triangles are made.
+fn normals_parallel(
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    threads: usize,
+    acc: &mut Vec<Vec3>,
+) {
+    let n = positions.len();
+    // A fresh buffer is filled in parallel, so that its page faults are spread over the
+    // threads; each task zeroes its own slice just before its sums, while it is in cache.
+    acc.par_extend(rayon::iter::repeat_n(Vec3::zeros(), n - acc.len()));
+    let shift = n
+        .div_ceil(threads * NORMAL_RANGES_PER_THREAD)
+        .max(1)
+        .next_power_of_two()
+        .trailing_zeros();
+    let ranges = n.div_ceil(1 << shift);
+    let block = triangles
+        .len()
+        .div_ceil(threads * NORMAL_RANGES_PER_THREAD)
+        .max(1);
+    let empty = (usize::MAX, 0);
+    let spans: Vec<(usize, usize)> = triangles
+        .par_chunks(block)
+        .enumerate()
+        .map(|(b, chunk)| {
+            let mut spans = vec![empty; ranges];
+            // The range of the last triangle that lay in one range, and the end of its
+            // interval so far, kept out of memory while consecutive triangles stay there (the
+            // common case).
+            let (mut cur, mut cur_end) = (usize::MAX, 0);
+            for (i, tri) in chunk.iter().enumerate() {
+                let t = b * block + i;
+                let (lo, hi) = (tri.iter().min().unwrap(), tri.iter().max().unwrap());
+                assert!(
+                    (*hi as usize) < n,
+                    "a triangle references vertex {hi}, but the mesh has {n} vertices"
+                );
+                let (r0, r1) = ((lo >> shift) as usize, (hi >> shift) as usize);
+                if r0 == r1 {
+                    if r0 != cur {
+                        if cur != usize::MAX {
+                            spans[cur].1 = spans[cur].1.max(cur_end);
+                        }
+                        cur = r0;
+                        spans[r0].0 = spans[r0].0.min(t);
+                    }
+                    cur_end = t + 1;
+                } else {
+                    for &v in tri {
+                        let s = &mut spans[(v >> shift) as usize];
+                        s.0 = s.0.min(t);
+                        s.1 = t + 1;
+                    }
+                }
+            }
+            if cur != usize::MAX {
+                spans[cur].1 = spans[cur].1.max(cur_end);
+            }
+            spans
+        })
+        .reduce(
+            || vec![empty; ranges],
+            |a, b| {
+                a.iter()
+                    .zip(&b)
+                    .map(|(x, y)| (x.0.min(y.0), x.1.max(y.1)))
+                    .collect()
+            },
+        );
+    let walked: usize = spans.iter().map(|&(lo, hi)| hi.saturating_sub(lo)).sum();
+    let per_task = if walked > 2 * triangles.len() {
+        // One range per thread: each walks the union of its ranges' intervals.
+        ranges.div_ceil(threads)
+    } else {
+        1
+    };
+    acc.par_chunks_mut(per_task << shift)
+        .zip(spans.par_chunks(per_task))
+        .enumerate()
+        .for_each(|(k, (out, spans))| {
+            out.fill(Vec3::zeros());
+            let lo = spans.iter().map(|s| s.0).min().unwrap_or(usize::MAX);
+            let hi = spans.iter().map(|s| s.1).max().unwrap_or(0);
+            if lo < hi {
+                accumulate_normals(positions, &triangles[lo..hi], (k * per_task) << shift, out);
+            }
+            out.iter_mut().for_each(normalize_or_zero);
+        });
+}
+
+/// Adds the cross product `(b - a) x (c - a)` of every triangle, in triangle order, to the
+/// accumulators of its corners that lie in `first..first + out.len()` (`out[v - first]`).
+fn accumulate_normals(positions: &[Vec3], triangles: &[[u32; 3]], first: usize, out: &mut [Vec3]) {
+    let len = out.len();
+    for tri in triangles {
+        let local = tri.map(|i| (i as usize).wrapping_sub(first));
+        if local.iter().all(|&l| l >= len) {
+            continue;
+        }
+        let [a, b, c] = tri.map(|i| positions[i as usize]);
+        let n = (b - a).cross(&(c - a));
+        for l in local {
+            if l < len {
+                out[l] += n;
+            }
+        }
+    }
+}
+
+/// Divides `n` by its length, leaving a zero (or non-finite) vector as it is.
+fn normalize_or_zero(n: &mut Vec3) {
+    let len = n.norm();
+    if len > 0.0 {
+        *n /= len;
+    }
+}
+
 #[cfg(test)]
 mod tests {
 
@@ -510,6 +679,121 @@ mod tests {
         }
         assert_eq!(m.triangles.len(), 2);
         m.validate().unwrap();
+    }
+
+    /// `compute_normals` as it was before it went parallel (2026-12-03), the reference that
+    /// every policy and thread count must match to the bit.
+    fn normals_before(m: &TriMesh) -> Vec<Vec3> {
+        let mut acc = vec![Vec3::zeros(); m.positions.len()];
+        for tri in &m.triangles {
+            let [a, b, c] = tri.map(|i| m.positions[i as usize]);
+            let n = (b - a).cross(&(c - a));
+            for &i in tri {
+                acc[i as usize] += n;
+            }
+        }
+        for n in &mut acc {
+            let len = n.norm();
+            if len > 0.0 {
+                *n /= len;
+            }
+        }
+        acc
+    }
+
+    fn bits(v: &[Vec3]) -> Vec<[u64; 3]> {
+        v.iter()
+            .map(|n| [n.x.to_bits(), n.y.to_bits(), n.z.to_bits()])
+            .collect()
+    }
+
+    /// Every policy, on pools of 1, 2, 3 and 7 threads, twice in a row (the second call reuses
+    /// the normal buffer), gives the old normals to the bit.
+    fn assert_normals_as_before(m: &TriMesh) {
+        let want = bits(&normals_before(m));
+        for threads in [1, 2, 3, 7] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            for par in [
+                Parallelism::Sequential,
+                Parallelism::Rayon,
+                Parallelism::Auto,
+            ] {
+                let mut m = m.clone();
+                for _ in 0..2 {
+                    pool.install(|| m.compute_normals_with(par));
+                    assert_eq!(bits(&m.normals), want, "{par:?} on {threads} threads");
+                }
+            }
+        }
+    }
+
+    /// Seeded xorshift64* in `[0, 1)`.
+    fn rng(seed: u64) -> impl FnMut() -> f64 {
+        let mut x = seed;
+        move || {
+            x ^= x >> 12;
+            x ^= x << 25;
+            x ^= x >> 27;
+            (x.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    #[test]
+    fn parallel_normals_equal_the_sequential_ones_to_the_bit() {
+        assert_normals_as_before(&TriMesh::new());
+        assert_normals_as_before(&square());
+        assert_normals_as_before(&square_and_wall());
+        // Degenerate triangles (a repeated corner, three collinear points, a point), an
+        // unreferenced vertex, a vertex that only degenerate triangles use, and a NaN.
+        let mut m = square();
+        let e = m.add_vertex(Vec3::new(2.0, 0.0, 0.0), None);
+        let _unused = m.add_vertex(Vec3::new(5.0, 5.0, 5.0), None);
+        let f = m.add_vertex(Vec3::new(3.0, 0.0, 0.0), None);
+        let g = m.add_vertex(Vec3::new(-1.0, 2.0, f64::NAN), None);
+        m.add_triangle([0, 0, 2]);
+        m.add_triangle([0, 1, e]);
+        m.add_triangle([f, f, f]);
+        m.add_triangle([1, 2, g]);
+        assert_normals_as_before(&m);
+        // A revolution surface (index locality, as tessellators produce) with degenerate
+        // triangles at the poles, above the parallel threshold.
+        let profile: Vec<(f64, f64)> = (0..=100)
+            .map(|i| {
+                let a = std::f64::consts::PI * i as f64 / 100.0;
+                (a.sin(), -a.cos())
+            })
+            .collect();
+        let sphere = TriMesh::revolution(&profile, 200);
+        assert!(sphere.triangles.len() > NORMALS_PARALLEL_THRESHOLD);
+        assert_normals_as_before(&sphere);
+        // Random positions and random triangles (no locality: every vertex's triangles spread
+        // over the whole list, some vertices unreferenced), with random rounding in the sums.
+        let mut r = rng(0x5eed_0031);
+        let mut m = TriMesh::new();
+        for _ in 0..20_000 {
+            let p = Vec3::new(r() - 0.5, r() * 3.0, (r() - 0.5) * 1e-3);
+            m.add_vertex(p, None);
+        }
+        for _ in 0..40_000 {
+            let t = [r(), r(), r()].map(|x| (x * 19_000.0) as u32);
+            m.add_triangle(t);
+        }
+        assert_normals_as_before(&m);
+    }
+
+    #[test]
+    #[should_panic(expected = "references vertex 9")]
+    fn parallel_normals_panic_on_a_missing_vertex() {
+        let mut m = square();
+        m.triangles.push([9, 9, 9]);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        pool.install(|| m.compute_normals_with(Parallelism::Rayon));
     }
 
     #[test]

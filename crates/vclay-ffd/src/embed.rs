@@ -41,8 +41,9 @@
 //! `i - p ..= i` along each axis), contiguous ranges of the cell-sorted storage.
 //!
 //! **Limitations.** Vertices outside the rest box are never moved. Normals, when enabled, are
-//! recomputed for the whole mesh ([`TriMesh::compute_normals`] is `O(triangles)`), also after an
-//! incremental update. The power form differs from the B-spline form by rounding only (about
+//! recomputed for the whole mesh ([`TriMesh::compute_normals_with`] under the call's
+//! parallelism, `O(triangles)`), also after an incremental update. The power form differs from
+//! the B-spline form by rounding only (about
 //! `1e-16` of the box diagonal for the degrees below 8 that use it; higher degrees, whose power
 //! form is worse conditioned, and [`EmbeddedMesh::set_blocked_kernel`]`(false)` use the
 //! per-vertex B-spline kernel). Memory is 32 bytes per embedded vertex (local coordinates 24,
@@ -315,7 +316,7 @@ impl EmbeddedMesh {
             .map(|a| (a, (a + CHUNK).min(m)))
             .collect();
         self.eval_ranges(lattice, &ranges, par);
-        self.finish();
+        self.finish(par);
         &self.mesh
     }
 
@@ -555,14 +556,14 @@ impl EmbeddedMesh {
         let count: usize = ranges.iter().map(|(a, b)| b - a).sum();
         self.eval_ranges(lattice, &ranges, par);
         if count > 0 {
-            self.finish();
+            self.finish(par);
         }
         count
     }
 
-    fn finish(&mut self) {
+    fn finish(&mut self, par: Parallelism) {
         if self.recompute_normals && !self.mesh.triangles.is_empty() {
-            self.mesh.compute_normals();
+            self.mesh.compute_normals_with(par);
         }
     }
 }
