@@ -1149,7 +1149,7 @@ pub mod profiles {
     /// A closed quadratic trajectory with 5 control points (`d-nurbs.txt` Fig 9d's wine glass:
     /// "two curves with 7 and 5 control points"), close to the circle of radius `r` in the x-y
     /// plane: the first and last control points coincide at `(r, 0, 0)` (the seam, tied by
-    /// [`SwungGeometry`]), the other three are mirror-symmetric about the x axis, the knots
+    /// [`SwungGeometry`](super::SwungGeometry)), the other three are mirror-symmetric about the x axis, the knots
     /// `0, 0, 0, a, 1 - a, 1, 1, 1`.
     ///
     /// Not an exact circle: a closed quadratic with 5 control points has three segments joined

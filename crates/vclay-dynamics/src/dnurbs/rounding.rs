@@ -38,7 +38,7 @@
 //! both faces). The edge and the bevel start instead from [`InitialShape::Sharp`], the paper's
 //! multiple control points: every control point of a function over a triangle of the middle
 //! column (for the edge's continuous net: the columns `u = 1, 1.5, 2`) lies on the edge line,
-//! keeping its coordinate along the edge ([`RoundingModel::sharp_target`]). A point of the
+//! keeping its coordinate along the edge (`RoundingModel::sharp_target`). A point of the
 //! middle column then depends on points of the edge line only and lies on it; a point of a
 //! side column or next to the middle column's sides on points of one face and of the edge,
 //! all in that face's plane. The image is exactly the two faces meeting at the edge (every
