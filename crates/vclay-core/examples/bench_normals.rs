@@ -14,23 +14,11 @@
 use std::time::Instant;
 use vclay_core::{Parallelism, TriMesh, Vec3};
 
-/// The sequential loop as it was before 2026-12-03, with a fresh buffer per call.
+/// The code as it was before 2026-12-03: the sequential loop (kept unchanged as the
+/// `Sequential` policy) with a fresh buffer per call.
 fn normals_before(m: &mut TriMesh) {
-    let mut acc = vec![Vec3::zeros(); m.positions.len()];
-    for tri in &m.triangles {
-        let [a, b, c] = tri.map(|i| m.positions[i as usize]);
-        let n = (b - a).cross(&(c - a));
-        for &i in tri {
-            acc[i as usize] += n;
-        }
-    }
-    for n in &mut acc {
-        let len = n.norm();
-        if len > 0.0 {
-            *n /= len;
-        }
-    }
-    m.normals = acc;
+    m.normals = Vec::new();
+    m.compute_normals_with(Parallelism::Sequential);
 }
 
 fn sphere(side: usize) -> TriMesh {

@@ -418,18 +418,32 @@ fn basis_table<const P1: usize>(
     let mut n = [0.0; P1];
     n[0] = 1.0;
     for j in 1..=last {
-        let mut saved = 0.0;
-        for r in 0..j {
-            // right + left = t_{span+r+1} - t_{span+1+r-j}, a difference of j knots apart.
-            let right = k[span + r + 1] - u;
-            let left = u - k[span + 1 + r - j];
-            let temp = n[r] * inv[(span + 1 + r - j) * P1 + j];
-            n[r] = saved + right * temp;
-            saved = left * temp;
-        }
-        n[j] = saved;
+        basis_row::<P1>(&mut n, k, inv, span, u, j);
     }
     n
+}
+
+/// Row `j` of the triangular table of Piegl & Tiller A2.2: the degree-`j` values in
+/// `n[0..=j]` from the degree-`j - 1` ones in `n[0..j]`.
+#[inline(always)]
+fn basis_row<const P1: usize>(
+    n: &mut [f64; P1],
+    k: &[f64],
+    inv: &[f64],
+    span: usize,
+    u: f64,
+    j: usize,
+) {
+    let mut saved = 0.0;
+    for r in 0..j {
+        // right + left = t_{span+r+1} - t_{span+1+r-j}, a difference of j knots apart.
+        let right = k[span + r + 1] - u;
+        let left = u - k[span + 1 + r - j];
+        let temp = n[r] * inv[(span + 1 + r - j) * P1 + j];
+        n[r] = saved + right * temp;
+        saved = left * temp;
+    }
+    n[j] = saved;
 }
 
 /// The `P1` non-zero basis functions of degree `P1 - 1` at `u` (span `span` of the knots `k`,
@@ -474,15 +488,7 @@ pub(crate) fn basis_first_fixed<const P1: usize>(
         d[r] = pf * v;
     }
     // The last row of the table: degree p.
-    let mut saved = 0.0;
-    for r in 0..p {
-        let right = k[span + r + 1] - u;
-        let left = u - k[span + 1 + r - p];
-        let temp = n[r] * inv[(span + 1 + r - p) * P1 + p];
-        n[r] = saved + right * temp;
-        saved = left * temp;
-    }
-    n[p] = saved;
+    basis_row::<P1>(&mut n, k, inv, span, u, p);
     (n, d)
 }
 
