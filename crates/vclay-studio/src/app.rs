@@ -369,6 +369,9 @@ pub struct Studio {
     notice_generation: u64,
     /// The status bar's message (undo, redo, the end of a time range).
     note: Option<String>,
+    /// How many lines at the end of the log are a drag's progress lines
+    /// ([`Notice::Progress`]), each the latest of its tool.
+    progress_lines: usize,
     /// The tool symmetry (sent to the worker with each press).
     pub symmetry: Symmetry,
     /// The surface under the mouse (brush tools).
@@ -452,6 +455,7 @@ impl Studio {
             generation: 0,
             notice_generation: 0,
             note: None,
+            progress_lines: 0,
             symmetry: Symmetry::default(),
             hover: None,
             hovered_handle: None,
@@ -553,6 +557,7 @@ impl Studio {
     fn reset_view_state(&mut self) {
         self.frame = Frame::default();
         self.log.clear();
+        self.progress_lines = 0;
         self.energy.clear();
         self.press = None;
         self.ffd_pins.clear();
@@ -633,9 +638,35 @@ impl Studio {
     }
 
     fn push_log(&mut self, l: String) {
+        self.progress_lines = 0;
+        self.push_line(l);
+    }
+
+    fn push_line(&mut self, l: String) {
         self.log.push_back(crate::text::round_numbers(&l));
         while self.log.len() > LOG_LINES {
             self.log.pop_front();
+        }
+        self.progress_lines = self.progress_lines.min(self.log.len());
+    }
+
+    /// A [`Notice::Progress`] line: it replaces the line of the same tool among the run of
+    /// progress lines at the end of the log (the text before its last `[` names the tool and
+    /// the point: "rope `studio-rope` cursor at", "moved control point 12 to"), else it is
+    /// added to the run.
+    fn push_progress(&mut self, l: String) {
+        let key = |s: &str| s[..s.rfind('[').unwrap_or(s.len())].to_string();
+        let k = key(&l);
+        let n = self.log.len();
+        let same = (n - self.progress_lines..n)
+            .rev()
+            .find(|&i| key(&self.log[i]) == k);
+        match same {
+            Some(i) => self.log[i] = crate::text::round_numbers(&l),
+            None => {
+                self.push_line(l);
+                self.progress_lines += 1;
+            }
         }
     }
 
@@ -672,9 +703,11 @@ impl Studio {
     fn notice(&mut self, ctx: &egui::Context, n: Notice) {
         match n {
             Notice::Log(l) => self.push_log(l),
+            Notice::Progress(l) => self.push_progress(l),
             Notice::Status(l) => {
-                self.push_log(l.clone());
-                self.note = Some(l);
+                // The status line reads like the log: numbers rounded.
+                self.note = Some(crate::text::round_numbers(&l));
+                self.push_log(l);
             }
             Notice::Replaced(_) => {}
             Notice::Error { message, .. } => {

@@ -352,6 +352,11 @@ pub enum Notice {
     /// A line for the status bar (and the log): undo and redo results, "nothing to undo", a
     /// run stopped at the time limit.
     Status(String),
+    /// A log line that a drag's next move supersedes (a rope's or a control point's cursor
+    /// moved): the log keeps one line per tool for a run of such lines, the latest (see
+    /// `Studio`'s log), so a stroke reads as "attached", "cursor at (last)", "released" instead
+    /// of one line per mouse move.
+    Progress(String),
     /// The session was replaced: what follows belongs to generation `.0` (see
     /// [`Frame::generation`]).
     Replaced(u64),
@@ -741,9 +746,14 @@ impl State {
     }
 
     fn apply(&mut self, c: Command) -> bool {
+        self.apply_noting(c, Notice::Log)
+    }
+
+    /// [`Self::apply`], its message sent as `note` says (a log line, or a drag's progress).
+    fn apply_noting(&mut self, c: Command, note: fn(String) -> Notice) -> bool {
         match self.session.apply(c) {
             Ok(m) => {
-                self.notify(Notice::Log(m));
+                self.notify(note(m));
                 true
             }
             Err(e) => {
@@ -1513,9 +1523,12 @@ impl State {
                 d.last_at = Some(to);
                 let model = d.model.clone();
                 let centre = d.centre;
+                // A brush's dabs each say what they did; a rope's or a handle's moves only
+                // where the cursor is now.
+                let note = if brush { Notice::Log } else { Notice::Progress };
                 for part in &mut d.parts {
                     let c = self.part_command(&model, centre, part, to);
-                    self.apply(c);
+                    self.apply_noting(c, note);
                 }
             }
         }

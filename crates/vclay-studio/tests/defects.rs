@@ -593,3 +593,96 @@ fn a_recovered_session_counts_as_modified() {
     request_close(&mut h);
     assert_eq!(h.state().dialog_title(), Some("Unsaved changes"));
 }
+
+#[test]
+fn the_status_line_rounds_numbers_as_the_log_does() {
+    // Undoing a rope on the egg names the material point it held, which the session writes
+    // with every digit ([0.590938872494213, ...]); the status line shows it rounded.
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Options {
+        paused: true,
+        ..quiet(dir.path())
+    });
+    open_builtin(&mut h, "Swung D-NURBS egg (Egg sculpting material)");
+    let w = h.state().worker().unwrap();
+    w.send(Request::Grab {
+        ray: Ray {
+            origin: Vec3::new(0.3, 0.2, 10.0),
+            direction: Vec3::new(0.0, 0.0, -1.0),
+        },
+        tolerance: 0.0,
+        grab: Grab::Rope { stiffness: None },
+    });
+    w.send(Request::Drag {
+        to: Vec3::new(0.3, 0.2, 1.3),
+    });
+    w.send(Request::Drop);
+    let long = |s: &str| {
+        s.split(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .any(|t| t.split_once('.').is_some_and(|(_, f)| f.len() > 3))
+    };
+    let attached = w.query(|s| s.log()[0].message.clone()).unwrap();
+    assert!(
+        long(&attached),
+        "the session's own message keeps every digit: {attached}"
+    );
+    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    h.step();
+    wait(&mut h, "the undo's status line", |s| {
+        s.note().is_some_and(|n| n.starts_with("undone: "))
+    });
+    let note = h.state().note().unwrap().to_string();
+    assert!(note.contains("material point [") && !long(&note), "{note}");
+}
+
+#[test]
+fn a_rope_stroke_logs_one_cursor_line_per_rope() {
+    // Twelve cursor moves of a rope and its mirror image (symmetry X) on the paused cube: the
+    // log says each rope was attached, where its cursor is now (one line each) and that it
+    // was released, not one line per mouse move.
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Options {
+        paused: true,
+        ..quiet(dir.path())
+    });
+    open_cube(&mut h);
+    let w = h.state().worker().unwrap();
+    w.send(Request::Symmetry(vclay_studio::symmetry::Symmetry([
+        true, false, false,
+    ])));
+    w.send(Request::Grab {
+        ray: down_at(0.9, 0.5),
+        tolerance: 0.0,
+        grab: Grab::Rope { stiffness: None },
+    });
+    for k in 1..=12 {
+        w.send(Request::Drag {
+            to: Vec3::new(0.9, 0.5, 1.0 + 0.05 * k as f64),
+        });
+        std::thread::sleep(Duration::from_millis(60));
+    }
+    w.send(Request::Drop);
+    wait(&mut h, "the release in the log", |s| {
+        s.log().filter(|l| l.starts_with("released")).count() == 2
+    });
+    let moves = h
+        .state()
+        .worker()
+        .unwrap()
+        .query(|s| {
+            s.log()
+                .iter()
+                .filter(|l| l.message.contains("cursor at"))
+                .count()
+        })
+        .unwrap();
+    assert!(moves >= 8, "the session logs every move: {moves}");
+    let log: Vec<String> = h.state().log().cloned().collect();
+    let cursor: Vec<&String> = log.iter().filter(|l| l.contains("cursor at")).collect();
+    assert_eq!(cursor.len(), 2, "one line per rope: {log:#?}");
+    assert!(
+        cursor.iter().all(|l| l.ends_with(", 1.6]")),
+        "the last position: {log:#?}"
+    );
+    assert_ne!(cursor[0], cursor[1], "the rope and its mirror image");
+}
