@@ -48,6 +48,27 @@ fn edge_rounding_scenario_steps_exports_and_restores() {
     assert_eq!(original.control_points(), loaded.control_points());
 }
 
+/// Issue 28: `rounding = "sharp-corner"` (the corner's exactly sharp start on its own domain,
+/// `RoundingKind::SharpCorner`) builds its 114 control points and steps; its scenario is
+/// `fig08b_sharp_corner_rounding.toml`.
+#[test]
+fn sharp_corner_scenario_builds_and_steps() {
+    let text = example("fig08b_sharp_corner_rounding.toml").replace(
+        "rounding = \"sharp-corner\"",
+        "rounding = \"sharp-corner\"\nquadrature = \"whole\"\nquadrature_points = 4",
+    );
+    let mut sc = Scenario::parse(&text, "corner.toml", "corner", Path::new(".")).unwrap();
+    for _ in 0..2 {
+        sc.session.step().unwrap();
+    }
+    let model = sc.session.model(None).unwrap();
+    assert!(
+        model.summary().contains("114 control points"),
+        "{}",
+        model.summary()
+    );
+}
+
 #[test]
 fn bad_keys_are_located() {
     let edge = "rounding = \"edge\"";

@@ -40,6 +40,7 @@ const NEW_EXAMPLES: &[&str] = &[
     "fig9d_swung_glass",
     "fig08a_edge_rounding",
     "fig08b_corner_rounding",
+    "fig08b_sharp_corner_rounding",
     "fig08c_bevel_rounding",
     "fig_patches_g1",
 ];

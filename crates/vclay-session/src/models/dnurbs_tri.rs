@@ -104,8 +104,9 @@ impl TriangularModel {
         let (surface, constraints, fixed): (_, Vec<Constraint>, Vec<usize>) = match &settings.source
         {
             Source::Rounding(name) => {
-                let kind = RoundingKind::parse(name)
-                    .ok_or_else(|| format!("rounding {name:?}: expected edge, corner or bevel"))?;
+                let kind = RoundingKind::parse(name).ok_or_else(|| {
+                    format!("rounding {name:?}: expected edge, corner, sharp-corner or bevel")
+                })?;
                 let r = RoundingModel::new(kind).map_err(|e| e.to_string())?;
                 let fixed = r.fixed_coordinates();
                 (r.surface, r.constraints, fixed)
@@ -144,7 +145,7 @@ impl TriangularModel {
                     SpecError::new(
                         "model",
                         "rounding",
-                        format!("{r:?}: expected edge, corner or bevel"),
+                        format!("{r:?}: expected edge, corner, sharp-corner or bevel"),
                     )
                 })?;
                 (Source::Rounding(r.to_ascii_lowercase()), Some(kind))
@@ -175,7 +176,7 @@ impl TriangularModel {
                 return Err(SpecError::new(
                     "model",
                     "rounding",
-                    "give exactly one of rounding = \"edge\" | \"corner\" | \"bevel\" and file = \"surface.json\"",
+                    "give exactly one of rounding = \"edge\" | \"corner\" | \"sharp-corner\" | \"bevel\" and file = \"surface.json\"",
                 ));
             }
         };
