@@ -4,13 +4,15 @@
 //! memory traffic").
 //!
 //! Run: `cargo run --release -p vclay-solids --example step_probe -- MODEL LEVEL SECONDS
-//! DIGEST_STEPS [--seq] [--fix-half]`, MODEL `cube` (the 4^3 benchmark cube of
-//! `benchmarks::cube`) or the name of a `benchmarks::PAPER_MODELS` entry (`Gear`, `Torus`,
-//! ...; its level is the table's, LEVEL is then ignored). Prints: data points, springs, median
-//! and mean wall ms per step over batches of at least 2 ms after `benchmarks::pull`, CPU ms per
-//! step, peak resident MB, the yardstick (`vclay_core::yardstick`) before and after, and an
-//! FNV-1a digest of the bits of the control points, velocities and data points after
-//! `benchmarks::pull` and `DIGEST_STEPS` more steps from a fresh model.
+//! DIGEST_STEPS [--seq] [--fix-half]`. MODEL is `cube` (the 4^3 benchmark cube of
+//! `benchmarks::cube` at LEVEL) or the name of a `benchmarks::PAPER_MODELS` entry (`Gear`,
+//! `Torus`, ...: the first entry of that name, at the table's level). `--fix-half` fixes the
+//! control points below z = 0.5 (journal section 5.2: the restricted chain). Prints: data
+//! points, springs, median and mean wall ms per step over batches of at least 2 ms after
+//! `benchmarks::pull`, CPU ms per step, bytes per data point of the per-step structures, peak
+//! resident MB, an FNV-1a digest of the bits of the control points, velocities and data points
+//! after `benchmarks::pull` and DIGEST_STEPS more steps of a fresh model, and the yardstick
+//! (`vclay_core::yardstick`) at the start and the end.
 
 use std::time::Instant;
 use vclay_solids::{DynamicSolid, SolidParams, benchmarks};
@@ -56,21 +58,22 @@ fn digest(s: &DynamicSolid) -> u64 {
     h
 }
 
-fn build(model: &str, level: usize, params: SolidParams, fix_half: bool) -> DynamicSolid {
-    let mut s = if model == "cube" {
-        benchmarks::cube(level, params).unwrap()
+/// The model and its subdivision level.
+fn build(model: &str, level: usize, params: SolidParams, fix_half: bool) -> (DynamicSolid, usize) {
+    let (mut s, level) = if model == "cube" {
+        (benchmarks::cube(level, params).unwrap(), level)
     } else {
         let m = benchmarks::PAPER_MODELS
             .iter()
             .find(|m| m.name == model)
             .unwrap_or_else(|| panic!("unknown model {model}"));
-        m.solid(params).unwrap()
+        (m.solid(params).unwrap(), m.level)
     };
     if fix_half {
         let low = s.control_points_where(|x| x.z < 0.5);
         s.set_fixed(&low, true).unwrap();
     }
-    s
+    (s, level)
 }
 
 fn main() {
@@ -90,14 +93,14 @@ fn main() {
         ..SolidParams::default()
     };
     // Digest first (a fresh model), then timing on another.
-    let mut s = build(&model, level, params, fix_half);
+    let (mut s, level) = build(&model, level, params, fix_half);
     benchmarks::pull(&mut s).unwrap();
     s.run(digest_steps).unwrap();
     let dig = digest(&s);
     let stats = s.stats();
     let bpp = s.bytes_per_data_point();
     drop(s);
-    let mut s = build(&model, level, params, fix_half);
+    let (mut s, _) = build(&model, level, params, fix_half);
     benchmarks::pull(&mut s).unwrap();
     let t = Instant::now();
     let mut batch = 0;
