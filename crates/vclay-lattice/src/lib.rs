@@ -55,6 +55,7 @@
 pub mod boundary;
 pub mod cells;
 pub mod command;
+pub mod compact;
 mod csr;
 pub mod edit;
 pub mod error;
@@ -72,6 +73,7 @@ pub mod sparse;
 pub mod subdivide;
 
 pub use boundary::{boundary_mesh, write_boundary};
+pub use compact::CompactMatrix;
 pub use edit::{Edit, ExtrudeParams, delete_cell, extrude_face};
 pub use error::LatticeError;
 pub use formats::FormatError;

@@ -17,15 +17,21 @@ use std::sync::OnceLock;
 use rayon::prelude::*;
 use vclay_core::Parallelism;
 
+use crate::compact::CompactMatrix;
 use crate::sparse::{Coord, SparseMatrix};
 
 /// The level operators `A^(1) .. A^(n)` of a subdivision hierarchy. Transposes are built only on
 /// request ([`SubdivisionMap::transpose`]), or on the first `A^T` product of a small chain
-/// ([`SubdivisionMap::GATHER_NNZ`]).
+/// ([`SubdivisionMap::GATHER_NNZ`]). After [`SubdivisionMap::compress`], the products read
+/// each level's weights as small indices into its distinct values ([`CompactMatrix`]; same
+/// bits, fewer bytes).
 #[derive(Debug, Default)]
 pub struct SubdivisionMap {
     ops: Vec<SparseMatrix>,
     transposes: Vec<OnceLock<SparseMatrix>>,
+    /// Compact copies of `ops` used by the products (empty: not compressed; `None` for a
+    /// level with too many distinct values).
+    compact: Vec<Option<CompactMatrix>>,
 }
 
 impl Clone for SubdivisionMap {
@@ -33,6 +39,7 @@ impl Clone for SubdivisionMap {
         Self {
             ops: self.ops.clone(),
             transposes: self.transposes.clone(),
+            compact: self.compact.clone(),
         }
     }
 }
@@ -73,7 +80,11 @@ impl SubdivisionMap {
             );
         }
         let transposes = ops.iter().map(|_| OnceLock::new()).collect();
-        Self { ops, transposes }
+        Self {
+            ops,
+            transposes,
+            compact: Vec::new(),
+        }
     }
 
     /// Appends the operator of one more level.
@@ -87,6 +98,67 @@ impl SubdivisionMap {
         }
         self.ops.push(op);
         self.transposes.push(OnceLock::new());
+        if !self.compact.is_empty() {
+            self.compact
+                .push(CompactMatrix::new(self.ops.last().expect("just pushed")));
+        }
+    }
+
+    /// Builds the compact form of every level ([`CompactMatrix`]: weights as `u8` or `u16`
+    /// indices into the level's distinct values, `u32` row pointers), which
+    /// [`SubdivisionMap::apply_into`] and the scattered [`SubdivisionMap::apply_transpose_into`]
+    /// then read instead of the `f64` operators. Same results bit for bit, 5-6 instead of 12
+    /// bytes per non-zero per product: meant for large chains, whose products are bound by
+    /// memory traffic (issue 31). Levels with more than 65,536 distinct weights stay as they
+    /// are. Costs 5-6 bytes per non-zero of memory.
+    pub fn compress(&mut self) {
+        self.compact = self.ops.par_iter().map(CompactMatrix::new).collect();
+    }
+
+    /// Whether [`SubdivisionMap::compress`] has been called (and the chain not changed since).
+    pub fn is_compressed(&self) -> bool {
+        !self.compact.is_empty()
+    }
+
+    /// The compact form of level `j`, if the chain is compressed and the level could be.
+    pub fn compact(&self, j: usize) -> Option<&CompactMatrix> {
+        self.compact.get(j)?.as_ref()
+    }
+
+    /// Drops the stored transposes (they are built again on the next
+    /// [`SubdivisionMap::transpose`]): for large chains, whose `A^T` products scatter through
+    /// the operators and never read them, after a Galerkin product has built them.
+    pub fn release_transposes(&mut self) {
+        for t in &mut self.transposes {
+            t.take();
+        }
+    }
+
+    /// Bytes that the level products of this chain hold: the operators (12 bytes per non-zero,
+    /// 8 per row), the stored transposes and the compact forms.
+    pub fn bytes(&self) -> usize {
+        let full = |a: &SparseMatrix| a.nnz() * 12 + a.nrows() * 8;
+        self.ops.iter().map(full).sum::<usize>()
+            + self
+                .transposes
+                .iter()
+                .filter_map(OnceLock::get)
+                .map(full)
+                .sum::<usize>()
+            + self
+                .compact
+                .iter()
+                .flatten()
+                .map(CompactMatrix::bytes)
+                .sum::<usize>()
+    }
+
+    /// `y = A^(j+1) x` through the compact form where there is one.
+    fn apply_level<T: Coord>(&self, j: usize, x: &[T], y: &mut [T], par: Parallelism) {
+        match self.compact(j) {
+            Some(c) => c.apply_into(x, y, par),
+            None => self.ops[j].apply_into(x, y, par),
+        }
     }
 
     /// Number of levels `n`.
@@ -161,7 +233,14 @@ impl SubdivisionMap {
             out.copy_from_slice(p);
             return;
         }
-        chain(p, out, ws, n, |j| (self.ops[j].nrows(), &self.ops[j]), par);
+        chain(
+            p,
+            out,
+            ws,
+            n,
+            |j| self.ops[j].nrows(),
+            |j, x, y| self.apply_level(j, x, y, par),
+        );
     }
 
     /// `g = A^T f` (forces on data points pulled back to control points), allocating.
@@ -215,6 +294,8 @@ impl SubdivisionMap {
             };
             if gather {
                 self.transpose(level).apply_into(src, dst, par);
+            } else if let Some(c) = self.compact(level) {
+                c.apply_transpose_into(src, dst, partials, par);
             } else {
                 m.apply_transpose_into(src, dst, partials, par);
             }
@@ -235,27 +316,27 @@ impl SubdivisionMap {
     }
 }
 
-/// Applies `n` matrices in sequence, `step(j)` giving the j-th matrix and its row count.
-fn chain<'a, T: Coord>(
+/// Applies `n` matrices in sequence: `rows(j)` is the row count of the j-th and
+/// `apply(j, x, y)` computes `y = A_j x`.
+fn chain<T: Coord>(
     input: &[T],
     out: &mut [T],
     ws: &mut ChainWorkspace<T>,
     n: usize,
-    step: impl Fn(usize) -> (usize, &'a SparseMatrix),
-    par: Parallelism,
+    rows: impl Fn(usize) -> usize,
+    apply: impl Fn(usize, &[T], &mut [T]),
 ) {
     let ChainWorkspace { a, b, .. } = ws;
     let mut cur: &mut Vec<T> = a;
     let mut other: &mut Vec<T> = b;
     for j in 0..n {
-        let (rows, m) = step(j);
         let src: &[T] = if j == 0 { input } else { other.as_slice() };
         if j + 1 == n {
-            m.apply_into(src, out, par);
+            apply(j, src, out);
         } else {
             cur.clear();
-            cur.resize(rows, T::zero());
-            m.apply_into(src, cur, par);
+            cur.resize(rows(j), T::zero());
+            apply(j, src, cur);
             std::mem::swap(&mut cur, &mut other);
         }
     }

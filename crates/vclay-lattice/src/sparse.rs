@@ -55,7 +55,7 @@ pub struct SparseMatrix {
 }
 
 /// Rows per rayon task when applying a matrix in parallel.
-const MIN_ROWS_PER_TASK: usize = 2048;
+pub(crate) const MIN_ROWS_PER_TASK: usize = 2048;
 
 impl SparseMatrix {
     /// A matrix from CSR arrays.
@@ -378,6 +378,29 @@ impl SparseMatrix {
     /// If `self.ncols() != rhs.nrows()`.
     #[track_caller]
     pub fn mul(&self, rhs: &SparseMatrix) -> SparseMatrix {
+        self.mul_with(rhs, |_, v| v)
+    }
+
+    /// The product `self * diag(w) * rhs` without forming `diag(w) rhs`: each entry of `rhs`
+    /// row `k` is taken as `v * w[k]`, the value a row-scaled copy would hold, so the result is
+    /// bit for bit `self.mul(&scaled)` (a Galerkin product `A^T W A` of a large level without
+    /// a copy of `A`, issue 31).
+    ///
+    /// # Panics
+    /// If `self.ncols() != rhs.nrows()` or `w.len() != rhs.nrows()`.
+    #[track_caller]
+    pub fn mul_scaled(&self, w: &[f64], rhs: &SparseMatrix) -> SparseMatrix {
+        assert_eq!(w.len(), rhs.nrows, "mul_scaled: weight length");
+        self.mul_with(rhs, |k, v| v * w[k])
+    }
+
+    /// `self * rhs` with `rhs`'s entry `v` in row `k` read as `value(k, v)`.
+    #[track_caller]
+    fn mul_with(
+        &self,
+        rhs: &SparseMatrix,
+        value: impl Fn(usize, f64) -> f64 + Sync,
+    ) -> SparseMatrix {
         assert_eq!(self.ncols, rhs.nrows, "mul: inner dimensions");
         let n = rhs.ncols;
         let rows: Vec<(Vec<u32>, Vec<f64>)> = (0..self.nrows)
@@ -390,6 +413,7 @@ impl SparseMatrix {
                     for (&k, &w) in c.iter().zip(v) {
                         let (c2, v2) = rhs.row(k as usize);
                         for (&j, &w2) in c2.iter().zip(v2) {
+                            let w2 = value(k as usize, w2);
                             let j = j as usize;
                             if !seen[j] {
                                 seen[j] = true;

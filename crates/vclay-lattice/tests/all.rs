@@ -7,6 +7,7 @@ mod common;
 
 mod boundary_rules;
 mod bspline;
+mod compact;
 mod counts;
 mod edit;
 mod formats;

@@ -195,3 +195,32 @@ fn scattered_transpose_equals_stored_transpose() {
     }
     assert_eq!(a.apply_transpose(&x).len(), ncols);
 }
+
+#[test]
+fn mul_scaled_equals_the_product_with_a_row_scaled_copy_bit_for_bit() {
+    // Issue 31: the Galerkin product of a large level without a scaled copy of `A`.
+    let s = solid(primitives::gear(1.0, 2.0, 2.5, 0.4), BoundaryRule::Sharp, 2);
+    let a = s.map().operator(1);
+    let mut rng = Rng(5);
+    let w: Vec<f64> = (0..a.nrows()).map(|_| 1.0 + rng.sym().abs()).collect();
+    let mut vals = a.values().to_vec();
+    for i in 0..a.nrows() {
+        for v in &mut vals[a.row_ptr()[i]..a.row_ptr()[i + 1]] {
+            *v *= w[i];
+        }
+    }
+    let scaled = SparseMatrix::from_csr(
+        a.nrows(),
+        a.ncols(),
+        a.row_ptr().to_vec(),
+        a.col_indices().to_vec(),
+        vals,
+    );
+    let t = a.transpose();
+    let expected = t.mul(&scaled);
+    let got = t.mul_scaled(&w, a);
+    assert_eq!(got.row_ptr(), expected.row_ptr());
+    assert_eq!(got.col_indices(), expected.col_indices());
+    let bits = |m: &SparseMatrix| m.values().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&got), bits(&expected));
+}

@@ -1,5 +1,6 @@
 //! Times the per-step kernels of a dynamic subdivision solid (4^3 cube) one by one: spring
-//! forces (one thread and all threads), `d = A p` and `g = A^T f`.
+//! forces (one thread and all threads), `d = A p` and `g = A^T f` (with the `f64` level
+//! operators, then compressed: `SubdivisionMap::compress`).
 //!
 //! Run: `cargo run --release -p vclay-solids --example kernels -- [level] [reps]`.
 
@@ -50,15 +51,20 @@ fn main() {
             median(t) * 1e6 / springs.len() as f64
         );
     }
-    // The control map alone.
-    let disc = s.source().discretize(s.control_points()).unwrap();
+    // The control map alone: as built (`f64` operators), then compressed (issue 31).
+    let mut disc = s.source().discretize(s.control_points()).unwrap();
     let mut ws = vclay_lattice::ChainWorkspace::new();
     let mut dd = vec![Vec3::zeros(); d.len()];
     let mut g = vec![Vec3::zeros(); s.control_points().len()];
-    for (name, par) in [
-        ("1 thread", Parallelism::Sequential),
-        ("all threads", Parallelism::Auto),
+    for (name, par, compress) in [
+        ("1 thread", Parallelism::Sequential, false),
+        ("all threads", Parallelism::Auto, false),
+        ("1 thread, compressed", Parallelism::Sequential, true),
+        ("all threads, compressed", Parallelism::Auto, true),
     ] {
+        if compress && !disc.map.is_compressed() {
+            disc.map.compress();
+        }
         let ta: Vec<f64> = (0..reps)
             .map(|_| {
                 let t0 = Instant::now();

@@ -19,6 +19,8 @@
 //! only the rows and columns that remaining rows reach are kept, so each application touches
 //! the active part of every level.
 
+use std::borrow::Cow;
+
 use vclay_core::{Parallelism, Vec3};
 use vclay_lattice::{ChainWorkspace, SparseMatrix, SubdivisionMap};
 
@@ -31,27 +33,27 @@ pub fn galerkin(map: &SubdivisionMap, w: &[f64]) -> SparseMatrix {
     let n = map.levels();
     assert!(n > 0, "galerkin: empty chain");
     assert_eq!(map.data_count(), Some(w.len()), "galerkin: weight length");
-    // Finest level: A^(n)T (diag(w) A^(n)).
+    // A large chain's transposes are built for this product and dropped after it (its `A^T`
+    // products scatter through the operators and never read them); a small chain keeps them
+    // for its gathered `A^T` products. The same matrices either way.
+    let large =
+        map.operators().iter().map(SparseMatrix::nnz).sum::<usize>() > SubdivisionMap::GATHER_NNZ;
+    let transpose = |j: usize| -> Cow<'_, SparseMatrix> {
+        if large {
+            Cow::Owned(map.operator(j).transpose())
+        } else {
+            Cow::Borrowed(map.transpose(j))
+        }
+    };
+    // Finest level: A^(n)T (diag(w) A^(n)), without a scaled copy of A^(n) (the same bits).
     let top = map.operator(n - 1);
-    let mut cur = map.transpose(n - 1).mul(&scale_rows(top, w));
+    let mut cur = transpose(n - 1).mul_scaled(w, top);
     for j in (0..n - 1).rev() {
         let a = map.operator(j);
         let wa = cur.mul(a);
-        cur = map.transpose(j).mul(&wa);
+        cur = transpose(j).mul(&wa);
     }
     cur
-}
-
-/// `diag(w) a`.
-fn scale_rows(a: &SparseMatrix, w: &[f64]) -> SparseMatrix {
-    let rp = a.row_ptr().to_vec();
-    let mut vals = a.values().to_vec();
-    for i in 0..a.nrows() {
-        for v in &mut vals[rp[i]..rp[i + 1]] {
-            *v *= w[i];
-        }
-    }
-    SparseMatrix::from_csr(a.nrows(), a.ncols(), rp, a.col_indices().to_vec(), vals)
 }
 
 /// For each data point, whether it depends on at least one control point with `free[i]`
@@ -125,6 +127,12 @@ impl Restricted {
     /// The restricted chain.
     pub fn map(&self) -> &SubdivisionMap {
         &self.map
+    }
+
+    /// The restricted chain, mutable (to [compress](SubdivisionMap::compress) it or release
+    /// its transposes; its operators cannot be changed through it).
+    pub(crate) fn map_mut(&mut self) -> &mut SubdivisionMap {
+        &mut self.map
     }
 }
 

@@ -26,12 +26,20 @@
 //! [organized](SpringSet::organize) set runs one block of springs per thread over contiguous
 //! point ranges, each writing its own slice of the force array, then the springs that straddle
 //! blocks; an unorganized set scatters into one buffer per thread and sums them. The hot loop
-//! has no atomics and allocates nothing.
+//! has no atomics and allocates nothing. Large organized sets ([`SpringSet::INDEX_SPRINGS`])
+//! read their rest lengths and stiffnesses as one-byte indices into tables of the distinct
+//! values (a subdivided lattice has a few hundred at most), which are the stored `f64` values
+//! bit for bit: 10 instead of 24 bytes per edge spring and 6 instead of 20 per virtual spring
+//! stream through the pass (issue 31, `docs/performance.md` "Solid step memory traffic").
 
 use rayon::prelude::*;
 use vclay_core::{Parallelism, Vec3};
 
 /// Edge springs and virtual springs of a data lattice (or of its active part).
+///
+/// The parameter arrays are public; after [`SpringSet::organize`] change them only through
+/// [`SpringSet::reset_rest`], or organize the set again: a large organized set reads them
+/// through an index built from their values (module docs).
 #[derive(Clone, Debug, Default)]
 pub struct SpringSet {
     /// Edge endpoints.
@@ -54,6 +62,148 @@ pub struct SpringSet {
     pub(crate) band: Vec<u32>,
     /// The point ranges of the blocks of an organized set.
     pub(crate) blocks: Vec<std::ops::Range<usize>>,
+    /// Rest lengths and stiffnesses as one-byte indices into tables of their distinct values,
+    /// read by the force kernel instead of the `f64` arrays (built by
+    /// [`SpringSet::organize`] for large sets, [`SpringSet::INDEX_SPRINGS`]).
+    pub(crate) index: Option<Box<SpringIndex>>,
+}
+
+/// The rest lengths and stiffnesses of a spring set as `u8` indices into tables of their
+/// distinct values (issue 31): 2 bytes per spring instead of 16, the same `f64` values bit
+/// for bit (`table[index]` is the stored value). A subdivided box at level 5 has 29 and 27
+/// distinct edge rest lengths and stiffnesses, 185 and 176 for the virtual springs: the
+/// regular masks make most springs alike. Sets with more than 256 distinct values of one
+/// kind keep reading the `f64` arrays.
+#[derive(Clone, Debug)]
+pub(crate) struct SpringIndex {
+    /// `[rest, k]` indices of each edge spring.
+    edge: Vec<[u8; 2]>,
+    /// `[rest, k]` indices of each face corner's virtual spring.
+    corner: Vec<[u8; 2]>,
+    edge_rest: [f64; 256],
+    edge_k: [f64; 256],
+    corner_rest: [f64; 256],
+    corner_k: [f64; 256],
+}
+
+/// The distinct values of `vals` (by bit pattern) as a 256-entry table and each value's index
+/// into it, or `None` above 256 distinct values.
+fn byte_table(vals: &[f64]) -> Option<([f64; 256], Vec<u8>)> {
+    let mut table = [0.0; 256];
+    let mut n = 0;
+    let mut map = std::collections::HashMap::new();
+    let mut idx = Vec::with_capacity(vals.len());
+    for &v in vals {
+        let i = match map.entry(v.to_bits()) {
+            std::collections::hash_map::Entry::Occupied(e) => *e.get(),
+            std::collections::hash_map::Entry::Vacant(e) => {
+                if n == 256 {
+                    return None;
+                }
+                table[n] = v;
+                n += 1;
+                *e.insert((n - 1) as u8)
+            }
+        };
+        idx.push(i);
+    }
+    Some((table, idx))
+}
+
+impl SpringIndex {
+    /// The index of `set`'s parameters, or `None` when one kind has more than 256 distinct
+    /// values.
+    fn new(set: &SpringSet) -> Option<Self> {
+        let (edge_rest, er) = byte_table(&set.edge_rest)?;
+        let (edge_k, ek) = byte_table(&set.edge_k)?;
+        let (corner_rest, cr) = byte_table(&set.corner_rest)?;
+        let (corner_k, ck) = byte_table(&set.corner_k)?;
+        Some(Self {
+            edge: er.into_iter().zip(ek).map(|(r, k)| [r, k]).collect(),
+            corner: cr.into_iter().zip(ck).map(|(r, k)| [r, k]).collect(),
+            edge_rest,
+            edge_k,
+            corner_rest,
+            corner_k,
+        })
+    }
+}
+
+/// Where the force kernel reads rest lengths and stiffnesses: the `f64` arrays of the set or
+/// its [`SpringIndex`] (the same values).
+trait Params: Copy {
+    /// Rest lengths and stiffnesses of edges `e..e + BATCH` (`buf` as scratch).
+    fn edge_batch<'a>(self, e: usize, buf: &'a mut [[f64; BATCH]; 2]) -> (&'a [f64], &'a [f64])
+    where
+        Self: 'a;
+    /// Rest length and stiffness of edge `i`.
+    fn edge(self, i: usize) -> (f64, f64);
+    /// Rest length and stiffness of face corner `i`.
+    fn corner(self, i: usize) -> (f64, f64);
+    /// Rest lengths and stiffnesses of face corners `lo..lo + 4` into `rest` and `k`.
+    fn corners4(self, lo: usize, rest: &mut [f64], k: &mut [f64]);
+}
+
+/// The set's `f64` arrays.
+#[derive(Clone, Copy)]
+struct Full<'s>(&'s SpringSet);
+
+impl<'s> Params for Full<'s> {
+    #[inline(always)]
+    fn edge_batch<'a>(self, e: usize, _buf: &'a mut [[f64; BATCH]; 2]) -> (&'a [f64], &'a [f64])
+    where
+        Self: 'a,
+    {
+        (
+            &self.0.edge_rest[e..e + BATCH],
+            &self.0.edge_k[e..e + BATCH],
+        )
+    }
+    #[inline(always)]
+    fn edge(self, i: usize) -> (f64, f64) {
+        (self.0.edge_rest[i], self.0.edge_k[i])
+    }
+    #[inline(always)]
+    fn corner(self, i: usize) -> (f64, f64) {
+        (self.0.corner_rest[i], self.0.corner_k[i])
+    }
+    #[inline(always)]
+    fn corners4(self, lo: usize, rest: &mut [f64], k: &mut [f64]) {
+        rest.copy_from_slice(&self.0.corner_rest[lo..lo + 4]);
+        k.copy_from_slice(&self.0.corner_k[lo..lo + 4]);
+    }
+}
+
+impl Params for &SpringIndex {
+    #[inline(always)]
+    fn edge_batch<'a>(self, e: usize, buf: &'a mut [[f64; BATCH]; 2]) -> (&'a [f64], &'a [f64])
+    where
+        Self: 'a,
+    {
+        let ids = &self.edge[e..e + BATCH];
+        for (j, &[r, k]) in ids.iter().enumerate() {
+            buf[0][j] = self.edge_rest[r as usize];
+            buf[1][j] = self.edge_k[k as usize];
+        }
+        (&buf[0], &buf[1])
+    }
+    #[inline(always)]
+    fn edge(self, i: usize) -> (f64, f64) {
+        let [r, k] = self.edge[i];
+        (self.edge_rest[r as usize], self.edge_k[k as usize])
+    }
+    #[inline(always)]
+    fn corner(self, i: usize) -> (f64, f64) {
+        let [r, k] = self.corner[i];
+        (self.corner_rest[r as usize], self.corner_k[k as usize])
+    }
+    #[inline(always)]
+    fn corners4(self, lo: usize, rest: &mut [f64], k: &mut [f64]) {
+        for (j, &[ri, ki]) in self.corner[lo..lo + 4].iter().enumerate() {
+            rest[j] = self.corner_rest[ri as usize];
+            k[j] = self.corner_k[ki as usize];
+        }
+    }
 }
 
 /// One block of an organized spring set: the springs whose points all lie in `points`, or (the
@@ -87,6 +237,13 @@ impl SpringSet {
     /// sets, the per-thread copies of the force array cost more than they save (measured with
     /// `examples/kernels.rs`: no gain at 218k springs, 1.5x at 1.7M on 2 cores).
     pub const PARALLEL_SPRINGS: usize = 500_000;
+
+    /// [`SpringSet::organize`] indexes the rest lengths and stiffnesses of sets of at least
+    /// this many springs (one-byte indices into tables of distinct values, when there are at
+    /// most 256 of each kind): their force passes are bound by memory traffic, and the index
+    /// cuts the bytes per spring from 24 to 10 (edges) and from 20 to 6 (virtual springs).
+    /// Smaller sets run from cache, where the table lookups would only add work.
+    pub const INDEX_SPRINGS: usize = 500_000;
 
     /// Number of faces.
     pub fn num_faces(&self) -> usize {
@@ -150,6 +307,9 @@ impl SpringSet {
                 self.corner_rest[lo + j] = (d[m] - (d[a] + d[b]) * 0.5).norm();
             }
         }
+        if self.index.is_some() {
+            self.index = SpringIndex::new(self).map(Box::new);
+        }
     }
 
     /// The subset of springs that touch a point with `keep[i]` (journal section 5.2: springs
@@ -191,6 +351,8 @@ impl SpringSet {
         let edge_counts = counts(edge_keys.iter().map(|k| k.0), blocks + 1);
         let face_counts = counts(face_keys.iter().map(|k| k.0), blocks + 1);
         *self = self.select(edge_keys.iter().map(|k| k.2), face_keys.iter().map(|k| k.2));
+        // Freed before the band and the index are built (the peak of a large build).
+        drop((edge_keys, face_keys));
         let (mut e0, mut f0) = (0, 0);
         self.parts = (0..=blocks)
             .map(|b| {
@@ -228,6 +390,31 @@ impl SpringSet {
             .iter()
             .map(|p| p.points.clone())
             .collect();
+        self.index = None;
+        if self.len() >= Self::INDEX_SPRINGS {
+            self.index_parameters();
+        }
+    }
+
+    /// Builds the one-byte index of the rest lengths and stiffnesses that the force kernel
+    /// then reads ([`SpringSet::INDEX_SPRINGS`]); returns whether every kind has at most 256
+    /// distinct values (otherwise the kernel keeps reading the `f64` arrays). The forces are
+    /// the same bits either way. Changing the parameter arrays afterwards other than through
+    /// [`SpringSet::reset_rest`] requires calling this again (or [`SpringSet::organize`]).
+    pub(crate) fn index_parameters(&mut self) -> bool {
+        self.index = SpringIndex::new(self).map(Box::new);
+        self.index.is_some()
+    }
+
+    /// Bytes of the spring arrays: endpoints, rest lengths and stiffnesses (24 per edge, 20
+    /// per face corner) and the parameter index (face offsets excluded).
+    pub fn bytes(&self) -> usize {
+        self.edges.len() * 24
+            + self.face_verts.len() * 20
+            + self
+                .index
+                .as_ref()
+                .map_or(0, |ix| 2 * (ix.edge.len() + ix.corner.len()) + 4 * 256 * 8)
     }
 
     /// The point blocks of a set [organized](SpringSet::organize) for `n` points (`None`
@@ -312,6 +499,32 @@ impl SpringSet {
         ws: &mut ForceWorkspace,
         par: Parallelism,
     ) -> f64 {
+        self.forces(d, f, ws, par, false)
+    }
+
+    /// Overwrites `f` with the spring forces in configuration `d` and returns the potential
+    /// energy: [`SpringSet::add_forces`] on a zeroed `f`, the same bits, but an
+    /// [organized](SpringSet::organize) set running in parallel zeroes each block's range in
+    /// the task that then fills it, instead of a separate pass over `f` on one thread.
+    pub fn set_forces(
+        &self,
+        d: &[Vec3],
+        f: &mut [Vec3],
+        ws: &mut ForceWorkspace,
+        par: Parallelism,
+    ) -> f64 {
+        self.forces(d, f, ws, par, true)
+    }
+
+    /// [`SpringSet::add_forces`], on a zeroed `f` if `overwrite`.
+    fn forces(
+        &self,
+        d: &[Vec3],
+        f: &mut [Vec3],
+        ws: &mut ForceWorkspace,
+        par: Parallelism,
+        overwrite: bool,
+    ) -> f64 {
         let organized = self.parts.len() > 2
             && self.parts[self.parts.len() - 2].points.end == f.len()
             && d.len() == f.len();
@@ -321,6 +534,9 @@ impl SpringSet {
             1
         };
         if threads == 1 {
+            if overwrite {
+                f.fill(Vec3::zeros());
+            }
             return self.forces_range(d, f, 0, 0..self.edges.len(), 0..self.num_faces());
         }
         if organized && let Some((straddle, blocks)) = self.parts.split_last() {
@@ -338,11 +554,17 @@ impl SpringSet {
                 .par_iter()
                 .zip(chunks)
                 .map(|(b, chunk)| {
+                    if overwrite {
+                        chunk.fill(Vec3::zeros());
+                    }
                     self.forces_range(d, chunk, b.points.start, b.edges.clone(), b.faces.clone())
                 })
                 .sum();
             return energy
                 + self.forces_range(d, f, 0, straddle.edges.clone(), straddle.faces.clone());
+        }
+        if overwrite {
+            f.fill(Vec3::zeros());
         }
         ws.bufs.resize_with(threads, Vec::new);
         let (ne, nf) = (self.edges.len(), self.num_faces());
@@ -396,8 +618,9 @@ impl SpringSet {
     /// gathered (spring vectors `x`), then `g = k (1 - l0/|x|) x` and the energy computed
     /// lane-wise without branches, then scattered.
     #[inline(always)]
-    fn forces_kernel(
+    fn forces_kernel<P: Params>(
         &self,
+        params: P,
         d: &[Vec3],
         f: &mut [Vec3],
         base: usize,
@@ -406,6 +629,7 @@ impl SpringSet {
     ) -> f64 {
         let mut energy = 0.0;
         let mut x = [[0.0; BATCH]; 3];
+        let mut buf = [[0.0; BATCH]; 2];
         // Edge springs.
         let mut e = edges.start;
         while e + BATCH <= edges.end {
@@ -416,11 +640,8 @@ impl SpringSet {
                 x[1][j] = v.y;
                 x[2][j] = v.z;
             }
-            energy += spring_batch(
-                &mut x,
-                &self.edge_rest[e..e + BATCH],
-                &self.edge_k[e..e + BATCH],
-            );
+            let (rest, k) = params.edge_batch(e, &mut buf);
+            energy += spring_batch(&mut x, rest, k);
             for (j, &[a, b]) in idx.iter().enumerate() {
                 let g = Vec3::new(x[0][j], x[1][j], x[2][j]);
                 f[a as usize - base] += g;
@@ -436,8 +657,8 @@ impl SpringSet {
             if l == 0.0 {
                 continue;
             }
-            let k = self.edge_k[i];
-            let s = l - self.edge_rest[i];
+            let (rest, k) = params.edge(i);
+            let s = l - rest;
             energy += 0.5 * k * s * s;
             let g = x * (k * s / l);
             f[a - base] += g;
@@ -459,23 +680,26 @@ impl SpringSet {
                 starts[nq] = lo;
                 nq += 1;
                 if nq == Q {
-                    energy += self.quad_batch(d, f, base, &starts, &mut x, &mut rest, &mut ks);
+                    energy +=
+                        self.quad_batch(params, d, f, base, &starts, &mut x, &mut rest, &mut ks);
                     nq = 0;
                 }
                 continue;
             }
-            energy += self.face_scalar(d, f, base, lo, hi);
+            energy += self.face_scalar(params, d, f, base, lo, hi);
         }
         for &lo in &starts[..nq] {
-            energy += self.face_scalar(d, f, base, lo, lo + 4);
+            energy += self.face_scalar(params, d, f, base, lo, lo + 4);
         }
         energy
     }
 
     /// One batch of `BATCH / 4` quads starting at corner offsets `starts`.
     #[inline(always)]
-    fn quad_batch(
+    #[allow(clippy::too_many_arguments)]
+    fn quad_batch<P: Params>(
         &self,
+        params: P,
         d: &[Vec3],
         f: &mut [Vec3],
         base: usize,
@@ -499,8 +723,7 @@ impl SpringSet {
                 x[1][4 * q + j] = y.y;
                 x[2][4 * q + j] = y.z;
             }
-            rest[4 * q..4 * q + 4].copy_from_slice(&self.corner_rest[lo..lo + 4]);
-            ks[4 * q..4 * q + 4].copy_from_slice(&self.corner_k[lo..lo + 4]);
+            params.corners4(lo, &mut rest[4 * q..4 * q + 4], &mut ks[4 * q..4 * q + 4]);
         }
         let energy = spring_batch(x, rest, ks);
         for (q, &lo) in starts.iter().enumerate() {
@@ -519,7 +742,15 @@ impl SpringSet {
 
     /// The virtual springs of one face (corners `lo..hi` of `face_verts`), one by one.
     #[inline(always)]
-    fn face_scalar(&self, d: &[Vec3], f: &mut [Vec3], base: usize, lo: usize, hi: usize) -> f64 {
+    fn face_scalar<P: Params>(
+        &self,
+        params: P,
+        d: &[Vec3],
+        f: &mut [Vec3],
+        base: usize,
+        lo: usize,
+        hi: usize,
+    ) -> f64 {
         let verts = &self.face_verts[lo..hi];
         let mut energy = 0.0;
         for j in 0..verts.len() {
@@ -529,8 +760,8 @@ impl SpringSet {
             if l == 0.0 {
                 continue;
             }
-            let k = self.corner_k[lo + j];
-            let s = l - self.corner_rest[lo + j];
+            let (rest, k) = params.corner(lo + j);
+            let s = l - rest;
             energy += 0.5 * k * s * s;
             let g = x * (k * s / l);
             f[m - base] -= g;
@@ -618,8 +849,11 @@ impl pulp::WithSimd for ForcesOp<'_> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _simd: S) -> f64 {
-        self.set
-            .forces_kernel(self.d, self.f, self.base, self.edges, self.faces)
+        let set = self.set;
+        match &set.index {
+            Some(ix) => set.forces_kernel(&**ix, self.d, self.f, self.base, self.edges, self.faces),
+            None => set.forces_kernel(Full(set), self.d, self.f, self.base, self.edges, self.faces),
+        }
     }
 }
 
@@ -657,4 +891,89 @@ pub(crate) fn spring_hessian_apply(x: Vec3, k: f64, l0: f64, y: Vec3) -> Vec3 {
     let along = u * u.dot(&y);
     let t = (1.0 - l0 / l).max(0.0);
     (along + (y - along) * t) * k
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{SolidParams, benchmarks};
+
+    fn bits(v: &[Vec3]) -> Vec<[u64; 3]> {
+        v.iter()
+            .map(|x| [x.x.to_bits(), x.y.to_bits(), x.z.to_bits()])
+            .collect()
+    }
+
+    fn forces(set: &SpringSet, d: &[Vec3], par: Parallelism) -> (Vec<Vec3>, u64) {
+        let mut f = vec![Vec3::new(1.0, 2.0, 3.0); d.len()];
+        let e = set.set_forces(d, &mut f, &mut ForceWorkspace::default(), par);
+        (f, e.to_bits())
+    }
+
+    #[test]
+    fn indexed_parameters_give_the_same_forces_bit_for_bit() {
+        for level in [1, 2] {
+            let mut s = benchmarks::cube(level, SolidParams::default()).unwrap();
+            benchmarks::pull(&mut s).unwrap();
+            let d = s.data_points().to_vec();
+            let plain = s.springs().clone();
+            assert!(plain.index.is_none(), "small sets read the f64 arrays");
+            let mut indexed = plain.clone();
+            assert!(indexed.index_parameters());
+            let ix: &SpringIndex = indexed.index.as_deref().unwrap();
+            // Every looked-up value is the stored one.
+            for i in 0..plain.edges.len() {
+                let (r, k) = Params::edge(ix, i);
+                assert_eq!(
+                    (r.to_bits(), k.to_bits()),
+                    (plain.edge_rest[i].to_bits(), plain.edge_k[i].to_bits())
+                );
+            }
+            for i in 0..plain.face_verts.len() {
+                let (r, k) = Params::corner(ix, i);
+                assert_eq!(
+                    (r.to_bits(), k.to_bits()),
+                    (plain.corner_rest[i].to_bits(), plain.corner_k[i].to_bits())
+                );
+            }
+            assert!(indexed.bytes() > plain.bytes());
+            for par in [Parallelism::Sequential, Parallelism::Rayon] {
+                let (f0, e0) = forces(&plain, &d, par);
+                let (f1, e1) = forces(&indexed, &d, par);
+                assert_eq!(bits(&f0), bits(&f1), "level {level} {par:?}");
+                assert_eq!(e0, e1);
+                // `set_forces` is `add_forces` on zeroed forces.
+                let mut f2 = vec![Vec3::zeros(); d.len()];
+                let e2 = indexed.add_forces(&d, &mut f2, &mut ForceWorkspace::default(), par);
+                assert_eq!(bits(&f1), bits(&f2));
+                assert_eq!(e1, e2.to_bits());
+            }
+            // A plastic reset makes every rest length different: the index is dropped (more
+            // than 256 values) or rebuilt, and the forces still match the plain set's.
+            let mut plain2 = plain.clone();
+            let mut indexed2 = indexed.clone();
+            plain2.reset_rest(&d);
+            indexed2.reset_rest(&d);
+            let moved: Vec<Vec3> = d.iter().map(|x| x * 1.01).collect();
+            assert_eq!(
+                bits(&forces(&plain2, &moved, Parallelism::Sequential).0),
+                bits(&forces(&indexed2, &moved, Parallelism::Sequential).0)
+            );
+        }
+    }
+
+    #[test]
+    fn more_than_256_distinct_stiffnesses_keep_the_f64_arrays() {
+        let mut set = SpringSet {
+            face_offsets: vec![0],
+            ..Default::default()
+        };
+        for i in 0..300u32 {
+            set.edges.push([i, i + 1]);
+            set.edge_rest.push(1.0);
+            set.edge_k.push(1.0 + f64::from(i));
+        }
+        assert!(!set.index_parameters());
+        assert!(set.index.is_none());
+    }
 }

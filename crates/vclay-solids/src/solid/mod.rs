@@ -43,8 +43,8 @@ use std::time::Instant;
 
 use vclay_core::{Parallelism, Vec3};
 use vclay_lattice::{
-    CellId, EdgeId, ExtrudeParams, FaceId, Lattice, SparseMatrix, VertexId, delete_cell,
-    extrude_face,
+    CellId, EdgeId, ExtrudeParams, FaceId, Lattice, SparseMatrix, SubdivisionMap, VertexId,
+    delete_cell, extrude_face,
 };
 
 use crate::error::{SolidsError, invalid};
@@ -573,6 +573,7 @@ impl DynamicSolid {
         } else {
             galerkin(&self.disc.map, &damp)
         };
+        compress_large(&mut self.disc.map);
         self.mass = mass;
         self.damp = damp;
         self.springs = sp;
@@ -594,7 +595,8 @@ impl DynamicSolid {
             let mut act = self.springs.filter(&active);
             act.organize(nd, force_blocks());
             self.active_springs = Some(act);
-            let r = Restricted::new(&self.disc.map, rows);
+            let mut r = Restricted::new(&self.disc.map, rows);
+            compress_large(r.map_mut());
             self.free_rows = self
                 .free
                 .iter()
@@ -739,18 +741,12 @@ impl DynamicSolid {
         }
     }
 
-    /// Bytes held per data point by the per-step structures (level operators and their
-    /// transposes, springs, data-point arrays, data lattice topology excluded).
+    /// Bytes held per data point by the per-step structures (level operators, their stored
+    /// transposes and compact forms, [`SubdivisionMap::bytes`]; springs and their parameter
+    /// index, [`SpringSet::bytes`]; data-point arrays; data lattice topology excluded).
     pub fn bytes_per_data_point(&self) -> f64 {
-        let ops: usize = self
-            .disc
-            .map
-            .operators()
-            .iter()
-            .map(|a| 2 * (a.nnz() * 12 + a.nrows() * 8))
-            .sum();
-        let s = &self.springs;
-        let springs = s.edges.len() * 24 + s.face_verts.len() * 20;
+        let ops = self.disc.map.bytes();
+        let springs = self.springs.bytes();
         let arrays = self.d.len() * (4 * 24 + 2 * 8);
         (ops + springs + arrays) as f64 / self.d.len() as f64
     }
@@ -807,12 +803,13 @@ impl DynamicSolid {
     fn generalized_forces(&mut self) -> Energy {
         let par = self.params.parallelism;
         let w = &mut self.work;
-        w.f.iter_mut().for_each(|x| *x = Vec3::zeros());
         let springs = self.active_springs.as_ref().unwrap_or(&self.springs);
         let mut internal = if self.metric.is_some() {
+            w.f.iter_mut().for_each(|x| *x = Vec3::zeros());
             0.0
         } else {
-            springs.add_forces(&self.d, &mut w.f, &mut w.force, par)
+            // Zeroes `f` inside the spring pass (block by block when parallel).
+            springs.set_forces(&self.d, &mut w.f, &mut w.force, par)
         };
         let mut tools = 0.0;
         for t in self.tools.iter().flatten() {
@@ -1751,6 +1748,19 @@ fn verdict(energy: &Energy, finite: bool, factor: f64, scale: f64) -> Result<(),
         ))
     } else {
         Ok(())
+    }
+}
+
+/// For a chain above [`SubdivisionMap::GATHER_NNZ`] non-zeros, whose `A^T` products scatter
+/// through the operators: drops any stored transposes (`galerkin` does not keep them for such
+/// a chain) and stores the compact operators ([`SubdivisionMap::compress`]), so that the
+/// per-step products `A p` and `A^T f` stream 5-6 instead of 12 bytes per non-zero (same bits;
+/// issue 31). Small chains, whose products run from cache, are left as they are.
+fn compress_large(map: &mut SubdivisionMap) {
+    let nnz: usize = map.operators().iter().map(SparseMatrix::nnz).sum();
+    if nnz > SubdivisionMap::GATHER_NNZ {
+        map.release_transposes();
+        map.compress();
     }
 }
 
