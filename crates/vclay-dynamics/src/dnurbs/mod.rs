@@ -473,8 +473,9 @@ pub struct Dnurbs<G: DnurbsGeometry> {
     /// 1,024 free control points). Default `false`, the path every recorded
     /// trajectory was computed with: faer's kernels for three columns round differently from
     /// those for one and two, so the steps differ in the last bits (tested within `1e-12` of
-    /// the model size over 100 steps). Issue 31: the 64 x 64 frozen sheet ran 1.3-1.5x as
-    /// many steps per second with it on the shared 2-core host (`docs/performance.md`,
+    /// the model size over 100 steps). Issue 31: on the shared 2-core host it saved about
+    /// 0.3 ms of CPU time per step of the 64 x 64 frozen sheet, and its steps per second were
+    /// higher in 9 of 12 alternated pairs, within the host's noise (`docs/performance.md`,
     /// session h47).
     pub solve_together: bool,
     direct: Option<system::DirectSolver>,
