@@ -467,6 +467,17 @@ pub struct Dnurbs<G: DnurbsGeometry> {
     pub tolerance: f64,
     /// Linear solver (default [`LinearSolver::Direct`]).
     pub solver: LinearSolver,
+    /// With [`LinearSolver::Direct`]: solve the three coordinate columns (`x`, `y`, `z`) with
+    /// the cached factor in one call on one thread, one pass over the factor, instead of the
+    /// default split (`x` on one thread, `y` and `z` on another, for models with at least
+    /// 1,024 free control points). Default `false`, the path every recorded
+    /// trajectory was computed with: faer's kernels for three columns round differently from
+    /// those for one and two, so the steps differ in the last bits (tested within `1e-12` of
+    /// the model size over 100 steps). Issue 31: on the shared 2-core host it saved about
+    /// 0.3 ms of CPU time per step of the 64 x 64 frozen sheet, and its steps per second were
+    /// higher in 9 of 12 alternated pairs, within the host's noise (`docs/performance.md`,
+    /// session h47).
+    pub solve_together: bool,
     direct: Option<system::DirectSolver>,
     cache: StepCache,
 }
@@ -596,6 +607,7 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
             max_iterations: DEFAULT_CG_ITERATIONS,
             tolerance: DEFAULT_CG_TOLERANCE,
             solver: LinearSolver::default(),
+            solve_together: false,
             direct: None,
             cache: StepCache::default(),
         })
@@ -1048,14 +1060,20 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
                 self.max_iterations,
                 self.tolerance,
             ),
-            LinearSolver::Direct => {
-                system::direct_solve(&mut self.direct, &op, &rhs, &mut x, &self.fixed, false)
-                    .map_err(|_| DynamicsError::Singular {
-                        what: "the system matrix is not positive definite: with no mass (static \
+            LinearSolver::Direct => system::direct_solve(
+                &mut self.direct,
+                &op,
+                &rhs,
+                &mut x,
+                &self.fixed,
+                false,
+                self.solve_together,
+            )
+            .map_err(|_| DynamicsError::Singular {
+                what: "the system matrix is not positive definite: with no mass (static \
                        solve), fix control points so that rigid motions are excluded"
-                            .into(),
-                    })?
-            }
+                    .into(),
+            })?,
         };
         // Divergence: non-finite state or runaway displacement.
         let limit = DIVERGENCE_DISPLACEMENT_FACTOR * self.rest_scale;

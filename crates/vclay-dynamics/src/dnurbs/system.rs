@@ -652,6 +652,7 @@ pub(crate) fn direct_solve(
     x: &mut [Vec3],
     fixed: &[bool],
     verify: bool,
+    together: bool,
 ) -> Result<SolverStats, NotPositiveDefinite> {
     use faer::linalg::solvers::Solve;
     let n = op.sys.n;
@@ -688,7 +689,10 @@ pub(crate) fn direct_solve(
     }
     // The x column on one thread, y and z on another (faer runs sequentially here: its rayon
     // feature is off), for models big enough to pay for the split.
-    if m >= 4 * PARALLEL_ELEMENTS {
+    if together {
+        // One call, one pass over the factor for the three columns (`Dnurbs::solve_together`).
+        solver.llt.solve_in_place(rhs.as_mut());
+    } else if m >= 4 * PARALLEL_ELEMENTS {
         let (first, rest) = rhs.as_mut().split_at_col_mut(1);
         rayon::join(
             || solver.llt.solve_in_place(first),
