@@ -272,7 +272,8 @@ fn physics_figures(seconds: f64, large: bool) -> Result<serde_json::Value> {
         // Issue 4 asked for 10 steps/s; issue 31 for 30.
         out["solid_cube_level5"] = at_least(rate, "steps/s", 30.0);
         out["solid_cube_level5"]["bytes_per_data_point"] = json!(big.bytes_per_data_point());
-        out["solid_cube_level5"]["peak_resident_bytes"] = json!(peak_resident_bytes());
+        out["solid_cube_level5"]["peak_resident_bytes"] =
+            json!(vclay::core::yardstick::peak_resident_bytes());
     }
     Ok(out)
 }
@@ -396,14 +397,6 @@ fn session_figures(seconds: f64) -> Result<serde_json::Value> {
             "full_copy_ms": full_ms,
         },
     }))
-}
-
-/// The process's peak resident set size (`VmHWM` of `/proc/self/status`, Linux), if known.
-fn peak_resident_bytes() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
 }
 
 fn rayon_threads() -> usize {

@@ -115,6 +115,16 @@ pub fn process_cpu_seconds() -> Option<f64> {
     Some((utime + stime) / 100.0)
 }
 
+/// Peak resident set size of this process so far (`VmHWM` of `/proc/self/status`), in bytes:
+/// Linux only, `None` elsewhere or on a read error. The benchmarks print it beside their
+/// times (issue 31: the level-5 step's peak memory must not grow).
+pub fn peak_resident_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -47,17 +47,6 @@ fn cloud(n: usize, seed: u64) -> Vec<Vec3> {
     out
 }
 
-/// This process's CPU time (user + system, all threads) in seconds, from `/proc/self/stat`
-/// (Linux; clock ticks of 1/100 s); `None` elsewhere.
-fn cpu_seconds() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // Fields after the command name (in parentheses): utime and stime are the 12th and 13th.
-    let rest = &stat[stat.rfind(')')? + 2..];
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let ticks = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
-    Some(ticks / 100.0)
-}
-
 fn main() {
     // The same run's reference workload (issue 31), at the start and at the end.
     let yard_start = vclay_core::yardstick::measure(0.3);
@@ -84,11 +73,13 @@ fn main() {
         let pts = cloud(n, 1);
         let mut best: Option<(f64, f64, vclay_fit::FitReport)> = None;
         for _ in 0..RUNS {
-            let c = cpu_seconds();
+            let c = vclay_core::yardstick::process_cpu_seconds();
             let t = Instant::now();
             let fit = fit_surface(&pts, &opts).expect("fit");
             let s = t.elapsed().as_secs_f64();
-            let cpu = c.zip(cpu_seconds()).map_or(f64::NAN, |(a, b)| b - a);
+            let cpu = c
+                .zip(vclay_core::yardstick::process_cpu_seconds())
+                .map_or(f64::NAN, |(a, b)| b - a);
             if best.as_ref().is_none_or(|(b, _, _)| s < *b) {
                 best = Some((s, cpu, fit.report));
             }

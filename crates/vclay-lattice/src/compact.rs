@@ -24,10 +24,9 @@
 
 use std::collections::HashMap;
 
-use rayon::prelude::*;
 use vclay_core::Parallelism;
 
-use crate::sparse::{Coord, MIN_ROWS_PER_TASK, SparseMatrix};
+use crate::sparse::{Coord, SparseMatrix, each_row, scatter_rows};
 
 /// An index into a table of weights: `u8` (a 256-entry table) or `u16` (65,536 entries), so
 /// that a lookup needs no bounds check.
@@ -221,15 +220,7 @@ impl CompactMatrix {
         y: &mut [T],
         par: Parallelism,
     ) {
-        let row = |(i, yi): (usize, &mut T)| *yi = self.row_dot(i, idx, table, |c| x[c]);
-        if par.is_parallel(self.nrows) {
-            y.par_iter_mut()
-                .enumerate()
-                .with_min_len(MIN_ROWS_PER_TASK)
-                .for_each(row);
-        } else {
-            y.iter_mut().enumerate().for_each(row);
-        }
+        each_row(y, par, |i| self.row_dot(i, idx, table, |c| x[c]));
     }
 
     /// Rows `rows` of `y = A x`, as [`SparseMatrix::apply_rows_with`] (same bits).
@@ -325,40 +316,16 @@ impl CompactMatrix {
                 }
             }
         };
-        let tasks = rayon::current_num_threads().min(self.nrows / MIN_ROWS_PER_TASK);
-        if !par.is_parallel(self.nrows) || tasks < 2 {
-            y.iter_mut().for_each(|v| *v = T::zero());
-            scatter(0..self.nrows, y);
-            return;
-        }
-        let n = self.ncols;
-        scratch.clear();
-        scratch.resize(tasks * n, T::zero());
-        // Blocks of equal entry counts, as `SparseMatrix::apply_transpose_into`.
-        let nnz = self.nnz();
-        let mut bounds: Vec<usize> = (0..=tasks)
-            .map(|t| {
-                let target = nnz * t / tasks;
-                self.row_ptr
-                    .partition_point(|&p| (p as usize) < target)
-                    .min(self.nrows)
-            })
-            .collect();
-        bounds[tasks] = self.nrows;
-        scratch
-            .par_chunks_mut(n)
-            .enumerate()
-            .for_each(|(t, acc)| scatter(bounds[t]..bounds[t + 1], acc));
-        let partials: &[T] = scratch;
-        y.par_iter_mut()
-            .enumerate()
-            .with_min_len(MIN_ROWS_PER_TASK)
-            .for_each(|(c, v)| {
-                let mut s = partials[c];
-                for t in 1..tasks {
-                    s.add_scaled(1.0, &partials[t * n + c]);
-                }
-                *v = s;
-            });
+        // The same blocks and order of sums as `SparseMatrix::apply_transpose_into`.
+        let first_row_at = |entry: usize| self.row_ptr.partition_point(|&p| (p as usize) < entry);
+        scatter_rows(
+            self.nrows,
+            self.nnz(),
+            first_row_at,
+            y,
+            scratch,
+            par,
+            scatter,
+        );
     }
 }

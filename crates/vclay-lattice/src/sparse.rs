@@ -196,15 +196,7 @@ impl SparseMatrix {
     pub fn apply_into<T: Coord>(&self, x: &[T], y: &mut [T], par: Parallelism) {
         assert_eq!(x.len(), self.ncols, "apply: input length");
         assert_eq!(y.len(), self.nrows, "apply: output length");
-        let row = |(i, yi): (usize, &mut T)| *yi = self.row_dot(i, |c| x[c]);
-        if par.is_parallel(self.nrows) {
-            y.par_iter_mut()
-                .enumerate()
-                .with_min_len(MIN_ROWS_PER_TASK)
-                .for_each(row);
-        } else {
-            y.iter_mut().enumerate().for_each(row);
-        }
+        each_row(y, par, |i| self.row_dot(i, |c| x[c]));
     }
 
     /// Rows `rows` of `y = A x`, the input read through `x(column)` and each row's value
@@ -283,41 +275,16 @@ impl SparseMatrix {
                 }
             }
         };
-        let tasks = rayon::current_num_threads().min(self.nrows / MIN_ROWS_PER_TASK);
-        if !par.is_parallel(self.nrows) || tasks < 2 {
-            y.iter_mut().for_each(|v| *v = T::zero());
-            scatter(0..self.nrows, y);
-            return;
-        }
-        let n = self.ncols;
-        scratch.clear();
-        scratch.resize(tasks * n, T::zero());
-        // Blocks of equal entry counts (rows differ in length).
-        let nnz = self.nnz();
-        let mut bounds: Vec<usize> = (0..=tasks)
-            .map(|t| {
-                let target = nnz * t / tasks;
-                self.row_ptr
-                    .partition_point(|&p| p < target)
-                    .min(self.nrows)
-            })
-            .collect();
-        bounds[tasks] = self.nrows;
-        scratch
-            .par_chunks_mut(n)
-            .enumerate()
-            .for_each(|(t, acc)| scatter(bounds[t]..bounds[t + 1], acc));
-        let partials: &[T] = scratch;
-        y.par_iter_mut()
-            .enumerate()
-            .with_min_len(MIN_ROWS_PER_TASK)
-            .for_each(|(c, v)| {
-                let mut s = partials[c];
-                for t in 1..tasks {
-                    s.add_scaled(1.0, &partials[t * n + c]);
-                }
-                *v = s;
-            });
+        let first_row_at = |entry: usize| self.row_ptr.partition_point(|&p| p < entry);
+        scatter_rows(
+            self.nrows,
+            self.nnz(),
+            first_row_at,
+            y,
+            scratch,
+            par,
+            scatter,
+        );
     }
 
     /// The matrix with its rows reordered: row `i` of the result is row `order[i]` of `self`
@@ -465,4 +432,66 @@ impl SparseMatrix {
             })
             .collect()
     }
+}
+
+/// `y[i] = row(i)` for every row `i`: in parallel (tasks of at least [`MIN_ROWS_PER_TASK`]
+/// rows) when `par` says so for `y.len()` rows. The kernel of `A x` for every storage of `A`
+/// ([`SparseMatrix`], [`crate::CompactMatrix`]); each row's value does not depend on the
+/// split, so the result is the same bits either way.
+pub(crate) fn each_row<T: Send>(y: &mut [T], par: Parallelism, row: impl Fn(usize) -> T + Sync) {
+    if par.is_parallel(y.len()) {
+        y.par_iter_mut()
+            .enumerate()
+            .with_min_len(MIN_ROWS_PER_TASK)
+            .for_each(|(i, yi)| *yi = row(i));
+    } else {
+        y.iter_mut().enumerate().for_each(|(i, yi)| *yi = row(i));
+    }
+}
+
+/// `y = A^T x` by scattering the rows of `A` (`nrows` rows, `nnz` entries): `scatter(rows,
+/// acc)` adds rows `rows`' terms into `acc`. On one thread, straight into the zeroed `y`; in
+/// parallel, each of `T` tasks scatters a block of rows of about equal entry counts (the block
+/// bounds from `first_row_at(entry)`, the first row whose entries start at or after `entry`)
+/// into its own partial sum in `scratch` (grown to `T * y.len()`), and the partial sums are
+/// added in task order, column-parallel. Shared by [`SparseMatrix::apply_transpose_into`]
+/// and [`crate::CompactMatrix`]'s, so both give the same bits for the same thread count.
+pub(crate) fn scatter_rows<T: Coord>(
+    nrows: usize,
+    nnz: usize,
+    first_row_at: impl Fn(usize) -> usize,
+    y: &mut [T],
+    scratch: &mut Vec<T>,
+    par: Parallelism,
+    scatter: impl Fn(std::ops::Range<usize>, &mut [T]) + Sync,
+) {
+    let tasks = rayon::current_num_threads().min(nrows / MIN_ROWS_PER_TASK);
+    if !par.is_parallel(nrows) || tasks < 2 {
+        y.iter_mut().for_each(|v| *v = T::zero());
+        scatter(0..nrows, y);
+        return;
+    }
+    let n = y.len();
+    scratch.clear();
+    scratch.resize(tasks * n, T::zero());
+    // Blocks of equal entry counts (rows differ in length).
+    let mut bounds: Vec<usize> = (0..=tasks)
+        .map(|t| first_row_at(nnz * t / tasks).min(nrows))
+        .collect();
+    bounds[tasks] = nrows;
+    scratch
+        .par_chunks_mut(n)
+        .enumerate()
+        .for_each(|(t, acc)| scatter(bounds[t]..bounds[t + 1], acc));
+    let partials: &[T] = scratch;
+    y.par_iter_mut()
+        .enumerate()
+        .with_min_len(MIN_ROWS_PER_TASK)
+        .for_each(|(c, v)| {
+            let mut s = partials[c];
+            for t in 1..tasks {
+                s.add_scaled(1.0, &partials[t * n + c]);
+            }
+            *v = s;
+        });
 }

@@ -18,26 +18,11 @@ use std::time::Instant;
 use vclay_solids::{DynamicSolid, SolidParams, benchmarks};
 
 fn peak_rss_mb() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
-                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
-        })
-        .map_or(f64::NAN, |kb| kb / 1024.0)
+    vclay_core::yardstick::peak_resident_bytes().map_or(f64::NAN, |b| b as f64 / 1048576.0)
 }
 
-/// CPU seconds (user + system) of this process so far, from `/proc/self/stat` (100 Hz ticks).
 fn cpu_seconds() -> f64 {
-    std::fs::read_to_string("/proc/self/stat")
-        .ok()
-        .and_then(|s| {
-            let rest = s.rsplit_once(')')?.1;
-            let f: Vec<&str> = rest.split_whitespace().collect();
-            Some((f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?) / 100.0)
-        })
-        .unwrap_or(f64::NAN)
+    vclay_core::yardstick::process_cpu_seconds().unwrap_or(f64::NAN)
 }
 
 fn digest(s: &DynamicSolid) -> u64 {
