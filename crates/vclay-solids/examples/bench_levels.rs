@@ -18,40 +18,6 @@ fn peak_rss_mb() -> f64 {
     vclay_core::yardstick::peak_resident_bytes().map_or(f64::NAN, |b| b as f64 / 1048576.0)
 }
 
-fn cpu_seconds() -> f64 {
-    vclay_core::yardstick::process_cpu_seconds().unwrap_or(f64::NAN)
-}
-
-/// Wall milliseconds per step, as the median over batches of at least 2 ms and as the mean
-/// over all steps, and CPU milliseconds per step (after `benchmarks::pull`). The median is
-/// the figure a shared machine's pauses move least.
-fn time_steps(s: &mut DynamicSolid, seconds: f64) -> (f64, f64, f64) {
-    benchmarks::pull(s).unwrap();
-    let t = Instant::now();
-    let mut batch = 0;
-    while batch == 0 || t.elapsed().as_secs_f64() < 2e-3 {
-        s.step().unwrap();
-        batch += 1;
-    }
-    let t0 = Instant::now();
-    let c0 = cpu_seconds();
-    let mut per_batch = Vec::new();
-    while per_batch.len() < 5 || t0.elapsed().as_secs_f64() < seconds {
-        let tb = Instant::now();
-        for _ in 0..batch {
-            s.step().unwrap();
-        }
-        per_batch.push(tb.elapsed().as_secs_f64() * 1e3 / batch as f64);
-    }
-    let n = (per_batch.len() * batch) as f64;
-    per_batch.sort_by(f64::total_cmp);
-    (
-        per_batch[per_batch.len() / 2],
-        t0.elapsed().as_secs_f64() * 1e3 / n,
-        (cpu_seconds() - c0) * 1e3 / n,
-    )
-}
-
 /// Prints one table row. `largest` is the most data points of any model timed before in this
 /// process: the peak resident size per data point means something only for a model at least
 /// that large.
@@ -64,7 +30,9 @@ fn row(
     largest: &mut usize,
 ) {
     let st = s.stats();
-    let (ms, mean, cpu) = time_steps(s, seconds);
+    benchmarks::pull(s).unwrap();
+    let t = benchmarks::time_steps(s, seconds);
+    let (ms, mean, cpu) = (t.median_ms, t.mean_ms, t.cpu_ms);
     let peak = if st.data_points >= *largest {
         format!("{:.0}", peak_rss_mb() * 1048576.0 / st.data_points as f64)
     } else {

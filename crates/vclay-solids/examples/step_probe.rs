@@ -14,15 +14,10 @@
 //! after `benchmarks::pull` and DIGEST_STEPS more steps of a fresh model, and the yardstick
 //! (`vclay_core::yardstick`) at the start and the end.
 
-use std::time::Instant;
 use vclay_solids::{DynamicSolid, SolidParams, benchmarks};
 
 fn peak_rss_mb() -> f64 {
     vclay_core::yardstick::peak_resident_bytes().map_or(f64::NAN, |b| b as f64 / 1048576.0)
-}
-
-fn cpu_seconds() -> f64 {
-    vclay_core::yardstick::process_cpu_seconds().unwrap_or(f64::NAN)
 }
 
 fn digest(s: &DynamicSolid) -> u64 {
@@ -87,27 +82,8 @@ fn main() {
     drop(s);
     let (mut s, _) = build(&model, level, params, fix_half);
     benchmarks::pull(&mut s).unwrap();
-    let t = Instant::now();
-    let mut batch = 0;
-    while batch == 0 || t.elapsed().as_secs_f64() < 2e-3 {
-        s.step().unwrap();
-        batch += 1;
-    }
-    let t0 = Instant::now();
-    let c0 = cpu_seconds();
-    let mut per_batch = Vec::new();
-    while per_batch.len() < 5 || t0.elapsed().as_secs_f64() < seconds {
-        let tb = Instant::now();
-        for _ in 0..batch {
-            s.step().unwrap();
-        }
-        per_batch.push(tb.elapsed().as_secs_f64() * 1e3 / batch as f64);
-    }
-    let steps = (per_batch.len() * batch) as f64;
-    let mean = t0.elapsed().as_secs_f64() * 1e3 / steps;
-    let cpu = (cpu_seconds() - c0) * 1e3 / steps;
-    per_batch.sort_by(f64::total_cmp);
-    let median = per_batch[per_batch.len() / 2];
+    let t = benchmarks::time_steps(&mut s, seconds);
+    let (median, mean, cpu) = (t.median_ms, t.mean_ms, t.cpu_ms);
     println!(
         "{model} level {level}{}: {} data pts, {} springs, median {median:.4} ms/step ({:.1} \
          steps/s), mean {mean:.4}, cpu {cpu:.4} ms/step, {bpp:.0} B/data pt, peak {:.0} MB, \

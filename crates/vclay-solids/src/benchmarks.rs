@@ -262,6 +262,51 @@ pub fn pull(s: &mut DynamicSolid) -> Result<(), SolidsError> {
     s.run(3)
 }
 
+/// Step times of a benchmark run ([`time_steps`]), in milliseconds per step.
+#[derive(Clone, Copy, Debug)]
+pub struct StepTimes {
+    /// Wall time, median over batches of at least 2 ms: the figure a shared machine's pauses
+    /// move least.
+    pub median_ms: f64,
+    /// Wall time, mean over all timed steps.
+    pub mean_ms: f64,
+    /// CPU time of the whole process (all threads) per step; NaN where the platform does not
+    /// say ([`vclay_core::yardstick::process_cpu_seconds`]).
+    pub cpu_ms: f64,
+}
+
+/// Times `s.step()` for about `seconds` (at least 5 batches, each of at least 2 ms of steps),
+/// from the state `s` is in (the examples call [`pull`] first). Panics if a step fails: a
+/// benchmark model that diverges is a bug to see, not a figure.
+pub fn time_steps(s: &mut DynamicSolid, seconds: f64) -> StepTimes {
+    let cpu = || vclay_core::yardstick::process_cpu_seconds().unwrap_or(f64::NAN);
+    let t = std::time::Instant::now();
+    let mut batch = 0;
+    while batch == 0 || t.elapsed().as_secs_f64() < 2e-3 {
+        s.step().expect("benchmark step");
+        batch += 1;
+    }
+    let t0 = std::time::Instant::now();
+    let c0 = cpu();
+    let mut per_batch = Vec::new();
+    while per_batch.len() < 5 || t0.elapsed().as_secs_f64() < seconds {
+        let tb = std::time::Instant::now();
+        for _ in 0..batch {
+            s.step().expect("benchmark step");
+        }
+        per_batch.push(tb.elapsed().as_secs_f64() * 1e3 / batch as f64);
+    }
+    let n = (per_batch.len() * batch) as f64;
+    let mean_ms = t0.elapsed().as_secs_f64() * 1e3 / n;
+    let cpu_ms = (cpu() - c0) * 1e3 / n;
+    per_batch.sort_by(f64::total_cmp);
+    StepTimes {
+        median_ms: per_batch[per_batch.len() / 2],
+        mean_ms,
+        cpu_ms,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -21,7 +21,7 @@ use vclay_studio::worker::{Frame, Grab, Notice, Request, Worker};
 use vclay_studio::{Options, Studio, Tool};
 
 use crate::common;
-use common::{click, harness, quiet, wait_for};
+use common::{click, harness, paused, quiet, wait_for};
 
 /// Steps the UI until `done` holds (at most 30 s of wall time).
 fn wait(h: &mut Harness<'static, Studio>, what: &str, done: impl FnMut(&Studio) -> bool) {
@@ -76,10 +76,7 @@ fn cube_session(dir: &Path) -> PathBuf {
 #[test]
 fn a_click_on_a_dialog_over_the_viewport_does_not_reach_the_model() {
     let dir = tempfile::tempdir().unwrap();
-    let mut h = harness(Options {
-        paused: true,
-        ..quiet(dir.path())
-    });
+    let mut h = harness(paused(dir.path()));
     open_cube(&mut h);
     let centre = h.state().viewport().center();
     file_menu(&mut h, "Open...");
@@ -249,10 +246,7 @@ fn the_pde_glass_opens_paused_and_its_run_stops_at_the_end_of_the_time_slider() 
 #[test]
 fn open_and_the_start_page_ask_about_unsaved_changes() {
     let dir = tempfile::tempdir().unwrap();
-    let mut h = harness(Options {
-        paused: true,
-        ..quiet(dir.path())
-    });
+    let mut h = harness(paused(dir.path()));
     open_cube(&mut h);
     edit_damping(&mut h);
     file_menu(&mut h, "Open...");
@@ -451,10 +445,7 @@ fn save_as_suggests_an_absolute_path_beside_the_file_and_enter_saves() {
     wait(&mut h, "saved", |_| expected.exists());
 
     // Without a file: absolute, named after the model.
-    let mut h = harness(Options {
-        paused: true,
-        ..quiet(dir.path())
-    });
+    let mut h = harness(paused(dir.path()));
     open_cube(&mut h);
     file_menu(&mut h, "Save as...");
     let value = PathBuf::from(h.get_by_role(Role::TextInput).value().unwrap());
@@ -536,10 +527,7 @@ fn text_typed_in_the_frame_of_a_click_is_not_lost() {
 #[test]
 fn log_lines_show_rounded_numbers() {
     let dir = tempfile::tempdir().unwrap();
-    let mut h = harness(Options {
-        paused: true,
-        ..quiet(dir.path())
-    });
+    let mut h = harness(paused(dir.path()));
     open_cube(&mut h);
     let w = h.state().worker().unwrap();
     let model = h.state().frame().models[0].name.clone();
@@ -599,10 +587,7 @@ fn the_status_line_rounds_numbers_as_the_log_does() {
     // Undoing a rope on the egg names the material point it held, which the session writes
     // with every digit ([0.590938872494213, ...]); the status line shows it rounded.
     let dir = tempfile::tempdir().unwrap();
-    let mut h = harness(Options {
-        paused: true,
-        ..quiet(dir.path())
-    });
+    let mut h = harness(paused(dir.path()));
     open_builtin(&mut h, "Swung D-NURBS egg (Egg sculpting material)");
     let w = h.state().worker().unwrap();
     w.send(Request::Grab {
@@ -641,10 +626,7 @@ fn a_rope_stroke_logs_one_cursor_line_per_rope() {
     // log says each rope was attached, where its cursor is now (one line each) and that it
     // was released, not one line per mouse move.
     let dir = tempfile::tempdir().unwrap();
-    let mut h = harness(Options {
-        paused: true,
-        ..quiet(dir.path())
-    });
+    let mut h = harness(paused(dir.path()));
     open_cube(&mut h);
     let w = h.state().worker().unwrap();
     w.send(Request::Symmetry(vclay_studio::symmetry::Symmetry([

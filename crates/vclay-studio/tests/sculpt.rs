@@ -20,14 +20,11 @@ use vclay_studio::worker::{Flow, Grab, Request, Worker};
 use vclay_studio::{Options, Studio, Tool};
 
 use crate::common;
-use common::{click, harness, quiet, wait_for};
+use common::{click, harness, paused, quiet, wait_for};
 
 /// The paused cube from the start page.
 fn paused_cube(dir: &Path) -> Harness<'static, Studio> {
-    let mut h = harness(Options {
-        paused: true,
-        ..quiet(dir)
-    });
+    let mut h = harness(paused(dir));
     click(
         &mut h,
         Role::Button,
@@ -371,10 +368,7 @@ fn symmetry_mirrors_a_fix_stroke_and_a_rope_in_one_undo_group() {
 #[test]
 fn a_control_point_handle_lights_up_under_the_mouse() {
     let dir = tempfile::tempdir().unwrap();
-    let mut h = harness(Options {
-        paused: true,
-        ..quiet(dir.path())
-    });
+    let mut h = harness(paused(dir.path()));
     click(
         &mut h,
         Role::Button,

@@ -30,6 +30,14 @@ pub fn quiet(dir: &Path) -> Options {
     }
 }
 
+/// [`quiet`] with the simulation paused at the start.
+pub fn paused(dir: &Path) -> Options {
+    Options {
+        paused: true,
+        ..quiet(dir)
+    }
+}
+
 /// Steps the UI until `done` holds (at most `secs` of wall time).
 pub fn wait_for(
     h: &mut Harness<'static, Studio>,
