@@ -74,9 +74,16 @@ xdotool key h; sleep 0.3; xdotool key bracketright; sleep 0.2; xdotool key brack
 drag $((bx + bw / 10)) $((by + bh * 93 / 100)) $((bx + bw * 9 / 10)) $((by + bh * 93 / 100)) 20 0.2
 sleep 0.5
 
-# 3. Symmetry X, rope up from the top right (its mirror pulls the top left).
+# 3. Symmetry X, rope up from the top right (its mirror pulls the top left). The top of the
+# clay in that column (the scenario's rope left a dome on the top face, so the box's top is
+# the dome's).
+gx=$((bx + bw * 8 / 10))
+col=$(convert "$work/1_front.png" -crop "1x735+$gx+33" +repage -fuzz 18% -fill white \
+  -opaque "rgb(200,150,120)" -fill black +opaque white -format "%@" info:)
+gy=$(($(echo "$col" | sed 's/.*+//') + 33 + bh * 4 / 100))
+echo "check_designer: the rope grabs at ($gx, $gy)"
 xdotool key x; sleep 0.2; xdotool key r; sleep 0.3
-drag $((bx + bw * 8 / 10)) $((by + bh * 6 / 100)) $((bx + bw * 8 / 10)) $((by - bh * 30 / 100)) 25 1.5
+drag "$gx" "$gy" "$gx" $((gy - bh * 36 / 100)) 25 1.5
 import -window root "$work/2_pulled.png"
 
 # 4. Saved 0.7 s after the release and 2.5 s later.

@@ -29,7 +29,7 @@ for _ in $(seq 300); do
 done
 [ -n "$win" ] || { echo "check_studio: FAILED: no window"; exit 1; }
 xdotool windowmove "$win" 0 0 windowsize "$win" 1280 800 2>/dev/null || true
-sleep 4 # the scenario's own rope pulls the cube away and lets go by t = 0.9 s
+sleep 4 # the scenario's own rope pulls the cube, a plastic reset keeps the shape at t = 0.9 s
 # Fit the view to where the cube is now (the toolbar's Fit button), so it is at the centre of
 # the viewport, between the tool panel (left) and the plot panel (right).
 xdotool mousemove 179 12 click 1

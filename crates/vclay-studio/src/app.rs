@@ -33,6 +33,12 @@ pub const LOG_LINES: usize = 200;
 pub const PDE_T_MAX: f64 = 10.0;
 /// Least width of a dialog, in points (an error message must be readable).
 pub const DIALOG_MIN_WIDTH: f32 = 420.0;
+/// The energy plot's y axis reaches at least this times the model size squared: energies of a
+/// model at rest are rounding noise (positions rounded at 1e-16 of the size give energies near
+/// 1e-32 of `k size^2`, and 1e-28 was seen on the unit cube), which an axis scaled to the data
+/// alone draws as full-height spikes. A pull of a millionth of the size with a unit stiffness
+/// (1e-12 size^2) stays eight orders above it.
+pub const ENERGY_PLOT_FLOOR: f64 = 1e-20;
 
 /// The tool a press in the viewport uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -317,6 +323,11 @@ pub struct Options {
     /// The desktop's file chooser for Open, Save as, Export and Screenshot (`None`: the typed
     /// path dialogs). The binary uses [`crate::native::Chooser::find`].
     pub chooser: Option<crate::native::Chooser>,
+    /// A file that receives one line a second of the window's frame rate and the simulation's
+    /// speed (`vclay-studio --frame-log PATH`; `bench/window_fps.sh` reads it): wall seconds
+    /// since the start, frames/s, simulated time, steps, steps/s, step ms, display ms,
+    /// triangles, separated by spaces after a `#` header line.
+    pub frame_log: Option<PathBuf>,
 }
 
 /// The studio (see the [module docs](self)).
@@ -343,6 +354,10 @@ pub struct Studio {
     dialog: Option<Dialog>,
     log: VecDeque<String>,
     energy: Vec<[f64; 3]>,
+    /// The energy plot's y range as last drawn (tests read it).
+    energy_y_range: Option<[f64; 2]>,
+    /// The open `--frame-log` file, when the last line was written, and the studio's start.
+    frame_log: Option<(std::fs::File, Instant, Instant)>,
     press: Option<Press>,
     fitted: bool,
     edits: BTreeMap<String, f64>,
@@ -438,6 +453,8 @@ impl Studio {
             dialog: None,
             log: VecDeque::new(),
             energy: Vec::new(),
+            energy_y_range: None,
+            frame_log: None,
             press: None,
             ffd_pins: Vec::new(),
             pin_pending: false,
@@ -603,6 +620,11 @@ impl Studio {
     /// The energy plot's samples `(time, kinetic, elastic)`, oldest first.
     pub fn energy_samples(&self) -> &[[f64; 3]] {
         &self.energy
+    }
+
+    /// The energy plot's y range `[min, max]` as last drawn (`None` before the first draw).
+    pub fn energy_y_range(&self) -> Option<[f64; 2]> {
+        self.energy_y_range
     }
 
     /// The status bar's message (undo and redo results, a run stopped at the end of the time
@@ -786,6 +808,49 @@ impl Studio {
             .max(1e-9)
     }
 
+    /// Appends a line to the `--frame-log` file once a second (see [`Options::frame_log`]).
+    /// A file that cannot be written is reported once in the log and then left alone.
+    fn write_frame_log(&mut self, now: Instant) {
+        use std::io::Write;
+        if self.frame_log.is_none()
+            && let Some(p) = self.opts.frame_log.take()
+        {
+            let opened = std::fs::File::create(&p).and_then(|mut f| {
+                writeln!(
+                    f,
+                    "# wall_s frames_per_s sim_t steps steps_per_s step_ms display_ms triangles"
+                )?;
+                Ok(f)
+            });
+            match opened {
+                Ok(f) => self.frame_log = Some((f, now, now)),
+                Err(e) => self.push_log(format!("frame log {}: {e}", p.display())),
+            }
+        }
+        let Some((f, last, start)) = &mut self.frame_log else {
+            return;
+        };
+        if now.duration_since(*last) < Duration::from_secs(1) {
+            return;
+        }
+        *last = now;
+        let line = format!(
+            "{:.2} {} {:.4} {} {:.1} {:.3} {:.3} {}",
+            now.duration_since(*start).as_secs_f64(),
+            self.frame_times.len(),
+            self.frame.time,
+            self.frame.steps,
+            self.frame.steps_per_second,
+            self.frame.step_seconds * 1e3,
+            self.frame.build_seconds * 1e3,
+            self.scene.tri_indices.len() / 3
+        );
+        if let Err(e) = writeln!(f, "{line}") {
+            self.frame_log = None;
+            self.push_log(format!("frame log: {e}"));
+        }
+    }
+
     /// Draws one frame of the whole window.
     pub fn show(&mut self, ui: &mut Ui) {
         let ctx = ui.ctx().clone();
@@ -803,6 +868,7 @@ impl Studio {
         {
             self.frame_times.pop_front();
         }
+        self.write_frame_log(now);
         self.shortcuts(&ctx);
         self.handle_close(&ctx);
         self.handle_screenshot();
@@ -956,7 +1022,10 @@ impl Studio {
         match answer {
             Some(Answer::Submit) => match purpose {
                 PathPurpose::Open => {
-                    if let Err(e) = self.open_file(Path::new(path)) {
+                    // A relative path is read from the folder the dialog names (the opened
+                    // file's), not from wherever the studio was started.
+                    let path = self.open_folder().join(path.trim());
+                    if let Err(e) = self.open_file(&path) {
                         return Some(Dialog::Error(e));
                     }
                 }
@@ -989,6 +1058,19 @@ impl Studio {
             Some(f) if load::is_session_file(f) => self.send(Request::Save(f.clone())),
             _ => self.ask_path(PathPurpose::SaveAs, self.suggestion("session")),
         }
+    }
+
+    /// The folder the Open dialog reads a relative path from: the opened file's, else the
+    /// working folder (absolute either way, so that the dialog can say which).
+    pub fn open_folder(&self) -> PathBuf {
+        let dir = self
+            .file
+            .as_deref()
+            .and_then(Path::parent)
+            .filter(|d| !d.as_os_str().is_empty())
+            .map(Path::to_path_buf)
+            .unwrap_or_else(|| std::env::current_dir().unwrap_or_default());
+        absolute(&dir)
     }
 
     /// An absolute path with extension `ext` for a save dialog: beside the opened file, else
@@ -1410,13 +1492,31 @@ impl Studio {
         ui.heading("Energy");
         let kin: egui_plot::PlotPoints<'_> = self.energy.iter().map(|s| [s[0], s[1]]).collect();
         let ela: egui_plot::PlotPoints<'_> = self.energy.iter().map(|s| [s[0], s[2]]).collect();
-        egui_plot::Plot::new("energy")
+        let (size, dt) = self
+            .frame
+            .models
+            .first()
+            .map_or((1.0, 1.0), |m| (m.size, m.dt));
+        // The time axis spans at least one step: with the y floor below, a single sample would
+        // otherwise give egui_plot bounds of zero width (which it rejects).
+        let t0 = self.energy.first().map_or(self.frame.time, |s| s[0]);
+        let t1 = self.energy.last().map_or(t0, |s| s[0]);
+        let step = if dt.is_finite() && dt > 0.0 { dt } else { 1.0 };
+        let shown = egui_plot::Plot::new("energy")
+            .include_x(t0)
+            .include_x(t1.max(t0 + step))
             .height(200.0)
             .legend(egui_plot::Legend::default())
+            // A model at rest has energies of rounding size (1e-28); autoscaled alone they
+            // would fill the plot as spikes. The axis always reaches the noise floor.
+            .include_y(0.0)
+            .include_y(ENERGY_PLOT_FLOOR * size * size)
             .show(ui, |p| {
                 p.line(egui_plot::Line::new("kinetic", kin));
                 p.line(egui_plot::Line::new("elastic", ela));
             });
+        let b = shown.transform.bounds();
+        self.energy_y_range = Some([b.min()[1], b.max()[1]]);
         ui.label(format!(
             "kinetic {:.4e}  elastic {:.4e}",
             self.frame.energy.kinetic, self.frame.energy.elastic
@@ -1748,7 +1848,13 @@ impl Studio {
         mut path: String,
     ) -> (Dialog, bool, Option<Dialog>) {
         let (note, ok) = match purpose {
-            PathPurpose::Open => (None, "Open"),
+            PathPurpose::Open => (
+                Some(format!(
+                    "A relative path is read from {}",
+                    self.open_folder().display()
+                )),
+                "Open",
+            ),
             PathPurpose::SaveAs => (None, "Save"),
             PathPurpose::Export => (
                 Some(format!(

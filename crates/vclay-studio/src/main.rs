@@ -1,12 +1,12 @@
-//! `vclay-studio [FILE] [--autosave PATH] [--paused] [--no-recovery] [--bench [FRAMES]]`: the
-//! interactive studio (also started by `vclay studio ARGS`).
+//! `vclay-studio [FILE] [--autosave PATH] [--paused] [--no-recovery] [--frame-log PATH]
+//! [--bench [FRAMES]]`: the interactive studio (also started by `vclay studio ARGS`).
 
 use std::io::Write;
 use std::path::PathBuf;
 
 use vclay_studio::{Options, Studio, bench};
 
-const USAGE: &str = "usage: vclay-studio [FILE] [--autosave PATH] [--paused] [--no-recovery]\n       vclay-studio --bench [FRAMES]\n\nFILE: any file vclay reads, recognized by its content: a scenario, a session, a model file\n(JSON, STEP, IGES), a PDE spec, a triangular model, a lattice (.ovm, .vtu) or a mesh (.obj,\n.stl, .ply, .glb). Without FILE the start page offers built-in models.";
+const USAGE: &str = "usage: vclay-studio [FILE] [--autosave PATH] [--paused] [--no-recovery] [--frame-log PATH]\n       vclay-studio --bench [FRAMES]\n\nFILE: any file vclay reads, recognized by its content: a scenario, a session, a model file\n(JSON, STEP, IGES), a PDE spec, a triangular model, a lattice (.ovm, .vtu) or a mesh (.obj,\n.stl, .ply, .glb). Without FILE the start page offers built-in models.";
 
 fn main() -> anyhow::Result<()> {
     let mut args = std::env::args().skip(1);
@@ -30,6 +30,12 @@ fn main() -> anyhow::Result<()> {
                 opts.autosave = Some(PathBuf::from(p));
             }
             "--paused" => opts.paused = true,
+            "--frame-log" => {
+                let p = args
+                    .next()
+                    .ok_or_else(|| anyhow::anyhow!("--frame-log needs a path\n{USAGE}"))?;
+                opts.frame_log = Some(PathBuf::from(p));
+            }
             "--no-recovery" => opts.no_recovery = true,
             "--bench" => {
                 bench_frames = Some(300);

@@ -31,7 +31,7 @@ pub fn rope_cube(out: &Path) -> Result<StepOutput> {
         .collect();
     Ok((
         format!(
-            "4^3 cube at level 2 ({}) pulled by the rope and released: {} steps at {:.3} ms/step (max {:.3} ms), final energy {:.3e}",
+            "4^3 cube at level 2 ({}) pulled by the rope, kept by a plastic reset and released: {} steps at {:.3} ms/step (max {:.3} ms), final energy {:.3e}",
             sc.session.model(None)?.summary(),
             steps,
             s.mean_step_ms,
