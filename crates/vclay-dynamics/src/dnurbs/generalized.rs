@@ -69,6 +69,10 @@ use rayon::prelude::*;
 use std::sync::Arc;
 use vclay_core::{GaussLegendre, Vec3};
 
+mod block_schur;
+pub use block_schur::{BLOCK_SCHUR_ITERATIONS, BLOCK_SCHUR_TOLERANCE, BlockSchur};
+use block_schur::{SchurBuffers, SchurFactor, SchurPattern};
+
 /// Values and Jacobian columns of a geometry at one parameter, for the six parametric
 /// derivatives `s, s_u, s_v, s_uu, s_uv, s_vv` (see [`super::rational::MULTI_INDICES`]).
 #[derive(Clone, Debug, Default)]
@@ -1393,8 +1397,17 @@ pub struct GeneralizedDnurbs<G: GeneralizedGeometry> {
     /// (see [`FactorReuse`]; default `None`: every step factors its own matrix, the path every
     /// recorded trajectory was computed with). Only for [`LinearSolver::Direct`].
     pub factor_reuse: Option<FactorReuse>,
+    /// Whether the direct solver splits the step matrix into the control points' shared
+    /// block and the rest and solves through a Schur complement on the rest, when the
+    /// structure holds (see [`BlockSchur`]; default `None`: the full factorization, the path
+    /// every recorded trajectory was computed with). Only for [`LinearSolver::Direct`] without
+    /// [`Self::factor_reuse`].
+    pub block_schur: Option<BlockSchur>,
     /// Numeric factorizations so far (the direct solver's; see [`FactorReuse`]).
     factorizations: usize,
+    /// The block split of the current pattern (`None` inside: the structure does not hold),
+    /// built once per [`CsrPattern`].
+    schur: Option<(Arc<CsrPattern>, Option<Arc<SchurPattern>>)>,
     direct: Option<Arc<DirectPattern>>,
     /// Buffers of the numeric factorization kept between steps (scratch; no state).
     factor_buffers: FactorBuffers,
@@ -1458,7 +1471,9 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             inertial_force: true,
             solver: geometry_solver,
             factor_reuse: None,
+            block_schur: None,
             factorizations: 0,
+            schur: None,
             direct: None,
             factor_buffers: FactorBuffers::default(),
             row_cache: RowCache::default(),
@@ -2256,14 +2271,38 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                 None
             }
         });
-        let direct = if folded && reused.is_none() {
-            self.factor(&pattern, &values, &extra_diag)
-        } else {
-            None
+        // The block split (`block_schur`): the shared position block and the rest factored
+        // apart, CG on the Schur complement; the full factorization when the structure does
+        // not hold or the iterations do not reach the tolerance.
+        let schur = match self.block_schur {
+            Some(settings) if folded && self.factor_reuse.is_none() => {
+                let solved = self.schur_solve(
+                    settings,
+                    &pattern,
+                    &values,
+                    &extra_diag,
+                    &works,
+                    ne,
+                    &b,
+                    &mut x,
+                );
+                if solved.is_none() {
+                    x.copy_from_slice(&warm);
+                }
+                solved.map(|(f, stats)| (f, settings, stats))
+            }
+            _ => None,
         };
-        let (pre, mut stats) = match (reused, direct) {
+        let (pre, mut stats) = match (reused, schur) {
             (Some((f, stats)), _) => (Solve::Reused(f), stats),
-            (None, direct) => {
+            // The CG's residual is reported, as the CG paths do.
+            (None, Some((f, settings, stats))) => (Solve::Schur(f, settings), stats),
+            (None, None) => {
+                let direct = if folded {
+                    self.factor(&pattern, &values, &extra_diag)
+                } else {
+                    None
+                };
                 let pre = match direct {
                     Some(f) => Solve::Direct(f),
                     None => Solve::Pcg(Precond::new(&op, &self.geometry.coordinate_groups())),
@@ -2611,6 +2650,49 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             works.push(w);
         }
         Ok(())
+    }
+
+    /// The block-Schur solve of this step's system `A x = b` ([`BlockSchur`], module docs of
+    /// `generalized/block_schur.rs`), starting from `x`; `works` are the elements (`..ne`) and
+    /// the point forces folded into `values`. `None` when the structure does not hold or the
+    /// iterations do not reach the tolerance (the caller factors the full matrix).
+    #[allow(clippy::too_many_arguments)]
+    fn schur_solve(
+        &mut self,
+        settings: BlockSchur,
+        pattern: &Arc<CsrPattern>,
+        values: &[f64],
+        extra_diag: &[f64],
+        works: &[ElementWork],
+        ne: usize,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Option<(SchurFactor, SolverStats)> {
+        if self
+            .schur
+            .as_ref()
+            .is_none_or(|(p, _)| !Arc::ptr_eq(p, pattern))
+        {
+            let n = self.geometry.coordinates().len();
+            let homogeneous =
+                self.geometry.weight_coordinates() == homogeneous_weight_coordinates(n);
+            let split = SchurPattern::new(pattern, &self.fixed, homogeneous, &works[..ne], values)
+                .map(Arc::new);
+            self.schur = Some((pattern.clone(), split));
+        }
+        let split = self.schur.as_ref()?.1.clone()?;
+        if !works[ne..].iter().all(|w| split.admits(w)) {
+            return None;
+        }
+        let f = split.factor(values, extra_diag, &mut self.factor_buffers.schur)?;
+        let stats = f.solve(b, x, settings.max_iterations, settings.tolerance);
+        if stats.relative_residual <= settings.tolerance {
+            self.factorizations += 1;
+            Some((f, stats))
+        } else {
+            self.factor_buffers.schur.keep(f);
+            None
+        }
     }
 
     /// Sparse Cholesky of this step's matrix (CSR values `full` with the point-force blocks
@@ -3295,6 +3377,8 @@ struct FactorBuffers {
     scratch: Scratch,
     /// The last factorization, kept for [`GeneralizedDnurbs::factor_reuse`].
     lagged: Option<Factor>,
+    /// The block-Schur solve's buffers ([`GeneralizedDnurbs::block_schur`]).
+    schur: SchurBuffers,
 }
 
 impl FactorBuffers {
@@ -3304,6 +3388,7 @@ impl FactorBuffers {
         match solve {
             Solve::Direct(f) | Solve::Reused(f) if reuse => self.lagged = Some(f),
             Solve::Direct(f) | Solve::Reused(f) => self.factor = f.values,
+            Solve::Schur(f, _) => self.schur.keep(f),
             Solve::Pcg(_) => {}
         }
     }
@@ -3351,6 +3436,9 @@ enum Solve {
     /// Conjugate gradients preconditioned with an earlier step's factorization
     /// ([`FactorReuse`]).
     Reused(Factor),
+    /// The block split's factors, conjugate gradients on the Schur complement with the
+    /// block-Schur settings' cap and tolerance ([`BlockSchur`]).
+    Schur(SchurFactor, BlockSchur),
 }
 
 /// A preconditioner `z = M^-1 r` on the free coordinates (fixed entries of `z` untouched).
@@ -3411,25 +3499,31 @@ impl Solve {
             // (constraint rows, projections) are solved like the first.
             Solve::Reused(f) => pcg(op, f, b, x, max_it, tol),
             Solve::Direct(f) => {
-                let free = &f.pattern.free;
                 f.solve_into(b, x);
-                let mut ax = vec![0.0; b.len()];
-                op.apply(x, &mut ax);
-                let (mut rn, mut bn) = (0.0, 0.0);
-                for &i in free {
-                    rn += (b[i] - ax[i]).powi(2);
-                    bn += b[i] * b[i];
-                }
                 SolverStats {
                     iterations: 0,
-                    relative_residual: if bn > 0.0 {
-                        (rn / bn).sqrt()
-                    } else {
-                        rn.sqrt()
-                    },
+                    relative_residual: relative_residual(op, b, x),
                 }
             }
+            Solve::Schur(f, settings) => f.solve(b, x, settings.max_iterations, settings.tolerance),
         }
+    }
+}
+
+/// `|b - A x| / |b|` over the free coordinates (`|b - A x|` when `b` vanishes there): one
+/// product with `A`.
+fn relative_residual(op: &Op<'_>, b: &[f64], x: &[f64]) -> f64 {
+    let mut ax = vec![0.0; b.len()];
+    op.apply(x, &mut ax);
+    let (mut rn, mut bn) = (0.0, 0.0);
+    for i in (0..b.len()).filter(|&i| !op.fixed[i]) {
+        rn += (b[i] - ax[i]).powi(2);
+        bn += b[i] * b[i];
+    }
+    if bn > 0.0 {
+        (rn / bn).sqrt()
+    } else {
+        rn.sqrt()
     }
 }
 
