@@ -30,7 +30,10 @@
 //! ```
 //! solved by a sparse Cholesky factorization refactored every step on a symbolic analysis
 //! cached per set of fixed coordinates ([`LinearSolver::Direct`], the default for tensor-product
-//! geometries), or by block-Jacobi-preconditioned conjugate gradients (one 4x4 block per control
+//! geometries; opt-in [`GeneralizedDnurbs::block_schur`]: where the Jacobian's `R_i I3` blocks
+//! make the matrix `[[S (x) I3, B], [B^T, C]]`, `S` and `C` factored apart and conjugate
+//! gradients on the Schur complement, module `block_schur`), or by
+//! block-Jacobi-preconditioned conjugate gradients (one 4x4 block per control
 //! point: x, y, z, w), warm-started from `v`, with an iteration cap and a relative residual
 //! tolerance (the paper capped CG at 10 iterations; the default for swung surfaces). The element
 //! matrices are computed in parallel per element (section 5.1): the Jacobian rows of all the
@@ -2229,16 +2232,38 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             self.pattern = Some(Arc::new(CsrPattern::new(n, &works[..ne], &self.fixed)));
         }
         let pattern = self.pattern.clone().expect("just built");
-        let mut values = pattern.values(&works[..ne]);
-        // The direct solver folds the point-force blocks into the CSR values (they lie in the
-        // element pattern) and factors them; CG applies them element-wise.
-        let folded = self.solver == LinearSolver::Direct
-            && fold_extras(&pattern, &mut values, &works[ne..], &self.fixed);
-        let first_extra = if folded { works.len() } else { ne };
         let warm: Vec<f64> = (0..n)
             .map(|i| if self.fixed[i] { 0.0 } else { v[i] })
             .collect();
         let mut x = warm.clone();
+        // The block split (`block_schur`): the shared position block and the rest summed
+        // straight from the element matrices and factored apart, CG on the Schur complement;
+        // the CSR values and the full factorization when the structure does not hold or the
+        // iterations do not reach the tolerance.
+        let schur = match self.block_schur {
+            Some(settings)
+                if self.solver == LinearSolver::Direct && self.factor_reuse.is_none() =>
+            {
+                let solved =
+                    self.schur_solve(settings, &pattern, &extra_diag, &works, ne, &b, &mut x);
+                if solved.is_none() {
+                    x.copy_from_slice(&warm);
+                }
+                solved.map(|(f, stats)| (f, settings, stats))
+            }
+            _ => None,
+        };
+        let mut values = if schur.is_some() {
+            Vec::new()
+        } else {
+            pattern.values(&works[..ne])
+        };
+        // The direct solver folds the point-force blocks into the CSR values (they lie in the
+        // element pattern) and factors them; CG applies them element-wise.
+        let folded = schur.is_some()
+            || (self.solver == LinearSolver::Direct
+                && fold_extras(&pattern, &mut values, &works[ne..], &self.fixed));
+        let first_extra = if folded { works.len() } else { ne };
         // An earlier step's factor as the preconditioner (`factor_reuse`), if it fits this
         // step's pattern; the step factors its own matrix if that does not converge.
         let lagged = match (self.factor_reuse, folded) {
@@ -2254,7 +2279,8 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         let fixed = self.fixed.clone();
         let op = Op {
             works: &works,
-            csr: Some((&pattern, &values)),
+            // No CSR values on the block split's path (its solves do not read them).
+            csr: schur.is_none().then_some((&*pattern, values.as_slice())),
             first_extra,
             extra_diag: &extra_diag,
             fixed: &fixed,
@@ -2271,28 +2297,6 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                 None
             }
         });
-        // The block split (`block_schur`): the shared position block and the rest factored
-        // apart, CG on the Schur complement; the full factorization when the structure does
-        // not hold or the iterations do not reach the tolerance.
-        let schur = match self.block_schur {
-            Some(settings) if folded && self.factor_reuse.is_none() => {
-                let solved = self.schur_solve(
-                    settings,
-                    &pattern,
-                    &values,
-                    &extra_diag,
-                    &works,
-                    ne,
-                    &b,
-                    &mut x,
-                );
-                if solved.is_none() {
-                    x.copy_from_slice(&warm);
-                }
-                solved.map(|(f, stats)| (f, settings, stats))
-            }
-            _ => None,
-        };
         let (pre, mut stats) = match (reused, schur) {
             (Some((f, stats)), _) => (Solve::Reused(f), stats),
             // The CG's residual is reported, as the CG paths do.
@@ -2654,14 +2658,13 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
 
     /// The block-Schur solve of this step's system `A x = b` ([`BlockSchur`], module docs of
     /// `generalized/block_schur.rs`), starting from `x`; `works` are the elements (`..ne`) and
-    /// the point forces folded into `values`. `None` when the structure does not hold or the
-    /// iterations do not reach the tolerance (the caller factors the full matrix).
+    /// the point forces. `None` when the structure does not hold or the iterations do not
+    /// reach the tolerance (the caller sums the CSR values and factors the full matrix).
     #[allow(clippy::too_many_arguments)]
     fn schur_solve(
         &mut self,
         settings: BlockSchur,
         pattern: &Arc<CsrPattern>,
-        values: &[f64],
         extra_diag: &[f64],
         works: &[ElementWork],
         ne: usize,
@@ -2673,18 +2676,28 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             .as_ref()
             .is_none_or(|(p, _)| !Arc::ptr_eq(p, pattern))
         {
+            // Built and checked once per pattern, on this step's summed values.
             let n = self.geometry.coordinates().len();
             let homogeneous =
                 self.geometry.weight_coordinates() == homogeneous_weight_coordinates(n);
-            let split = SchurPattern::new(pattern, &self.fixed, homogeneous, &works[..ne], values)
+            let mut values = pattern.values(&works[..ne]);
+            let folded = fold_extras(pattern, &mut values, &works[ne..], &self.fixed);
+            let split = folded
+                .then(|| {
+                    SchurPattern::new(pattern, &self.fixed, homogeneous, &works[..ne], &values)
+                })
+                .flatten()
                 .map(Arc::new);
             self.schur = Some((pattern.clone(), split));
         }
         let split = self.schur.as_ref()?.1.clone()?;
-        if !works[ne..].iter().all(|w| split.admits(w)) {
-            return None;
-        }
-        let f = split.factor(values, extra_diag, &mut self.factor_buffers.schur)?;
+        let f = split.factor(
+            works,
+            ne,
+            &self.fixed,
+            extra_diag,
+            &mut self.factor_buffers.schur,
+        )?;
         let stats = f.solve(b, x, settings.max_iterations, settings.tolerance);
         if stats.relative_residual <= settings.tolerance {
             self.factorizations += 1;
