@@ -3,7 +3,9 @@
 //! cubic surface (default 16; issue goal: 60 steps/s on 2 cores; optional second argument: CG
 //! relative tolerance; `--cg`: block-Jacobi CG instead of the default sparse Cholesky;
 //! `--uniform`: unit initial weights, `benchmarks::uniform_dynamic_sheet`; `--reuse`: the
-//! direct solver reuses earlier factorizations as CG preconditioners, `FactorReuse`), pulled
+//! direct solver reuses earlier factorizations as CG preconditioners, `FactorReuse`;
+//! `--schur`: the direct solver's block split with CG on the weights' Schur complement,
+//! `BlockSchur`), pulled
 //! by a moving spring, one edge fixed (`vclay_dynamics::dnurbs::benchmarks::dynamic_sheet`).
 //! Every step recomputes the element matrices (they depend on the weights). Prints the wall and
 //! process CPU time per step and the same run's yardstick (`vclay_core::yardstick`, before and
@@ -18,8 +20,9 @@ fn main() {
     let cg = std::env::args().any(|a| a == "--cg");
     let uniform = std::env::args().any(|a| a == "--uniform");
     let reuse = std::env::args().any(|a| a == "--reuse");
+    let schur = std::env::args().any(|a| a == "--schur");
     let args: Vec<String> = std::env::args()
-        .filter(|a| !["--cg", "--uniform", "--reuse"].contains(&a.as_str()))
+        .filter(|a| !["--cg", "--uniform", "--reuse", "--schur"].contains(&a.as_str()))
         .collect();
     let n: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(16);
     let t0 = Instant::now();
@@ -38,6 +41,9 @@ fn main() {
     }
     if reuse {
         d.factor_reuse = Some(Default::default());
+    }
+    if schur {
+        d.block_schur = Some(Default::default());
     }
     let steps = 60;
     let before = yardstick::measure(0.3);
@@ -69,10 +75,15 @@ fn main() {
             (h ^ x.to_bits()).wrapping_mul(0x100_0000_01b3)
         });
     println!(
-        "{n}x{n} cubic, dynamic weights ({} coordinates, {} quadrature points, {:?}): setup {:.1} ms, {:.1} steps/s, {:.1} CG iterations per step, {} factorizations, {} sub-steps, weights now {lo:.3}..{hi:.3}, digest {digest:016x}",
+        "{n}x{n} cubic, dynamic weights ({} coordinates, {} quadrature points, {:?}{}): setup {:.1} ms, {:.1} steps/s, {:.1} CG iterations per step, {} factorizations, {} sub-steps, weights now {lo:.3}..{hi:.3}, digest {digest:016x}",
         d.geometry().coordinates().len(),
         d.quadrature_points(),
         d.solver,
+        if d.block_schur.is_some() {
+            " + block Schur"
+        } else {
+            ""
+        },
         setup * 1e3,
         steps as f64 / secs,
         iters as f64 / steps as f64,

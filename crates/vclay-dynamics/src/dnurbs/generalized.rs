@@ -30,7 +30,10 @@
 //! ```
 //! solved by a sparse Cholesky factorization refactored every step on a symbolic analysis
 //! cached per set of fixed coordinates ([`LinearSolver::Direct`], the default for tensor-product
-//! geometries), or by block-Jacobi-preconditioned conjugate gradients (one 4x4 block per control
+//! geometries; opt-in [`GeneralizedDnurbs::block_schur`]: where the Jacobian's `R_i I3` blocks
+//! make the matrix `[[S (x) I3, B], [B^T, C]]`, `S` and `C` factored apart and conjugate
+//! gradients on the Schur complement, module `block_schur`), or by
+//! block-Jacobi-preconditioned conjugate gradients (one 4x4 block per control
 //! point: x, y, z, w), warm-started from `v`, with an iteration cap and a relative residual
 //! tolerance (the paper capped CG at 10 iterations; the default for swung surfaces). The element
 //! matrices are computed in parallel per element (section 5.1): the Jacobian rows of all the
@@ -68,6 +71,10 @@ use crate::error::DynamicsError;
 use rayon::prelude::*;
 use std::sync::Arc;
 use vclay_core::{GaussLegendre, Vec3};
+
+mod block_schur;
+pub use block_schur::{BLOCK_SCHUR_ITERATIONS, BLOCK_SCHUR_TOLERANCE, BlockSchur};
+use block_schur::{SchurBuffers, SchurFactor, SchurPattern};
 
 /// Values and Jacobian columns of a geometry at one parameter, for the six parametric
 /// derivatives `s, s_u, s_v, s_uu, s_uv, s_vv` (see [`super::rational::MULTI_INDICES`]).
@@ -1393,8 +1400,17 @@ pub struct GeneralizedDnurbs<G: GeneralizedGeometry> {
     /// (see [`FactorReuse`]; default `None`: every step factors its own matrix, the path every
     /// recorded trajectory was computed with). Only for [`LinearSolver::Direct`].
     pub factor_reuse: Option<FactorReuse>,
+    /// Whether the direct solver splits the step matrix into the control points' shared
+    /// block and the rest and solves through a Schur complement on the rest, when the
+    /// structure holds (see [`BlockSchur`]; default `None`: the full factorization, the path
+    /// every recorded trajectory was computed with). Only for [`LinearSolver::Direct`] without
+    /// [`Self::factor_reuse`].
+    pub block_schur: Option<BlockSchur>,
     /// Numeric factorizations so far (the direct solver's; see [`FactorReuse`]).
     factorizations: usize,
+    /// The block split of the current pattern (`None` inside: the structure does not hold),
+    /// built once per [`CsrPattern`].
+    schur: Option<(Arc<CsrPattern>, Option<Arc<SchurPattern>>)>,
     direct: Option<Arc<DirectPattern>>,
     /// Buffers of the numeric factorization kept between steps (scratch; no state).
     factor_buffers: FactorBuffers,
@@ -1458,7 +1474,9 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             inertial_force: true,
             solver: geometry_solver,
             factor_reuse: None,
+            block_schur: None,
             factorizations: 0,
+            schur: None,
             direct: None,
             factor_buffers: FactorBuffers::default(),
             row_cache: RowCache::default(),
@@ -2214,16 +2232,38 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             self.pattern = Some(Arc::new(CsrPattern::new(n, &works[..ne], &self.fixed)));
         }
         let pattern = self.pattern.clone().expect("just built");
-        let mut values = pattern.values(&works[..ne]);
-        // The direct solver folds the point-force blocks into the CSR values (they lie in the
-        // element pattern) and factors them; CG applies them element-wise.
-        let folded = self.solver == LinearSolver::Direct
-            && fold_extras(&pattern, &mut values, &works[ne..], &self.fixed);
-        let first_extra = if folded { works.len() } else { ne };
         let warm: Vec<f64> = (0..n)
             .map(|i| if self.fixed[i] { 0.0 } else { v[i] })
             .collect();
         let mut x = warm.clone();
+        // The block split (`block_schur`): the shared position block and the rest summed
+        // straight from the element matrices and factored apart, CG on the Schur complement;
+        // the CSR values and the full factorization when the structure does not hold or the
+        // iterations do not reach the tolerance.
+        let schur = match self.block_schur {
+            Some(settings)
+                if self.solver == LinearSolver::Direct && self.factor_reuse.is_none() =>
+            {
+                let solved =
+                    self.schur_solve(settings, &pattern, &extra_diag, &works, ne, &b, &mut x);
+                if solved.is_none() {
+                    x.copy_from_slice(&warm);
+                }
+                solved.map(|(f, stats)| (f, settings, stats))
+            }
+            _ => None,
+        };
+        let mut values = if schur.is_some() {
+            Vec::new()
+        } else {
+            pattern.values(&works[..ne])
+        };
+        // The direct solver folds the point-force blocks into the CSR values (they lie in the
+        // element pattern) and factors them; CG applies them element-wise.
+        let folded = schur.is_some()
+            || (self.solver == LinearSolver::Direct
+                && fold_extras(&pattern, &mut values, &works[ne..], &self.fixed));
+        let first_extra = if folded { works.len() } else { ne };
         // An earlier step's factor as the preconditioner (`factor_reuse`), if it fits this
         // step's pattern; the step factors its own matrix if that does not converge.
         let lagged = match (self.factor_reuse, folded) {
@@ -2239,7 +2279,8 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         let fixed = self.fixed.clone();
         let op = Op {
             works: &works,
-            csr: Some((&pattern, &values)),
+            // No CSR values on the block split's path (its solves do not read them).
+            csr: schur.is_none().then_some((&*pattern, values.as_slice())),
             first_extra,
             extra_diag: &extra_diag,
             fixed: &fixed,
@@ -2256,14 +2297,16 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                 None
             }
         });
-        let direct = if folded && reused.is_none() {
-            self.factor(&pattern, &values, &extra_diag)
-        } else {
-            None
-        };
-        let (pre, mut stats) = match (reused, direct) {
+        let (pre, mut stats) = match (reused, schur) {
             (Some((f, stats)), _) => (Solve::Reused(f), stats),
-            (None, direct) => {
+            // The CG's residual is reported, as the CG paths do.
+            (None, Some((f, settings, stats))) => (Solve::Schur(f, settings), stats),
+            (None, None) => {
+                let direct = if folded {
+                    self.factor(&pattern, &values, &extra_diag)
+                } else {
+                    None
+                };
                 let pre = match direct {
                     Some(f) => Solve::Direct(f),
                     None => Solve::Pcg(Precond::new(&op, &self.geometry.coordinate_groups())),
@@ -2611,6 +2654,58 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             works.push(w);
         }
         Ok(())
+    }
+
+    /// The block-Schur solve of this step's system `A x = b` ([`BlockSchur`], module docs of
+    /// `generalized/block_schur.rs`), starting from `x`; `works` are the elements (`..ne`) and
+    /// the point forces. `None` when the structure does not hold or the iterations do not
+    /// reach the tolerance (the caller sums the CSR values and factors the full matrix).
+    #[allow(clippy::too_many_arguments)]
+    fn schur_solve(
+        &mut self,
+        settings: BlockSchur,
+        pattern: &Arc<CsrPattern>,
+        extra_diag: &[f64],
+        works: &[ElementWork],
+        ne: usize,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Option<(SchurFactor, SolverStats)> {
+        if self
+            .schur
+            .as_ref()
+            .is_none_or(|(p, _)| !Arc::ptr_eq(p, pattern))
+        {
+            // Built and checked once per pattern, on this step's summed values.
+            let n = self.geometry.coordinates().len();
+            let homogeneous =
+                self.geometry.weight_coordinates() == homogeneous_weight_coordinates(n);
+            let mut values = pattern.values(&works[..ne]);
+            let folded = fold_extras(pattern, &mut values, &works[ne..], &self.fixed);
+            let split = folded
+                .then(|| {
+                    SchurPattern::new(pattern, &self.fixed, homogeneous, &works[..ne], &values)
+                })
+                .flatten()
+                .map(Arc::new);
+            self.schur = Some((pattern.clone(), split));
+        }
+        let split = self.schur.as_ref()?.1.clone()?;
+        let f = split.factor(
+            works,
+            ne,
+            &self.fixed,
+            extra_diag,
+            &mut self.factor_buffers.schur,
+        )?;
+        let stats = f.solve(b, x, settings.max_iterations, settings.tolerance);
+        if stats.relative_residual <= settings.tolerance {
+            self.factorizations += 1;
+            Some((f, stats))
+        } else {
+            self.factor_buffers.schur.keep(f);
+            None
+        }
     }
 
     /// Sparse Cholesky of this step's matrix (CSR values `full` with the point-force blocks
@@ -3295,6 +3390,8 @@ struct FactorBuffers {
     scratch: Scratch,
     /// The last factorization, kept for [`GeneralizedDnurbs::factor_reuse`].
     lagged: Option<Factor>,
+    /// The block-Schur solve's buffers ([`GeneralizedDnurbs::block_schur`]).
+    schur: SchurBuffers,
 }
 
 impl FactorBuffers {
@@ -3304,6 +3401,7 @@ impl FactorBuffers {
         match solve {
             Solve::Direct(f) | Solve::Reused(f) if reuse => self.lagged = Some(f),
             Solve::Direct(f) | Solve::Reused(f) => self.factor = f.values,
+            Solve::Schur(f, _) => self.schur.keep(f),
             Solve::Pcg(_) => {}
         }
     }
@@ -3351,6 +3449,9 @@ enum Solve {
     /// Conjugate gradients preconditioned with an earlier step's factorization
     /// ([`FactorReuse`]).
     Reused(Factor),
+    /// The block split's factors, conjugate gradients on the Schur complement with the
+    /// block-Schur settings' cap and tolerance ([`BlockSchur`]).
+    Schur(SchurFactor, BlockSchur),
 }
 
 /// A preconditioner `z = M^-1 r` on the free coordinates (fixed entries of `z` untouched).
@@ -3411,25 +3512,31 @@ impl Solve {
             // (constraint rows, projections) are solved like the first.
             Solve::Reused(f) => pcg(op, f, b, x, max_it, tol),
             Solve::Direct(f) => {
-                let free = &f.pattern.free;
                 f.solve_into(b, x);
-                let mut ax = vec![0.0; b.len()];
-                op.apply(x, &mut ax);
-                let (mut rn, mut bn) = (0.0, 0.0);
-                for &i in free {
-                    rn += (b[i] - ax[i]).powi(2);
-                    bn += b[i] * b[i];
-                }
                 SolverStats {
                     iterations: 0,
-                    relative_residual: if bn > 0.0 {
-                        (rn / bn).sqrt()
-                    } else {
-                        rn.sqrt()
-                    },
+                    relative_residual: relative_residual(op, b, x),
                 }
             }
+            Solve::Schur(f, settings) => f.solve(b, x, settings.max_iterations, settings.tolerance),
         }
+    }
+}
+
+/// `|b - A x| / |b|` over the free coordinates (`|b - A x|` when `b` vanishes there): one
+/// product with `A`.
+fn relative_residual(op: &Op<'_>, b: &[f64], x: &[f64]) -> f64 {
+    let mut ax = vec![0.0; b.len()];
+    op.apply(x, &mut ax);
+    let (mut rn, mut bn) = (0.0, 0.0);
+    for i in (0..b.len()).filter(|&i| !op.fixed[i]) {
+        rn += (b[i] - ax[i]).powi(2);
+        bn += b[i] * b[i];
+    }
+    if bn > 0.0 {
+        (rn / bn).sqrt()
+    } else {
+        rn.sqrt()
     }
 }
 

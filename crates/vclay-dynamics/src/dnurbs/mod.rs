@@ -49,8 +49,9 @@ mod system;
 pub mod triangular;
 
 pub use generalized::{
-    Constraint, DEFAULT_QUADRATURE_TOLERANCE, FactorReuse, GeneralizedDnurbs, GeneralizedGeometry,
-    GeneralizedState, LinearTie, LocalJacobian, QuadratureRule, denominator_radius,
+    BlockSchur, Constraint, DEFAULT_QUADRATURE_TOLERANCE, FactorReuse, GeneralizedDnurbs,
+    GeneralizedGeometry, GeneralizedState, LinearTie, LocalJacobian, QuadratureRule,
+    denominator_radius,
 };
 pub use geometry::{ClosedCurve, DnurbsGeometry, ElementSamples};
 pub use patches::{Continuity, PatchesGeometry};

@@ -1,0 +1,836 @@
+//! The step matrix of a homogeneous geometry split into its shared coordinate block and the
+//! rest, solved through a Schur complement on the rest (issues 27/31).
+//!
+//! ## Structure
+//! With the coordinates `p = [..., p_i, w_i, ...]` of `d-nurbs.txt` eq (4) (a control point's
+//! `x, y, z`, then its weight), the Jacobian of eqs (5)-(6) and (13) is
+//! `J = [..., R_i I3, w_i, ...]`: a control point's three position columns are the same scalar
+//! `R_i` times the identity (and so are their parametric derivatives `R^a_i I3`). Every term of
+//! the step matrix of eq (18), `2M + dt D + 2 dt^2 K` with `M`, `D` of eq (16) and `K` of eq
+//! (17) (and the springs' `k J^T J` of eq (19)), is a sum of `c J^a^T J^a`, whose entry between
+//! two position columns is `c R^a_i R^a_j I3`. Ordering the free coordinates as the control
+//! points whose `x, y, z` are all free (`kron`, component-major in the solves) and the others
+//! (`rest`: the weights and the free coordinates of partly held control points):
+//!
+//! ```text
+//! A = [ S (x) I3   B ]      S_ij = sum_q sum_a c R^a_i R^a_j   (one scalar block for x, y, z)
+//!     [ B^T        C ]      B: position-rest coupling, C: rest-rest block (+ weight diagonal)
+//! ```
+//!
+//! The intrinsic weight inertia and the weight penalty add to `C`'s diagonal only. Solving
+//! `A [u; w] = [f; g]`: `u = (S^-1 (x) I3)(f - B w)` and
+//! `Sigma w = g - B^T (S^-1 (x) I3) f` with the Schur complement
+//! `Sigma = C - B^T (S^-1 (x) I3) B`, which is dense (the weights couple through every
+//! position). So `Sigma` is never formed: `S` (one control point per row, a sixteenth of the
+//! full matrix's entries) and `C` are factored by sparse Cholesky and `Sigma w = g'` is solved by
+//! conjugate gradients preconditioned with `C^-1`, each iteration one three-column solve with
+//! `S`'s factor, one product with `B` and `B^T`, one with `C` and one solve with `C`'s factor.
+//!
+//! The blocks are summed straight from the element matrices (`S` from the `x` rows only, its
+//! lower triangle; `B` from the position rows; `C` from the rest rows), on two threads over two
+//! bands of entries, each entry receiving its elements' terms in element order and then the
+//! point forces': the values of the CSR sum to the last bit, without summing the other
+//! two thirds of the position block or `B^T` (the CSR values are summed only when the step
+//! falls back to the full factorization).
+//!
+//! ## Exactness
+//! Not the same bits as the full factorization: the result of an iterative solve. The CG stops
+//! at `|r| <= tolerance |b|` with `r` the Schur residual, which is the residual of the full
+//! system (its position rows are solved exactly by the back-substitution), so a step's error is
+//! that of the full solve with this residual; the step reports it as the CG paths report
+//! theirs. [`BLOCK_SCHUR_TOLERANCE`] and the comparison against the full factorization in
+//! `tests/generalized.rs` state the bound. A solve that does not reach the tolerance in
+//! [`BlockSchur::max_iterations`] leaves the step to the full factorization.
+//!
+//! ## Limitations
+//! Taken only when the structure holds, which is checked once per set of fixed coordinates,
+//! not assumed: a homogeneous `(x, y, z, w)` layout, every element's position columns in `R I3`
+//! blocks of whole control points (a geometry with general columns on positions, such as the
+//! swung surface, keeps the full factorization), and on that step's summed matrix the `x`, `y`
+//! and `z` blocks of `S` equal to the last bit and the entries between components zero (the
+//! later steps' element matrices have the same shapes, written by the same `Gram` code, so
+//! they keep it). Every step checks that the point forces' blocks keep it and that no diagonal
+//! term falls on a position. The solves run on one thread; only the sums use both.
+
+use super::{CsrPattern, ElementWork, Scratch, SolverStats};
+use faer::sparse::linalg::cholesky::SymbolicCholesky;
+use std::sync::Arc;
+
+/// Default relative residual of the block-Schur solve ([`BlockSchur::tolerance`]): `1e-12`,
+/// two orders below the CG solver's [`super::GENERALIZED_CG_TOLERANCE`]; measured on the 10 x 10
+/// benchmark sheet over 100 steps, the trajectory stays within `1e-12` of the model size of
+/// the full factorization's (`docs/performance.md`, fourth pass).
+pub const BLOCK_SCHUR_TOLERANCE: f64 = 1e-12;
+
+/// Default iteration cap of the block-Schur solve ([`BlockSchur::max_iterations`]): the 32 x 32
+/// sheet needs 13-15.
+pub const BLOCK_SCHUR_ITERATIONS: usize = 60;
+
+/// Settings of the block-Schur solve of [`super::GeneralizedDnurbs::block_schur`] (module docs
+/// of `generalized/block_schur.rs`): the step matrix `[[S (x) I3, B], [B^T, C]]` solved with
+/// sparse factors of `S` and `C` and conjugate gradients on the Schur complement
+/// `C - B^T (S^-1 (x) I3) B` (`d-nurbs.txt` eqs (6), (13), (16)-(18)).
+///
+/// It pays where the full factorization dominates a step (the 32 x 32 sheet: about 27 % less
+/// CPU time a step). Every further solve of a step (one per constraint row, the Newton
+/// projections) is a CG run here but only two triangular solves with a full factor, so on
+/// small constrained models it is slower: the Fig 8 sharp corner (7,614 quadrature points,
+/// normal constraints) took 463 ms for 30 steps against 350 ms with the full factorization.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BlockSchur {
+    /// Relative residual `|b - A x| / |b|` at which the iterations stop (default
+    /// [`BLOCK_SCHUR_TOLERANCE`]).
+    pub tolerance: f64,
+    /// Iteration cap (default [`BLOCK_SCHUR_ITERATIONS`]); a solve that does not reach the
+    /// tolerance falls back to the full factorization for that step.
+    pub max_iterations: usize,
+}
+
+impl Default for BlockSchur {
+    fn default() -> Self {
+        Self {
+            tolerance: BLOCK_SCHUR_TOLERANCE,
+            max_iterations: BLOCK_SCHUR_ITERATIONS,
+        }
+    }
+}
+
+/// The layout of the blocks `S` (lower triangle), `B` and `C`, where each element's entries
+/// go, and the symbolic factorizations of `S` and `C`; built once per set of fixed coordinates
+/// (per [`CsrPattern`]).
+#[derive(Debug)]
+pub(super) struct SchurPattern {
+    /// Free control points of `S`: the coordinate of each one's `x` (its `y`, `z` follow).
+    kron: Vec<usize>,
+    /// Per control point, its index in `kron` (`u32::MAX`: not in `S`).
+    kron_of: Vec<u32>,
+    /// The other free coordinates, in order (`C`'s rows).
+    rest: Vec<usize>,
+    /// Per coordinate, its index in `rest` (`u32::MAX`: not in `C`).
+    rest_of: Vec<u32>,
+    /// `S`'s lower triangle, column by column (the diagonal first).
+    s_col_ptr: Vec<usize>,
+    s_row_idx: Vec<usize>,
+    s_symbolic: SymbolicCholesky<usize>,
+    /// `B` by control point: entries `b_ptr[i]..b_ptr[i + 1]` with their rest index; each
+    /// entry holds the `x`, `y`, `z` rows' values.
+    b_ptr: Vec<usize>,
+    b_col: Vec<u32>,
+    /// `C` by rows (all entries); `c_diag[r]`: the diagonal's entry.
+    c_ptr: Vec<usize>,
+    c_col: Vec<u32>,
+    c_diag: Vec<usize>,
+    /// `C`'s lower triangle as CSC (the diagonal first), each entry's index in `C`'s rows.
+    cl_col_ptr: Vec<usize>,
+    cl_row_idx: Vec<usize>,
+    cl_src: Vec<usize>,
+    c_symbolic: SymbolicCholesky<usize>,
+    /// Per element, `(entry of its matrix a, slot)`: the slots are `S`'s lower entries, then
+    /// `B`'s (three per entry), then `C`'s rows ([`Self::slot`]), in the element's row order;
+    /// `maps[0]` for the slots below `half`, `maps[1]` for the others (summed on two threads,
+    /// each slot still in element order), with about as many entries each.
+    maps: [Vec<Vec<[u32; 2]>>; 2],
+    half: usize,
+}
+
+/// Where an entry `(i, j)` of an element matrix is summed ([`SchurPattern::slot`]).
+enum Slot {
+    /// Not read: a fixed coordinate, the `y` and `z` rows of `S` (equal to the `x` row), `S`'s
+    /// upper triangle, `B^T`, the zeros between components.
+    Skip,
+    /// This slot of the summed values.
+    At(usize),
+    /// In a block whose layout lacks it (the caller takes the full factorization).
+    Missing,
+}
+
+/// The CSR position of entry `(i, j)`.
+fn position(pattern: &CsrPattern, i: usize, j: usize) -> Option<usize> {
+    let (a, b) = (pattern.row_ptr[i], pattern.row_ptr[i + 1]);
+    let k = pattern.cols[a..b].binary_search(&j).ok()?;
+    Some(a + k)
+}
+
+fn symbolic(m: usize, col_ptr: &[usize], row_idx: &[usize]) -> Option<SymbolicCholesky<usize>> {
+    let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(m, m, col_ptr, None, row_idx);
+    // Approximate minimum degree, faer's defaults (as `DirectPattern`).
+    faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(
+        sym,
+        faer::Side::Lower,
+        Default::default(),
+        Default::default(),
+    )
+    .ok()
+}
+
+impl SchurPattern {
+    /// The split of `pattern`'s free coordinates, or `None` when the structure does not hold
+    /// (module docs): `homogeneous` says the layout is `(x, y, z, w)` per control point;
+    /// `works` are the elements the pattern was built from and `values` their summed matrix
+    /// with the point forces (the `x`, `y`, `z` blocks of `S` are checked equal and the
+    /// entries between components zero, once, here).
+    pub(super) fn new(
+        pattern: &CsrPattern,
+        fixed: &[bool],
+        homogeneous: bool,
+        works: &[ElementWork],
+        values: &[f64],
+    ) -> Option<Self> {
+        let n = fixed.len();
+        if !homogeneous || !n.is_multiple_of(4) || n == 0 {
+            return None;
+        }
+        let nc = n / 4;
+        let mut shared: Vec<bool> = (0..nc).map(|c| (0..3).all(|k| !fixed[4 * c + k])).collect();
+        for w in works {
+            if !blocks_are_points(w) {
+                return None;
+            }
+            // A general column on a position: that control point is not in `S`.
+            let nb = w.shape.0;
+            for &i in &w.dofs[3 * nb..] {
+                if i % 4 != 3 {
+                    shared[i / 4] = false;
+                }
+            }
+        }
+        let kron: Vec<usize> = (0..nc).filter(|&c| shared[c]).map(|c| 4 * c).collect();
+        if kron.is_empty() {
+            return None;
+        }
+        let mut kron_of = vec![u32::MAX; nc];
+        for (k, &x) in kron.iter().enumerate() {
+            kron_of[x / 4] = k as u32;
+        }
+        let rest: Vec<usize> = (0..n)
+            .filter(|&i| !fixed[i] && (i % 4 == 3 || !shared[i / 4]))
+            .collect();
+        let mut rest_of = vec![u32::MAX; n];
+        for (r, &i) in rest.iter().enumerate() {
+            rest_of[i] = r as u32;
+        }
+        // S (lower) and B, from the x rows.
+        let value = |i: usize, j: usize| position(pattern, i, j).map(|p| values[p]);
+        let (mut s_col_ptr, mut s_row_idx) = (vec![0], Vec::new());
+        let (mut b_ptr, mut b_col) = (vec![0], Vec::new());
+        for (j, &x) in kron.iter().enumerate() {
+            for p in pattern.row_ptr[x]..pattern.row_ptr[x + 1] {
+                let q = pattern.cols[p];
+                if fixed[q] {
+                    continue;
+                }
+                if rest_of[q] != u32::MAX {
+                    b_col.push(rest_of[q]);
+                    continue;
+                }
+                let (c, k) = (q / 4, q % 4);
+                let i = kron_of[c] as usize;
+                if k != 0 || i < j {
+                    continue;
+                }
+                let v = value(x, q)?;
+                for k in 1..3 {
+                    if value(x + k, q + k)?.to_bits() != v.to_bits() {
+                        return None;
+                    }
+                }
+                // Between different components: structural zeros (or absent).
+                for (a, b) in [(0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)] {
+                    if value(x + a, q + b).is_some_and(|z| z != 0.0) {
+                        return None;
+                    }
+                }
+                s_row_idx.push(i);
+            }
+            s_col_ptr.push(s_row_idx.len());
+            b_ptr.push(b_col.len());
+        }
+        // The diagonal comes first in each column (rows ascending, all >= the column).
+        let ns = kron.len();
+        if (0..ns).any(|j| s_col_ptr[j] == s_col_ptr[j + 1] || s_row_idx[s_col_ptr[j]] != j) {
+            return None;
+        }
+        // C, all rows, and its lower triangle.
+        let nr = rest.len();
+        let (mut c_ptr, mut c_col) = (vec![0], Vec::new());
+        let mut c_diag = vec![usize::MAX; nr];
+        for (r, &i) in rest.iter().enumerate() {
+            for p in pattern.row_ptr[i]..pattern.row_ptr[i + 1] {
+                let t = rest_of[pattern.cols[p]];
+                if t == u32::MAX {
+                    continue;
+                }
+                if t as usize == r {
+                    c_diag[r] = c_col.len();
+                }
+                c_col.push(t);
+            }
+            c_ptr.push(c_col.len());
+        }
+        if c_diag.contains(&usize::MAX) {
+            return None;
+        }
+        let (mut cl_col_ptr, mut cl_row_idx, mut cl_src) = (vec![0], Vec::new(), Vec::new());
+        for r in 0..nr {
+            for e in c_ptr[r]..c_ptr[r + 1] {
+                if c_col[e] as usize >= r {
+                    cl_row_idx.push(c_col[e] as usize);
+                    cl_src.push(e);
+                }
+            }
+            cl_col_ptr.push(cl_row_idx.len());
+        }
+        let s_symbolic = symbolic(ns, &s_col_ptr, &s_row_idx)?;
+        let c_symbolic = symbolic(nr, &cl_col_ptr, &cl_row_idx)?;
+        let mut split = Self {
+            kron,
+            kron_of,
+            rest,
+            rest_of,
+            s_col_ptr,
+            s_row_idx,
+            s_symbolic,
+            b_ptr,
+            b_col,
+            c_ptr,
+            c_col,
+            c_diag,
+            cl_col_ptr,
+            cl_row_idx,
+            cl_src,
+            c_symbolic,
+            maps: [Vec::new(), Vec::new()],
+            half: 0,
+        };
+        let mut maps = Vec::with_capacity(works.len());
+        let mut per_slot = vec![0usize; split.slots()];
+        for w in works {
+            let mut map = Vec::new();
+            let nd = w.dofs.len();
+            for (a, &i) in w.dofs.iter().enumerate() {
+                for (b, &j) in w.dofs.iter().enumerate() {
+                    match split.slot(fixed, i, j) {
+                        Slot::Skip => {}
+                        Slot::At(d) => {
+                            per_slot[d] += 1;
+                            map.push([u32::try_from(a * nd + b).ok()?, u32::try_from(d).ok()?]);
+                        }
+                        Slot::Missing => return None,
+                    }
+                }
+            }
+            maps.push(map);
+        }
+        let total: usize = per_slot.iter().sum();
+        let mut seen = 0;
+        split.half = per_slot
+            .iter()
+            .position(|&k| {
+                seen += k;
+                2 * seen >= total
+            })
+            .map_or(0, |d| d + 1);
+        let half = split.half as u32;
+        split.maps = [
+            maps.iter()
+                .map(|m| m.iter().copied().filter(|e| e[1] < half).collect())
+                .collect(),
+            maps.iter()
+                .map(|m| {
+                    m.iter()
+                        .filter(|e| e[1] >= half)
+                        .map(|&[a, d]| [a, d - half])
+                        .collect()
+                })
+                .collect(),
+        ];
+        Some(split)
+    }
+
+    /// Number of summed values: `S`'s lower entries, three per entry of `B`, `C`'s entries.
+    fn slots(&self) -> usize {
+        self.s_row_idx.len() + 3 * self.b_col.len() + self.c_col.len()
+    }
+
+    /// Where entry `(i, j)` of an element matrix is summed. The entries read are those a
+    /// gather from the summed CSR matrix would read: `S`'s lower entry `(row k, column l)`,
+    /// `k >= l`, from the `x` row of control point `l` and the `x` column of `k`; `B` from the
+    /// position rows; `C` from the rest rows.
+    fn slot(&self, fixed: &[bool], i: usize, j: usize) -> Slot {
+        if fixed[i] || fixed[j] {
+            return Slot::Skip;
+        }
+        let find = |range: std::ops::Range<usize>, list: &[u32], key: u32| {
+            list[range.clone()]
+                .binary_search(&key)
+                .map_or(Slot::Missing, |k| Slot::At(range.start + k))
+        };
+        let (ci, ki) = (i / 4, i % 4);
+        let si = self.kron_of[ci];
+        let ns_lower = self.s_row_idx.len();
+        if si != u32::MAX && ki < 3 {
+            let si = si as usize;
+            let rj = self.rest_of[j];
+            if rj != u32::MAX {
+                return match find(self.b_ptr[si]..self.b_ptr[si + 1], &self.b_col, rj) {
+                    Slot::At(e) => Slot::At(ns_lower + 3 * e + ki),
+                    other => other,
+                };
+            }
+            let sj = self.kron_of[j / 4];
+            if ki != 0 || !j.is_multiple_of(4) || sj == u32::MAX || (sj as usize) < si {
+                return Slot::Skip;
+            }
+            let col = self.s_col_ptr[si]..self.s_col_ptr[si + 1];
+            return match self.s_row_idx[col.clone()].binary_search(&(sj as usize)) {
+                Ok(k) => Slot::At(col.start + k),
+                Err(_) => Slot::Missing,
+            };
+        }
+        let (ri, rj) = (self.rest_of[i], self.rest_of[j]);
+        if ri == u32::MAX || rj == u32::MAX {
+            return Slot::Skip;
+        }
+        let ri = ri as usize;
+        match find(self.c_ptr[ri]..self.c_ptr[ri + 1], &self.c_col, rj) {
+            Slot::At(e) => Slot::At(ns_lower + 3 * self.b_col.len() + e),
+            other => other,
+        }
+    }
+
+    /// Whether a point force's block `w` keeps the structure: its position columns in
+    /// `R I3` blocks of whole control points, no general column on a control point of `S`.
+    fn admits(&self, w: &ElementWork) -> bool {
+        let nb = w.shape.0;
+        blocks_are_points(w)
+            && w.dofs[3 * nb..]
+                .iter()
+                .all(|&i| i % 4 == 3 || self.kron_of[i / 4] == u32::MAX)
+    }
+
+    /// The summed values of every slot ([`Self::slot`]): the element matrices `works[..ne]`
+    /// in element order, then the point forces `works[ne..]` in order, per slot, as the CSR sum
+    /// and its folding add them (the same values to the last bit: the test
+    /// `summed_blocks_equal_the_csr_sum_bit_for_bit`); `false` if a point force breaks the
+    /// structure.
+    fn sum(&self, works: &[ElementWork], ne: usize, fixed: &[bool], sums: &mut Vec<f64>) -> bool {
+        sums.clear();
+        sums.resize(self.slots(), 0.0);
+        // Two bands of slots side by side; every slot receives its elements' terms in element
+        // order.
+        let (low, high) = sums.split_at_mut(self.half);
+        let band = |out: &mut [f64], maps: &[Vec<[u32; 2]>]| {
+            for (w, map) in works[..ne].iter().zip(maps) {
+                for &[a, d] in map {
+                    out[d as usize] += w.a[a as usize];
+                }
+            }
+        };
+        rayon::join(|| band(low, &self.maps[0]), || band(high, &self.maps[1]));
+        for w in &works[ne..] {
+            if !self.admits(w) {
+                return false;
+            }
+            let nd = w.dofs.len();
+            for (a, &i) in w.dofs.iter().enumerate() {
+                for (bc, &j) in w.dofs.iter().enumerate() {
+                    match self.slot(fixed, i, j) {
+                        Slot::Skip => {}
+                        Slot::At(d) => sums[d] += w.a[a * nd + bc],
+                        Slot::Missing => return false,
+                    }
+                }
+            }
+        }
+        true
+    }
+
+    /// This step's blocks summed straight from the element matrices `works[..ne]` and the
+    /// point forces `works[ne..]` (in that order, per entry, as the CSR sum and its folding
+    /// add them, so the values are the CSR matrix's to the last bit) plus `extra_diag`, and
+    /// the numeric factorizations of `S` and `C`. `None` if a point force breaks the
+    /// structure, a diagonal term falls on a position or a factorization fails. `buffers` are
+    /// the last step's, reused.
+    pub(super) fn factor(
+        self: &Arc<Self>,
+        works: &[ElementWork],
+        ne: usize,
+        fixed: &[bool],
+        extra_diag: &[f64],
+        buffers: &mut SchurBuffers,
+    ) -> Option<SchurFactor> {
+        for &x in &self.kron {
+            if extra_diag[x..x + 3].iter().any(|&d| d != 0.0) {
+                return None;
+            }
+        }
+        let SchurBuffers {
+            sums,
+            c_lower,
+            scratch,
+            b,
+            c,
+            ..
+        } = buffers;
+        if !self.sum(works, ne, fixed, sums) {
+            return None;
+        }
+        let (s_values, rest) = sums.split_at(self.s_row_idx.len());
+        let (b_values, c_values) = rest.split_at(3 * self.b_col.len());
+        b.clear();
+        b.extend(b_values.chunks_exact(3).map(|v| [v[0], v[1], v[2]]));
+        c.clear();
+        c.extend_from_slice(c_values);
+        for (r, &e) in self.c_diag.iter().enumerate() {
+            c[e] += extra_diag[self.rest[r]];
+        }
+        c_lower.clear();
+        c_lower.extend(self.cl_src.iter().map(|&e| c[e]));
+        let s_factor = numeric(
+            &self.s_symbolic,
+            &self.s_col_ptr,
+            &self.s_row_idx,
+            s_values,
+            std::mem::take(&mut buffers.s_factor),
+            scratch,
+        )?;
+        let c_factor = numeric(
+            &self.c_symbolic,
+            &self.cl_col_ptr,
+            &self.cl_row_idx,
+            c_lower,
+            std::mem::take(&mut buffers.c_factor),
+            scratch,
+        )?;
+        Some(SchurFactor {
+            pattern: self.clone(),
+            s_factor,
+            c_factor,
+            b: std::mem::take(b),
+            c: std::mem::take(c),
+        })
+    }
+}
+
+/// Whether every block column of `w` is a whole control point's `x, y, z` (`4c, 4c+1, 4c+2`).
+fn blocks_are_points(w: &ElementWork) -> bool {
+    let nb = w.shape.0;
+    w.dofs[..3 * nb]
+        .chunks_exact(3)
+        .all(|b| b[0] % 4 == 0 && b[1] == b[0] + 1 && b[2] == b[0] + 2)
+}
+
+/// The numeric factor of the lower triangle `(col_ptr, row_idx, values)` with `symbolic`,
+/// into `out` (sequential, as the full factorization).
+fn numeric(
+    symbolic: &SymbolicCholesky<usize>,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+    values: &[f64],
+    mut out: Vec<f64>,
+    scratch: &mut Scratch,
+) -> Option<Vec<f64>> {
+    let m = col_ptr.len() - 1;
+    let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(m, m, col_ptr, None, row_idx);
+    let mat = faer::sparse::SparseColMatRef::new(sym, values);
+    out.resize(symbolic.len_val(), 0.0);
+    let par = faer::Par::Seq;
+    let req = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
+    symbolic
+        .factorize_numeric_llt::<f64>(
+            &mut out,
+            mat,
+            faer::Side::Lower,
+            Default::default(),
+            par,
+            faer::dyn_stack::MemStack::new(scratch.get(req)),
+            Default::default(),
+        )
+        .ok()?;
+    Some(out)
+}
+
+/// Buffers of the block-Schur factorization kept between steps (scratch; no state).
+#[derive(Default)]
+pub(super) struct SchurBuffers {
+    sums: Vec<f64>,
+    c_lower: Vec<f64>,
+    s_factor: Vec<f64>,
+    c_factor: Vec<f64>,
+    b: Vec<[f64; 3]>,
+    c: Vec<f64>,
+    scratch: Scratch,
+}
+
+impl SchurBuffers {
+    /// Takes back a step's factor buffers.
+    pub(super) fn keep(&mut self, f: SchurFactor) {
+        self.s_factor = f.s_factor;
+        self.c_factor = f.c_factor;
+        self.b = f.b;
+        self.c = f.c;
+    }
+}
+
+/// One step's factors of `S` and `C` and the values of `B` and `C` (see the module docs).
+pub(super) struct SchurFactor {
+    pattern: Arc<SchurPattern>,
+    s_factor: Vec<f64>,
+    c_factor: Vec<f64>,
+    /// `B`'s values in [`SchurPattern::b_col`]'s order: the `x`, `y`, `z` rows' entries.
+    b: Vec<[f64; 3]>,
+    /// `C`'s values by rows ([`SchurPattern::c_ptr`]).
+    c: Vec<f64>,
+}
+
+impl SchurFactor {
+    /// Solves `(S (x) I3) u = f` in place, `f` component-major (`x` of every control point,
+    /// then `y`, then `z`): one pass over `S`'s factor for the three columns.
+    fn solve_s(&self, f: &mut [f64]) {
+        let p = &self.pattern;
+        let ns = p.kron.len();
+        let rhs = faer::MatMut::from_column_major_slice_mut(f, ns, 3);
+        solve_with(&p.s_symbolic, &self.s_factor, rhs);
+    }
+
+    /// Solves `C z = r` in place.
+    fn solve_c(&self, r: &mut [f64]) {
+        let nr = r.len();
+        let rhs = faer::MatMut::from_column_major_slice_mut(r, nr, 1);
+        solve_with(&self.pattern.c_symbolic, &self.c_factor, rhs);
+    }
+
+    /// `out = B w` (component-major, as [`Self::solve_s`]).
+    fn b_times(&self, w: &[f64], out: &mut [f64]) {
+        let p = &self.pattern;
+        let ns = p.kron.len();
+        for i in 0..ns {
+            let mut s = [0.0; 3];
+            for e in p.b_ptr[i]..p.b_ptr[i + 1] {
+                let we = w[p.b_col[e] as usize];
+                for k in 0..3 {
+                    s[k] += self.b[e][k] * we;
+                }
+            }
+            for k in 0..3 {
+                out[k * ns + i] = s[k];
+            }
+        }
+    }
+
+    /// `out -= B^T u` (`u` component-major).
+    fn sub_bt_times(&self, u: &[f64], out: &mut [f64]) {
+        let p = &self.pattern;
+        let ns = p.kron.len();
+        for i in 0..ns {
+            let ui = [u[i], u[ns + i], u[2 * ns + i]];
+            for e in p.b_ptr[i]..p.b_ptr[i + 1] {
+                let b = &self.b[e];
+                out[p.b_col[e] as usize] -= b[0] * ui[0] + b[1] * ui[1] + b[2] * ui[2];
+            }
+        }
+    }
+
+    /// `out = C w`.
+    fn c_times(&self, w: &[f64], out: &mut [f64]) {
+        let p = &self.pattern;
+        for (r, o) in out.iter_mut().enumerate() {
+            let mut s = 0.0;
+            for e in p.c_ptr[r]..p.c_ptr[r + 1] {
+                s += self.c[e] * w[p.c_col[e] as usize];
+            }
+            *o = s;
+        }
+    }
+
+    /// `out = Sigma w = C w - B^T (S^-1 (x) I3) B w`; `t` is scratch of `3 ns`.
+    fn schur_times(&self, w: &[f64], out: &mut [f64], t: &mut [f64]) {
+        self.b_times(w, t);
+        self.solve_s(t);
+        self.c_times(w, out);
+        self.sub_bt_times(t, out);
+    }
+
+    /// Solves `A x = b` on the free coordinates (fixed entries of `x` become 0), starting the
+    /// iterations from `x`'s rest entries; returns the iterations and the relative residual of
+    /// the last iterate (the Schur residual: module docs).
+    pub(super) fn solve(&self, b: &[f64], x: &mut [f64], max_it: usize, tol: f64) -> SolverStats {
+        let p = &self.pattern;
+        let (ns, nr) = (p.kron.len(), p.rest.len());
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        // f (component-major) and y = (S^-1 (x) I3) f.
+        let mut f = vec![0.0; 3 * ns];
+        for (i, &c) in p.kron.iter().enumerate() {
+            for k in 0..3 {
+                f[k * ns + i] = b[c + k];
+            }
+        }
+        let gr: Vec<f64> = p.rest.iter().map(|&i| b[i]).collect();
+        let bnorm = (dot(&f, &f) + dot(&gr, &gr)).sqrt();
+        let mut y = f.clone();
+        self.solve_s(&mut y);
+        // g' = g - B^T y; r = g' - Sigma w for the starting w.
+        let mut r = gr;
+        self.sub_bt_times(&y, &mut r);
+        let mut w: Vec<f64> = p.rest.iter().map(|&i| x[i]).collect();
+        let mut t = vec![0.0; 3 * ns];
+        let mut q = vec![0.0; nr];
+        if w.iter().any(|&v| v != 0.0) {
+            self.schur_times(&w, &mut q, &mut t);
+            for (ri, qi) in r.iter_mut().zip(&q) {
+                *ri -= qi;
+            }
+        }
+        let rel = |r: &[f64]| {
+            let rn = dot(r, r).sqrt();
+            if bnorm > 0.0 { rn / bnorm } else { rn }
+        };
+        let mut stats = SolverStats {
+            iterations: 0,
+            relative_residual: rel(&r),
+        };
+        let mut z = r.clone();
+        self.solve_c(&mut z);
+        let mut d = z.clone();
+        let mut rz = dot(&r, &z);
+        while stats.iterations < max_it && stats.relative_residual > tol {
+            self.schur_times(&d, &mut q, &mut t);
+            let dq = dot(&d, &q);
+            if dq <= 0.0 {
+                break;
+            }
+            let alpha = rz / dq;
+            for i in 0..nr {
+                w[i] += alpha * d[i];
+                r[i] -= alpha * q[i];
+            }
+            stats.iterations += 1;
+            stats.relative_residual = rel(&r);
+            if stats.relative_residual <= tol {
+                break;
+            }
+            z.copy_from_slice(&r);
+            self.solve_c(&mut z);
+            let rz_new = dot(&r, &z);
+            let beta = rz_new / rz;
+            rz = rz_new;
+            for i in 0..nr {
+                d[i] = z[i] + beta * d[i];
+            }
+        }
+        // u = (S^-1 (x) I3)(f - B w).
+        self.b_times(&w, &mut t);
+        for (fi, ti) in f.iter_mut().zip(&t) {
+            *fi -= ti;
+        }
+        self.solve_s(&mut f);
+        x.iter_mut().for_each(|v| *v = 0.0);
+        for (i, &c) in p.kron.iter().enumerate() {
+            for k in 0..3 {
+                x[c + k] = f[k * ns + i];
+            }
+        }
+        for (r, &i) in p.rest.iter().enumerate() {
+            x[i] = w[r];
+        }
+        stats
+    }
+}
+
+/// `rhs = (L L^T)^-1 rhs` with a factor of `symbolic` (sequential).
+fn solve_with(symbolic: &SymbolicCholesky<usize>, values: &[f64], rhs: faer::MatMut<'_, f64>) {
+    let par = faer::Par::Seq;
+    let mut mem =
+        faer::dyn_stack::MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(rhs.ncols(), par));
+    faer::sparse::linalg::cholesky::LltRef::<'_, usize, f64>::new(symbolic, values)
+        .solve_in_place_with_conj(
+            faer::Conj::No,
+            rhs,
+            par,
+            faer::dyn_stack::MemStack::new(&mut mem),
+        );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{GeneralizedDnurbs, fold_extras};
+    use super::*;
+    use crate::dnurbs::{RationalGeometry, benchmarks};
+    use crate::{Force, Integrator};
+    use vclay_core::Vec3;
+
+    impl SchurPattern {
+        /// The CSR position each slot would be gathered from (see [`Self::slot`]).
+        fn csr_positions(&self, pattern: &CsrPattern) -> Vec<usize> {
+            let at = |i: usize, j: usize| position(pattern, i, j).expect("in the pattern");
+            let mut out = Vec::with_capacity(self.slots());
+            for col in 0..self.kron.len() {
+                for e in self.s_col_ptr[col]..self.s_col_ptr[col + 1] {
+                    out.push(at(self.kron[col], self.kron[self.s_row_idx[e]]));
+                }
+            }
+            for i in 0..self.kron.len() {
+                for e in self.b_ptr[i]..self.b_ptr[i + 1] {
+                    for k in 0..3 {
+                        out.push(at(self.kron[i] + k, self.rest[self.b_col[e] as usize]));
+                    }
+                }
+            }
+            for r in 0..self.rest.len() {
+                for e in self.c_ptr[r]..self.c_ptr[r + 1] {
+                    out.push(at(self.rest[r], self.rest[self.c_col[e] as usize]));
+                }
+            }
+            out
+        }
+    }
+
+    /// The blocks summed straight from the element matrices (two bands of slots, point forces
+    /// after the elements) are the summed CSR matrix's entries with the point forces folded
+    /// in, to the last bit: an 8 x 8 benchmark sheet with one control point held in `x` only
+    /// (its `y`, `z` in `C`), a moving spring and a data spring, after a few steps.
+    #[test]
+    fn summed_blocks_equal_the_csr_sum_bit_for_bit() {
+        let mut m: GeneralizedDnurbs<RationalGeometry> = benchmarks::dynamic_sheet(8).unwrap();
+        m.block_schur = Some(BlockSchur::default());
+        m.set_fixed_coordinate(4 * (3 * 8 + 4), true).unwrap();
+        m.forces_mut().push(Force::DataPoint {
+            point: Vec3::new(0.3, 0.6, 0.2),
+            stiffness: 5.0,
+        });
+        for _ in 0..4 {
+            m.step(Integrator::Implicit { dt: benchmarks::DT }).unwrap();
+        }
+        let mut works = std::mem::take(&mut m.work_pool);
+        let ne = works.len();
+        let ck = 2.0 * benchmarks::DT * benchmarks::DT;
+        m.add_point_forces(&mut works, ck, ck).unwrap();
+        assert!(works.len() > ne, "point forces present");
+        let pattern = m.pattern.clone().unwrap();
+        let split = m
+            .schur
+            .as_ref()
+            .unwrap()
+            .1
+            .clone()
+            .expect("structure holds");
+        assert!(
+            split.kron.len() < 8 * 7,
+            "the held row and the partly held point are out"
+        );
+        assert!(
+            split.rest.len() > 8 * 8 - 1,
+            "the partly held point's y, z are in C"
+        );
+        let mut values = pattern.values(&works[..ne]);
+        assert!(fold_extras(&pattern, &mut values, &works[ne..], &m.fixed));
+        let mut sums = Vec::new();
+        assert!(split.sum(&works, ne, &m.fixed, &mut sums));
+        let at = split.csr_positions(&pattern);
+        assert_eq!(sums.len(), at.len());
+        assert!(0 < split.half && split.half < sums.len());
+        for (d, (&v, &p)) in sums.iter().zip(&at).enumerate() {
+            assert_eq!(v.to_bits(), values[p].to_bits(), "slot {d}");
+        }
+    }
+}
