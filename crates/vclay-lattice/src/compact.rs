@@ -26,7 +26,7 @@ use std::collections::HashMap;
 
 use vclay_core::Parallelism;
 
-use crate::sparse::{Coord, SparseMatrix, each_row, scatter_rows};
+use crate::sparse::{Coord, SparseMatrix, dot_pair, each_row_pair, scatter_rows};
 
 /// An index into a table of weights: `u8` (a 256-entry table) or `u16` (65,536 entries), so
 /// that a lookup needs no bounds check.
@@ -220,7 +220,34 @@ impl CompactMatrix {
         y: &mut [T],
         par: Parallelism,
     ) {
-        each_row(y, par, |i| self.row_dot(i, idx, table, |c| x[c]));
+        each_row_pair(y, par, |i, pair| match pair {
+            Some(y1) => {
+                let (a, b) = self.row_dot2(i, idx, table, |c| x[c]);
+                *y1 = b;
+                a
+            }
+            None => self.row_dot(i, idx, table, |c| x[c]),
+        });
+    }
+
+    /// Rows `i` and `i + 1` of `A x` ([`dot_pair`]: the same bits as two
+    /// [`CompactMatrix::row_dot`]s).
+    #[inline(always)]
+    fn row_dot2<T: Coord, I: WeightIndex>(
+        &self,
+        i: usize,
+        idx: &[I],
+        table: &I::Table,
+        x: impl Fn(usize) -> T,
+    ) -> (T, T) {
+        let r0 = self.row_ptr[i] as usize..self.row_ptr[i + 1] as usize;
+        let r1 = self.row_ptr[i + 1] as usize..self.row_ptr[i + 2] as usize;
+        dot_pair(
+            (&self.cols[r0.clone()], &idx[r0]),
+            (&self.cols[r1.clone()], &idx[r1]),
+            |v| v.weight(table),
+            x,
+        )
     }
 
     /// Rows `rows` of `y = A x`, as [`SparseMatrix::apply_rows_with`] (same bits).

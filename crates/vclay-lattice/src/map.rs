@@ -281,16 +281,19 @@ impl SubdivisionMap {
         let ChainWorkspace { a, b, partials } = ws;
         let mut cur: &mut Vec<T> = a;
         let mut other: &mut Vec<T> = b;
+        let mut other_len = 0;
         for j in 0..n {
             let level = n - 1 - j;
             let m = &self.ops[level];
-            let src: &[T] = if j == 0 { f } else { other.as_slice() };
+            let src: &[T] = if j == 0 { f } else { &other[..other_len] };
+            // Every product below overwrites its whole output (the scattered ones zero it
+            // first), so a buffer is only grown, never cleared.
             let dst: &mut [T] = if j + 1 == n {
                 out
             } else {
-                cur.clear();
-                cur.resize(m.ncols(), T::zero());
-                cur.as_mut_slice()
+                grow(cur, m.ncols());
+                other_len = m.ncols();
+                &mut cur[..m.ncols()]
             };
             if gather {
                 self.transpose(level).apply_into(src, dst, par);
@@ -329,15 +332,26 @@ fn chain<T: Coord>(
     let ChainWorkspace { a, b, .. } = ws;
     let mut cur: &mut Vec<T> = a;
     let mut other: &mut Vec<T> = b;
+    let mut other_len = 0;
     for j in 0..n {
-        let src: &[T] = if j == 0 { input } else { other.as_slice() };
+        let src: &[T] = if j == 0 { input } else { &other[..other_len] };
         if j + 1 == n {
             apply(j, src, out);
         } else {
-            cur.clear();
-            cur.resize(rows(j), T::zero());
-            apply(j, src, cur);
+            // `apply` overwrites every row: the buffer is only grown, never cleared.
+            let r = rows(j);
+            grow(cur, r);
+            apply(j, src, &mut cur[..r]);
+            other_len = r;
             std::mem::swap(&mut cur, &mut other);
         }
+    }
+}
+
+/// Grows `v` to at least `n` entries (new ones zero); never shrinks it, so that a workspace
+/// reused for the levels of a chain is zero-filled once, not at every product.
+fn grow<T: Coord>(v: &mut Vec<T>, n: usize) {
+    if v.len() < n {
+        v.resize(n, T::zero());
     }
 }

@@ -196,7 +196,14 @@ impl SparseMatrix {
     pub fn apply_into<T: Coord>(&self, x: &[T], y: &mut [T], par: Parallelism) {
         assert_eq!(x.len(), self.ncols, "apply: input length");
         assert_eq!(y.len(), self.nrows, "apply: output length");
-        each_row(y, par, |i| self.row_dot(i, |c| x[c]));
+        each_row_pair(y, par, |i, pair| match pair {
+            Some(y1) => {
+                let (a, b) = self.row_dot2(i, |c| x[c]);
+                *y1 = b;
+                a
+            }
+            None => self.row_dot(i, |c| x[c]),
+        });
     }
 
     /// Rows `rows` of `y = A x`, the input read through `x(column)` and each row's value
@@ -212,9 +219,30 @@ impl SparseMatrix {
         x: impl Fn(usize) -> T,
         mut out: impl FnMut(usize, T),
     ) {
-        for i in rows {
+        let mut i = rows.start;
+        while i + 1 < rows.end {
+            let (a, b) = self.row_dot2(i, &x);
+            out(i, a);
+            out(i + 1, b);
+            i += 2;
+        }
+        if i < rows.end {
             out(i, self.row_dot(i, &x));
         }
+    }
+
+    /// Rows `i` and `i + 1` of `A x` ([`dot_pair`]: the same bits as two
+    /// [`SparseMatrix::row_dot`]s).
+    #[inline(always)]
+    fn row_dot2<T: Coord>(&self, i: usize, x: impl Fn(usize) -> T) -> (T, T) {
+        let r0 = self.row_ptr[i]..self.row_ptr[i + 1];
+        let r1 = self.row_ptr[i + 1]..self.row_ptr[i + 2];
+        dot_pair(
+            (&self.cols[r0.clone()], &self.vals[r0]),
+            (&self.cols[r1.clone()], &self.vals[r1]),
+            |v| v,
+            x,
+        )
     }
 
     /// Row `i` of `A x`, `x` read through `x(column)`: two partial sums (even and odd
@@ -434,18 +462,78 @@ impl SparseMatrix {
     }
 }
 
-/// `y[i] = row(i)` for every row `i`: in parallel (tasks of at least [`MIN_ROWS_PER_TASK`]
-/// rows) when `par` says so for `y.len()` rows. The kernel of `A x` for every storage of `A`
-/// ([`SparseMatrix`], [`crate::CompactMatrix`]); each row's value does not depend on the
-/// split, so the result is the same bits either way.
-pub(crate) fn each_row<T: Send>(y: &mut [T], par: Parallelism, row: impl Fn(usize) -> T + Sync) {
+/// Two rows of `A x` at once, their entries interleaved: row `r`'s entries `(cols, w)` with
+/// weights `weight(w)`. Each row sums exactly as the one-row products do (even entries into one
+/// partial sum, odd entries into another, the odd tail into the first, then second + first), so
+/// each value is the same bits as a one-row product; the two rows give four independent chains
+/// of additions instead of two (issue 31: a row of a level operator has about 15 entries, and
+/// one row's two chains leave the core waiting on the additions' latency).
+#[inline(always)]
+pub(crate) fn dot_pair<T: Coord, W: Copy>(
+    (c0, w0): (&[u32], &[W]),
+    (c1, w1): (&[u32], &[W]),
+    weight: impl Fn(W) -> f64,
+    x: impl Fn(usize) -> T,
+) -> (T, T) {
+    let (cp0, ct0) = c0.as_chunks::<2>();
+    let (vp0, vt0) = w0.as_chunks::<2>();
+    let (cp1, ct1) = c1.as_chunks::<2>();
+    let (vp1, vt1) = w1.as_chunks::<2>();
+    let (mut a0, mut b0, mut a1, mut b1) = (T::zero(), T::zero(), T::zero(), T::zero());
+    let both = cp0.len().min(cp1.len());
+    for (((c, v), d), w) in cp0[..both]
+        .iter()
+        .zip(&vp0[..both])
+        .zip(&cp1[..both])
+        .zip(&vp1[..both])
+    {
+        a0.add_scaled(weight(v[0]), &x(c[0] as usize));
+        a1.add_scaled(weight(w[0]), &x(d[0] as usize));
+        b0.add_scaled(weight(v[1]), &x(c[1] as usize));
+        b1.add_scaled(weight(w[1]), &x(d[1] as usize));
+    }
+    for (c, v) in cp0[both..].iter().zip(&vp0[both..]) {
+        a0.add_scaled(weight(v[0]), &x(c[0] as usize));
+        b0.add_scaled(weight(v[1]), &x(c[1] as usize));
+    }
+    for (c, v) in cp1[both..].iter().zip(&vp1[both..]) {
+        a1.add_scaled(weight(v[0]), &x(c[0] as usize));
+        b1.add_scaled(weight(v[1]), &x(c[1] as usize));
+    }
+    if let (Some(&c), Some(&v)) = (ct0.first(), vt0.first()) {
+        a0.add_scaled(weight(v), &x(c as usize));
+    }
+    if let (Some(&c), Some(&v)) = (ct1.first(), vt1.first()) {
+        a1.add_scaled(weight(v), &x(c as usize));
+    }
+    b0.add_scaled(1.0, &a0);
+    b1.add_scaled(1.0, &a1);
+    (b0, b1)
+}
+
+/// `y[i] = row i` for every row, two rows at a time: `row(i, Some(y_(i+1)))` returns row `i`'s
+/// value and stores row `i + 1`'s (kernels that interleave two rows, [`dot_pair`]), `row(i,
+/// None)` returns the last row of an odd count. In parallel (tasks of at least
+/// [`MIN_ROWS_PER_TASK`] rows) when `par` says so for `y.len()` rows. The kernel of `A x` for
+/// every storage of `A` ([`SparseMatrix`], [`crate::CompactMatrix`]); each row's value does not
+/// depend on the split or the pairing, so the result is the same bits either way.
+pub(crate) fn each_row_pair<T: Send>(
+    y: &mut [T],
+    par: Parallelism,
+    row: impl Fn(usize, Option<&mut T>) -> T + Sync,
+) {
+    let pair = |k: usize, ys: &mut [T]| match ys {
+        [y0, y1] => *y0 = row(2 * k, Some(y1)),
+        [y0] => *y0 = row(2 * k, None),
+        _ => {}
+    };
     if par.is_parallel(y.len()) {
-        y.par_iter_mut()
+        y.par_chunks_mut(2)
             .enumerate()
-            .with_min_len(MIN_ROWS_PER_TASK)
-            .for_each(|(i, yi)| *yi = row(i));
+            .with_min_len(MIN_ROWS_PER_TASK / 2)
+            .for_each(|(k, ys)| pair(k, ys));
     } else {
-        y.iter_mut().enumerate().for_each(|(i, yi)| *yi = row(i));
+        y.chunks_mut(2).enumerate().for_each(|(k, ys)| pair(k, ys));
     }
 }
 

@@ -224,3 +224,83 @@ fn mul_scaled_equals_the_product_with_a_row_scaled_copy_bit_for_bit() {
     let bits = |m: &SparseMatrix| m.values().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&got), bits(&expected));
 }
+
+fn bits(v: &[Vec3]) -> Vec<[u64; 3]> {
+    v.iter()
+        .map(|x| [x.x.to_bits(), x.y.to_bits(), x.z.to_bits()])
+        .collect()
+}
+
+/// Issue 31 (session h50): `A x` takes rows two at a time with their entries interleaved; every
+/// row must still be the one-row product's bits (rows of unequal lengths, odd and even counts,
+/// a last unpaired row, sequential and parallel, `f64` and compact storage).
+#[test]
+fn paired_row_products_equal_one_row_products_bit_for_bit() {
+    let mut rng = Rng(50);
+    let s = solid(primitives::gear(1.0, 2.0, 2.5, 0.4), BoundaryRule::Sharp, 2);
+    for a in s.map().operators() {
+        let x: Vec<Vec3> = (0..a.ncols()).map(|_| rng.vec3(1.0)).collect();
+        // Odd and even row counts: all rows, and all but the first.
+        for rows in [0..a.nrows(), 1..a.nrows()] {
+            let sub = a.select_rows(&rows.clone().map(|i| i as u32).collect::<Vec<_>>());
+            let one: Vec<Vec3> = (0..sub.nrows())
+                .map(|i| {
+                    let mut v = Vec3::zeros();
+                    sub.apply_rows_with(i..i + 1, |c| x[c], |_, y| v = y);
+                    v
+                })
+                .collect();
+            let compact = vclay_lattice::CompactMatrix::new(&sub).unwrap();
+            for par in [Parallelism::Sequential, Parallelism::Rayon] {
+                let mut y = vec![Vec3::zeros(); sub.nrows()];
+                sub.apply_into(&x, &mut y, par);
+                assert_eq!(bits(&y), bits(&one), "{par:?}");
+                compact.apply_into(&x, &mut y, par);
+                assert_eq!(bits(&y), bits(&one), "compact, {par:?}");
+            }
+            // Row ranges starting at odd and even rows, of odd and even lengths.
+            for r in [0..sub.nrows(), 1..sub.nrows(), 3..sub.nrows() - 2] {
+                let mut got = Vec::new();
+                sub.apply_rows_with(r.clone(), |c| x[c], |i, v| got.push((i, v)));
+                assert_eq!(got.len(), r.len());
+                for (i, v) in got {
+                    assert_eq!(bits(&[v]), bits(&[one[i]]), "row {i}");
+                }
+            }
+        }
+    }
+}
+
+/// Issue 31 (session h50): a chain workspace keeps its buffers at their largest size instead of
+/// clearing them before every product, so one workspace reused for chains of other sizes must
+/// give the bits of a fresh one.
+#[test]
+fn a_workspace_reused_across_chains_gives_the_bits_of_a_fresh_one() {
+    let mut rng = Rng(5);
+    let big = solid(
+        primitives::box_lattice([3, 3, 3], Vec3::zeros(), Vec3::repeat(1.0)),
+        BoundaryRule::Sharp,
+        3,
+    );
+    let small = solid(primitives::gear(1.0, 2.0, 2.5, 0.4), BoundaryRule::Sharp, 2);
+    let mut shared = ChainWorkspace::new();
+    for (round, s) in [&big, &small, &big, &small].into_iter().enumerate() {
+        let map = s.map();
+        let p: Vec<Vec3> = (0..map.control_count().unwrap())
+            .map(|_| rng.vec3(1.0))
+            .collect();
+        let f: Vec<Vec3> = (0..map.data_count().unwrap())
+            .map(|_| rng.vec3(1.0))
+            .collect();
+        for par in [Parallelism::Sequential, Parallelism::Rayon] {
+            let (mut d0, mut d1) = (vec![Vec3::zeros(); f.len()], vec![Vec3::zeros(); f.len()]);
+            map.apply_into(&p, &mut d0, &mut ChainWorkspace::new(), par);
+            map.apply_into(&p, &mut d1, &mut shared, par);
+            assert_eq!(bits(&d0), bits(&d1), "round {round}, A p, {par:?}");
+            let (mut g0, mut g1) = (vec![Vec3::zeros(); p.len()], vec![Vec3::zeros(); p.len()]);
+            map.apply_transpose_into(&f, &mut g0, &mut ChainWorkspace::new(), par);
+            map.apply_transpose_into(&f, &mut g1, &mut shared, par);
+            assert_eq!(bits(&g0), bits(&g1), "round {round}, A^T f, {par:?}");
+        }
+    }
+}

@@ -2,7 +2,10 @@
 //! forces (one thread and all threads), `d = A p` and `g = A^T f` (with the `f64` level
 //! operators, then compressed: `SubdivisionMap::compress`).
 //!
-//! Run: `cargo run --release -p vclay-solids --example kernels -- [level] [reps]`.
+//! Run: `cargo run --release -p vclay-solids --example kernels -- [level] [reps]`. Each figure
+//! is the median wall time of `reps` runs and, after the slash, the process's CPU time per run
+//! (on a shared host a one-thread pass's CPU time is its own work; its wall time includes the
+//! time other tenants held the core).
 
 use std::time::Instant;
 use vclay_core::{Parallelism, Vec3};
@@ -12,6 +15,20 @@ use vclay_solids::{SolidParams, benchmarks};
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
+}
+
+/// `reps` runs of `pass`: the median wall ms and the mean process CPU ms of a run.
+fn time(reps: usize, mut pass: impl FnMut()) -> (f64, f64) {
+    let cpu = || vclay_core::yardstick::process_cpu_seconds().unwrap_or(f64::NAN);
+    let mut wall = Vec::with_capacity(reps);
+    let mut busy = 0.0;
+    for _ in 0..reps {
+        let (c0, t0) = (cpu(), Instant::now());
+        pass();
+        wall.push(t0.elapsed().as_secs_f64() * 1e3);
+        busy += (cpu() - c0) * 1e3;
+    }
+    (median(wall), busy / reps as f64)
 }
 
 fn main() {
@@ -37,18 +54,13 @@ fn main() {
         ("springs, 1 thread", Parallelism::Sequential),
         ("springs, all threads", Parallelism::Rayon),
     ] {
-        let t: Vec<f64> = (0..reps)
-            .map(|_| {
-                f.iter_mut().for_each(|x| *x = Vec3::zeros());
-                let t0 = Instant::now();
-                springs.add_forces(&d, &mut f, &mut ws, par);
-                t0.elapsed().as_secs_f64() * 1e3
-            })
-            .collect();
+        // `set_forces`: the step's call (the zeroing of `f` included).
+        let (t, c) = time(reps, || {
+            springs.set_forces(&d, &mut f, &mut ws, par);
+        });
         println!(
-            "level {level}: {name}: {:.3} ms ({:.2} ns/spring)",
-            median(t.clone()),
-            median(t) * 1e6 / springs.len() as f64
+            "level {level}: {name}: {t:.3} / {c:.3} ms ({:.2} ns/spring)",
+            t * 1e6 / springs.len() as f64
         );
     }
     // The control map alone: as built (`f64` operators), then compressed (issue 31).
@@ -65,35 +77,21 @@ fn main() {
         if compress && !disc.map.is_compressed() {
             disc.map.compress();
         }
-        let ta: Vec<f64> = (0..reps)
-            .map(|_| {
-                let t0 = Instant::now();
-                disc.map
-                    .apply_into(s.control_points(), &mut dd, &mut ws, par);
-                t0.elapsed().as_secs_f64() * 1e3
-            })
-            .collect();
-        let tt: Vec<f64> = (0..reps)
-            .map(|_| {
-                let t0 = Instant::now();
-                disc.map.apply_transpose_into(&f, &mut g, &mut ws, par);
-                t0.elapsed().as_secs_f64() * 1e3
-            })
-            .collect();
+        let (ta, ca) = time(reps, || {
+            disc.map
+                .apply_into(s.control_points(), &mut dd, &mut ws, par)
+        });
+        let (tt, ct) = time(reps, || {
+            disc.map.apply_transpose_into(&f, &mut g, &mut ws, par)
+        });
         println!(
-            "level {level}: A p {:.3} ms, A^T f {:.3} ms ({name}, {} non-zeros)",
-            median(ta),
-            median(tt),
+            "level {level}: A p {ta:.3} / {ca:.3} ms, A^T f {tt:.3} / {ct:.3} ms ({name}, {} non-zeros)",
             disc.map.operators().iter().map(|m| m.nnz()).sum::<usize>()
         );
     }
-    let t: Vec<f64> = (0..reps)
-        .map(|_| {
-            let t0 = Instant::now();
-            s.step().unwrap();
-            t0.elapsed().as_secs_f64() * 1e3
-        })
-        .collect();
-    println!("level {level}: whole step: {:.3} ms", median(t));
+    let (t, c) = time(reps, || {
+        s.step().unwrap();
+    });
+    println!("level {level}: whole step: {t:.3} / {c:.3} ms");
     println!("{}", vclay_core::yardstick::start_and_end_line(yard_start));
 }
