@@ -2,7 +2,8 @@
 # The studio's frame rate in a real window (issue 27): the release `vclay-studio` under Xvfb with
 # Mesa's llvmpipe (software OpenGL: every pixel is drawn by the CPU, on the same 2 cores as the
 # simulation), on the frame-loop benchmark's models (`vclay-studio --bench`): the 4^3 cube at
-# levels 3 and 4 and the 32 x 32 D-NURBS sheet with frozen and dynamic weights. For each, the
+# levels 3 and 4 and the 32 x 32 D-NURBS sheet with frozen and dynamic weights (the direct
+# solve and the default for this size, the block-Schur one). For each, the
 # studio opens the model, xdotool drags a rope across it for DRAG seconds (a slow circle, so
 # the simulation and the picture both change every frame), and the window's `--frame-log`
 # (one line a second: frames/s, steps/s, step and display ms) is read back. Prints one
@@ -27,20 +28,21 @@ source bench/studio_window.sh
 cube() { # LEVEL DT
   printf '[model]\nkind = "subdivision-solid"\nprimitive = "box"\npoints = [4, 4, 4]\nlevel = %s\n[material]\ndamping = 2.0\nedge_stiffness = 100.0\nvirtual_stiffness = 50.0\n[simulation]\nintegrator = "symplectic"\ndt = %s\n' "$1" "$2"
 }
-sheet() { # ENGINE LINE
-  printf '[model]\nkind = "dnurbs-surface"\nsize = [32, 32]\ndegree = [3, 3]\n%b[simulation]\ndt = 0.01\n' "$1"
+sheet() { # MODEL_LINES SIMULATION_LINES
+  printf '[model]\nkind = "dnurbs-surface"\nsize = [32, 32]\ndegree = [3, 3]\n%b[simulation]\ndt = 0.01\n%b' "$1" "${2:-}"
 }
 cube 3 0.002 >"$work/cube3.toml"
 cube 4 0.001 >"$work/cube4.toml"
 sheet 'engine = "frozen"\n' >"$work/sheet_frozen.toml"
-sheet '' >"$work/sheet_dynamic.toml"
+sheet '' 'solver = "direct"\n' >"$work/sheet_dynamic_direct.toml"
+sheet '' >"$work/sheet_dynamic_block_schur.toml" # the default for this size
 
 median() { sort -g | awk '{a[NR] = $1} END {if (NR == 0) print "nan"; else if (NR % 2) print a[(NR + 1) / 2]; else print (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
 load() { cut -d' ' -f1 /proc/loadavg; }
 
 echo "| model | triangles | frames/s (median of the drag's seconds) | steps/s | step ms | display ms | load before / after |"
 echo "| --- | ---: | ---: | ---: | ---: | ---: | --- |"
-for m in cube3 cube4 sheet_frozen sheet_dynamic; do
+for m in cube3 cube4 sheet_frozen sheet_dynamic_direct sheet_dynamic_block_schur; do
   log=$work/$m.frames
   before=$(load)
   "$studio" "$work/$m.toml" --autosave "$work/autosave.session" --no-recovery \

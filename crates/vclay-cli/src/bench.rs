@@ -220,6 +220,12 @@ fn physics_figures(seconds: f64, large: bool) -> Result<serde_json::Value> {
     // The studio's sheet: unit initial weights (issue 31's goal: 30 steps/s).
     let mut dynamic32 = dn::uniform_dynamic_sheet(32)?;
     let dynamic32_rate = steps_per_second(seconds, || Ok(dynamic32.step(implicit).map(drop)?))?;
+    // The same sheet with the opt-in block-Schur solve (`[simulation] solver = "block-schur"`;
+    // the same trajectory within 1e-12 of its residual per solve, not bit for bit).
+    let mut dynamic32_split = dn::uniform_dynamic_sheet(32)?;
+    dynamic32_split.block_schur = Some(vclay::dynamics::dnurbs::BlockSchur::default());
+    let dynamic32_split_rate =
+        steps_per_second(seconds, || Ok(dynamic32_split.step(implicit).map(drop)?))?;
     let mut dynamic_fixed = dn::dynamic_sheet(16)?;
     dynamic_fixed
         .set_quadrature_rule(vclay::dynamics::dnurbs::generalized::QuadratureRule::Fixed)?;
@@ -233,6 +239,7 @@ fn physics_figures(seconds: f64, large: bool) -> Result<serde_json::Value> {
         "dnurbs_64x64_frozen_weights": at_least(frozen_rate, "steps/s", 500.0),
         "dnurbs_16x16_dynamic_weights": at_least(dynamic_rate, "steps/s", 60.0),
         "dnurbs_32x32_dynamic_weights": at_least(dynamic32_rate, "steps/s", 30.0),
+        "dnurbs_32x32_dynamic_weights_block_schur": at_least(dynamic32_split_rate, "steps/s", 30.0),
         "dnurbs_16x16_dynamic_weights_fixed_rule": at_least(dynamic_fixed_rate, "steps/s", 60.0),
         "solid_cube_level2": {
             "value": cube_ms,

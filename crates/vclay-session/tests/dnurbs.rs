@@ -466,3 +466,82 @@ fn every_dnurbs_kind_takes_set_dt_through_the_one_model() {
         assert_eq!(s.model(None).unwrap().dt(), dt0, "{kind}");
     }
 }
+
+/// `[simulation] solver = "block-schur"` (issues 27/31): the split solve follows the direct
+/// factorization within its stated tolerance (1e-12 relative residual per solve; here 1e-10 of
+/// the model size after 60 steps with a rope pulling), is saved with the model and continues
+/// bit for bit after a load; the frozen engine and unknown names are refused with the key.
+#[test]
+fn the_block_schur_solver_follows_the_direct_one_and_is_saved() {
+    let model = "kind = \"dnurbs-surface\"\nsize = [10, 10]\ndegree = [3, 3]";
+    let run = |sim: &str| {
+        let mut s = session(build(ModelKind::DnurbsSurface, model, "", sim));
+        s.apply(Command::new(rope(
+            Some([0.4, 0.6]),
+            None,
+            Some([0.3, 0.2, 0.8]),
+        )))
+        .unwrap();
+        s.run(60).unwrap();
+        s
+    };
+    let direct = run("dt = 0.01");
+    let mut split = run("dt = 0.01\nsolver = \"block-schur\"");
+    let size = direct.model(None).unwrap().size();
+    let (a, b) = (
+        direct.model(None).unwrap().control_points(),
+        split.model(None).unwrap().control_points(),
+    );
+    let gap = a
+        .iter()
+        .zip(&b)
+        .map(|(p, q)| (*p - *q).norm())
+        .fold(0.0, f64::max);
+    assert!(gap < 1e-10 * size, "block-schur is {gap} from direct");
+    assert_ne!(saved(&direct), saved(&split), "the split path was taken");
+    assert_eq!(saved(&split)["solver"], "block-schur");
+    assert!(saved(&direct).get("solver").is_none());
+    common::check_continue(&mut split, 3, "block-schur");
+
+    let e = common::try_build(
+        ModelKind::DnurbsSurface,
+        "kind = \"dnurbs-surface\"\nsize = [6, 6]\ndegree = [3, 3]\nengine = \"frozen\"",
+        None,
+        Some("dt = 0.01\nsolver = \"block-schur\""),
+        Path::new("."),
+    )
+    .err()
+    .expect("the frozen engine refuses it");
+    let e = format!("{e:?}");
+    assert!(e.contains("solver") && e.contains("generalized"), "{e}");
+    let e = common::try_build(
+        ModelKind::DnurbsSurface,
+        model,
+        None,
+        Some("dt = 0.01\nsolver = \"lu\""),
+        Path::new("."),
+    )
+    .err()
+    .expect("an unknown solver");
+    let e = format!("{e:?}");
+    assert!(e.contains("solver") && e.contains("lu"), "{e}");
+
+    // "auto" (the default) takes it from 20 x 20 control points with dynamic weights.
+    let takes = |size: usize, sim: &str, weights: &str| {
+        let m = build(
+            ModelKind::DnurbsSurface,
+            &format!(
+                "kind = \"dnurbs-surface\"\nsize = [{size}, {size}]\ndegree = [3, 3]\nweights = \"{weights}\""
+            ),
+            "",
+            sim,
+        );
+        m.save().unwrap().get("solver").is_some()
+    };
+    let n = (vclay_session::models::dnurbs::AUTO_BLOCK_SCHUR_POINTS as f64).sqrt() as usize;
+    assert!(takes(n, "dt = 0.01", "dynamic"));
+    assert!(takes(n, "dt = 0.01\nsolver = \"auto\"", "dynamic"));
+    assert!(!takes(n - 1, "dt = 0.01", "dynamic"));
+    assert!(!takes(n, "dt = 0.01\nsolver = \"direct\"", "dynamic"));
+    assert!(!takes(n, "dt = 0.01", "frozen"));
+}

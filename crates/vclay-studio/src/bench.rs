@@ -28,8 +28,10 @@ pub struct Case {
     pub goal_fps: f64,
 }
 
-/// The cases: the 4^3 cube at levels 3 and 4 and a 32 x 32 D-NURBS surface.
-pub const CASES: [Case; 4] = [
+/// The cases: the 4^3 cube at levels 3 and 4 and a 32 x 32 D-NURBS surface (frozen
+/// weights; dynamic weights with the direct solve and with the default for this size, the
+/// block-Schur one).
+pub const CASES: [Case; 5] = [
     Case {
         name: "4^3 cube, level 3 (15,625 data points), rope",
         scenario: "[model]\nkind = \"subdivision-solid\"\nprimitive = \"box\"\npoints = [4, 4, 4]\nlevel = 3\n[material]\ndamping = 2.0\nedge_stiffness = 100.0\nvirtual_stiffness = 50.0\n[simulation]\nintegrator = \"symplectic\"\ndt = 0.002\n",
@@ -52,7 +54,14 @@ pub const CASES: [Case; 4] = [
         goal_fps: 60.0,
     },
     Case {
-        name: "32 x 32 D-NURBS surface (dynamic weights), rope",
+        name: "32 x 32 D-NURBS surface (dynamic weights, direct solver), rope",
+        scenario: "[model]\nkind = \"dnurbs-surface\"\nsize = [32, 32]\ndegree = [3, 3]\n[simulation]\ndt = 0.01\nsolver = \"direct\"\n",
+        grab: [0.5, 0.5, 0.0],
+        steps: 1,
+        goal_fps: 60.0,
+    },
+    Case {
+        name: "32 x 32 D-NURBS surface (dynamic weights, default solver: block-schur), rope",
         scenario: "[model]\nkind = \"dnurbs-surface\"\nsize = [32, 32]\ndegree = [3, 3]\n[simulation]\ndt = 0.01\n",
         grab: [0.5, 0.5, 0.0],
         steps: 1,

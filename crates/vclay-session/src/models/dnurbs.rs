@@ -245,7 +245,40 @@ impl DnurbsEngine for NurbsEngine {
     }
 }
 
+/// The `[simulation] solver` keyword (and saved value) of the block-Schur solve.
+const BLOCK_SCHUR_SOLVER: &str = "block-schur";
+
+/// `solver = "auto"` (the default) takes the block-Schur solve for tensor-product surfaces
+/// with dynamic weights and at least this many control points (20 x 20), where the whole step
+/// matrix's factorization is most of a step: `vclay bench --physics` on a quiet host, the
+/// 32 x 32 sheet at 33 steps/s against 20 with the direct factorization; the 16 x 16 sheet
+/// gains about 6 % of CPU time and smaller or constrained models can lose (each constraint row
+/// is a conjugate-gradient run there). The choice is made once, when the model is built, and
+/// saved with it (a saved model continues as it ran).
+pub const AUTO_BLOCK_SCHUR_POINTS: usize = 400;
+
 impl NurbsEngine {
+    /// Whether the generalized engine solves its steps by blocks
+    /// ([`GeneralizedDnurbs::block_schur`]); always `false` for the frozen engine.
+    fn block_schur(&self) -> bool {
+        match self {
+            NurbsEngine::Rational(d) => d.block_schur.is_some(),
+            NurbsEngine::Swung(d) => d.block_schur.is_some(),
+            _ => false,
+        }
+    }
+
+    /// Turns the block-Schur solve on or off (default settings); the frozen engine ignores it
+    /// (its spec refuses the key).
+    fn set_block_schur(&mut self, on: bool) {
+        let b = on.then(vclay_dynamics::dnurbs::BlockSchur::default);
+        match self {
+            NurbsEngine::Rational(d) => d.block_schur = b,
+            NurbsEngine::Swung(d) => d.block_schur = b,
+            _ => {}
+        }
+    }
+
     fn is_curve(&self) -> bool {
         match self {
             NurbsEngine::Rational(d) => d.geometry().parametric_dimension() == 1,
@@ -1326,6 +1359,25 @@ impl DnurbsModel {
                 "the frozen-weight engine picks its rule at construction (weight-aware, one order for the model); choosing one needs `engine = \"generalized\"`".into(),
             ));
         }
+        // `None`: "auto", decided below from the model's size.
+        let block_schur = keyword(
+            "simulation",
+            "solver",
+            sim.solver.as_deref(),
+            &[
+                ("auto", None),
+                ("direct", Some(false)),
+                (BLOCK_SCHUR_SOLVER, Some(true)),
+            ],
+        )?
+        .flatten();
+        if frozen && block_schur == Some(true) {
+            return Err(err(
+                "simulation",
+                "solver",
+                "the frozen-weight engine factors its constant matrix once; the block-Schur solve needs `engine = \"generalized\"`".into(),
+            ));
+        }
         let penalty = sim.weight_penalty.unwrap_or(0.0);
         let dynamic_weights = keyword(
             "model",
@@ -1393,6 +1445,14 @@ impl DnurbsModel {
             NurbsEngine::FrozenCurve(d) => fix_frozen(d, reference, &m.fix)?,
             NurbsEngine::FrozenRing(d) => fix_frozen(d, reference, &m.fix)?,
         }
+        let auto = !frozen
+            && dynamic_weights
+            && kind == ModelKind::DnurbsSurface
+            && n.engine
+                .surface()
+                .map_err(|e| err("model", "size", e.to_string()))?
+                .is_some_and(|s| s.control_points().len() >= AUTO_BLOCK_SCHUR_POINTS);
+        n.engine.set_block_schur(block_schur.unwrap_or(auto));
         Ok(model)
     }
 
@@ -1411,6 +1471,16 @@ impl DnurbsModel {
                 NurbsEngine::Rational(d) => d.set_quadrature_rule(q.rule()).map_err(dyn_err)?,
                 NurbsEngine::Swung(d) => d.set_quadrature_rule(q.rule()).map_err(dyn_err)?,
                 _ => {}
+            }
+        }
+        match s.solver.as_deref() {
+            None => {}
+            Some(BLOCK_SCHUR_SOLVER) if !frozen => m.kind_mut().engine.set_block_schur(true),
+            Some(o) => {
+                return Err(SessionError::model(format!(
+                    "unknown solver \"{o}\" for the {} engine",
+                    s.engine
+                )));
             }
         }
         if m.engine().is_curve() != (kind == ModelKind::DnurbsCurve) {
@@ -2337,6 +2407,10 @@ impl GeneralizedKind for Nurbs {
             kinetic: self.ed.kinetic,
             steps: self.ed.steps,
             quadrature: self.engine.quadrature_rule().map(Quad::of),
+            solver: self
+                .engine
+                .block_schur()
+                .then(|| BLOCK_SCHUR_SOLVER.to_string()),
         };
         serde_json::to_value(saved).map_err(SessionError::kernel)
     }
@@ -2400,6 +2474,13 @@ scenario_keys! {
         pub quadrature: Option<String>,
         /// Relative accuracy of the weight-aware rule.
         pub quadrature_tolerance: Option<f64>,
+        /// `"auto"` (default: `"block-schur"` for surfaces with dynamic weights and at least
+        /// [`AUTO_BLOCK_SCHUR_POINTS`] control points, else `"direct"`), `"direct"` (a sparse
+        /// Cholesky factorization of the whole step matrix) or `"block-schur"` (the generalized
+        /// engine's split solve, [`vclay_dynamics::dnurbs::BlockSchur`]: about a quarter less
+        /// CPU a step on large tensor-product sheets with dynamic weights, each solve to a
+        /// relative residual of 1e-12), issues 27/31.
+        pub solver: Option<String>,
     }
 }
 
@@ -2455,6 +2536,10 @@ struct Saved {
     /// the weight-aware default).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     quadrature: Option<Quad>,
+    /// `"block-schur"` when the generalized engine solves its steps by blocks (absent: the
+    /// direct factorization, and in files written before issues 27/31).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    solver: Option<String>,
 }
 
 #[derive(Debug, Serialize, Deserialize)]
