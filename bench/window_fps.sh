@@ -59,8 +59,10 @@ for m in cube3 cube4 sheet_frozen sheet_dynamic_direct sheet_dynamic_block_schur
   xdotool windowmove "$win" 0 0 windowsize "$win" 1280 800 2>/dev/null || true
   sleep 3
   xdotool windowfocus "$win" 2>/dev/null || true
-  # Front view, framed; the rope (R) grabs the model at the viewport's centre and circles.
-  xdotool mousemove 660 400; sleep 0.2; xdotool key 1; sleep 0.3; xdotool key f; sleep 1; xdotool key r; sleep 0.3
+  # Front view of the cubes, top view of the sheets (they lie in the xy plane), framed; the
+  # rope (R) grabs the model at the viewport's centre and circles.
+  case "$m" in sheet*) view=7 ;; *) view=1 ;; esac
+  xdotool mousemove 660 400; sleep 0.2; xdotool key "$view"; sleep 0.3; xdotool key f; sleep 1; xdotool key r; sleep 0.3
   start=$(awk 'END {print $1}' "$log")
   xdotool mousedown 1
   steps=$((drag_s * 10))
