@@ -645,7 +645,8 @@ fn reused_factorizations_follow_the_direct_path_within_the_stated_tolerance() {
 /// sheet with one control point held in `x` only (its `y`, `z` join the weights in the Schur
 /// block) and a data spring, the trajectory stays within the stated tolerance of the full
 /// factorization's (`docs/performance.md`, fourth pass: 1e-10 of the model size), the split is
-/// taken (CG iterations counted, one factorization a step) and the residuals stay small.
+/// taken (CG iterations counted, one factorization a step) and the residuals stay small. With
+/// the default cap on constraint rows the point-constrained sheet takes the full factorization.
 #[test]
 fn block_schur_follows_the_full_factorization_within_the_stated_tolerance() {
     use vclay_dynamics::dnurbs::{BlockSchur, benchmarks};
@@ -684,8 +685,22 @@ fn block_schur_follows_the_full_factorization_within_the_stated_tolerance() {
     };
     for partial in [false, true] {
         let (full, full_residual, full_iterations, full_factors, scale) = run(None, partial);
+        // Every step split, the point constraint's three rows included (by default a step
+        // with more than `BLOCK_SCHUR_CONSTRAINT_ROWS` rows factors the whole matrix).
+        let always = BlockSchur {
+            max_constraint_rows: usize::MAX,
+            ..Default::default()
+        };
         let (split, split_residual, split_iterations, split_factors, _) =
-            run(Some(BlockSchur::default()), partial);
+            run(Some(always), partial);
+        if !partial {
+            let (capped, _, capped_iterations, _, _) = run(Some(BlockSchur::default()), partial);
+            assert_eq!(
+                capped_iterations, 0,
+                "a point constraint: the full factorization"
+            );
+            assert_eq!(capped, full, "the same bits as without the split");
+        }
         assert_eq!(full_iterations, 0);
         assert_eq!((full_factors, split_factors), (100, 100));
         assert!(split_iterations >= 100, "{split_iterations} CG iterations");

@@ -73,7 +73,9 @@ use std::sync::Arc;
 use vclay_core::{GaussLegendre, Vec3};
 
 mod block_schur;
-pub use block_schur::{BLOCK_SCHUR_ITERATIONS, BLOCK_SCHUR_TOLERANCE, BlockSchur};
+pub use block_schur::{
+    BLOCK_SCHUR_CONSTRAINT_ROWS, BLOCK_SCHUR_ITERATIONS, BLOCK_SCHUR_TOLERANCE, BlockSchur,
+};
 use block_schur::{SchurBuffers, SchurFactor, SchurPattern};
 
 /// Values and Jacobian columns of a geometry at one parameter, for the six parametric
@@ -1641,6 +1643,20 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         !self.constraints.is_empty() || !self.ties.is_empty()
     }
 
+    /// Rows the constraints and ties add to a step (before the dependence check): a point
+    /// constraint 3, a normal constraint 2, a tie 1.
+    fn constraint_row_count(&self) -> usize {
+        let rows: usize = self
+            .constraints
+            .iter()
+            .map(|c| match c {
+                Constraint::Point { .. } => 3,
+                Constraint::Normal { .. } => 2,
+            })
+            .sum();
+        rows + self.ties.len()
+    }
+
     /// Removes every constraint (the ties stay).
     pub fn clear_constraints(&mut self) {
         self.constraints.clear();
@@ -2242,7 +2258,9 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         // iterations do not reach the tolerance.
         let schur = match self.block_schur {
             Some(settings)
-                if self.solver == LinearSolver::Direct && self.factor_reuse.is_none() =>
+                if self.solver == LinearSolver::Direct
+                    && self.factor_reuse.is_none()
+                    && self.constraint_row_count() <= settings.max_constraint_rows =>
             {
                 let solved =
                     self.schur_solve(settings, &pattern, &extra_diag, &works, ne, &b, &mut x);

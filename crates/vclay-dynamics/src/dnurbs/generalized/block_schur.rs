@@ -66,6 +66,13 @@ pub const BLOCK_SCHUR_TOLERANCE: f64 = 1e-12;
 /// sheet needs 13-15.
 pub const BLOCK_SCHUR_ITERATIONS: usize = 60;
 
+/// Default [`BlockSchur::max_constraint_rows`]: `2` (one normal constraint). Each constraint
+/// row is a CG run on the split path but two triangular solves with a full factor; on the
+/// 32 x 32 sheet one run is about as much as the split saves on the factorization (about 9 ms
+/// of CG against about 20 ms saved), so from a point constraint (3 rows) on the full
+/// factorization is the faster one.
+pub const BLOCK_SCHUR_CONSTRAINT_ROWS: usize = 2;
+
 /// Settings of the block-Schur solve of [`super::GeneralizedDnurbs::block_schur`] (module docs
 /// of `generalized/block_schur.rs`): the step matrix `[[S (x) I3, B], [B^T, C]]` solved with
 /// sparse factors of `S` and `C` and conjugate gradients on the Schur complement
@@ -84,6 +91,10 @@ pub struct BlockSchur {
     /// Iteration cap (default [`BLOCK_SCHUR_ITERATIONS`]); a solve that does not reach the
     /// tolerance falls back to the full factorization for that step.
     pub max_iterations: usize,
+    /// Steps with more constraint rows than this (point constraints 3, normal constraints 2,
+    /// ties 1 each) use the full factorization (default [`BLOCK_SCHUR_CONSTRAINT_ROWS`];
+    /// `usize::MAX`: always split).
+    pub max_constraint_rows: usize,
 }
 
 impl Default for BlockSchur {
@@ -91,6 +102,7 @@ impl Default for BlockSchur {
         Self {
             tolerance: BLOCK_SCHUR_TOLERANCE,
             max_iterations: BLOCK_SCHUR_ITERATIONS,
+            max_constraint_rows: BLOCK_SCHUR_CONSTRAINT_ROWS,
         }
     }
 }
