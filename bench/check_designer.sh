@@ -25,19 +25,8 @@ work=$root/target/check-designer
 # shellcheck source=bench/studio_window.sh
 source bench/studio_window.sh
 
-win=
 start() { # FILE: starts the studio on FILE and waits for its window
-  "$studio" "$1" --autosave "$work/autosave.session" --no-recovery >>"$work/studio.log" 2>&1 &
-  studio_pid=$!
-  win=
-  for _ in $(seq 300); do
-    win=$(xdotool search --name "vclay studio" 2>/dev/null | head -1 || true)
-    [ -n "$win" ] && break
-    kill -0 "$studio_pid" 2>/dev/null || { cat "$work/studio.log"; echo "check_designer: FAILED: the studio exited"; exit 1; }
-    sleep 0.1
-  done
-  [ -n "$win" ] || { echo "check_designer: FAILED: no window"; exit 1; }
-  xdotool windowmove "$win" 0 0 windowsize "$win" 1280 800 2>/dev/null || true
+  start_studio "$1" --autosave "$work/autosave.session" --no-recovery
   sleep 3
   xdotool windowfocus "$win" 2>/dev/null || true
 }

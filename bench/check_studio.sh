@@ -17,18 +17,7 @@ work=$root/target/check-studio
 # shellcheck source=bench/studio_window.sh
 source bench/studio_window.sh
 
-"$studio" examples/scenarios/fig07_rope_cube.toml --autosave "$work/autosave.session" \
-  --no-recovery >"$work/studio.log" 2>&1 &
-studio_pid=$!
-win=
-for _ in $(seq 300); do
-  win=$(xdotool search --name "vclay studio" 2>/dev/null | head -1 || true)
-  [ -n "$win" ] && break
-  kill -0 "$studio_pid" 2>/dev/null || { cat "$work/studio.log"; echo "check_studio: FAILED: the studio exited"; exit 1; }
-  sleep 0.1
-done
-[ -n "$win" ] || { echo "check_studio: FAILED: no window"; exit 1; }
-xdotool windowmove "$win" 0 0 windowsize "$win" 1280 800 2>/dev/null || true
+start_studio examples/scenarios/fig07_rope_cube.toml --autosave "$work/autosave.session" --no-recovery
 sleep 4 # the scenario's own rope pulls the cube, a plastic reset keeps the shape at t = 0.9 s
 # Fit the view to where the cube is now (the toolbar's Fit button), so it is at the centre of
 # the viewport, between the tool panel (left) and the plot panel (right).

@@ -3,6 +3,9 @@
 # `work` (its output folder, under target/). Sets `studio` (the binary: VCLAY_STUDIO, else the
 # debug build), starts Xvfb on a free display (no server reset between clients, so a second
 # studio can connect), exports DISPLAY, and kills the studio (`studio_pid`) and Xvfb on exit.
+# `start_studio FILE [ARGS...]` starts the studio on FILE (its output appended to
+# $work/studio.log), waits for its window, sets `win` and `studio_pid`, and moves the window to
+# the top-left corner at 1280 x 800.
 # Exits 0 with SKIPPED when Xvfb, xdotool, ImageMagick or python3 is missing.
 for tool in Xvfb xdotool import convert python3; do
   if ! command -v "$tool" >/dev/null 2>&1; then
@@ -39,3 +42,17 @@ for _ in $(seq 100); do
   sleep 0.1
 done
 [ -n "$ready" ] || { cat "$work/xvfb.log"; echo "$name: FAILED: Xvfb did not start"; exit 1; }
+
+start_studio() {
+  "$studio" "$@" >>"$work/studio.log" 2>&1 &
+  studio_pid=$!
+  win=
+  for _ in $(seq 300); do
+    win=$(xdotool search --name "vclay studio" 2>/dev/null | head -1 || true)
+    [ -n "$win" ] && break
+    kill -0 "$studio_pid" 2>/dev/null || { cat "$work/studio.log"; echo "$name: FAILED: the studio exited"; exit 1; }
+    sleep 0.1
+  done
+  [ -n "$win" ] || { echo "$name: FAILED: no window"; exit 1; }
+  xdotool windowmove "$win" 0 0 windowsize "$win" 1280 800 2>/dev/null || true
+}

@@ -45,18 +45,7 @@ echo "| --- | ---: | ---: | ---: | ---: | ---: | --- |"
 for m in cube3 cube4 sheet_frozen sheet_dynamic_direct sheet_dynamic_block_schur; do
   log=$work/$m.frames
   before=$(load)
-  "$studio" "$work/$m.toml" --autosave "$work/autosave.session" --no-recovery \
-    --frame-log "$log" >>"$work/studio.log" 2>&1 &
-  studio_pid=$!
-  win=
-  for _ in $(seq 300); do
-    win=$(xdotool search --name "vclay studio" 2>/dev/null | head -1 || true)
-    [ -n "$win" ] && break
-    kill -0 "$studio_pid" 2>/dev/null || { cat "$work/studio.log"; echo "window_fps: FAILED: the studio exited"; exit 1; }
-    sleep 0.1
-  done
-  [ -n "$win" ] || { echo "window_fps: FAILED: no window"; exit 1; }
-  xdotool windowmove "$win" 0 0 windowsize "$win" 1280 800 2>/dev/null || true
+  start_studio "$work/$m.toml" --autosave "$work/autosave.session" --no-recovery --frame-log "$log"
   sleep 3
   xdotool windowfocus "$win" 2>/dev/null || true
   # Front view of the cubes, top view of the sheets (they lie in the xy plane), framed; the
