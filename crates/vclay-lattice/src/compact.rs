@@ -220,14 +220,12 @@ impl CompactMatrix {
         y: &mut [T],
         par: Parallelism,
     ) {
-        each_row_pair(y, par, |i, pair| match pair {
-            Some(y1) => {
-                let (a, b) = self.row_dot2(i, idx, table, |c| x[c]);
-                *y1 = b;
-                a
-            }
-            None => self.row_dot(i, idx, table, |c| x[c]),
-        });
+        each_row_pair(
+            y,
+            par,
+            |i| self.row_dot2(i, idx, table, |c| x[c]),
+            |i| self.row_dot(i, idx, table, |c| x[c]),
+        );
     }
 
     /// Rows `i` and `i + 1` of `A x` ([`dot_pair`]: the same bits as two

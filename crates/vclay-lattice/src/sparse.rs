@@ -196,14 +196,12 @@ impl SparseMatrix {
     pub fn apply_into<T: Coord>(&self, x: &[T], y: &mut [T], par: Parallelism) {
         assert_eq!(x.len(), self.ncols, "apply: input length");
         assert_eq!(y.len(), self.nrows, "apply: output length");
-        each_row_pair(y, par, |i, pair| match pair {
-            Some(y1) => {
-                let (a, b) = self.row_dot2(i, |c| x[c]);
-                *y1 = b;
-                a
-            }
-            None => self.row_dot(i, |c| x[c]),
-        });
+        each_row_pair(
+            y,
+            par,
+            |i| self.row_dot2(i, |c| x[c]),
+            |i| self.row_dot(i, |c| x[c]),
+        );
     }
 
     /// Rows `rows` of `y = A x`, the input read through `x(column)` and each row's value
@@ -511,20 +509,21 @@ pub(crate) fn dot_pair<T: Coord, W: Copy>(
     (b0, b1)
 }
 
-/// `y[i] = row i` for every row, two rows at a time: `row(i, Some(y_(i+1)))` returns row `i`'s
-/// value and stores row `i + 1`'s (kernels that interleave two rows, [`dot_pair`]), `row(i,
-/// None)` returns the last row of an odd count. In parallel (tasks of at least
+/// `y[i] = row i` for every row, two rows at a time: `two(i)` gives rows `i` and `i + 1`
+/// (kernels that interleave two rows, [`dot_pair`]), `one(i)` the last row of an odd count.
+/// In parallel (tasks of at least
 /// [`MIN_ROWS_PER_TASK`] rows) when `par` says so for `y.len()` rows. The kernel of `A x` for
 /// every storage of `A` ([`SparseMatrix`], [`crate::CompactMatrix`]); each row's value does not
 /// depend on the split or the pairing, so the result is the same bits either way.
 pub(crate) fn each_row_pair<T: Send>(
     y: &mut [T],
     par: Parallelism,
-    row: impl Fn(usize, Option<&mut T>) -> T + Sync,
+    two: impl Fn(usize) -> (T, T) + Sync,
+    one: impl Fn(usize) -> T + Sync,
 ) {
     let pair = |k: usize, ys: &mut [T]| match ys {
-        [y0, y1] => *y0 = row(2 * k, Some(y1)),
-        [y0] => *y0 = row(2 * k, None),
+        [y0, y1] => (*y0, *y1) = two(2 * k),
+        [y0] => *y0 = one(2 * k),
         _ => {}
     };
     if par.is_parallel(y.len()) {
