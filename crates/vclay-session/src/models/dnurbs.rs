@@ -216,6 +216,9 @@ impl DnurbsEngine for NurbsEngine {
     fn is_point_fixed(&self, i: usize) -> bool {
         each!(self, d => d.is_point_fixed(i))
     }
+    fn fixed_points(&self) -> Vec<bool> {
+        each!(self, d => d.fixed_points())
+    }
     fn set_point_fixed(&mut self, i: usize, fixed: bool) -> Result<(), DynamicsError> {
         each!(self, d => d.set_point_fixed(i, fixed))
     }
@@ -2197,8 +2200,9 @@ impl GeneralizedKind for Nurbs {
             out.push(c);
         }
         let p = self.engine.control_points(false);
+        let fixed = self.engine.fixed_points();
         out.push(LineSet::markers(LineRole::Fixed, &p, |i| {
-            self.engine.is_point_fixed(i)
+            fixed.get(i).copied().unwrap_or(false)
         }));
         let t = self.engine.time();
         let mut ropes = LineSet::new(LineRole::Ropes);

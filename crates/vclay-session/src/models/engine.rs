@@ -75,6 +75,13 @@ pub trait DnurbsEngine: Clone + std::fmt::Debug + Send + Sync + 'static {
     fn control_points(&self, rest: bool) -> Vec<Vec3>;
     /// Whether control point `i` is fixed.
     fn is_point_fixed(&self, i: usize) -> bool;
+    /// [`Self::is_point_fixed`] of every control point, in one pass (the display marks them
+    /// every frame; one query per point rebuilt the coordinate groups per point).
+    fn fixed_points(&self) -> Vec<bool> {
+        (0..self.control_points(false).len())
+            .map(|i| self.is_point_fixed(i))
+            .collect()
+    }
     /// Fixes or frees control point `i` (a generalized geometry's default-held coordinates
     /// stay held).
     fn set_point_fixed(&mut self, i: usize, fixed: bool) -> Result<(), DynamicsError>;
@@ -231,6 +238,18 @@ where
             .first()
             .is_some_and(|&c| self.is_fixed_coordinate(c))
     }
+    fn fixed_points(&self) -> Vec<bool> {
+        // `point_coords` for every group at once: the groups and the held set built once.
+        let held = self.geometry().default_fixed_coordinates();
+        groups(self.geometry())
+            .iter()
+            .map(|r| {
+                (r.start..r.start + 3)
+                    .find(|c| !held.contains(c))
+                    .is_some_and(|c| self.is_fixed_coordinate(c))
+            })
+            .collect()
+    }
     fn set_point_fixed(&mut self, i: usize, fixed: bool) -> Result<(), DynamicsError> {
         point_coords(self.geometry(), i)
             .iter()
@@ -351,5 +370,30 @@ where
     }
     fn quadrature_rule(&self) -> Option<QuadratureRule> {
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::DnurbsEngine;
+    use vclay_dynamics::dnurbs::benchmarks;
+
+    /// `fixed_points` (one pass, used by the display every frame) gives `is_point_fixed` of
+    /// every control point: a dynamic-weight sheet with its first row held, one more point
+    /// held and one point held in `y` only (not a fixed point: its first free coordinate,
+    /// `x`, is free).
+    #[test]
+    fn fixed_points_are_is_point_fixed_of_every_point() {
+        let mut d = benchmarks::dynamic_sheet(6).unwrap();
+        d.set_point_fixed(20, true).unwrap();
+        d.set_fixed_coordinate(4 * 13 + 1, true).unwrap();
+        let fixed = d.fixed_points();
+        let each: Vec<bool> = (0..36).map(|i| d.is_point_fixed(i)).collect();
+        assert_eq!(fixed, each);
+        assert!(fixed[20] && !fixed[13] && !fixed[35]);
+        assert!(
+            fixed.iter().filter(|&&f| f).count() >= 7,
+            "the held row and point 20"
+        );
     }
 }
