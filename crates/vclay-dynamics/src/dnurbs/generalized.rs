@@ -245,10 +245,9 @@ struct Gram {
     /// [`gemm_tn`], the same products as stored ones).
     c: Vec<f64>,
     /// `[bb | bv]`, row-major `nb x nc` (`bv` component-major per block: column
-    /// `nb + k nv + j`), valid after [`Gram::finish`].
-    bbv: Vec<f64>,
-    /// `vv`, row-major `nv x nv`, valid after [`Gram::finish`].
-    vv: Vec<f64>,
+    /// `nb + k nv + j`), then `vv`, row-major `nv x nv`: the products, valid after
+    /// [`Gram::finish`] ([`gram_index`] says where an entry of the dense matrix is).
+    products: Vec<f64>,
 }
 
 impl Gram {
@@ -321,14 +320,13 @@ impl Gram {
     fn finish(&mut self) {
         let (nb, nv, nc, ld) = (self.nb, self.nv, self.nc(), self.ld());
         let rows = self.x.len() / ld;
-        self.bbv.clear();
-        self.bbv.resize(nb * nc, 0.0);
-        self.vv.clear();
-        self.vv.resize(nv * nv, 0.0);
+        self.products.clear();
+        self.products.resize(nb * nc + nv * nv, 0.0);
         if rows == 0 || nc == 0 {
             return;
         }
         let (x, c) = (&self.x[..rows * ld], &self.c[..rows]);
+        let (bbv, vv) = self.products.split_at_mut(nb * nc);
         struct Products<'a> {
             x: &'a [f64],
             c: &'a [f64],
@@ -370,8 +368,8 @@ impl Gram {
             nc,
             nb,
             nv,
-            bbv: &mut self.bbv,
-            vv: &mut self.vv,
+            bbv,
+            vv,
         });
     }
 
@@ -393,27 +391,49 @@ impl Gram {
     /// was written into before).
     fn write_nonzero(&mut self, out: &mut [f64]) {
         self.finish();
-        let (nb, nv, nc) = (self.nb, self.nv, self.nc());
-        let nd = 3 * nb + nv;
+        write_products((self.nb, self.nv), &self.products, out);
+    }
+}
+
+/// Where entry `(a, b)` of the dense element matrix of shape `(nb, nv)` (the local order of
+/// [`LocalJacobian::dofs`]: `3 nb` block columns, then `nv` general ones) lies in [`Gram`]'s
+/// products `[bb | bv]`, `vv`; `None` for a structural zero (two blocks' different
+/// components). The block pair `(p, q)` is `bb_pq I3`; block `p`'s component `k` against
+/// general column `j` is `bv[p, nb + k nv + j]`, and its transpose the same entry.
+fn gram_index((nb, nv): (usize, usize), a: usize, b: usize) -> Option<usize> {
+    let nc = nb + 3 * nv;
+    match (a < 3 * nb, b < 3 * nb) {
+        (true, true) => (a % 3 == b % 3).then_some(a / 3 * nc + b / 3),
+        (true, false) => Some(a / 3 * nc + nb + a % 3 * nv + (b - 3 * nb)),
+        (false, true) => Some(b / 3 * nc + nb + b % 3 * nv + (a - 3 * nb)),
+        (false, false) => Some(nb * nc + (a - 3 * nb) * nv + (b - 3 * nb)),
+    }
+}
+
+/// The dense element matrix of shape `(nb, nv)` from [`Gram`]'s `products` into `out`
+/// without the structural zeros (see [`Gram::write_nonzero`]).
+fn write_products((nb, nv): (usize, usize), products: &[f64], out: &mut [f64]) {
+    let nc = nb + 3 * nv;
+    let nd = 3 * nb + nv;
+    let (bbv, vv) = products.split_at(nb * nc);
+    for a in 0..nb {
+        let row = &bbv[a * nc..(a + 1) * nc];
+        for k in 0..3 {
+            let o = &mut out[(3 * a + k) * nd..(3 * a + k + 1) * nd];
+            for b in 0..nb {
+                o[3 * b + k] = row[b];
+            }
+            o[3 * nb..].copy_from_slice(&row[nb + k * nv..nb + (k + 1) * nv]);
+        }
+    }
+    for i in 0..nv {
+        let o = &mut out[(3 * nb + i) * nd..(3 * nb + i + 1) * nd];
         for a in 0..nb {
-            let row = &self.bbv[a * nc..(a + 1) * nc];
             for k in 0..3 {
-                let o = &mut out[(3 * a + k) * nd..(3 * a + k + 1) * nd];
-                for b in 0..nb {
-                    o[3 * b + k] = row[b];
-                }
-                o[3 * nb..].copy_from_slice(&row[nb + k * nv..nb + (k + 1) * nv]);
+                o[3 * a + k] = bbv[a * nc + nb + k * nv + i];
             }
         }
-        for i in 0..nv {
-            let o = &mut out[(3 * nb + i) * nd..(3 * nb + i + 1) * nd];
-            for a in 0..nb {
-                for k in 0..3 {
-                    o[3 * a + k] = self.bbv[a * nc + nb + k * nv + i];
-                }
-            }
-            o[3 * nb..].copy_from_slice(&self.vv[i * nv..(i + 1) * nv]);
-        }
+        o[3 * nb..].copy_from_slice(&vv[i * nv..(i + 1) * nv]);
     }
 }
 
@@ -1326,13 +1346,45 @@ struct ElementWork {
     /// `(blocks, vectors)` of `dofs` ([`Gram`]'s shape): `a`'s entries between different
     /// components of two blocks are structural zeros.
     shape: (usize, usize),
+    /// The element matrix, dense (row-major `nd x nd` over `dofs`): valid when `dense` is
+    /// set ([`ElementWork::densify`]).
     a: Vec<f64>,
+    /// Whether `a` holds this step's matrix: point forces write it at once; an element's is
+    /// written from `products` only when the step needs it (the block-Schur sum reads
+    /// `products`, a fifth of the bytes).
+    dense: bool,
+    /// An element's [`Gram`] products `[bb | bv]`, `vv` (positions in [`gram_index`]).
+    products: Vec<f64>,
     /// Every column of the element, fixed ones included (the coordinates of `mass_diag`).
     all_dofs: Vec<usize>,
     mass_diag: Vec<f64>,
     rhs: Vec<f64>,
     elastic: f64,
     kinetic: f64,
+}
+
+impl ElementWork {
+    /// Writes `a` from `products` unless it holds this step's matrix already.
+    fn densify(&mut self) {
+        if self.dense {
+            return;
+        }
+        let nd = self.dofs.len();
+        if self.a.len() != nd * nd {
+            // `write_products` leaves the structural zeros as they are.
+            self.a.clear();
+            self.a.resize(nd * nd, 0.0);
+        }
+        write_products(self.shape, &self.products, &mut self.a);
+        self.dense = true;
+    }
+}
+
+/// [`ElementWork::densify`] on every element of `works`, on rayon's threads.
+fn densify(works: &mut [ElementWork]) {
+    if works.iter().any(|w| !w.dense) {
+        works.par_iter_mut().for_each(ElementWork::densify);
+    }
 }
 
 /// A D-NURBS whose control points and weights are all dynamic (see the module docs).
@@ -2263,7 +2315,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                     && self.constraint_row_count() <= settings.max_constraint_rows =>
             {
                 let solved =
-                    self.schur_solve(settings, &pattern, &extra_diag, &works, ne, &b, &mut x);
+                    self.schur_solve(settings, &pattern, &extra_diag, &mut works, ne, &b, &mut x);
                 if solved.is_none() {
                     x.copy_from_slice(&warm);
                 }
@@ -2274,6 +2326,8 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         let mut values = if schur.is_some() {
             Vec::new()
         } else {
+            // Every other path reads the dense element matrices.
+            densify(&mut works[..ne]);
             pattern.values(&works[..ne])
         };
         // The direct solver folds the point-force blocks into the CSR values (they lie in the
@@ -2526,12 +2580,12 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                     let moving = vl.iter().any(|x| *x != 0.0);
                     let shape = lj.free_dofs_into(fixed, &mut w.dofs);
                     let nd = w.dofs.len();
-                    if w.shape != shape || w.a.len() != nd * nd {
-                        // `write_nonzero` leaves the structural zeros as they are.
+                    if w.shape != shape {
+                        // A new shape: `densify` zeroes `a` before writing it.
                         w.a.clear();
-                        w.a.resize(nd * nd, 0.0);
                         w.shape = shape;
                     }
+                    w.dense = false;
                     w.rhs.clear();
                     w.rhs.resize(nd, 0.0);
                     (w.elastic, w.kinetic) = (0.0, 0.0);
@@ -2617,7 +2671,10 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
                         gram.add(lj, &coef);
                         lj.apply_transpose_all(&y, &mut w.rhs);
                     }
-                    gram.write_nonzero(&mut w.a);
+                    gram.finish();
+                    // The products move into the element (the thread's accumulator takes the
+                    // element's last buffer); `a` is written only if the step needs it.
+                    std::mem::swap(&mut w.products, &mut gram.products);
                     Ok(())
                 })
             })
@@ -2652,6 +2709,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             let nd = dofs.len();
             let mut w = ElementWork {
                 a: vec![0.0; nd * nd],
+                dense: true,
                 rhs: vec![0.0; nd],
                 dofs,
                 shape: (lj.blocks.len(), lj.vectors.len()),
@@ -2684,7 +2742,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         settings: BlockSchur,
         pattern: &Arc<CsrPattern>,
         extra_diag: &[f64],
-        works: &[ElementWork],
+        works: &mut [ElementWork],
         ne: usize,
         b: &[f64],
         x: &mut [f64],
@@ -2698,6 +2756,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             let n = self.geometry.coordinates().len();
             let homogeneous =
                 self.geometry.weight_coordinates() == homogeneous_weight_coordinates(n);
+            densify(&mut works[..ne]);
             let mut values = pattern.values(&works[..ne]);
             let folded = fold_extras(pattern, &mut values, &works[ne..], &self.fixed);
             let split = folded
@@ -4020,8 +4079,9 @@ mod tests {
                     }
                 }
                 g.finish();
-                assert_eq!(bits(&g.bbv), bits(&bbv), "{nb} x {nv}, {mask:b}");
-                assert_eq!(bits(&g.vv), bits(&vv), "{nb} x {nv}, {mask:b}");
+                let (gb, gv) = g.products.split_at(nb * nc);
+                assert_eq!(bits(gb), bits(&bbv), "{nb} x {nv}, {mask:b}");
+                assert_eq!(bits(gv), bits(&vv), "{nb} x {nv}, {mask:b}");
             }
         }
     }

@@ -26,12 +26,14 @@
 //! conjugate gradients preconditioned with `C^-1`, each iteration one three-column solve with
 //! `S`'s factor, one product with `B` and `B^T`, one with `C` and one solve with `C`'s factor.
 //!
-//! The blocks are summed straight from the element matrices (`S` from the `x` rows only, its
-//! lower triangle; `B` from the position rows; `C` from the rest rows), on two threads over two
-//! bands of entries, each entry receiving its elements' terms in element order and then the
-//! point forces': the values of the CSR sum to the last bit, without summing the other
-//! two thirds of the position block or `B^T` (the CSR values are summed only when the step
-//! falls back to the full factorization).
+//! The blocks are summed straight from each element's Gram products (`[bb | bv]` and `vv`,
+//! `nb (nb + 3 nv) + nv^2` values: `S` from `bb`'s lower triangle, `B` from `bv`, `C` from `vv`
+//! and `bv`'s partly held points; the dense `nd x nd` element matrix, five times the bytes, is
+//! not written on this path), on two threads over two bands of entries, each entry receiving
+//! its elements' terms in element order and then the point forces': the values of the CSR sum
+//! to the last bit, without summing the other two thirds of the position block or `B^T` (the
+//! dense element matrices and the CSR values are written only when the step falls back to the
+//! full factorization).
 //!
 //! ## Exactness
 //! Not the same bits as the full factorization: the result of an iterative solve. The CG stops
@@ -52,7 +54,7 @@
 //! they keep it). Every step checks that the point forces' blocks keep it and that no diagonal
 //! term falls on a position. The solves run on one thread; only the sums use both.
 
-use super::{CsrPattern, ElementWork, Scratch, SolverStats};
+use super::{CsrPattern, ElementWork, Scratch, SolverStats, gram_index};
 use faer::sparse::linalg::cholesky::SymbolicCholesky;
 use std::sync::Arc;
 
@@ -137,7 +139,9 @@ pub(super) struct SchurPattern {
     cl_row_idx: Vec<usize>,
     cl_src: Vec<usize>,
     c_symbolic: SymbolicCholesky<usize>,
-    /// Per element, `(entry of its matrix a, slot)`: the slots are `S`'s lower entries, then
+    /// Per element, `(entry of its Gram products, slot)` (the products `[bb | bv]`, `vv` of
+    /// `d-nurbs.txt` eqs (16)-(17) per element, positions in `gram_index`; structural zeros
+    /// left out): the slots are `S`'s lower entries, then
     /// `B`'s (three per entry), then `C`'s rows ([`Self::slot`]), in the element's row order;
     /// `maps[0]` for the slots below `half`, `maps[1]` for the others (summed on two threads,
     /// each slot still in element order), with about as many entries each.
@@ -318,14 +322,17 @@ impl SchurPattern {
         let mut per_slot = vec![0usize; split.slots()];
         for w in works {
             let mut map = Vec::new();
-            let nd = w.dofs.len();
             for (a, &i) in w.dofs.iter().enumerate() {
                 for (b, &j) in w.dofs.iter().enumerate() {
                     match split.slot(fixed, i, j) {
                         Slot::Skip => {}
                         Slot::At(d) => {
+                            // A structural zero adds nothing (a sum from +0 never is -0).
+                            let Some(g) = gram_index(w.shape, a, b) else {
+                                continue;
+                            };
                             per_slot[d] += 1;
-                            map.push([u32::try_from(a * nd + b).ok()?, u32::try_from(d).ok()?]);
+                            map.push([u32::try_from(g).ok()?, u32::try_from(d).ok()?]);
                         }
                         Slot::Missing => return None,
                     }
@@ -433,8 +440,8 @@ impl SchurPattern {
         let (low, high) = sums.split_at_mut(self.half);
         let band = |out: &mut [f64], maps: &[Vec<[u32; 2]>]| {
             for (w, map) in works[..ne].iter().zip(maps) {
-                for &[a, d] in map {
-                    out[d as usize] += w.a[a as usize];
+                for &[g, d] in map {
+                    out[d as usize] += w.products[g as usize];
                 }
             }
         };
@@ -815,6 +822,10 @@ mod tests {
         }
         let mut works = std::mem::take(&mut m.work_pool);
         let ne = works.len();
+        assert!(
+            works.iter().all(|w| !w.dense),
+            "the block-Schur steps never wrote the dense element matrices"
+        );
         let ck = 2.0 * benchmarks::DT * benchmarks::DT;
         m.add_point_forces(&mut works, ck, ck).unwrap();
         assert!(works.len() > ne, "point forces present");
@@ -834,6 +845,7 @@ mod tests {
             split.rest.len() > 8 * 8 - 1,
             "the partly held point's y, z are in C"
         );
+        super::super::densify(&mut works[..ne]);
         let mut values = pattern.values(&works[..ne]);
         assert!(fold_extras(&pattern, &mut values, &works[ne..], &m.fixed));
         let mut sums = Vec::new();
