@@ -320,9 +320,13 @@ impl Gram {
     fn finish(&mut self) {
         let (nb, nv, nc, ld) = (self.nb, self.nv, self.nc(), self.ld());
         let rows = self.x.len() / ld;
-        self.products.clear();
-        self.products.resize(nb * nc + nv * nv, 0.0);
+        let len = nb * nc + nv * nv;
+        if self.products.len() != len {
+            self.products.clear();
+            self.products.resize(len, 0.0);
+        }
         if rows == 0 || nc == 0 {
+            self.products.fill(0.0);
             return;
         }
         let (x, c) = (&self.x[..rows * ld], &self.c[..rows]);
@@ -352,11 +356,12 @@ impl Gram {
                     vv,
                 } = self;
                 // bb and each G_k^T C G_k are symmetric: upper tiles only.
-                gemm_tn(x, c, ld, 0..nb, 0..nb, bbv, nc, true);
-                gemm_tn(x, c, ld, 0..nb, nb..nc, &mut bbv[nb..], nc, false);
+                // Every entry is written (no zeroing first); the three `vv` terms add up.
+                gemm_tn(x, c, ld, 0..nb, 0..nb, bbv, nc, true, false);
+                gemm_tn(x, c, ld, 0..nb, nb..nc, &mut bbv[nb..], nc, false, false);
                 for k in 0..3 {
                     let cols = nb + k * nv..nb + (k + 1) * nv;
-                    gemm_tn(x, c, ld, cols.clone(), cols, vv, nv, true);
+                    gemm_tn(x, c, ld, cols.clone(), cols, vv, nv, true, k > 0);
                 }
             }
         }
@@ -441,7 +446,8 @@ fn write_products((nb, nv): (usize, usize), products: &[f64], out: &mut [f64]) {
 /// 4 x 8 register tiles and may read up to 7 columns past a range's end.
 const GEMM_PAD: usize = 8;
 
-/// `out += L^T C L` restricted to the column ranges `lc` (rows of `out`) and `rc` (columns),
+/// `out = L^T C L` (with `add`: `out += L^T C L`) restricted to the column ranges `lc` (rows
+/// of `out`) and `rc` (columns),
 /// `L` row-major with row stride `ld`, `C` the diagonal `c` (one coefficient per row of `L`);
 /// `out` is row-major with row stride `ldo` (entry `(a, j)` at `a ldo + j`). Each entry of
 /// `R = C L` is formed in registers as `c_r * l_rj`, the same product a stored `R` held (the
@@ -451,7 +457,8 @@ const GEMM_PAD: usize = 8;
 /// accumulated in registers over all rows, without the packing buffers a general GEMM
 /// allocates per call. Every tile is a whole one (vectorized); at the end of a range it reads
 /// the next columns (or the [`GEMM_PAD`] zeros each row must carry after its last range) and
-/// stores only the entries inside the ranges.
+/// stores only the entries inside the ranges. Writing a tile (`add` false) gives the bits of
+/// adding it to zeros: its sums start at `+0` and so are never `-0`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn gemm_tn(
@@ -463,6 +470,7 @@ fn gemm_tn(
     out: &mut [f64],
     ldo: usize,
     sym: bool,
+    add: bool,
 ) {
     const TA: usize = 4;
     const TJ: usize = 8;
@@ -501,8 +509,12 @@ fn gemm_tn(
             }
             for (a, acc_a) in acc.iter().enumerate().take(ta) {
                 let o = &mut out[(a0 + a) * ldo + j0..][..tj];
-                for (o, v) in o.iter_mut().zip(acc_a) {
-                    *o += v;
+                if add {
+                    for (o, v) in o.iter_mut().zip(acc_a) {
+                        *o += v;
+                    }
+                } else {
+                    o.copy_from_slice(&acc_a[..tj]);
                 }
             }
             j0 += TJ;
