@@ -633,6 +633,15 @@ pub trait GeneralizedGeometry: Clone + Send + Sync + std::fmt::Debug {
     fn scale(&self) -> f64;
     /// Values and Jacobian columns at a parameter.
     fn jacobian_at(&self, param: [f64; 2], out: &mut LocalJacobian) -> Result<(), DynamicsError>;
+    /// The six values `s, s_u, s_v, s_uu, s_uv, s_vv` at a parameter (the point and the
+    /// derivatives of `d-nurbs.txt` eq (17)'s energy), without the Jacobian columns: the
+    /// [`LocalJacobian::s`] of [`Self::jacobian_at`], bit for bit (the elastic energy and the
+    /// rest shape read only these). Default: [`Self::jacobian_at`].
+    fn values_at(&self, param: [f64; 2]) -> Result<[Vec3; 6], DynamicsError> {
+        let mut lj = LocalJacobian::default();
+        self.jacobian_at(param, &mut lj)?;
+        Ok(lj.s)
+    }
     /// [`Self::jacobian_at`] for a quadrature point of element `element`: the columns must be
     /// the same coordinates in the same order at every quadrature point of the element (the
     /// element's degrees of freedom). Default: [`Self::jacobian_at`]. Geometries whose elements
@@ -762,10 +771,9 @@ fn rest_values<G: GeneralizedGeometry>(
 ) -> Result<Vec<Vec<[Vec3; 6]>>, DynamicsError> {
     quad.par_iter()
         .map(|q| {
-            let mut lj = LocalJacobian::default();
             q.params
                 .iter()
-                .map(|&p| g.jacobian_at(p, &mut lj).map(|_| lj.s))
+                .map(|&p| g.values_at(p))
                 .collect::<Result<Vec<_>, _>>()
         })
         .collect()
@@ -2030,17 +2038,16 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             .par_iter()
             .enumerate()
             .map(|(e, q)| {
-                let mut lj = LocalJacobian::default();
                 let mut u = 0.0;
                 for (k, (&p, &w)) in q.params.iter().zip(&q.weights).enumerate() {
-                    g.jacobian_at(p, &mut lj)?;
+                    let s = g.values_at(p)?;
                     let c = coef(e, p);
                     for m in 1..6 {
                         if c[m] != 0.0 {
                             u += 0.5
                                 * w
                                 * c[m]
-                                * (lj.s[m] - self.reference_value(e, k, m)).norm_squared();
+                                * (s[m] - self.reference_value(e, k, m)).norm_squared();
                         }
                     }
                 }

@@ -559,6 +559,8 @@ struct VelocityBuffers {
 thread_local! {
     static VELOCITY: std::cell::RefCell<VelocityScratch> =
         std::cell::RefCell::new(VelocityScratch::default());
+    /// The local data of [`GeneralizedGeometry::values_at`], one per thread.
+    static VALUES: std::cell::RefCell<Local> = std::cell::RefCell::new(Local::default());
 }
 
 fn non_empty_spans(kv: &KnotVector) -> Vec<(f64, f64)> {
@@ -661,6 +663,22 @@ impl GeneralizedGeometry for RationalGeometry {
         self.local_into(param, &mut out.scratch)?;
         Self::columns_from_local(out);
         Ok(())
+    }
+    fn values_at(&self, param: [f64; 2]) -> Result<[Vec3; 6], DynamicsError> {
+        // `columns_from_local`'s values without its columns (the same sums: `s` does not
+        // depend on them), in per-thread buffers.
+        super::generalized::with_thread_buffer(&VALUES, |l| {
+            self.local_into(param, l)?;
+            Ok(rational_columns(
+                &l.bu,
+                l.ku,
+                &l.bv,
+                l.kv,
+                &l.w,
+                &l.p,
+                |_, _, _| {},
+            ))
+        })
     }
     type ElementTables = RationalTables;
     fn element_tables(&self, _element: usize, params: &[[f64; 2]]) -> RationalTables {
@@ -1399,9 +1417,10 @@ mod tests {
             .collect()
     }
 
-    /// The tabled Jacobians and the velocity terms after them equal the direct evaluations
-    /// bit for bit at every Gauss point of every element (issue 31 caches the basis values
-    /// per quadrature point; the trajectories must not move by a bit).
+    /// The tabled Jacobians, the velocity terms after them and the values alone
+    /// (`values_at`) equal the direct evaluations bit for bit at every Gauss point of every
+    /// element (issue 31 caches the basis values per quadrature point; the trajectories and
+    /// energies must not move by a bit).
     #[test]
     fn tabled_evaluation_equals_direct_evaluation_bit_for_bit() {
         for g in geometries() {
@@ -1428,6 +1447,8 @@ mod tests {
                     g.jacobian_at(p, &mut direct).unwrap();
                     g.element_jacobian_tabled(e, k, p, &t, &mut tabled).unwrap();
                     assert_eq!(bits(&direct.s), bits(&tabled.s));
+                    // The values alone (elastic energy, rest shape): the same bits.
+                    assert_eq!(bits(&direct.s), bits(&g.values_at(p).unwrap()));
                     assert_eq!(direct.blocks.len(), tabled.blocks.len());
                     for (a, b) in direct.blocks.iter().zip(&tabled.blocks) {
                         assert_eq!(a.0, b.0);
