@@ -603,13 +603,12 @@ pub(super) struct SchurFactor {
 }
 
 impl SchurFactor {
-    /// Solves `(S (x) I_k) u = f` in place, `f` component-major (`x` of every control
-    /// point, then `y`, ...: `f.len() / ns` components): one pass over `S`'s factor for all
-    /// of them.
+    /// Solves `(S (x) I3) u = f` in place, `f` component-major (`x` of every control point,
+    /// then `y`, then `z`): one pass over `S`'s factor for the three columns.
     fn solve_s(&self, f: &mut [f64]) {
         let p = &self.pattern;
         let ns = p.kron.len();
-        let rhs = faer::MatMut::from_column_major_slice_mut(f, ns, f.len() / ns);
+        let rhs = faer::MatMut::from_column_major_slice_mut(f, ns, 3);
         solve_with(&p.s_symbolic, &self.s_factor, rhs);
     }
 
@@ -620,42 +619,33 @@ impl SchurFactor {
         solve_with(&self.pattern.c_symbolic, &self.c_factor, rhs);
     }
 
-    /// `out = B_ks w`: the rows of `B` of the components `ks` (`0..3`: all of `B`),
-    /// component-major over `ks` as [`Self::solve_s`].
-    fn b_times(&self, w: &[f64], out: &mut [f64], ks: std::ops::Range<usize>) {
+    /// `out = B w` (component-major, as [`Self::solve_s`]).
+    fn b_times(&self, w: &[f64], out: &mut [f64]) {
         let p = &self.pattern;
         let ns = p.kron.len();
         for i in 0..ns {
             let mut s = [0.0; 3];
             for e in p.b_ptr[i]..p.b_ptr[i + 1] {
                 let we = w[p.b_col[e] as usize];
-                for k in ks.clone() {
+                for k in 0..3 {
                     s[k] += self.b[e][k] * we;
                 }
             }
-            for (o, k) in ks.clone().enumerate() {
-                out[o * ns + i] = s[k];
+            for k in 0..3 {
+                out[k * ns + i] = s[k];
             }
         }
     }
 
-    /// `out -= B_ks^T u` (`u` component-major over the components `ks`, as
-    /// [`Self::b_times`]).
-    fn sub_bt_times(&self, u: &[f64], out: &mut [f64], ks: std::ops::Range<usize>) {
+    /// `out -= B^T u` (`u` component-major).
+    fn sub_bt_times(&self, u: &[f64], out: &mut [f64]) {
         let p = &self.pattern;
         let ns = p.kron.len();
         for i in 0..ns {
-            let mut ui = [0.0; 3];
-            for (o, k) in ks.clone().enumerate() {
-                ui[k] = u[o * ns + i];
-            }
+            let ui = [u[i], u[ns + i], u[2 * ns + i]];
             for e in p.b_ptr[i]..p.b_ptr[i + 1] {
                 let b = &self.b[e];
-                let mut s = 0.0;
-                for k in ks.clone() {
-                    s += b[k] * ui[k];
-                }
-                out[p.b_col[e] as usize] -= s;
+                out[p.b_col[e] as usize] -= b[0] * ui[0] + b[1] * ui[1] + b[2] * ui[2];
             }
         }
     }
@@ -672,44 +662,18 @@ impl SchurFactor {
         }
     }
 
-    /// `out = Sigma w = C w - sum_k B_k^T S^-1 B_k w` (`B_k`: the rows of component `k`);
-    /// `t` is scratch of `3 ns`, `acc` of `nr`. Two chains on rayon's threads: the `x` and
-    /// `y` components (one two-column solve with `S`'s factor), and the `z` component with
-    /// `C w`; then `out += acc`. The products are those of one three-column chain, summed in
-    /// another order (the step's result moves within the solve's tolerance, not more).
-    fn schur_times(&self, w: &[f64], out: &mut [f64], t: &mut [f64], acc: &mut [f64]) {
-        let ns = self.pattern.kron.len();
-        let (txy, tz) = t.split_at_mut(2 * ns);
-        rayon::join(
-            || {
-                self.b_times(w, txy, 0..2);
-                self.solve_s(txy);
-                acc.fill(0.0);
-                self.sub_bt_times(txy, acc, 0..2);
-            },
-            || {
-                self.b_times(w, tz, 2..3);
-                self.solve_s(tz);
-                self.c_times(w, out);
-                self.sub_bt_times(tz, out, 2..3);
-            },
-        );
-        for (o, a) in out.iter_mut().zip(acc.iter()) {
-            *o += a;
-        }
+    /// `out = Sigma w = C w - B^T (S^-1 (x) I3) B w`; `t` is scratch of `3 ns`.
+    fn schur_times(&self, w: &[f64], out: &mut [f64], t: &mut [f64]) {
+        self.b_times(w, t);
+        self.solve_s(t);
+        self.c_times(w, out);
+        self.sub_bt_times(t, out);
     }
 
     /// Solves `A x = b` on the free coordinates (fixed entries of `x` become 0), starting the
     /// iterations from `x`'s rest entries; returns the iterations and the relative residual of
     /// the last iterate (the Schur residual: module docs).
     pub(super) fn solve(&self, b: &[f64], x: &mut [f64], max_it: usize, tol: f64) -> SolverStats {
-        // On one of rayon's threads, so that the two chains of each product with `Sigma`
-        // (`Self::schur_times`) are joined inside the pool rather than injected from outside.
-        rayon::scope(|_| self.solve_in_pool(b, x, max_it, tol))
-    }
-
-    /// [`Self::solve`], run by a thread of rayon's pool.
-    fn solve_in_pool(&self, b: &[f64], x: &mut [f64], max_it: usize, tol: f64) -> SolverStats {
         let p = &self.pattern;
         let (ns, nr) = (p.kron.len(), p.rest.len());
         let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
@@ -726,13 +690,12 @@ impl SchurFactor {
         self.solve_s(&mut y);
         // g' = g - B^T y; r = g' - Sigma w for the starting w.
         let mut r = gr;
-        self.sub_bt_times(&y, &mut r, 0..3);
+        self.sub_bt_times(&y, &mut r);
         let mut w: Vec<f64> = p.rest.iter().map(|&i| x[i]).collect();
         let mut t = vec![0.0; 3 * ns];
         let mut q = vec![0.0; nr];
-        let mut acc = vec![0.0; nr];
         if w.iter().any(|&v| v != 0.0) {
-            self.schur_times(&w, &mut q, &mut t, &mut acc);
+            self.schur_times(&w, &mut q, &mut t);
             for (ri, qi) in r.iter_mut().zip(&q) {
                 *ri -= qi;
             }
@@ -750,7 +713,7 @@ impl SchurFactor {
         let mut d = z.clone();
         let mut rz = dot(&r, &z);
         while stats.iterations < max_it && stats.relative_residual > tol {
-            self.schur_times(&d, &mut q, &mut t, &mut acc);
+            self.schur_times(&d, &mut q, &mut t);
             let dq = dot(&d, &q);
             if dq <= 0.0 {
                 break;
@@ -775,7 +738,7 @@ impl SchurFactor {
             }
         }
         // u = (S^-1 (x) I3)(f - B w).
-        self.b_times(&w, &mut t, 0..3);
+        self.b_times(&w, &mut t);
         for (fi, ti) in f.iter_mut().zip(&t) {
             *fi -= ti;
         }
