@@ -503,27 +503,26 @@ fn the_block_schur_solver_follows_the_direct_one_and_is_saved() {
     assert!(saved(&direct).get("solver").is_none());
     common::check_continue(&mut split, 3, "block-schur");
 
-    let Err(e) = common::try_build(
-        ModelKind::DnurbsSurface,
+    // The build's error for `model` with `sim`, as text.
+    let refused = |model: &str, sim: &str, why: &str| {
+        let Err(e) = common::try_build(
+            ModelKind::DnurbsSurface,
+            model,
+            None,
+            Some(sim),
+            Path::new("."),
+        ) else {
+            panic!("{why}")
+        };
+        format!("{e:?}")
+    };
+    let e = refused(
         "kind = \"dnurbs-surface\"\nsize = [6, 6]\ndegree = [3, 3]\nengine = \"frozen\"",
-        None,
-        Some("dt = 0.01\nsolver = \"block-schur\""),
-        Path::new("."),
-    ) else {
-        panic!("the frozen engine refuses it")
-    };
-    let e = format!("{e:?}");
+        "dt = 0.01\nsolver = \"block-schur\"",
+        "the frozen engine refuses it",
+    );
     assert!(e.contains("solver") && e.contains("generalized"), "{e}");
-    let Err(e) = common::try_build(
-        ModelKind::DnurbsSurface,
-        model,
-        None,
-        Some("dt = 0.01\nsolver = \"lu\""),
-        Path::new("."),
-    ) else {
-        panic!("an unknown solver")
-    };
-    let e = format!("{e:?}");
+    let e = refused(model, "dt = 0.01\nsolver = \"lu\"", "an unknown solver");
     assert!(e.contains("solver") && e.contains("lu"), "{e}");
 
     // "auto" (the default) takes it from 20 x 20 control points with dynamic weights.

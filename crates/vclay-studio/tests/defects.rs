@@ -34,6 +34,24 @@ fn file_menu(h: &mut Harness<'static, Studio>, item: &str) {
     click(h, Role::Button, item);
 }
 
+/// Types `text` into the dialog's path field and presses Enter.
+fn type_and_enter(h: &mut Harness<'static, Studio>, text: &str) {
+    h.get_by_role(Role::TextInput).type_text(text);
+    h.step();
+    h.key_press(Key::Enter);
+    h.step();
+}
+
+/// Waits for the first frame of a swung surface (the [`EGG`] scenario).
+fn wait_for_egg(h: &mut Harness<'static, Studio>) {
+    wait(h, "the egg's frame", |s| {
+        s.frame()
+            .models
+            .first()
+            .is_some_and(|m| m.summary.starts_with("dnurbs-swung"))
+    });
+}
+
 fn open_builtin(h: &mut Harness<'static, Studio>, title: &str) {
     click(h, Role::Button, title);
     wait(h, "first frame", |s| !s.frame().models.is_empty());
@@ -296,18 +314,9 @@ fn a_newly_opened_model_has_a_fresh_log_plot_and_camera() {
     file_menu(&mut h, "Open...");
     click(&mut h, Role::Button, "Discard");
     assert_eq!(h.state().dialog_title(), Some("Open"));
-    h.get_by_role(Role::TextInput)
-        .type_text(&egg.display().to_string());
-    h.step();
-    h.key_press(Key::Enter);
-    h.step();
+    type_and_enter(&mut h, &egg.display().to_string());
     assert_eq!(h.state().dialog_title(), None, "Enter opens");
-    wait(&mut h, "the egg's frame", |s| {
-        s.frame()
-            .models
-            .first()
-            .is_some_and(|m| m.summary.starts_with("dnurbs-swung"))
-    });
+    wait_for_egg(&mut h);
     // Let frames and notices that the cube's session still had in flight arrive.
     for _ in 0..20 {
         std::thread::sleep(Duration::from_millis(10));
@@ -688,17 +697,9 @@ fn the_open_dialog_reads_a_relative_path_from_the_opened_files_folder() {
     assert_eq!(h.state().open_folder(), folder);
     let says = format!("A relative path is read from {}", folder.display());
     h.get_by_label(says.as_str());
-    h.get_by_role(Role::TextInput).type_text("egg.toml");
-    h.step();
-    h.key_press(Key::Enter);
-    h.step();
+    type_and_enter(&mut h, "egg.toml");
     assert_eq!(h.state().error(), None, "egg.toml beside cube.toml opens");
-    wait(&mut h, "the egg's frame", |s| {
-        s.frame()
-            .models
-            .first()
-            .is_some_and(|m| m.summary.starts_with("dnurbs-swung"))
-    });
+    wait_for_egg(&mut h);
     assert_eq!(h.state().recent()[0], folder.join("egg.toml"));
 }
 

@@ -1371,7 +1371,8 @@ struct ElementWork {
     a: Vec<f64>,
     /// Whether `a` holds this step's matrix: point forces write it at once; an element's is
     /// written from `products` only when the step needs it (the block-Schur sum reads
-    /// `products`, a fifth of the bytes).
+    /// `products`, under a third of the bytes: 1,280 values against 4,096 for a bicubic
+    /// element).
     dense: bool,
     /// An element's [`Gram`] products `[bb | bv]`, `vv` (positions in [`gram_index`]).
     products: Vec<f64>,

@@ -123,16 +123,18 @@ fn groups<G: GeneralizedGeometry>(g: &G) -> Vec<Range<usize>> {
         .collect()
 }
 
+/// The x, y, z coordinates of the control point whose group is `r` that fix/free act on
+/// (those the geometry does not hold by default, `held`).
+fn free_coords<'a>(r: &Range<usize>, held: &'a [usize]) -> impl Iterator<Item = usize> + 'a {
+    (r.start..r.start + 3).filter(|c| !held.contains(c))
+}
+
 /// The x, y, z coordinates of control point `i` that fix/free act on.
 fn point_coords<G: GeneralizedGeometry>(g: &G, i: usize) -> Vec<usize> {
     let held = g.default_fixed_coordinates();
     groups(g)
         .get(i)
-        .map(|r| {
-            (r.start..r.start + 3)
-                .filter(|c| !held.contains(c))
-                .collect()
-        })
+        .map(|r| free_coords(r, &held).collect())
         .unwrap_or_default()
 }
 
@@ -244,8 +246,8 @@ where
         groups(self.geometry())
             .iter()
             .map(|r| {
-                (r.start..r.start + 3)
-                    .find(|c| !held.contains(c))
+                free_coords(r, &held)
+                    .next()
                     .is_some_and(|c| self.is_fixed_coordinate(c))
             })
             .collect()
