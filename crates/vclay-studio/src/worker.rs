@@ -1645,8 +1645,13 @@ impl State {
         if known.is_none() {
             self.energy_clock.evaluated_in(energy, t0.elapsed());
         }
-        let n = self.step_times.len().max(1) as f64;
-        let step_seconds = self.step_times.iter().map(|s| s.1).sum::<f64>() / n;
+        // Mean over the last second's steps; 0 without steps (a float sum of nothing is -0,
+        // which the status bar would print as "-0.00 ms").
+        let step_seconds = if self.step_times.is_empty() {
+            0.0
+        } else {
+            self.step_times.iter().map(|s| s.1).sum::<f64>() / self.step_times.len() as f64
+        };
         let steps = self
             .session
             .model(None)

@@ -165,6 +165,23 @@ fn is_status(n: &Notice, prefix: &str) -> bool {
     matches!(n, Notice::Status(l) if l.starts_with(prefix))
 }
 
+/// A paused model has no step time: the status bar must not print "step -0.00 ms" (a float
+/// sum of no steps is -0).
+#[test]
+fn a_paused_model_reports_a_step_time_of_plus_zero() {
+    let session = builtin(builtin_named("cube").unwrap()).unwrap();
+    let w = Worker::start(session, false);
+    let f = next_frame(&w);
+    assert!(!f.running);
+    assert_eq!(
+        f.step_seconds.to_bits(),
+        0.0f64.to_bits(),
+        "{}",
+        f.step_seconds
+    );
+    assert_eq!(format!("{:.2}", f.step_seconds * 1e3), "0.00");
+}
+
 #[test]
 fn redo_works_while_the_simulation_runs() {
     let session = builtin(builtin_named("cube").unwrap()).unwrap();
