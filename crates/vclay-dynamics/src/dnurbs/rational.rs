@@ -355,25 +355,39 @@ impl RationalGeometry {
     /// [`Self::denominator`] at every `(u, v)` of `us x vs` (rows: `u`), the same sums with
     /// the basis values of each `u` and each `v` evaluated once (a curve's `v` is ignored).
     fn denominator_grid(&self, us: &[f64], vs: &[f64]) -> Vec<Vec<f64>> {
-        let basis = |axis: usize, t: f64| -> Option<(usize, Vec<f64>)> {
+        // Per parameter its first local control and the offset of its `degree + 1` values in
+        // one buffer per direction (`None`: outside the domain); one workspace per direction
+        // (it is scratch: the values do not depend on it).
+        let basis = |axis: usize, ts: &mut dyn Iterator<Item = f64>| {
             let kv = &self.knots[axis];
-            check_param(kv, t, axis).ok()?;
-            let span = kv.find_span(t);
-            let mut values = vec![0.0; kv.degree() + 1];
+            let k = kv.degree() + 1;
             let mut ws = vclay_spline::BasisWorkspace::new(kv.degree());
-            kv.basis_derivatives(span, t, 0, &mut values, &mut ws);
-            Some((span - kv.degree(), values))
+            let mut values = Vec::new();
+            let first: Vec<Option<(usize, usize)>> = ts
+                .map(|t| {
+                    check_param(kv, t, axis).ok()?;
+                    let span = kv.find_span(t);
+                    let at = values.len();
+                    values.resize(at + k, 0.0);
+                    kv.basis_derivatives(span, t, 0, &mut values[at..], &mut ws);
+                    Some((span - kv.degree(), at))
+                })
+                .collect();
+            (first, values, k)
         };
-        let bu: Vec<_> = us.iter().map(|&u| basis(0, u)).collect();
-        let bv: Vec<_> = vs
-            .iter()
-            .map(|&v| basis(1, if self.surface { v } else { 0.5 }))
-            .collect();
+        let (bu, u_values, ku) = basis(0, &mut us.iter().copied());
+        let (bv, v_values, kv) = basis(
+            1,
+            &mut vs.iter().map(|&v| if self.surface { v } else { 0.5 }),
+        );
         bu.iter()
             .map(|u| {
                 bv.iter()
                     .map(|v| match (u, v) {
-                        (Some((fu, bu)), Some((fv, bv))) => {
+                        (Some((fu, au)), Some((fv, av))) => {
+                            let (fu, fv) = (*fu, *fv);
+                            let bu = &u_values[*au..*au + ku];
+                            let bv = &v_values[*av..*av + kv];
                             let mut w = 0.0;
                             for (a, &nu) in bu.iter().enumerate() {
                                 for (b, &nv) in bv.iter().enumerate() {

@@ -147,6 +147,10 @@ pub(super) struct SchurPattern {
     /// each slot still in element order), with about as many entries each.
     maps: [Vec<Vec<[u32; 2]>>; 2],
     half: usize,
+    /// The last steps' point forces' `(columns, where each entry goes)`, per point force in
+    /// order ([`Self::point_map`]): a rope's block keeps its columns while its material point
+    /// stays in one element, so the lookups of [`Self::slot`] are made once.
+    point_maps: std::sync::Mutex<Vec<(Vec<usize>, Option<Vec<[u32; 2]>>)>>,
 }
 
 /// Where an entry `(i, j)` of an element matrix is summed ([`SchurPattern::slot`]).
@@ -317,6 +321,7 @@ impl SchurPattern {
             c_symbolic,
             maps: [Vec::new(), Vec::new()],
             half: 0,
+            point_maps: std::sync::Mutex::new(Vec::new()),
         };
         let mut maps = Vec::with_capacity(works.len());
         let mut per_slot = vec![0usize; split.slots()];
@@ -446,22 +451,52 @@ impl SchurPattern {
             }
         };
         rayon::join(|| band(low, &self.maps[0]), || band(high, &self.maps[1]));
-        for w in &works[ne..] {
-            if !self.admits(w) {
-                return false;
-            }
-            let nd = w.dofs.len();
-            for (a, &i) in w.dofs.iter().enumerate() {
-                for (bc, &j) in w.dofs.iter().enumerate() {
-                    match self.slot(fixed, i, j) {
-                        Slot::Skip => {}
-                        Slot::At(d) => sums[d] += w.a[a * nd + bc],
-                        Slot::Missing => return false,
-                    }
+        let mut cache = self
+            .point_maps
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        cache.truncate(works.len() - ne);
+        for (k, w) in works[ne..].iter().enumerate() {
+            if cache.get(k).is_none_or(|(dofs, _)| *dofs != w.dofs) {
+                let entry = (w.dofs.clone(), self.point_map(w, fixed));
+                if k < cache.len() {
+                    cache[k] = entry;
+                } else {
+                    cache.push(entry);
                 }
+            }
+            // Entry by entry in the block's row order, as the CSR folding adds them.
+            let Some(map) = &cache[k].1 else {
+                return false;
+            };
+            for &[e, d] in map {
+                sums[d as usize] += w.a[e as usize];
             }
         }
         true
+    }
+
+    /// Where each entry of a point force's block `w` (row-major `a`) is summed, in row order:
+    /// `[entry, slot]` for the entries [`Self::slot`] reads; `None` if the block breaks the
+    /// structure ([`Self::admits`], or a slot the layout lacks).
+    fn point_map(&self, w: &ElementWork, fixed: &[bool]) -> Option<Vec<[u32; 2]>> {
+        if !self.admits(w) {
+            return None;
+        }
+        let nd = w.dofs.len();
+        let mut map = Vec::new();
+        for (a, &i) in w.dofs.iter().enumerate() {
+            for (bc, &j) in w.dofs.iter().enumerate() {
+                match self.slot(fixed, i, j) {
+                    Slot::Skip => {}
+                    Slot::At(d) => {
+                        map.push([u32::try_from(a * nd + bc).ok()?, u32::try_from(d).ok()?])
+                    }
+                    Slot::Missing => return None,
+                }
+            }
+        }
+        Some(map)
     }
 
     /// This step's blocks summed straight from the element matrices `works[..ne]` and the
