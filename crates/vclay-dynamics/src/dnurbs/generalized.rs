@@ -1159,11 +1159,13 @@ fn slice_order(rule: QuadratureRule, degree: usize, values: &[f64], nodes: &[f64
 
 /// The four Chebyshev nodes of a cubic's denominator slices ([`element_order`]) and the LU
 /// factors of their Vandermonde matrix, made once (the matrix is the same for every slice).
-#[allow(clippy::type_complexity)]
-static CHEBYSHEV4_LU: std::sync::OnceLock<(
+static CHEBYSHEV4_LU: std::sync::OnceLock<Vandermonde4> = std::sync::OnceLock::new();
+
+/// Four nodes and the LU factors of their Vandermonde matrix `V_ij = t_i^j`.
+type Vandermonde4 = (
     [f64; 4],
     nalgebra::linalg::LU<f64, nalgebra::U4, nalgebra::U4>,
-)> = std::sync::OnceLock::new();
+);
 
 /// [`denominator_radius`] for up to 4 samples (a polynomial of degree at most 3) from the
 /// closed-form zeros: the same monomial coefficients (the same LU solve) and degree; the cubic's

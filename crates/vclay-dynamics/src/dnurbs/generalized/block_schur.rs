@@ -150,8 +150,12 @@ pub(super) struct SchurPattern {
     /// The last steps' point forces' `(columns, where each entry goes)`, per point force in
     /// order ([`Self::point_map`]): a rope's block keeps its columns while its material point
     /// stays in one element, so the lookups of [`Self::slot`] are made once.
-    point_maps: std::sync::Mutex<Vec<(Vec<usize>, Option<Vec<[u32; 2]>>)>>,
+    point_maps: std::sync::Mutex<Vec<PointMap>>,
 }
+
+/// A point force's columns and where each entry of its block is summed
+/// ([`SchurPattern::point_map`]; `None`: the block breaks the structure).
+type PointMap = (Vec<usize>, Option<Vec<[u32; 2]>>);
 
 /// Where an entry `(i, j)` of an element matrix is summed ([`SchurPattern::slot`]).
 enum Slot {
@@ -807,7 +811,7 @@ fn solve_with(symbolic: &SymbolicCholesky<usize>, values: &[f64], rhs: faer::Mat
 
 #[cfg(test)]
 mod tests {
-    use super::super::{GeneralizedDnurbs, fold_extras};
+    use super::super::{GeneralizedDnurbs, fold_extras, same_bits};
     use super::*;
     use crate::dnurbs::{RationalGeometry, benchmarks};
     use crate::{Force, Integrator};
@@ -891,5 +895,12 @@ mod tests {
         for (d, (&v, &p)) in sums.iter().zip(&at).enumerate() {
             assert_eq!(v.to_bits(), values[p].to_bits(), "slot {d}");
         }
+        // The point forces' maps kept from the steps (above) and made afresh give the same
+        // sums.
+        assert_eq!(split.point_maps.lock().unwrap().len(), works.len() - ne);
+        split.point_maps.lock().unwrap().clear();
+        let mut fresh = Vec::new();
+        assert!(split.sum(&works, ne, &m.fixed, &mut fresh));
+        assert!(same_bits(&fresh, &sums));
     }
 }
