@@ -46,7 +46,7 @@ use std::any::Any;
 use std::marker::PhantomData;
 use std::ops::{Deref, DerefMut, Range};
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
-use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
@@ -225,30 +225,12 @@ impl Team {
             }
         }
         work(sh, open, counts, run, 0, self.threads());
-        let tw = Instant::now();
         while sh.done.load(Ordering::Acquire) < total {
             std::hint::spin_loop();
         }
-        PROF_END[0].fetch_add(tw.elapsed().as_nanos() as u64, Ordering::Relaxed);
-        let tw = Instant::now();
         sh.epoch.store(open + 1, Ordering::SeqCst);
         while sh.active.load(Ordering::SeqCst) > 0 {
             std::hint::spin_loop();
-        }
-        let aw = tw.elapsed().as_nanos() as u64;
-        PROF_END[1].fetch_add(aw, Ordering::Relaxed);
-        {
-            let mut r = [0u64; 34];
-            for rank in 0..2 {
-                for k in 0..8 {
-                    for j in 0..2 {
-                        r[rank * 16 + k * 2 + j] = LAST[rank][k][j].swap(0, Ordering::Relaxed);
-                    }
-                }
-            }
-            r[32] = aw;
-            r[33] = 0;
-            lock(&RECS).push(r);
         }
         *lock(&sh.job) = None;
         if let Some(p) = lock(&sh.panic).take() {
@@ -301,15 +283,9 @@ fn work(
 ) {
     let mut start = 0;
     for (k, &c) in counts.iter().enumerate() {
-        let tw = Instant::now();
         while sh.done.load(Ordering::Acquire) < start {
             std::hint::spin_loop();
         }
-        let kk = k.min(15);
-        let wns = tw.elapsed().as_nanos() as u64;
-        PROF[rank][kk][0].fetch_add(wns, Ordering::Relaxed);
-        LAST[rank][kk][0].store(wns, Ordering::Relaxed);
-        let tw = Instant::now();
         let own = (rank..c).step_by(threads.max(1));
         for t in own.chain(0..c) {
             // Claimed by the first thread to tag it with this epoch.
@@ -323,76 +299,9 @@ fn work(
                 lock(&sh.panic).get_or_insert(p);
             }
             sh.done.fetch_add(1, Ordering::AcqRel);
-            PROF[rank][kk][2].fetch_add(1, Ordering::Relaxed);
         }
-        let xns = tw.elapsed().as_nanos() as u64;
-        PROF[rank][kk][1].fetch_add(xns, Ordering::Relaxed);
-        LAST[rank][kk][1].store(xns, Ordering::Relaxed);
         start += c;
     }
-}
-
-/// Throwaway profile: [rank][phase][wait ns, work ns, tasks].
-pub static PROF: [[[AtomicU64; 3]; 16]; 4] =
-    [const { [const { [const { AtomicU64::new(0) }; 3] }; 16] }; 4];
-/// Throwaway: end-of-run waits of the caller [done wait, active wait].
-pub static PROF_END: [AtomicU64; 2] = [const { AtomicU64::new(0) }; 2];
-/// Last program's figures.
-pub static LAST: [[[AtomicU64; 2]; 16]; 4] =
-    [const { [const { [const { AtomicU64::new(0) }; 2] }; 16] }; 4];
-/// Per-program records.
-pub static RECS: Mutex<Vec<[u64; 34]>> = Mutex::new(Vec::new());
-/// Prints the profile per step.
-pub fn prof_dump(steps: u64) {
-    for r in 0..2 {
-        let mut line = format!("rank {r}:");
-        for k in 0..8 {
-            let w = PROF[r][k][0].load(Ordering::Relaxed) as f64 / steps as f64;
-            let x = PROF[r][k][1].load(Ordering::Relaxed) as f64 / steps as f64;
-            let n = PROF[r][k][2].load(Ordering::Relaxed) as f64 / steps as f64;
-            line += &format!(" p{k} w{w:.0} x{x:.0} n{n:.2} |");
-        }
-        println!("{line}");
-    }
-    let recs = lock(&RECS);
-    if !recs.is_empty() {
-        let med = |i: usize| {
-            let mut v: Vec<u64> = recs.iter().map(|r| r[i]).collect();
-            v.sort_unstable();
-            v[v.len() / 2]
-        };
-        for r in 0..2 {
-            let mut line = format!("median rank {r}:");
-            for k in 0..7 {
-                line += &format!(
-                    " p{k} w{} x{} |",
-                    med(r * 16 + k * 2),
-                    med(r * 16 + k * 2 + 1)
-                );
-            }
-            println!("{line}");
-        }
-        println!("median active wait {}", med(32));
-    }
-    println!(
-        "end waits: done {:.0} active {:.0}",
-        PROF_END[0].load(Ordering::Relaxed) as f64 / steps as f64,
-        PROF_END[1].load(Ordering::Relaxed) as f64 / steps as f64
-    );
-}
-/// Reset.
-pub fn prof_reset() {
-    for r in &PROF {
-        for k in r {
-            for x in k {
-                x.store(0, Ordering::Relaxed);
-            }
-        }
-    }
-    for x in &PROF_END {
-        x.store(0, Ordering::Relaxed);
-    }
-    lock(&RECS).clear();
 }
 
 fn helper(sh: &Shared, idx: usize) {
@@ -445,8 +354,6 @@ fn wait_open(sh: &Shared, idx: usize, seen: usize) -> Option<usize> {
         }
     }
 }
-
-static NOCLAIM: OnceLock<bool> = OnceLock::new();
 
 /// A mutable slice shared by the tasks of a phased program: tasks borrow index ranges for
 /// writing ([`SharedSlice::range`]) or the whole slice for reading ([`SharedSlice::read`]).
@@ -586,9 +493,6 @@ impl<'a, T> SharedSlice<'a, T> {
     }
 
     fn claim(&self, r: &Range<usize>, write: bool) {
-        if *NOCLAIM.get_or_init(|| std::env::var_os("NOCLAIM").is_some()) {
-            return;
-        }
         self.live.with(|live| {
             let clash = live.iter().any(|&(s, e, w)| {
                 (write || w) && s < r.end && r.start < e && !r.is_empty() && s < e
@@ -603,9 +507,6 @@ impl<'a, T> SharedSlice<'a, T> {
     }
 
     fn unclaim(&self, r: &Range<usize>, write: bool) {
-        if *NOCLAIM.get_or_init(|| std::env::var_os("NOCLAIM").is_some()) {
-            return;
-        }
         self.live.with(|live| {
             let found = live.iter().position(|&b| b == (r.start, r.end, write));
             if let Some(i) = found {
