@@ -229,6 +229,33 @@ impl SparseMatrix {
         }
     }
 
+    /// The rows listed in `rows` (any order, any subset) of `y = A x`, the input read through
+    /// `x(column)`, row `rows[q]`'s value handed to `out(q, value)`: the kernel of phased
+    /// programs that give each thread the rows whose inputs it wrote (issue 31). Rows are taken
+    /// two at a time, as in [`SparseMatrix::apply_rows_with`]; each value is the same bits as
+    /// that row's value there (every row sums its entries in the same order into the same
+    /// two partial sums, whichever row it is paired with).
+    ///
+    /// # Panics
+    /// If an entry of `rows` is out of bounds.
+    #[inline]
+    pub fn apply_row_list_with<T: Coord>(
+        &self,
+        rows: &[u32],
+        x: impl Fn(usize) -> T,
+        mut out: impl FnMut(usize, T),
+    ) {
+        let (pairs, tail) = rows.as_chunks::<2>();
+        for (q, &[r0, r1]) in pairs.iter().enumerate() {
+            let (a, b) = dot_pair(self.row(r0 as usize), self.row(r1 as usize), |v| v, &x);
+            out(2 * q, a);
+            out(2 * q + 1, b);
+        }
+        if let Some(&r) = tail.first() {
+            out(rows.len() - 1, self.row_dot(r as usize, &x));
+        }
+    }
+
     /// Rows `i` and `i + 1` of `A x` ([`dot_pair`]: the same bits as two
     /// [`SparseMatrix::row_dot`]s).
     #[inline(always)]

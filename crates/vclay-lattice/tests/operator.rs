@@ -271,6 +271,42 @@ fn paired_row_products_equal_one_row_products_bit_for_bit() {
     }
 }
 
+/// Issue 31 (session h54): the phased step takes the rows of its first `A^T` level as a list
+/// (each thread the rows whose forces it wrote); every row must be the one-row product's bits,
+/// whatever row it is paired with (shuffled lists, odd and even lengths, a row repeated).
+#[test]
+fn row_list_products_equal_one_row_products_bit_for_bit() {
+    let mut rng = Rng(54);
+    let s = solid(primitives::gear(1.0, 2.0, 2.5, 0.4), BoundaryRule::Sharp, 2);
+    for a in s
+        .map()
+        .operators()
+        .iter()
+        .chain([&s.map().operator(1).transpose()])
+    {
+        let x: Vec<Vec3> = (0..a.ncols()).map(|_| rng.vec3(1.0)).collect();
+        let one = |i: usize| {
+            let mut v = Vec3::zeros();
+            a.apply_rows_with(i..i + 1, |c| x[c], |_, y| v = y);
+            v
+        };
+        // A shuffled order of all rows, its odd-length tail, and a list with a repeated row.
+        let mut order: Vec<u32> = (0..a.nrows() as u32).collect();
+        for i in (1..order.len()).rev() {
+            order.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
+        }
+        let repeated = [order[0], order[1], order[0]];
+        for list in [&order[..], &order[1..], &repeated[..]] {
+            let mut got = vec![None; list.len()];
+            a.apply_row_list_with(list, |c| x[c], |q, v| got[q] = Some(v));
+            for (q, v) in got.into_iter().enumerate() {
+                let row = list[q] as usize;
+                assert_eq!(bits(&[v.unwrap()]), bits(&[one(row)]), "row {row}");
+            }
+        }
+    }
+}
+
 /// Issue 31 (session h50): a chain workspace keeps its buffers at their largest size instead of
 /// clearing them before every product, so one workspace reused for chains of other sizes must
 /// give the bits of a fresh one.

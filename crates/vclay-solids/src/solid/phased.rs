@@ -33,6 +33,15 @@
 //! Every task writes its own part, so the result does not depend on how many threads ran the
 //! program; it equals the one-thread step up to the order of the force sums (a few units in the
 //! last place, see the tests).
+//!
+//! # Borrows
+//! Tasks reach the shared buffers through [`SharedSlice`] borrows, each checked at run time
+//! under a lock that both threads take at the same moment when a phase starts, so a borrow
+//! costs about a cache-line transfer between the cores. The control phases, whose work is a
+//! few microseconds, take few of them: `g` is one buffer of points (not three coordinate
+//! columns) and the energies, kinetic energies and finiteness flags that the integration
+//! phase reads are one buffer of scalars (issue 31, `docs/performance.md` "Level-2 step,
+//! session 20").
 
 use std::ops::Range;
 
@@ -40,7 +49,7 @@ use vclay_core::team::{SharedSlice, run_phases, team_threads};
 use vclay_core::{Parallelism, Vec3};
 use vclay_lattice::{SparseMatrix, SubdivisionMap};
 
-use super::{DynamicSolid, Energy, Integrator, MassFactor, advance, inverse_rows, verdict};
+use super::{DynamicSolid, Energy, Integrator, MassFactor, advance, inverse_point_rows, verdict};
 
 /// Active data points from which [`Parallelism::Auto`] runs a step as a phased program.
 /// Below it a step takes a few microseconds and the barriers would cost a good part of that.
@@ -54,21 +63,59 @@ const ROWS_PER_TASK: usize = 32;
 pub(super) struct PhasedWork {
     /// Intermediate levels of the chain (index = level; 0 and the last unused).
     levels: Vec<Vec<Vec3>>,
-    /// `g` on the free points by coordinate (`3 m`).
-    columns: Vec<f64>,
-    /// Energies: per spring block, its springs and its share of the straddling springs; then
-    /// per block, the tools.
-    energies: Vec<f64>,
+    /// `g` on the free points.
+    g: Vec<Vec3>,
+    /// The scalars that the integration phase reads, in one buffer so that a task borrows
+    /// them once ([`Scalars`]).
+    scalars: Vec<f64>,
     /// Per spring block, the forces of its share of the straddling springs (zero outside the
     /// band between steps).
     straddle: Vec<Vec<Vec3>>,
     /// Whether `straddle` is all zero (false while a program runs, so that a panicking step
     /// leaves it to be cleared).
     clean: bool,
-    /// Kinetic energy per control task.
-    kinetic: Vec<f64>,
-    /// Finiteness per control task.
-    finite: Vec<bool>,
+}
+
+/// The layout of [`PhasedWork::scalars`] for `nb` spring blocks: per spring block, the energy
+/// of its springs and of its share of the straddling springs; per block, the tools' energy;
+/// then per control task, its kinetic energy and its finiteness (1 or 0).
+#[derive(Clone, Copy, Debug)]
+struct Scalars {
+    nb: usize,
+    control_tasks: usize,
+}
+
+impl Scalars {
+    fn len(self) -> usize {
+        3 * self.nb + 2 * self.control_tasks
+    }
+
+    /// Spring and straddle energies of block `t`.
+    fn springs(self, t: usize) -> Range<usize> {
+        2 * t..2 * t + 2
+    }
+
+    /// The tools' energy on block `t`.
+    fn tools(self, t: usize) -> Range<usize> {
+        2 * self.nb + t..2 * self.nb + t + 1
+    }
+
+    /// Kinetic energy and finiteness of control task `t`.
+    fn control(self, t: usize) -> Range<usize> {
+        3 * self.nb + 2 * t..3 * self.nb + 2 * t + 2
+    }
+
+    /// The energies of phases 1-4 and whether the state was finite: the same sums in the same
+    /// order wherever computed.
+    fn energy(self, e: &[f64]) -> (Energy, bool) {
+        let control = || (0..self.control_tasks).map(|t| &e[self.control(t)]);
+        let energy = Energy {
+            kinetic: control().map(|c| c[0]).sum(),
+            internal: e[..2 * self.nb].iter().sum(),
+            tools: e[2 * self.nb..3 * self.nb].iter().sum(),
+        };
+        (energy, control().all(|c| c[1] != 0.0))
+    }
 }
 
 /// What a phase does.
@@ -120,21 +167,19 @@ fn rows_into(
     }
 }
 
-/// `out(k, row k of op x)` for the free points `ks` (their rows in `rows`, `u32::MAX`: zero).
-fn free_rows_with(
-    op: &SparseMatrix,
-    ks: Range<usize>,
-    rows: &[u32],
-    src: impl Fn(usize) -> Vec3,
-    mut out: impl FnMut(usize, Vec3),
-) {
-    for k in ks {
-        let r = rows[k] as usize;
-        let mut g = Vec3::zeros();
-        if rows[k] != u32::MAX {
-            op.apply_rows_with(r..r + 1, &src, |_, x| g = x);
+/// `out[q] = row rows[q] of op x` (`u32::MAX`: zero): the `A^(1)T` rows of a task's free
+/// points. Two rows at a time ([`SparseMatrix::apply_row_list_with`], the same bits as one
+/// row at a time) unless a row is missing (fixed points of a restricted chain).
+fn free_rows_into(op: &SparseMatrix, rows: &[u32], src: impl Fn(usize) -> Vec3, out: &mut [Vec3]) {
+    if !rows.contains(&u32::MAX) {
+        return op.apply_row_list_with(rows, src, |q, x| out[q] = x);
+    }
+    for (o, &r) in out.iter_mut().zip(rows) {
+        *o = Vec3::zeros();
+        if r != u32::MAX {
+            let r = r as usize;
+            op.apply_rows_with(r..r + 1, &src, |_, x| *o = x);
         }
-        out(k, g);
     }
 }
 
@@ -236,8 +281,9 @@ impl DynamicSolid {
         for j in 1..n {
             pw.levels[j].resize(pts[j], Vec3::zeros());
         }
-        pw.columns.resize(3 * m, 0.0);
-        pw.energies.resize(3 * nb, 0.0);
+        pw.g.resize(m, Vec3::zeros());
+        let layout = Scalars { nb, control_tasks };
+        pw.scalars.resize(layout.len(), 0.0);
         if !pw.clean || pw.straddle.len() != nb || pw.straddle.iter().any(|b| b.len() != nd) {
             pw.straddle = vec![vec![Vec3::zeros(); nd]; nb];
         }
@@ -248,20 +294,10 @@ impl DynamicSolid {
             .map(|b| SharedSlice::new(b))
             .collect();
         let band = &springs.band[..];
-        pw.kinetic.resize(control_tasks, 0.0);
-        pw.finite.resize(control_tasks, true);
         let levels: Vec<SharedSlice<'_, Vec3>> =
             pw.levels.iter_mut().map(|l| SharedSlice::new(l)).collect();
-        let (cx, rest) = pw.columns.split_at_mut(m);
-        let (cy, cz) = rest.split_at_mut(m);
-        let cols = [
-            SharedSlice::new(cx),
-            SharedSlice::new(cy),
-            SharedSlice::new(cz),
-        ];
-        let energies = SharedSlice::new(&mut pw.energies);
-        let kinetic = SharedSlice::new(&mut pw.kinetic);
-        let finite = SharedSlice::new(&mut pw.finite);
+        let gsh = SharedSlice::new(&mut pw.g);
+        let scalars = SharedSlice::new(&mut pw.scalars);
         let f = SharedSlice::new(&mut work.f);
         let dsh = SharedSlice::new(&mut d[..]);
         let psh = SharedSlice::new(&mut p[..]);
@@ -279,12 +315,6 @@ impl DynamicSolid {
         let damping_ratio = *damping_ratio;
         let divergence = (params.divergence_factor, *energy_scale, *tool_energy_seen);
 
-        // The energies of phases 1-4 (the same sums, in the same order, wherever computed).
-        let energy_of = |e: &[f64], k: &[f64]| Energy {
-            kinetic: k.iter().sum(),
-            internal: e[..2 * nb].iter().sum(),
-            tools: e[2 * nb..].iter().sum(),
-        };
         // The rows of `p`, `v` and the good state that integration task `t` of `tasks` owns:
         // from its first free point to the next task's, the first and last tasks extended to
         // the ends, so the tasks cover every control point.
@@ -307,7 +337,7 @@ impl DynamicSolid {
                     let dr = dsh.read();
                     let e = springs.block_forces(t, &dr, &mut f.range(blocks[t].clone()));
                     let es = springs.straddle_forces(&dr, &mut straddle[t].range(0..nd), t, nb);
-                    let mut er = energies.range(2 * t..2 * t + 2);
+                    let mut er = scalars.range(layout.springs(t));
                     er[0] = e;
                     er[1] = es;
                 }
@@ -331,11 +361,11 @@ impl DynamicSolid {
                     for tool in tools.iter().flatten() {
                         te += tool.add_forces_in(&dr, mass, boundary, &mut fr, r.clone());
                     }
-                    energies.range(2 * nb + t..2 * nb + t + 1)[0] = te;
+                    scalars.range(layout.tools(t))[0] = te;
                 }
                 Phase::Transpose(j) => {
-                    let rows = chunk(pts[j], tasks, t);
                     let op = transposes[j];
+                    let rows = chunk(pts[j], tasks, t);
                     if j + 1 == n {
                         let fr = f.read();
                         let fr: &[Vec3] = &fr;
@@ -358,66 +388,52 @@ impl DynamicSolid {
                         .iter()
                         .chain(&vr[all])
                         .all(|x| x.iter().all(|c| c.is_finite()));
-                    finite.range(t..t + 1)[0] = ok;
                     let kr = chunk(m, tasks, t);
-                    let mut out = [
-                        cols[0].range(kr.clone()),
-                        cols[1].range(kr.clone()),
-                        cols[2].range(kr.clone()),
-                    ];
+                    let mut out = gsh.range(kr.clone());
                     // `A^(1)T` rows of the free points, from level 1 (or the forces).
-                    {
-                        let put = |k: usize, g: Vec3| {
-                            for c in 0..3 {
-                                out[c][k - kr.start] = g[c];
-                            }
-                        };
-                        let op = transposes[0];
-                        if n == 1 {
-                            let fr = f.read();
-                            let fr: &[Vec3] = &fr;
-                            match outputs {
-                                Some(o) => free_rows_with(
-                                    op,
-                                    kr.clone(),
-                                    free_rows,
-                                    move |c| fr[o[c] as usize],
-                                    put,
-                                ),
-                                None => {
-                                    free_rows_with(op, kr.clone(), free_rows, move |c| fr[c], put)
-                                }
-                            }
-                        } else {
-                            let lr = levels[1].read();
-                            let lr: &[Vec3] = &lr;
-                            free_rows_with(op, kr.clone(), free_rows, move |c| lr[c], put);
+                    let op = transposes[0];
+                    let rows = &free_rows[kr.clone()];
+                    if n == 1 {
+                        let fr = f.read();
+                        let fr: &[Vec3] = &fr;
+                        match outputs {
+                            Some(o) => free_rows_into(op, rows, |c| fr[o[c] as usize], &mut out),
+                            None => free_rows_into(op, rows, |c| fr[c], &mut out),
                         }
+                    } else {
+                        let lr = levels[1].read();
+                        let lr: &[Vec3] = &lr;
+                        free_rows_into(op, rows, |c| lr[c], &mut out);
                     }
+                    // `M v` (kinetic energy) and `g -= D v`, the free points two rows at a time
+                    // (the same bits as one at a time).
+                    let vr: &[Vec3] = &vr;
+                    let ks = &free[kr];
                     let mut kin = 0.0;
-                    for k in kr.clone() {
-                        let i = free[k] as usize;
-                        let mut mv = Vec3::zeros();
-                        mp.apply_rows_with(i..i + 1, |c| vr[c], |_, x| mv = x);
-                        kin += 0.5 * vr[i].dot(&mv);
-                        let dv = match damping_ratio {
-                            Some(c) => mv * c,
-                            None => {
-                                let mut dv = Vec3::zeros();
-                                dp.apply_rows_with(i..i + 1, |c| vr[c], |_, x| dv = x);
-                                dv
-                            }
-                        };
-                        for c in 0..3 {
-                            out[c][k - kr.start] -= dv[c];
-                        }
-                    }
-                    kinetic.range(t..t + 1)[0] = kin;
+                    mp.apply_row_list_with(
+                        ks,
+                        |c| vr[c],
+                        |q, mv| {
+                            let i = ks[q] as usize;
+                            kin += 0.5 * vr[i].dot(&mv);
+                            let dv = match damping_ratio {
+                                Some(c) => mv * c,
+                                None => {
+                                    let mut dv = Vec3::zeros();
+                                    dp.apply_rows_with(i..i + 1, |c| vr[c], |_, x| dv = x);
+                                    dv
+                                }
+                            };
+                            out[q] -= dv;
+                        },
+                    );
+                    let mut sc = scalars.range(layout.control(t));
+                    sc[0] = kin;
+                    sc[1] = if ok { 1.0 } else { 0.0 };
                 }
                 Phase::Integrate => {
-                    let energy = energy_of(&energies.read(), &kinetic.read());
+                    let (energy, all_finite) = layout.energy(&scalars.read());
                     let (factor, scale, seen) = divergence;
-                    let all_finite = finite.read().iter().all(|&x| x);
                     let accepted = verdict(
                         &energy,
                         all_finite,
@@ -433,15 +449,15 @@ impl DynamicSolid {
                     let (mut pr, mut vr) = (psh.range(own.clone()), vsh.range(own.clone()));
                     gp.range(own.clone()).copy_from_slice(&pr);
                     gv.range(own).copy_from_slice(&vr);
-                    let c = [cols[0].read(), cols[1].read(), cols[2].read()];
+                    let g = gsh.read();
                     if let Some(inv) = dense_inverse {
-                        inverse_rows(inv, [&c[0], &c[1], &c[2]], chunk(m, tasks, t), |k, a| {
+                        inverse_point_rows(inv, &g, chunk(m, tasks, t), |k, a| {
                             let i = free[k] as usize - base;
                             step(&mut pr[i], &mut vr[i], a);
                         });
                     } else if let Some(llt) = sparse {
                         use faer::linalg::solvers::Solve;
-                        let mut rhs = faer::Mat::<f64>::from_fn(m, 3, |k, j| c[j][k]);
+                        let mut rhs = faer::Mat::<f64>::from_fn(m, 3, |k, j| g[k][j]);
                         llt.solve_in_place(rhs.as_mut());
                         for (k, &i) in free.iter().enumerate() {
                             let a = Vec3::new(rhs[(k, 0)], rhs[(k, 1)], rhs[(k, 2)]);
@@ -451,8 +467,8 @@ impl DynamicSolid {
                     }
                 }
                 Phase::Apply(j) => {
-                    let rows = chunk(pts[j + 1], tasks, t);
                     let op = map.operator(j);
+                    let rows = chunk(pts[j + 1], tasks, t);
                     let (dst, to) = if j + 1 < n {
                         (&levels[j + 1], None)
                     } else {
@@ -474,8 +490,7 @@ impl DynamicSolid {
             }
         };
         run_phases(&counts, &run);
-        let energy = energy_of(&energies.read(), &kinetic.read());
-        let all_finite = finite.read().iter().all(|&x| x);
+        let (energy, all_finite) = layout.energy(&scalars.read());
         drop(straddle);
         work.phased.clean = true;
         (energy, all_finite)
