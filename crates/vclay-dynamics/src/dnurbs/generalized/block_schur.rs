@@ -52,11 +52,29 @@
 //! and `z` blocks of `S` equal to the last bit and the entries between components zero (the
 //! later steps' element matrices have the same shapes, written by the same `Gram` code, so
 //! they keep it). Every step checks that the point forces' blocks keep it and that no diagonal
-//! term falls on a position. The solves run on one thread; only the sums use both.
+//! term falls on a position.
+//!
+//! ## Threads
+//! The sums use two rayon threads (above). The factorizations of `S` and `C` (about the same
+//! size, about 1 ms each on the 32 x 32 sheet) run side by side, and each CG iteration is
+//! split over [`vclay_core::team`]'s persistent team (a few microseconds a barrier, where
+//! `rayon::join` costs more per call): `B d` in two bands of control points, then the
+//! three-column solve with `S`'s factor beside `C d`, then `B^T t` in two bands of rows (a
+//! gather by rows, in the scatter's order), then the serial rest (the solve with `C`'s
+//! factor, the dot products). Every value is computed in the same order on one thread or two:
+//! the same bits as the serial solve. The `S` solve (about a third of an iteration) and the
+//! `C` solve (about a fifth) stay whole: splitting the `S` solve's three columns over the two
+//! threads changes the bits (faer's kernels sum differently for one, two and three columns)
+//! and costs nearly as much for two columns as for three. The helper spins while the caller
+//! runs the serial parts, so a step costs more CPU time than wall time saved; on a loaded
+//! host the spinning competes with the other processes.
 
 use super::{CsrPattern, ElementWork, Scratch, SolverStats, gram_index};
 use faer::sparse::linalg::cholesky::SymbolicCholesky;
-use std::sync::Arc;
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
+use vclay_core::team::{SharedSlice, TaskFn, run_phases};
 
 /// Default relative residual of the block-Schur solve ([`BlockSchur::tolerance`]): `1e-12`,
 /// two orders below the CG solver's [`super::GENERALIZED_CG_TOLERANCE`]; measured on the 10 x 10
@@ -65,7 +83,8 @@ use std::sync::Arc;
 pub const BLOCK_SCHUR_TOLERANCE: f64 = 1e-12;
 
 /// Default iteration cap of the block-Schur solve ([`BlockSchur::max_iterations`]): the 32 x 32
-/// sheet needs 13-15.
+/// benchmark sheet (`dnurbs_dynamic_weights 32 --uniform --schur`) takes about 11 a step, the
+/// studio's free 32 x 32 sheet pulled by a rope 16-17.
 pub const BLOCK_SCHUR_ITERATIONS: usize = 60;
 
 /// Default [`BlockSchur::max_constraint_rows`]: `2` (one normal constraint). Each constraint
@@ -130,6 +149,16 @@ pub(super) struct SchurPattern {
     /// entry holds the `x`, `y`, `z` rows' values.
     b_ptr: Vec<usize>,
     b_col: Vec<u32>,
+    /// `B^T` by rest rows: entries `bt_ptr[r]..bt_ptr[r + 1]`, each `B`'s entry index, in
+    /// ascending control points (the order in which the scatter by control points would
+    /// subtract them); rows `..bt_half` and `bt_half..` hold about half the entries each.
+    bt_ptr: Vec<usize>,
+    bt_src: Vec<u32>,
+    /// Per entry of `bt_src`, its control point (index in `kron`).
+    bt_point: Vec<u32>,
+    bt_half: usize,
+    /// Control points `..b_half` and `b_half..` hold about half of `B`'s entries each.
+    b_half: usize,
     /// `C` by rows (all entries); `c_diag[r]`: the diagonal's entry.
     c_ptr: Vec<usize>,
     c_col: Vec<u32>,
@@ -304,6 +333,27 @@ impl SchurPattern {
             }
             cl_col_ptr.push(cl_row_idx.len());
         }
+        // B^T by rows (a counting sort of B's entries by rest index, control points ascending).
+        let mut bt_ptr = vec![0usize; nr + 1];
+        for &r in &b_col {
+            bt_ptr[r as usize + 1] += 1;
+        }
+        for r in 0..nr {
+            bt_ptr[r + 1] += bt_ptr[r];
+        }
+        let mut next = bt_ptr.clone();
+        let mut bt_src = vec![0u32; b_col.len()];
+        let mut bt_point = vec![0u32; b_col.len()];
+        for i in 0..ns {
+            for e in b_ptr[i]..b_ptr[i + 1] {
+                let r = b_col[e] as usize;
+                bt_src[next[r]] = u32::try_from(e).ok()?;
+                bt_point[next[r]] = u32::try_from(i).ok()?;
+                next[r] += 1;
+            }
+        }
+        let b_half = b_ptr.partition_point(|&k| 2 * k < b_col.len()).min(ns);
+        let bt_half = bt_ptr.partition_point(|&k| 2 * k < b_col.len()).min(nr);
         let s_symbolic = symbolic(ns, &s_col_ptr, &s_row_idx)?;
         let c_symbolic = symbolic(nr, &cl_col_ptr, &cl_row_idx)?;
         let mut split = Self {
@@ -314,6 +364,11 @@ impl SchurPattern {
             s_col_ptr,
             s_row_idx,
             s_symbolic,
+            bt_ptr,
+            bt_src,
+            bt_point,
+            bt_half,
+            b_half,
             b_ptr,
             b_col,
             c_ptr,
@@ -526,6 +581,7 @@ impl SchurPattern {
             sums,
             c_lower,
             scratch,
+            scratch_c,
             b,
             c,
             ..
@@ -544,22 +600,44 @@ impl SchurPattern {
         }
         c_lower.clear();
         c_lower.extend(self.cl_src.iter().map(|&e| c[e]));
-        let s_factor = numeric(
-            &self.s_symbolic,
-            &self.s_col_ptr,
-            &self.s_row_idx,
-            s_values,
-            std::mem::take(&mut buffers.s_factor),
-            scratch,
-        )?;
-        let c_factor = numeric(
-            &self.c_symbolic,
-            &self.cl_col_ptr,
-            &self.cl_row_idx,
-            c_lower,
-            std::mem::take(&mut buffers.c_factor),
-            scratch,
-        )?;
+        // S and C side by side (a phased program of two tasks, each with its own scratch).
+        let jobs = [
+            Mutex::new((std::mem::take(&mut buffers.s_factor), Some(scratch))),
+            Mutex::new((std::mem::take(&mut buffers.c_factor), Some(scratch_c))),
+        ];
+        let task = |_: usize, k: usize| {
+            let mut job = jobs[k].lock().unwrap_or_else(PoisonError::into_inner);
+            let (out, scratch) = &mut *job;
+            let Some(scratch) = scratch.take() else {
+                return;
+            };
+            let (col_ptr, row_idx, values, symbolic) = if k == 0 {
+                (&self.s_col_ptr, &self.s_row_idx, s_values, &self.s_symbolic)
+            } else {
+                (
+                    &self.cl_col_ptr,
+                    &self.cl_row_idx,
+                    &c_lower[..],
+                    &self.c_symbolic,
+                )
+            };
+            // An empty factor marks a failure.
+            *out = numeric(
+                symbolic,
+                col_ptr,
+                row_idx,
+                values,
+                std::mem::take(out),
+                scratch,
+            )
+            .unwrap_or_default();
+        };
+        run_phases(&[2], &task);
+        let [s_factor, c_factor] =
+            jobs.map(|j| j.into_inner().unwrap_or_else(PoisonError::into_inner).0);
+        if s_factor.is_empty() || c_factor.is_empty() {
+            return None;
+        }
         Some(SchurFactor {
             pattern: self.clone(),
             s_factor,
@@ -618,6 +696,7 @@ pub(super) struct SchurBuffers {
     b: Vec<[f64; 3]>,
     c: Vec<f64>,
     scratch: Scratch,
+    scratch_c: Scratch,
 }
 
 impl SchurBuffers {
@@ -642,13 +721,13 @@ pub(super) struct SchurFactor {
 }
 
 impl SchurFactor {
-    /// Solves `(S (x) I3) u = f` in place, `f` component-major (`x` of every control point,
-    /// then `y`, then `z`): one pass over `S`'s factor for the three columns.
+    /// Solves `(S (x) I3) u = f` in place for the `f.len() / ns` columns of `f`
+    /// (component-major: `x` of every control point, then `y`, then `z`): one pass over `S`'s
+    /// factor for the columns.
     fn solve_s(&self, f: &mut [f64]) {
-        let p = &self.pattern;
-        let ns = p.kron.len();
-        let rhs = faer::MatMut::from_column_major_slice_mut(f, ns, 3);
-        solve_with(&p.s_symbolic, &self.s_factor, rhs);
+        let ns = self.pattern.kron.len();
+        let rhs = faer::MatMut::from_column_major_slice_mut(f, ns, f.len() / ns);
+        solve_with(&self.pattern.s_symbolic, &self.s_factor, rhs);
     }
 
     /// Solves `C z = r` in place.
@@ -676,16 +755,41 @@ impl SchurFactor {
         }
     }
 
+    /// `B w` on the control points `rows` (`out[k]`: component `k` of those rows); each
+    /// entry summed as in [`Self::b_times`].
+    fn b_times_rows(&self, w: &[f64], rows: Range<usize>, out: [&mut [f64]; 3]) {
+        let p = &self.pattern;
+        let [ox, oy, oz] = out;
+        for (j, i) in rows.enumerate() {
+            let mut s = [0.0; 3];
+            for e in p.b_ptr[i]..p.b_ptr[i + 1] {
+                let we = w[p.b_col[e] as usize];
+                for k in 0..3 {
+                    s[k] += self.b[e][k] * we;
+                }
+            }
+            (ox[j], oy[j], oz[j]) = (s[0], s[1], s[2]);
+        }
+    }
+
     /// `out -= B^T u` (`u` component-major).
     fn sub_bt_times(&self, u: &[f64], out: &mut [f64]) {
+        self.sub_bt_rows(u, 0..out.len(), out);
+    }
+
+    /// `out -= (B^T u)[rows]` (`out`: those rows of the result): per row, the entries in
+    /// ascending control points, each `b_x u_x + b_y u_y + b_z u_z` subtracted in turn.
+    fn sub_bt_rows(&self, u: &[f64], rows: Range<usize>, out: &mut [f64]) {
         let p = &self.pattern;
         let ns = p.kron.len();
-        for i in 0..ns {
-            let ui = [u[i], u[ns + i], u[2 * ns + i]];
-            for e in p.b_ptr[i]..p.b_ptr[i + 1] {
-                let b = &self.b[e];
-                out[p.b_col[e] as usize] -= b[0] * ui[0] + b[1] * ui[1] + b[2] * ui[2];
+        for (o, r) in out.iter_mut().zip(rows) {
+            let mut v = *o;
+            for k in p.bt_ptr[r]..p.bt_ptr[r + 1] {
+                let b = &self.b[p.bt_src[k] as usize];
+                let i = p.bt_point[k] as usize;
+                v -= b[0] * u[i] + b[1] * u[ns + i] + b[2] * u[2 * ns + i];
             }
+            *o = v;
         }
     }
 
@@ -712,7 +816,27 @@ impl SchurFactor {
     /// Solves `A x = b` on the free coordinates (fixed entries of `x` become 0), starting the
     /// iterations from `x`'s rest entries; returns the iterations and the relative residual of
     /// the last iterate (the Schur residual: module docs).
+    ///
+    /// The iterations run as one phased program ([`vclay_core::team`]), four phases an
+    /// iteration (module docs, "Threads"): (1) `t = B d` in two bands of control points; (2)
+    /// `t = (S^-1 (x) I3) t` (one three-column solve) beside `q = C d`; (3) `q -= B^T t` in
+    /// two bands of rows; (4) one task: the step along `d`, the residual, the solve with `C`'s
+    /// factor and the next direction. Each task writes its own part and every value is summed
+    /// in the same order whatever thread runs it, so the result is the same to the last bit
+    /// on one thread or two (test `two_threads_solve_as_one`) and as the serial loop's.
     pub(super) fn solve(&self, b: &[f64], x: &mut [f64], max_it: usize, tol: f64) -> SolverStats {
+        self.solve_on(b, x, max_it, tol, &run_phases)
+    }
+
+    /// [`Self::solve`] with the phased program run by `run` (tests: one thread or a team).
+    fn solve_on(
+        &self,
+        b: &[f64],
+        x: &mut [f64],
+        max_it: usize,
+        tol: f64,
+        run: &dyn Fn(&[usize], &TaskFn<'_>),
+    ) -> SolverStats {
         let p = &self.pattern;
         let (ns, nr) = (p.kron.len(), p.rest.len());
         let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
@@ -734,50 +858,76 @@ impl SchurFactor {
         let mut t = vec![0.0; 3 * ns];
         let mut q = vec![0.0; nr];
         if w.iter().any(|&v| v != 0.0) {
-            self.schur_times(&w, &mut q, &mut t);
+            self.schur_times(&w, &mut q, &mut t[..3 * ns]);
             for (ri, qi) in r.iter_mut().zip(&q) {
                 *ri -= qi;
             }
         }
-        let rel = |r: &[f64]| {
+        let rel = move |r: &[f64]| {
             let rn = dot(r, r).sqrt();
             if bnorm > 0.0 { rn / bnorm } else { rn }
         };
-        let mut stats = SolverStats {
+        let stats = SolverStats {
             iterations: 0,
             relative_residual: rel(&r),
         };
         let mut z = r.clone();
         self.solve_c(&mut z);
         let mut d = z.clone();
-        let mut rz = dot(&r, &z);
-        while stats.iterations < max_it && stats.relative_residual > tol {
-            self.schur_times(&d, &mut q, &mut t);
-            let dq = dot(&d, &q);
-            if dq <= 0.0 {
-                break;
-            }
-            let alpha = rz / dq;
-            for i in 0..nr {
-                w[i] += alpha * d[i];
-                r[i] -= alpha * q[i];
-            }
-            stats.iterations += 1;
-            stats.relative_residual = rel(&r);
-            if stats.relative_residual <= tol {
-                break;
-            }
-            z.copy_from_slice(&r);
-            self.solve_c(&mut z);
-            let rz_new = dot(&r, &z);
-            let beta = rz_new / rz;
-            rz = rz_new;
-            for i in 0..nr {
-                d[i] = z[i] + beta * d[i];
-            }
+        let rz = dot(&r, &z);
+        let done = AtomicBool::new(max_it == 0 || stats.relative_residual <= tol);
+        let serial = Mutex::new(CgState {
+            w: &mut w,
+            r: &mut r,
+            z: &mut z,
+            rz,
+            stats,
+        });
+        {
+            let (ts, qs, ds) = (
+                SharedSlice::new(&mut t),
+                SharedSlice::new(&mut q),
+                SharedSlice::new(&mut d),
+            );
+            let counts: Vec<usize> = (0..max_it).flat_map(|_| [2, 2, 2, 1]).collect();
+            let task = |phase: usize, task: usize| {
+                // The phase barriers order this load after the store of an earlier phase.
+                if done.load(Ordering::Relaxed) {
+                    return;
+                }
+                match (phase % 4, task) {
+                    (0, k) => {
+                        let rows = if k == 0 { 0..p.b_half } else { p.b_half..ns };
+                        let d = ds.read();
+                        let at = |c: usize| c * ns + rows.start..c * ns + rows.end;
+                        let (mut x, mut y, mut z) =
+                            (ts.range(at(0)), ts.range(at(1)), ts.range(at(2)));
+                        self.b_times_rows(&d, rows.clone(), [&mut x, &mut y, &mut z]);
+                    }
+                    (1, 0) => self.solve_s(&mut ts.range(0..3 * ns)),
+                    (1, _) => self.c_times(&ds.read(), &mut qs.range(0..nr)),
+                    (2, k) => {
+                        let rows = if k == 0 { 0..p.bt_half } else { p.bt_half..nr };
+                        let t = ts.read();
+                        self.sub_bt_rows(&t, rows.clone(), &mut qs.range(rows));
+                    }
+                    _ => {
+                        let mut st = serial.lock().unwrap_or_else(PoisonError::into_inner);
+                        let (q, mut d) = (qs.read(), ds.range(0..nr));
+                        if st.iterate(&q, &mut d, tol, self, &dot, &rel) {
+                            done.store(true, Ordering::Relaxed);
+                        }
+                    }
+                }
+            };
+            run(&counts, &task);
         }
+        let stats = serial
+            .into_inner()
+            .unwrap_or_else(PoisonError::into_inner)
+            .stats;
         // u = (S^-1 (x) I3)(f - B w).
-        self.b_times(&w, &mut t);
+        self.b_times(&w, &mut t[..3 * ns]);
         for (fi, ti) in f.iter_mut().zip(&t) {
             *fi -= ti;
         }
@@ -792,6 +942,55 @@ impl SchurFactor {
             x[i] = w[r];
         }
         stats
+    }
+}
+
+/// The iterate of [`SchurFactor::solve`]'s conjugate gradients that only the serial phase
+/// touches.
+struct CgState<'a> {
+    w: &'a mut [f64],
+    r: &'a mut [f64],
+    z: &'a mut [f64],
+    rz: f64,
+    stats: SolverStats,
+}
+
+impl CgState<'_> {
+    /// One iteration's serial part, given `q = Sigma d`: the step along `d`, the residual and
+    /// (unless it stops) the preconditioned residual and the next direction into `d`; `true`
+    /// when the iterations stop (the tolerance reached, the cap, or a non-positive curvature).
+    fn iterate(
+        &mut self,
+        q: &[f64],
+        d: &mut [f64],
+        tol: f64,
+        f: &SchurFactor,
+        dot: &dyn Fn(&[f64], &[f64]) -> f64,
+        rel: &dyn Fn(&[f64]) -> f64,
+    ) -> bool {
+        let dq = dot(d, q);
+        if dq <= 0.0 {
+            return true;
+        }
+        let alpha = self.rz / dq;
+        for i in 0..d.len() {
+            self.w[i] += alpha * d[i];
+            self.r[i] -= alpha * q[i];
+        }
+        self.stats.iterations += 1;
+        self.stats.relative_residual = rel(self.r);
+        if self.stats.relative_residual <= tol {
+            return true;
+        }
+        self.z.copy_from_slice(self.r);
+        f.solve_c(self.z);
+        let rz_new = dot(self.r, self.z);
+        let beta = rz_new / self.rz;
+        self.rz = rz_new;
+        for i in 0..d.len() {
+            d[i] = self.z[i] + beta * d[i];
+        }
+        false
     }
 }
 
@@ -902,5 +1101,179 @@ mod tests {
         let mut fresh = Vec::new();
         assert!(split.sum(&works, ne, &m.fixed, &mut fresh));
         assert!(same_bits(&fresh, &sums));
+    }
+}
+
+#[cfg(test)]
+mod solve_tests {
+    use super::super::GeneralizedDnurbs;
+    use super::*;
+    use crate::Integrator;
+    use crate::dnurbs::{RationalGeometry, benchmarks};
+    use vclay_core::team::Team;
+
+    /// An `n x n` benchmark sheet after a few block-Schur steps, this step's factor (with a
+    /// weight diagonal, as the weight inertia adds) and a right-hand side.
+    fn factored(n: usize) -> (SchurFactor, Vec<f64>, SchurBuffers) {
+        let mut m: GeneralizedDnurbs<RationalGeometry> = benchmarks::dynamic_sheet(n).unwrap();
+        m.block_schur = Some(BlockSchur::default());
+        for _ in 0..3 {
+            m.step(Integrator::Implicit { dt: benchmarks::DT }).unwrap();
+        }
+        let mut works = std::mem::take(&mut m.work_pool);
+        let ne = works.len();
+        let ck = 2.0 * benchmarks::DT * benchmarks::DT;
+        m.add_point_forces(&mut works, ck, ck).unwrap();
+        let split = m
+            .schur
+            .as_ref()
+            .unwrap()
+            .1
+            .clone()
+            .expect("structure holds");
+        let nd = m.fixed.len();
+        let extra: Vec<f64> = (0..nd)
+            .map(|i| if i % 4 == 3 { 0.5 } else { 0.0 })
+            .collect();
+        let mut buffers = SchurBuffers::default();
+        let f = split
+            .factor(&works, ne, &m.fixed, &extra, &mut buffers)
+            .expect("factors");
+        let b = (0..nd)
+            .map(|i| ((i * 7919) % 1013) as f64 / 1013.0 - 0.5)
+            .collect();
+        (f, b, buffers)
+    }
+
+    /// Runs a phased program on the calling thread alone, in order.
+    fn alone(counts: &[usize], run: &TaskFn<'_>) {
+        for (phase, &c) in counts.iter().enumerate() {
+            for task in 0..c {
+                run(phase, task);
+            }
+        }
+    }
+
+    /// The block-Schur CG run as a phased program on a team of two gives the same iterate to
+    /// the last bit as on one thread (every value is summed in one order whoever runs it).
+    #[test]
+    fn two_threads_solve_as_one() {
+        let (f, b, _) = factored(12);
+        let team = Team::new(2);
+        let (mut x1, mut x2) = (vec![0.0; b.len()], vec![0.0; b.len()]);
+        let s1 = f.solve_on(&b, &mut x1, 60, 1e-12, &alone);
+        let s2 = f.solve_on(&b, &mut x2, 60, 1e-12, &|c, t| team.run(c, t));
+        assert!(s1.iterations > 3 && s1.relative_residual <= 1e-12, "{s1:?}");
+        assert_eq!(s1.iterations, s2.iterations);
+        assert_eq!(
+            s1.relative_residual.to_bits(),
+            s2.relative_residual.to_bits()
+        );
+        assert!(x1.iter().zip(&x2).all(|(a, b)| a.to_bits() == b.to_bits()));
+    }
+
+    /// `B^T` by rows subtracts in the scatter's order: the same bits as the scatter by
+    /// control points; the two bands of rows cover every row.
+    #[test]
+    fn transpose_by_rows_equals_the_scatter() {
+        let (f, _, _) = factored(8);
+        let p = &f.pattern;
+        let (ns, nr) = (p.kron.len(), p.rest.len());
+        let u: Vec<f64> = (0..3 * ns).map(|i| (i as f64 * 0.37).sin()).collect();
+        let mut scatter: Vec<f64> = (0..nr).map(|r| r as f64).collect();
+        let mut rows = scatter.clone();
+        for i in 0..ns {
+            for e in p.b_ptr[i]..p.b_ptr[i + 1] {
+                let b = &f.b[e];
+                scatter[p.b_col[e] as usize] -=
+                    b[0] * u[i] + b[1] * u[ns + i] + b[2] * u[2 * ns + i];
+            }
+        }
+        let (lo, hi) = rows.split_at_mut(p.bt_half);
+        f.sub_bt_rows(&u, 0..p.bt_half, lo);
+        f.sub_bt_rows(&u, p.bt_half..nr, hi);
+        assert!(0 < p.bt_half && p.bt_half < nr);
+        assert!(
+            scatter
+                .iter()
+                .zip(&rows)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        );
+    }
+
+    /// Timings of the CG's pieces on the 32 x 32 sheet (`cargo test --release -p
+    /// vclay-dynamics schur_piece_timings -- --ignored --nocapture`).
+    #[test]
+    #[ignore = "timing, prints"]
+    fn schur_piece_timings() {
+        let (f, _, mut buffers) = factored(32);
+        let p = &f.pattern;
+        let (ns, nr) = (p.kron.len(), p.rest.len());
+        let reps = 400;
+        let time = |name: &str, g: &mut dyn FnMut()| {
+            let t0 = std::time::Instant::now();
+            for _ in 0..reps {
+                g();
+            }
+            let us = t0.elapsed().as_secs_f64() * 1e6 / reps as f64;
+            println!("{name}: {us:.1} us");
+        };
+        let d: Vec<f64> = (0..nr).map(|i| (i as f64 * 0.1).cos()).collect();
+        let mut t = vec![0.0; 3 * ns];
+        let mut q = vec![0.0; nr];
+        println!("ns {ns}, nr {nr}, B entries {}", p.b_col.len());
+        time("b_times (3)", &mut || f.b_times(&d, &mut t));
+        time("b_times_rows (half)", &mut || {
+            let (x, yz) = t.split_at_mut(ns);
+            let (y, z) = yz.split_at_mut(ns);
+            let h = p.b_half;
+            f.b_times_rows(&d, 0..h, [&mut x[..h], &mut y[..h], &mut z[..h]])
+        });
+        time("sub_bt scatter", &mut || {
+            for i in 0..ns {
+                for e in p.b_ptr[i]..p.b_ptr[i + 1] {
+                    let b = &f.b[e];
+                    q[p.b_col[e] as usize] -= b[0] * t[i] + b[1] * t[ns + i] + b[2] * t[2 * ns + i];
+                }
+            }
+        });
+        time("solve_s (3)", &mut || f.solve_s(&mut t));
+        time("solve_s (2)", &mut || f.solve_s(&mut t[..2 * ns]));
+        time("solve_s (1)", &mut || f.solve_s(&mut t[..ns]));
+        time("solve_c", &mut || f.solve_c(&mut q));
+        time("c_times", &mut || f.c_times(&d, &mut q));
+        time("sub_bt_times", &mut || f.sub_bt_times(&t, &mut q));
+        let mut scratch = Scratch::default();
+        let sv = buffers.sums[..p.s_row_idx.len()].to_vec();
+        let cl = buffers.c_lower.clone();
+        time("numeric S", &mut || {
+            let out = std::mem::take(&mut buffers.s_factor);
+            buffers.s_factor = numeric(
+                &p.s_symbolic,
+                &p.s_col_ptr,
+                &p.s_row_idx,
+                &sv,
+                out,
+                &mut scratch,
+            )
+            .unwrap();
+        });
+        time("numeric C", &mut || {
+            let out = std::mem::take(&mut buffers.c_factor);
+            buffers.c_factor = numeric(
+                &p.c_symbolic,
+                &p.cl_col_ptr,
+                &p.cl_row_idx,
+                &cl,
+                out,
+                &mut scratch,
+            )
+            .unwrap();
+        });
+        println!(
+            "factor values: S {}, C {}",
+            p.s_symbolic.len_val(),
+            p.c_symbolic.len_val()
+        );
     }
 }
