@@ -24,7 +24,9 @@ pub struct Case {
     pub grab: [f64; 3],
     /// Simulation steps per frame.
     pub steps: usize,
-    /// Frame-rate goal of the issue.
+    /// Frame-rate goal of the issue: 60 for the level-3 cube and the frozen sheet (issue 16), 30
+    /// for the level-4 cube (2 steps a frame) and the dynamic-weight sheets (one step a frame,
+    /// "30 steps/s", issue 27).
     pub goal_fps: f64,
 }
 
@@ -58,14 +60,14 @@ pub const CASES: [Case; 5] = [
         scenario: "[model]\nkind = \"dnurbs-surface\"\nsize = [32, 32]\ndegree = [3, 3]\n[simulation]\ndt = 0.01\nsolver = \"direct\"\n",
         grab: [0.5, 0.5, 0.0],
         steps: 1,
-        goal_fps: 60.0,
+        goal_fps: 30.0,
     },
     Case {
         name: "32 x 32 D-NURBS surface (dynamic weights, default solver: block-schur), rope",
         scenario: "[model]\nkind = \"dnurbs-surface\"\nsize = [32, 32]\ndegree = [3, 3]\n[simulation]\ndt = 0.01\n",
         grab: [0.5, 0.5, 0.0],
         steps: 1,
-        goal_fps: 60.0,
+        goal_fps: 30.0,
     },
 ];
 
