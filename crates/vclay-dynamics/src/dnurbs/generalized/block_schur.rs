@@ -110,7 +110,10 @@ pub struct BlockSchur {
     /// [`BLOCK_SCHUR_TOLERANCE`]).
     pub tolerance: f64,
     /// Iteration cap (default [`BLOCK_SCHUR_ITERATIONS`]); a solve that does not reach the
-    /// tolerance falls back to the full factorization for that step.
+    /// tolerance falls back to the full factorization for that step. The iterations run as one
+    /// phased program of seven tasks an iteration (module docs, "Threads"), so a cap above
+    /// `vclay_core::team::MAX_TASKS / 7` (146) runs them on the calling thread alone: the same
+    /// bits, without the second core.
     pub max_iterations: usize,
     /// Steps with more constraint rows than this (point constraints 3, normal constraints 2,
     /// ties 1 each) use the full factorization (default [`BLOCK_SCHUR_CONSTRAINT_ROWS`];
