@@ -769,14 +769,15 @@ fn rest_values<G: GeneralizedGeometry>(
     g: &G,
     quad: &[Quadrature],
 ) -> Result<Vec<Vec<[Vec3; 6]>>, DynamicsError> {
-    quad.par_iter()
-        .map(|q| {
-            q.params
-                .iter()
-                .map(|&p| g.values_at(p))
-                .collect::<Result<Vec<_>, _>>()
-        })
-        .collect()
+    quad.par_iter().map(|q| element_rest_values(g, q)).collect()
+}
+
+/// One element's [`rest_values`]: the six values at each of its quadrature points.
+fn element_rest_values<G: GeneralizedGeometry>(
+    g: &G,
+    q: &Quadrature,
+) -> Result<Vec<[Vec3; 6]>, DynamicsError> {
+    q.params.iter().map(|&p| g.values_at(p)).collect()
 }
 
 /// Each element's [`GeneralizedGeometry::element_tables`] for its quadrature points.
@@ -1681,11 +1682,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
             .par_iter()
             .map(|&(e, order)| {
                 let q = Quadrature::for_element(geometry, e, &elements[e], order, dim)?;
-                let rest = q
-                    .params
-                    .iter()
-                    .map(|&p| rest_geometry.values_at(p))
-                    .collect::<Result<Vec<_>, _>>()?;
+                let rest = element_rest_values(&rest_geometry, &q)?;
                 let tables = Arc::new(geometry.element_tables(e, &q.params));
                 Ok((q, rest, tables))
             })

@@ -204,8 +204,8 @@ struct MassSolver {
     factor: MassFactor,
     /// Right-hand sides of the sparse solve.
     rhs: faer::Mat<f64>,
-    /// Right-hand sides of the dense product, by coordinate (`3 m`).
-    columns: Vec<f64>,
+    /// Right-hand sides of the dense product, the free points' `b` (`m` points).
+    columns: Vec<Vec3>,
 }
 
 /// The factorization of the free block of `A^T M A`.
@@ -224,39 +224,11 @@ enum MassFactor {
     Dense(Vec<f64>),
 }
 
-/// `out(k, x_k)` for the rows `rows` of `x = inv b`, `inv` row-major `m x m`, `b` given by its
-/// three coordinate columns (`b[c]` has length `m`).
-#[inline]
-fn inverse_rows(
-    inv: &[f64],
-    b: [&[f64]; 3],
-    rows: std::ops::Range<usize>,
-    mut out: impl FnMut(usize, Vec3),
-) {
-    let m = b[0].len();
-    for k in rows {
-        let row = &inv[k * m..(k + 1) * m];
-        let mut acc = [0.0; 3];
-        for (a, bc) in acc.iter_mut().zip(b) {
-            // Four partial sums: independent chains the compiler vectorizes.
-            let mut s = [0.0; 4];
-            let (rc, rt) = row.as_chunks::<4>();
-            let (bch, bt) = bc.as_chunks::<4>();
-            for (r4, b4) in rc.iter().zip(bch) {
-                for l in 0..4 {
-                    s[l] += r4[l] * b4[l];
-                }
-            }
-            *a = (s[0] + s[1]) + (s[2] + s[3]) + rt.iter().zip(bt).map(|(r, x)| r * x).sum::<f64>();
-        }
-        out(k, Vec3::new(acc[0], acc[1], acc[2]));
-    }
-}
-
-/// [`inverse_rows`] with `b` given as points (`b[k]` the `k`-th row of the three columns):
-/// every coordinate's four partial sums take the same terms in the same order, so each value
-/// is the same bits; the three coordinates run in one pass over the row (twelve independent
-/// chains instead of four), and the phased step keeps `g` in one buffer instead of three.
+/// `out(k, x_k)` for the rows `rows` of `x = inv b`, `inv` row-major `m x m`, `b` given as
+/// points (`b.len() == m`): per coordinate four partial sums over the row's chunks of four,
+/// then the tail, the three coordinates in one pass over the row (twelve independent chains
+/// the compiler vectorizes). The one-thread step ([`DynamicSolid::solve_mass`]) and the phased
+/// step's rows use it alike, so both give the same bits.
 #[inline]
 fn inverse_point_rows(
     inv: &[f64],
@@ -346,7 +318,7 @@ impl MassSolver {
         Ok(MassSolver {
             factor,
             rhs: faer::Mat::zeros(m, 3),
-            columns: vec![0.0; 3 * m],
+            columns: vec![Vec3::zeros(); m],
         })
     }
 }
@@ -900,15 +872,10 @@ impl DynamicSolid {
         match factor {
             MassFactor::Empty => {}
             MassFactor::Dense(inv) => {
-                let m = free.len();
-                for (k, &i) in free.iter().enumerate() {
-                    for c in 0..3 {
-                        columns[c * m + k] = b[i as usize][c];
-                    }
+                for (c, &i) in columns.iter_mut().zip(free) {
+                    *c = b[i as usize];
                 }
-                let (bx, rest) = columns.split_at(m);
-                let (by, bz) = rest.split_at(m);
-                inverse_rows(inv, [bx, by, bz], 0..m, |k, v| x[free[k] as usize] = v);
+                inverse_point_rows(inv, columns, 0..free.len(), |k, v| x[free[k] as usize] = v);
             }
             MassFactor::Sparse(s) => {
                 for (k, &i) in free.iter().enumerate() {
@@ -1816,10 +1783,11 @@ fn spring_energy_scale(sp: &SpringSet) -> f64 {
 mod tests {
     use super::*;
 
-    /// Issue 31 (session h54): the phased step multiplies by the dense inverse of `A^T M A`
-    /// from `g` stored as points, three coordinates in one pass; every value must be the bits
-    /// of the coordinate-column product of the one-thread step (sizes with and without a tail
-    /// of fewer than four columns, row ranges not starting at zero).
+    /// Issue 31 (session h54): both steps multiply by the dense inverse of `A^T M A` from
+    /// points, three coordinates in one pass; every value must be the bits of the
+    /// coordinate-column product the steps used before, so that saved trajectories continue
+    /// exactly (sizes with and without a tail of fewer than four columns, row ranges not
+    /// starting at zero).
     #[test]
     fn inverse_rows_of_points_equal_inverse_rows_of_columns_bit_for_bit() {
         let mut x = 0x9e37_79b9_7f4a_7c15_u64;
@@ -1834,13 +1802,24 @@ mod tests {
             let b: Vec<Vec3> = (0..m).map(|_| Vec3::new(rnd(), rnd(), rnd())).collect();
             let cols: [Vec<f64>; 3] = std::array::from_fn(|c| b.iter().map(|p| p[c]).collect());
             for rows in [0..m, m / 2..m] {
+                // The coordinate-column form the one-thread step used before (session 20).
                 let mut want = vec![Vec3::zeros(); m];
-                inverse_rows(
-                    &inv,
-                    [&cols[0], &cols[1], &cols[2]],
-                    rows.clone(),
-                    |k, v| want[k] = v,
-                );
+                for k in rows.clone() {
+                    let row = &inv[k * m..(k + 1) * m];
+                    let (rc, rt) = row.as_chunks::<4>();
+                    for c in 0..3 {
+                        let (bch, bt) = cols[c].as_chunks::<4>();
+                        let mut s = [0.0; 4];
+                        for (r4, b4) in rc.iter().zip(bch) {
+                            for l in 0..4 {
+                                s[l] += r4[l] * b4[l];
+                            }
+                        }
+                        want[k][c] = (s[0] + s[1])
+                            + (s[2] + s[3])
+                            + rt.iter().zip(bt).map(|(r, x)| r * x).sum::<f64>();
+                    }
+                }
                 let mut got = vec![Vec3::zeros(); m];
                 inverse_point_rows(&inv, &b, rows.clone(), |k, v| got[k] = v);
                 for k in rows.clone() {

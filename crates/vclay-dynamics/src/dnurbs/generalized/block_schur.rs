@@ -1049,6 +1049,25 @@ mod tests {
     /// after the elements) are the summed CSR matrix's entries with the point forces folded
     /// in, to the last bit: an 8 x 8 benchmark sheet with one control point held in `x` only
     /// (its `y`, `z` in `C`), a moving spring and a data spring, after a few steps.
+    /// The element matrices of `m`'s last block-Schur step with its point forces appended
+    /// (as the step adds them), the number of element matrices, and the split it used.
+    pub(super) fn last_step(
+        m: &mut GeneralizedDnurbs<RationalGeometry>,
+    ) -> (Vec<ElementWork>, usize, Arc<SchurPattern>) {
+        let mut works = std::mem::take(&mut m.work_pool);
+        let ne = works.len();
+        let ck = 2.0 * benchmarks::DT * benchmarks::DT;
+        m.add_point_forces(&mut works, ck, ck).unwrap();
+        let split = m
+            .schur
+            .as_ref()
+            .unwrap()
+            .1
+            .clone()
+            .expect("structure holds");
+        (works, ne, split)
+    }
+
     #[test]
     fn summed_blocks_equal_the_csr_sum_bit_for_bit() {
         let mut m: GeneralizedDnurbs<RationalGeometry> = benchmarks::dynamic_sheet(8).unwrap();
@@ -1061,23 +1080,13 @@ mod tests {
         for _ in 0..4 {
             m.step(Integrator::Implicit { dt: benchmarks::DT }).unwrap();
         }
-        let mut works = std::mem::take(&mut m.work_pool);
-        let ne = works.len();
         assert!(
-            works.iter().all(|w| !w.dense),
+            m.work_pool.iter().all(|w| !w.dense),
             "the block-Schur steps never wrote the dense element matrices"
         );
-        let ck = 2.0 * benchmarks::DT * benchmarks::DT;
-        m.add_point_forces(&mut works, ck, ck).unwrap();
+        let (mut works, ne, split) = last_step(&mut m);
         assert!(works.len() > ne, "point forces present");
         let pattern = m.pattern.clone().unwrap();
-        let split = m
-            .schur
-            .as_ref()
-            .unwrap()
-            .1
-            .clone()
-            .expect("structure holds");
         assert!(
             split.kron.len() < 8 * 7,
             "the held row and the partly held point are out"
@@ -1123,17 +1132,7 @@ mod solve_tests {
         for _ in 0..3 {
             m.step(Integrator::Implicit { dt: benchmarks::DT }).unwrap();
         }
-        let mut works = std::mem::take(&mut m.work_pool);
-        let ne = works.len();
-        let ck = 2.0 * benchmarks::DT * benchmarks::DT;
-        m.add_point_forces(&mut works, ck, ck).unwrap();
-        let split = m
-            .schur
-            .as_ref()
-            .unwrap()
-            .1
-            .clone()
-            .expect("structure holds");
+        let (works, ne, split) = super::tests::last_step(&mut m);
         let nd = m.fixed.len();
         let extra: Vec<f64> = (0..nd)
             .map(|i| if i % 4 == 3 { 0.5 } else { 0.0 })
