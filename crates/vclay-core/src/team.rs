@@ -581,6 +581,306 @@ impl<T> Drop for ReadAll<'_, '_, T> {
     }
 }
 
+/// The borrows of a phased program declared before it runs, so that its tasks reach shared
+/// buffers without run-time claims (issue 31; `docs/performance.md` "Level-2 step, session
+/// 21").
+///
+/// A [`SharedSlice`] claim takes the slice's lock, and the threads of a team take it at the
+/// same moment when a phase starts, so every claim and release moves a cache line between
+/// their cores. A plan states instead, for every slice of the program (numbered `0..slices`),
+/// the phases in which its tasks read all of it ([`Plan::read`]) and the range that each task
+/// writes ([`Plan::write`]). [`Plan::start`] checks the plan once: in every phase the written
+/// ranges are pairwise disjoint, and a slice that is written is not read. A task then gets its
+/// declared part ([`PlannedSlice::part`]) or the whole slice ([`PlannedSlice::read`]) through
+/// the [`Task`] that the program hands it, with no shared state touched: the checks left are
+/// on the task itself (its phase, its program, the slices it has taken).
+///
+/// Why this is sound: the phases of a program are separated by the team's barriers; a task's
+/// borrows cannot outlive the task (they borrow its `&Task`, which lives for one call); a task
+/// takes each part once ([`Task`] records it) and cannot be shared with another thread; within
+/// a phase the parts of different tasks are disjoint and nobody reads a slice being written
+/// (checked by [`Plan::start`]); a [`PlannedSlice`] answers only the tasks of its own program,
+/// and a [`Program`] runs once at a time (`run` takes it mutably; its plan stays borrowed
+/// mutably while it exists).
+#[derive(Clone, Debug, Default)]
+pub struct Plan {
+    counts: Vec<usize>,
+    /// First task (numbered through the program) of each phase.
+    starts: Vec<usize>,
+    slices: usize,
+    /// `reads[s * phases + k]`: slice `s` is read in phase `k`.
+    reads: Vec<bool>,
+    /// `writes[s * tasks + starts[k] + t]`: the range that task `t` of phase `k` writes.
+    writes: Vec<Range<usize>>,
+    /// Per slice, the end of its furthest declared write.
+    ends: Vec<usize>,
+    /// Scratch of [`Plan::start`].
+    sorted: Vec<Range<usize>>,
+}
+
+/// Most slices of a planned program (a [`Task`] records the parts it took as bits).
+pub const MAX_PLANNED_SLICES: usize = 64;
+
+static PROGRAM_IDS: AtomicUsize = AtomicUsize::new(1);
+
+impl Plan {
+    /// Clears the plan for a program of `counts[k]` tasks in phase `k` over `slices` slices
+    /// (nothing declared yet); the buffers are kept.
+    ///
+    /// # Panics
+    /// If `slices` exceeds [`MAX_PLANNED_SLICES`].
+    #[track_caller]
+    pub fn reset(&mut self, counts: &[usize], slices: usize) {
+        assert!(
+            slices <= MAX_PLANNED_SLICES,
+            "Plan: {slices} slices (at most {MAX_PLANNED_SLICES})"
+        );
+        self.counts.clear();
+        self.counts.extend_from_slice(counts);
+        self.starts.clear();
+        let mut total = 0;
+        for &c in counts {
+            self.starts.push(total);
+            total += c;
+        }
+        self.slices = slices;
+        self.reads.clear();
+        self.reads.resize(slices * counts.len(), false);
+        self.writes.clear();
+        self.writes.resize(slices * total, 0..0);
+        self.ends.clear();
+        self.ends.resize(slices, 0);
+    }
+
+    fn tasks(&self) -> usize {
+        self.starts
+            .last()
+            .map_or(0, |s| s + self.counts[self.counts.len() - 1])
+    }
+
+    /// Declares that the tasks of phase `phase` read all of slice `slice`.
+    #[track_caller]
+    pub fn read(&mut self, slice: usize, phase: usize) {
+        assert!(
+            slice < self.slices && phase < self.counts.len(),
+            "Plan: no such slice or phase"
+        );
+        self.reads[slice * self.counts.len() + phase] = true;
+    }
+
+    /// Declares that task `task` of phase `phase` writes `range` of slice `slice` (an empty
+    /// range: nothing).
+    #[track_caller]
+    pub fn write(&mut self, slice: usize, phase: usize, task: usize, range: Range<usize>) {
+        assert!(
+            slice < self.slices && phase < self.counts.len() && task < self.counts[phase],
+            "Plan: no such slice, phase or task"
+        );
+        assert!(range.start <= range.end, "Plan: range {range:?} reversed");
+        self.ends[slice] = self.ends[slice].max(range.end);
+        let i = slice * self.tasks() + self.starts[phase] + task;
+        self.writes[i] = range;
+    }
+
+    /// Checks the plan and opens it as a program.
+    ///
+    /// # Panics
+    /// If two tasks of a phase write overlapping ranges of a slice, or a slice is written and
+    /// read in the same phase.
+    #[track_caller]
+    pub fn start(&mut self) -> Program<'_> {
+        let (phases, tasks) = (self.counts.len(), self.tasks());
+        for s in 0..self.slices {
+            for k in 0..phases {
+                let w = &self.writes[s * tasks + self.starts[k]..][..self.counts[k]];
+                self.sorted.clear();
+                self.sorted
+                    .extend(w.iter().filter(|r| !r.is_empty()).cloned());
+                assert!(
+                    self.sorted.is_empty() || !self.reads[s * phases + k],
+                    "Plan: slice {s} is written and read in phase {k}"
+                );
+                self.sorted.sort_unstable_by_key(|r| r.start);
+                for pair in self.sorted.windows(2) {
+                    assert!(
+                        pair[0].end <= pair[1].start,
+                        "Plan: phase {k} writes overlapping ranges {:?} and {:?} of slice {s}",
+                        pair[0],
+                        pair[1]
+                    );
+                }
+            }
+        }
+        Program {
+            id: PROGRAM_IDS.fetch_add(1, Ordering::Relaxed),
+            plan: self,
+        }
+    }
+}
+
+/// A checked [`Plan`], ready to run ([`Program::run`]); its slices are bound with
+/// [`Program::slice`].
+#[derive(Debug)]
+pub struct Program<'p> {
+    id: usize,
+    plan: &'p Plan,
+}
+
+/// What a task of a [`Program`] is: its phase and index, and the parts it has taken. Handed
+/// to the task by [`Program::run`]; it cannot leave the task's thread.
+#[derive(Debug)]
+pub struct Task {
+    program: usize,
+    phase: usize,
+    index: usize,
+    /// Bit `s`: the task has taken its part of slice `s`.
+    taken: std::cell::Cell<u64>,
+    _not_send: PhantomData<*const ()>,
+}
+
+impl Task {
+    /// The task's phase.
+    pub fn phase(&self) -> usize {
+        self.phase
+    }
+
+    /// The task's index in its phase.
+    pub fn index(&self) -> usize {
+        self.index
+    }
+}
+
+impl<'p> Program<'p> {
+    /// Binds `data` as slice `index` of the plan.
+    ///
+    /// # Panics
+    /// If `index` is not a slice of the plan or a declared range ends beyond `data`.
+    #[track_caller]
+    pub fn slice<'a, T>(&self, index: usize, data: &'a mut [T]) -> PlannedSlice<'p, 'a, T> {
+        assert!(index < self.plan.slices, "Plan: no slice {index}");
+        assert!(
+            self.plan.ends[index] <= data.len(),
+            "Plan: slice {index} has {} elements, a declared range ends at {}",
+            data.len(),
+            self.plan.ends[index]
+        );
+        PlannedSlice {
+            ptr: data.as_mut_ptr(),
+            len: data.len(),
+            index,
+            program: self.id,
+            plan: self.plan,
+            _borrow: PhantomData,
+        }
+    }
+
+    /// Runs the program on the [global team](Team::global) (see [`run_phases`]): task `t` of
+    /// phase `k` runs as `run(task)`, with `task.phase() == k` and `task.index() == t`.
+    pub fn run(&mut self, run: &(dyn Fn(&Task) + Sync)) {
+        let program = self.id;
+        run_phases(&self.plan.counts, &|phase, index| {
+            run(&Task {
+                program,
+                phase,
+                index,
+                taken: std::cell::Cell::new(0),
+                _not_send: PhantomData,
+            });
+        });
+    }
+}
+
+/// A mutable slice bound to a [`Program`]: its tasks reach it as their plan declares, with no
+/// run-time claim.
+pub struct PlannedSlice<'p, 'a, T> {
+    ptr: *mut T,
+    len: usize,
+    index: usize,
+    program: usize,
+    plan: &'p Plan,
+    _borrow: PhantomData<&'a mut [T]>,
+}
+
+// SAFETY: as for `SharedSlice`: the elements are reached only as the checked plan allows
+// (disjoint `&mut [T]` parts, `T: Send`, or shared reads, `T: Sync`).
+unsafe impl<T: Send + Sync> Sync for PlannedSlice<'_, '_, T> {}
+unsafe impl<T: Send> Send for PlannedSlice<'_, '_, T> {}
+
+impl<T> std::fmt::Debug for PlannedSlice<'_, '_, T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "PlannedSlice {{ index: {}, len: {} }}",
+            self.index, self.len
+        )
+    }
+}
+
+impl<T> PlannedSlice<'_, '_, T> {
+    #[track_caller]
+    fn check(&self, task: &Task) {
+        assert!(
+            task.program == self.program,
+            "PlannedSlice: a task of another program"
+        );
+    }
+
+    /// The range that `task` writes (empty if none).
+    #[track_caller]
+    pub fn range_of(&self, task: &Task) -> Range<usize> {
+        self.check(task);
+        let p = self.plan;
+        p.writes[self.index * p.tasks() + p.starts[task.phase] + task.index].clone()
+    }
+
+    /// The part that `task` declared it writes, with its range (empty if it declared none).
+    ///
+    /// # Panics
+    /// If the task belongs to another program or has taken its part already.
+    #[track_caller]
+    // The parts that `&self` hands out are disjoint by the checked plan (see the SAFETY note).
+    #[allow(clippy::mut_from_ref)]
+    pub fn part<'t>(&'t self, task: &'t Task) -> (Range<usize>, &'t mut [T]) {
+        let r = self.range_of(task);
+        let bit = 1u64 << self.index;
+        assert!(
+            task.taken.get() & bit == 0,
+            "PlannedSlice: part of slice {} taken twice",
+            self.index
+        );
+        task.taken.set(task.taken.get() | bit);
+        // SAFETY: `r` is in bounds (its end is at most `ends[index] <= len`, checked in
+        // `Program::slice`). Only tasks of this slice's program get here (`check`), and the
+        // program runs once at a time (`Program::run` takes it mutably). In this task's phase
+        // no other task's declared part overlaps `r` and no task reads the slice (checked in
+        // `Plan::start`); this task takes `r` once (`taken`); the borrow lives at most as long
+        // as `&'t Task`, i.e. within this task's call, and the phases before and after are
+        // separated by the team's barriers. So this is the only live reference to `r`.
+        let part = unsafe { std::slice::from_raw_parts_mut(self.ptr.add(r.start), r.len()) };
+        (r, part)
+    }
+
+    /// The whole slice, for a task of a phase that declared it reads it.
+    ///
+    /// # Panics
+    /// If the task belongs to another program or its phase does not read the slice.
+    #[track_caller]
+    pub fn read<'t>(&'t self, task: &'t Task) -> &'t [T] {
+        self.check(task);
+        let p = self.plan;
+        assert!(
+            p.reads[self.index * p.counts.len() + task.phase],
+            "PlannedSlice: phase {} does not read slice {}",
+            task.phase,
+            self.index
+        );
+        // SAFETY: no task writes this slice in a phase that reads it (checked in
+        // `Plan::start`), the other phases are separated by the team's barriers and borrows
+        // end with their task's call (`'t`), so no `&mut` to any element is live meanwhile.
+        unsafe { std::slice::from_raw_parts(self.ptr, self.len) }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -623,6 +923,143 @@ mod tests {
             None => run_inline(&[tasks, tasks, 1], &run),
         }
         sa.read().to_vec()
+    }
+
+    /// The three-phase program of [`program`] with declared borrows.
+    fn planned_program(plan: &mut Plan, n: usize) -> Vec<f64> {
+        let mut a = vec![0.0; n];
+        let mut b = vec![0.0; n];
+        let tasks = 7;
+        let chunk = |t: usize| n * t / tasks..n * (t + 1) / tasks;
+        plan.reset(&[tasks, tasks, 1], 2);
+        for t in 0..tasks {
+            plan.write(0, 0, t, chunk(t));
+            plan.write(1, 1, t, chunk(t));
+        }
+        plan.read(0, 1);
+        plan.read(1, 2);
+        plan.write(0, 2, 0, 0..n);
+        let mut prog = plan.start();
+        let (sa, sb) = (prog.slice(0, &mut a), prog.slice(1, &mut b));
+        prog.run(&|task| match task.phase() {
+            0 => {
+                let (r, w) = sa.part(task);
+                for (i, x) in r.zip(w.iter_mut()) {
+                    *x = (i as f64).sin();
+                }
+            }
+            1 => {
+                let a = sa.read(task);
+                let (r, w) = sb.part(task);
+                for (i, x) in r.zip(w.iter_mut()) {
+                    *x = a[i] + a[(i * 7 + 3) % n];
+                }
+            }
+            _ => {
+                let b = sb.read(task);
+                let (_, w) = sa.part(task);
+                for (x, y) in w.iter_mut().zip(b) {
+                    *x = 2.0 * y;
+                }
+            }
+        });
+        a
+    }
+
+    /// Issue 31 (session h56): a program whose borrows are declared in a plan computes what
+    /// the same program with run-time claims computes, on the team and on one thread, and a
+    /// plan is reused from run to run.
+    #[test]
+    fn a_planned_program_computes_what_the_claimed_program_computes() {
+        let want = program(None, 1000);
+        let mut plan = Plan::default();
+        for _ in 0..200 {
+            assert_eq!(planned_program(&mut plan, 1000), want);
+        }
+        assert_eq!(planned_program(&mut plan, 333), program(None, 333));
+    }
+
+    #[test]
+    #[should_panic(expected = "writes overlapping ranges")]
+    fn a_plan_with_overlapping_writes_panics_when_started() {
+        let mut plan = Plan::default();
+        plan.reset(&[1, 2], 1);
+        plan.write(0, 1, 0, 0..6);
+        plan.write(0, 1, 1, 5..10);
+        plan.start();
+    }
+
+    #[test]
+    #[should_panic(expected = "written and read in phase 0")]
+    fn a_plan_that_reads_a_slice_it_writes_in_the_same_phase_panics_when_started() {
+        let mut plan = Plan::default();
+        plan.reset(&[2], 1);
+        plan.write(0, 0, 1, 0..3);
+        plan.read(0, 0);
+        plan.start();
+    }
+
+    #[test]
+    #[should_panic(expected = "declared range ends at 12")]
+    fn a_slice_shorter_than_its_plan_panics_when_bound() {
+        let mut plan = Plan::default();
+        plan.reset(&[2], 1);
+        plan.write(0, 0, 1, 6..12);
+        let prog = plan.start();
+        let mut v = vec![0; 10];
+        prog.slice(0, &mut v);
+    }
+
+    /// Runs `task` as the only task of a one-slice program (slice 0: 10 elements, the task
+    /// writes 0..5 and nothing is read); returns the panic message, if any.
+    fn misuse(task: impl Fn(&PlannedSlice<'_, '_, i32>, &Task) + Sync) -> Option<String> {
+        let mut plan = Plan::default();
+        plan.reset(&[1], 1);
+        plan.write(0, 0, 0, 0..5);
+        let mut prog = plan.start();
+        let mut v = vec![0; 10];
+        let s = prog.slice(0, &mut v);
+        let r = catch_unwind(AssertUnwindSafe(|| prog.run(&|t| task(&s, t))));
+        r.err().map(|p| {
+            p.downcast_ref::<String>()
+                .cloned()
+                .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_default()
+        })
+    }
+
+    #[test]
+    fn a_planned_slice_refuses_every_undeclared_borrow() {
+        // The declared part, once: fine.
+        assert_eq!(
+            misuse(|s, t| {
+                s.part(t).1[4] = 1;
+            }),
+            None
+        );
+        // Twice in one task: two `&mut` to one range.
+        let twice = misuse(|s, t| {
+            let (_, a) = s.part(t);
+            let (_, b) = s.part(t);
+            a[0] = 1;
+            b[0] = 2;
+        });
+        assert!(twice.unwrap().contains("taken twice"));
+        // A read in a phase that writes the slice.
+        let read = misuse(|s, t| {
+            s.read(t);
+        });
+        assert!(read.unwrap().contains("does not read slice 0"));
+        // A task of another program (here one nested inside the task).
+        let other = misuse(|s, _| {
+            let mut plan = Plan::default();
+            plan.reset(&[1], 1);
+            plan.write(0, 0, 0, 0..1);
+            plan.start().run(&|inner| {
+                s.part(inner);
+            });
+        });
+        assert!(other.unwrap().contains("another program"));
     }
 
     #[test]

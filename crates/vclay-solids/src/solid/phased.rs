@@ -45,7 +45,7 @@
 
 use std::ops::Range;
 
-use vclay_core::team::{SharedSlice, run_phases, team_threads};
+use vclay_core::team::{Plan, PlannedSlice, Task, team_threads};
 use vclay_core::{Parallelism, Vec3};
 use vclay_lattice::{SparseMatrix, SubdivisionMap};
 
@@ -74,6 +74,47 @@ pub(super) struct PhasedWork {
     /// Whether `straddle` is all zero (false while a program runs, so that a panicking step
     /// leaves it to be cleared).
     clean: bool,
+    /// Points per level of the chain (0: the control points).
+    pts: Vec<usize>,
+    /// The program's phases and their task counts.
+    phases: Vec<(Phase, usize)>,
+    /// The task counts alone.
+    counts: Vec<usize>,
+    /// The program's borrows ([`Slots`]).
+    plan: Plan,
+}
+
+/// The slices of the phased program, numbered for its [`Plan`]: the fixed ones, then level
+/// `j` of the chain at `LEVELS + j` (`0..=n`, the ends unused), then the straddle buffer of
+/// spring block `s`.
+#[derive(Clone, Copy, Debug)]
+struct Slots {
+    n: usize,
+    nb: usize,
+}
+
+impl Slots {
+    const D: usize = 0;
+    const F: usize = 1;
+    const SCALARS: usize = 2;
+    const G: usize = 3;
+    const P: usize = 4;
+    const V: usize = 5;
+    const GOOD_P: usize = 6;
+    const GOOD_V: usize = 7;
+    const LEVELS: usize = 8;
+
+    fn level(self, j: usize) -> usize {
+        Self::LEVELS + j
+    }
+
+    fn straddle(self, s: usize) -> usize {
+        Self::LEVELS + self.n + 1 + s
+    }
+
+    fn len(self) -> usize {
+        self.straddle(self.nb)
+    }
 }
 
 /// The layout of [`PhasedWork::scalars`] for `nb` spring blocks: per spring block, the energy
@@ -141,13 +182,13 @@ fn tasks_for(rows: usize, threads: usize) -> usize {
     (rows / ROWS_PER_TASK).clamp(1, threads)
 }
 
-/// Rows `rows` of `op x`, `x` read through `src`, stored in `dst` at the same rows, or at
-/// `to[row]` (sorted) when given.
+/// Rows `rows` of `op x`, `x` read through `src`, stored in `out` (the rows from
+/// `rows.start`), or at `to[row] - to[rows.start]` (`to` sorted) when given.
 fn rows_into(
     op: &SparseMatrix,
     rows: Range<usize>,
     src: impl Fn(usize) -> Vec3,
-    dst: &SharedSlice<'_, Vec3>,
+    out: &mut [Vec3],
     to: Option<&[u32]>,
 ) {
     if rows.is_empty() {
@@ -156,12 +197,10 @@ fn rows_into(
     match to {
         Some(o) => {
             let base = o[rows.start] as usize;
-            let mut out = dst.range(base..o[rows.end - 1] as usize + 1);
             op.apply_rows_with(rows, src, |i, x| out[o[i] as usize - base] = x);
         }
         None => {
             let base = rows.start;
-            let mut out = dst.range(rows.clone());
             op.apply_rows_with(rows, src, |i, x| out[i - base] = x);
         }
     }
@@ -251,15 +290,32 @@ impl DynamicSolid {
             None => (&disc.map, None, None),
         };
         let n = map.levels();
+        let pw = &mut work.phased;
+        let PhasedWork {
+            levels,
+            g,
+            scalars,
+            straddle,
+            clean,
+            pts,
+            phases,
+            counts,
+            plan,
+        } = pw;
         // Points per level: level 0 the (restricted) control points, level n the data points.
-        let pts: Vec<usize> = std::iter::once(map.operator(0).ncols())
-            .chain(map.operators().iter().map(|a| a.nrows()))
-            .collect();
-        let transposes: Vec<_> = (0..n).map(|j| map.transpose(j)).collect();
+        pts.clear();
+        pts.push(map.operator(0).ncols());
+        pts.extend(map.operators().iter().map(|a| a.nrows()));
+        let pts = &pts[..];
+        // The stored transposes, built before the tasks read them.
+        for j in 0..n {
+            map.transpose(j);
+        }
 
         // Phases and their task counts.
         let nb = blocks.len();
-        let mut phases = vec![(Phase::Springs, nb), (Phase::Merge, nb)];
+        phases.clear();
+        phases.extend([(Phase::Springs, nb), (Phase::Merge, nb)]);
         for j in (1..n).rev() {
             phases.push((Phase::Transpose(j), tasks_for(pts[j], threads)));
         }
@@ -273,47 +329,22 @@ impl DynamicSolid {
         for j in 0..n {
             phases.push((Phase::Apply(j), tasks_for(pts[j + 1], threads)));
         }
-        let counts: Vec<usize> = phases.iter().map(|p| p.1).collect();
+        let phases = &phases[..];
+        counts.clear();
+        counts.extend(phases.iter().map(|p| p.1));
 
         // Shared buffers.
-        let pw = &mut work.phased;
-        pw.levels.resize_with(n + 1, Vec::new);
+        levels.resize_with(n + 1, Vec::new);
         for j in 1..n {
-            pw.levels[j].resize(pts[j], Vec3::zeros());
+            levels[j].resize(pts[j], Vec3::zeros());
         }
-        pw.g.resize(m, Vec3::zeros());
+        g.resize(m, Vec3::zeros());
         let layout = Scalars { nb, control_tasks };
-        pw.scalars.resize(layout.len(), 0.0);
-        if !pw.clean || pw.straddle.len() != nb || pw.straddle.iter().any(|b| b.len() != nd) {
-            pw.straddle = vec![vec![Vec3::zeros(); nd]; nb];
+        scalars.resize(layout.len(), 0.0);
+        if !*clean || straddle.len() != nb || straddle.iter().any(|b| b.len() != nd) {
+            *straddle = vec![vec![Vec3::zeros(); nd]; nb];
         }
-        pw.clean = false;
-        let straddle: Vec<SharedSlice<'_, Vec3>> = pw
-            .straddle
-            .iter_mut()
-            .map(|b| SharedSlice::new(b))
-            .collect();
-        let band = &springs.band[..];
-        let levels: Vec<SharedSlice<'_, Vec3>> =
-            pw.levels.iter_mut().map(|l| SharedSlice::new(l)).collect();
-        let gsh = SharedSlice::new(&mut pw.g);
-        let scalars = SharedSlice::new(&mut pw.scalars);
-        let f = SharedSlice::new(&mut work.f);
-        let dsh = SharedSlice::new(&mut d[..]);
-        let psh = SharedSlice::new(&mut p[..]);
-        let vsh = SharedSlice::new(&mut v[..]);
-        let (good_p, good_v) = (&mut good.0, &mut good.1);
-        let gp = SharedSlice::new(&mut good_p[..]);
-        let gv = SharedSlice::new(&mut good_v[..]);
-        let (dense_inverse, sparse) = match &solver.factor {
-            MassFactor::Empty => (None, None),
-            MassFactor::Dense(inv) => (Some(&inv[..]), None),
-            MassFactor::Sparse(llt) => (None, Some(llt)),
-        };
-        let (free, free_rows, mp, dp) = (&free[..], &free_rows[..], &*mp, &*dp);
-        let (mass, boundary, tools) = (&mass[..], &*boundary, &tools[..]);
-        let damping_ratio = *damping_ratio;
-        let divergence = (params.divergence_factor, *energy_scale, *tool_energy_seen);
+        *clean = false;
 
         // The rows of `p`, `v` and the good state that integration task `t` of `tasks` owns:
         // from its first free point to the next task's, the first and last tasks extended to
@@ -328,16 +359,111 @@ impl DynamicSolid {
             };
             lo..hi
         };
+        // Rows `rows` of a map into the data points go to `to[row]` (sorted) when given.
+        let out_range = |rows: Range<usize>, to: Option<&[u32]>| match to {
+            Some(o) if !rows.is_empty() => o[rows.start] as usize..o[rows.end - 1] as usize + 1,
+            Some(_) => 0..0,
+            None => rows,
+        };
+
+        // Every borrow of every task, declared and checked once (see "Borrows" above).
+        let slot = Slots { n, nb };
+        plan.reset(counts, slot.len());
+        for (k, &(phase, tasks)) in phases.iter().enumerate() {
+            for t in 0..tasks {
+                match phase {
+                    Phase::Springs => {
+                        plan.read(Slots::D, k);
+                        plan.write(Slots::F, k, t, blocks[t].clone());
+                        plan.write(slot.straddle(t), k, t, 0..nd);
+                        plan.write(Slots::SCALARS, k, t, layout.springs(t));
+                    }
+                    Phase::Merge => {
+                        plan.read(Slots::D, k);
+                        plan.write(Slots::F, k, t, blocks[t].clone());
+                        for s in 0..nb {
+                            plan.write(slot.straddle(s), k, t, blocks[t].clone());
+                        }
+                        plan.write(Slots::SCALARS, k, t, layout.tools(t));
+                    }
+                    Phase::Transpose(j) => {
+                        plan.read(
+                            if j + 1 == n {
+                                Slots::F
+                            } else {
+                                slot.level(j + 1)
+                            },
+                            k,
+                        );
+                        plan.write(slot.level(j), k, t, chunk(pts[j], tasks, t));
+                    }
+                    Phase::Control => {
+                        plan.read(Slots::P, k);
+                        plan.read(Slots::V, k);
+                        plan.read(if n == 1 { Slots::F } else { slot.level(1) }, k);
+                        plan.write(Slots::G, k, t, chunk(m, tasks, t));
+                        plan.write(Slots::SCALARS, k, t, layout.control(t));
+                    }
+                    Phase::Integrate => {
+                        plan.read(Slots::SCALARS, k);
+                        plan.read(Slots::G, k);
+                        for s in [Slots::P, Slots::V, Slots::GOOD_P, Slots::GOOD_V] {
+                            plan.write(s, k, t, owned(t, tasks));
+                        }
+                    }
+                    Phase::Apply(j) => {
+                        plan.read(if j == 0 { Slots::P } else { slot.level(j) }, k);
+                        let rows = chunk(pts[j + 1], tasks, t);
+                        if j + 1 < n {
+                            plan.write(slot.level(j + 1), k, t, rows);
+                        } else {
+                            plan.write(Slots::D, k, t, out_range(rows, outputs));
+                        }
+                    }
+                }
+            }
+        }
+        let mut program = plan.start();
+        let straddle: Vec<PlannedSlice<'_, '_, Vec3>> = straddle
+            .iter_mut()
+            .enumerate()
+            .map(|(s, b)| program.slice(slot.straddle(s), &mut b[..]))
+            .collect();
+        let band = &springs.band[..];
+        let levels: Vec<PlannedSlice<'_, '_, Vec3>> = levels
+            .iter_mut()
+            .enumerate()
+            .map(|(j, l)| program.slice(slot.level(j), &mut l[..]))
+            .collect();
+        let gsh = program.slice(Slots::G, &mut g[..]);
+        let scalar_sh = program.slice(Slots::SCALARS, &mut scalars[..]);
+        let f = program.slice(Slots::F, &mut work.f[..]);
+        let dsh = program.slice(Slots::D, &mut d[..]);
+        let psh = program.slice(Slots::P, &mut p[..]);
+        let vsh = program.slice(Slots::V, &mut v[..]);
+        let (good_p, good_v) = (&mut good.0, &mut good.1);
+        let gp = program.slice(Slots::GOOD_P, &mut good_p[..]);
+        let gv = program.slice(Slots::GOOD_V, &mut good_v[..]);
+        let (dense_inverse, sparse) = match &solver.factor {
+            MassFactor::Empty => (None, None),
+            MassFactor::Dense(inv) => (Some(&inv[..]), None),
+            MassFactor::Sparse(llt) => (None, Some(llt)),
+        };
+        let (free, free_rows, mp, dp) = (&free[..], &free_rows[..], &*mp, &*dp);
+        let (mass, boundary, tools) = (&mass[..], &*boundary, &tools[..]);
+        let damping_ratio = *damping_ratio;
+        let divergence = (params.divergence_factor, *energy_scale, *tool_energy_seen);
         let step = |x: &mut Vec3, y: &mut Vec3, a: Vec3| advance(explicit, x, y, a, dt);
 
-        let run = |k: usize, t: usize| {
-            let (phase, tasks) = phases[k];
+        let run = |task: &Task| {
+            let t = task.index();
+            let (phase, tasks) = phases[task.phase()];
             match phase {
                 Phase::Springs => {
-                    let dr = dsh.read();
-                    let e = springs.block_forces(t, &dr, &mut f.range(blocks[t].clone()));
-                    let es = springs.straddle_forces(&dr, &mut straddle[t].range(0..nd), t, nb);
-                    let mut er = scalars.range(layout.springs(t));
+                    let dr = dsh.read(task);
+                    let e = springs.block_forces(t, dr, f.part(task).1);
+                    let es = springs.straddle_forces(dr, straddle[t].part(task).1, t, nb);
+                    let er = scalar_sh.part(task).1;
                     er[0] = e;
                     er[1] = es;
                 }
@@ -347,67 +473,59 @@ impl DynamicSolid {
                     let r = blocks[t].clone();
                     let lo = band.partition_point(|&i| (i as usize) < r.start);
                     let hi = band.partition_point(|&i| (i as usize) < r.end);
-                    let mut fr = f.range(r.clone());
+                    let fr = f.part(task).1;
                     for share in &straddle {
-                        let mut sh = share.range(r.clone());
+                        let sh = share.part(task).1;
                         for &i in &band[lo..hi] {
                             let i = i as usize - r.start;
                             fr[i] += sh[i];
                             sh[i] = Vec3::zeros();
                         }
                     }
-                    let dr = dsh.read();
+                    let dr = dsh.read(task);
                     let mut te = 0.0;
                     for tool in tools.iter().flatten() {
-                        te += tool.add_forces_in(&dr, mass, boundary, &mut fr, r.clone());
+                        te += tool.add_forces_in(dr, mass, boundary, fr, r.clone());
                     }
-                    scalars.range(layout.tools(t))[0] = te;
+                    scalar_sh.part(task).1[0] = te;
                 }
                 Phase::Transpose(j) => {
-                    let op = transposes[j];
-                    let rows = chunk(pts[j], tasks, t);
+                    let op = map.transpose(j);
+                    let (rows, out) = levels[j].part(task);
                     if j + 1 == n {
-                        let fr = f.read();
-                        let fr: &[Vec3] = &fr;
+                        let fr = f.read(task);
                         match outputs {
-                            Some(o) => {
-                                rows_into(op, rows, move |c| fr[o[c] as usize], &levels[j], None)
-                            }
-                            None => rows_into(op, rows, move |c| fr[c], &levels[j], None),
+                            Some(o) => rows_into(op, rows, |c| fr[o[c] as usize], out, None),
+                            None => rows_into(op, rows, |c| fr[c], out, None),
                         }
                     } else {
-                        let src = levels[j + 1].read();
-                        let src: &[Vec3] = &src;
-                        rows_into(op, rows, move |c| src[c], &levels[j], None);
+                        let src = levels[j + 1].read(task);
+                        rows_into(op, rows, |c| src[c], out, None);
                     }
                 }
                 Phase::Control => {
-                    let (pr, vr) = (psh.read(), vsh.read());
+                    let (pr, vr) = (psh.read(task), vsh.read(task));
                     let all = chunk(nc, tasks, t);
                     let ok = pr[all.clone()]
                         .iter()
                         .chain(&vr[all])
                         .all(|x| x.iter().all(|c| c.is_finite()));
-                    let kr = chunk(m, tasks, t);
-                    let mut out = gsh.range(kr.clone());
+                    let (kr, out) = gsh.part(task);
                     // `A^(1)T` rows of the free points, from level 1 (or the forces).
-                    let op = transposes[0];
+                    let op = map.transpose(0);
                     let rows = &free_rows[kr.clone()];
                     if n == 1 {
-                        let fr = f.read();
-                        let fr: &[Vec3] = &fr;
+                        let fr = f.read(task);
                         match outputs {
-                            Some(o) => free_rows_into(op, rows, |c| fr[o[c] as usize], &mut out),
-                            None => free_rows_into(op, rows, |c| fr[c], &mut out),
+                            Some(o) => free_rows_into(op, rows, |c| fr[o[c] as usize], out),
+                            None => free_rows_into(op, rows, |c| fr[c], out),
                         }
                     } else {
-                        let lr = levels[1].read();
-                        let lr: &[Vec3] = &lr;
-                        free_rows_into(op, rows, |c| lr[c], &mut out);
+                        let lr = levels[1].read(task);
+                        free_rows_into(op, rows, |c| lr[c], out);
                     }
                     // `M v` (kinetic energy) and `g -= D v`, the free points two rows at a time
                     // (the same bits as one at a time).
-                    let vr: &[Vec3] = &vr;
                     let ks = &free[kr];
                     let mut kin = 0.0;
                     mp.apply_row_list_with(
@@ -427,12 +545,12 @@ impl DynamicSolid {
                             out[q] -= dv;
                         },
                     );
-                    let mut sc = scalars.range(layout.control(t));
+                    let sc = scalar_sh.part(task).1;
                     sc[0] = kin;
                     sc[1] = if ok { 1.0 } else { 0.0 };
                 }
                 Phase::Integrate => {
-                    let (energy, all_finite) = layout.energy(&scalars.read());
+                    let (energy, all_finite) = layout.energy(scalar_sh.read(task));
                     let (factor, scale, seen) = divergence;
                     let accepted = verdict(
                         &energy,
@@ -444,14 +562,14 @@ impl DynamicSolid {
                     if !accepted {
                         return;
                     }
-                    let own = owned(t, tasks);
+                    let (own, pr) = psh.part(task);
+                    let vr = vsh.part(task).1;
                     let base = own.start;
-                    let (mut pr, mut vr) = (psh.range(own.clone()), vsh.range(own.clone()));
-                    gp.range(own.clone()).copy_from_slice(&pr);
-                    gv.range(own).copy_from_slice(&vr);
-                    let g = gsh.read();
+                    gp.part(task).1.copy_from_slice(pr);
+                    gv.part(task).1.copy_from_slice(vr);
+                    let g = gsh.read(task);
                     if let Some(inv) = dense_inverse {
-                        inverse_point_rows(inv, &g, chunk(m, tasks, t), |k, a| {
+                        inverse_point_rows(inv, g, chunk(m, tasks, t), |k, a| {
                             let i = free[k] as usize - base;
                             step(&mut pr[i], &mut vr[i], a);
                         });
@@ -474,26 +592,24 @@ impl DynamicSolid {
                     } else {
                         (&dsh, outputs)
                     };
+                    let out = dst.part(task).1;
                     if j == 0 {
-                        let pr = psh.read();
-                        let pr: &[Vec3] = &pr;
+                        let pr = psh.read(task);
                         match inputs {
-                            Some(ins) => rows_into(op, rows, move |c| pr[ins[c] as usize], dst, to),
-                            None => rows_into(op, rows, move |c| pr[c], dst, to),
+                            Some(ins) => rows_into(op, rows, |c| pr[ins[c] as usize], out, to),
+                            None => rows_into(op, rows, |c| pr[c], out, to),
                         }
                     } else {
-                        let src = levels[j].read();
-                        let src: &[Vec3] = &src;
-                        rows_into(op, rows, move |c| src[c], dst, to);
+                        let src = levels[j].read(task);
+                        rows_into(op, rows, |c| src[c], out, to);
                     }
                 }
             }
         };
-        run_phases(&counts, &run);
-        let (energy, all_finite) = layout.energy(&scalars.read());
-        drop(straddle);
+        program.run(&run);
+        drop((straddle, levels));
         work.phased.clean = true;
-        (energy, all_finite)
+        layout.energy(&work.phased.scalars)
     }
 }
 
