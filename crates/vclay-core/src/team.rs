@@ -602,6 +602,37 @@ impl<T> Drop for ReadAll<'_, '_, T> {
 /// (checked by [`Plan::start`]); a [`PlannedSlice`] answers only the tasks of its own program,
 /// and a [`Program`] runs once at a time (`run` takes it mutably; its plan stays borrowed
 /// mutably while it exists).
+///
+/// ```
+/// use vclay_core::team::Plan;
+/// let mut v = vec![0.0; 8];
+/// let mut plan = Plan::default();
+/// plan.reset(&[2, 1], 1); // two tasks in phase 0, one in phase 1; one slice
+/// plan.write(0, 0, 0, 0..4);
+/// plan.write(0, 0, 1, 4..8);
+/// plan.read(0, 1);
+/// let sum = std::sync::Mutex::new(0.0);
+/// let mut program = plan.start();
+/// let s = program.slice(0, &mut v);
+/// program.run(&|task| match task.phase() {
+///     0 => s.part(task).1.fill(1.0),
+///     _ => *sum.lock().unwrap() = s.read(task).iter().sum(),
+/// });
+/// assert_eq!(*sum.lock().unwrap(), 8.0);
+/// ```
+///
+/// A part cannot outlive its task (here kept for later):
+/// ```compile_fail
+/// use vclay_core::team::Plan;
+/// let mut v = vec![0.0; 8];
+/// let mut plan = Plan::default();
+/// plan.reset(&[1], 1);
+/// plan.write(0, 0, 0, 0..8);
+/// let kept = std::sync::Mutex::new(None);
+/// let mut program = plan.start();
+/// let s = program.slice(0, &mut v);
+/// program.run(&|task| *kept.lock().unwrap() = Some(s.part(task).1));
+/// ```
 #[derive(Clone, Debug, Default)]
 pub struct Plan {
     counts: Vec<usize>,

@@ -35,13 +35,16 @@
 //! last place, see the tests).
 //!
 //! # Borrows
-//! Tasks reach the shared buffers through [`SharedSlice`] borrows, each checked at run time
-//! under a lock that both threads take at the same moment when a phase starts, so a borrow
-//! costs about a cache-line transfer between the cores. The control phases, whose work is a
-//! few microseconds, take few of them: `g` is one buffer of points (not three coordinate
-//! columns) and the energies, kinetic energies and finiteness flags that the integration
-//! phase reads are one buffer of scalars (issue 31, `docs/performance.md` "Level-2 step,
-//! session 20").
+//! Tasks reach the shared buffers through a [`Plan`] that declares, before the program runs,
+//! which buffers ([`Slots`]) each phase reads and which range each task writes; it is checked
+//! once when the program starts, and a task then takes its part or reads a buffer with no
+//! shared state touched. The run-time claims of [`vclay_core::team::SharedSlice`] used before
+//! took a lock that both threads took at the same moment when a phase started, about 26 claims
+//! a thread and step, each a cache-line transfer between the cores (issue 31,
+//! `docs/performance.md` "Level-2 step, session 21"). The plan is rebuilt every step in the
+//! workspace (a few hundred ranges, no allocation once grown), so it always matches the
+//! model. `g` is one buffer of points and the energies, kinetic energies and finiteness flags
+//! that the integration phase reads are one buffer of scalars (session 20).
 
 use std::ops::Range;
 
