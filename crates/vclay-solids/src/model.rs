@@ -199,7 +199,11 @@ impl SolidSource {
                 // ids): the subdivision numbering (vertex, edge, face, cell points, recursively)
                 // scatters neighbours across the whole array, and the per-step spring and
                 // operator passes are bound by memory access at large levels.
-                let order = solid.finest().locality_order();
+                // A grid (every subdivided box) is numbered in grid order instead, so that the
+                // structured-grid spring kernel reads and writes the point arrays in order
+                // (issue 31; `springs::grid`).
+                let order = crate::springs::lattice_grid_order(solid.finest())
+                    .unwrap_or_else(|| solid.finest().locality_order());
                 let data = solid
                     .finest()
                     .renumber_points(&order)

@@ -32,8 +32,30 @@
 //! bit for bit: 10 instead of 24 bytes per edge spring and 6 instead of 20 per virtual spring
 //! stream through the pass (issue 31, `docs/performance.md` "Solid step memory traffic").
 
+mod grid;
+
+use grid::{GridSprings, GridWorkspace};
 use rayon::prelude::*;
 use vclay_core::{Parallelism, Vec3};
+
+/// The points of `lattice` in the order of a structured grid (`i + nx (j + ny k)`, x the
+/// longest axis; [`grid`] module docs) when its edges and faces are exactly those of an
+/// `nx x ny x nz` grid, else `None`: the data-point numbering under which the grid spring kernel
+/// reads and writes the point arrays in order ([`crate::model`]).
+pub(crate) fn lattice_grid_order(lattice: &vclay_lattice::Lattice) -> Option<Vec<u32>> {
+    use vclay_lattice::{EdgeId, FaceId};
+    let edges: Vec<[u32; 2]> = (0..lattice.num_edges())
+        .map(|e| lattice.edge_vertices(EdgeId::new(e)).map(|v| v.0))
+        .collect();
+    let mut offsets = Vec::with_capacity(lattice.num_faces() + 1);
+    offsets.push(0u32);
+    let mut verts = Vec::with_capacity(4 * lattice.num_faces());
+    for f in 0..lattice.num_faces() {
+        verts.extend(lattice.face_vertices(FaceId::new(f)).iter().map(|v| v.0));
+        offsets.push(u32::try_from(verts.len()).ok()?);
+    }
+    grid::label(&edges, &offsets, &verts, lattice.num_points()).map(|(_, order)| order)
+}
 
 /// Edge springs and virtual springs of a data lattice (or of its active part).
 ///
@@ -66,6 +88,9 @@ pub struct SpringSet {
     /// read by the force kernel instead of the `f64` arrays (built by
     /// [`SpringSet::organize`] for large sets, [`SpringSet::INDEX_SPRINGS`]).
     pub(crate) index: Option<Box<SpringIndex>>,
+    /// The springs in the order of a structured grid, when the set is exactly a grid's edges
+    /// and quads (built by [`SpringSet::organize`]; [`grid`] module docs).
+    pub(crate) grid: Option<Box<GridSprings>>,
 }
 
 /// The rest lengths and stiffnesses of a spring set as `u8` indices into tables of their
@@ -219,6 +244,7 @@ pub(crate) struct Part {
 #[derive(Clone, Debug, Default)]
 pub struct ForceWorkspace {
     bufs: Vec<Vec<Vec3>>,
+    grid: GridWorkspace,
 }
 
 #[inline]
@@ -310,6 +336,11 @@ impl SpringSet {
         if self.index.is_some() {
             self.index = SpringIndex::new(self).map(Box::new);
         }
+        if let Some(mut grid) = self.grid.take()
+            && grid.set_params(self)
+        {
+            self.grid = Some(grid);
+        }
     }
 
     /// The subset of springs that touch a point with `keep[i]` (journal section 5.2: springs
@@ -391,7 +422,26 @@ impl SpringSet {
             .map(|p| p.points.clone())
             .collect();
         self.index = None;
-        if self.len() >= Self::INDEX_SPRINGS {
+        self.grid = GridSprings::new(self, n).map(Box::new);
+        // The grid kernel reads its own copy of the parameters.
+        if self.grid.is_none() && self.len() >= Self::INDEX_SPRINGS {
+            self.index_parameters();
+        }
+    }
+
+    /// The points along x, y and z of the grid whose edges and quads this set's springs
+    /// are, when [`SpringSet::organize`] found one (`None` otherwise): then
+    /// [`SpringSet::add_forces`] and [`SpringSet::set_forces`] run the structured-grid kernel.
+    pub fn grid_dims(&self) -> Option<[usize; 3]> {
+        self.grid.as_ref().map(|g| g.dims())
+    }
+
+    /// Drops the grid form, so that the general kernel runs (for comparisons; the parameter
+    /// index of a large set is built as [`SpringSet::organize`] builds it for a set that is
+    /// not a grid).
+    pub fn drop_grid(&mut self) {
+        if self.grid.take().is_some() && !self.parts.is_empty() && self.len() >= Self::INDEX_SPRINGS
+        {
             self.index_parameters();
         }
     }
@@ -415,6 +465,7 @@ impl SpringSet {
                 .index
                 .as_ref()
                 .map_or(0, |ix| 2 * (ix.edge.len() + ix.corner.len()) + 4 * 256 * 8)
+            + self.grid.as_ref().map_or(0, |g| g.bytes())
     }
 
     /// The point blocks of a set [organized](SpringSet::organize) for `n` points (`None`
@@ -525,14 +576,20 @@ impl SpringSet {
         par: Parallelism,
         overwrite: bool,
     ) -> f64 {
-        let organized = self.parts.len() > 2
-            && self.parts[self.parts.len() - 2].points.end == f.len()
-            && d.len() == f.len();
         let threads = if par.is_parallel_from(self.len(), Self::PARALLEL_SPRINGS) {
             rayon::current_num_threads().max(1)
         } else {
             1
         };
+        if let Some(grid) = &self.grid
+            && d.len() == grid.len()
+            && f.len() == grid.len()
+        {
+            return grid.forces(d, f, &mut ws.grid, threads, overwrite);
+        }
+        let organized = self.parts.len() > 2
+            && self.parts[self.parts.len() - 2].points.end == f.len()
+            && d.len() == f.len();
         if threads == 1 {
             if overwrite {
                 f.fill(Vec3::zeros());
@@ -975,5 +1032,40 @@ mod tests {
         }
         assert!(!set.index_parameters());
         assert!(set.index.is_none());
+    }
+
+    /// The largest difference between the forces of the grid kernel and of the general
+    /// kernel, relative to the largest force, and the energies' relative difference.
+    fn grid_vs_general(set: &SpringSet, d: &[Vec3], par: Parallelism) -> (f64, f64) {
+        assert!(set.grid.is_some(), "a grid");
+        let mut general = set.clone();
+        general.drop_grid();
+        let (fg, eg) = forces(set, d, par);
+        let (fs, es) = forces(&general, d, par);
+        let scale = fs.iter().map(|x| x.amax()).fold(0.0, f64::max);
+        let df = fg
+            .iter()
+            .zip(&fs)
+            .map(|(a, b)| (a - b).amax())
+            .fold(0.0, f64::max);
+        let (eg, es) = (f64::from_bits(eg), f64::from_bits(es));
+        (df / scale, (eg - es).abs() / es.abs())
+    }
+
+    #[test]
+    fn grid_kernel_agrees_with_the_general_kernel() {
+        for level in [1, 2, 3] {
+            let mut s = benchmarks::cube(level, SolidParams::default()).unwrap();
+            benchmarks::pull(&mut s).unwrap();
+            let d = s.data_points().to_vec();
+            let set = s.springs();
+            let n = [4, 7, 13, 25][level];
+            assert_eq!(set.grid_dims(), Some([n, n, n]));
+            for par in [Parallelism::Sequential, Parallelism::Rayon] {
+                let (df, de) = grid_vs_general(set, &d, par);
+                eprintln!("level {level} {par:?}: {df:e} {de:e}");
+                assert!(df < 1e-12 && de < 1e-12, "level {level}: {df:e} {de:e}");
+            }
+        }
     }
 }
