@@ -973,7 +973,9 @@ mod tests {
             let mut s = benchmarks::cube(level, SolidParams::default()).unwrap();
             benchmarks::pull(&mut s).unwrap();
             let d = s.data_points().to_vec();
-            let plain = s.springs().clone();
+            // The general kernel (a box's set is a grid, whose kernel has its own copy).
+            let mut plain = s.springs().clone();
+            plain.drop_grid();
             assert!(plain.index.is_none(), "small sets read the f64 arrays");
             let mut indexed = plain.clone();
             assert!(indexed.index_parameters());
@@ -1066,6 +1068,172 @@ mod tests {
                 eprintln!("level {level} {par:?}: {df:e} {de:e}");
                 assert!(df < 1e-12 && de < 1e-12, "level {level}: {df:e} {de:e}");
             }
+        }
+    }
+
+    /// A solid on a subdivided box of `n` control points, `levels` levels.
+    fn boxed(n: [usize; 3], levels: usize) -> crate::DynamicSolid {
+        let control = vclay_lattice::primitives::box_lattice(n, Vec3::zeros(), Vec3::repeat(1.0));
+        let (source, p) =
+            crate::SolidSource::subdivision(control, vclay_lattice::BoundaryRule::Sharp, levels);
+        crate::DynamicSolid::new(
+            source,
+            p,
+            crate::Material::default(),
+            SolidParams::default(),
+        )
+        .unwrap()
+    }
+
+    /// `d` moved by a seeded pseudo-random amount of up to `amp` per coordinate.
+    fn perturbed(d: &[Vec3], amp: f64, seed: u64) -> Vec<Vec3> {
+        let mut x = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+        let mut next = || {
+            // xorshift64
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        d.iter()
+            .map(|p| p + Vec3::new(next(), next(), next()) * amp)
+            .collect()
+    }
+
+    #[test]
+    fn grid_kernel_agrees_on_perturbed_boxes_and_after_a_plastic_reset() {
+        // Odd and even grid sizes, cubic and not: (control points, levels) -> grid points.
+        for (n, levels, dims) in [
+            ([4, 4, 4], 1, [7, 7, 7]),
+            ([4, 4, 4], 3, [25, 25, 25]),
+            ([3, 5, 4], 2, [17, 13, 9]),
+            ([4, 6, 5], 0, [6, 5, 4]),
+        ] {
+            let s = boxed(n, levels);
+            let mut set = s.springs().clone();
+            assert_eq!(set.grid_dims(), Some(dims), "{n:?} level {levels}");
+            let d0 = s.data_points().to_vec();
+            let d = perturbed(&d0, 0.02 / (1 << levels) as f64, 7);
+            for par in [Parallelism::Sequential, Parallelism::Rayon] {
+                let (df, de) = grid_vs_general(&set, &d, par);
+                assert!(df < 1e-12 && de < 1e-12, "{n:?} {levels}: {df:e} {de:e}");
+            }
+            // The returned energy is `energy()`'s.
+            let (_, e) = forces(&set, &d, Parallelism::Sequential);
+            let e2 = set.energy(&d);
+            assert!(
+                (f64::from_bits(e) - e2).abs() <= 1e-12 * e2,
+                "{n:?} {levels}"
+            );
+            // A plastic reset rewrites every rest length; the grid copy follows.
+            set.reset_rest(&d);
+            assert!(set.grid.is_some());
+            let moved = perturbed(&d, 0.01 / (1 << levels) as f64, 11);
+            let (df, de) = grid_vs_general(&set, &moved, Parallelism::Sequential);
+            assert!(
+                df < 1e-12 && de < 1e-12,
+                "{n:?} {levels} reset: {df:e} {de:e}"
+            );
+            let (f, e) = forces(&set, &d, Parallelism::Sequential);
+            assert_eq!(e, 0.0f64.to_bits(), "at the reset shape: no energy");
+            assert!(f.iter().all(|x| x.amax() < 1e-12));
+        }
+    }
+
+    #[test]
+    fn grid_kernel_gives_the_same_bits_on_any_number_of_threads() {
+        let s = boxed([4, 4, 4], 3);
+        let set = s.springs();
+        let d = perturbed(s.data_points(), 0.002, 3);
+        let (f1, e1) = forces(set, &d, Parallelism::Sequential);
+        for threads in [2, 3, 5] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let (f, e) = pool.install(|| forces(set, &d, Parallelism::Rayon));
+            assert_eq!(bits(&f), bits(&f1), "{threads} threads");
+            assert_eq!(e, e1);
+            // add_forces adds the same values.
+            let mut g = vec![Vec3::new(1.0, 2.0, 3.0); d.len()];
+            let mut h = g.clone();
+            let mut ws = ForceWorkspace::default();
+            pool.install(|| set.add_forces(&d, &mut g, &mut ws, Parallelism::Rayon));
+            set.add_forces(&d, &mut h, &mut ws, Parallelism::Sequential);
+            assert_eq!(bits(&g), bits(&h));
+            let f_plus: Vec<Vec3> = f1.iter().map(|x| x + Vec3::new(1.0, 2.0, 3.0)).collect();
+            assert_eq!(bits(&g), bits(&f_plus));
+        }
+    }
+
+    #[test]
+    fn sets_that_are_not_grids_keep_the_general_kernel() {
+        // A torus and a gear (other topologies), a set filtered to part of the points (fixed
+        // regions), and a grid's set with one quad removed.
+        for control in [
+            vclay_lattice::primitives::paper_torus(0.25, 0.5, 0.25),
+            vclay_lattice::primitives::gear(0.25, 0.5, 0.65, 0.25),
+        ] {
+            let (source, p) =
+                crate::SolidSource::subdivision(control, vclay_lattice::BoundaryRule::Sharp, 1);
+            let s = crate::DynamicSolid::new(
+                source,
+                p,
+                crate::Material::default(),
+                SolidParams::default(),
+            )
+            .unwrap();
+            assert_eq!(s.springs().grid_dims(), None);
+        }
+        let s = boxed([4, 4, 4], 2);
+        let n = s.data_points().len();
+        let keep: Vec<bool> = s.data_points().iter().map(|p| p.z > 0.5).collect();
+        let mut part = s.springs().filter(&keep);
+        part.organize(n, 2);
+        assert_eq!(part.grid_dims(), None);
+        let mut holed = s.springs().clone();
+        let last = holed.num_faces() - 1;
+        let mut cut = holed.select(0..holed.edges.len(), 0..last);
+        cut.organize(n, 2);
+        assert_eq!(cut.grid_dims(), None);
+        holed.organize(n, 2);
+        assert_eq!(holed.grid_dims(), Some([13, 13, 13]));
+    }
+
+    #[test]
+    fn grid_kernel_on_points_not_numbered_in_grid_order() {
+        // The same box with its points renumbered by a seeded shuffle: the grid is found
+        // through the permutation, and the forces still agree.
+        let s = boxed([3, 5, 4], 2);
+        let n = s.data_points().len();
+        let mut perm: Vec<u32> = (0..n as u32).collect();
+        let mut x = 12345u64;
+        for i in (1..n).rev() {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            perm.swap(i, (x % (i as u64 + 1)) as usize);
+        }
+        let set = s.springs();
+        let mut moved = set.select(0..set.edges.len(), 0..set.num_faces());
+        for v in moved
+            .edges
+            .iter_mut()
+            .flatten()
+            .chain(&mut moved.face_verts)
+        {
+            *v = perm[*v as usize];
+        }
+        moved.organize(n, 2);
+        assert_eq!(moved.grid_dims(), Some([17, 13, 9]));
+        let d0 = perturbed(s.data_points(), 0.004, 5);
+        let mut d = vec![Vec3::zeros(); n];
+        for (i, &p) in perm.iter().enumerate() {
+            d[p as usize] = d0[i];
+        }
+        for par in [Parallelism::Sequential, Parallelism::Rayon] {
+            let (df, de) = grid_vs_general(&moved, &d, par);
+            assert!(df < 1e-12 && de < 1e-12, "{par:?}: {df:e} {de:e}");
         }
     }
 }

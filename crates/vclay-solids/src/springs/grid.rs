@@ -99,12 +99,13 @@ impl Stored {
 pub(crate) struct GridSprings {
     /// Points along x, y, z (x the longest axis).
     dims: [usize; 3],
-    /// The point id at each grid index `i + nx (j + ny k)`.
+    /// Number of points.
+    n: usize,
+    /// The point id at each grid index `i + nx (j + ny k)`; empty when that is the identity
+    /// (the points are numbered in grid order, as [`crate::model`] numbers a grid's).
     points: Vec<u32>,
-    /// The grid index of each point id (the inverse of `points`).
+    /// The grid index of each point id (the inverse of `points`; empty with it).
     index: Vec<u32>,
-    /// Whether `points` is the identity (the points are numbered in grid order).
-    identity: bool,
     /// Edge rest lengths at slot `axis * N + g` (`g` the edge's lower end).
     edge_rest: Stored,
     /// Edge stiffnesses, as `edge_rest`.
@@ -159,11 +160,16 @@ impl GridSprings {
             index[p as usize] = g as u32;
         }
         let identity = points.iter().enumerate().all(|(g, &p)| p as usize == g);
+        let (points, index) = if identity {
+            (Vec::new(), Vec::new())
+        } else {
+            (points, index)
+        };
         let mut grid = GridSprings {
             dims,
+            n,
             points,
             index,
-            identity,
             edge_rest: Stored::Full(Vec::new()),
             edge_k: Stored::Full(Vec::new()),
             corner_rest: Stored::Full(Vec::new()),
@@ -179,12 +185,12 @@ impl GridSprings {
 
     /// Number of points.
     pub(crate) fn len(&self) -> usize {
-        self.points.len()
+        self.n
     }
 
     /// Bytes held (point maps and parameters).
     pub(crate) fn bytes(&self) -> usize {
-        8 * self.points.len()
+        4 * (self.points.len() + self.index.len())
             + self.edge_rest.bytes()
             + self.edge_k.bytes()
             + self.corner_rest.bytes()
@@ -198,7 +204,7 @@ impl GridSprings {
         let Some((es, cs)) = self.slots(set) else {
             return false;
         };
-        let n = self.points.len();
+        let n = self.n;
         let bytes = set.len() >= SpringSet::INDEX_SPRINGS;
         self.edge_rest = Stored::new(&set.edge_rest, &es, 3 * n, bytes);
         self.edge_k = Stored::new(&set.edge_k, &es, 3 * n, bytes);
@@ -211,7 +217,7 @@ impl GridSprings {
     /// element of the grid, two are the same, or the counts are not the grid's.
     fn slots(&self, set: &SpringSet) -> Option<(Vec<u32>, Vec<u32>)> {
         let [nx, ny, nz] = self.dims;
-        let n = self.points.len();
+        let n = self.n;
         let nf = set.num_faces();
         let edges = (nx - 1) * ny * nz + nx * (ny - 1) * nz + nx * ny * (nz - 1);
         let faces = (nx - 1) * (ny - 1) * nz + (nx - 1) * ny * (nz - 1) + nx * (ny - 1) * (nz - 1);
@@ -219,7 +225,16 @@ impl GridSprings {
             return None;
         }
         let coord = |p: u32| -> Option<[usize; 3]> {
-            let g = *self.index.get(p as usize)? as usize;
+            let g = if self.points.is_empty() {
+                (p as usize) < n
+            } else {
+                (p as usize) < self.index.len()
+            }
+            .then(|| {
+                self.index
+                    .get(p as usize)
+                    .map_or(p as usize, |&g| g as usize)
+            })?;
             Some([g % nx, (g / nx) % ny, g / (nx * ny)])
         };
         let at = |c: [usize; 3]| c[0] + nx * (c[1] + ny * c[2]);
@@ -300,7 +315,7 @@ impl GridSprings {
         // [`crate::model`] are), else into `ws.fg`, from which `f` is then filled in point
         // order (scattered reads: writing `f` plane by plane through the permutation, scattered
         // stores, took 30 % of the pass on a Cuthill-McKee numbering).
-        let direct = self.identity;
+        let direct = self.points.is_empty();
         let GridWorkspace {
             threads: scratch,
             energy,
@@ -309,7 +324,7 @@ impl GridSprings {
         let dest: &mut [Vec3] = if direct {
             &mut *f
         } else {
-            fg.resize(self.points.len(), Vec3::zeros());
+            fg.resize(self.n, Vec3::zeros());
             &mut fg[..]
         };
         let mode = if direct { overwrite } else { true };
@@ -407,7 +422,7 @@ impl GridSprings {
     ) {
         let [nx, ny, nz] = self.dims;
         let plane = nx * ny;
-        let n = self.points.len();
+        let n = self.n;
         s.prepare(plane, nx);
         let k0 = ks.start;
         self.gather(d, k0, &mut s.d0);
@@ -499,14 +514,22 @@ impl GridSprings {
     #[inline(always)]
     fn gather(&self, d: &[Vec3], k: usize, out: &mut [Vec<f64>; 3]) {
         let plane = self.dims[0] * self.dims[1];
-        let ids = &self.points[k * plane..(k + 1) * plane];
         let [x, y, z] = out;
         let (x, y, z) = (&mut x[..plane], &mut y[..plane], &mut z[..plane]);
-        for (g, &p) in ids.iter().enumerate() {
-            let q = d[p as usize];
-            x[g] = q.x;
-            y[g] = q.y;
-            z[g] = q.z;
+        if self.points.is_empty() {
+            for (g, q) in d[k * plane..(k + 1) * plane].iter().enumerate() {
+                x[g] = q.x;
+                y[g] = q.y;
+                z[g] = q.z;
+            }
+        } else {
+            let ids = &self.points[k * plane..(k + 1) * plane];
+            for (g, &p) in ids.iter().enumerate() {
+                let q = d[p as usize];
+                x[g] = q.x;
+                y[g] = q.y;
+                z[g] = q.z;
+            }
         }
     }
 
@@ -561,7 +584,7 @@ impl GridSprings {
         rows: &mut Rows,
         acc: &mut S::f64s,
     ) {
-        let n = self.points.len();
+        let n = self.n;
         let Rows { a, pr, pk, .. } = rows;
         let [pr0, pr1, pr2, pr3] = pr.each_mut();
         let [pk0, pk1, pk2, pk3] = pk.each_mut();
