@@ -31,31 +31,23 @@
 //! values (a subdivided lattice has a few hundred at most), which are the stored `f64` values
 //! bit for bit: 10 instead of 24 bytes per edge spring and 6 instead of 20 per virtual spring
 //! stream through the pass (issue 31, `docs/performance.md` "Solid step memory traffic").
+//!
+//! When the springs are exactly the edges and quads of an `nx x ny x nz` grid (every
+//! subdivided box; found combinatorially by [`SpringSet::organize`]), [`SpringSet::add_forces`]
+//! and [`SpringSet::set_forces`] run the structured-grid kernel of the `springs/grid.rs` module instead:
+//! the z-planes of `d` as coordinate rows, each kind of spring along a row one unit-stride
+//! vector, the forces added row by row, threads over ranges of planes. It sums each point's
+//! terms in another order than the general kernel (agreement to rounding, about `1e-16`
+//! relative; the same bits for any number of threads). The phased program's
+//! `SpringSet::block_forces` and `SpringSet::straddle_forces`, the stiffness product and
+//! [`SpringSet::energy`] keep the general code. `docs/performance.md` "Structured-grid spring
+//! kernel".
 
 mod grid;
 
 use grid::{GridSprings, GridWorkspace};
 use rayon::prelude::*;
 use vclay_core::{Parallelism, Vec3};
-
-/// The points of `lattice` in the order of a structured grid (`i + nx (j + ny k)`, x the
-/// longest axis; [`grid`] module docs) when its edges and faces are exactly those of an
-/// `nx x ny x nz` grid, else `None`: the data-point numbering under which the grid spring kernel
-/// reads and writes the point arrays in order ([`crate::model`]).
-pub(crate) fn lattice_grid_order(lattice: &vclay_lattice::Lattice) -> Option<Vec<u32>> {
-    use vclay_lattice::{EdgeId, FaceId};
-    let edges: Vec<[u32; 2]> = (0..lattice.num_edges())
-        .map(|e| lattice.edge_vertices(EdgeId::new(e)).map(|v| v.0))
-        .collect();
-    let mut offsets = Vec::with_capacity(lattice.num_faces() + 1);
-    offsets.push(0u32);
-    let mut verts = Vec::with_capacity(4 * lattice.num_faces());
-    for f in 0..lattice.num_faces() {
-        verts.extend(lattice.face_vertices(FaceId::new(f)).iter().map(|v| v.0));
-        offsets.push(u32::try_from(verts.len()).ok()?);
-    }
-    grid::label(&edges, &offsets, &verts, lattice.num_points()).map(|(_, order)| order)
-}
 
 /// Edge springs and virtual springs of a data lattice (or of its active part).
 ///
@@ -271,6 +263,22 @@ impl SpringSet {
     /// Smaller sets run from cache, where the table lookups would only add work.
     pub const INDEX_SPRINGS: usize = 500_000;
 
+    /// [`SpringSet::organize`] looks for a structured grid (and then the force passes run the
+    /// grid kernel) in sets of at least this many springs: below it the set runs from cache
+    /// and the two kernels take about the same time (level 2, 28,548 springs: 0.103 ms
+    /// either way), and the small models keep the general kernel's bits, which the session
+    /// layer's stored runs record (`vclay-session/tests`).
+    pub const GRID_SPRINGS: usize = 500_000;
+
+    /// [`SpringSet::organize`] looks for a structured grid only on up to this many points:
+    /// the data points of a subdivided box are numbered by
+    /// [`vclay_lattice::Lattice::locality_order`] (diagonal fronts), so the grid kernel reads
+    /// `d` and fills `f` through a permutation, and beyond the caches these scattered accesses
+    /// cost more than the kernel saves (13 % faster than the general kernel at level 4, 117,649
+    /// points; 5 % slower at level 5, 912,673; `docs/performance.md` "Structured-grid spring
+    /// kernel").
+    pub const GRID_POINTS: usize = 1 << 18;
+
     /// Number of faces.
     pub fn num_faces(&self) -> usize {
         self.face_offsets.len().saturating_sub(1)
@@ -422,7 +430,9 @@ impl SpringSet {
             .map(|p| p.points.clone())
             .collect();
         self.index = None;
-        self.grid = GridSprings::new(self, n).map(Box::new);
+        self.grid = (self.len() >= Self::GRID_SPRINGS && n <= Self::GRID_POINTS)
+            .then(|| GridSprings::new(self, n).map(Box::new))
+            .flatten();
         // The grid kernel reads its own copy of the parameters.
         if self.grid.is_none() && self.len() >= Self::INDEX_SPRINGS {
             self.index_parameters();
@@ -434,6 +444,14 @@ impl SpringSet {
     /// [`SpringSet::add_forces`] and [`SpringSet::set_forces`] run the structured-grid kernel.
     pub fn grid_dims(&self) -> Option<[usize; 3]> {
         self.grid.as_ref().map(|g| g.dims())
+    }
+
+    /// Looks for a structured grid over points `0..n` whatever the set's size
+    /// ([`SpringSet::GRID_SPRINGS`], [`SpringSet::GRID_POINTS`]), so that the force passes run
+    /// the grid kernel if one is found (for comparisons and tests); returns whether one was.
+    pub fn use_grid_kernel(&mut self, n: usize) -> bool {
+        self.grid = GridSprings::new(self, n).map(Box::new);
+        self.grid.is_some()
     }
 
     /// Drops the grid form, so that the general kernel runs (for comparisons; the parameter
@@ -1060,7 +1078,9 @@ mod tests {
             let mut s = benchmarks::cube(level, SolidParams::default()).unwrap();
             benchmarks::pull(&mut s).unwrap();
             let d = s.data_points().to_vec();
-            let set = s.springs();
+            let mut set = s.springs().clone();
+            assert!(set.use_grid_kernel(d.len()));
+            let set = &set;
             let n = [4, 7, 13, 25][level];
             assert_eq!(set.grid_dims(), Some([n, n, n]));
             for par in [Parallelism::Sequential, Parallelism::Rayon] {
@@ -1111,6 +1131,8 @@ mod tests {
         ] {
             let s = boxed(n, levels);
             let mut set = s.springs().clone();
+            assert_eq!(set.grid_dims(), None, "a small set: the general kernel");
+            assert!(set.use_grid_kernel(s.data_points().len()));
             assert_eq!(set.grid_dims(), Some(dims), "{n:?} level {levels}");
             let d0 = s.data_points().to_vec();
             let d = perturbed(&d0, 0.02 / (1 << levels) as f64, 7);
@@ -1143,7 +1165,9 @@ mod tests {
     #[test]
     fn grid_kernel_gives_the_same_bits_on_any_number_of_threads() {
         let s = boxed([4, 4, 4], 3);
-        let set = s.springs();
+        let mut set = s.springs().clone();
+        assert!(set.use_grid_kernel(s.data_points().len()));
+        let set = &set;
         let d = perturbed(s.data_points(), 0.002, 3);
         let (f1, e1) = forces(set, &d, Parallelism::Sequential);
         for threads in [2, 3, 5] {
@@ -1152,7 +1176,7 @@ mod tests {
                 .build()
                 .unwrap();
             let (f, e) = pool.install(|| forces(set, &d, Parallelism::Rayon));
-            assert_eq!(bits(&f), bits(&f1), "{threads} threads");
+            assert!(bits(&f) == bits(&f1), "{threads} threads");
             assert_eq!(e, e1);
             // add_forces adds the same values.
             let mut g = vec![Vec3::new(1.0, 2.0, 3.0); d.len()];
@@ -1160,9 +1184,9 @@ mod tests {
             let mut ws = ForceWorkspace::default();
             pool.install(|| set.add_forces(&d, &mut g, &mut ws, Parallelism::Rayon));
             set.add_forces(&d, &mut h, &mut ws, Parallelism::Sequential);
-            assert_eq!(bits(&g), bits(&h));
+            assert!(bits(&g) == bits(&h));
             let f_plus: Vec<Vec3> = f1.iter().map(|x| x + Vec3::new(1.0, 2.0, 3.0)).collect();
-            assert_eq!(bits(&g), bits(&f_plus));
+            assert!(bits(&g) == bits(&f_plus));
         }
     }
 
@@ -1183,21 +1207,25 @@ mod tests {
                 SolidParams::default(),
             )
             .unwrap();
-            assert_eq!(s.springs().grid_dims(), None);
+            let mut set = s.springs().clone();
+            assert!(!set.use_grid_kernel(s.data_points().len()));
         }
         let s = boxed([4, 4, 4], 2);
         let n = s.data_points().len();
         let keep: Vec<bool> = s.data_points().iter().map(|p| p.z > 0.5).collect();
         let mut part = s.springs().filter(&keep);
         part.organize(n, 2);
-        assert_eq!(part.grid_dims(), None);
-        let mut holed = s.springs().clone();
-        let last = holed.num_faces() - 1;
-        let mut cut = holed.select(0..holed.edges.len(), 0..last);
+        assert!(!part.use_grid_kernel(n));
+        let mut whole = s.springs().clone();
+        let last = whole.num_faces() - 1;
+        let mut cut = whole.select(0..whole.edges.len(), 0..last);
         cut.organize(n, 2);
-        assert_eq!(cut.grid_dims(), None);
-        holed.organize(n, 2);
-        assert_eq!(holed.grid_dims(), Some([13, 13, 13]));
+        assert!(!cut.use_grid_kernel(n));
+        let mut cut = whole.select(1..whole.edges.len(), 0..whole.num_faces());
+        cut.organize(n, 2);
+        assert!(!cut.use_grid_kernel(n));
+        assert!(whole.use_grid_kernel(n));
+        assert_eq!(whole.grid_dims(), Some([13, 13, 13]));
     }
 
     #[test]
@@ -1225,6 +1253,7 @@ mod tests {
             *v = perm[*v as usize];
         }
         moved.organize(n, 2);
+        assert!(moved.use_grid_kernel(n));
         assert_eq!(moved.grid_dims(), Some([17, 13, 9]));
         let d0 = perturbed(s.data_points(), 0.004, 5);
         let mut d = vec![Vec3::zeros(); n];
