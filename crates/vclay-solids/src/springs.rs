@@ -33,8 +33,10 @@
 //! stream through the pass (issue 31, `docs/performance.md` "Solid step memory traffic").
 //!
 //! When the springs are exactly the edges and quads of an `nx x ny x nz` grid (every
-//! subdivided box; found combinatorially by [`SpringSet::organize`]), [`SpringSet::add_forces`]
-//! and [`SpringSet::set_forces`] run the structured-grid kernel of the `springs/grid.rs` module instead:
+//! subdivided box; found combinatorially by [`SpringSet::organize`] for sets of
+//! [`SpringSet::GRID_SPRINGS`] springs on at most [`SpringSet::GRID_POINTS`] points, or by
+//! [`SpringSet::use_grid_kernel`]), [`SpringSet::add_forces`] and [`SpringSet::set_forces`]
+//! run the structured-grid kernel of the `springs/grid.rs` module instead:
 //! the z-planes of `d` as coordinate rows, each kind of spring along a row one unit-stride
 //! vector, the forces added row by row, threads over ranges of planes. It sums each point's
 //! terms in another order than the general kernel (agreement to rounding, about `1e-16`
@@ -264,19 +266,21 @@ impl SpringSet {
     pub const INDEX_SPRINGS: usize = 500_000;
 
     /// [`SpringSet::organize`] looks for a structured grid (and then the force passes run the
-    /// grid kernel) in sets of at least this many springs: below it the set runs from cache
-    /// and the two kernels take about the same time (level 2, 28,548 springs: 0.103 ms
-    /// either way), and the small models keep the general kernel's bits, which the session
-    /// layer's stored runs record (`vclay-session/tests`).
+    /// grid kernel) in sets of at least this many springs. Below it the steps of the
+    /// benchmark cubes (levels 2 and 3) run the phased program, which calls the general
+    /// kernel per block, so the grid copy would only cost memory (level 3: 770 -> 1,018 bytes
+    /// per data point); at level 2 the two kernels take the same time (0.103 ms); and the
+    /// small models keep the general kernel's bits, which the session layer's stored runs
+    /// record (`vclay-session/tests`).
     pub const GRID_SPRINGS: usize = 500_000;
 
     /// [`SpringSet::organize`] looks for a structured grid only on up to this many points:
     /// the data points of a subdivided box are numbered by
     /// [`vclay_lattice::Lattice::locality_order`] (diagonal fronts), so the grid kernel reads
     /// `d` and fills `f` through a permutation, and beyond the caches these scattered accesses
-    /// cost more than the kernel saves (13 % faster than the general kernel at level 4, 117,649
-    /// points; 5 % slower at level 5, 912,673; `docs/performance.md` "Structured-grid spring
-    /// kernel").
+    /// cost more than the kernel saves (the spring pass 7-14 % faster than the general kernel's
+    /// at level 4, 117,649 points; 5 % slower at level 5, 912,673; `docs/performance.md`
+    /// "Structured-grid spring kernel").
     pub const GRID_POINTS: usize = 1 << 18;
 
     /// Number of faces.
@@ -369,6 +373,8 @@ impl SpringSet {
     /// copies), and the straddling part after them. Pays off when the point ids are numbered for
     /// locality (the data lattices of [`crate::model`] are, by
     /// [`vclay_lattice::Lattice::locality_order`]). The forces do not depend on the order.
+    /// Large sets that are exactly a grid's edges and quads also get the structured-grid
+    /// kernel ([`SpringSet::GRID_SPRINGS`], [`SpringSet::GRID_POINTS`]; module docs).
     pub fn organize(&mut self, n: usize, blocks: usize) {
         let blocks = blocks.max(1);
         let block = |v: u32| (v as usize * blocks / n.max(1)).min(blocks - 1);

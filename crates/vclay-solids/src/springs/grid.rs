@@ -12,9 +12,10 @@
 //! structure-of-arrays copy of two z-planes of `d`, and their forces added into the planes'
 //! force rows with vector adds. Instead of about fifteen scalar gathers of `d` and
 //! read-modify-write scatters into `f` per point (the general kernel, 80 % of its time in
-//! session h50's measurements), a point is read once from `d` and written once to `f`, in
-//! order when the points are numbered in grid order ([`crate::model`] numbers a grid's data
-//! points so), through the permutation otherwise.
+//! session h50's measurements), a point is read once from `d` and written once to `f`: in
+//! order when the points are numbered in grid order, else through the permutation (the data
+//! points of [`crate::model`] keep their Cuthill-McKee numbering, which saved sessions store;
+//! hence [`SpringSet::GRID_POINTS`]).
 //!
 //! # How
 //! [`GridSprings::new`] labels the points combinatorially ([`label`]; no coordinates): a
