@@ -256,9 +256,9 @@ impl GridSprings {
         let mut es = Vec::with_capacity(edges);
         for &[a, b] in &set.edges {
             let (ca, cb) = (coord(a)?, coord(b)?);
-            let diff: Vec<usize> = (0..3).filter(|&x| ca[x] != cb[x]).collect();
-            let [axis] = diff[..] else { return None };
-            if ca[axis].abs_diff(cb[axis]) != 1 {
+            // Exactly one coordinate differs, by one.
+            let axis = (0..3).find(|&x| ca[x] != cb[x])?;
+            if ca[axis].abs_diff(cb[axis]) != 1 || (0..3).any(|x| x != axis && ca[x] != cb[x]) {
                 return None;
             }
             let s = axis * n + at(ca).min(at(cb));
