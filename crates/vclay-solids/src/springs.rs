@@ -51,6 +51,27 @@ use grid::{GridSprings, GridWorkspace};
 use rayon::prelude::*;
 use vclay_core::{Parallelism, Vec3};
 
+/// The points along each axis and the points of `lattice` in the order of a structured grid
+/// (`i + nx (j + ny k)`, x the longest axis; `springs/grid.rs` module docs) when its edges and faces are exactly those of
+/// an `nx x ny x nz` grid, else `None`: the data-point numbering under which the grid spring
+/// kernel reads and writes the point arrays in order ([`crate::DataNumbering::Grid`]).
+pub(crate) fn lattice_grid_order(
+    lattice: &vclay_lattice::Lattice,
+) -> Option<([usize; 3], Vec<u32>)> {
+    use vclay_lattice::{EdgeId, FaceId};
+    let edges: Vec<[u32; 2]> = (0..lattice.num_edges())
+        .map(|e| lattice.edge_vertices(EdgeId::new(e)).map(|v| v.0))
+        .collect();
+    let mut offsets = Vec::with_capacity(lattice.num_faces() + 1);
+    offsets.push(0u32);
+    let mut verts = Vec::with_capacity(4 * lattice.num_faces());
+    for f in 0..lattice.num_faces() {
+        verts.extend(lattice.face_vertices(FaceId::new(f)).iter().map(|v| v.0));
+        offsets.push(u32::try_from(verts.len()).ok()?);
+    }
+    grid::label(&edges, &offsets, &verts, lattice.num_points())
+}
+
 /// Edge springs and virtual springs of a data lattice (or of its active part).
 ///
 /// The parameter arrays are public; after [`SpringSet::organize`] change them only through
@@ -274,13 +295,14 @@ impl SpringSet {
     /// record (`vclay-session/tests`).
     pub const GRID_SPRINGS: usize = 500_000;
 
-    /// [`SpringSet::organize`] looks for a structured grid only on up to this many points:
-    /// the data points of a subdivided box are numbered by
-    /// [`vclay_lattice::Lattice::locality_order`] (diagonal fronts), so the grid kernel reads
-    /// `d` and fills `f` through a permutation, and beyond the caches these scattered accesses
-    /// cost more than the kernel saves (the spring pass 7-14 % faster than the general kernel's
-    /// at level 4, 117,649 points; 5 % slower at level 5, 912,673; `docs/performance.md`
-    /// "Structured-grid spring kernel").
+    /// [`SpringSet::organize`] keeps a structured grid whose points are *not* numbered in grid
+    /// order only on up to this many points: then the grid kernel reads `d` and fills `f`
+    /// through a permutation, and beyond the caches these scattered accesses cost more than
+    /// the kernel saves (on the Cuthill-McKee numbering of [`vclay_lattice::Lattice::locality_order`]:
+    /// the spring pass 7-14 % faster than the general kernel's at level 4, 117,649 points; 5 %
+    /// slower at level 5, 912,673; `docs/performance.md` "Structured-grid spring kernel"). A
+    /// grid numbered in grid order (the large box lattices of [`crate::model`],
+    /// [`crate::DataNumbering::Grid`]) is kept at any size.
     pub const GRID_POINTS: usize = 1 << 18;
 
     /// Number of faces.
@@ -436,9 +458,11 @@ impl SpringSet {
             .map(|p| p.points.clone())
             .collect();
         self.index = None;
-        self.grid = (self.len() >= Self::GRID_SPRINGS && n <= Self::GRID_POINTS)
-            .then(|| GridSprings::new(self, n).map(Box::new))
-            .flatten();
+        self.grid = (self.len() >= Self::GRID_SPRINGS)
+            .then(|| GridSprings::new(self, n))
+            .flatten()
+            .filter(|g| n <= Self::GRID_POINTS || g.in_grid_order())
+            .map(Box::new);
         // The grid kernel reads its own copy of the parameters.
         if self.grid.is_none() && self.len() >= Self::INDEX_SPRINGS {
             self.index_parameters();

@@ -196,6 +196,11 @@ impl GridSprings {
         self.dims
     }
 
+    /// Whether the points are numbered in grid order (no point maps).
+    pub(crate) fn in_grid_order(&self) -> bool {
+        self.points.is_empty()
+    }
+
     /// Number of points.
     pub(crate) fn len(&self) -> usize {
         self.n
