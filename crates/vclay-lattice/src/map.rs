@@ -25,7 +25,8 @@ use crate::tensor::{TensorOperator, TensorWorkspace};
 /// request ([`SubdivisionMap::transpose`]), or on the first `A^T` product of a small chain
 /// ([`SubdivisionMap::GATHER_NNZ`]). After [`SubdivisionMap::compress`], the products read
 /// each level's weights as small indices into its distinct values ([`CompactMatrix`]; same
-/// bits, fewer bytes).
+/// bits, fewer bytes). A level given a tensor-product form ([`SubdivisionMap::set_tensor`],
+/// [`TensorOperator`]) is applied one axis at a time instead (issue 31).
 #[derive(Debug, Default)]
 pub struct SubdivisionMap {
     ops: Vec<SparseMatrix>,
@@ -119,9 +120,20 @@ impl SubdivisionMap {
     /// then read instead of the `f64` operators. Same results bit for bit, 5-6 instead of 12
     /// bytes per non-zero per product: meant for large chains, whose products are bound by
     /// memory traffic (issue 31). Levels with more than 65,536 distinct weights stay as they
-    /// are. Costs 5-6 bytes per non-zero of memory.
+    /// are, and levels with a tensor form ([`SubdivisionMap::set_tensor`]) get none. Costs 5-6
+    /// bytes per non-zero of memory.
     pub fn compress(&mut self) {
-        self.compact = self.ops.par_iter().map(CompactMatrix::new).collect();
+        let tensor = &self.tensor;
+        self.compact = self
+            .ops
+            .par_iter()
+            .enumerate()
+            .map(|(j, op)| match tensor.get(j) {
+                // Levels with a tensor form never read their compact form.
+                Some(Some(_)) => None,
+                _ => CompactMatrix::new(op),
+            })
+            .collect();
     }
 
     /// Makes the products ([`SubdivisionMap::apply_into`], [`SubdivisionMap::apply_transpose_into`])
@@ -141,6 +153,9 @@ impl SubdivisionMap {
         );
         self.tensor.resize(self.ops.len(), None);
         self.tensor[j] = Some(t);
+        if let Some(c) = self.compact.get_mut(j) {
+            *c = None;
+        }
     }
 
     /// The tensor-product form of level `j`, if [`SubdivisionMap::set_tensor`] gave one.

@@ -249,15 +249,79 @@ impl TensorOperator {
 }
 
 /// `line = sum_c w_c src_c` over the `(c, w)` of `row`, where `src_c` is line `c` of `input`
-/// (lines of `line.len()` values); zero for an empty row.
+/// (lines of `line.len()` values), summed from zero in the order of `row`; zero for an empty
+/// row. Rows of up to five entries (every row of a subdivision factor and of its transpose)
+/// write each value once.
 #[inline]
 fn line_sum<T: Coord>(row: &[(u32, f64)], input: &[T], line: &mut [T]) {
     let inner = line.len();
-    line.fill(T::zero());
-    for &(c, w) in row {
-        let src = &input[c as usize * inner..(c as usize + 1) * inner];
-        for (d, v) in line.iter_mut().zip(src) {
-            d.add_scaled(w, v);
+    let src = |c: u32| &input[c as usize * inner..(c as usize + 1) * inner];
+    match *row {
+        [(a, wa)] => {
+            for (d, x) in line.iter_mut().zip(src(a)) {
+                let mut v = T::zero();
+                v.add_scaled(wa, x);
+                *d = v;
+            }
+        }
+        [(a, wa), (b, wb)] => {
+            for ((d, x), y) in line.iter_mut().zip(src(a)).zip(src(b)) {
+                let mut v = T::zero();
+                v.add_scaled(wa, x);
+                v.add_scaled(wb, y);
+                *d = v;
+            }
+        }
+        [(a, wa), (b, wb), (c, wc)] => {
+            for (((d, x), y), z) in line.iter_mut().zip(src(a)).zip(src(b)).zip(src(c)) {
+                let mut v = T::zero();
+                v.add_scaled(wa, x);
+                v.add_scaled(wb, y);
+                v.add_scaled(wc, z);
+                *d = v;
+            }
+        }
+        [(a, wa), (b, wb), (c, wc), (e, we)] => {
+            for ((((d, x), y), z), u) in line
+                .iter_mut()
+                .zip(src(a))
+                .zip(src(b))
+                .zip(src(c))
+                .zip(src(e))
+            {
+                let mut v = T::zero();
+                v.add_scaled(wa, x);
+                v.add_scaled(wb, y);
+                v.add_scaled(wc, z);
+                v.add_scaled(we, u);
+                *d = v;
+            }
+        }
+        [(a, wa), (b, wb), (c, wc), (e, we), (g, wg)] => {
+            for (((((d, x), y), z), u), t) in line
+                .iter_mut()
+                .zip(src(a))
+                .zip(src(b))
+                .zip(src(c))
+                .zip(src(e))
+                .zip(src(g))
+            {
+                let mut v = T::zero();
+                v.add_scaled(wa, x);
+                v.add_scaled(wb, y);
+                v.add_scaled(wc, z);
+                v.add_scaled(we, u);
+                v.add_scaled(wg, t);
+                *d = v;
+            }
+        }
+        _ => {
+            line.fill(T::zero());
+            for &(c, w) in row {
+                for (d, v) in line.iter_mut().zip(src(c)) {
+                    d.add_scaled(w, v);
+                }
+            }
         }
     }
 }
