@@ -34,8 +34,9 @@
 //!
 //! When the springs are exactly the edges and quads of an `nx x ny x nz` grid (every
 //! subdivided box; found combinatorially by [`SpringSet::organize`] for sets of
-//! [`SpringSet::GRID_SPRINGS`] springs on at most [`SpringSet::GRID_POINTS`] points, or by
-//! [`SpringSet::use_grid_kernel`]), [`SpringSet::add_forces`] and [`SpringSet::set_forces`]
+//! [`SpringSet::GRID_SPRINGS`] springs whose points are numbered in grid order (the boxes of
+//! [`crate::model::GRID_NUMBERING_POINTS`] points and more: level 4 of the 4^3 cube and finer)
+//! or number at most [`SpringSet::GRID_POINTS`], or by [`SpringSet::use_grid_kernel`]), [`SpringSet::add_forces`] and [`SpringSet::set_forces`]
 //! run the structured-grid kernel of the `springs/grid.rs` module instead:
 //! the z-planes of `d` as coordinate rows, each kind of spring along a row one unit-stride
 //! vector, the forces added row by row, threads over ranges of planes. It sums each point's

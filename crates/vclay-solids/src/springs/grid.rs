@@ -13,9 +13,9 @@
 //! force rows with vector adds. Instead of about fifteen scalar gathers of `d` and
 //! read-modify-write scatters into `f` per point (the general kernel, 80 % of its time in
 //! session h50's measurements), a point is read once from `d` and written once to `f`: in
-//! order when the points are numbered in grid order, else through the permutation (the data
-//! points of [`crate::model`] keep their Cuthill-McKee numbering, which saved sessions store;
-//! hence [`SpringSet::GRID_POINTS`]).
+//! order when the points are numbered in grid order (the data points of the large boxes of
+//! [`crate::model`], [`crate::DataNumbering::Grid`]), else through the permutation (hence
+//! [`SpringSet::GRID_POINTS`] for grids in another numbering).
 //!
 //! # How
 //! [`GridSprings::new`] labels the points combinatorially ([`label`]; no coordinates): a
