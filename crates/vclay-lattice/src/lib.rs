@@ -71,6 +71,7 @@ pub mod map;
 pub mod primitives;
 pub mod sparse;
 pub mod subdivide;
+pub mod tensor;
 
 pub use boundary::{boundary_mesh, write_boundary};
 pub use compact::CompactMatrix;
@@ -88,3 +89,4 @@ pub use sparse::{Coord, SparseMatrix};
 pub use subdivide::{
     BoundaryRule, Features, Refinement, SubdivisionRules, subdivide, subdivision_operator,
 };
+pub use tensor::{TensorOperator, TensorWorkspace};

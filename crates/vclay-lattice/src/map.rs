@@ -19,12 +19,14 @@ use vclay_core::Parallelism;
 
 use crate::compact::CompactMatrix;
 use crate::sparse::{Coord, SparseMatrix};
+use crate::tensor::{TensorOperator, TensorWorkspace};
 
 /// The level operators `A^(1) .. A^(n)` of a subdivision hierarchy. Transposes are built only on
 /// request ([`SubdivisionMap::transpose`]), or on the first `A^T` product of a small chain
 /// ([`SubdivisionMap::GATHER_NNZ`]). After [`SubdivisionMap::compress`], the products read
 /// each level's weights as small indices into its distinct values ([`CompactMatrix`]; same
-/// bits, fewer bytes).
+/// bits, fewer bytes). A level given a tensor-product form ([`SubdivisionMap::set_tensor`],
+/// [`TensorOperator`]) is applied one axis at a time instead (issue 31).
 #[derive(Debug, Default)]
 pub struct SubdivisionMap {
     ops: Vec<SparseMatrix>,
@@ -32,6 +34,9 @@ pub struct SubdivisionMap {
     /// Compact copies of `ops` used by the products (empty: not compressed; `None` for a
     /// level with too many distinct values).
     compact: Vec<Option<CompactMatrix>>,
+    /// Tensor-product forms of levels used by the products instead of the sparse operators
+    /// (empty: none; [`SubdivisionMap::set_tensor`]).
+    tensor: Vec<Option<TensorOperator>>,
 }
 
 impl Clone for SubdivisionMap {
@@ -40,6 +45,7 @@ impl Clone for SubdivisionMap {
             ops: self.ops.clone(),
             transposes: self.transposes.clone(),
             compact: self.compact.clone(),
+            tensor: self.tensor.clone(),
         }
     }
 }
@@ -52,6 +58,8 @@ pub struct ChainWorkspace<T> {
     b: Vec<T>,
     /// Per-task partial sums of the scattered transpose products.
     partials: Vec<T>,
+    /// The intermediate grids of tensor-product levels.
+    tensor: TensorWorkspace<T>,
 }
 
 impl<T: Coord> ChainWorkspace<T> {
@@ -61,6 +69,7 @@ impl<T: Coord> ChainWorkspace<T> {
             a: Vec::new(),
             b: Vec::new(),
             partials: Vec::new(),
+            tensor: TensorWorkspace::default(),
         }
     }
 }
@@ -84,6 +93,7 @@ impl SubdivisionMap {
             ops,
             transposes,
             compact: Vec::new(),
+            tensor: Vec::new(),
         }
     }
 
@@ -110,9 +120,47 @@ impl SubdivisionMap {
     /// then read instead of the `f64` operators. Same results bit for bit, 5-6 instead of 12
     /// bytes per non-zero per product: meant for large chains, whose products are bound by
     /// memory traffic (issue 31). Levels with more than 65,536 distinct weights stay as they
-    /// are. Costs 5-6 bytes per non-zero of memory.
+    /// are, and levels with a tensor form ([`SubdivisionMap::set_tensor`]) get none. Costs 5-6
+    /// bytes per non-zero of memory.
     pub fn compress(&mut self) {
-        self.compact = self.ops.par_iter().map(CompactMatrix::new).collect();
+        let tensor = &self.tensor;
+        self.compact = self
+            .ops
+            .par_iter()
+            .enumerate()
+            .map(|(j, op)| match tensor.get(j) {
+                // Levels with a tensor form never read their compact form.
+                Some(Some(_)) => None,
+                _ => CompactMatrix::new(op),
+            })
+            .collect();
+    }
+
+    /// Makes the products ([`SubdivisionMap::apply_into`], [`SubdivisionMap::apply_transpose_into`])
+    /// apply level `j` (`A^(j+1)`) through its tensor-product form `t`
+    /// ([`TensorOperator::factor`] of [`SubdivisionMap::operator`]`(j)`): about a sixth of the
+    /// multiply-adds, results equal to the sparse operator's to rounding (not bit for bit; issue
+    /// 31). The operator itself stays (Galerkin products, restrictions, [`SubdivisionMap::product`]).
+    ///
+    /// # Panics
+    /// If `t`'s shape is not the operator's.
+    #[track_caller]
+    pub fn set_tensor(&mut self, j: usize, t: TensorOperator) {
+        assert_eq!(
+            (t.nrows(), t.ncols()),
+            (self.ops[j].nrows(), self.ops[j].ncols()),
+            "tensor form of level {j}"
+        );
+        self.tensor.resize(self.ops.len(), None);
+        self.tensor[j] = Some(t);
+        if let Some(c) = self.compact.get_mut(j) {
+            *c = None;
+        }
+    }
+
+    /// The tensor-product form of level `j`, if [`SubdivisionMap::set_tensor`] gave one.
+    pub fn tensor(&self, j: usize) -> Option<&TensorOperator> {
+        self.tensor.get(j)?.as_ref()
     }
 
     /// Whether [`SubdivisionMap::compress`] has been called (and the chain not changed since).
@@ -151,10 +199,26 @@ impl SubdivisionMap {
                 .flatten()
                 .map(CompactMatrix::bytes)
                 .sum::<usize>()
+            + self
+                .tensor
+                .iter()
+                .flatten()
+                .map(TensorOperator::bytes)
+                .sum::<usize>()
     }
 
     /// `y = A^(j+1) x` through the compact form where there is one.
-    fn apply_level<T: Coord>(&self, j: usize, x: &[T], y: &mut [T], par: Parallelism) {
+    fn apply_level<T: Coord>(
+        &self,
+        j: usize,
+        x: &[T],
+        y: &mut [T],
+        tw: &mut TensorWorkspace<T>,
+        par: Parallelism,
+    ) {
+        if let Some(t) = self.tensor(j) {
+            return t.apply_into(x, y, tw, par);
+        }
         match self.compact(j) {
             Some(c) => c.apply_into(x, y, par),
             None => self.ops[j].apply_into(x, y, par),
@@ -239,7 +303,7 @@ impl SubdivisionMap {
             ws,
             n,
             |j| self.ops[j].nrows(),
-            |j, x, y| self.apply_level(j, x, y, par),
+            |j, x, y, tw| self.apply_level(j, x, y, tw, par),
         );
     }
 
@@ -278,7 +342,12 @@ impl SubdivisionMap {
             return;
         }
         let gather = self.ops.iter().map(SparseMatrix::nnz).sum::<usize>() <= Self::GATHER_NNZ;
-        let ChainWorkspace { a, b, partials } = ws;
+        let ChainWorkspace {
+            a,
+            b,
+            partials,
+            tensor,
+        } = ws;
         let mut cur: &mut Vec<T> = a;
         let mut other: &mut Vec<T> = b;
         let mut other_len = 0;
@@ -295,7 +364,9 @@ impl SubdivisionMap {
                 other_len = m.ncols();
                 &mut cur[..m.ncols()]
             };
-            if gather {
+            if let Some(t) = self.tensor(level) {
+                t.apply_transpose_into(src, dst, tensor, par);
+            } else if gather {
                 self.transpose(level).apply_into(src, dst, par);
             } else if let Some(c) = self.compact(level) {
                 c.apply_transpose_into(src, dst, partials, par);
@@ -327,21 +398,21 @@ fn chain<T: Coord>(
     ws: &mut ChainWorkspace<T>,
     n: usize,
     rows: impl Fn(usize) -> usize,
-    apply: impl Fn(usize, &[T], &mut [T]),
+    apply: impl Fn(usize, &[T], &mut [T], &mut TensorWorkspace<T>),
 ) {
-    let ChainWorkspace { a, b, .. } = ws;
+    let ChainWorkspace { a, b, tensor, .. } = ws;
     let mut cur: &mut Vec<T> = a;
     let mut other: &mut Vec<T> = b;
     let mut other_len = 0;
     for j in 0..n {
         let src: &[T] = if j == 0 { input } else { &other[..other_len] };
         if j + 1 == n {
-            apply(j, src, out);
+            apply(j, src, out, tensor);
         } else {
             // `apply` overwrites every row: the buffer is only grown, never cleared.
             let r = rows(j);
             grow(cur, r);
-            apply(j, src, &mut cur[..r]);
+            apply(j, src, &mut cur[..r], tensor);
             other_len = r;
             std::mem::swap(&mut cur, &mut other);
         }

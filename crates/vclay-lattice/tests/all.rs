@@ -19,6 +19,7 @@ mod limit_surface;
 mod operator;
 mod primitives;
 mod renumber;
+mod tensor;
 mod vtu_read;
 
 vclay_core::every_test_file_is_listed!();

@@ -404,3 +404,67 @@ fn solid_from_file(
 ) -> Result<Box<dyn Model>, vclay_session::models::SpecError> {
     common::try_build(ModelKind::SubdivisionSolid, keys, None, None, dir)
 }
+
+/// Issue 31's grid numbering: a subdivided box of at least
+/// `vclay_solids::model::GRID_NUMBERING_POINTS` data points (here level 4 of the 4^3 box) is
+/// saved with `"numbering": "grid"`; the same model saved by an older build (no `numbering`,
+/// data points and the rope's data point in the Cuthill-McKee numbering) loads into the grid
+/// numbering and saves back as exactly the new file, so it continues as the new one does.
+#[test]
+fn a_large_box_saved_in_the_old_numbering_loads_into_the_grid_numbering() {
+    use serde_json::Value;
+    use vclay_solids::DataNumbering;
+    let model = build(
+        ModelKind::SubdivisionSolid,
+        "kind = \"subdivision-solid\"\nprimitive = \"box\"\npoints = [4, 4, 4]\nlevel = 4",
+        "dt = 0.001",
+    );
+    let mut s = warmed(model, 2);
+    let new = saved(&s);
+    assert_eq!(new["numbering"], "grid");
+    // The file of an older build: the orders of both numberings from the same topology.
+    let (source, p) = vclay_solids::benchmarks::subdivision_box(4, 4);
+    let old_order = source
+        .discretize_numbered(&p, Some(DataNumbering::Locality))
+        .unwrap()
+        .order;
+    let grid_order = source.discretize(&p).unwrap().order;
+    let mut grid_index = vec![0usize; grid_order.len()];
+    for (i, &g) in grid_order.iter().enumerate() {
+        grid_index[g as usize] = i;
+    }
+    // Old data point i is grid data point `to_grid[i]`.
+    let to_grid: Vec<usize> = old_order.iter().map(|&g| grid_index[g as usize]).collect();
+    let mut to_old = vec![0usize; to_grid.len()];
+    for (i, &j) in to_grid.iter().enumerate() {
+        to_old[j] = i;
+    }
+    let mut old = new.clone();
+    old.as_object_mut().unwrap().remove("numbering");
+    for (part, key) in [
+        ("rest", "data_points"),
+        ("rest", "physics_data_points"),
+        ("state", "data_points"),
+    ] {
+        let a = new[part][key].as_array().unwrap();
+        old[part][key] = Value::Array(to_grid.iter().map(|&j| a[j].clone()).collect());
+    }
+    let rope = &mut old["state"]["tools"][0];
+    let j = rope["point"].as_u64().unwrap() as usize;
+    rope["point"] = Value::from(to_old[j]);
+    assert_ne!(old, new, "the old file differs");
+    let kind = ModelKind::SubdivisionSolid;
+    let loaded = vclay_session::models::load(kind, &old).unwrap();
+    let mut s2 = Session::with_model("m", loaded).unwrap();
+    assert_same(&saved(&s2), &new, "the old file loaded and saved again");
+    s.run(2).unwrap();
+    s2.run(2).unwrap();
+    assert_same(&saved(&s2), &saved(&s), "continued");
+    // An unknown numbering is an error that names it.
+    let mut bad = new.clone();
+    bad["numbering"] = Value::from("spiral");
+    let e = vclay_session::models::load(kind, &bad)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("spiral"), "{e}");
+}

@@ -1,5 +1,6 @@
 //! Times the per-step kernels of a dynamic subdivision solid (4^3 cube) one by one: spring
-//! forces (one thread and all threads), `d = A p` and `g = A^T f` (with the `f64` level
+//! forces (one thread and all threads, as the step runs them, then with the structured-grid
+//! kernel and with the general kernel), `d = A p` and `g = A^T f` (with the `f64` level
 //! operators, then compressed: `SubdivisionMap::compress`).
 //!
 //! Run: `cargo run --release -p vclay-solids --example kernels -- [level] [reps]`. Each figure
@@ -62,6 +63,43 @@ fn main() {
             "level {level}: {name}: {t:.3} / {c:.3} ms ({:.2} ns/spring)",
             t * 1e6 / springs.len() as f64
         );
+    }
+    // The structured-grid kernel and the general kernel on the same set, whichever the step
+    // uses (issue 31; `SpringSet::GRID_SPRINGS`, `SpringSet::GRID_POINTS`).
+    let mut grid = springs.clone();
+    if grid.use_grid_kernel(d.len()) {
+        let mut general = springs.clone();
+        general.drop_grid();
+        for (name, set, par) in [
+            (
+                "springs, grid kernel, 1 thread",
+                &grid,
+                Parallelism::Sequential,
+            ),
+            (
+                "springs, grid kernel, all threads",
+                &grid,
+                Parallelism::Rayon,
+            ),
+            (
+                "springs, general kernel, 1 thread",
+                &general,
+                Parallelism::Sequential,
+            ),
+            (
+                "springs, general kernel, all threads",
+                &general,
+                Parallelism::Rayon,
+            ),
+        ] {
+            let (t, c) = time(reps, || {
+                set.set_forces(&d, &mut f, &mut ws, par);
+            });
+            println!(
+                "level {level}: {name}: {t:.3} / {c:.3} ms ({:.2} ns/spring)",
+                t * 1e6 / springs.len() as f64
+            );
+        }
     }
     // The control map alone: as built (`f64` operators), then compressed (issue 31).
     let mut disc = s.source().discretize(s.control_points()).unwrap();

@@ -64,7 +64,7 @@ pub mod tools;
 
 pub use error::SolidsError;
 pub use material::{Material, MaterialField};
-pub use model::{Discretization, SolidSource};
+pub use model::{DataNumbering, Discretization, SolidSource};
 pub use solid::{
     DynamicSolid, Energy, Integrator, PHASED_POINTS, SolidParams, SolidRest, SolidState,
     SolidStats, StepReport, ToolId,

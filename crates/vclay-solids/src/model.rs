@@ -14,7 +14,7 @@
 use vclay_core::Vec3;
 use vclay_lattice::{
     CellId, Features, Lattice, SparseMatrix, SubdivisionMap, SubdivisionRules, SubdivisionSolid,
-    primitives,
+    TensorOperator, primitives,
 };
 use vclay_spline::KnotVector;
 
@@ -22,6 +22,51 @@ use crate::error::{SolidsError, invalid};
 
 /// Largest subdivision level accepted (level 6 of the 4^3 cube has 7.3 million data points).
 pub const MAX_LEVEL: usize = 6;
+
+/// Subdivision solids whose finest lattice has at least this many points and is a structured
+/// grid (every subdivided box from level 4 of the 4^3 cube on: 117,649 points) number their
+/// data points in grid order ([`DataNumbering::Grid`]); smaller ones keep
+/// [`DataNumbering::Locality`], and with it the bits of their trajectories and of the session
+/// files that store them.
+pub const GRID_NUMBERING_POINTS: usize = 100_000;
+
+/// How the data points of a subdivision solid are numbered (the order of
+/// [`crate::DynamicSolid::data_points`], of every per-data-point array and of the data-point ids
+/// that tools hold). Saved states are in the numbering of the build that saved them; a
+/// session file records it, and [`crate::DynamicSolid::from_parts_numbered`] moves the data
+/// points and tool ids of a state saved in another numbering into the solid's own.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum DataNumbering {
+    /// Cuthill-McKee by [`Lattice::locality_order`] (B-spline solids and level 0: the
+    /// lattice's own numbering). Every solid before session 21 (issue 31), and every solid
+    /// below [`GRID_NUMBERING_POINTS`] or whose finest lattice is not a grid since.
+    #[default]
+    Locality,
+    /// Grid order `i + nx (j + ny k)` of a finest lattice that is an `nx x ny x nz` grid (x the
+    /// longest axis; found from the topology alone), under which the structured-grid spring
+    /// kernel (`springs/grid.rs`) reads `d` and writes `f` in order (issue 31,
+    /// `docs/performance.md` "Level-5 step, session 21").
+    Grid,
+}
+
+impl DataNumbering {
+    /// The name a session file stores (`"locality"`, `"grid"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            DataNumbering::Locality => "locality",
+            DataNumbering::Grid => "grid",
+        }
+    }
+
+    /// The numbering named `name` ([`DataNumbering::name`]).
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "locality" => Some(DataNumbering::Locality),
+            "grid" => Some(DataNumbering::Grid),
+            _ => None,
+        }
+    }
+}
 
 /// Where a dynamic solid's geometry comes from.
 #[derive(Clone, Debug)]
@@ -141,8 +186,22 @@ impl SolidSource {
         Ok(())
     }
 
-    /// Builds the discretization with control points `p`.
+    /// Builds the discretization with control points `p`, its data points numbered as this
+    /// build numbers them ([`DataNumbering`], [`GRID_NUMBERING_POINTS`]).
     pub fn discretize(&self, p: &[Vec3]) -> Result<Discretization, SolidsError> {
+        self.discretize_numbered(p, None)
+    }
+
+    /// [`SolidSource::discretize`] with the data points numbered by `numbering` where that
+    /// applies (`None`: this build's choice). [`DataNumbering::Grid`] applies to subdivision
+    /// solids of at least one level whose finest lattice is a grid; otherwise, and for
+    /// B-spline solids, the result is that of `None` (its [`Discretization::numbering`] says
+    /// which one was used).
+    pub fn discretize_numbered(
+        &self,
+        p: &[Vec3],
+        numbering: Option<DataNumbering>,
+    ) -> Result<Discretization, SolidsError> {
         self.validate()?;
         if p.len() != self.control_count() {
             return Err(invalid(
@@ -192,6 +251,7 @@ impl SolidSource {
                         data: solid.finest().clone(),
                         cell_parent: parent,
                         order: (0..p.len() as u32).collect(),
+                        numbering: DataNumbering::Locality,
                     });
                 }
                 // Renumber the data points by a breadth-first sweep (Cuthill-McKee, from the
@@ -199,19 +259,71 @@ impl SolidSource {
                 // ids): the subdivision numbering (vertex, edge, face, cell points, recursively)
                 // scatters neighbours across the whole array, and the per-step spring and
                 // operator passes are bound by memory access at large levels.
-                let order = solid.finest().locality_order();
+                // (Numbering a grid's points in grid order made the structured-grid spring
+                // kernel 10-20 % faster at level 5, but a saved session stores data points in
+                // this numbering: not done without a versioned migration; docs/performance.md
+                // "Structured-grid spring kernel".)
+                // Large grids (every subdivided box from level 4 on) are numbered in grid order
+                // instead, so that the structured-grid spring kernel reads `d` and writes `f`
+                // in order (issue 31; `DataNumbering`).
+                let want =
+                    numbering.unwrap_or(if solid.finest().num_points() >= GRID_NUMBERING_POINTS {
+                        DataNumbering::Grid
+                    } else {
+                        DataNumbering::Locality
+                    });
+                let grid = match want {
+                    DataNumbering::Grid => crate::springs::lattice_grid_order(solid.finest()),
+                    DataNumbering::Locality => None,
+                };
+                let (order, numbering, fine_dims) = match grid {
+                    Some((dims, order)) => (order, DataNumbering::Grid, Some(dims)),
+                    None => (
+                        solid.finest().locality_order(),
+                        DataNumbering::Locality,
+                        None,
+                    ),
+                };
                 let data = solid
                     .finest()
                     .renumber_points(&order)
                     .map_err(SolidsError::Lattice)?;
                 let mut ops = map.operators().to_vec();
+                drop(map);
                 let last = ops.len() - 1;
+                // Grid dimensions of each level numbered in grid order (`None`: not renumbered).
+                let mut dims: Vec<Option<[usize; 3]>> = vec![None; levels + 1];
+                dims[*levels] = fine_dims;
+                if numbering == DataNumbering::Grid {
+                    // The levels between the control points and the data points are internal to
+                    // the chain: number the points of each (a grid too) in grid order as well,
+                    // so that `A p` and `A^T f` read and write every level in the order of the
+                    // data points (each level's rows and the next level's columns permuted).
+                    for j in 1..*levels {
+                        if let Some((d, o)) = crate::springs::lattice_grid_order(solid.lattice(j)) {
+                            ops[j - 1] = ops[j - 1].select_rows(&o);
+                            ops[j] = renumber_columns(&ops[j], &o);
+                            dims[j] = Some(d);
+                        }
+                    }
+                }
                 ops[last] = ops[last].select_rows(&order);
+                let mut map = SubdivisionMap::new(ops);
+                // Levels between two grids in grid order are tensor products of one-dimensional
+                // subdivision operators: their products run one axis at a time.
+                for j in 0..*levels {
+                    if let (Some(c), Some(f)) = (dims[j], dims[j + 1])
+                        && let Some(t) = TensorOperator::factor(map.operator(j), c, f)
+                    {
+                        map.set_tensor(j, t);
+                    }
+                }
                 Ok(Discretization {
-                    map: SubdivisionMap::new(ops),
+                    map,
                     data,
                     cell_parent: parent,
                     order,
+                    numbering,
                 })
             }
             SolidSource::BSpline {
@@ -235,9 +347,36 @@ pub struct Discretization {
     /// Data point `i` is point `order[i]` of the lattice the source defines (for subdivision
     /// solids the finest level of [`vclay_lattice::SubdivisionSolid`], whose numbering puts
     /// vertex, edge, face and cell points in blocks; the data points are renumbered by
-    /// [`Lattice::locality_order`] for cache-friendly passes). The identity for B-spline solids and
-    /// level 0.
+    /// [`Lattice::locality_order`] for cache-friendly passes, or in grid order, see
+    /// [`Discretization::numbering`]). The identity for B-spline solids and level 0.
     pub order: Vec<u32>,
+    /// Which numbering `order` is.
+    pub numbering: DataNumbering,
+}
+
+/// `m` with its columns renumbered: new column `i` is old column `order[i]` (the entries of
+/// each row sorted by their new column, so every row's terms are summed in column order as
+/// before).
+fn renumber_columns(m: &SparseMatrix, order: &[u32]) -> SparseMatrix {
+    let mut new = vec![0u32; order.len()];
+    for (i, &c) in order.iter().enumerate() {
+        new[c as usize] = i as u32;
+    }
+    let mut row_ptr = Vec::with_capacity(m.nrows() + 1);
+    row_ptr.push(0);
+    let mut cols = Vec::with_capacity(m.nnz());
+    let mut vals = Vec::with_capacity(m.nnz());
+    let mut row: Vec<(u32, f64)> = Vec::new();
+    for i in 0..m.nrows() {
+        let (c, v) = m.row(i);
+        row.clear();
+        row.extend(c.iter().map(|&c| new[c as usize]).zip(v.iter().copied()));
+        row.sort_unstable_by_key(|e| e.0);
+        cols.extend(row.iter().map(|e| e.0));
+        vals.extend(row.iter().map(|e| e.1));
+        row_ptr.push(cols.len());
+    }
+    SparseMatrix::from_csr(m.nrows(), m.ncols(), row_ptr, cols, vals)
 }
 
 /// Grid sample parameters: `samples` values spread uniformly over the knot vector's domain.
@@ -341,5 +480,6 @@ fn bspline_discretization(
         data,
         cell_parent,
         order,
+        numbering: DataNumbering::Locality,
     })
 }

@@ -31,9 +31,47 @@
 //! values (a subdivided lattice has a few hundred at most), which are the stored `f64` values
 //! bit for bit: 10 instead of 24 bytes per edge spring and 6 instead of 20 per virtual spring
 //! stream through the pass (issue 31, `docs/performance.md` "Solid step memory traffic").
+//!
+//! When the springs are exactly the edges and quads of an `nx x ny x nz` grid (every
+//! subdivided box; found combinatorially by [`SpringSet::organize`] for sets of
+//! [`SpringSet::GRID_SPRINGS`] springs whose points are numbered in grid order (the boxes of
+//! [`crate::model::GRID_NUMBERING_POINTS`] points and more: level 4 of the 4^3 cube and finer)
+//! or number at most [`SpringSet::GRID_POINTS`], or by [`SpringSet::use_grid_kernel`]), [`SpringSet::add_forces`] and [`SpringSet::set_forces`]
+//! run the structured-grid kernel of the `springs/grid.rs` module instead:
+//! the z-planes of `d` as coordinate rows, each kind of spring along a row one unit-stride
+//! vector, the forces added row by row, threads over ranges of planes. It sums each point's
+//! terms in another order than the general kernel (agreement to rounding, about `1e-16`
+//! relative; the same bits for any number of threads). The phased program's
+//! `SpringSet::block_forces` and `SpringSet::straddle_forces`, the stiffness product and
+//! [`SpringSet::energy`] keep the general code. `docs/performance.md` "Structured-grid spring
+//! kernel".
 
+mod grid;
+
+use grid::{GridSprings, GridWorkspace};
 use rayon::prelude::*;
 use vclay_core::{Parallelism, Vec3};
+
+/// The points along each axis and the points of `lattice` in the order of a structured grid
+/// (`i + nx (j + ny k)`, x the longest axis; `springs/grid.rs` module docs) when its edges and faces are exactly those of
+/// an `nx x ny x nz` grid, else `None`: the data-point numbering under which the grid spring
+/// kernel reads and writes the point arrays in order ([`crate::DataNumbering::Grid`]).
+pub(crate) fn lattice_grid_order(
+    lattice: &vclay_lattice::Lattice,
+) -> Option<([usize; 3], Vec<u32>)> {
+    use vclay_lattice::{EdgeId, FaceId};
+    let edges: Vec<[u32; 2]> = (0..lattice.num_edges())
+        .map(|e| lattice.edge_vertices(EdgeId::new(e)).map(|v| v.0))
+        .collect();
+    let mut offsets = Vec::with_capacity(lattice.num_faces() + 1);
+    offsets.push(0u32);
+    let mut verts = Vec::with_capacity(4 * lattice.num_faces());
+    for f in 0..lattice.num_faces() {
+        verts.extend(lattice.face_vertices(FaceId::new(f)).iter().map(|v| v.0));
+        offsets.push(u32::try_from(verts.len()).ok()?);
+    }
+    grid::label(&edges, &offsets, &verts, lattice.num_points())
+}
 
 /// Edge springs and virtual springs of a data lattice (or of its active part).
 ///
@@ -66,6 +104,9 @@ pub struct SpringSet {
     /// read by the force kernel instead of the `f64` arrays (built by
     /// [`SpringSet::organize`] for large sets, [`SpringSet::INDEX_SPRINGS`]).
     pub(crate) index: Option<Box<SpringIndex>>,
+    /// The springs in the order of a structured grid, when the set is exactly a grid's edges
+    /// and quads (built by [`SpringSet::organize`]; [`grid`] module docs).
+    pub(crate) grid: Option<Box<GridSprings>>,
 }
 
 /// The rest lengths and stiffnesses of a spring set as `u8` indices into tables of their
@@ -219,6 +260,7 @@ pub(crate) struct Part {
 #[derive(Clone, Debug, Default)]
 pub struct ForceWorkspace {
     bufs: Vec<Vec<Vec3>>,
+    grid: GridWorkspace,
 }
 
 #[inline]
@@ -244,6 +286,25 @@ impl SpringSet {
     /// cuts the bytes per spring from 24 to 10 (edges) and from 20 to 6 (virtual springs).
     /// Smaller sets run from cache, where the table lookups would only add work.
     pub const INDEX_SPRINGS: usize = 500_000;
+
+    /// [`SpringSet::organize`] looks for a structured grid (and then the force passes run the
+    /// grid kernel) in sets of at least this many springs. Below it the steps of the
+    /// benchmark cubes (levels 2 and 3) run the phased program, which calls the general
+    /// kernel per block, so the grid copy would only cost memory (level 3: 770 -> 1,018 bytes
+    /// per data point); at level 2 the two kernels take the same time (0.103 ms); and the
+    /// small models keep the general kernel's bits, which the session layer's stored runs
+    /// record (`vclay-session/tests`).
+    pub const GRID_SPRINGS: usize = 500_000;
+
+    /// [`SpringSet::organize`] keeps a structured grid whose points are *not* numbered in grid
+    /// order only on up to this many points: then the grid kernel reads `d` and fills `f`
+    /// through a permutation, and beyond the caches these scattered accesses cost more than
+    /// the kernel saves (on the Cuthill-McKee numbering of [`vclay_lattice::Lattice::locality_order`]:
+    /// the spring pass 7-14 % faster than the general kernel's at level 4, 117,649 points; 5 %
+    /// slower at level 5, 912,673; `docs/performance.md` "Structured-grid spring kernel"). A
+    /// grid numbered in grid order (the large box lattices of [`crate::model`],
+    /// [`crate::DataNumbering::Grid`]) is kept at any size.
+    pub const GRID_POINTS: usize = 1 << 18;
 
     /// Number of faces.
     pub fn num_faces(&self) -> usize {
@@ -310,6 +371,11 @@ impl SpringSet {
         if self.index.is_some() {
             self.index = SpringIndex::new(self).map(Box::new);
         }
+        if let Some(mut grid) = self.grid.take()
+            && grid.set_params(self)
+        {
+            self.grid = Some(grid);
+        }
     }
 
     /// The subset of springs that touch a point with `keep[i]` (journal section 5.2: springs
@@ -330,6 +396,8 @@ impl SpringSet {
     /// copies), and the straddling part after them. Pays off when the point ids are numbered for
     /// locality (the data lattices of [`crate::model`] are, by
     /// [`vclay_lattice::Lattice::locality_order`]). The forces do not depend on the order.
+    /// Large sets that are exactly a grid's edges and quads also get the structured-grid
+    /// kernel ([`SpringSet::GRID_SPRINGS`], [`SpringSet::GRID_POINTS`]; module docs).
     pub fn organize(&mut self, n: usize, blocks: usize) {
         let blocks = blocks.max(1);
         let block = |v: u32| (v as usize * blocks / n.max(1)).min(blocks - 1);
@@ -391,7 +459,38 @@ impl SpringSet {
             .map(|p| p.points.clone())
             .collect();
         self.index = None;
-        if self.len() >= Self::INDEX_SPRINGS {
+        self.grid = (self.len() >= Self::GRID_SPRINGS)
+            .then(|| GridSprings::new(self, n))
+            .flatten()
+            .filter(|g| n <= Self::GRID_POINTS || g.in_grid_order())
+            .map(Box::new);
+        // The grid kernel reads its own copy of the parameters.
+        if self.grid.is_none() && self.len() >= Self::INDEX_SPRINGS {
+            self.index_parameters();
+        }
+    }
+
+    /// The points along x, y and z of the grid whose edges and quads this set's springs
+    /// are, when [`SpringSet::organize`] found one (`None` otherwise): then
+    /// [`SpringSet::add_forces`] and [`SpringSet::set_forces`] run the structured-grid kernel.
+    pub fn grid_dims(&self) -> Option<[usize; 3]> {
+        self.grid.as_ref().map(|g| g.dims())
+    }
+
+    /// Looks for a structured grid over points `0..n` whatever the set's size
+    /// ([`SpringSet::GRID_SPRINGS`], [`SpringSet::GRID_POINTS`]), so that the force passes run
+    /// the grid kernel if one is found (for comparisons and tests); returns whether one was.
+    pub fn use_grid_kernel(&mut self, n: usize) -> bool {
+        self.grid = GridSprings::new(self, n).map(Box::new);
+        self.grid.is_some()
+    }
+
+    /// Drops the grid form, so that the general kernel runs (for comparisons; the parameter
+    /// index of a large set is built as [`SpringSet::organize`] builds it for a set that is
+    /// not a grid).
+    pub fn drop_grid(&mut self) {
+        if self.grid.take().is_some() && !self.parts.is_empty() && self.len() >= Self::INDEX_SPRINGS
+        {
             self.index_parameters();
         }
     }
@@ -415,6 +514,7 @@ impl SpringSet {
                 .index
                 .as_ref()
                 .map_or(0, |ix| 2 * (ix.edge.len() + ix.corner.len()) + 4 * 256 * 8)
+            + self.grid.as_ref().map_or(0, |g| g.bytes())
     }
 
     /// The point blocks of a set [organized](SpringSet::organize) for `n` points (`None`
@@ -525,14 +625,20 @@ impl SpringSet {
         par: Parallelism,
         overwrite: bool,
     ) -> f64 {
-        let organized = self.parts.len() > 2
-            && self.parts[self.parts.len() - 2].points.end == f.len()
-            && d.len() == f.len();
         let threads = if par.is_parallel_from(self.len(), Self::PARALLEL_SPRINGS) {
             rayon::current_num_threads().max(1)
         } else {
             1
         };
+        if let Some(grid) = &self.grid
+            && d.len() == grid.len()
+            && f.len() == grid.len()
+        {
+            return grid.forces(d, f, &mut ws.grid, threads, overwrite);
+        }
+        let organized = self.parts.len() > 2
+            && self.parts[self.parts.len() - 2].points.end == f.len()
+            && d.len() == f.len();
         if threads == 1 {
             if overwrite {
                 f.fill(Vec3::zeros());
@@ -916,7 +1022,9 @@ mod tests {
             let mut s = benchmarks::cube(level, SolidParams::default()).unwrap();
             benchmarks::pull(&mut s).unwrap();
             let d = s.data_points().to_vec();
-            let plain = s.springs().clone();
+            // The general kernel (a box's set is a grid, whose kernel has its own copy).
+            let mut plain = s.springs().clone();
+            plain.drop_grid();
             assert!(plain.index.is_none(), "small sets read the f64 arrays");
             let mut indexed = plain.clone();
             assert!(indexed.index_parameters());
@@ -975,5 +1083,217 @@ mod tests {
         }
         assert!(!set.index_parameters());
         assert!(set.index.is_none());
+    }
+
+    /// The largest difference between the forces of the grid kernel and of the general
+    /// kernel, relative to the largest force, and the energies' relative difference.
+    fn grid_vs_general(set: &SpringSet, d: &[Vec3], par: Parallelism) -> (f64, f64) {
+        assert!(set.grid.is_some(), "a grid");
+        let mut general = set.clone();
+        general.drop_grid();
+        let (fg, eg) = forces(set, d, par);
+        let (fs, es) = forces(&general, d, par);
+        let scale = fs.iter().map(|x| x.amax()).fold(0.0, f64::max);
+        let df = fg
+            .iter()
+            .zip(&fs)
+            .map(|(a, b)| (a - b).amax())
+            .fold(0.0, f64::max);
+        let (eg, es) = (f64::from_bits(eg), f64::from_bits(es));
+        (df / scale, (eg - es).abs() / es.abs())
+    }
+
+    #[test]
+    fn grid_kernel_agrees_with_the_general_kernel() {
+        for level in [1, 2, 3] {
+            let mut s = benchmarks::cube(level, SolidParams::default()).unwrap();
+            benchmarks::pull(&mut s).unwrap();
+            let d = s.data_points().to_vec();
+            let mut set = s.springs().clone();
+            assert!(set.use_grid_kernel(d.len()));
+            let set = &set;
+            let n = [4, 7, 13, 25][level];
+            assert_eq!(set.grid_dims(), Some([n, n, n]));
+            for par in [Parallelism::Sequential, Parallelism::Rayon] {
+                let (df, de) = grid_vs_general(set, &d, par);
+                eprintln!("level {level} {par:?}: {df:e} {de:e}");
+                assert!(df < 1e-12 && de < 1e-12, "level {level}: {df:e} {de:e}");
+            }
+        }
+    }
+
+    /// A solid on a subdivided box of `n` control points, `levels` levels.
+    fn boxed(n: [usize; 3], levels: usize) -> crate::DynamicSolid {
+        let control = vclay_lattice::primitives::box_lattice(n, Vec3::zeros(), Vec3::repeat(1.0));
+        let (source, p) =
+            crate::SolidSource::subdivision(control, vclay_lattice::BoundaryRule::Sharp, levels);
+        crate::DynamicSolid::new(
+            source,
+            p,
+            crate::Material::default(),
+            SolidParams::default(),
+        )
+        .unwrap()
+    }
+
+    /// `d` moved by a seeded pseudo-random amount of up to `amp` per coordinate.
+    fn perturbed(d: &[Vec3], amp: f64, seed: u64) -> Vec<Vec3> {
+        let mut x = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+        let mut next = || {
+            // xorshift64
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        d.iter()
+            .map(|p| p + Vec3::new(next(), next(), next()) * amp)
+            .collect()
+    }
+
+    #[test]
+    fn grid_kernel_agrees_on_perturbed_boxes_and_after_a_plastic_reset() {
+        // Odd and even grid sizes, cubic and not: (control points, levels) -> grid points.
+        for (n, levels, dims) in [
+            ([4, 4, 4], 1, [7, 7, 7]),
+            ([4, 4, 4], 3, [25, 25, 25]),
+            ([3, 5, 4], 2, [17, 13, 9]),
+            ([4, 6, 5], 0, [6, 5, 4]),
+        ] {
+            let s = boxed(n, levels);
+            let mut set = s.springs().clone();
+            assert_eq!(set.grid_dims(), None, "a small set: the general kernel");
+            assert!(set.use_grid_kernel(s.data_points().len()));
+            assert_eq!(set.grid_dims(), Some(dims), "{n:?} level {levels}");
+            let d0 = s.data_points().to_vec();
+            let d = perturbed(&d0, 0.02 / (1 << levels) as f64, 7);
+            for par in [Parallelism::Sequential, Parallelism::Rayon] {
+                let (df, de) = grid_vs_general(&set, &d, par);
+                assert!(df < 1e-12 && de < 1e-12, "{n:?} {levels}: {df:e} {de:e}");
+            }
+            // The returned energy is `energy()`'s.
+            let (_, e) = forces(&set, &d, Parallelism::Sequential);
+            let e2 = set.energy(&d);
+            assert!(
+                (f64::from_bits(e) - e2).abs() <= 1e-12 * e2,
+                "{n:?} {levels}"
+            );
+            // A plastic reset rewrites every rest length; the grid copy follows.
+            set.reset_rest(&d);
+            assert!(set.grid.is_some());
+            let moved = perturbed(&d, 0.01 / (1 << levels) as f64, 11);
+            let (df, de) = grid_vs_general(&set, &moved, Parallelism::Sequential);
+            assert!(
+                df < 1e-12 && de < 1e-12,
+                "{n:?} {levels} reset: {df:e} {de:e}"
+            );
+            let (f, e) = forces(&set, &d, Parallelism::Sequential);
+            assert_eq!(e, 0.0f64.to_bits(), "at the reset shape: no energy");
+            assert!(f.iter().all(|x| x.amax() < 1e-12));
+        }
+    }
+
+    #[test]
+    fn grid_kernel_gives_the_same_bits_on_any_number_of_threads() {
+        let s = boxed([4, 4, 4], 3);
+        let mut set = s.springs().clone();
+        assert!(set.use_grid_kernel(s.data_points().len()));
+        let set = &set;
+        let d = perturbed(s.data_points(), 0.002, 3);
+        let (f1, e1) = forces(set, &d, Parallelism::Sequential);
+        for threads in [2, 3, 5] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let (f, e) = pool.install(|| forces(set, &d, Parallelism::Rayon));
+            assert!(bits(&f) == bits(&f1), "{threads} threads");
+            assert_eq!(e, e1);
+            // add_forces adds the same values.
+            let mut g = vec![Vec3::new(1.0, 2.0, 3.0); d.len()];
+            let mut h = g.clone();
+            let mut ws = ForceWorkspace::default();
+            pool.install(|| set.add_forces(&d, &mut g, &mut ws, Parallelism::Rayon));
+            set.add_forces(&d, &mut h, &mut ws, Parallelism::Sequential);
+            assert!(bits(&g) == bits(&h));
+            let f_plus: Vec<Vec3> = f1.iter().map(|x| x + Vec3::new(1.0, 2.0, 3.0)).collect();
+            assert!(bits(&g) == bits(&f_plus));
+        }
+    }
+
+    #[test]
+    fn sets_that_are_not_grids_keep_the_general_kernel() {
+        // A torus and a gear (other topologies), a set filtered to part of the points (fixed
+        // regions), and a grid's set with one quad removed.
+        for control in [
+            vclay_lattice::primitives::paper_torus(0.25, 0.5, 0.25),
+            vclay_lattice::primitives::gear(0.25, 0.5, 0.65, 0.25),
+        ] {
+            let (source, p) =
+                crate::SolidSource::subdivision(control, vclay_lattice::BoundaryRule::Sharp, 1);
+            let s = crate::DynamicSolid::new(
+                source,
+                p,
+                crate::Material::default(),
+                SolidParams::default(),
+            )
+            .unwrap();
+            let mut set = s.springs().clone();
+            assert!(!set.use_grid_kernel(s.data_points().len()));
+        }
+        let s = boxed([4, 4, 4], 2);
+        let n = s.data_points().len();
+        let keep: Vec<bool> = s.data_points().iter().map(|p| p.z > 0.5).collect();
+        let mut part = s.springs().filter(&keep);
+        part.organize(n, 2);
+        assert!(!part.use_grid_kernel(n));
+        let mut whole = s.springs().clone();
+        let last = whole.num_faces() - 1;
+        let mut cut = whole.select(0..whole.edges.len(), 0..last);
+        cut.organize(n, 2);
+        assert!(!cut.use_grid_kernel(n));
+        let mut cut = whole.select(1..whole.edges.len(), 0..whole.num_faces());
+        cut.organize(n, 2);
+        assert!(!cut.use_grid_kernel(n));
+        assert!(whole.use_grid_kernel(n));
+        assert_eq!(whole.grid_dims(), Some([13, 13, 13]));
+    }
+
+    #[test]
+    fn grid_kernel_on_points_not_numbered_in_grid_order() {
+        // The same box with its points renumbered by a seeded shuffle: the grid is found
+        // through the permutation, and the forces still agree.
+        let s = boxed([3, 5, 4], 2);
+        let n = s.data_points().len();
+        let mut perm: Vec<u32> = (0..n as u32).collect();
+        let mut x = 12345u64;
+        for i in (1..n).rev() {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            perm.swap(i, (x % (i as u64 + 1)) as usize);
+        }
+        let set = s.springs();
+        let mut moved = set.select(0..set.edges.len(), 0..set.num_faces());
+        for v in moved
+            .edges
+            .iter_mut()
+            .flatten()
+            .chain(&mut moved.face_verts)
+        {
+            *v = perm[*v as usize];
+        }
+        moved.organize(n, 2);
+        assert!(moved.use_grid_kernel(n));
+        assert_eq!(moved.grid_dims(), Some([17, 13, 9]));
+        let d0 = perturbed(s.data_points(), 0.004, 5);
+        let mut d = vec![Vec3::zeros(); n];
+        for (i, &p) in perm.iter().enumerate() {
+            d[p as usize] = d0[i];
+        }
+        for par in [Parallelism::Sequential, Parallelism::Rayon] {
+            let (df, de) = grid_vs_general(&moved, &d, par);
+            assert!(df < 1e-12 && de < 1e-12, "{par:?}: {df:e} {de:e}");
+        }
     }
 }

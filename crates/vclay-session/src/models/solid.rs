@@ -16,8 +16,8 @@ use vclay_lattice::{
     primitives,
 };
 use vclay_solids::{
-    DynamicSolid, Falloff, Integrator, Material, MaterialField, SolidParams, SolidRest,
-    SolidSource, SolidState, SolidsError, Tool, ToolId,
+    DataNumbering, DynamicSolid, Falloff, Integrator, Material, MaterialField, SolidParams,
+    SolidRest, SolidSource, SolidState, SolidsError, Tool, ToolId,
 };
 use vclay_spline::{KnotVector, NurbsVolume};
 
@@ -633,8 +633,17 @@ impl SolidModel {
             steps: s.state.steps,
             tool_energy_seen: s.state.tool_energy_seen,
         };
-        let solid = DynamicSolid::from_parts(source, material, params, &rest, &state)
-            .map_err(SessionError::kernel)?;
+        let numbering = match s.numbering.as_deref() {
+            None => DataNumbering::Locality,
+            Some(name) => DataNumbering::from_name(name).ok_or_else(|| {
+                SessionError::model(format!(
+                    "unknown data-point numbering \"{name}\" (\"locality\" or \"grid\")"
+                ))
+            })?,
+        };
+        let solid =
+            DynamicSolid::from_parts_numbered(source, material, params, &rest, &state, numbering)
+                .map_err(SessionError::kernel)?;
         for t in &s.tools.tools {
             if solid.tool(ToolId(t.handle)).is_none() {
                 return Err(SessionError::model(format!(
@@ -1234,6 +1243,8 @@ impl Model for SolidModel {
         let arr = |v: &[Vec3]| v.iter().map(a3).collect::<Vec<_>>();
         let saved = Saved {
             source,
+            numbering: (s.data_numbering() != DataNumbering::Locality)
+                .then(|| s.data_numbering().name().to_string()),
             material: s
                 .material()
                 .cells()
@@ -1759,6 +1770,12 @@ fn build_primitive(name: &str, m: &ModelKeys, min: Vec3, max: Vec3) -> Result<La
 #[serde(deny_unknown_fields)]
 struct Saved {
     source: SavedSource,
+    /// How the data points (and the tools' data-point ids) of `rest` and `state` are
+    /// numbered ([`DataNumbering::name`]); absent: `"locality"`, the numbering of every file
+    /// written before issue 31's grid numbering and of every solid that does not use it, so
+    /// those files are unchanged. Loading moves them into the numbering of this build.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    numbering: Option<String>,
     material: Vec<SavedMaterial>,
     params: SavedParams,
     rest: SavedRest,

@@ -53,7 +53,7 @@ use crate::map::{
 };
 use crate::material::{Material, MaterialField};
 use crate::metric::MetricEnergy;
-use crate::model::{Discretization, SolidSource};
+use crate::model::{DataNumbering, Discretization, SolidSource};
 use crate::springs::{ForceWorkspace, SpringSet};
 use crate::tools::{Boundary, Falloff, Tool, nearest, within};
 
@@ -657,11 +657,16 @@ impl DynamicSolid {
     }
     /// Data point `i` is point `data_order()[i]` of the lattice the source defines: for a
     /// subdivision solid the finest level of [`vclay_lattice::SubdivisionSolid`] (the data
-    /// points are renumbered by [`vclay_lattice::Lattice::locality_order`] for cache-friendly passes,
+    /// points are renumbered by [`vclay_lattice::Lattice::locality_order`] for cache-friendly
+    /// passes, or in grid order, [`DynamicSolid::data_numbering`],
     /// [`Discretization::order`](crate::Discretization::order)); the identity for B-spline
     /// solids.
     pub fn data_order(&self) -> &[u32] {
         &self.disc.order
+    }
+    /// How the data points are numbered ([`DataNumbering`]; a session file records it).
+    pub fn data_numbering(&self) -> DataNumbering {
+        self.disc.numbering
     }
     /// Lumped data point masses.
     pub fn masses(&self) -> &[f64] {
@@ -2025,7 +2030,93 @@ impl DynamicSolid {
         rest: &SolidRest,
         state: &SolidState,
     ) -> Result<Self, SolidsError> {
-        let mut s = Self::with_material(source, rest.control_points.clone(), material, params)?;
+        let s = Self::with_material(source, rest.control_points.clone(), material, params)?;
+        s.put_parts(rest, state)
+    }
+
+    /// [`DynamicSolid::from_parts`] for parts whose data points (rest, physics rest and state)
+    /// and tools' data-point ids are in `numbering`, which need not be the one this build
+    /// gives the solid (a session saved by an older build: every solid was
+    /// [`DataNumbering::Locality`] before issue 31's grid numbering). When they differ the
+    /// parts are first moved into the solid's numbering: data point `i` of `numbering` is the
+    /// point of the same finest-lattice point (a permutation, so the values keep their
+    /// bits; a region force's point list keeps its order). The result then steps as a solid
+    /// built in this numbering from the moved parts; its trajectory equals the saving build's
+    /// to rounding (the passes sum in another order), not bit for bit.
+    pub fn from_parts_numbered(
+        source: SolidSource,
+        material: MaterialField,
+        params: SolidParams,
+        rest: &SolidRest,
+        state: &SolidState,
+        numbering: DataNumbering,
+    ) -> Result<Self, SolidsError> {
+        let s = Self::with_material(source, rest.control_points.clone(), material, params)?;
+        if numbering == s.disc.numbering {
+            return s.put_parts(rest, state);
+        }
+        // The finest-lattice point of each data point in the saved numbering (the topology of
+        // the finest lattice does not depend on the control points).
+        let saved = s
+            .source
+            .discretize_numbered(&rest.control_points, Some(numbering))?;
+        if saved.numbering != numbering {
+            return Err(invalid(
+                "data numbering",
+                numbering.name(),
+                &format!(
+                    "a numbering this solid can have ({})",
+                    s.disc.numbering.name()
+                ),
+            ));
+        }
+        let nd = s.d.len();
+        let mut here = vec![u32::MAX; nd];
+        for (i, &g) in s.disc.order.iter().enumerate() {
+            here[g as usize] = i as u32;
+        }
+        // Saved data point i is data point `to[i]` here.
+        let to: Vec<u32> = saved.order.iter().map(|&g| here[g as usize]).collect();
+        drop(saved);
+        let move_points = |x: &[Vec3], what: &str| -> Result<Vec<Vec3>, SolidsError> {
+            if x.len() != nd {
+                return Err(invalid(what, x.len(), &format!("{nd} values")));
+            }
+            let mut out = vec![Vec3::zeros(); nd];
+            for (i, v) in x.iter().enumerate() {
+                out[to[i] as usize] = *v;
+            }
+            Ok(out)
+        };
+        let rest = SolidRest {
+            data_points: move_points(&rest.data_points, "rest data points")?,
+            physics_data_points: move_points(&rest.physics_data_points, "physics data points")?,
+            ..rest.clone()
+        };
+        let mut state = SolidState {
+            data_points: move_points(&state.data_points, "state data points")?,
+            ..state.clone()
+        };
+        for t in state.tools.iter_mut().flatten() {
+            t.validate(nd)?;
+            match t {
+                Tool::Rope { point, .. } | Tool::PointForce { point, .. } => {
+                    *point = to[*point] as usize;
+                }
+                Tool::RegionForce { points, .. } => {
+                    for q in points.iter_mut() {
+                        *q = to[*q] as usize;
+                    }
+                }
+                Tool::Gravity { .. } | Tool::Inflation { .. } => {}
+            }
+        }
+        s.put_parts(&rest, &state)
+    }
+
+    /// The rest of [`DynamicSolid::from_parts`]: `self` built from the rest control points.
+    fn put_parts(self, rest: &SolidRest, state: &SolidState) -> Result<Self, SolidsError> {
+        let mut s = self;
         for (what, len) in [
             ("rest data points", rest.data_points.len()),
             ("physics data points", rest.physics_data_points.len()),
