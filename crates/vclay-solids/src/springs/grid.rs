@@ -473,18 +473,27 @@ impl GridSprings {
                 let side = j + 1 < ny;
                 // Edges: the force on the first point in `rows.v[0]`, its opposite on the
                 // second.
-                self.edge_row(simd, [(d0, r0), (d0, r0 + 1)], g0, m, rows, &mut acc);
+                let to = Sink::Rows;
+                self.edge_row(simd, [(d0, r0), (d0, r0 + 1)], g0, m, rows, to, &mut acc);
                 add_row(l, r0, &rows.v[0], m, 1.0);
                 add_row(l, r0 + 1, &rows.v[0], m, -1.0);
+                // The y- and z-edges add straight into rows of `L` and `U` that do not overlap
+                // (the same additions in the same order as through `rows.v`).
                 if side {
-                    self.edge_row(simd, [(d0, r0), (d0, r1)], n + g0, nx, rows, &mut acc);
-                    add_row(l, r0, &rows.v[0], nx, 1.0);
-                    add_row(l, r1, &rows.v[0], nx, -1.0);
+                    let to = Sink::Split(l, r0, r1);
+                    self.edge_row(simd, [(d0, r0), (d0, r1)], n + g0, nx, rows, to, &mut acc);
                 }
                 if upper {
-                    self.edge_row(simd, [(d0, r0), (d1, r0)], 2 * n + g0, nx, rows, &mut acc);
-                    add_row(l, r0, &rows.v[0], nx, 1.0);
-                    add_row(un, r0, &rows.v[0], nx, -1.0);
+                    let to = Sink::Two(l, un, r0);
+                    self.edge_row(
+                        simd,
+                        [(d0, r0), (d1, r0)],
+                        2 * n + g0,
+                        nx,
+                        rows,
+                        to,
+                        &mut acc,
+                    );
                 }
                 // Quads, corners (0, 0), (1, 0), (1, 1), (0, 1) in the plane's axes: the
                 // total force on each corner in `rows.a`.
@@ -562,6 +571,7 @@ impl GridSprings {
         lo: usize,
         m: usize,
         rows: &mut Rows,
+        to: Sink<'_>,
         acc: &mut S::f64s,
     ) {
         let [(pa, oa), (pb, ob)] = p;
@@ -569,6 +579,7 @@ impl GridSprings {
         let rest = self.edge_rest.row(lo, m, &mut pr[0]);
         let k = self.edge_k.row(lo, m, &mut pk[0]);
         let [gx, gy, gz] = &mut v[0];
+        let mut to = to;
         let lanes_n = S::F64_LANES;
         let mut i = 0;
         while i < m {
@@ -580,9 +591,25 @@ impl GridSprings {
             let mut z = simd.sub_f64s(ld(simd, &pb[2][rb]), ld(simd, &pa[2][ra]));
             let (r0, k0) = (ld(simd, &rest[r.clone()]), ld(simd, &k[r.clone()]));
             lanes(simd, &mut x, &mut y, &mut z, r0, k0, acc);
-            st(simd, &mut gx[r.clone()], x);
-            st(simd, &mut gy[r.clone()], y);
-            st(simd, &mut gz[r], z);
+            match &mut to {
+                Sink::Rows => {
+                    st(simd, &mut gx[r.clone()], x);
+                    st(simd, &mut gy[r.clone()], y);
+                    st(simd, &mut gz[r], z);
+                }
+                Sink::Split(dst, a, b) => {
+                    for (c, g) in [x, y, z].into_iter().enumerate() {
+                        add_lanes(simd, &mut dst[c][*a + r.start..*a + r.end], g, false);
+                        add_lanes(simd, &mut dst[c][*b + r.start..*b + r.end], g, true);
+                    }
+                }
+                Sink::Two(da, db, a) => {
+                    for (c, g) in [x, y, z].into_iter().enumerate() {
+                        add_lanes(simd, &mut da[c][*a + r.start..*a + r.end], g, false);
+                        add_lanes(simd, &mut db[c][*a + r.start..*a + r.end], g, true);
+                    }
+                }
+            }
             i += lanes_n;
         }
     }
@@ -654,6 +681,30 @@ impl GridSprings {
             i += lanes_n;
         }
     }
+}
+
+/// Where [`GridSprings::edge_row`] puts the force `g` on the first point of each spring.
+enum Sink<'a> {
+    /// `g` into `rows.v[0]` (the callers add it to overlapping, shifted rows).
+    Rows,
+    /// `+g` at offset `.1` and `-g` at offset `.2` of the same planes (rows that do not
+    /// overlap).
+    Split(&'a mut [Vec<f64>; 3], usize, usize),
+    /// `+g` into the first planes and `-g` into the second, both at offset `.2`.
+    Two(&'a mut [Vec<f64>; 3], &'a mut [Vec<f64>; 3], usize),
+}
+
+/// `s += v` (`s -= v` if `sub`) on the first `s.len()` lanes (at most one vector's): the
+/// additions of [`add_row`], lane by lane.
+#[inline(always)]
+fn add_lanes<S: Simd>(simd: S, s: &mut [f64], v: S::f64s, sub: bool) {
+    let old = ld(simd, s);
+    let new = if sub {
+        simd.sub_f64s(old, v)
+    } else {
+        simd.add_f64s(old, v)
+    };
+    st(simd, s, new);
 }
 
 /// The values of `s` (at most one vector's lanes; missing lanes are zero) as a vector.
