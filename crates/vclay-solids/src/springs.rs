@@ -185,9 +185,25 @@ trait Params: Copy {
     fn corners4(self, lo: usize, rest: &mut [f64], k: &mut [f64]);
 }
 
-/// The set's `f64` arrays.
+/// The set's `f64` arrays (slices held by value, as in [`Topology`]).
 #[derive(Clone, Copy)]
-struct Full<'s>(&'s SpringSet);
+struct Full<'s> {
+    edge_rest: &'s [f64],
+    edge_k: &'s [f64],
+    corner_rest: &'s [f64],
+    corner_k: &'s [f64],
+}
+
+impl<'s> Full<'s> {
+    fn of(set: &'s SpringSet) -> Self {
+        Self {
+            edge_rest: &set.edge_rest,
+            edge_k: &set.edge_k,
+            corner_rest: &set.corner_rest,
+            corner_k: &set.corner_k,
+        }
+    }
+}
 
 impl<'s> Params for Full<'s> {
     #[inline(always)]
@@ -195,27 +211,49 @@ impl<'s> Params for Full<'s> {
     where
         Self: 'a,
     {
-        (
-            &self.0.edge_rest[e..e + BATCH],
-            &self.0.edge_k[e..e + BATCH],
-        )
+        (&self.edge_rest[e..e + BATCH], &self.edge_k[e..e + BATCH])
     }
     #[inline(always)]
     fn edge(self, i: usize) -> (f64, f64) {
-        (self.0.edge_rest[i], self.0.edge_k[i])
+        (self.edge_rest[i], self.edge_k[i])
     }
     #[inline(always)]
     fn corner(self, i: usize) -> (f64, f64) {
-        (self.0.corner_rest[i], self.0.corner_k[i])
+        (self.corner_rest[i], self.corner_k[i])
     }
     #[inline(always)]
     fn corners4(self, lo: usize, rest: &mut [f64], k: &mut [f64]) {
-        rest.copy_from_slice(&self.0.corner_rest[lo..lo + 4]);
-        k.copy_from_slice(&self.0.corner_k[lo..lo + 4]);
+        rest.copy_from_slice(&self.corner_rest[lo..lo + 4]);
+        k.copy_from_slice(&self.corner_k[lo..lo + 4]);
     }
 }
 
-impl Params for &SpringIndex {
+/// A [`SpringIndex`]'s index arrays as slices held by value (as in [`Topology`]) and its
+/// tables.
+#[derive(Clone, Copy)]
+struct Indexed<'s> {
+    edge: &'s [[u8; 2]],
+    corner: &'s [[u8; 2]],
+    edge_rest: &'s [f64; 256],
+    edge_k: &'s [f64; 256],
+    corner_rest: &'s [f64; 256],
+    corner_k: &'s [f64; 256],
+}
+
+impl<'s> Indexed<'s> {
+    fn of(ix: &'s SpringIndex) -> Self {
+        Self {
+            edge: &ix.edge,
+            corner: &ix.corner,
+            edge_rest: &ix.edge_rest,
+            edge_k: &ix.edge_k,
+            corner_rest: &ix.corner_rest,
+            corner_k: &ix.corner_k,
+        }
+    }
+}
+
+impl Params for Indexed<'_> {
     #[inline(always)]
     fn edge_batch<'a>(self, e: usize, buf: &'a mut [[f64; BATCH]; 2]) -> (&'a [f64], &'a [f64])
     where
@@ -720,12 +758,87 @@ impl SpringSet {
         })
     }
 
+    /// `out += K y`, with `K` the clamped (positive semi-definite) stiffness matrix of the
+    /// springs at configuration `d` (see the [module docs](self)). Sequential.
+    pub fn add_stiffness_product(&self, d: &[Vec3], y: &[Vec3], out: &mut [Vec3]) {
+        for (i, e) in self.edges.iter().enumerate() {
+            let (a, b) = (e[0] as usize, e[1] as usize);
+            let h =
+                spring_hessian_apply(d[b] - d[a], self.edge_k[i], self.edge_rest[i], y[b] - y[a]);
+            out[b] += h;
+            out[a] -= h;
+        }
+        for fc in 0..self.num_faces() {
+            let (lo, hi) = (self.face(fc).start, self.face(fc).end);
+            let verts = &self.face_verts[lo..hi];
+            for j in 0..verts.len() {
+                let (m, a, b) = corner(verts, j);
+                let x = d[m] - (d[a] + d[b]) * 0.5;
+                let yx = y[m] - (y[a] + y[b]) * 0.5;
+                let h =
+                    spring_hessian_apply(x, self.corner_k[lo + j], self.corner_rest[lo + j], yx);
+                out[m] += h;
+                out[a] -= h * 0.5;
+                out[b] -= h * 0.5;
+            }
+        }
+    }
+
+    /// A bound on the largest eigenvalue of `K` at rest, per point: Gershgorin row sums
+    /// (`sum` of the stiffnesses a point takes part in, each counted with its coupling weight).
+    pub fn gershgorin(&self, n: usize) -> Vec<f64> {
+        let mut g = vec![0.0; n];
+        for (i, e) in self.edges.iter().enumerate() {
+            g[e[0] as usize] += 2.0 * self.edge_k[i];
+            g[e[1] as usize] += 2.0 * self.edge_k[i];
+        }
+        for fc in 0..self.num_faces() {
+            let (lo, hi) = (self.face(fc).start, self.face(fc).end);
+            let verts = &self.face_verts[lo..hi];
+            for j in 0..verts.len() {
+                let (m, a, b) = corner(verts, j);
+                let k = self.corner_k[lo + j];
+                g[m] += 2.0 * k;
+                g[a] += k;
+                g[b] += k;
+            }
+        }
+        g
+    }
+}
+
+/// The index arrays the force kernel reads, as slices held by value: the kernel's loop then
+/// keeps their addresses in registers or its own stack frame instead of reloading them from
+/// the [`SpringSet`] (a fixed heap address that every thread's batch stores can 4K-alias
+/// with, the spring phase's stack lottery in `docs/performance.md`, session 21 (h59)).
+#[derive(Clone, Copy)]
+struct Topology<'s> {
+    edges: &'s [[u32; 2]],
+    face_offsets: &'s [u32],
+    face_verts: &'s [u32],
+}
+
+impl<'s> Topology<'s> {
+    fn of(set: &'s SpringSet) -> Self {
+        Self {
+            edges: &set.edges,
+            face_offsets: &set.face_offsets,
+            face_verts: &set.face_verts,
+        }
+    }
+
+    /// The corners of face `f` (see [`SpringSet::face`]).
+    #[inline(always)]
+    fn face(self, f: usize) -> std::ops::Range<usize> {
+        self.face_offsets[f] as usize..self.face_offsets[f + 1] as usize
+    }
+
     /// The force kernel (see [`ForcesOp`]): springs in batches of [`BATCH`], each batch
     /// gathered (spring vectors `x`), then `g = k (1 - l0/|x|) x` and the energy computed
     /// lane-wise without branches, then scattered.
     #[inline(always)]
     fn forces_kernel<P: Params>(
-        &self,
+        self,
         params: P,
         d: &[Vec3],
         f: &mut [Vec3],
@@ -804,7 +917,7 @@ impl SpringSet {
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn quad_batch<P: Params>(
-        &self,
+        self,
         params: P,
         d: &[Vec3],
         f: &mut [Vec3],
@@ -849,7 +962,7 @@ impl SpringSet {
     /// The virtual springs of one face (corners `lo..hi` of `face_verts`), one by one.
     #[inline(always)]
     fn face_scalar<P: Params>(
-        &self,
+        self,
         params: P,
         d: &[Vec3],
         f: &mut [Vec3],
@@ -876,54 +989,6 @@ impl SpringSet {
             f[b - base] += h;
         }
         energy
-    }
-
-    /// `out += K y`, with `K` the clamped (positive semi-definite) stiffness matrix of the
-    /// springs at configuration `d` (see the [module docs](self)). Sequential.
-    pub fn add_stiffness_product(&self, d: &[Vec3], y: &[Vec3], out: &mut [Vec3]) {
-        for (i, e) in self.edges.iter().enumerate() {
-            let (a, b) = (e[0] as usize, e[1] as usize);
-            let h =
-                spring_hessian_apply(d[b] - d[a], self.edge_k[i], self.edge_rest[i], y[b] - y[a]);
-            out[b] += h;
-            out[a] -= h;
-        }
-        for fc in 0..self.num_faces() {
-            let (lo, hi) = (self.face(fc).start, self.face(fc).end);
-            let verts = &self.face_verts[lo..hi];
-            for j in 0..verts.len() {
-                let (m, a, b) = corner(verts, j);
-                let x = d[m] - (d[a] + d[b]) * 0.5;
-                let yx = y[m] - (y[a] + y[b]) * 0.5;
-                let h =
-                    spring_hessian_apply(x, self.corner_k[lo + j], self.corner_rest[lo + j], yx);
-                out[m] += h;
-                out[a] -= h * 0.5;
-                out[b] -= h * 0.5;
-            }
-        }
-    }
-
-    /// A bound on the largest eigenvalue of `K` at rest, per point: Gershgorin row sums
-    /// (`sum` of the stiffnesses a point takes part in, each counted with its coupling weight).
-    pub fn gershgorin(&self, n: usize) -> Vec<f64> {
-        let mut g = vec![0.0; n];
-        for (i, e) in self.edges.iter().enumerate() {
-            g[e[0] as usize] += 2.0 * self.edge_k[i];
-            g[e[1] as usize] += 2.0 * self.edge_k[i];
-        }
-        for fc in 0..self.num_faces() {
-            let (lo, hi) = (self.face(fc).start, self.face(fc).end);
-            let verts = &self.face_verts[lo..hi];
-            for j in 0..verts.len() {
-                let (m, a, b) = corner(verts, j);
-                let k = self.corner_k[lo + j];
-                g[m] += 2.0 * k;
-                g[a] += k;
-                g[b] += k;
-            }
-        }
-        g
     }
 }
 
@@ -957,8 +1022,22 @@ impl pulp::WithSimd for ForcesOp<'_> {
     fn with_simd<S: pulp::Simd>(self, _simd: S) -> f64 {
         let set = self.set;
         match &set.index {
-            Some(ix) => set.forces_kernel(&**ix, self.d, self.f, self.base, self.edges, self.faces),
-            None => set.forces_kernel(Full(set), self.d, self.f, self.base, self.edges, self.faces),
+            Some(ix) => Topology::of(set).forces_kernel(
+                Indexed::of(ix),
+                self.d,
+                self.f,
+                self.base,
+                self.edges,
+                self.faces,
+            ),
+            None => Topology::of(set).forces_kernel(
+                Full::of(set),
+                self.d,
+                self.f,
+                self.base,
+                self.edges,
+                self.faces,
+            ),
         }
     }
 }
@@ -1031,14 +1110,14 @@ mod tests {
             let ix: &SpringIndex = indexed.index.as_deref().unwrap();
             // Every looked-up value is the stored one.
             for i in 0..plain.edges.len() {
-                let (r, k) = Params::edge(ix, i);
+                let (r, k) = Params::edge(Indexed::of(ix), i);
                 assert_eq!(
                     (r.to_bits(), k.to_bits()),
                     (plain.edge_rest[i].to_bits(), plain.edge_k[i].to_bits())
                 );
             }
             for i in 0..plain.face_verts.len() {
-                let (r, k) = Params::corner(ix, i);
+                let (r, k) = Params::corner(Indexed::of(ix), i);
                 assert_eq!(
                     (r.to_bits(), k.to_bits()),
                     (plain.corner_rest[i].to_bits(), plain.corner_k[i].to_bits())
