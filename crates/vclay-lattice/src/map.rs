@@ -420,8 +420,8 @@ fn chain<T: Coord>(
 }
 
 /// Grows `v` to at least `n` entries (new ones zero); never shrinks it, so that a workspace
-/// reused for the levels of a chain is zero-filled once, not at every product.
-fn grow<T: Coord>(v: &mut Vec<T>, n: usize) {
+/// reused for the levels of a chain is zero-filled once, not at every product (the tensor-product levels' workspaces too).
+pub(crate) fn grow<T: Coord>(v: &mut Vec<T>, n: usize) {
     if v.len() < n {
         v.resize(n, T::zero());
     }

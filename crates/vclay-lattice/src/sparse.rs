@@ -366,6 +366,43 @@ impl SparseMatrix {
         }
     }
 
+    /// The matrix with its columns renumbered: new column `i` is old column `order[i]` (`A P^T`
+    /// for the permutation `P`). The entries of each row are sorted by their new column, so a
+    /// row's terms are still summed in column order.
+    ///
+    /// # Panics
+    /// If `order` is not a permutation of the columns (a programmer error).
+    #[track_caller]
+    pub fn renumber_columns(&self, order: &[u32]) -> SparseMatrix {
+        assert_eq!(order.len(), self.ncols, "one new position per column");
+        let mut new = vec![u32::MAX; order.len()];
+        for (i, &c) in order.iter().enumerate() {
+            assert_eq!(new[c as usize], u32::MAX, "column {c} appears twice");
+            new[c as usize] = i as u32;
+        }
+        let mut row_ptr = Vec::with_capacity(self.nrows + 1);
+        row_ptr.push(0);
+        let mut cols = Vec::with_capacity(self.nnz());
+        let mut vals = Vec::with_capacity(self.nnz());
+        let mut row: Vec<(u32, f64)> = Vec::new();
+        for i in 0..self.nrows {
+            let (c, v) = self.row(i);
+            row.clear();
+            row.extend(c.iter().map(|&c| new[c as usize]).zip(v.iter().copied()));
+            row.sort_unstable_by_key(|e| e.0);
+            cols.extend(row.iter().map(|e| e.0));
+            vals.extend(row.iter().map(|e| e.1));
+            row_ptr.push(cols.len());
+        }
+        SparseMatrix {
+            nrows: self.nrows,
+            ncols: self.ncols,
+            row_ptr,
+            cols,
+            vals,
+        }
+    }
+
     /// The transpose, as a new CSR matrix (a counting sort over columns; rows of the result
     /// stay sorted).
     pub fn transpose(&self) -> SparseMatrix {

@@ -31,6 +31,7 @@
 use rayon::prelude::*;
 use vclay_core::Parallelism;
 
+use crate::map::grow;
 use crate::sparse::{Coord, SparseMatrix};
 
 /// One axis's factor: `rows[i]` lists `(column, weight)` of row `i`.
@@ -84,13 +85,6 @@ impl<T> Default for TensorWorkspace<T> {
             a: Vec::new(),
             b: Vec::new(),
         }
-    }
-}
-
-/// Grows `v` to at least `n` entries.
-fn grow<T: Coord>(v: &mut Vec<T>, n: usize) {
-    if v.len() < n {
-        v.resize(n, T::zero());
     }
 }
 

@@ -340,3 +340,28 @@ fn a_workspace_reused_across_chains_gives_the_bits_of_a_fresh_one() {
         }
     }
 }
+
+#[test]
+fn renumbered_columns_take_the_renumbered_input() {
+    // A level operator of a gear (unsorted neighbourhoods) and a scrambled column order:
+    // `A P^T` applied to `P x` is `A x`, each row's terms summed in the new column order.
+    let s = solid(primitives::gear(1.0, 2.0, 2.5, 0.4), BoundaryRule::Sharp, 2);
+    let a = &s.map().operators()[1];
+    let n = a.ncols();
+    let mut rng = Rng(7);
+    let mut order: Vec<u32> = (0..n as u32).collect();
+    for i in (1..n).rev() {
+        order.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
+    }
+    let b = a.renumber_columns(&order);
+    assert_eq!((b.nrows(), b.ncols(), b.nnz()), (a.nrows(), n, a.nnz()));
+    for i in 0..b.nrows() {
+        let (c, _) = b.row(i);
+        assert!(c.windows(2).all(|w| w[0] < w[1]), "row {i} not sorted");
+    }
+    let x: Vec<Vec3> = (0..n).map(|_| rng.vec3(1.0)).collect();
+    let px: Vec<Vec3> = order.iter().map(|&c| x[c as usize]).collect();
+    for (u, v) in a.apply(&x).iter().zip(b.apply(&px)) {
+        assert!((u - v).norm() < 1e-13, "{u} against {v}");
+    }
+}

@@ -302,7 +302,7 @@ impl SolidSource {
                     for j in 1..*levels {
                         if let Some((d, o)) = crate::springs::lattice_grid_order(solid.lattice(j)) {
                             ops[j - 1] = ops[j - 1].select_rows(&o);
-                            ops[j] = renumber_columns(&ops[j], &o);
+                            ops[j] = ops[j].renumber_columns(&o);
                             dims[j] = Some(d);
                         }
                     }
@@ -352,31 +352,6 @@ pub struct Discretization {
     pub order: Vec<u32>,
     /// Which numbering `order` is.
     pub numbering: DataNumbering,
-}
-
-/// `m` with its columns renumbered: new column `i` is old column `order[i]` (the entries of
-/// each row sorted by their new column, so every row's terms are summed in column order as
-/// before).
-fn renumber_columns(m: &SparseMatrix, order: &[u32]) -> SparseMatrix {
-    let mut new = vec![0u32; order.len()];
-    for (i, &c) in order.iter().enumerate() {
-        new[c as usize] = i as u32;
-    }
-    let mut row_ptr = Vec::with_capacity(m.nrows() + 1);
-    row_ptr.push(0);
-    let mut cols = Vec::with_capacity(m.nnz());
-    let mut vals = Vec::with_capacity(m.nnz());
-    let mut row: Vec<(u32, f64)> = Vec::new();
-    for i in 0..m.nrows() {
-        let (c, v) = m.row(i);
-        row.clear();
-        row.extend(c.iter().map(|&c| new[c as usize]).zip(v.iter().copied()));
-        row.sort_unstable_by_key(|e| e.0);
-        cols.extend(row.iter().map(|e| e.0));
-        vals.extend(row.iter().map(|e| e.1));
-        row_ptr.push(cols.len());
-    }
-    SparseMatrix::from_csr(m.nrows(), m.ncols(), row_ptr, cols, vals)
 }
 
 /// Grid sample parameters: `samples` values spread uniformly over the knot vector's domain.
