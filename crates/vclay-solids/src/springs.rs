@@ -847,8 +847,8 @@ impl<'s> Topology<'s> {
         faces: std::ops::Range<usize>,
     ) -> f64 {
         let mut energy = 0.0;
-        let mut x = [[0.0; BATCH]; 3];
-        let mut buf = [[0.0; BATCH]; 2];
+        let mut x = CacheAligned([[0.0; BATCH]; 3]);
+        let mut buf = CacheAligned([[0.0; BATCH]; 2]);
         // Edge springs.
         let mut e = edges.start;
         while e + BATCH <= edges.end {
@@ -889,8 +889,8 @@ impl<'s> Topology<'s> {
         const Q: usize = BATCH / 4;
         let mut quads = [0usize; Q];
         let mut starts = [0usize; Q];
-        let mut rest = [0.0; BATCH];
-        let mut ks = [0.0; BATCH];
+        let mut rest = CacheAligned([0.0; BATCH]);
+        let mut ks = CacheAligned([0.0; BATCH]);
         let mut nq = 0;
         for fc in faces {
             let (lo, hi) = (self.face(fc).start, self.face(fc).end);
@@ -1004,6 +1004,38 @@ fn counts(it: impl Iterator<Item = usize>, n: usize) -> Vec<usize> {
 /// Springs per batch of the force kernel.
 const BATCH: usize = 16;
 
+/// A value aligned to a cache line (64 bytes): the force kernel's batch arrays on the stack.
+///
+/// The kernel writes a batch lane by lane and reads it back in 32-byte vectors (and the other
+/// way round). A stack frame is only 16-byte aligned, so half the placements of an array make
+/// every other vector access split two cache lines, and when the array also crosses a 4096-byte
+/// page boundary some of them split two pages, which costs far more. The thread's stack offset
+/// is drawn per process by address-space randomization (the caller) or fixed per build (the
+/// team's helper), so the 384-byte `x` of a batch crossed a page in some processes and not in
+/// others: on the level-2 cube that thread's spring phase took 55-61 us instead of 50-53
+/// (`docs/performance.md`, "Level-2 spring phase, session 22 (h61)", where a sweep of the stack
+/// offset shows the slow placements are exactly those). Aligned to 64 bytes, no vector access
+/// splits a cache line, so none splits a page, wherever the stack lies. The arithmetic and its
+/// order are unchanged: the same bits.
+#[derive(Clone, Copy)]
+#[repr(C, align(64))]
+struct CacheAligned<T>(T);
+
+impl<T> std::ops::Deref for CacheAligned<T> {
+    type Target = T;
+    #[inline(always)]
+    fn deref(&self) -> &T {
+        &self.0
+    }
+}
+
+impl<T> std::ops::DerefMut for CacheAligned<T> {
+    #[inline(always)]
+    fn deref_mut(&mut self) -> &mut T {
+        &mut self.0
+    }
+}
+
 /// The force kernel as a [`pulp::WithSimd`] operation, so that [`pulp::Arch::dispatch`]
 /// compiles it with the best instruction set the CPU has (runtime detection, safe code).
 struct ForcesOp<'a> {
@@ -1048,8 +1080,8 @@ impl pulp::WithSimd for ForcesOp<'_> {
 #[inline(always)]
 fn spring_batch(x: &mut [[f64; BATCH]; 3], rest: &[f64], k: &[f64]) -> f64 {
     let (rest, k) = (&rest[..BATCH], &k[..BATCH]);
-    let mut e = [0.0; BATCH];
-    let mut c = [0.0; BATCH];
+    let mut e = CacheAligned([0.0; BATCH]);
+    let mut c = CacheAligned([0.0; BATCH]);
     for j in 0..BATCH {
         let l = (x[0][j] * x[0][j] + x[1][j] * x[1][j] + x[2][j] * x[2][j]).sqrt();
         let s = l - rest[j];
