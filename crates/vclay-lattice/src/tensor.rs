@@ -28,6 +28,8 @@
 //! their results agree with it to rounding, not bit for bit (the same bits on any number of
 //! threads: each output value is computed by one task in a fixed order). Only whole grids.
 
+use std::ops::Range;
+
 use rayon::prelude::*;
 use vclay_core::Parallelism;
 
@@ -168,6 +170,94 @@ impl TensorOperator {
             .chain(&self.st)
             .map(|f| f.rows.iter().map(|r| 24 + 16 * r.len()).sum::<usize>())
             .sum()
+    }
+
+    /// Points along x, y and z of the coarse grid (the columns) and of the fine grid (the rows).
+    pub fn dims(&self) -> ([usize; 3], [usize; 3]) {
+        (self.coarse, self.fine)
+    }
+
+    /// Values per z-plane of the two intermediate grids of the plane-range products, `fx cy`
+    /// and `fx fy` (each grid has one plane per coarse z-plane): `A x`'s after its x-pass and
+    /// after its y-pass, `A^T y`'s after its y^T-pass and after its z^T-pass.
+    pub fn intermediate_plane_lens(&self) -> [usize; 2] {
+        let [_, cy, _] = self.coarse;
+        let [fx, fy, _] = self.fine;
+        [fx * cy, fx * fy]
+    }
+
+    /// Coarse z-planes `planes` of the x- and y-passes of `y = A x`: `t1` and `t2` receive
+    /// those planes of the two intermediate grids ([`TensorOperator::intermediate_plane_lens`]
+    /// values each). Each plane reads only the same plane of `x`, so tasks over disjoint plane
+    /// ranges are independent; with [`TensorOperator::apply_z_planes`] over all fine planes
+    /// this is [`TensorOperator::apply_into`], bit for bit (every value is summed by
+    /// the same `line_sum` in the same order).
+    ///
+    /// # Panics
+    /// If `x` is not a coarse grid or `t1`, `t2` do not hold exactly `planes`.
+    #[track_caller]
+    pub fn apply_xy_planes<T: Coord>(
+        &self,
+        x: &[T],
+        planes: Range<usize>,
+        t1: &mut [T],
+        t2: &mut [T],
+    ) {
+        let [cx, cy, _] = self.coarse;
+        let [l1, l2] = self.intermediate_plane_lens();
+        assert_eq!(x.len(), self.ncols(), "input length");
+        assert_eq!(t1.len(), planes.len() * l1, "first intermediate length");
+        assert_eq!(t2.len(), planes.len() * l2, "second intermediate length");
+        let x = &x[planes.start * cx * cy..planes.end * cx * cy];
+        along_rows(&self.s[0], x, cx, t1, self.fine[0], 1, false);
+        along_rows(&self.s[1], t1, l1, t2, l2, self.fine[0], false);
+    }
+
+    /// Fine z-planes `planes` of `y = A x` (the z-pass): `y` receives those planes, from the
+    /// whole second intermediate grid `t2` of [`TensorOperator::apply_xy_planes`].
+    ///
+    /// # Panics
+    /// If `t2` is not a whole intermediate grid or `y` does not hold exactly `planes`.
+    #[track_caller]
+    pub fn apply_z_planes<T: Coord>(&self, t2: &[T], planes: Range<usize>, y: &mut [T]) {
+        let [fx, fy, _] = self.fine;
+        assert_eq!(t2.len(), fx * fy * self.coarse[2], "intermediate length");
+        assert_eq!(y.len(), planes.len() * fx * fy, "output length");
+        for (line, row) in y.chunks_exact_mut(fx * fy).zip(&self.s[2].rows[planes]) {
+            line_sum(row, t2, line);
+        }
+    }
+
+    /// Coarse z-planes `planes` of `x = A^T y`: per plane the z^T-pass (from the fine planes
+    /// around it), then the y^T- and x^T-passes within the plane, `u2` and `u1` receiving the
+    /// plane's intermediate values (`[fx fy, fx cy]` per plane,
+    /// [`TensorOperator::intermediate_plane_lens`]) and `x` the plane's values. Tasks over
+    /// disjoint plane ranges are independent; over all planes this is
+    /// [`TensorOperator::apply_transpose_into`], bit for bit.
+    ///
+    /// # Panics
+    /// If `y` is not a fine grid or `u2`, `u1`, `x` do not hold exactly `planes`.
+    #[track_caller]
+    pub fn apply_transpose_planes<T: Coord>(
+        &self,
+        y: &[T],
+        planes: Range<usize>,
+        u2: &mut [T],
+        u1: &mut [T],
+        x: &mut [T],
+    ) {
+        let [cx, cy, _] = self.coarse;
+        let [fx, _, _] = self.fine;
+        let [l1, l2] = self.intermediate_plane_lens();
+        assert_eq!(y.len(), self.nrows(), "input length");
+        assert_eq!(u2.len(), planes.len() * l2, "second intermediate length");
+        assert_eq!(u1.len(), planes.len() * l1, "first intermediate length");
+        assert_eq!(x.len(), planes.len() * cx * cy, "output length");
+        for (line, row) in u2.chunks_exact_mut(l2).zip(&self.st[2].rows[planes]) {
+            line_sum(row, y, line);
+        }
+        along_rows(&self.st[1], u2, l2, u1, l1, fx, false);
+        along_rows(&self.st[0], u1, fx, x, cx, 1, false);
     }
 
     /// `y = A x` (module docs: along x, then y, then z).

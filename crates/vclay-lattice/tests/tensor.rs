@@ -146,3 +146,69 @@ fn operators_that_are_not_kronecker_products_are_refused() {
     let added = SparseMatrix::from_csr(a.nrows(), a.ncols(), rp4, c4, v4);
     assert!(TensorOperator::factor(&added, coarse, fine).is_none());
 }
+
+/// The plane-range products (the phased step's tasks, `vclay-solids` `solid/phased.rs`) give
+/// the whole products bit for bit, however the planes are split: shapes with odd and even plane
+/// counts, one to five tasks (some with empty ranges).
+#[test]
+fn plane_range_products_are_the_whole_products_bit_for_bit() {
+    for coarse in [[5, 4, 3], [3, 3, 3], [2, 6, 4], [7, 7, 7], [4, 5, 6]] {
+        let s = [
+            factor_1d(coarse[0], 0.125),
+            factor_1d(coarse[1], 0.1),
+            factor_1d(coarse[2], 0.15),
+        ];
+        let fine = [s[0].len(), s[1].len(), s[2].len()];
+        let a = kron(&s, coarse);
+        let t = TensorOperator::factor(&a, coarse, fine).unwrap();
+        assert_eq!(t.dims(), (coarse, fine));
+        let [l1, l2] = t.intermediate_plane_lens();
+        let x: Vec<Vec3> = (0..a.ncols())
+            .map(|i| Vec3::new(i as f64, (i * i % 17) as f64, -(i as f64).sqrt()))
+            .collect();
+        let f: Vec<Vec3> = (0..a.nrows())
+            .map(|i| Vec3::new((i % 13) as f64 - 6.0, 1.0 / (1 + i) as f64, (i % 5) as f64))
+            .collect();
+        let mut ws = TensorWorkspace::default();
+        let mut y = vec![Vec3::zeros(); a.nrows()];
+        t.apply_into(&x, &mut y, &mut ws, Parallelism::Sequential);
+        let mut g = vec![Vec3::zeros(); a.ncols()];
+        t.apply_transpose_into(&f, &mut g, &mut ws, Parallelism::Sequential);
+        let cz = coarse[2];
+        let (plane, fplane) = (coarse[0] * coarse[1], fine[0] * fine[1]);
+        for tasks in 1..=5 {
+            let split = |n: usize, k: usize| n * k / tasks..n * (k + 1) / tasks;
+            // A x: x- and y-passes by coarse planes, then the z-pass by fine planes.
+            let (mut t1, mut t2) = (vec![Vec3::zeros(); l1 * cz], vec![Vec3::zeros(); l2 * cz]);
+            for k in 0..tasks {
+                let e = split(cz, k);
+                t.apply_xy_planes(
+                    &x,
+                    e.clone(),
+                    &mut t1[e.start * l1..e.end * l1],
+                    &mut t2[e.start * l2..e.end * l2],
+                );
+            }
+            let mut y2 = vec![Vec3::zeros(); a.nrows()];
+            for k in 0..tasks {
+                let p = split(fine[2], k);
+                t.apply_z_planes(&t2, p.clone(), &mut y2[p.start * fplane..p.end * fplane]);
+            }
+            assert!(y == y2, "{coarse:?}, {tasks} tasks: A x");
+            // A^T f: every pass by coarse planes.
+            let (mut u1, mut u2) = (vec![Vec3::zeros(); l1 * cz], vec![Vec3::zeros(); l2 * cz]);
+            let mut g2 = vec![Vec3::zeros(); a.ncols()];
+            for k in 0..tasks {
+                let e = split(cz, k);
+                t.apply_transpose_planes(
+                    &f,
+                    e.clone(),
+                    &mut u2[e.start * l2..e.end * l2],
+                    &mut u1[e.start * l1..e.end * l1],
+                    &mut g2[e.start * plane..e.end * plane],
+                );
+            }
+            assert!(g == g2, "{coarse:?}, {tasks} tasks: A^T f");
+        }
+    }
+}

@@ -23,12 +23,24 @@ use crate::error::{SolidsError, invalid};
 /// Largest subdivision level accepted (level 6 of the 4^3 cube has 7.3 million data points).
 pub const MAX_LEVEL: usize = 6;
 
-/// Subdivision solids whose finest lattice has at least this many points and is a structured
-/// grid (every subdivided box from level 4 of the 4^3 cube on: 117,649 points) number their
-/// data points in grid order ([`DataNumbering::Grid`]); smaller ones keep
-/// [`DataNumbering::Locality`], and with it the bits of their trajectories and of the session
-/// files that store them.
+/// A subdivision solid loaded from a file whose finest lattice is a structured grid of at least
+/// this many points (every subdivided box from level 4 of the 4^3 cube on: 117,649 points) is
+/// numbered in grid order ([`DataNumbering::Grid`]) whatever numbering the file records (its
+/// parts are moved into it, [`crate::DynamicSolid::from_parts_numbered`]: twice as fast a step
+/// there, the trajectory continuing to rounding); a smaller one keeps the numbering its file
+/// records, and with it the bits of its trajectory. New solids: [`GRID_NUMBERING_NEW_POINTS`].
 pub const GRID_NUMBERING_POINTS: usize = 100_000;
+
+/// A new subdivision solid (built by [`SolidSource::discretize`], not loaded from a file) whose
+/// finest lattice is a structured grid of at least this many points (every subdivided box from
+/// level 2 of the 4^3 cube on: 2,197 points) is numbered in grid order
+/// ([`DataNumbering::Grid`]), which gives each level between two grids its tensor-product form
+/// ([`TensorOperator`]: the phased step's map passes one axis at a time, issue 31,
+/// `docs/performance.md` "Level-2 step, session 22 (h60)"); smaller ones keep
+/// [`DataNumbering::Locality`]. The same bound as [`crate::PHASED_POINTS`]: below it a step
+/// runs on one thread, takes a few microseconds, and the small models keep the bits of their
+/// stored runs.
+pub const GRID_NUMBERING_NEW_POINTS: usize = crate::PHASED_POINTS;
 
 /// How the data points of a subdivision solid are numbered (the order of
 /// [`crate::DynamicSolid::data_points`], of every per-data-point array and of the data-point ids
@@ -38,14 +50,16 @@ pub const GRID_NUMBERING_POINTS: usize = 100_000;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum DataNumbering {
     /// Cuthill-McKee by [`Lattice::locality_order`] (B-spline solids and level 0: the
-    /// lattice's own numbering). Every solid before session 21 (issue 31), and every solid
-    /// below [`GRID_NUMBERING_POINTS`] or whose finest lattice is not a grid since.
+    /// lattice's own numbering). Every solid before session 21 (issue 31); since, every solid
+    /// whose finest lattice is not a grid, new ones below [`GRID_NUMBERING_NEW_POINTS`], and
+    /// (session 22) those loaded from a file that records it, below [`GRID_NUMBERING_POINTS`].
     #[default]
     Locality,
     /// Grid order `i + nx (j + ny k)` of a finest lattice that is an `nx x ny x nz` grid (x the
     /// longest axis; found from the topology alone), under which the structured-grid spring
     /// kernel (`springs/grid.rs`) reads `d` and writes `f` in order (issue 31,
-    /// `docs/performance.md` "Level-5 step, session 21").
+    /// `docs/performance.md` "Level-5 step, session 21") and the levels of the chain between
+    /// grids are applied in their tensor-product forms ([`TensorOperator`], session 22).
     Grid,
 }
 
@@ -263,15 +277,17 @@ impl SolidSource {
                 // kernel 10-20 % faster at level 5, but a saved session stores data points in
                 // this numbering: not done without a versioned migration; docs/performance.md
                 // "Structured-grid spring kernel".)
-                // Large grids (every subdivided box from level 4 on) are numbered in grid order
-                // instead, so that the structured-grid spring kernel reads `d` and writes `f`
-                // in order (issue 31; `DataNumbering`).
-                let want =
-                    numbering.unwrap_or(if solid.finest().num_points() >= GRID_NUMBERING_POINTS {
+                // Grids (every subdivided box from level 2 on, `GRID_NUMBERING_NEW_POINTS`) are
+                // numbered in grid order instead, so that the structured-grid spring kernel
+                // reads `d` and writes `f` in order and the levels between grids get their
+                // tensor-product forms (issue 31; `DataNumbering`).
+                let want = numbering.unwrap_or(
+                    if solid.finest().num_points() >= GRID_NUMBERING_NEW_POINTS {
                         DataNumbering::Grid
                     } else {
                         DataNumbering::Locality
-                    });
+                    },
+                );
                 let grid = match want {
                     DataNumbering::Grid => crate::springs::lattice_grid_order(solid.finest()),
                     DataNumbering::Locality => None,

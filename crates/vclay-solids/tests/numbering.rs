@@ -1,10 +1,11 @@
-//! The data-point numbering ([`DataNumbering`], issue 31): large subdivided boxes are numbered in
-//! grid order, everything else keeps the Cuthill-McKee numbering, and parts saved in the old
-//! numbering load into the new one meaning the same points.
+//! The data-point numbering ([`DataNumbering`], issue 31): new subdivided boxes from
+//! [`GRID_NUMBERING_NEW_POINTS`] data points are numbered in grid order, everything else keeps
+//! the Cuthill-McKee numbering; parts saved in the old numbering load into the new one meaning
+//! the same points from [`GRID_NUMBERING_POINTS`] on, and keep their numbering below it.
 
 use vclay_core::Vec3;
 use vclay_solids::benchmarks::{self, subdivision_box};
-use vclay_solids::model::GRID_NUMBERING_POINTS;
+use vclay_solids::model::{GRID_NUMBERING_NEW_POINTS, GRID_NUMBERING_POINTS};
 use vclay_solids::{
     DataNumbering, DynamicSolid, Material, SolidParams, SolidRest, SolidState, Tool,
 };
@@ -25,14 +26,19 @@ fn max_diff(a: &[Vec3], b: &[Vec3]) -> f64 {
 
 #[test]
 fn large_boxes_are_numbered_in_grid_order_and_the_rest_keep_locality() {
-    let small = cube(3);
-    assert!(small.data_points().len() < GRID_NUMBERING_POINTS);
+    let small = cube(1);
+    assert!(small.data_points().len() < GRID_NUMBERING_NEW_POINTS);
     assert_eq!(small.data_numbering(), DataNumbering::Locality);
-    assert_eq!(
-        small.springs().grid_dims(),
-        None,
-        "level 3: the general kernel"
-    );
+    for level in [2, 3] {
+        let mid = cube(level);
+        assert!(mid.data_points().len() >= GRID_NUMBERING_NEW_POINTS);
+        assert_eq!(mid.data_numbering(), DataNumbering::Grid, "level {level}");
+        assert_eq!(
+            mid.springs().grid_dims(),
+            None,
+            "level {level}: the general kernel"
+        );
+    }
     let large = cube(4);
     assert!(large.data_points().len() >= GRID_NUMBERING_POINTS);
     assert_eq!(large.data_numbering(), DataNumbering::Grid);
@@ -242,4 +248,65 @@ fn grid_numbered_chains_run_the_tensor_levels_and_agree_with_the_sparse_products
             .apply_transpose_into(&f, &mut k, &mut ws, Parallelism::Rayon);
         assert!(g == k, "level {level}: A^T f, one thread = all threads");
     }
+}
+
+/// A box below [`GRID_NUMBERING_POINTS`] loaded from parts in the Cuthill-McKee numbering (a
+/// session saved before session 22, when such boxes were not grid-numbered) keeps it: its data
+/// points keep their places and it continues bit for bit, while a new solid of the same box is
+/// numbered in grid order.
+#[test]
+fn small_boxes_saved_in_the_locality_numbering_keep_it() {
+    let (source, p) = subdivision_box(4, 2);
+    assert_eq!(cube(2).data_numbering(), DataNumbering::Grid);
+    let old = source
+        .discretize_numbered(&p, Some(DataNumbering::Locality))
+        .unwrap();
+    assert_eq!(old.numbering, DataNumbering::Locality);
+    assert!(old.data.num_points() < GRID_NUMBERING_POINTS);
+    let d: Vec<Vec3> = old.data.points().to_vec();
+    let rest = SolidRest {
+        control_points: p.clone(),
+        data_points: d.clone(),
+        physics_data_points: d.clone(),
+        fixed: vec![false; p.len()],
+        metric_stiffness: None,
+        energy_scale: 1.0,
+    };
+    let state = SolidState {
+        control_points: p.clone(),
+        velocities: vec![Vec3::zeros(); p.len()],
+        data_points: d.clone(),
+        tools: vec![Some(Tool::Rope {
+            point: 1000,
+            cursor: Vec3::new(1.3, 1.2, 1.1),
+            stiffness: 50.0,
+            length: 0.0,
+        })],
+        time: 0.0,
+        steps: 0,
+        tool_energy_seen: 0.0,
+    };
+    let material =
+        vclay_solids::MaterialField::uniform(Material::default(), source.control_cells());
+    let load = |rest: &SolidRest, state: &SolidState| {
+        DynamicSolid::from_parts_numbered(
+            source.clone(),
+            material.clone(),
+            SolidParams::default(),
+            rest,
+            state,
+            DataNumbering::Locality,
+        )
+        .unwrap()
+    };
+    let mut s = load(&rest, &state);
+    assert_eq!(s.data_numbering(), DataNumbering::Locality);
+    assert_eq!(s.data_points(), &d[..], "the data points keep their places");
+    s.run(10).unwrap();
+    // Saved and loaded again mid-run: the same trajectory, bit for bit.
+    let mut t = load(&s.rest(), &s.state());
+    s.run(10).unwrap();
+    t.run(10).unwrap();
+    assert_eq!(t.state(), s.state());
+    assert!(s.state().control_points != p, "the rope moves the box");
 }

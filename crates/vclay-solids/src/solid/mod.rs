@@ -407,6 +407,18 @@ impl DynamicSolid {
         material: MaterialField,
         params: SolidParams,
     ) -> Result<Self, SolidsError> {
+        Self::with_discretization(source, p, material, params, None)
+    }
+
+    /// [`DynamicSolid::with_material`] with `disc`, the discretization of `source` at `p`
+    /// (`None`: [`SolidSource::discretize`]).
+    fn with_discretization(
+        source: SolidSource,
+        p: Vec<Vec3>,
+        material: MaterialField,
+        params: SolidParams,
+        disc: Option<Discretization>,
+    ) -> Result<Self, SolidsError> {
         params.validate()?;
         for m in material.cells() {
             m.validate()?;
@@ -418,7 +430,10 @@ impl DynamicSolid {
                 &format!("{} cell materials", source.control_cells()),
             ));
         }
-        let disc = source.discretize(&p)?;
+        let disc = match disc {
+            Some(d) => d,
+            None => source.discretize(&p)?,
+        };
         let n = p.len();
         let d = disc.data.points().to_vec();
         let mut s = Self {
@@ -2036,13 +2051,18 @@ impl DynamicSolid {
 
     /// [`DynamicSolid::from_parts`] for parts whose data points (rest, physics rest and state)
     /// and tools' data-point ids are in `numbering`, which need not be the one this build
-    /// gives the solid (a session saved by an older build: every solid was
-    /// [`DataNumbering::Locality`] before issue 31's grid numbering). When they differ the
-    /// parts are first moved into the solid's numbering: data point `i` of `numbering` is the
-    /// point of the same finest-lattice point (a permutation, so the values keep their
-    /// bits; a region force's point list keeps its order). The result then steps as a solid
-    /// built in this numbering from the moved parts; its trajectory equals the saving build's
-    /// to rounding (the passes sum in another order), not bit for bit.
+    /// gives a new solid (a session saved by an older build: every solid was
+    /// [`DataNumbering::Locality`] before issue 31's grid numbering, and boxes below
+    /// [`crate::model::GRID_NUMBERING_POINTS`] data points were until session 22).
+    ///
+    /// A solid below [`crate::model::GRID_NUMBERING_POINTS`] data points keeps `numbering`
+    /// (when it can have it) and steps bit for bit as the solid the parts were taken from. A
+    /// larger one gets this build's numbering: when that differs, the parts are first moved
+    /// into it: data point `i` of `numbering` is the point of the same finest-lattice point (a
+    /// permutation, so the values keep their bits; a region force's point list keeps its
+    /// order). The result then steps as a solid built in this numbering from the moved parts;
+    /// its trajectory equals the saving build's to rounding (the passes sum in another order),
+    /// not bit for bit.
     pub fn from_parts_numbered(
         source: SolidSource,
         material: MaterialField,
@@ -2051,15 +2071,25 @@ impl DynamicSolid {
         state: &SolidState,
         numbering: DataNumbering,
     ) -> Result<Self, SolidsError> {
-        let s = Self::with_material(source, rest.control_points.clone(), material, params)?;
+        let p = rest.control_points.clone();
+        // The discretization in the saved numbering (where the solid can have it).
+        let saved = source.discretize_numbered(&p, Some(numbering))?;
+        // Small: keep the saved numbering, and with it the saved trajectory's bits. Large: the
+        // saved numbering if it is this build's (grid order, or a lattice that is no grid).
+        let keep = saved.numbering == numbering
+            && (saved.data.num_points() < crate::model::GRID_NUMBERING_POINTS
+                || numbering == DataNumbering::Grid
+                || crate::springs::lattice_grid_order(&saved.data).is_none());
+        if keep {
+            return Self::with_discretization(source, p, material, params, Some(saved))?
+                .put_parts(rest, state);
+        }
+        let s = Self::with_discretization(source, p, material, params, None)?;
         if numbering == s.disc.numbering {
             return s.put_parts(rest, state);
         }
-        // The finest-lattice point of each data point in the saved numbering (the topology of
-        // the finest lattice does not depend on the control points).
-        let saved = s
-            .source
-            .discretize_numbered(&rest.control_points, Some(numbering))?;
+        // `saved` gives the finest-lattice point of each data point in the saved numbering
+        // (the topology of the finest lattice does not depend on the control points).
         if saved.numbering != numbering {
             return Err(invalid(
                 "data numbering",

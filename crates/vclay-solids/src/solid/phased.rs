@@ -18,13 +18,26 @@
 //!    are cleared for the next step); then the tools' forces on the block's points
 //!    ([`crate::Tool::add_forces_in`]).
 //! 3. `A^T f` level by level, finest first, through the stored transposes, split by rows; the
-//!    last level (to the control points) is fused into phase 4.
+//!    last level (to the control points) is fused into phase 4. A level with a tensor-product
+//!    form ([`SubdivisionMap::tensor`], a box in grid order: `A^(j) = S_z ⊗ S_y ⊗ S_x`) is
+//!    split by its coarse z-planes instead: each task runs the z^T-pass into its planes, then
+//!    the y^T- and x^T-passes within them ([`vclay_lattice::TensorOperator::apply_transpose_planes`]).
 //! 4. Control points, split by free points: `g = A^T f - D v`, `M v` for the kinetic energy,
 //!    the finiteness check.
 //! 5. Integration, split by free points: the divergence verdict (every task computes the same
 //!    one from the energies of phases 1-4), the last good state, `p'' = (A^T M A)^-1 g` (rows of
 //!    the dense inverse, or one sparse solve), the integrator's update.
-//! 6. `d = A p` level by level, split by rows.
+//! 6. `d = A p` level by level, split by rows; a tensor-product level in two phases: the x-
+//!    and y-passes split by coarse z-planes (each reads only its own planes), then the z-pass
+//!    split by fine z-planes ([`vclay_lattice::TensorOperator::apply_xy_planes`],
+//!    [`vclay_lattice::TensorOperator::apply_z_planes`]). Its two intermediate grids live in
+//!    the workspace, declared in the plan like the levels.
+//!
+//! A tensor-product level costs about a third of the multiply-adds of the sparse rows and
+//! streams no large matrix: at level 2 of the 4^3 cube its two passes took ~27 us a thread
+//! and step as sparse rows; with the grid numbering the step went from 0.093-0.098 to
+//! 0.073-0.077 ms, about 8 us of it the tensor form (session 22,
+//! `docs/performance.md` "Level-2 step, session 22 (h60)").
 //!
 //! Tasks of the same part of the data have the same index in every phase, so with the team's
 //! owner rule ([`vclay_core::team`]) each thread keeps its half of `d`, `f` and the levels in
@@ -32,7 +45,9 @@
 //!
 //! Every task writes its own part, so the result does not depend on how many threads ran the
 //! program; it equals the one-thread step up to the order of the force sums (a few units in the
-//! last place, see the tests).
+//! last place, see the tests). The map passes themselves, sparse or tensor, are the map's
+//! own products ([`SubdivisionMap::apply_into`], [`SubdivisionMap::apply_transpose_into`])
+//! bit for bit.
 //!
 //! # Borrows
 //! Tasks reach the shared buffers through a [`Plan`] that declares, before the program runs,
@@ -66,6 +81,9 @@ const ROWS_PER_TASK: usize = 32;
 pub(super) struct PhasedWork {
     /// Intermediate levels of the chain (index = level; 0 and the last unused).
     levels: Vec<Vec<Vec3>>,
+    /// The two intermediate grids of each level applied in its tensor-product form (index
+    /// `2 j` and `2 j + 1` for level `j`; empty for the other levels).
+    mids: Vec<Vec<Vec3>>,
     /// `g` on the free points.
     g: Vec<Vec3>,
     /// The scalars that the integration phase reads, in one buffer so that a task borrows
@@ -88,7 +106,8 @@ pub(super) struct PhasedWork {
 }
 
 /// The slices of the phased program, numbered for its [`Plan`]: the fixed ones, then level
-/// `j` of the chain at `LEVELS + j` (`0..=n`, the ends unused), then the straddle buffer of
+/// `j` of the chain at `LEVELS + j` (`0..=n`, the ends unused), then the two intermediate
+/// grids of each level `j < n` (used by tensor-product levels), then the straddle buffer of
 /// spring block `s`.
 #[derive(Clone, Copy, Debug)]
 struct Slots {
@@ -111,8 +130,13 @@ impl Slots {
         Self::LEVELS + j
     }
 
+    /// Intermediate grid `w` (0 or 1) of tensor level `j`.
+    fn mid(self, j: usize, w: usize) -> usize {
+        Self::LEVELS + self.n + 1 + 2 * j + w
+    }
+
     fn straddle(self, s: usize) -> usize {
-        Self::LEVELS + self.n + 1 + s
+        Self::LEVELS + 3 * self.n + 1 + s
     }
 
     fn len(self) -> usize {
@@ -171,13 +195,20 @@ enum Phase {
     Transpose(usize),
     Control,
     Integrate,
-    /// `A^(j)` from level `j` to `j + 1`.
+    /// The x- and y-passes of a level `j` applied in its tensor-product form.
+    ApplyXY(usize),
+    /// `A^(j)` from level `j` to `j + 1` (the z-pass of a tensor level).
     Apply(usize),
 }
 
 /// Range `t` of `rows` split into `tasks`.
 fn chunk(rows: usize, tasks: usize, t: usize) -> Range<usize> {
     rows * t / tasks..rows * (t + 1) / tasks
+}
+
+/// `r` scaled by `len` (a range of planes of `len` values as a range of values).
+fn scaled(r: &Range<usize>, len: usize) -> Range<usize> {
+    r.start * len..r.end * len
 }
 
 /// Tasks for a phase of `rows` rows on `threads` threads.
@@ -296,6 +327,7 @@ impl DynamicSolid {
         let pw = &mut work.phased;
         let PhasedWork {
             levels,
+            mids,
             g,
             scalars,
             straddle,
@@ -310,17 +342,28 @@ impl DynamicSolid {
         pts.push(map.operator(0).ncols());
         pts.extend(map.operators().iter().map(|a| a.nrows()));
         let pts = &pts[..];
-        // The stored transposes, built before the tasks read them.
+        // Levels applied in their tensor-product form: between two grids in grid order (never
+        // the first level, whose transpose phase 4 reads; never a restricted chain's).
+        let tensor = |j: usize| if j > 0 { map.tensor(j) } else { None };
+        // The stored transposes of the other levels, built before the tasks read them.
         for j in 0..n {
-            map.transpose(j);
+            if tensor(j).is_none() {
+                map.transpose(j);
+            }
         }
+        // Tasks over `planes` z-planes of `len` values each.
+        let plane_tasks = |planes: usize, len: usize| tasks_for(planes * len, threads).min(planes);
 
         // Phases and their task counts.
         let nb = blocks.len();
         phases.clear();
         phases.extend([(Phase::Springs, nb), (Phase::Merge, nb)]);
         for j in (1..n).rev() {
-            phases.push((Phase::Transpose(j), tasks_for(pts[j], threads)));
+            let tasks = match tensor(j) {
+                Some(t) => plane_tasks(t.dims().0[2], pts[j + 1] / t.dims().1[2]),
+                None => tasks_for(pts[j], threads),
+            };
+            phases.push((Phase::Transpose(j), tasks));
         }
         let control_tasks = tasks_for(m.max(nc), threads);
         phases.push((Phase::Control, control_tasks));
@@ -330,7 +373,14 @@ impl DynamicSolid {
         };
         phases.push((Phase::Integrate, integrate_tasks));
         for j in 0..n {
-            phases.push((Phase::Apply(j), tasks_for(pts[j + 1], threads)));
+            match tensor(j) {
+                Some(t) => {
+                    let ([.., cz], [fx, fy, fz]) = t.dims();
+                    phases.push((Phase::ApplyXY(j), plane_tasks(cz, fx * fy)));
+                    phases.push((Phase::Apply(j), plane_tasks(fz, fx * fy)));
+                }
+                None => phases.push((Phase::Apply(j), tasks_for(pts[j + 1], threads))),
+            }
         }
         let phases = &phases[..];
         counts.clear();
@@ -340,6 +390,15 @@ impl DynamicSolid {
         levels.resize_with(n + 1, Vec::new);
         for j in 1..n {
             levels[j].resize(pts[j], Vec3::zeros());
+        }
+        mids.resize_with(2 * n, Vec::new);
+        for j in 0..n {
+            let [l1, l2] = tensor(j).map_or([0, 0], |t| {
+                let cz = t.dims().0[2];
+                t.intermediate_plane_lens().map(|l| l * cz)
+            });
+            mids[2 * j].resize(l1, Vec3::zeros());
+            mids[2 * j + 1].resize(l2, Vec3::zeros());
         }
         g.resize(m, Vec3::zeros());
         let layout = Scalars { nb, control_tasks };
@@ -398,7 +457,18 @@ impl DynamicSolid {
                             },
                             k,
                         );
-                        plan.write(slot.level(j), k, t, chunk(pts[j], tasks, t));
+                        match tensor(j) {
+                            Some(op) => {
+                                // Coarse z-planes, with their planes of both intermediates.
+                                let ([cx, cy, cz], _) = op.dims();
+                                let [l1, l2] = op.intermediate_plane_lens();
+                                let e = chunk(cz, tasks, t);
+                                plan.write(slot.level(j), k, t, scaled(&e, cx * cy));
+                                plan.write(slot.mid(j, 0), k, t, scaled(&e, l1));
+                                plan.write(slot.mid(j, 1), k, t, scaled(&e, l2));
+                            }
+                            None => plan.write(slot.level(j), k, t, chunk(pts[j], tasks, t)),
+                        }
                     }
                     Phase::Control => {
                         plan.read(Slots::P, k);
@@ -413,6 +483,26 @@ impl DynamicSolid {
                         for s in [Slots::P, Slots::V, Slots::GOOD_P, Slots::GOOD_V] {
                             plan.write(s, k, t, owned(t, tasks));
                         }
+                    }
+                    Phase::ApplyXY(j) => {
+                        let op = tensor(j).expect("tensor level");
+                        plan.read(slot.level(j), k);
+                        let [l1, l2] = op.intermediate_plane_lens();
+                        let e = chunk(op.dims().0[2], tasks, t);
+                        plan.write(slot.mid(j, 0), k, t, scaled(&e, l1));
+                        plan.write(slot.mid(j, 1), k, t, scaled(&e, l2));
+                    }
+                    Phase::Apply(j) if tensor(j).is_some() => {
+                        // Fine z-planes (no output map: a restricted chain has no tensor levels).
+                        let ([..], [fx, fy, fz]) = tensor(j).unwrap().dims();
+                        plan.read(slot.mid(j, 1), k);
+                        let rows = scaled(&chunk(fz, tasks, t), fx * fy);
+                        let dst = if j + 1 < n {
+                            slot.level(j + 1)
+                        } else {
+                            Slots::D
+                        };
+                        plan.write(dst, k, t, rows);
                     }
                     Phase::Apply(j) => {
                         plan.read(if j == 0 { Slots::P } else { slot.level(j) }, k);
@@ -437,6 +527,11 @@ impl DynamicSolid {
             .iter_mut()
             .enumerate()
             .map(|(j, l)| program.slice(slot.level(j), &mut l[..]))
+            .collect();
+        let mids: Vec<PlannedSlice<'_, '_, Vec3>> = mids
+            .iter_mut()
+            .enumerate()
+            .map(|(i, l)| program.slice(slot.mid(i / 2, i % 2), &mut l[..]))
             .collect();
         let gsh = program.slice(Slots::G, &mut g[..]);
         let scalar_sh = program.slice(Slots::SCALARS, &mut scalars[..]);
@@ -491,6 +586,17 @@ impl DynamicSolid {
                         te += tool.add_forces_in(dr, mass, boundary, fr, r.clone());
                     }
                     scalar_sh.part(task).1[0] = te;
+                }
+                Phase::Transpose(j) if tensor(j).is_some() => {
+                    let op = tensor(j).unwrap();
+                    let src = if j + 1 == n {
+                        f.read(task)
+                    } else {
+                        levels[j + 1].read(task)
+                    };
+                    let planes = chunk(op.dims().0[2], tasks, t);
+                    let (u2, u1) = (mids[2 * j + 1].part(task).1, mids[2 * j].part(task).1);
+                    op.apply_transpose_planes(src, planes, u2, u1, levels[j].part(task).1);
                 }
                 Phase::Transpose(j) => {
                     let op = map.transpose(j);
@@ -587,6 +693,18 @@ impl DynamicSolid {
                         }
                     }
                 }
+                Phase::ApplyXY(j) => {
+                    let op = tensor(j).unwrap();
+                    let planes = chunk(op.dims().0[2], tasks, t);
+                    let (t1, t2) = (mids[2 * j].part(task).1, mids[2 * j + 1].part(task).1);
+                    op.apply_xy_planes(levels[j].read(task), planes, t1, t2);
+                }
+                Phase::Apply(j) if tensor(j).is_some() => {
+                    let op = tensor(j).unwrap();
+                    let planes = chunk(op.dims().1[2], tasks, t);
+                    let dst = if j + 1 < n { &levels[j + 1] } else { &dsh };
+                    op.apply_z_planes(mids[2 * j + 1].read(task), planes, dst.part(task).1);
+                }
                 Phase::Apply(j) => {
                     let op = map.operator(j);
                     let rows = chunk(pts[j + 1], tasks, t);
@@ -610,7 +728,7 @@ impl DynamicSolid {
             }
         };
         program.run(&run);
-        drop((straddle, levels));
+        drop((straddle, levels, mids));
         work.phased.clean = true;
         layout.energy(&work.phased.scalars)
     }
@@ -798,6 +916,66 @@ mod tests {
         for (a, b) in v1.iter().zip(&v2) {
             assert!((a - b).norm() <= 1e-9 * speed, "velocity {a} vs {b}");
         }
+    }
+
+    /// A box of `n` control points per axis at `level`, as (source, control points).
+    fn boxed(n: [usize; 3], level: usize) -> (SolidSource, Vec<Vec3>) {
+        let control = vclay_lattice::primitives::box_lattice(n, Vec3::zeros(), Vec3::repeat(1.0));
+        SolidSource::subdivision(control, vclay_lattice::BoundaryRule::Sharp, level)
+    }
+
+    #[test]
+    fn phased_tensor_levels_give_the_maps_products_bit_for_bit() {
+        // Boxes in grid order: every level after the first is a tensor product, run as phases
+        // over z-planes (odd and even plane counts, one and two tensor levels); the phased
+        // `A p` and `A^T f` are the map's own products (`SubdivisionMap::apply_into`,
+        // `apply_transpose_into`: `TensorOperator`'s) bit for bit.
+        for (n, level) in [
+            ([3, 4, 5], 2),
+            ([4, 4, 4], 2),
+            ([2, 3, 4], 3),
+            ([4, 4, 4], 3),
+        ] {
+            let (source, p) = boxed(n, level);
+            let params = SolidParams {
+                parallelism: Parallelism::Rayon,
+                ..SolidParams::default()
+            };
+            let mut s = DynamicSolid::new(source, p, Material::default(), params).unwrap();
+            assert_eq!(s.data_numbering(), crate::DataNumbering::Grid, "{n:?}");
+            let tensor: Vec<bool> = (0..level).map(|j| s.disc.map.tensor(j).is_some()).collect();
+            assert_eq!(
+                tensor,
+                (0..level).map(|j| j > 0).collect::<Vec<_>>(),
+                "{n:?}"
+            );
+            s.attach_rope(Vec3::new(1.3, 1.2, 1.1), 50.0, 0.0).unwrap();
+            s.add_tool(Tool::Gravity {
+                g: Vec3::new(0.0, 0.0, -0.5),
+            })
+            .unwrap();
+            if team_threads() > 1 {
+                assert!(s.phased_eligible(), "{n:?} level {level}");
+            }
+            // From rest (`D v = 0`): `g = A^T f` for the forces of the step.
+            s.step().unwrap();
+            let g = s.disc.map.apply_transpose(&s.work.f);
+            if team_threads() > 1 {
+                assert!(g == s.work.phased.g, "{n:?} level {level}: A^T f");
+            }
+            s.run(3).unwrap();
+            assert!(
+                s.d == s.disc.map.apply(&s.p),
+                "{n:?} level {level}: d = A p"
+            );
+        }
+        assert_same_motion(
+            boxed([3, 4, 5], 2),
+            Integrator::SymplecticEuler,
+            None,
+            false,
+        );
+        assert_same_motion(boxed([4, 4, 4], 3), Integrator::SymplecticEuler, None, true);
     }
 
     #[test]
