@@ -21,7 +21,7 @@ pub mod yardstick;
 
 pub use math::{Interval, Vec3, Vec4};
 pub use mesh::{MeshError, MeshSink, TriMesh};
-pub use par::Parallelism;
+pub use par::{CacheAligned, Parallelism};
 pub use plasticity::Plasticity;
 pub use quadrature::GaussLegendre;
 pub use tolerance::Tolerance;

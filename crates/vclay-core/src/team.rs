@@ -77,9 +77,7 @@ unsafe impl Send for Job {}
 
 /// A claim flag on a cache line of its own: the threads claim different tasks at the same
 /// moment, and flags sharing a line would bounce it between their cores.
-#[derive(Default)]
-#[repr(align(64))]
-struct Padded(AtomicUsize);
+type Padded = crate::par::CacheAligned<AtomicUsize>;
 
 struct Shared {
     /// Odd while a program is open; incremented to open and to close.

@@ -50,7 +50,7 @@ mod grid;
 
 use grid::{GridSprings, GridWorkspace};
 use rayon::prelude::*;
-use vclay_core::{Parallelism, Vec3};
+use vclay_core::{CacheAligned, Parallelism, Vec3};
 
 /// The points along each axis and the points of `lattice` in the order of a structured grid
 /// (`i + nx (j + ny k)`, x the longest axis; `springs/grid.rs` module docs) when its edges and faces are exactly those of
@@ -847,6 +847,8 @@ impl<'s> Topology<'s> {
         faces: std::ops::Range<usize>,
     ) -> f64 {
         let mut energy = 0.0;
+        // Batch arrays on cache lines of their own, wherever the thread's stack lies: no vector
+        // access splits a line or a page ([`CacheAligned`]; the same bits).
         let mut x = CacheAligned([[0.0; BATCH]; 3]);
         let mut buf = CacheAligned([[0.0; BATCH]; 2]);
         // Edge springs.
@@ -1003,38 +1005,6 @@ fn counts(it: impl Iterator<Item = usize>, n: usize) -> Vec<usize> {
 
 /// Springs per batch of the force kernel.
 const BATCH: usize = 16;
-
-/// A value aligned to a cache line (64 bytes): the force kernel's batch arrays on the stack.
-///
-/// The kernel writes a batch lane by lane and reads it back in 32-byte vectors (and the other
-/// way round). A stack frame is only 16-byte aligned, so half the placements of an array make
-/// every other vector access split two cache lines, and when the array also crosses a 4096-byte
-/// page boundary some of them split two pages, which costs far more. The thread's stack offset
-/// is drawn per process by address-space randomization (the caller) or fixed per build (the
-/// team's helper), so the 384-byte `x` of a batch crossed a page in some processes and not in
-/// others: on the level-2 cube that thread's spring phase took 55-61 us instead of 50-53
-/// (`docs/performance.md`, "Level-2 spring phase, session 22 (h61)", where a sweep of the stack
-/// offset shows the slow placements are exactly those). Aligned to 64 bytes, no vector access
-/// splits a cache line, so none splits a page, wherever the stack lies. The arithmetic and its
-/// order are unchanged: the same bits.
-#[derive(Clone, Copy)]
-#[repr(C, align(64))]
-struct CacheAligned<T>(T);
-
-impl<T> std::ops::Deref for CacheAligned<T> {
-    type Target = T;
-    #[inline(always)]
-    fn deref(&self) -> &T {
-        &self.0
-    }
-}
-
-impl<T> std::ops::DerefMut for CacheAligned<T> {
-    #[inline(always)]
-    fn deref_mut(&mut self) -> &mut T {
-        &mut self.0
-    }
-}
 
 /// The force kernel as a [`pulp::WithSimd`] operation, so that [`pulp::Arch::dispatch`]
 /// compiles it with the best instruction set the CPU has (runtime detection, safe code).
