@@ -4,8 +4,10 @@
 # target/check-designer/ (CI artifacts). Steps and what is checked (from the sessions saved on
 # the way, read back with Python):
 #   1. front view (key 1), frame (F); the cube's box on screen is found from the clay colour;
-#   2. the fix brush (H), grown twice with ], strokes along the cube's bottom edge: the control
-#      points it fixed are the bottom ones (all in the lower half, three or more at the bottom);
+#   2. once a saved session says the scenario has ended (t = 1.5 s), the fix brush (H), grown
+#      twice with ], strokes along the cube's bottom edge: the control points it fixed (saved
+#      and checked at once) are the bottom ones (all in the lower half, three or more at the
+#      bottom), and they stay fixed through the pull;
 #   3. symmetry X on, the rope (R) pulls the top right up: the mirrored rope pulls the top left,
 #      and both sides rise alike;
 #   4. released in sculpt mode (the default), the shape stays: the session saved 0.7 s after the
@@ -15,6 +17,7 @@
 #      unchanged);
 #   6. the last session saved is opened again in a new studio and saved at once: the control
 #      points are the same.
+# A failed step prints the window's last frame-log lines and the saved session's command log.
 # Says SKIPPED and exits 0 when Xvfb, xdotool or ImageMagick is missing. VCLAY_STUDIO=path uses
 # a built binary; else this builds the debug one.
 set -euo pipefail
@@ -25,10 +28,28 @@ work=$root/target/check-designer
 # shellcheck source=bench/studio_window.sh
 source bench/studio_window.sh
 
+starts=0
 start() { # FILE: starts the studio on FILE and waits for its window
-  start_studio "$1" --autosave "$work/autosave.session" --no-recovery
+  starts=$((starts + 1))
+  start_studio "$1" --autosave "$work/autosave.session" --no-recovery \
+    --frame-log "$work/frames_$starts.txt"
   sleep 3
   xdotool windowfocus "$win" 2>/dev/null || true
+}
+# What the studio did, printed when a step fails: the last frame-log lines (frames/s, simulated
+# time, steps/s) and the commands of the session saved last (step, time, action, message).
+diagnose() { # SESSION
+  echo "check_designer: the window's last frame-log lines (wall_s frames/s sim_t steps steps/s ...):"
+  tail -n 4 "$work"/frames_*.txt 2>/dev/null | sed 's/^/  /' || true
+  python3 - "$1" <<'PY' || true
+import json, sys
+s = json.load(open(sys.argv[1]))
+print(f"check_designer: the log of {sys.argv[1]}:")
+for e in s["log"]:
+    if e["command"]["action"] != "move-rope":
+        print(f"  step {e['step']} t {e['time']:.3f} {e['command']['action']}: {e['message'][:70]}")
+PY
+  tail -n 5 "$work/studio.log" 2>/dev/null | sed 's/^/  studio: /' || true
 }
 save_as() { # PATH: Ctrl+Shift+S, type the path, Enter
   xdotool key ctrl+shift+s; sleep 0.8
@@ -56,19 +77,47 @@ read -r bw bh bx by <<<"$(echo "$box" | sed 's/[x+]/ /g')"
 bx=$((bx + 308)); by=$((by + 33))
 echo "check_designer: the cube on screen: ${bw}x${bh} at ($bx, $by)"
 [ "$bw" -gt 100 ] && [ "$bh" -gt 100 ] || { echo "check_designer: FAILED: no cube in the front view"; exit 1; }
-save_as "$work/0_before.session"
+# The designer starts once the scenario has ended (t = 1.5 s; its timeline frees the bottom at
+# t = 0.9, which would undo a fix stroke made before): saved until the saved time says so.
+ended=
+for k in $(seq 1 20); do
+  save_as "$work/0_before_$k.session"
+  if python3 -c 'import json, sys; s = json.load(open(sys.argv[1]))
+sys.exit(0 if s["models"][0]["state"]["state"]["time"] >= 1.5 - 1e-9 else 1)' \
+    "$work/0_before_$k.session"; then
+    cp "$work/0_before_$k.session" "$work/0_before.session"; ended=1; break
+  fi
+  sleep 1
+done
+[ -n "$ended" ] || { diagnose "$work/0_before_$k.session"; echo "check_designer: FAILED: the scenario did not end"; exit 1; }
 
-# 2. Fix brush, grown twice (]), along the bottom edge.
+# 2. Fix brush, grown twice (]), along the bottom edge; saved and checked at once.
 xdotool key h; sleep 0.3; xdotool key bracketright; sleep 0.2; xdotool key bracketright; sleep 0.3
 drag $((bx + bw / 10)) $((by + bh * 93 / 100)) $((bx + bw * 9 / 10)) $((by + bh * 93 / 100)) 20 0.2
 sleep 0.5
+save_as "$work/0_fixed.session"
+python3 - "$work" <<'PY' || { diagnose "$work/0_fixed.session"; exit 1; }
+import json, sys
+work = sys.argv[1]
+p0 = json.load(open(f"{work}/0_before.session"))["models"][0]["state"]["state"]["control_points"]
+m = json.load(open(f"{work}/0_fixed.session"))["models"][0]["state"]
+zs = [p[2] for p in p0]
+zlo, zhi = min(zs), max(zs)
+fixed = [i for i, f in enumerate(m["rest"]["fixed"]) if f]
+heights = [(p0[i][2] - zlo) / (zhi - zlo) for i in fixed]
+print(f"check_designer: fix brush fixed {len(fixed)} control points, heights {[round(h, 2) for h in heights]}")
+if sum(h < 0.1 for h in heights) < 3:
+    sys.exit("check_designer: FAILED: the fix stroke fixed too few bottom points")
+if max(heights) >= 0.5:
+    sys.exit("check_designer: FAILED: the fix brush fixed points away from the stroke")
+PY
 
 # 3. Symmetry X, rope up from the top right (its mirror pulls the top left). The top of the
 # clay in that column (the scenario's rope left a dome on the top face, so the box's top is
 # the dome's).
 gx=$((bx + bw * 8 / 10))
 col=$(convert "$work/1_front.png" -crop "1x735+$gx+33" +repage -fuzz 18% -fill white \
-  -opaque "rgb(200,150,120)" -fill black +opaque white -format "%@" info:)
+  -opaque "rgb(200,150,120)" -fill black +opaque white -format "%@" info: 2>/dev/null)
 gy=$(($(echo "$col" | sed 's/.*+//') + 33 + bh * 4 / 100))
 echo "check_designer: the rope grabs at ($gx, $gy)"
 xdotool key x; sleep 0.2; xdotool key r; sleep 0.3
@@ -97,7 +146,7 @@ start "$work/3_after_dialog.session"
 save_as "$work/4_reopened.session"
 import -window root "$work/5_reopened.png"
 
-python3 - "$work" <<'PY'
+python3 - "$work" <<'PY' || { diagnose "$work/3_after_dialog.session"; exit 1; }
 import json, sys
 work = sys.argv[1]
 def load(name):
@@ -115,16 +164,11 @@ later_s, later = load("2_later")
 dialog_s, dialog = load("3_after_dialog")
 reopened_s, reopened = load("4_reopened")
 p0 = points(before)
-zs = [p[2] for p in p0]
-zlo, zhi = min(zs), max(zs)
 size = max(max(p[k] for p in p0) - min(p[k] for p in p0) for k in range(3))
 
-# 2. The fixed points are the bottom ones.
-fixed = [i for i, f in enumerate(released["rest"]["fixed"]) if f]
-heights = [(p0[i][2] - zlo) / (zhi - zlo) for i in fixed]
-print(f"check_designer: fix brush fixed {len(fixed)} control points, heights {[round(h, 2) for h in heights]}")
-assert sum(h < 0.1 for h in heights) >= 3, "the fix stroke fixed too few bottom points"
-assert max(heights) < 0.5, "the fix brush fixed points away from the stroke"
+# 2. The fix stroke's points (checked when it was saved) are still fixed after the pull.
+fixed = [i for i, f in enumerate(load("0_fixed")[1]["rest"]["fixed"]) if f]
+assert fixed and all(released["rest"]["fixed"][i] for i in fixed), "the pull freed fixed points"
 
 # 3. Two ropes, mirrored; both sides rose alike.
 r = ropes(released_s)

@@ -664,3 +664,27 @@ fn the_smooth_brush_strokes_smooth_edits_along_the_drag_in_one_undo_step() {
     let left = w.query(|s| s.log().len()).unwrap();
     assert_eq!(left, 0, "one undo step");
 }
+
+#[test]
+fn a_key_pressed_in_the_frame_after_a_dialog_closes_is_a_shortcut() {
+    // The path field had the keyboard focus; the dialog that held it is gone, so the next
+    // frame's keys are the designer's shortcuts (a stale focus used to swallow them for a frame).
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = paused_cube(dir.path());
+    key(&mut h, Key::R);
+    assert_eq!(h.state().tool, Tool::Rope);
+    h.key_press_modifiers(Modifiers::COMMAND | Modifiers::SHIFT, Key::S);
+    h.step();
+    assert_eq!(h.state().dialog_title(), Some("Save session as"));
+    let path = dir.path().join("cube.session");
+    h.key_press_modifiers(Modifiers::COMMAND, Key::A);
+    h.step();
+    h.get_by_role(Role::TextInput)
+        .type_text(&format!("{}", path.display()));
+    h.step();
+    key(&mut h, Key::Enter);
+    assert_eq!(h.state().dialog_title(), None);
+    key(&mut h, Key::H);
+    assert_eq!(h.state().tool, Tool::Fix, "the key after the dialog");
+    wait_for(&mut h, 30, "the save", |_| path.exists());
+}
