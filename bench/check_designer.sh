@@ -17,7 +17,8 @@
 #      unchanged);
 #   6. the last session saved is opened again in a new studio and saved at once: the control
 #      points are the same.
-# A failed step prints the window's last frame-log lines and the saved session's command log.
+# A failed step prints the window's last frame-log lines and the saved session's command log;
+# a fix stroke that fixed no bottom point is tried once more, with a warning.
 # Says SKIPPED and exits 0 when Xvfb, xdotool or ImageMagick is missing. VCLAY_STUDIO=path uses
 # a built binary; else this builds the debug one.
 set -euo pipefail
@@ -91,26 +92,41 @@ sys.exit(0 if s["models"][0]["state"]["state"]["time"] >= 1.5 - 1e-9 else 1)' \
 done
 [ -n "$ended" ] || { diagnose "$work/0_before_$k.session"; echo "check_designer: FAILED: the scenario did not end"; exit 1; }
 
-# 2. Fix brush, grown twice (]), along the bottom edge; saved and checked at once.
-xdotool key h; sleep 0.3; xdotool key bracketright; sleep 0.2; xdotool key bracketright; sleep 0.3
-drag $((bx + bw / 10)) $((by + bh * 93 / 100)) $((bx + bw * 9 / 10)) $((by + bh * 93 / 100)) 20 0.2
-sleep 0.5
-save_as "$work/0_fixed.session"
-python3 - "$work" <<'PY' || { diagnose "$work/0_fixed.session"; exit 1; }
+# 2. Fix brush, grown twice (]), along the bottom edge; saved and checked at once. A stroke
+# that fixed nothing is tried once more after the diagnosis is printed (CI saw one once, on a
+# machine whose screenshots it did not keep); a second failure fails the check.
+fix_ok() { # SESSION: the fix brush fixed bottom points, and only points in the lower half
+  python3 - "$work/0_before.session" "$1" <<'PY'
 import json, sys
-work = sys.argv[1]
-p0 = json.load(open(f"{work}/0_before.session"))["models"][0]["state"]["state"]["control_points"]
-m = json.load(open(f"{work}/0_fixed.session"))["models"][0]["state"]
+p0 = json.load(open(sys.argv[1]))["models"][0]["state"]["state"]["control_points"]
+m = json.load(open(sys.argv[2]))["models"][0]["state"]
 zs = [p[2] for p in p0]
 zlo, zhi = min(zs), max(zs)
 fixed = [i for i, f in enumerate(m["rest"]["fixed"]) if f]
 heights = [(p0[i][2] - zlo) / (zhi - zlo) for i in fixed]
 print(f"check_designer: fix brush fixed {len(fixed)} control points, heights {[round(h, 2) for h in heights]}")
 if sum(h < 0.1 for h in heights) < 3:
-    sys.exit("check_designer: FAILED: the fix stroke fixed too few bottom points")
+    sys.exit("check_designer: the fix stroke fixed too few bottom points")
 if max(heights) >= 0.5:
-    sys.exit("check_designer: FAILED: the fix brush fixed points away from the stroke")
+    sys.exit("check_designer: the fix brush fixed points away from the stroke")
 PY
+}
+fixed_ok=
+for try in 1 2; do
+  xdotool key h; sleep 0.3
+  # Grown twice (once more on the second try, should the first have missed a key).
+  xdotool key bracketright; sleep 0.2
+  [ "$try" = 2 ] || { xdotool key bracketright; sleep 0.3; }
+  drag $((bx + bw / 10)) $((by + bh * 93 / 100)) $((bx + bw * 9 / 10)) $((by + bh * 93 / 100)) 20 0.2
+  sleep 0.5
+  save_as "$work/0_fixed_$try.session"
+  if fix_ok "$work/0_fixed_$try.session"; then
+    cp "$work/0_fixed_$try.session" "$work/0_fixed.session"; fixed_ok=1; break
+  fi
+  diagnose "$work/0_fixed_$try.session"
+  [ "$try" = 2 ] || echo "check_designer: WARNING: the fix stroke fixed nothing at the bottom; once more"
+done
+[ -n "$fixed_ok" ] || { echo "check_designer: FAILED: the fix stroke fixed too few bottom points"; exit 1; }
 
 # 3. Symmetry X, rope up from the top right (its mirror pulls the top left). The top of the
 # clay in that column (the scenario's rope left a dome on the top face, so the box's top is
@@ -171,7 +187,8 @@ fixed = [i for i, f in enumerate(load("0_fixed")[1]["rest"]["fixed"]) if f]
 assert fixed and all(released["rest"]["fixed"][i] for i in fixed), "the pull freed fixed points"
 
 # 3. Two ropes, mirrored; both sides rose alike.
-r = ropes(released_s)
+fixed_s = load("0_fixed")[0]
+r = ropes(released_s)[len(ropes(fixed_s)):]
 print(f"check_designer: ropes {[e['command'].get('name') for e in r]}")
 assert len(r) == 2, f"symmetry X gives two ropes: {len(r)}"
 xs = [p[0] for p in p0]
