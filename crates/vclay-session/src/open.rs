@@ -69,6 +69,46 @@ pub enum FileKind {
 }
 
 impl FileKind {
+    /// Every kind, in the order [`openable`] and messages list them.
+    pub const ALL: [FileKind; 11] = [
+        FileKind::Scenario,
+        FileKind::Session,
+        FileKind::Step,
+        FileKind::Iges,
+        FileKind::ModelJson,
+        FileKind::Triangular,
+        FileKind::PdeSpec,
+        FileKind::Lattice,
+        FileKind::Mesh,
+        FileKind::PointCloud,
+        FileKind::Geomdl,
+    ];
+
+    /// The extensions the readers take for such a file (they choose their format by
+    /// extension; a recognized file with another one is refused with these named). A session
+    /// and a scenario are recognized by content whatever their name; the first extension is
+    /// the one vclay writes.
+    pub fn extensions(self) -> &'static [&'static str] {
+        match self {
+            FileKind::Scenario => &["toml"],
+            FileKind::Session => &["session"],
+            FileKind::ModelJson | FileKind::Triangular | FileKind::PdeSpec | FileKind::Geomdl => {
+                &["json"]
+            }
+            FileKind::Step => &["step", "stp", "p21"],
+            FileKind::Iges => &["igs", "iges"],
+            FileKind::Lattice => &["ovm", "vtu"],
+            FileKind::Mesh => &["obj", "ply", "stl", "glb"],
+            FileKind::PointCloud => &["xyz"],
+        }
+    }
+
+    /// Whether [`open`] opens such a file as a session (a point cloud and a geomdl document
+    /// go to other commands: [`FileKind::commands`]).
+    pub fn opens(self) -> bool {
+        !matches!(self, FileKind::PointCloud | FileKind::Geomdl)
+    }
+
     /// One phrase for messages ("a PDE surface spec").
     pub fn describe(self) -> &'static str {
         match self {
@@ -100,6 +140,42 @@ impl FileKind {
             FileKind::Mesh => "`vclay ffd`, `vclay clay`, `vclay studio FILE`",
             FileKind::PointCloud => "`vclay fit FILE --out surface.json`",
         }
+    }
+}
+
+/// What [`open`] opens, in one phrase for front ends (a start page, an Open dialog): every
+/// kind that [`FileKind::opens`], with its extensions; kinds with the same extensions share
+/// them ("a vclay model file, a triangular D-NURBS model file or a PDE surface spec (.json)").
+pub fn openable() -> String {
+    list_kinds(FileKind::ALL.iter().copied().filter(|k| k.opens()))
+}
+
+/// `kinds` with their extensions, grouped where consecutive kinds share them, joined with
+/// commas and a final "or".
+fn list_kinds(kinds: impl Iterator<Item = FileKind>) -> String {
+    let mut groups: Vec<(Vec<&str>, &[&str])> = Vec::new();
+    for k in kinds {
+        match groups.last_mut() {
+            Some((names, ext)) if *ext == k.extensions() => names.push(k.describe()),
+            _ => groups.push((vec![k.describe()], k.extensions())),
+        }
+    }
+    let phrases: Vec<String> = groups
+        .iter()
+        .map(|(names, ext)| {
+            let names = join_or(names.iter().map(|n| n.to_string()).collect());
+            format!("{names} (.{})", ext.join(", ."))
+        })
+        .collect();
+    join_or(phrases)
+}
+
+/// "a, b or c".
+fn join_or(mut items: Vec<String>) -> String {
+    match items.pop() {
+        Some(last) if !items.is_empty() => format!("{} or {last}", items.join(", ")),
+        Some(last) => last,
+        None => String::new(),
     }
 }
 
@@ -225,8 +301,10 @@ pub fn identify_bytes(path: &Path, head: &[u8], len: u64) -> Result<FileKind, Se
     }
     Err(SessionError::io(
         path,
-        "not a file vclay reads (scenarios .toml, sessions, model/PDE JSON, STEP, IGES, \
-         lattices .ovm/.vtu, meshes .obj/.ply/.stl/.glb, point clouds .xyz)",
+        format!(
+            "not a file vclay reads: {}",
+            list_kinds(FileKind::ALL.iter().copied())
+        ),
     ))
 }
 
@@ -374,7 +452,11 @@ pub fn open(path: &Path) -> Result<Opened, SessionError> {
             })
         }
         FileKind::ModelJson | FileKind::Step | FileKind::Iges => {
-            check_extension(path, kind, &["json", "step", "stp", "p21", "igs", "iges"])?;
+            let allowed = [FileKind::ModelJson, FileKind::Step, FileKind::Iges]
+                .iter()
+                .flat_map(|k| k.extensions().iter().copied())
+                .collect::<Vec<_>>();
+            check_extension(path, kind, &allowed)?;
             with_model(model_file_spec(&abs)?)
         }
         FileKind::Triangular => with_model(ModelSpec::DnurbsTriangular(
@@ -390,7 +472,7 @@ pub fn open(path: &Path) -> Result<Opened, SessionError> {
             },
         ))),
         FileKind::Lattice => {
-            check_extension(path, kind, &["ovm", "vtu"])?;
+            check_extension(path, kind, kind.extensions())?;
             let spec = models::KindSpec::of_model(models::solid::ModelKeys {
                 file: Some(abs.clone()),
                 level: Some(LATTICE_LEVEL),
@@ -404,7 +486,7 @@ pub fn open(path: &Path) -> Result<Opened, SessionError> {
             )))
         }
         FileKind::Mesh => {
-            check_extension(path, kind, &["obj", "ply", "stl", "glb"])?;
+            check_extension(path, kind, kind.extensions())?;
             with_model(ModelSpec::Ffd(models::KindSpec::of_model(
                 models::ffd::ModelKeys {
                     mesh: Some(abs.clone()),

@@ -164,3 +164,63 @@ fn files_that_are_not_sessions_say_what_takes_them() {
     let m = open(&bin).unwrap_err().to_string();
     assert!(m.contains("not a file vclay reads"), "{m}");
 }
+
+#[test]
+fn openable_lists_every_kind_that_opens_with_the_extensions_its_files_have() {
+    let o = vclay_session::open::openable();
+    for k in FileKind::ALL {
+        assert_eq!(o.contains(k.describe()), k.opens(), "{k:?} in {o}");
+        if k.opens() {
+            for e in k.extensions() {
+                assert!(o.contains(&format!(".{e}")), ".{e} of {k:?} in {o}");
+            }
+        }
+    }
+    assert!(o.contains("a STEP file (.step, .stp, .p21)"), "{o}");
+    // The repository's example and seed files: each one recognized has an extension its kind
+    // lists (so the start page and the Open dialog name what the files are called).
+    let mut seen = std::collections::BTreeSet::new();
+    let mut dirs = vec![
+        repo().join("examples"),
+        repo().join("crates/vclay-io/tests/data/cad"),
+    ];
+    for d in [
+        "geomdl",
+        "glb",
+        "iges",
+        "model_json",
+        "obj",
+        "ovm",
+        "pde_spec",
+        "ply",
+        "scenario",
+        "session",
+        "step",
+        "stl",
+    ] {
+        dirs.push(repo().join("fuzz/seeds").join(d));
+    }
+    while let Some(d) = dirs.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let p = entry.unwrap().path();
+            if p.is_dir() {
+                dirs.push(p);
+                continue;
+            }
+            let Ok(kind) = vclay_session::open::identify(&p) else {
+                continue;
+            };
+            let ext = p
+                .extension()
+                .map_or(String::new(), |e| e.to_string_lossy().to_lowercase());
+            assert!(
+                kind.extensions().contains(&ext.as_str()),
+                "{} is {kind:?}, whose extensions are {:?}",
+                p.display(),
+                kind.extensions()
+            );
+            seen.insert(format!("{kind:?}"));
+        }
+    }
+    assert!(seen.len() >= 9, "kinds seen: {seen:?}");
+}

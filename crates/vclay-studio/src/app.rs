@@ -1200,9 +1200,13 @@ impl Studio {
             }
         }
         ui.add_space(8.0);
-        ui.label(
-            "Or File > Open: a scenario (.toml), a session (.session), a lattice (.ovm), a model \
-             (.json) or a mesh (.obj, .stl, .ply).",
+        // What the session layer opens, in its own words (one way in for every file).
+        ui.add(
+            egui::Label::new(format!(
+                "Or File > Open: {}.",
+                vclay_session::open::openable()
+            ))
+            .wrap(),
         );
         if let Some(b) = chosen {
             self.open_builtin(&b);
