@@ -331,3 +331,67 @@ fn ten_thousand_faces_read_in_two_seconds() {
     );
     assert!(secs < 2.0, "{secs} s");
 }
+
+/// The sphere's face refined for sculpting: its surface (degree-2 quarter arcs, joined at
+/// triple knots) gets its new knots spread over the whole domain, not packed at its start
+/// (which left the last quarter of the sphere in one span, all of whose control points touch
+/// the seam, so a pull there moved nothing), and the refinement is exact.
+#[test]
+fn refining_a_sphere_for_sculpting_spreads_the_knots_and_keeps_the_surface() {
+    use vclay_io::trimmed::sculpt::{boundary_control_points, refine_for_sculpting};
+    let imp = import_model(data("trimmed_cut_sphere.step")).unwrap();
+    let sh = one_closed_shell(&imp.shells);
+    let face = sh.faces.iter().find(|f| f.bound.len() == 3).unwrap();
+    let s = &face.surface;
+    for n in [24, 32, 48] {
+        let r = refine_for_sculpting(s, [n, n]).unwrap();
+        assert_eq!(r.dims(), [n, n]);
+        assert!(r.degree().iter().all(|&p| p >= 3));
+        for a in 0..2 {
+            let d: Vec<f64> = r.knots()[a]
+                .distinct()
+                .into_iter()
+                .map(|(u, _)| u)
+                .collect();
+            let spans: Vec<f64> = d.windows(2).map(|w| w[1] - w[0]).collect();
+            let (lo, hi) = spans
+                .iter()
+                .fold((f64::INFINITY, 0.0f64), |(l, h), &x| (l.min(x), h.max(x)));
+            // Uniform grid points beside the quarter joints: the spans differ by at most a
+            // grid step's fraction, never by the old factor of 5.
+            assert!(
+                hi <= 2.0 * lo,
+                "n {n}, direction {a}: spans {lo:.3}..{hi:.3}: {spans:?}"
+            );
+        }
+        // Exact: the same points at the same parameters (radius 10; 1e-12 relative).
+        let dom = s.domain();
+        for i in 0..=20 {
+            for j in 0..=20 {
+                let u = dom[0].min + dom[0].length() * i as f64 / 20.0;
+                let v = dom[1].min + dom[1].length() * j as f64 / 20.0;
+                let e = (r.point(u, v).unwrap() - s.point(u, v).unwrap()).norm();
+                assert!(e < 1e-11, "n {n}: ({u}, {v}) moved by {e:e}");
+            }
+        }
+        // The control point at the front of the equator (u = 3 pi / 2, v = 0) is free: the
+        // boundary (the seam, the pole, the cut) is away from it.
+        let fixed = boundary_control_points(face, &r).unwrap();
+        let [nu, nv] = r.dims();
+        let near = |k: usize, t: f64| {
+            let g = r.knots()[k].greville();
+            (0..g.len())
+                .min_by(|&a, &b| (g[a] - t).abs().total_cmp(&(g[b] - t).abs()))
+                .unwrap()
+        };
+        let (i, j) = (near(0, 1.5 * std::f64::consts::PI), near(1, 0.0));
+        assert!(i < nu && j < nv);
+        assert!(!fixed.contains(&(i * nv + j)), "n {n}: ({i}, {j}) is fixed");
+        assert!(
+            fixed.len() * 2 <= nu * nv,
+            "n {n}: {} of {} fixed",
+            fixed.len(),
+            nu * nv
+        );
+    }
+}

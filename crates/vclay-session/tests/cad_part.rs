@@ -541,3 +541,48 @@ fn the_default_density_leaves_half_of_a_holed_face_free() {
     );
     eprintln!("default: {fixed} of {n} fixed; refine = [24, 24]: {fixed24} of {n24}");
 }
+
+/// The cut sphere (its body: quarter arcs joined at triple knots, the seam at u = 0 = 2 pi):
+/// a rope at the front of the equator (u = 3 pi / 2, y = -10) pulls the clay out with the
+/// boundary fixed, as one at the back (u = pi / 2) does. Before, the refinement for sculpting
+/// filled its knot grid from u = 0 and left the last quarter one span wide, all of whose
+/// control points touch the seam and were held: the front did not move at all.
+#[test]
+fn a_rope_pulls_the_sphere_wherever_it_grabs() {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../vclay-io/tests/data/cad/trimmed_cut_sphere.step");
+    let pull = |y: f64| {
+        let text = format!(
+            "[model]\nkind = \"cad-part\"\nfile = {:?}\n\n[simulation]\nsteps = 40\n\n\
+             [[timeline]]\nat = 0.0\naction = \"rope\"\nname = \"pull\"\n\
+             from = [0.0, {y}, 0.0]\nto = [0.0, {}, 0.0]\n",
+            file.display().to_string(),
+            1.3 * y
+        );
+        let mut sc = Scenario::parse(&text, "sphere.toml", "sphere", Path::new(".")).unwrap();
+        let p0 = sc.session.model(None).unwrap().control_points();
+        for _ in 0..40 {
+            sc.session.step().unwrap();
+        }
+        let m = sc.session.model(None).unwrap();
+        assert!(
+            m.summary().contains("boundary control points fixed"),
+            "{}",
+            m.summary()
+        );
+        // How far the clay moved out along the pull (radius 10).
+        m.control_points()
+            .iter()
+            .zip(&p0)
+            .map(|(p, q)| (p.y - q.y) * y.signum())
+            .fold(0.0, f64::max)
+    };
+    let (front, back) = (pull(-10.0), pull(10.0));
+    eprintln!("the rope moved the front out by {front:.3}, the back by {back:.3}");
+    assert!(front > 0.2, "the front moved by {front}");
+    assert!(back > 0.2, "the back moved by {back}");
+    assert!(
+        (front - back).abs() < 0.5 * front.max(back),
+        "front {front} and back {back} differ"
+    );
+}

@@ -7,8 +7,9 @@
 //! their pcurves) no longer meet it. This module gives the pieces a session needs:
 //!
 //! - [`refine_for_sculpting`]: the surface with enough control points to move (degree raised to
-//!   at least [`SCULPT_MIN_DEGREE`], then uniform knots inserted; exact, Piegl & Tiller A5.9 and
-//!   A5.1, so the surface and the pcurves' parameters are unchanged);
+//!   at least [`SCULPT_MIN_DEGREE`], then knots inserted evenly between the surface's own knots;
+//!   exact, Piegl & Tiller A5.9 and A5.1, so the surface and the pcurves' parameters are
+//!   unchanged);
 //! - [`boundary_control_points`]: the control points whose basis functions are non-zero
 //!   somewhere on the face's pcurves. Holding them fixed keeps `S(c(t))`, and so every edge,
 //!   exactly where it was, whatever the other control points do (a B-spline surface at
@@ -42,9 +43,11 @@ pub const GAP_SAMPLES: usize = 65;
 pub const MAX_SCULPT_POINTS: usize = 256;
 
 /// The surface raised to degree at least [`SCULPT_MIN_DEGREE`] along each direction and given
-/// at least `points[a]` control points along direction `a` by inserting knots uniformly over
-/// the domain (an existing knot within the parameter tolerance is not inserted again). Exact:
-/// the surface's points and parametrization do not change.
+/// at least `points[a]` control points along direction `a` by inserting knots: shared out
+/// among the spans between the surface's own knots so that the longest resulting span is as
+/// short as it can be, and spread evenly inside each (a surface without inner knots gets the
+/// uniform grid of `points[a] - p` spans). Exact: the surface's points and parametrization do
+/// not change.
 pub fn refine_for_sculpting(s: &NurbsSurface, points: [usize; 2]) -> Result<NurbsSurface, String> {
     if let Some(n) = points
         .iter()
@@ -66,25 +69,38 @@ pub fn refine_for_sculpting(s: &NurbsSurface, points: [usize; 2]) -> Result<Nurb
         if have >= points[axis] {
             continue;
         }
-        let kv = s.knots()[axis].clone();
-        let dom = kv.domain();
-        let tol = kv.parameter_tolerance();
-        // Spans of the target: (n - p) uniform spans; knots already there are kept.
-        let p = kv.degree();
-        let spans = points[axis] - p;
-        for k in 1..spans {
-            if s.dims()[axis] >= points[axis] {
-                break;
+        // The knots to add are shared out among the spans between the surface's own knots,
+        // one at a time to the span whose pieces would be longest (ties: the first), then
+        // spread evenly inside each span; they are inserted in increasing order. A surface
+        // without inner knots (a plane's patch) gets the uniform grid of `points - p` spans.
+        // Filling that grid from the domain's start instead, as before, refined one end of a
+        // surface that holds knots already (a circle's quarter joints): the last quarter of a
+        // sphere stayed one span, all of whose control points touch the face's seam, so a
+        // pull there moved nothing.
+        let knots: Vec<f64> = s.knots()[axis]
+            .distinct()
+            .into_iter()
+            .map(|(u, _)| u)
+            .collect();
+        let mut share = vec![0usize; knots.len().saturating_sub(1)];
+        let piece = |i: usize, k: usize| (knots[i + 1] - knots[i]) / (k + 1) as f64;
+        for _ in have..points[axis] {
+            let i = (0..share.len())
+                .max_by(|&a, &b| {
+                    piece(a, share[a])
+                        .total_cmp(&piece(b, share[b]))
+                        .then(b.cmp(&a))
+                })
+                .ok_or("a knot vector without a span")?;
+            share[i] += 1;
+        }
+        for (i, &k) in share.iter().enumerate() {
+            let (a, len) = (knots[i], knots[i + 1] - knots[i]);
+            for j in 1..=k {
+                s = s
+                    .insert_knot(axis, a + len * j as f64 / (k + 1) as f64, 1)
+                    .map_err(|e| e.to_string())?;
             }
-            let u = dom.min + dom.length() * k as f64 / spans as f64;
-            if s.knots()[axis]
-                .as_slice()
-                .iter()
-                .any(|&x| (x - u).abs() <= tol)
-            {
-                continue;
-            }
-            s = s.insert_knot(axis, u, 1).map_err(|e| e.to_string())?;
         }
     }
     Ok(s)
