@@ -586,3 +586,90 @@ fn a_rope_pulls_the_sphere_wherever_it_grabs() {
         "front {front} and back {back} differ"
     );
 }
+
+/// The sculpted face runs on the frozen-weight engine unless the part asks for the generalized
+/// one (a part's weights are held, so its matrices are constant and factored once): the two
+/// give the same pull to 1e-3 of it, the frozen part offers no `constraint` (the generalized
+/// one does, and takes one), and both take the studio's plastic flow and the smooth brush.
+#[test]
+fn the_face_runs_on_the_frozen_engine_unless_asked_and_both_sculpt_alike() {
+    use vclay_session::{Command, Edit, Plasticity};
+    let file = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../vclay-io/tests/data/cad/trimmed_cut_sphere.step");
+    let part = |engine: &str| {
+        let text = format!(
+            "[model]\nkind = \"cad-part\"\nfile = {:?}\n{engine}\n[simulation]\nsteps = 30\n\n\
+             [[timeline]]\nat = 0.0\naction = \"rope\"\nname = \"pull\"\n\
+             from = [0.0, -10.0, 0.0]\nto = [0.0, -12.0, 0.0]\n",
+            file.display().to_string()
+        );
+        Scenario::parse(&text, "sphere.toml", "sphere", Path::new(".")).unwrap()
+    };
+    let mut frozen = part("");
+    let mut general = part("engine = \"generalized\"");
+    let p0 = frozen.session.model(None).unwrap().control_points();
+    for _ in 0..30 {
+        frozen.session.step().unwrap();
+        general.session.step().unwrap();
+    }
+    let (a, b) = (
+        frozen.session.model(None).unwrap().control_points(),
+        general.session.model(None).unwrap().control_points(),
+    );
+    let moved = a
+        .iter()
+        .zip(&p0)
+        .map(|(p, q)| (p - q).norm())
+        .fold(0.0, f64::max);
+    let differ = a
+        .iter()
+        .zip(&b)
+        .map(|(p, q)| (p - q).norm())
+        .fold(0.0, f64::max);
+    eprintln!("pulled by {moved:.4}; the engines differ by {differ:.2e}");
+    assert!(moved > 0.5, "the pull moved the face by {moved}");
+    assert!(
+        differ < 1e-3 * moved.max(1.0),
+        "the engines differ by {differ}"
+    );
+    let actions = |sc: &Scenario| -> Vec<&'static str> {
+        let m = sc.session.model(None).unwrap();
+        m.tools().iter().map(|t| t.action).collect()
+    };
+    assert!(
+        !actions(&frozen).contains(&"constraint"),
+        "{:?}",
+        actions(&frozen)
+    );
+    assert!(actions(&general).contains(&"constraint"));
+    for sc in [&mut frozen, &mut general] {
+        assert!(actions(sc).contains(&"smooth"));
+        // The studio's plastic flow: rest positions follow what the pull displaced.
+        sc.session
+            .set_plasticity(None, Some(Plasticity::new(20.0, 0.0).unwrap()))
+            .unwrap();
+        let rest0 = sc.session.model(None).unwrap().save().unwrap();
+        sc.session.run(5).unwrap();
+        let rest1 = sc.session.model(None).unwrap().save().unwrap();
+        assert_ne!(rest0["dnurbs"], rest1["dnurbs"], "the flow changed nothing");
+        sc.session
+            .apply(Command::new(Edit::Smooth {
+                near: [0.0, -10.5, 0.0],
+                radius: 3.0,
+                strength: Some(0.5),
+            }))
+            .unwrap();
+    }
+    let e = frozen
+        .session
+        .apply(Command::new(Edit::Constraint {
+            name: None,
+            kind: "point".into(),
+            param: [4.0, 0.0],
+            target: Some([0.0, -10.0, 0.0]),
+            normal: None,
+        }))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("constraint"), "{e}");
+}

@@ -771,6 +771,80 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
         &self.rest
     }
 
+    /// Replaces the rest shape's control points (the smooth brush's smoothed rest shape).
+    /// With frozen weights the surface is linear in its control points, `s = J p`, so the rest
+    /// shape enters the step only through `K p_rest` (eq 17 with `s_ref = J p_rest`), which
+    /// is recomputed on the next step; the shape, its motion and the matrices stay.
+    ///
+    /// # Errors
+    /// [`DynamicsError::NoSuchCoordinate`] for a wrong count, [`DynamicsError::Parameter`]
+    /// for a non-finite coordinate.
+    pub fn set_rest_shape(&mut self, rest: &[Vec3]) -> Result<(), DynamicsError> {
+        if rest.len() != self.rest.len() {
+            return Err(DynamicsError::NoSuchCoordinate {
+                index: rest.len(),
+                count: self.rest.len(),
+            });
+        }
+        if let Some(v) = rest
+            .iter()
+            .flat_map(|p| [p.x, p.y, p.z])
+            .find(|v| !v.is_finite())
+        {
+            return Err(DynamicsError::Parameter {
+                name: "rest shape coordinate",
+                value: v,
+                why: "must be finite",
+            });
+        }
+        self.rest = rest.to_vec();
+        self.cache.k_rest = None;
+        Ok(())
+    }
+
+    /// Plastic flow (`vclay_core::plasticity`, the studio's sculpt mode): every control point
+    /// displaced from its rest position by more than `yield_distance` moves its rest position
+    /// towards it by `fraction x (1 - yield / displacement)` of the displacement, as
+    /// [`GeneralizedDnurbs::plastic_flow`] does per control point. Returns how many yielded.
+    ///
+    /// # Errors
+    /// [`DynamicsError::Parameter`] for a fraction outside `[0, 1]` or a negative or
+    /// non-finite yield distance.
+    pub fn plastic_flow(
+        &mut self,
+        fraction: f64,
+        yield_distance: f64,
+    ) -> Result<usize, DynamicsError> {
+        if vclay_core::plasticity::check_flow(fraction, yield_distance).is_err() {
+            let (name, value) = if (0.0..=1.0).contains(&fraction) {
+                ("yield distance", yield_distance)
+            } else {
+                ("plastic flow fraction", fraction)
+            };
+            return Err(DynamicsError::Parameter {
+                name,
+                value,
+                why: "fraction in [0, 1], yield distance finite and non-negative",
+            });
+        }
+        let mut yielded = 0;
+        for (r, p) in self.rest.iter_mut().zip(self.geometry.points()) {
+            let f = vclay_core::plasticity::plastic_flow_factor(
+                fraction,
+                yield_distance,
+                (*p - *r).norm(),
+            );
+            if f > 0.0 {
+                *r += (*p - *r) * f;
+                yielded += 1;
+            }
+        }
+        if yielded > 0 {
+            self.cache.k_rest = None;
+        }
+        Ok(yielded)
+    }
+
     /// Moves control point `i` to `position` (it keeps its fixed/free state; a fixed point stays
     /// at the new place). The velocity of the point is set to zero.
     pub fn move_control_point(&mut self, i: usize, position: Vec3) -> Result<(), DynamicsError> {

@@ -11,8 +11,9 @@
 //!   the `ring` primitive (Fig 6).
 //!
 //! Both step by eq 18 and take the forces of section 6.1. Where the frozen engine lacks
-//! something (constraints, weights, a weight penalty, rest coordinates in its undo state) its
-//! method refuses with a message that names the generalized engine. A control point is what
+//! something (constraints, weights, a weight penalty) its method refuses with a message that
+//! names the generalized engine; its rest shape is control points in its state, so plastic
+//! flow and the smooth brush act on it as on the generalized engine's rest coordinates. A control point is what
 //! fix, free, move-point and set-weight count: the x, y, z (and w) group of the generalized
 //! coordinates, or a point of the frozen engine's net.
 
@@ -60,8 +61,9 @@ pub trait DnurbsEngine: Clone + std::fmt::Debug + Send + Sync + 'static {
     fn stop(&mut self);
     /// The rest shape becomes the current shape.
     fn plastic_reset(&mut self) -> Result<(), DynamicsError>;
-    /// Plastic flow (`vclay_core::plasticity`); the frozen engine refuses (its rest shape is
-    /// not in its undo state).
+    /// Plastic flow (`vclay_core::plasticity`): rest positions follow the points displaced past
+    /// the yield distance (per control point on both engines; the rest shape is in both
+    /// engines' states, so undo restores it).
     fn plastic_flow(&mut self, fraction: f64, yield_distance: f64) -> Result<usize, SessionError>;
     /// Elastic energy of the current state.
     fn elastic_energy(&self) -> Result<f64, DynamicsError>;
@@ -311,11 +313,8 @@ where
         self.set_rest_shape_to_current();
         Ok(())
     }
-    fn plastic_flow(&mut self, _: f64, _: f64) -> Result<usize, SessionError> {
-        Err(SessionError::model(
-            "a D-NURBS with frozen weights (engine = \"frozen\") has no plastic flow; use the \
-             generalized engine",
-        ))
+    fn plastic_flow(&mut self, fraction: f64, yield_distance: f64) -> Result<usize, SessionError> {
+        Dnurbs::plastic_flow(self, fraction, yield_distance).map_err(SessionError::from)
     }
     fn elastic_energy(&self) -> Result<f64, DynamicsError> {
         Ok(Dnurbs::elastic_energy(self))
@@ -354,11 +353,8 @@ where
             "the frozen-weight engine has no weight penalty (its weights are held)",
         ))
     }
-    fn set_rest_points(&mut self, _: &[Vec3]) -> Result<(), SessionError> {
-        Err(cmd(
-            "the smooth brush changes the rest shape, which a D-NURBS with frozen weights \
-             (engine = \"frozen\") keeps in its elements; use the generalized engine",
-        ))
+    fn set_rest_points(&mut self, points: &[Vec3]) -> Result<(), SessionError> {
+        self.set_rest_shape(points).map_err(SessionError::from)
     }
     fn constraints(&self) -> Vec<Constraint> {
         Vec::new()
