@@ -97,10 +97,11 @@ scenario_keys! {
 
 /// The sculpted face's engine when the part gives none: the frozen-weight engine
 /// (`d-nurbs.txt` footnote 2). A part's weights are held anyway, so its matrices are constant
-/// and factored once: on the cut sphere (24 x 24) a step took 0.3 ms against 7.3 ms on the
-/// generalized engine, on the plate's 48 x 48 face 1.6 ms against 36 ms (`vclay run`, this
-/// host, session 23), with the same energies to 1e-3. The generalized engine, which
-/// reassembles and refactors every step, is kept for constraints (`engine = "generalized"`).
+/// and factored once: a step of the cut sphere's 24 x 24 face took 0.32 ms against 8.4 ms on
+/// the generalized engine, of the plate's 48 x 48 face 1.6-1.8 ms against 44.5 ms (`vclay run`,
+/// docs/performance.md, session 23), and the two engines' control points agree to 1e-10 after
+/// 30 steps of a pull. The generalized engine, which reassembles and refactors every step, is
+/// kept for constraints (`engine = "generalized"`).
 pub const DEFAULT_ENGINE: &str = "frozen";
 
 /// A CAD part with one face sculpted as a D-NURBS surface (see the [module docs](self)).
