@@ -686,7 +686,8 @@ pub trait Model: Send + Sync + std::fmt::Debug {
     /// Whether the model takes `edit` (its action is one of [`Model::tools`]); the session
     /// refuses other edits before the model sees them.
     fn accepts(&self, edit: &Edit) -> bool {
-        crate::describe::actions(self.kind()).contains(&edit.action())
+        let action = edit.action();
+        self.tools().iter().any(|t| t.action == action)
     }
     /// The extensions [`Model::export`] writes (checked when a scenario is read, so a run
     /// does not fail at its end). Default: every one of [`EXPORT_EXTENSIONS`].

@@ -618,10 +618,16 @@ impl Session {
 pub(crate) fn check_edit(model: &dyn Model, edit: &Edit, at: f64) -> Result<(), EditError> {
     if !model.accepts(edit) {
         let takes: Vec<&str> = model.tools().iter().map(|t| t.action).collect();
+        // The kind takes it, this model's setup does not (a D-NURBS on the frozen engine).
+        let setup = if crate::describe::actions(model.kind()).contains(&edit.action()) {
+            " with its settings (see its `engine`)"
+        } else {
+            ""
+        };
         return Err(EditError::new(
             "action",
             format!(
-                "a {} model does not take `{}`; it takes {}",
+                "a {} model does not take `{}`{setup}; it takes {}",
                 model.kind(),
                 edit.action(),
                 takes.join(", ")

@@ -188,6 +188,25 @@ fn frozen_surface_commands() {
             weight: 2.0,
         },
     );
+    // The frozen engine's tools leave out what it refuses (the kind's list has them), and
+    // the refusal says that the model's settings are why.
+    let actions: Vec<&str> = frozen_sheet().tools().iter().map(|t| t.action).collect();
+    for a in ["constraint", "set-weight"] {
+        assert!(!actions.contains(&a), "{a} in {actions:?}");
+        assert!(vclay_session::describe::actions(ModelKind::DnurbsSurface).contains(&a));
+    }
+    assert!(
+        actions.contains(&"rope") && actions.contains(&"smooth"),
+        "{actions:?}"
+    );
+    let e = session(frozen_sheet())
+        .apply(Command::new(Edit::SetWeight {
+            index: 0,
+            weight: 2.0,
+        }))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("set-weight") && e.contains("engine"), "{e}");
 }
 
 #[test]

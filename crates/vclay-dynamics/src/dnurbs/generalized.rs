@@ -1893,26 +1893,7 @@ impl<G: GeneralizedGeometry> GeneralizedDnurbs<G> {
         fraction: f64,
         yield_distance: f64,
     ) -> Result<usize, DynamicsError> {
-        for (name, value, ok) in [
-            (
-                "plastic flow fraction",
-                fraction,
-                (0.0..=1.0).contains(&fraction),
-            ),
-            (
-                "yield distance",
-                yield_distance,
-                yield_distance.is_finite() && yield_distance >= 0.0,
-            ),
-        ] {
-            if !ok {
-                return Err(DynamicsError::Parameter {
-                    name,
-                    value,
-                    why: "fraction in [0, 1], yield distance finite and non-negative",
-                });
-            }
-        }
+        super::check_flow_args(fraction, yield_distance)?;
         let q = self.geometry.coordinates();
         let weights = self.geometry.weight_coordinates();
         let mut is_weight = vec![false; q.len()];

@@ -446,6 +446,25 @@ pub struct StepReport {
     pub elastic_energy: f64,
 }
 
+/// The plastic flow's arguments of both engines ([`Dnurbs::plastic_flow`],
+/// [`GeneralizedDnurbs::plastic_flow`]), checked by `vclay_core::plasticity::check_flow`;
+/// the error names the first bad one.
+fn check_flow_args(fraction: f64, yield_distance: f64) -> Result<(), DynamicsError> {
+    if vclay_core::plasticity::check_flow(fraction, yield_distance).is_ok() {
+        return Ok(());
+    }
+    let (name, value) = if (0.0..=1.0).contains(&fraction) {
+        ("yield distance", yield_distance)
+    } else {
+        ("plastic flow fraction", fraction)
+    };
+    Err(DynamicsError::Parameter {
+        name,
+        value,
+        why: "fraction in [0, 1], yield distance finite and non-negative",
+    })
+}
+
 /// A D-NURBS with frozen weights over a geometry `G` (curve or tensor-product surface).
 #[derive(Clone, Debug)]
 pub struct Dnurbs<G: DnurbsGeometry> {
@@ -815,18 +834,7 @@ impl<G: DnurbsGeometry> Dnurbs<G> {
         fraction: f64,
         yield_distance: f64,
     ) -> Result<usize, DynamicsError> {
-        if vclay_core::plasticity::check_flow(fraction, yield_distance).is_err() {
-            let (name, value) = if (0.0..=1.0).contains(&fraction) {
-                ("yield distance", yield_distance)
-            } else {
-                ("plastic flow fraction", fraction)
-            };
-            return Err(DynamicsError::Parameter {
-                name,
-                value,
-                why: "fraction in [0, 1], yield distance finite and non-negative",
-            });
-        }
+        check_flow_args(fraction, yield_distance)?;
         let mut yielded = 0;
         for (r, p) in self.rest.iter_mut().zip(self.geometry.points()) {
             let f = vclay_core::plasticity::plastic_flow_factor(

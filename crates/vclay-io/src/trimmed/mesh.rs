@@ -542,34 +542,13 @@ fn delaunay_reference(points: &[P2]) -> Vec<[usize; 3]> {
     if n < 3 {
         return Vec::new();
     }
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in points {
-        lo = [lo[0].min(p.x), lo[1].min(p.y)];
-        hi = [hi[0].max(p.x), hi[1].max(p.y)];
-    }
-    let d = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-300);
-    let (mx, my) = ((lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0);
-    let mut xy: Vec<[f64; 2]> = points.iter().map(|p| [p.x, p.y]).collect();
-    xy.push([mx - 20.0 * d, my - d]);
-    xy.push([mx, my + 20.0 * d]);
-    xy.push([mx + 20.0 * d, my - d]);
-    // Counter-clockwise triangles; `d` is inside the circumcircle of (a, b, c) when the
-    // incircle determinant (taken relative to d, Guibas & Stolfi) is positive.
+    let xy = with_super_triangle(points);
     let orient = |t: [usize; 3], xy: &[[f64; 2]]| -> [usize; 3] {
-        let ([ax, ay], [bx, by], [cx, cy]) = (xy[t[0]], xy[t[1]], xy[t[2]]);
-        if (bx - ax) * (cy - ay) - (by - ay) * (cx - ax) < 0.0 {
+        if cross(xy[t[0]], xy[t[1]], xy[t[2]]) < 0.0 {
             [t[0], t[2], t[1]]
         } else {
             t
         }
-    };
-    let incircle = |t: [usize; 3], d: [f64; 2], xy: &[[f64; 2]]| -> bool {
-        let r = |k: usize| {
-            let (x, y) = (xy[t[k]][0] - d[0], xy[t[k]][1] - d[1]);
-            (x, y, x * x + y * y)
-        };
-        let ((ax, ay, a2), (bx, by, b2), (cx, cy, c2)) = (r(0), r(1), r(2));
-        ax * (by * c2 - b2 * cy) - ay * (bx * c2 - b2 * cx) + a2 * (bx * cy - by * cx) > 0.0
     };
     let mut tris: Vec<[usize; 3]> = vec![orient([n, n + 1, n + 2], &xy)];
     let mut edges: Vec<[usize; 2]> = Vec::new();

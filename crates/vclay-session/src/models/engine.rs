@@ -12,10 +12,11 @@
 //!
 //! Both step by eq 18 and take the forces of section 6.1. Where the frozen engine lacks
 //! something (constraints, weights, a weight penalty) its method refuses with a message that
-//! names the generalized engine; its rest shape is control points in its state, so plastic
-//! flow and the smooth brush act on it as on the generalized engine's rest coordinates. A control point is what
-//! fix, free, move-point and set-weight count: the x, y, z (and w) group of the generalized
-//! coordinates, or a point of the frozen engine's net.
+//! names the generalized engine, and the model's tools leave out the actions it refuses
+//! ([`DnurbsEngine::refused_actions`]); its rest shape is control points in its state, so
+//! plastic flow and the smooth brush act on it as on the generalized engine's rest
+//! coordinates. A control point is what fix, free, move-point and set-weight count: the x, y,
+//! z (and w) group of the generalized coordinates, or a point of the frozen engine's net.
 
 use std::ops::Range;
 
@@ -41,6 +42,16 @@ pub trait DnurbsEngine: Clone + std::fmt::Debug + Send + Sync + 'static {
     type State: Clone + std::fmt::Debug + PartialEq + Send + Sync + 'static;
     /// Whether the weights are frozen (footnote 2).
     fn is_frozen(&self) -> bool;
+    /// The actions the engine refuses whatever their values, which the model's tools leave
+    /// out: on the frozen engine `constraint` (section 6.2 needs the generalized one) and
+    /// `set-weight` (its weights are held).
+    fn refused_actions(&self) -> &'static [&'static str] {
+        if self.is_frozen() {
+            &["constraint", "set-weight"]
+        } else {
+            &[]
+        }
+    }
     /// Simulated time.
     fn time(&self) -> f64;
     /// Steps the engine took.

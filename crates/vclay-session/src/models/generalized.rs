@@ -352,6 +352,14 @@ impl<K: GeneralizedKind> Model for GeneralizedModel<K> {
     fn kind(&self) -> ModelKind {
         self.kind.kind()
     }
+    /// The kind's tools less what the engine refuses ([`DnurbsEngine::refused_actions`]).
+    fn tools(&self) -> Vec<crate::describe::ToolSpec> {
+        let refused = self.kind.engine().refused_actions();
+        crate::describe::tools_for(self.kind())
+            .into_iter()
+            .filter(|t| !refused.contains(&t.action))
+            .collect()
+    }
     fn summary(&self) -> String {
         self.kind.summary()
     }

@@ -606,18 +606,14 @@ impl Model for PartModel {
         ModelKind::CadPart
     }
 
-    /// The kind's tools, less `constraint` on the frozen-weight engine (which has none).
+    /// The kind's tools that the sculpted face takes (its engine's: no `constraint` on the
+    /// frozen-weight one), and `sculpt-face`.
     fn tools(&self) -> Vec<ToolSpec> {
-        let frozen = self.face.engine_name() == "frozen";
+        let face: Vec<&str> = Model::tools(&self.face).iter().map(|t| t.action).collect();
         crate::describe::tools_for(ModelKind::CadPart)
             .into_iter()
-            .filter(|t| !(frozen && t.action == "constraint"))
+            .filter(|t| t.action == "sculpt-face" || face.contains(&t.action))
             .collect()
-    }
-
-    fn accepts(&self, edit: &Edit) -> bool {
-        let action = edit.action();
-        self.tools().iter().any(|t| t.action == action)
     }
 
     fn summary(&self) -> String {
